@@ -1,0 +1,65 @@
+//! `moma`: the command-line front end of the moma library.
+//!
+//! Every subcommand lives in its own file under `cmd/`; this file only dispatches.
+//! Errors are reported as one clear message (file, field, what was expected) with a
+//! non-zero exit; output files are written atomically, so a failed run leaves none.
+
+mod cmd;
+mod output;
+
+use clap::{Parser, Subcommand};
+
+/// Kinematics, dynamics, control and motion planning of mobile manipulators.
+#[derive(Parser)]
+#[command(name = "moma", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print a robot model's structure: nq, nv, mass, frames, joints.
+    Inspect(cmd::inspect::Args),
+    /// Evaluate rigid-body dynamics (RNEA, CRBA, ABA, ...) on a list of states.
+    Dynamics(cmd::dynamics::Args),
+    /// Time the rigid-body algorithms (median ns per call) on seeded random states.
+    Bench(cmd::bench::Args),
+    /// Evaluate the chapter's closed-form models (m1–m5) on a case file.
+    Eval(cmd::eval::Args),
+    /// Run a simulation scenario (TOML) and write CSV, JSON and SVG outputs.
+    Simulate(cmd::simulate::Args),
+    /// Print an occupancy map's size, resolution, origin and cell counts.
+    MapInfo(cmd::map_info::Args),
+    /// Plan a path on an occupancy map.
+    Plan(cmd::plan::Args),
+    /// Run every problem of a Moving AI scenario file and compare with the optimal lengths.
+    Scen(cmd::scen::Args),
+    /// Compute manipulability measures of a (mobile) manipulator on a list of states.
+    Manipulability(cmd::manipulability::Args),
+    /// Inverse kinematics: arm-only or whole-body.
+    Ik(cmd::ik::Args),
+    /// Evaluate reachability and manipulability over a grid of base placements.
+    ReachMap(cmd::reach_map::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Inspect(a) => cmd::inspect::run(a),
+        Command::Dynamics(a) => cmd::dynamics::run(a),
+        Command::Bench(a) => cmd::bench::run(a),
+        Command::Eval(a) => cmd::eval::run(a),
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::MapInfo(a) => cmd::map_info::run(a),
+        Command::Plan(a) => cmd::plan::run(a),
+        Command::Scen(a) => cmd::scen::run(a),
+        Command::Manipulability(a) => cmd::manipulability::run(a),
+        Command::Ik(a) => cmd::ik::run(a),
+        Command::ReachMap(a) => cmd::reach_map::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

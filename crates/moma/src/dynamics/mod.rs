@@ -1,0 +1,1 @@
+//! Rigid-body dynamics: RNEA, CRBA, ABA, gravity, nonlinear effects, Coriolis matrix, energy, centre of mass, momentum.

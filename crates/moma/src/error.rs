@@ -1,0 +1,137 @@
+//! The library's error type: every user input and every solver that can fail returns
+//! [`Result`]. Variants carry structured fields naming the file, element or field at fault.
+
+use std::path::PathBuf;
+
+/// Convenience alias for `Result<T, moma::Error>`.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong with user input or a solver in moma.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read.
+    #[error("{path}: cannot read file: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        source: std::io::Error,
+    },
+    /// A file could be read but its contents are malformed.
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the line, element or field.
+        message: String,
+    },
+    /// An invalid value in a named field of some input.
+    #[error("invalid {field}: {message}")]
+    InvalidInput {
+        /// The field at fault (e.g. `joint 'elbow' inertial.mass`).
+        field: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A non-finite (NaN or infinite) number where a finite one is required.
+    #[error("non-finite value in {field}")]
+    NonFinite {
+        /// The field holding the value.
+        field: String,
+    },
+    /// A vector or matrix of the wrong size in user input.
+    #[error("{field}: expected length {expected}, got {got}")]
+    WrongLength {
+        /// The field at fault.
+        field: String,
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        got: usize,
+    },
+    /// A name (joint, frame, link, model) that does not exist.
+    #[error("unknown {kind} '{name}'")]
+    Unknown {
+        /// What kind of name it is (e.g. `frame`).
+        kind: &'static str,
+        /// The name that was not found.
+        name: String,
+    },
+
+    // ---- rigid-body core --------------------------------------------------------------
+
+    /// The robot model is invalid (cyclic tree, bad inertia, unsupported joint, ...).
+    #[error("invalid model: {0}")]
+    Model(String),
+
+    // ---- non-holonomic mobile robots and simulation ----------------------------------
+
+    /// A matrix that must be invertible is (numerically) singular.
+    #[error("singular {what}{}", .detail.as_ref().map(|d| format!(": {d}")).unwrap_or_default())]
+    Singular {
+        /// The matrix or configuration (e.g. `N_C at d = 0`).
+        what: String,
+        /// Extra context, e.g. the condition number.
+        detail: Option<String>,
+    },
+
+    // ---- numerical trouble during simulation -----------------------------------------
+
+    /// A simulation or iterative solver went numerically wrong (NaN, blow-up, drift).
+    #[error("numerical failure at t = {t}: {message}")]
+    Numerical {
+        /// Simulation time (or iteration) where it happened.
+        t: f64,
+        /// What went wrong.
+        message: String,
+    },
+
+    // ---- motion planning ------------------------------------------------------------
+
+    /// A planning query is invalid (start/goal outside the map or in an obstacle, ...).
+    #[error("planning: {0}")]
+    Planning(String),
+}
+
+impl Error {
+    /// A [`Error::Parse`] for `path` with a message.
+    pub fn parse(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    /// An [`Error::InvalidInput`] for a field with a message.
+    pub fn invalid(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidInput {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Returns `Err(Error::NonFinite)` unless every value is finite.
+pub fn ensure_finite<'a>(field: &str, values: impl IntoIterator<Item = &'a f64>) -> Result<()> {
+    if values.into_iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::NonFinite {
+            field: field.to_string(),
+        })
+    }
+}
+
+/// Returns `Err(Error::WrongLength)` unless `got == expected`.
+pub fn ensure_len(field: &str, expected: usize, got: usize) -> Result<()> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(Error::WrongLength {
+            field: field.to_string(),
+            expected,
+            got,
+        })
+    }
+}

@@ -1,0 +1,1 @@
+//! Input and output: the URDF loader and serde schemas.

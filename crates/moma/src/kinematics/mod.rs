@@ -1,0 +1,1 @@
+//! Forward kinematics, frame Jacobians, configuration-space operations.

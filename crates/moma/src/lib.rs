@@ -1,0 +1,46 @@
+//! # moma — mobile manipulation in Rust
+//!
+//! Kinematics, dynamics, control and motion planning of wheeled mobile robot
+//! manipulators (a non-holonomic differential-drive platform carrying a serial arm)
+//! and of free-floating space manipulators.
+//!
+//! ## Conventions
+//!
+//! * SI units (m, kg, kg·m², s, N, N·m) and radians everywhere; one scalar type, `f64`.
+//! * Spatial vectors are stored `[linear; angular]` (as Pinocchio).
+//! * Transforms are named `a_from_b`, so composition reads right to left.
+//! * Quaternions are stored `[x, y, z, w]`.
+//!
+//! ## Data flow
+//!
+//! An immutable [`multibody::Model`] (validated once) and a reusable [`multibody::Data`]
+//! (all buffers allocated once by `Data::new(&model)`); algorithms are free functions
+//! `algorithm(&model, &mut data, q, v, …)` that write their results into `data` and do
+//! not allocate.
+//!
+//! ## Glossary (textbook symbol → Rust name)
+//!
+//! | symbol | meaning | Rust |
+//! | --- | --- | --- |
+//! | H, M | joint-space inertia (mass) matrix | `dynamics::crba` → `data.mass_matrix` |
+//! | h, C(q,q̇)q̇ | nonlinear effects | `dynamics::nonlinear_effects` |
+//! | G | gravity torques | `dynamics::gravity_torque` |
+//! | C_cor | Christoffel-consistent Coriolis matrix | `dynamics::coriolis_matrix` |
+//! | C(q) | Pfaffian constraint matrix | `mobile::constraint_matrix` |
+//! | N_C | admissible-velocity basis | `mobile::admissible_velocity_basis` |
+//! | J | frame Jacobian | `kinematics::frame_jacobian` |
+//! | J·N_C | whole-body Jacobian | `mobile::whole_body_jacobian` |
+
+pub mod closed_form;
+pub mod dynamics;
+pub mod error;
+pub mod io;
+pub mod kinematics;
+pub mod manipulability;
+pub mod mobile;
+pub mod multibody;
+pub mod planning;
+pub mod sim;
+pub mod spatial;
+
+pub use error::{Error, Result};

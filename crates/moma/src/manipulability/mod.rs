@@ -1,0 +1,1 @@
+//! Manipulability measures and ellipsoids.

@@ -1,0 +1,1 @@
+//! Multibody model (immutable) and data (workspace).

@@ -1,0 +1,1 @@
+//! Motion planning on occupancy grids.

@@ -1,0 +1,1 @@
+//! Integrators, the simulation loop and recorders.

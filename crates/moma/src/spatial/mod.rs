@@ -1,0 +1,1 @@
+//! 6-D spatial algebra on nalgebra.
