@@ -34,6 +34,7 @@
 pub mod closed_form;
 pub mod dynamics;
 pub mod error;
+pub mod ik;
 pub mod io;
 pub mod kinematics;
 pub mod manipulability;

@@ -1,0 +1,1 @@
+//! Inverse kinematics: damped least squares / Levenberg–Marquardt for arms, whole-body resolved-rate motion for mobile manipulators.
