@@ -106,7 +106,7 @@ doc = {
     "root_joint": root,
     "gravity": model.gravity.linear.tolist(),
     "nq": model.nq, "nv": model.nv, "njoints": model.njoints, "nframes": model.nframes,
-    "total_mass": float(sum(i.mass for i in model.inertias)),
+    "total_mass": float(pin.computeTotalMass(model)),
     "joints": [
         {"name": model.names[i], "type": model.joints[i].shortname(),
          "idx_q": model.joints[i].idx_q, "idx_v": model.joints[i].idx_v,
