@@ -86,9 +86,17 @@ fn bad_inertials() {
         "{m}"
     );
     let m = err(&with_inertial(
-        r#"<inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#,
+        r#"<inertial><mass value="1"/><inertia ixx="1" ixy="2" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ));
     assert!(m.contains("positive definite"), "{m}");
+    // a point mass (zero rotational inertia) and round-off-level negative eigenvalues load
+    for ok in [
+        r#"<inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#,
+        r#"<inertial><mass value="1e-6"/><inertia ixx="5e-8" ixy="6e-8" ixz="0" iyy="5e-8" iyz="0" izz="5e-8"/></inertial>"#,
+    ] {
+        let model = model_from_urdf_str(&with_inertial(ok), RootJoint::Fixed, "ok.urdf").unwrap();
+        assert!(model.total_mass() > 0.0);
+    }
     let m = err(&with_inertial(
         r#"<inertial><mass value="-2"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ));
