@@ -347,31 +347,5 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
             ),
         ));
     }
-    let mut model = b.build().map_err(ctx)?;
-    // The "last link": the deepest link (most URDF joints from the root), the first in
-    // document order on ties.
-    let link_depth = |mut l: usize| {
-        let mut d = 0;
-        while let Some(j) = parent_joint_of[l] {
-            l = link_ix[robot.joints[j].parent.link.as_str()];
-            d += 1;
-        }
-        d
-    };
-    let mut best = (root_link, 0);
-    for l in 0..robot.links.len() {
-        let d = link_depth(l);
-        if d > best.1 {
-            best = (l, d);
-        }
-    }
-    let name = &robot.links[best.0].name;
-    if let Some(f) = model
-        .frames
-        .iter()
-        .position(|f| f.kind == FrameKind::Body && &f.name == name)
-    {
-        model.last_link = FrameIndex(f);
-    }
-    Ok(model)
+    b.build().map_err(ctx)
 }

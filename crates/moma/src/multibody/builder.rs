@@ -349,7 +349,7 @@ impl ModelBuilder {
                 joint_of_dof[idx_v[i] + k] = JointIndex(i);
             }
         }
-        let last_link = deepest_body_frame(&self.frames);
+        let last_link = last_body_frame(&self.frames);
         Ok(Model {
             last_link,
             name: self.name,
@@ -377,21 +377,9 @@ impl ModelBuilder {
     }
 }
 
-fn deepest_body_frame(frames: &[Frame]) -> FrameIndex {
-    let mut best = (FrameIndex(frames.len().saturating_sub(1)), 0usize);
-    for (i, f) in frames.iter().enumerate() {
-        if f.kind != FrameKind::Body {
-            continue;
-        }
-        let mut depth = 1;
-        let mut k = f.parent_frame.0;
-        while k != 0 && depth <= frames.len() {
-            k = frames[k].parent_frame.0;
-            depth += 1;
-        }
-        if depth > best.1 {
-            best = (FrameIndex(i), depth);
-        }
-    }
-    best.0
+fn last_body_frame(frames: &[Frame]) -> FrameIndex {
+    frames
+        .iter()
+        .rposition(|f| f.kind == FrameKind::Body)
+        .map_or(FrameIndex(frames.len().saturating_sub(1)), FrameIndex)
 }

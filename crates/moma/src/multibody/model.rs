@@ -188,10 +188,10 @@ impl Model {
         self.inertias.iter().skip(1).map(Inertia::mass).sum()
     }
 
-    /// The "last link": for a URDF model, the deepest link (most joints, fixed ones
-    /// included, from the root link), the first in document order on ties; for a
-    /// [`ModelBuilder`](super::ModelBuilder) model, the deepest body frame (the last frame
-    /// if there is none). Used as the default end-effector frame by the CLI.
+    /// The "last link": the last body (link) frame in frame order. URDF models are
+    /// traversed depth-first with child joints sorted by name, as Pinocchio does, so this
+    /// is the frame `model.frames[-1]` Pinocchio would report (e.g. `panda_hand_tcp`,
+    /// `tool0` on UR5). Used as the default end-effector frame by the CLI.
     #[must_use]
     pub fn last_link_frame(&self) -> FrameIndex {
         self.last_link
