@@ -38,6 +38,9 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// Also write the JSON report to this file (atomically).
+    #[arg(long)]
+    pub output: Option<PathBuf>,
 }
 
 const NSTATES: usize = 100;
@@ -190,6 +193,11 @@ pub fn run(args: Args) -> Result<()> {
         median_ns: pick(|x| x.0),
         min_ns: pick(|x| x.1),
     };
+    if let Some(p) = &args.output {
+        let mut text = serde_json::to_string_pretty(&report).context("serialising JSON output")?;
+        text.push('\n');
+        crate::output::write_all_atomic(&[(p.clone(), text.into_bytes())])?;
+    }
     if args.json {
         return crate::output::print_json(&report);
     }
