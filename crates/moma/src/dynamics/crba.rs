@@ -1,7 +1,8 @@
 //! Composite rigid-body algorithm.
 
 use crate::kinematics::{assert_sizes, update_joint_placement};
-use crate::multibody::{Data, Model};
+use crate::multibody::{Data, JointType, Model};
+use crate::spatial::Motion;
 use nalgebra::{DMatrix, DVector};
 
 /// Joint-space inertia matrix H(q) (nv × nv, symmetric positive definite; both triangles
@@ -38,9 +39,24 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &DVector<f64>) -> &'d DMat
         data.world_from_joint[i] = m;
         data.composite_inertias[i] = model.inertias[i].transformed(&m);
         let iv = model.idx_v[i];
-        for k in 0..model.nvs[i] {
-            data.sw[iv + k] = m.act_motion(&data.s[iv + k]);
-        }
+        data.sw[iv] = match model.joint_types[i] {
+            // world column of an axis-aligned revolute joint: [p × ω; ω], ω a column of R
+            JointType::RevoluteX | JointType::RevoluteY | JointType::RevoluteZ => {
+                let c = match model.joint_types[i] {
+                    JointType::RevoluteX => 0,
+                    JointType::RevoluteY => 1,
+                    _ => 2,
+                };
+                let w = m.rotation.column(c).into_owned();
+                Motion::new(m.translation.cross(&w), w)
+            }
+            _ => {
+                for k in 1..model.nvs[i] {
+                    data.sw[iv + k] = m.act_motion(&data.s[iv + k]);
+                }
+                m.act_motion(&data.s[iv])
+            }
+        };
     }
     for i in (2..n).rev() {
         let p = model.parents[i].0;
