@@ -20,11 +20,11 @@ pub const SQRT2: f64 = std::f64::consts::SQRT_2;
 /// A padded passability grid for the searches (`true` = traversable).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SearchGrid {
-    width: usize,
-    height: usize,
-    pw: usize,
-    pass: Vec<bool>,
-    weight: Option<Vec<f32>>,
+    pub(super) width: usize,
+    pub(super) height: usize,
+    pub(super) pw: usize,
+    pub(super) pass: Vec<bool>,
+    pub(super) weight: Option<Vec<f32>>,
 }
 
 /// A found path.
@@ -110,7 +110,7 @@ impl SearchGrid {
     }
 
     #[inline]
-    fn pidx(&self, x: usize, y: usize) -> usize {
+    pub(super) fn pidx(&self, x: usize, y: usize) -> usize {
         (y + 1) * self.pw + x + 1
     }
 
