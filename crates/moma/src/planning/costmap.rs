@@ -292,3 +292,119 @@ pub fn footprint_cspace(
     }
     Ok(FootprintCSpace { headings, width, height, slices, sweeps })
 }
+
+/// A path of a polygonal robot through its (x, y, θ) C-space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FootprintPath {
+    /// `(x, y, k)` states from start to goal; heading θ = 2πk / 8.
+    pub states: Vec<(usize, usize, usize)>,
+    /// Cost: path length in cells plus `turn_cost` per 45° turn.
+    pub cost: f64,
+    /// Expanded states.
+    pub expanded: usize,
+}
+
+/// A* over (x, y, heading) for a polygonal robot with the C-space of
+/// [`footprint_cspace`] built with **8 headings** (θ_k = k · 45°, the directions of the
+/// 8 grid moves). From state (c, k) the robot may drive one cell along heading k (both
+/// cells free in slice k; for diagonals the two side cells too) or turn in place by ±45°
+/// (the swept footprint free), costing `turn_cost` (cells of travel per 45° turn). The
+/// goal is reached at any heading. `Ok(None)` when unreachable.
+pub fn astar_footprint(
+    cs: &FootprintCSpace,
+    start: (usize, usize, usize),
+    goal: (usize, usize),
+    turn_cost: f64,
+) -> Result<Option<FootprintPath>> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    if cs.headings != 8 {
+        return Err(Error::invalid("headings", "the footprint search needs the 8-heading C-space"));
+    }
+    if !(turn_cost.is_finite() && turn_cost >= 0.0) {
+        return Err(Error::invalid("turn cost", format!("must be finite and >= 0, got {turn_cost}")));
+    }
+    let (w, h) = (cs.width, cs.height);
+    for (what, (x, y)) in [("start", (start.0, start.1)), ("goal", goal)] {
+        if x >= w || y >= h {
+            return Err(Error::Planning(format!("{what} cell ({x}, {y}) lies outside the {w} x {h} map")));
+        }
+    }
+    if start.2 >= 8 {
+        return Err(Error::invalid("start heading", "index must be in 0..8"));
+    }
+    if cs.slices[start.2][start.1 * w + start.0] {
+        return Err(Error::Planning(format!(
+            "start pose ({}, {}, {}°) collides: the footprint overlaps an obstacle",
+            start.0,
+            start.1,
+            start.2 * 45
+        )));
+    }
+    if (0..8).all(|k| cs.slices[k][goal.1 * w + goal.0]) {
+        return Err(Error::Planning(format!("goal cell ({}, {}) collides at every heading", goal.0, goal.1)));
+    }
+    const DIRS: [(i64, i64); 8] = [(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1)];
+    let free = |k: usize, x: i64, y: i64| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && !cs.slices[k][y as usize * w + x as usize];
+    let n = w * h * 8;
+    let sid = |x: usize, y: usize, k: usize| (y * w + x) * 8 + k;
+    let mut g = vec![f64::INFINITY; n];
+    let mut parent = vec![u32::MAX; n];
+    let mut closed = vec![false; n];
+    let hfun = |x: usize, y: usize| super::astar::octile(goal.0 as i64 - x as i64, goal.1 as i64 - y as i64);
+    // Keys as ordered integers (costs are finite and non-negative).
+    let key = |f: f64| Reverse(f.to_bits());
+    let mut heap = BinaryHeap::new();
+    let s = sid(start.0, start.1, start.2);
+    g[s] = 0.0;
+    heap.push((key(hfun(start.0, start.1)), s as u32));
+    let mut expanded = 0;
+    while let Some((_, u)) = heap.pop() {
+        let u = u as usize;
+        if closed[u] {
+            continue;
+        }
+        closed[u] = true;
+        expanded += 1;
+        let (k, cell) = (u % 8, u / 8);
+        let (x, y) = (cell % w, cell / w);
+        if (x, y) == goal {
+            let mut states = Vec::new();
+            let mut c = u as u32;
+            while c != u32::MAX {
+                let ci = c as usize;
+                states.push(((ci / 8) % w, (ci / 8) / w, ci % 8));
+                c = parent[ci];
+            }
+            states.reverse();
+            return Ok(Some(FootprintPath { states, cost: g[u], expanded }));
+        }
+        let mut relax = |v: usize, c: f64, heap: &mut BinaryHeap<(Reverse<u64>, u32)>| {
+            let ng = g[u] + c;
+            if !closed[v] && ng < g[v] {
+                g[v] = ng;
+                parent[v] = u as u32;
+                let (vx, vy) = ((v / 8) % w, (v / 8) / w);
+                heap.push((key(ng + hfun(vx, vy)), v as u32));
+            }
+        };
+        // Drive forward.
+        let (dx, dy) = DIRS[k];
+        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+        if free(k, nx, ny) && (dx == 0 || dy == 0 || (free(k, x as i64 + dx, y as i64) && free(k, x as i64, y as i64 + dy))) {
+            let len = if dx != 0 && dy != 0 { super::astar::SQRT2 } else { 1.0 };
+            relax(sid(nx as usize, ny as usize, k), len, &mut heap);
+        }
+        // Turn in place by +45° (sweep k) or -45° (sweep k-1).
+        let i = y * w + x;
+        let kp = (k + 1) % 8;
+        if !cs.sweeps[k][i] && !cs.slices[kp][i] {
+            relax(sid(x, y, kp), turn_cost, &mut heap);
+        }
+        let km = (k + 7) % 8;
+        if !cs.sweeps[km][i] && !cs.slices[km][i] {
+            relax(sid(x, y, km), turn_cost, &mut heap);
+        }
+    }
+    Ok(None)
+}

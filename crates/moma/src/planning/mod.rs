@@ -15,6 +15,7 @@ pub mod grid;
 pub mod grid3;
 pub mod movingai;
 pub mod potential;
+pub mod render;
 pub mod rosmap;
 pub mod smooth;
 pub mod trajectory;

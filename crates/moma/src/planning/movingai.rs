@@ -115,6 +115,7 @@ impl MovingAiScenario {
         let mut version = 0;
         let mut problems = Vec::new();
         let mut seen_header = false;
+        let mut seen_version = false;
         for (n, line) in text.lines().enumerate() {
             let line = line.trim_end_matches('\r');
             if line.trim().is_empty() {
@@ -129,15 +130,19 @@ impl MovingAiScenario {
                         .parse::<f64>()
                         .map_err(|_| Error::parse(path, format!("line {}: bad version '{v}'", n + 1)))?
                         as u32;
+                    seen_version = true;
                     continue;
                 }
             }
             let f: Vec<&str> = if line.contains('\t') { line.split('\t').collect() } else { line.split_whitespace().collect() };
             let err = |what: &str| Error::parse(path, format!("line {}: {what}", n + 1));
-            let (bucket, map, wh, rest) = match f.len() {
-                9 => (f[0], f[1], Some((f[2], f[3])), &f[4..]),
-                7 => (f[0], f[1], None, &f[2..]),
-                k => return Err(err(&format!("expected 9 (version 1) or 7 (version 0) fields, got {k}"))),
+            let (bucket, map, wh, rest) = match (f.len(), version) {
+                (9, v) if v >= 1 || !seen_version => (f[0], f[1], Some((f[2], f[3])), &f[4..]),
+                (7, 0) => (f[0], f[1], None, &f[2..]),
+                (k, v) => {
+                    let want = if v >= 1 { "9 (version 1)" } else { "7 (version 0) or 9" };
+                    return Err(err(&format!("expected {want} tab-separated fields, got {k}")));
+                }
             };
             let int = |s: &str, name: &str| -> Result<usize> {
                 s.trim().parse::<usize>().map_err(|_| err(&format!("{name} '{s}' is not a non-negative integer")))
