@@ -1,8 +1,7 @@
 //! 3-D voxel grids and 26-connected A* (Moving AI 3-D benchmark move model).
 
 use crate::{Error, Result};
-use std::collections::{BinaryHeap, HashMap};
-use std::hash::{BuildHasherDefault, Hasher};
+use std::collections::BinaryHeap;
 
 /// A 3-D voxel occupancy grid stored as one bit per voxel (`true` = blocked).
 #[derive(Debug, Clone, PartialEq)]
@@ -20,8 +19,12 @@ impl Grid3 {
     /// An all-free grid of `nx × ny × nz` voxels.
     pub fn new(nx: usize, ny: usize, nz: usize) -> Result<Self> {
         let n = nx.checked_mul(ny).and_then(|v| v.checked_mul(nz)).unwrap_or(usize::MAX);
-        if nx == 0 || ny == 0 || nz == 0 || n >= u32::MAX as usize / 2 {
-            return Err(Error::invalid("voxel grid size", format!("{nx} x {ny} x {nz}: need 1 to 2^31 voxels")));
+        let side = u16::MAX as usize;
+        if nx == 0 || ny == 0 || nz == 0 || nx > side || ny > side || nz > side || n >= u32::MAX as usize / 2 {
+            return Err(Error::invalid(
+                "voxel grid size",
+                format!("{nx} x {ny} x {nz}: need 1 to 65,535 voxels per side and fewer than 2^31 in all"),
+            ));
         }
         Ok(Self { nx, ny, nz, bits: vec![0; n.div_ceil(64)] })
     }
@@ -73,28 +76,52 @@ pub struct Path3 {
     pub expanded: usize,
 }
 
-#[derive(Default)]
-struct MulHasher(u64);
-impl Hasher for MulHasher {
-    fn finish(&self) -> u64 {
-        self.0
+/// Search state of one voxel.
+#[derive(Clone, Copy)]
+struct VoxelState {
+    g: f64,
+    parent: u32,
+    closed: bool,
+}
+
+const UNSEEN: VoxelState = VoxelState { g: f64::INFINITY, parent: u32::MAX, closed: false };
+
+/// Search state stored in lazily allocated 8 x 8 x 8 blocks: dense-array speed without
+/// allocating state for the whole (possibly 10^8-voxel) grid.
+struct BlockStates {
+    nbx: usize,
+    nby: usize,
+    slot: Vec<u32>,
+    blocks: Vec<VoxelState>,
+}
+
+impl BlockStates {
+    fn new(g: &Grid3) -> Self {
+        let (nbx, nby, nbz) = (g.nx.div_ceil(8), g.ny.div_ceil(8), g.nz.div_ceil(8));
+        Self { nbx, nby, slot: vec![u32::MAX; nbx * nby * nbz], blocks: Vec::new() }
     }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(8) ^ b as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    #[inline]
+    fn get_mut(&mut self, x: i64, y: i64, z: i64) -> &mut VoxelState {
+        let (x, y, z) = (x as usize, y as usize, z as usize);
+        let b = ((z >> 3) * self.nby + (y >> 3)) * self.nbx + (x >> 3);
+        let mut s = self.slot[b];
+        if s == u32::MAX {
+            s = (self.blocks.len() / 512) as u32;
+            self.slot[b] = s;
+            self.blocks.extend(std::iter::repeat_n(UNSEEN, 512));
         }
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.0 = (v as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29);
+        let off = ((z & 7) << 6) | ((y & 7) << 3) | (x & 7);
+        &mut self.blocks[s as usize * 512 + off]
     }
 }
-type FastMap<V> = HashMap<u32, V, BuildHasherDefault<MulHasher>>;
 
 #[derive(Clone, Copy, PartialEq)]
 struct Entry3 {
     f: f64,
     g: f64,
-    idx: u32,
+    x: u16,
+    y: u16,
+    z: u16,
 }
 impl Eq for Entry3 {}
 impl Ord for Entry3 {
@@ -172,33 +199,32 @@ pub fn astar3d(grid: &Grid3, start: (usize, usize, usize), goal: (usize, usize, 
     };
     let (gx, gy, gz) = (goal.0 as i64, goal.1 as i64, goal.2 as i64);
     let h = |x: i64, y: i64, z: i64| octile3(gx - x, gy - y, gz - z);
-    let s = grid.index(start.0, start.1, start.2) as u32;
-    let t = grid.index(goal.0, goal.1, goal.2) as u32;
-    // (g, parent, closed)
-    let mut state: FastMap<(f64, u32, bool)> = FastMap::default();
+    let mut state = BlockStates::new(grid);
     let mut open = BinaryHeap::new();
-    state.insert(s, (0.0, u32::MAX, false));
-    open.push(Entry3 { f: h(start.0 as i64, start.1 as i64, start.2 as i64), g: 0.0, idx: s });
+    let (sx, sy, sz) = (start.0 as i64, start.1 as i64, start.2 as i64);
+    *state.get_mut(sx, sy, sz) = VoxelState { g: 0.0, parent: u32::MAX, closed: false };
+    open.push(Entry3 { f: h(sx, sy, sz), g: 0.0, x: sx as u16, y: sy as u16, z: sz as u16 });
     let mut expanded = 0;
-    while let Some(Entry3 { g, idx, .. }) = open.pop() {
-        let st = state.get_mut(&idx).expect("every queued voxel has a state");
-        if st.2 || g > st.0 {
+    while let Some(Entry3 { g, x, y, z, .. }) = open.pop() {
+        let (x, y, z) = (x as i64, y as i64, z as i64);
+        let st = state.get_mut(x, y, z);
+        if st.closed || g > st.g {
             continue;
         }
-        st.2 = true;
+        st.closed = true;
         expanded += 1;
-        if idx == t {
-            let mut voxels = Vec::new();
-            let mut cur = idx;
+        if (x, y, z) == (gx, gy, gz) {
+            let mut voxels = vec![(x as usize, y as usize, z as usize)];
+            let mut cur = state.get_mut(x, y, z).parent;
             while cur != u32::MAX {
-                let (x, y, z) = coords(cur);
-                voxels.push((x as usize, y as usize, z as usize));
-                cur = state[&cur].1;
+                let (cx, cy, cz) = coords(cur);
+                voxels.push((cx as usize, cy as usize, cz as usize));
+                cur = state.get_mut(cx, cy, cz).parent;
             }
             voxels.reverse();
             return Ok(Some(Path3 { voxels, cost: g, expanded }));
         }
-        let (x, y, z) = coords(idx);
+        let idx = grid.index(x as usize, y as usize, z as usize) as u32;
         let mut free = 0u32;
         for dz in -1..=1 {
             for dy in -1..=1 {
@@ -214,14 +240,13 @@ pub fn astar3d(grid: &Grid3, start: (usize, usize, usize), goal: (usize, usize, 
                 continue;
             }
             let (nx, ny, nz) = (x + dx, y + dy, z + dz);
-            let ni = grid.index(nx as usize, ny as usize, nz as usize) as u32;
             let ng = g + c;
-            let e = state.entry(ni).or_insert((f64::INFINITY, u32::MAX, false));
-            if e.2 || ng >= e.0 {
+            let e = state.get_mut(nx, ny, nz);
+            if e.closed || ng >= e.g {
                 continue;
             }
-            *e = (ng, idx, false);
-            open.push(Entry3 { f: ng + h(nx, ny, nz), g: ng, idx: ni });
+            *e = VoxelState { g: ng, parent: idx, closed: false };
+            open.push(Entry3 { f: ng + h(nx, ny, nz), g: ng, x: nx as u16, y: ny as u16, z: nz as u16 });
         }
     }
     Ok(None)
