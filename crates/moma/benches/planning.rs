@@ -251,6 +251,9 @@ fn bench_dstar(cr: &mut Criterion) {
 fn all(c: &mut Criterion) {
     let cases: Vec<MapCase> = MAPS.iter().map(|&m| load_case(m)).collect();
     per_query_table(&cases);
+    if std::env::var_os("MOMA_BENCH_TABLE_ONLY").is_some() {
+        return;
+    }
     bench_astar(c, &cases);
     bench_edt(c);
     bench_dstar(c);

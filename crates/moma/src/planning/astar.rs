@@ -164,38 +164,72 @@ impl SearchGrid {
     }
 }
 
+/// The open list: a binary heap of `(f, cell)` plus a stack for the entries whose f equals
+/// the last popped f. A* with a consistent heuristic pops non-decreasing f (f's IEEE bits
+/// serve as exact integer keys), and in open areas most successors keep the parent's f:
+/// those skip the heap entirely, and leaving the stack last-in first-out breaks f ties
+/// toward the most recently generated (deepest, larger-g) cells.
+#[derive(Debug, Clone, Default)]
+struct OpenList {
+    last: u64,
+    ties: Vec<u32>,
+    heap: BinaryHeap<std::cmp::Reverse<(u64, u32)>>,
+}
+
+impl OpenList {
+    fn clear(&mut self) {
+        self.last = 0;
+        self.ties.clear();
+        self.heap.clear();
+    }
+
+    /// Pushes `key`, clamped to the last popped key (float rounding can put a successor's
+    /// f one ulp below its parent's; treating it as equal is harmless).
+    #[inline]
+    fn push(&mut self, key: u64, idx: u32) {
+        if key <= self.last {
+            self.ties.push(idx);
+        } else {
+            self.heap.push(std::cmp::Reverse((key, idx)));
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(u64, u32)> {
+        if let Some(i) = self.ties.pop() {
+            return Some((self.last, i));
+        }
+        let std::cmp::Reverse((k, i)) = self.heap.pop()?;
+        self.last = k;
+        Some((k, i))
+    }
+}
+
+/// Per-cell search state, 16 bytes so one cache line access serves a neighbour.
+#[derive(Clone, Copy, Debug, Default)]
+struct CellState {
+    g: f64,
+    parent: u32,
+    stamp: u32,
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Node {
     f: f64,
-    g: f64,
     idx: u32,
-    x: u16,
-    y: u16,
 }
 impl PartialEq for Node {
     fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
+        self.f == o.f && self.idx == o.idx
     }
 }
 impl Eq for Node {}
 impl Ord for Node {
-    #[inline]
     fn cmp(&self, o: &Self) -> Ordering {
-        // BinaryHeap is a max-heap: the "greatest" node has the smallest f, then the
-        // largest g. Costs are finite and non-negative, so `partial_cmp` never fails.
-        if self.f != o.f {
-            if self.f < o.f { Ordering::Greater } else { Ordering::Less }
-        } else if self.g > o.g {
-            Ordering::Greater
-        } else if self.g < o.g {
-            Ordering::Less
-        } else {
-            Ordering::Equal
-        }
+        o.f.total_cmp(&self.f).then(o.idx.cmp(&self.idx))
     }
 }
 impl PartialOrd for Node {
-    #[inline]
     fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
         Some(self.cmp(o))
     }
@@ -205,11 +239,9 @@ impl PartialOrd for Node {
 /// of queries without clearing (a generation counter invalidates old entries).
 #[derive(Debug, Default, Clone)]
 pub struct AstarWorkspace {
-    g: Vec<f64>,
-    parent: Vec<u32>,
-    stamp: Vec<u32>,
+    state: Vec<CellState>,
     generation: u32,
-    heap: BinaryHeap<Node>,
+    heap: OpenList,
 }
 
 impl AstarWorkspace {
@@ -219,15 +251,13 @@ impl AstarWorkspace {
     }
 
     fn prepare(&mut self, n: usize) {
-        if self.stamp.len() != n {
-            self.g = vec![0.0; n];
-            self.parent = vec![u32::MAX; n];
-            self.stamp = vec![0; n];
+        if self.state.len() != n {
+            self.state = vec![CellState::default(); n];
             self.generation = 0;
         }
         // Stamps: 2·gen = generated this query, 2·gen + 1 = closed this query.
         if self.generation >= u32::MAX / 2 - 1 {
-            self.stamp.fill(0);
+            self.state.iter_mut().for_each(|c| c.stamp = 0);
             self.generation = 0;
         }
         self.generation += 1;
@@ -273,7 +303,7 @@ pub fn astar_with(
         while cur != u32::MAX {
             let c = cur as usize;
             cells.push((c % grid.pw - 1, c / grid.pw - 1));
-            cur = ws.parent[c];
+            cur = ws.state[c].parent;
         }
         cells.reverse();
         GridPath { cells, cost, expanded }
@@ -311,45 +341,52 @@ fn search<const W: bool>(
     ws.prepare(n);
     let open_stamp = ws.generation * 2;
     let closed_stamp = open_stamp + 1;
-    let pw = grid.pw as isize;
+    let pw = grid.pw;
+    let pwi = pw as isize;
+    let inv_pw = 1.0 / pw as f64;
     let pass = &grid.pass[..];
-    let g = &mut ws.g[..];
-    let parent = &mut ws.parent[..];
-    let stamp = &mut ws.stamp[..];
+    let st = &mut ws.state[..];
     let mut heap = std::mem::take(&mut ws.heap);
     heap.clear();
-    let (gx, gy) = (goal.0 as i64, goal.1 as i64);
+    // Heuristic in padded coordinates (the offset cancels).
+    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
     let h = |x: i64, y: i64| octile(gx - x, gy - y);
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
-    g[s] = 0.0;
-    parent[s] = u32::MAX;
-    stamp[s] = open_stamp;
-    heap.push(Node { f: h(start.0 as i64, start.1 as i64), g: 0.0, idx: s as u32, x: start.0 as u16, y: start.1 as u16 });
-    // Neighbour order: E, W, N(+y), S(−y), then diagonals NE, NW, SE, SW.
-    let card: [(isize, i64, i64); 4] = [(1, 1, 0), (-1, -1, 0), (pw, 0, 1), (-pw, 0, -1)];
-    // Each diagonal with the indices (into `card`) of the two cells it passes between.
+    st[s] = CellState { g: 0.0, parent: u32::MAX, stamp: open_stamp };
+    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1).to_bits(), s as u32);
+    // Neighbour order: E, W, N(+y), S(−y), then diagonals NE, NW, SE, SW, each with the
+    // indices (into the cardinals) of the two cells it passes between.
+    let card: [(isize, i64, i64); 4] = [(1, 1, 0), (-1, -1, 0), (pwi, 0, 1), (-pwi, 0, -1)];
     let diag: [(isize, i64, i64, usize, usize); 4] = [
-        (pw + 1, 1, 1, 0, 2),
-        (pw - 1, -1, 1, 1, 2),
-        (-pw + 1, 1, -1, 0, 3),
-        (-pw - 1, -1, -1, 1, 3),
+        (pwi + 1, 1, 1, 0, 2),
+        (pwi - 1, -1, 1, 1, 2),
+        (-pwi + 1, 1, -1, 0, 3),
+        (-pwi - 1, -1, -1, 1, 3),
     ];
     let mut expanded = 0usize;
     let mut result = None;
-    while let Some(node) = heap.pop() {
-        let u = node.idx as usize;
-        if stamp[u] == closed_stamp {
+    while let Some((_, ui)) = heap.pop() {
+        let u = ui as usize;
+        let su = st[u];
+        if su.stamp == closed_stamp {
             continue;
         }
-        stamp[u] = closed_stamp;
+        st[u].stamp = closed_stamp;
         expanded += 1;
         if u == t {
-            result = Some(node.g);
+            result = Some(su.g);
             break;
         }
-        let (x, y) = (node.x as i64, node.y as i64);
-        let gu = node.g;
+        // Row and column without an integer division: a float estimate, corrected.
+        let mut yy = (u as f64 * inv_pw) as usize;
+        if yy * pw > u {
+            yy -= 1;
+        } else if (yy + 1) * pw <= u {
+            yy += 1;
+        }
+        let (x, y) = ((u - yy * pw) as i64, yy as i64);
+        let gu = su.g;
         let mut open_card = [false; 4];
         for (k, &(off, dx, dy)) in card.iter().enumerate() {
             let v = (u as isize + off) as usize;
@@ -357,16 +394,14 @@ fn search<const W: bool>(
                 continue;
             }
             open_card[k] = true;
-            if stamp[v] == closed_stamp {
+            let sv = &mut st[v];
+            if sv.stamp == closed_stamp {
                 continue;
             }
             let ng = if W { gu + weight[v] as f64 } else { gu + 1.0 };
-            if stamp[v] != open_stamp || ng < g[v] {
-                stamp[v] = open_stamp;
-                g[v] = ng;
-                parent[v] = u as u32;
-                let (vx, vy) = (x + dx, y + dy);
-                heap.push(Node { f: ng + h(vx, vy), g: ng, idx: v as u32, x: vx as u16, y: vy as u16 });
+            if sv.stamp != open_stamp || ng < sv.g {
+                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
+                heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
             }
         }
         for &(off, dx, dy, a, b) in &diag {
@@ -374,16 +409,17 @@ fn search<const W: bool>(
                 continue;
             }
             let v = (u as isize + off) as usize;
-            if !pass[v] || stamp[v] == closed_stamp {
+            if !pass[v] {
+                continue;
+            }
+            let sv = &mut st[v];
+            if sv.stamp == closed_stamp {
                 continue;
             }
             let ng = if W { gu + SQRT2 * weight[v] as f64 } else { gu + SQRT2 };
-            if stamp[v] != open_stamp || ng < g[v] {
-                stamp[v] = open_stamp;
-                g[v] = ng;
-                parent[v] = u as u32;
-                let (vx, vy) = (x + dx, y + dy);
-                heap.push(Node { f: ng + h(vx, vy), g: ng, idx: v as u32, x: vx as u16, y: vy as u16 });
+            if sv.stamp != open_stamp || ng < sv.g {
+                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
+                heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
             }
         }
     }
@@ -391,7 +427,6 @@ fn search<const W: bool>(
     ws.heap = heap;
     result
 }
-
 
 /// Dijkstra wavefront from `goal` over the same move model: the geodesic (shortest-path)
 /// distance in cells from every cell to the goal, `f64::INFINITY` where unreachable or
@@ -405,7 +440,7 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
     let t = grid.pidx(goal.0, goal.1);
     dist_p[t] = 0.0;
     let mut heap = BinaryHeap::new();
-    heap.push(Node { f: 0.0, g: 0.0, idx: t as u32, x: 0, y: 0 });
+    heap.push(Node { f: 0.0, idx: t as u32 });
     let card = [1isize, -1, pw, -pw];
     let diag = [(pw + 1, 0, 2), (pw - 1, 1, 2), (-pw + 1, 0, 3), (-pw - 1, 1, 3)];
     while let Some(node) = heap.pop() {
@@ -428,7 +463,7 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
             let nd = du + wu;
             if nd < dist_p[v] {
                 dist_p[v] = nd;
-                heap.push(Node { f: nd, g: 0.0, idx: v as u32, x: 0, y: 0 });
+                heap.push(Node { f: nd, idx: v as u32 });
             }
         }
         for &(off, a, b) in &diag {
@@ -439,7 +474,7 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
             let nd = du + SQRT2 * wu;
             if nd < dist_p[v] {
                 dist_p[v] = nd;
-                heap.push(Node { f: nd, g: 0.0, idx: v as u32, x: 0, y: 0 });
+                heap.push(Node { f: nd, idx: v as u32 });
             }
         }
     }

@@ -136,9 +136,10 @@ fn envelope_row(row: &[u32], inf: u32, f: &mut [f64], v: &mut [u32], z: &mut [f6
             k += 1;
         }
         let vk = v[k] as usize;
-        let d = qf - vk as f64;
-        let gv = f[vk] - (vk as f64) * (vk as f64);
-        dst[q] = (d * d + gv).sqrt() as f32;
+        let d = q as i64 - vk as i64;
+        let gv = row[vk] as i64;
+        // Exact integer squared distance; f32 square root (correctly rounded).
+        dst[q] = ((d * d + gv * gv) as f32).sqrt();
     }
 }
 
