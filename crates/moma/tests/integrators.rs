@@ -1,0 +1,196 @@
+//! Integrator tests: RK4 order, Dormand–Prince 5(4) accuracy against closed-form
+//! solutions, step statistics, NaN / blow-up detection, the step-count guard and error
+//! propagation from the right-hand side.
+
+use moma::Error;
+use moma::sim::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4};
+
+/// Harmonic oscillator ẍ = −ω² x; x(t) = cos ωt, ẋ = −ω sin ωt.
+struct Oscillator {
+    omega: f64,
+}
+impl OdeSystem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> moma::Result<()> {
+        dx[0] = x[1];
+        dx[1] = -self.omega * self.omega * x[0];
+        Ok(())
+    }
+}
+
+/// Time-dependent scalar ODE ẋ = x cos t; x(t) = exp(sin t).
+struct ExpSin;
+impl OdeSystem for ExpSin {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> moma::Result<()> {
+        dx[0] = x[0] * t.cos();
+        Ok(())
+    }
+}
+
+/// ẋ = x², blows up at t = 1 from x(0) = 1.
+struct Riccati;
+impl OdeSystem for Riccati {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> moma::Result<()> {
+        dx[0] = x[0] * x[0];
+        Ok(())
+    }
+}
+
+/// Fails with a singular error once t > 0.5.
+struct FailsLater;
+impl OdeSystem for FailsLater {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) -> moma::Result<()> {
+        if t > 0.5 {
+            return Err(Error::Singular {
+                what: "test matrix".into(),
+                detail: None,
+            });
+        }
+        dx[0] = 1.0;
+        Ok(())
+    }
+}
+
+fn rk4_error(steps: usize) -> f64 {
+    let mut rk = Rk4::new(1);
+    let mut x = [1.0];
+    rk.integrate(&mut ExpSin, 0.0, &mut x, 2.0, steps).unwrap();
+    (x[0] - 2f64.sin().exp()).abs()
+}
+
+#[test]
+fn rk4_is_fourth_order() {
+    let (e1, e2, e3) = (rk4_error(20), rk4_error(40), rk4_error(80));
+    let (r1, r2) = (e1 / e2, e2 / e3);
+    assert!((14.0..18.0).contains(&r1), "ratio {r1}");
+    assert!((14.0..18.0).contains(&r2), "ratio {r2}");
+}
+
+#[test]
+fn rk4_counts_steps_and_evaluations() {
+    let mut rk = Rk4::new(2);
+    let mut x = [1.0, 0.0];
+    rk.integrate(&mut Oscillator { omega: 2.0 }, 0.0, &mut x, 1.0, 1000)
+        .unwrap();
+    assert_eq!(rk.stats.accepted, 1000);
+    assert_eq!(rk.stats.rhs_evals, 4000);
+    assert!((x[0] - 2f64.cos()).abs() < 1e-11);
+}
+
+#[test]
+fn dormand_prince_meets_tolerance_on_known_solutions() {
+    for tol in [1e-6, 1e-9, 1e-12] {
+        let mut dp = DormandPrince45::new(2, AdaptiveOptions::with_tolerance(tol)).unwrap();
+        let times: Vec<f64> = (1..=10).map(|k| k as f64).collect();
+        let omega = 3.0;
+        let out = dp
+            .solve_at(&mut Oscillator { omega }, 0.0, &[1.0, 0.0], &times)
+            .unwrap();
+        for (t, row) in times.iter().zip(&out) {
+            let err =
+                (row[0] - (omega * t).cos()).abs() + (row[1] + omega * (omega * t).sin()).abs();
+            // global error stays within a modest multiple of the local tolerance
+            assert!(err < 200.0 * tol, "tol {tol}: t = {t}, error {err:e}");
+        }
+        assert!(dp.stats.accepted > 0);
+        assert_eq!(dp.stats.rhs_evals >= 6 * dp.stats.accepted, true);
+    }
+    let mut dp = DormandPrince45::new(1, AdaptiveOptions::with_tolerance(1e-12)).unwrap();
+    let out = dp
+        .solve_at(&mut ExpSin, 0.0, &[1.0], &[0.3, 1.0, 5.0])
+        .unwrap();
+    for (t, row) in [0.3f64, 1.0, 5.0].iter().zip(&out) {
+        assert!((row[0] - t.sin().exp()).abs() < 1e-11);
+    }
+}
+
+#[test]
+fn dormand_prince_fewer_steps_at_looser_tolerance() {
+    let steps = |tol: f64| {
+        let mut dp = DormandPrince45::new(2, AdaptiveOptions::with_tolerance(tol)).unwrap();
+        dp.solve_at(&mut Oscillator { omega: 1.0 }, 0.0, &[1.0, 0.0], &[10.0])
+            .unwrap();
+        dp.stats.accepted
+    };
+    let (a, b) = (steps(1e-6), steps(1e-11));
+    // fifth order: 10^5 tighter tolerance ≈ 10× more steps
+    assert!(b > 5 * a && b < 20 * a, "{a} vs {b}");
+}
+
+#[test]
+fn blow_up_is_reported_with_time() {
+    let mut dp = DormandPrince45::new(1, AdaptiveOptions::with_tolerance(1e-9)).unwrap();
+    match dp.solve_at(&mut Riccati, 0.0, &[1.0], &[2.0]) {
+        Err(Error::Numerical { t, .. }) => assert!(t > 0.9 && t <= 1.0, "t = {t}"),
+        other => panic!("expected a numerical error, got {other:?}"),
+    }
+    let mut rk = Rk4::new(1);
+    let mut x = [1.0];
+    assert!(matches!(
+        rk.integrate(&mut Riccati, 0.0, &mut x, 2.0, 100),
+        Err(Error::Numerical { .. })
+    ));
+}
+
+#[test]
+fn nan_state_is_rejected() {
+    let mut dp = DormandPrince45::new(2, AdaptiveOptions::default()).unwrap();
+    let r = dp.solve_at(
+        &mut Oscillator { omega: 1.0 },
+        0.0,
+        &[f64::NAN, 0.0],
+        &[1.0],
+    );
+    assert!(matches!(r, Err(Error::Numerical { .. })));
+}
+
+#[test]
+fn step_count_guard_and_rhs_errors_propagate() {
+    let opts = AdaptiveOptions {
+        max_steps: 5,
+        ..AdaptiveOptions::with_tolerance(1e-12)
+    };
+    let mut dp = DormandPrince45::new(2, opts).unwrap();
+    let r = dp.solve_at(&mut Oscillator { omega: 10.0 }, 0.0, &[1.0, 0.0], &[100.0]);
+    assert!(matches!(r, Err(Error::Numerical { .. })));
+    let mut dp = DormandPrince45::new(1, AdaptiveOptions::default()).unwrap();
+    assert!(matches!(
+        dp.solve_at(&mut FailsLater, 0.0, &[0.0], &[1.0]),
+        Err(Error::Singular { .. })
+    ));
+}
+
+#[test]
+fn invalid_options_and_times_are_rejected() {
+    assert!(DormandPrince45::new(1, AdaptiveOptions::with_tolerance(-1.0)).is_err());
+    assert!(
+        DormandPrince45::new(
+            1,
+            AdaptiveOptions {
+                rtol: f64::NAN,
+                ..Default::default()
+            }
+        )
+        .is_err()
+    );
+    let mut dp = DormandPrince45::new(1, AdaptiveOptions::default()).unwrap();
+    assert!(dp.solve_at(&mut ExpSin, 0.0, &[1.0], &[1.0, 0.5]).is_err());
+    // wrong state length
+    assert!(matches!(
+        dp.solve_at(&mut ExpSin, 0.0, &[1.0, 2.0], &[1.0]),
+        Err(Error::WrongLength { .. })
+    ));
+    let mut rk = Rk4::new(1);
+    assert!(rk.integrate(&mut ExpSin, 0.0, &mut [1.0], 1.0, 0).is_err());
+}
