@@ -182,7 +182,7 @@ impl AdaptiveOptions {
         if !(self.atol > 0.0 && self.atol.is_finite()) {
             return Err(Error::invalid("atol", "must be positive and finite"));
         }
-        if !(self.max_step > 0.0) {
+        if self.max_step.is_nan() || self.max_step <= 0.0 {
             return Err(Error::invalid("max_step", "must be positive"));
         }
         if let Some(h) = self.initial_step
