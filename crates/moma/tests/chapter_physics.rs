@@ -389,3 +389,30 @@ fn singular_and_invalid_inputs_are_reported() {
     assert!(matches!(r, Err(Error::Singular { .. })));
     let _: SMatrix<f64, 1, 1> = SMatrix::zeros();
 }
+
+#[test]
+fn dormand_prince_45_also_reproduces_the_m5_reference_trajectories() {
+    for c in cases("m5_mobile_manipulator_3d") {
+        let m5 = m5_case(&c, None);
+        let (q, v, u) = (
+            vec_of::<6>(&c["state"]["q"]),
+            vec_of::<5>(&c["state"]["v"]),
+            vec_of::<5>(&c["inputs"]["u"]),
+        );
+        let mut ode = ReducedOde {
+            system: &m5,
+            input: u,
+        };
+        let mut dp = DormandPrince45::new(11, AdaptiveOptions::with_tolerance(1e-12)).unwrap();
+        let x0: Vec<f64> = q.iter().chain(v.iter()).copied().collect();
+        let times: Vec<f64> = serde_json::from_value(c["trajectory"]["t"].clone()).unwrap();
+        let rows = dp.solve_at(&mut ode, 0.0, &x0, &times).unwrap();
+        for (k, r) in rows.iter().enumerate() {
+            let want_q: Vec<f64> = serde_json::from_value(c["trajectory"]["q"][k].clone()).unwrap();
+            let want_v: Vec<f64> = serde_json::from_value(c["trajectory"]["v"][k].clone()).unwrap();
+            for (a, b) in r.iter().zip(want_q.iter().chain(want_v.iter())) {
+                assert!((a - b).abs() < 1e-8, "{a} vs {b}");
+            }
+        }
+    }
+}

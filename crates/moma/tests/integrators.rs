@@ -194,3 +194,71 @@ fn invalid_options_and_times_are_rejected() {
     let mut rk = Rk4::new(1);
     assert!(rk.integrate(&mut ExpSin, 0.0, &mut [1.0], 1.0, 0).is_err());
 }
+
+#[test]
+fn dop853_meets_tolerance_with_fewer_steps_than_dp45() {
+    use moma::sim::Dop853;
+    let times: Vec<f64> = (1..=10).map(|k| k as f64).collect();
+    let omega = 3.0;
+    for tol in [1e-6, 1e-9, 1e-12] {
+        let mut d8 = Dop853::new(2, AdaptiveOptions::with_tolerance(tol)).unwrap();
+        let out = d8
+            .solve_at(&mut Oscillator { omega }, 0.0, &[1.0, 0.0], &times)
+            .unwrap();
+        for (t, row) in times.iter().zip(&out) {
+            let err =
+                (row[0] - (omega * t).cos()).abs() + (row[1] + omega * (omega * t).sin()).abs();
+            assert!(err < 200.0 * tol, "tol {tol}: t = {t}, error {err:e}");
+        }
+        let mut d5 = DormandPrince45::new(2, AdaptiveOptions::with_tolerance(tol)).unwrap();
+        d5.solve_at(&mut Oscillator { omega }, 0.0, &[1.0, 0.0], &times)
+            .unwrap();
+        if tol <= 1e-9 {
+            assert!(
+                d8.stats.accepted * 2 < d5.stats.accepted,
+                "{} vs {}",
+                d8.stats.accepted,
+                d5.stats.accepted
+            );
+        }
+        assert!(d8.stats.rhs_evals >= 12 * d8.stats.accepted);
+    }
+    let mut d8 = Dop853::new(1, AdaptiveOptions::with_tolerance(1e-13)).unwrap();
+    let out = d8
+        .solve_at(&mut ExpSin, 0.0, &[1.0], &[0.3, 1.0, 5.0])
+        .unwrap();
+    for (t, row) in [0.3f64, 1.0, 5.0].iter().zip(&out) {
+        assert!((row[0] - t.sin().exp()).abs() < 1e-12);
+    }
+    // blow-up and the step guard work the same way
+    let mut d8 = Dop853::new(1, AdaptiveOptions::with_tolerance(1e-9)).unwrap();
+    assert!(matches!(
+        d8.solve_at(&mut Riccati, 0.0, &[1.0], &[2.0]),
+        Err(Error::Numerical { .. })
+    ));
+}
+
+/// Local error of one DOP853 step scales like h⁹ (8th-order method).
+#[test]
+fn dop853_is_eighth_order() {
+    use moma::sim::Dop853;
+    let err = |h: f64| {
+        // a single forced step of size h: max_step = h, loose tolerance so it is accepted
+        let opts = AdaptiveOptions {
+            initial_step: Some(h),
+            max_step: h,
+            ..AdaptiveOptions::with_tolerance(1.0)
+        };
+        let mut d8 = Dop853::new(1, opts).unwrap();
+        let out = d8.solve_at(&mut ExpSin, 0.0, &[1.0], &[8.0 * h]).unwrap();
+        assert_eq!(d8.stats.accepted, 8);
+        (out[0][0] - (8.0 * h).sin().exp()).abs()
+    };
+    let (e1, e2) = (err(0.2), err(0.1));
+    let ratio = e1 / e2;
+    // global error of an order-8 method: ratio 2^8 = 256 on halving h
+    assert!(
+        ratio > 150.0 && ratio < 400.0,
+        "ratio {ratio} ({e1:e}, {e2:e})"
+    );
+}

@@ -153,7 +153,7 @@ impl Unicycle {
     }
 
     /// States `(q, v)` at `times` under constant `u`, from `(q0, v0)` at t = 0
-    /// (Dormand–Prince 5(4) at `rtol = atol = tol`).
+    /// (DOP853 at `rtol = atol = tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,

@@ -217,7 +217,7 @@ impl PlatformArm {
         0.5 * ct.qdot.dot(&(h * ct.qdot))
     }
 
-    /// States `(q, v)` at `times` under constant `u` (Dormand–Prince 5(4), tolerance `tol`).
+    /// States `(q, v)` at `times` under constant `u` (DOP853, tolerance `tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,

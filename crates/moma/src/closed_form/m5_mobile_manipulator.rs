@@ -427,7 +427,7 @@ impl MobileManipulator {
         0.5 * ct.qdot.dot(&(h * ct.qdot)) + pot
     }
 
-    /// States `(q, v)` at `times` under constant `u` (Dormand–Prince 5(4), tolerance `tol`).
+    /// States `(q, v)` at `times` under constant `u` (DOP853, tolerance `tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,

@@ -216,7 +216,7 @@ where
     }
 }
 
-/// Integrates a [`ReducedOde`] with Dormand–Prince 5(4) at `rtol = atol = tol` and returns
+/// Integrates a [`ReducedOde`] with DOP853 at `rtol = atol = tol` and returns
 /// `(q, v)` at each requested time.
 #[allow(clippy::type_complexity)]
 pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
@@ -234,8 +234,7 @@ where
     let mut x0 = vec![0.0; N + NV];
     x0[..N].copy_from_slice(q0.as_slice());
     x0[N..].copy_from_slice(v0.as_slice());
-    let mut dp =
-        crate::sim::DormandPrince45::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+    let mut dp = crate::sim::Dop853::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
     let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
     Ok(rows
         .iter()
