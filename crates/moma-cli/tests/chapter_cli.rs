@@ -71,6 +71,15 @@ fn eval_reproduces_every_reference_file() {
             c.remove("outputs");
             let t = c["trajectory"]["t"].clone();
             c.insert("trajectory".into(), serde_json::json!({ "t": t }));
+            if let Some(ctl) = c.get_mut("control").and_then(|v| v.as_object_mut()) {
+                for k in [
+                    "x_d0", "xdot_d0", "xddot_d0", "tau_x0", "u0", "e0", "edot0", "W0",
+                ] {
+                    ctl.remove(k);
+                }
+                let t = ctl["closed_loop"]["t"].clone();
+                ctl.insert("closed_loop".into(), serde_json::json!({ "t": t }));
+            }
         }
         let inp = dir.join(format!("{name}.in.json"));
         let out = dir.join(format!("{name}.out.json"));
@@ -115,6 +124,26 @@ fn eval_reproduces_every_reference_file() {
                 false,
             );
             assert_eq!(g["params"], w["params"]);
+            if let Some(ctl) = w.get("control") {
+                let mut at0 = ctl.clone();
+                let cl = at0.as_object_mut().unwrap().remove("closed_loop").unwrap();
+                compare(
+                    &format!("{name} {} control", w["id"]),
+                    &g["control"],
+                    &at0,
+                    rel,
+                    true,
+                );
+                compare(
+                    &format!("{name} {} closed loop", w["id"]),
+                    &g["control"]["closed_loop"],
+                    &cl,
+                    abs,
+                    false,
+                );
+                // the set-up is echoed exactly
+                assert_eq!(g["control"]["Kp"], ctl["Kp"]);
+            }
         }
     }
     // stdout mode

@@ -416,3 +416,55 @@ fn dormand_prince_45_also_reproduces_the_m5_reference_trajectories() {
         }
     }
 }
+
+#[test]
+fn m5_task_space_skew_and_closed_loop_lyapunov_balance() {
+    use moma::closed_form::m5_mobile_manipulator::TaskController;
+    for c in cases("m5_mobile_manipulator_3d") {
+        let m5 = m5_case(&c, None);
+        let q = vec_of::<6>(&c["state"]["q"]);
+        let v = vec_of::<5>(&c["state"]["v"]);
+        let u = vec_of::<5>(&c["inputs"]["u"]);
+        let o = m5.evaluate(&q, &v, &u).unwrap();
+        // Ḣx − 2 BV skew-symmetric (Ḣx by central differences along q̇ = N_C v)
+        let eps = 1e-6;
+        let hx = |s: f64| m5.evaluate(&(q + o.qdot * s), &v, &u).unwrap().task.Hx;
+        let hxdot = (hx(eps) - hx(-eps)) / (2.0 * eps);
+        let k = hxdot - o.task.BV * 2.0;
+        assert!(
+            (k + k.transpose()).norm() < 1e-6 * (1.0 + hxdot.norm()),
+            "{}",
+            (k + k.transpose()).norm()
+        );
+
+        let ctl = &c["control"];
+        let mat = |key: &str| {
+            let rows: Vec<Vec<f64>> = serde_json::from_value(ctl[key].clone()).unwrap();
+            SMatrix::<f64, 5, 5>::from_fn(|i, j| rows[i][j])
+        };
+        let controller = TaskController {
+            x_ref: vec_of::<5>(&ctl["x_ref"]),
+            amp: vec_of::<5>(&ctl["amp"]),
+            omega: vec_of::<5>(&ctl["omega"]),
+            kp: mat("Kp"),
+            kd: mat("Kd"),
+        };
+        let (q0, v0) = (vec_of::<6>(&ctl["q0"]), vec_of::<5>(&ctl["v0"]));
+        let w0 = controller.control(&m5, 0.0, &q0, &v0).unwrap().w;
+        let times = [0.1, 0.2, 0.4, 0.6, 0.8, 1.0];
+        let samples = controller.simulate(&m5, &q0, &v0, &times, 1e-12).unwrap();
+        let mut last = w0;
+        for s in &samples {
+            // W(t) = W(0) − ∫ ėᵀ Kd ė dt, and W never increases
+            assert!(
+                (s.w - (w0 - s.dissipated)).abs() < 1e-9 * (1.0 + w0),
+                "t = {}: {} vs {}",
+                s.t,
+                s.w,
+                w0 - s.dissipated
+            );
+            assert!(s.w <= last + 1e-12);
+            last = s.w;
+        }
+    }
+}
