@@ -6,7 +6,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use moma::closed_form::ReducedOde;
 use moma::closed_form::lagrange;
 use moma::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
-use moma::sim::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4};
+use moma::sim::{AdaptiveOptions, Dop853, DormandPrince45, OdeSystem, Rk4};
 use nalgebra::SVector;
 use std::hint::black_box;
 
@@ -97,6 +97,21 @@ fn bench(c: &mut Criterion) {
             dp.stats.accepted, dp.stats.rejected, dp.stats.rhs_evals
         );
         c.bench_function(&format!("m5_dp45_1s_tol{tol:e}"), |b| {
+            b.iter(|| dp.solve_at(&mut ode, 0.0, black_box(&x0), &[1.0]).unwrap())
+        });
+    }
+    for tol in [1e-9, 1e-12] {
+        let mut ode = ReducedOde {
+            system: &m,
+            input: u,
+        };
+        let mut dp = Dop853::new(11, AdaptiveOptions::with_tolerance(tol)).unwrap();
+        dp.solve_at(&mut ode, 0.0, &x0, &[1.0]).unwrap();
+        eprintln!(
+            "m5 DOP853 tol {tol:e}: {} accepted, {} rejected, {} rhs evaluations per simulated second",
+            dp.stats.accepted, dp.stats.rejected, dp.stats.rhs_evals
+        );
+        c.bench_function(&format!("m5_dop853_1s_tol{tol:e}"), |b| {
             b.iter(|| dp.solve_at(&mut ode, 0.0, black_box(&x0), &[1.0]).unwrap())
         });
     }

@@ -237,7 +237,7 @@ fn evaluate_inner(
                     .ok_or_else(|| Error::invalid("balanced", "expected true or false"))?;
                 let p = &sys.params;
                 let scale = p.arm_mass() * (p.L1 + p.L2);
-                if b && !sys.is_balanced(1e-9 * scale.max(1.0)) {
+                if b && !sys.is_balanced(1e-6 * scale.max(1.0)) {
                     return Err(Error::invalid(
                         "balanced",
                         format!(
