@@ -360,3 +360,233 @@ fn m5_matches_multibody_in_joint_coordinates() {
         );
     }
 }
+
+/// Seeded random parameters and states (wider than the reference sets: negative d and
+/// counterweighted links included) — the closed forms must hold in general.
+#[test]
+fn random_robots_match_multibody() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261122);
+    for _ in 0..25 {
+        let mut r = |a: f64, b: f64| rng.random_range(a..b);
+        let m5p = MobileManipulatorParams {
+            M_cart: r(5.0, 50.0),
+            I_p: r(0.5, 5.0),
+            I_c: r(0.0, 0.1),
+            d: r(-0.5, 0.5),
+            L: r(-0.4, 0.4),
+            r_w: r(0.03, 0.2),
+            b: r(0.1, 0.5),
+            m1: r(0.5, 8.0),
+            m2: r(0.5, 8.0),
+            M1: r(0.0, 3.0),
+            M2: r(0.0, 3.0),
+            L1: r(0.2, 1.0),
+            L2: r(0.2, 1.0),
+            L1cm: r(-0.3, 0.6),
+            L2cm: r(-0.3, 0.6),
+            k1: r(0.01, 0.3),
+            k2: r(0.01, 0.3),
+            k1y: r(0.01, 0.3),
+            k2y: r(0.01, 0.3),
+            g: 9.81,
+        };
+        if m5p.d.abs() < 1e-3 {
+            continue;
+        }
+        let q = SVector::<f64, 6>::from_fn(|_, _| r(-3.0, 3.0));
+        let qd = SVector::<f64, 6>::from_fn(|_, _| r(-2.0, 2.0));
+        let p = m5p.clone();
+        let sys = MobileManipulator::new(m5p).unwrap();
+        let mut b = ModelBuilder::new("m5");
+        b.set_gravity(Vector3::new(0.0, 0.0, -p.g));
+        let base = planar_root(&mut b, p.M_cart, p.I_p);
+        let cap = b
+            .add_joint(
+                base,
+                "capstan",
+                JointType::RevoluteZ,
+                t(p.L, 0.0, 0.0),
+                JointLimits::unlimited(),
+            )
+            .unwrap();
+        b.append_body_inertia(
+            cap,
+            &Inertia::new(
+                0.0,
+                Vector3::zeros(),
+                Matrix3::from_diagonal(&Vector3::new(0.0, 0.0, p.I_c)),
+            ),
+            &SE3::identity(),
+        )
+        .unwrap();
+        vertical_arm(
+            &mut b,
+            cap,
+            SE3::identity(),
+            (p.m1, p.m2, p.M1, p.M2),
+            (p.L1, p.L2, p.L1cm, p.L2cm),
+            (p.k1, p.k2, p.k1y, p.k2y),
+        );
+        let model = b.build().unwrap();
+        let pm = joint_to_absolute();
+        let pinv = pm.try_inverse().unwrap();
+        let (qj, qjd) = (pinv * q, pinv * qd);
+        let mb = multibody_terms(
+            &model,
+            &DVector::from_column_slice(qj.as_slice()),
+            &DVector::from_column_slice(qjd.as_slice()),
+        );
+        let cf = lagrange::lagrange_terms(&sys, &q, &qd);
+        let pt = pm.transpose();
+        close("random m5 H_joint", &(pt * cf.mass * pm), &mb.h_mass);
+        close("random m5 C_joint", &(pt * cf.coriolis * pm), &mb.coriolis);
+        close(
+            "random m5 h_joint",
+            &(pt * cf.h),
+            &DMatrix::from_column_slice(6, 1, mb.h.as_slice()),
+        );
+        close(
+            "random m5 G_joint",
+            &(pt * cf.gravity),
+            &DMatrix::from_column_slice(6, 1, mb.g.as_slice()),
+        );
+
+        // m2 with the same kind of spread
+        let p2 = PlatformArmParams {
+            m_p: p.M_cart,
+            I_p: p.I_p,
+            d: p.d,
+            L: p.L,
+            r_w: p.r_w,
+            b: p.b,
+            m1: p.m1,
+            m2: p.m2,
+            M1: p.M1,
+            M2: p.M2,
+            L1: p.L1,
+            L2: p.L2,
+            L1cm: p.L1cm,
+            L2cm: p.L2cm,
+            k1: p.k1,
+            k2: p.k2,
+        };
+        let sys2 = PlatformArm::new(p2.clone()).unwrap();
+        let mut b = ModelBuilder::new("m2");
+        let base = planar_root(&mut b, p2.m_p, p2.I_p);
+        let j1 = b
+            .add_joint(
+                base,
+                "theta1",
+                JointType::RevoluteZ,
+                t(p2.L, 0.0, 0.0),
+                JointLimits::unlimited(),
+            )
+            .unwrap();
+        let link = |m: f64, lcm: f64, k: f64| {
+            Inertia::new(
+                m,
+                Vector3::new(lcm, 0.0, 0.0),
+                Matrix3::from_diagonal(&Vector3::new(0.0, 0.0, m * k * k)),
+            )
+        };
+        b.append_body_inertia(j1, &link(p2.m1, p2.L1cm, p2.k1), &SE3::identity())
+            .unwrap();
+        b.append_body_inertia(
+            j1,
+            &Inertia::point_mass(p2.M1, Vector3::new(p2.L1, 0.0, 0.0)),
+            &SE3::identity(),
+        )
+        .unwrap();
+        let j2 = b
+            .add_joint(
+                j1,
+                "theta2",
+                JointType::RevoluteZ,
+                t(p2.L1, 0.0, 0.0),
+                JointLimits::unlimited(),
+            )
+            .unwrap();
+        b.append_body_inertia(j2, &link(p2.m2, p2.L2cm, p2.k2), &SE3::identity())
+            .unwrap();
+        b.append_body_inertia(
+            j2,
+            &Inertia::point_mass(p2.M2, Vector3::new(p2.L2, 0.0, 0.0)),
+            &SE3::identity(),
+        )
+        .unwrap();
+        let model2 = b.build().unwrap();
+        let q2 = q.fixed_rows::<5>(0).into_owned();
+        let qd2 = qd.fixed_rows::<5>(0).into_owned();
+        let mb2 = multibody_terms(
+            &model2,
+            &DVector::from_column_slice(q2.as_slice()),
+            &DVector::from_column_slice(qd2.as_slice()),
+        );
+        let cf2 = lagrange::lagrange_terms(&sys2, &q2, &qd2);
+        close("random m2 H", &cf2.mass, &mb2.h_mass);
+        close("random m2 C", &cf2.coriolis, &mb2.coriolis);
+
+        // m4
+        let p4 = CartTwoLinkParams {
+            m1: p.m1,
+            m2: p.m2,
+            M1: p.M1,
+            M2: p.M2,
+            M_cart: p.M_cart,
+            L1: p.L1,
+            L2: p.L2,
+            L1cm: p.L1cm,
+            L2cm: p.L2cm,
+            k1: p.k1,
+            k2: p.k2,
+            g: p.g,
+        };
+        let sys4 = CartTwoLink::new(p4.clone()).unwrap();
+        let mut b = ModelBuilder::new("m4");
+        b.set_gravity(Vector3::new(0.0, 0.0, -p4.g));
+        let cart = b
+            .add_joint(
+                JointIndex(0),
+                "d0",
+                JointType::PrismaticX,
+                SE3::identity(),
+                JointLimits::unlimited(),
+            )
+            .unwrap();
+        b.append_body_inertia(
+            cart,
+            &Inertia::point_mass(p4.M_cart, Vector3::zeros()),
+            &SE3::identity(),
+        )
+        .unwrap();
+        vertical_arm(
+            &mut b,
+            cart,
+            SE3::identity(),
+            (p4.m1, p4.m2, p4.M1, p4.M2),
+            (p4.L1, p4.L2, p4.L1cm, p4.L2cm),
+            (p4.k1, p4.k2, 0.0, 0.0),
+        );
+        let model4 = b.build().unwrap();
+        let q4 = q.fixed_rows::<3>(3).into_owned();
+        let qd4 = qd.fixed_rows::<3>(3).into_owned();
+        let mb4 = multibody_terms(
+            &model4,
+            &DVector::from_column_slice(q4.as_slice()),
+            &DVector::from_column_slice(qd4.as_slice()),
+        );
+        let cf4 = lagrange::lagrange_terms(&sys4, &q4, &qd4);
+        close("random m4 H", &cf4.mass, &mb4.h_mass);
+        close(
+            "random m4 h",
+            &cf4.h,
+            &DMatrix::from_column_slice(3, 1, mb4.h.as_slice()),
+        );
+        close(
+            "random m4 G",
+            &cf4.gravity,
+            &DMatrix::from_column_slice(3, 1, mb4.g.as_slice()),
+        );
+    }
+}
