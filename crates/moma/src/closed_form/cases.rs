@@ -291,10 +291,11 @@ fn evaluate_inner(
 /// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
 /// Errors name the case id and the field.
 pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) -> Result<Value> {
-    let id = case
-        .get("id")
-        .map(|v| v.to_string())
-        .unwrap_or_else(|| format!("#{index}"));
+    let id = match case.get("id") {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => format!("#{index}"),
+    };
     let wrap = |e: Error| match e {
         Error::InvalidInput { field, message } => Error::InvalidInput {
             field: format!("case {id}: {field}"),
