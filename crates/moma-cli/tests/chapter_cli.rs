@@ -242,3 +242,13 @@ fn eval_errors_are_clear_and_leave_no_output() {
         &["case 0", "singular"],
     );
 }
+
+#[test]
+fn eval_rejects_a_bad_tolerance_and_a_missing_file() {
+    let r = moma(&["eval", data("m1_unicycle").to_str().unwrap(), "--tol", "-1"]);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--tol"));
+    let r = moma(&["eval", "/nonexistent/cases.json"]);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("cannot read case file"));
+}
