@@ -245,7 +245,7 @@ fn eval_errors_are_clear_and_leave_no_output() {
 
 #[test]
 fn eval_rejects_a_bad_tolerance_and_a_missing_file() {
-    let r = moma(&["eval", data("m1_unicycle").to_str().unwrap(), "--tol", "-1"]);
+    let r = moma(&["eval", data("m1_unicycle").to_str().unwrap(), "--tol=0"]);
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("--tol"));
     let r = moma(&["eval", "/nonexistent/cases.json"]);
