@@ -468,3 +468,46 @@ fn m5_task_space_skew_and_closed_loop_lyapunov_balance() {
         }
     }
 }
+
+#[test]
+fn model_state_round_trips_and_validates() {
+    use moma::closed_form::m5_mobile_manipulator::State;
+    let s =
+        State::from_slices(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0], &[6.0, 7.0, 8.0, 9.0, 10.0]).unwrap();
+    assert_eq!(State::from_ode(&s.to_ode()).unwrap(), s);
+    assert!(matches!(
+        State::from_slices(&[0.0; 5], &[0.0; 5]),
+        Err(Error::WrongLength { .. })
+    ));
+    assert!(matches!(
+        State::from_slices(&[f64::NAN; 6], &[0.0; 5]),
+        Err(Error::NonFinite { .. })
+    ));
+}
+
+#[test]
+fn state_derivative_matches_the_evaluated_outputs() {
+    for c in cases("m5_mobile_manipulator_3d") {
+        let m5 = m5_case(&c, None);
+        let s = moma::closed_form::m5_mobile_manipulator::State {
+            q: vec_of::<6>(&c["state"]["q"]),
+            v: vec_of::<5>(&c["state"]["v"]),
+        };
+        let u = vec_of::<5>(&c["inputs"]["u"]);
+        let d = m5.state_derivative(&s, &u).unwrap();
+        let o = m5.evaluate(&s.q, &s.v, &u).unwrap();
+        assert!((d.q - o.qdot).norm() < 1e-14);
+        assert!((d.v - o.vdot).norm() < 1e-10 * (1.0 + o.vdot.norm()));
+    }
+    for c in cases("m4_cart_two_link") {
+        let m4 = CartTwoLink::new(serde_json::from_value(c["params"].clone()).unwrap()).unwrap();
+        let s = moma::closed_form::m4_cart_two_link::State {
+            q: vec_of::<3>(&c["state"]["q"]),
+            v: vec_of::<3>(&c["state"]["qdot"]),
+        };
+        let u = vec_of::<3>(&c["inputs"]["u"]);
+        let d = m4.state_derivative(&s, &u).unwrap();
+        let want = vec_of::<3>(&c["outputs"]["qddot"]);
+        assert!((d.v - want).norm() < 1e-9 * (1.0 + want.norm()));
+    }
+}

@@ -12,6 +12,9 @@ use crate::error::Result;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// State `(q, v)` of this model.
+pub type State = super::ModelState<3, 2>;
+
 /// Parameters of the unicycle platform (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 pub struct UnicycleParams {
@@ -113,6 +116,15 @@ impl Unicycle {
         params.validate()?;
         velocity.check(params.d)?;
         Ok(Unicycle { params, velocity })
+    }
+
+    /// The reduced ODE right-hand side `(q̇, v̇) = (N_C v, Mr⁻¹(Qr − Cr v − Gr))` at `state`.
+    pub fn state_derivative(&self, state: &State, u: &SVector<f64, 2>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.v", &state.v)?;
+        check_finite("inputs.u", u)?;
+        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        Ok(State { q, v })
     }
 
     /// Evaluates every output at `(q, v, u)`.

@@ -19,6 +19,10 @@ use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// Configuration `q = [x, y, φ, φ1, θ1, θ2]` of this kinematic model (its inputs are the
+/// rates `v = [θ̇_L, θ̇_R, φ̇1, θ̇1, θ̇2]`).
+pub type Configuration = SVector<f64, 6>;
+
 /// Parameters of m3 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]

@@ -19,6 +19,9 @@ use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{SMatrix, SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+/// State `(q, v)` of this model (`v = q̇`).
+pub type State = super::ModelState<3, 3>;
+
 /// Parameters of m4 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
@@ -168,6 +171,17 @@ impl CartTwoLink {
     ) -> Result<Vector3<f64>> {
         let t = lagrange::lagrange_terms(self, q, qdot);
         lagrange::spd_solve(&t.mass, &(u - t.h - t.gravity), "mass matrix H")
+    }
+
+    /// The ODE right-hand side `(q̇, q̈)` at `state = (q, q̇)`.
+    pub fn state_derivative(&self, state: &State, u: &Vector3<f64>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.qdot", &state.v)?;
+        check_finite("inputs.u", u)?;
+        Ok(State {
+            q: state.v,
+            v: self.forward_dynamics(&state.q, &state.v, u)?,
+        })
     }
 
     /// Evaluates every output at `(q, q̇, u)`.

@@ -24,6 +24,9 @@ use crate::error::{Error, Result};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// State `(q, v)` of this model.
+pub type State = super::ModelState<6, 5>;
+
 /// Parameters of m5 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
@@ -410,6 +413,15 @@ impl MobileManipulator {
             BQ: c.b * e.q_force,
             manipulability_A: manipulability(&to_dmatrix(&c.a)),
         })
+    }
+
+    /// The reduced ODE right-hand side `(q̇, v̇) = (N_C v, Mr⁻¹(Qr − Cr v − Gr))` at `state`.
+    pub fn state_derivative(&self, state: &State, u: &SVector<f64, 5>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.v", &state.v)?;
+        check_finite("inputs.u", u)?;
+        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        Ok(State { q, v })
     }
 
     /// Evaluates every output at `(q, v, u)`.
