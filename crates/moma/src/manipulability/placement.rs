@@ -1,0 +1,1 @@
+//! Base-placement maps (placeholder replaced below).
