@@ -1,1 +1,6 @@
-//! Wheeled platforms: wheel contacts, Pfaffian constraints, admissible-velocity basis, reduced dynamics, whole-body Jacobian.
+//! Wheeled platforms: wheel contacts, Pfaffian constraints, admissible-velocity basis,
+//! reduced dynamics, whole-body Jacobian.
+
+pub mod diff_drive;
+
+pub use diff_drive::DiffDrive;
