@@ -1,1 +1,1 @@
-//! Base-placement maps (placeholder replaced below).
+//! Base-placement maps: reachability and manipulability over a grid of base poses.
