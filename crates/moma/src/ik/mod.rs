@@ -32,6 +32,9 @@ use crate::error::{Error, Result, ensure_finite};
 use crate::manipulability::{JacobianSvd, Measure, evaluate_svd};
 use nalgebra::{DMatrix, DVector};
 
+/// Step norm below which the secondary objective counts as settled.
+const SECONDARY_STEP_TOL: f64 = 1e-7;
+
 /// A kinematic task for [`solve`]: residual, Jacobian and configuration update.
 pub trait KinematicTask {
     /// Number of configuration coordinates `nq`.
@@ -56,6 +59,16 @@ pub trait KinematicTask {
     /// maximises (default: all; a whole-body task returns the arm's columns).
     fn manipulability_columns(&self) -> std::ops::Range<usize> {
         0..self.nv()
+    }
+    /// Writes into `out` a random configuration near `current` for a restart (e.g. the
+    /// same base pose, random arm joints within the limits); false if unsupported.
+    fn random_configuration(
+        &self,
+        _current: &DVector<f64>,
+        _rng: &mut dyn rand::RngCore,
+        _out: &mut DVector<f64>,
+    ) -> bool {
+        false
     }
     /// Gradient (in increment coordinates) of a preferred-posture objective
     /// `−½‖q − q_pref‖²`; returns false when the task has no preferred posture.
@@ -247,15 +260,30 @@ pub fn solve<T: KinematicTask + ?Sized>(
     let mut lambda = options.initial_damping;
     let mut iterations = 0;
     let mut slow = 0;
+    // With a secondary objective the solver keeps improving it after the task is met,
+    // as long as the residual stays within the tolerance and the step is not negligible.
+    let secondary = match options.null_space {
+        NullSpaceObjective::None => false,
+        NullSpaceObjective::Manipulability { gain, .. } | NullSpaceObjective::Posture { gain } => {
+            gain > 0.0
+        }
+    };
+    // Share of the null-space term in the step: halved after a rejected step before the
+    // damping grows, so the secondary objective never prevents convergence.
+    let mut ns_scale = 1.0;
     let status = loop {
-        if err <= options.tolerance {
+        let met = err <= options.tolerance;
+        if met && !secondary {
             break IkStatus::Converged;
         }
-        if iterations >= options.max_iterations {
-            break IkStatus::MaxIterations;
-        }
-        if lambda > options.max_damping {
-            break IkStatus::Stalled;
+        if iterations >= options.max_iterations || lambda > options.max_damping {
+            break if met {
+                IkStatus::Converged
+            } else if iterations >= options.max_iterations {
+                IkStatus::MaxIterations
+            } else {
+                IkStatus::Stalled
+            };
         }
         iterations += 1;
 
@@ -266,7 +294,7 @@ pub fn solve<T: KinematicTask + ?Sized>(
         ws.winv_eff.copy_from(&ws.winv);
         ws.blocked.iter_mut().for_each(|b| *b = false);
         for pass in 0..2 {
-            damped_step(ws, lambda, m, nv, have_grad, options)?;
+            damped_step(ws, lambda, m, nv, have_grad, ns_scale, options)?;
             if pass == 0 {
                 task.blocked_inputs(&q, &ws.delta, &mut ws.blocked);
                 if !ws.blocked.iter().any(|&b| b) {
@@ -280,6 +308,9 @@ pub fn solve<T: KinematicTask + ?Sized>(
             }
         }
         let norm = ws.delta.norm();
+        if met && norm < SECONDARY_STEP_TOL {
+            break IkStatus::Converged;
+        }
         if norm > options.max_step {
             ws.delta *= options.max_step / norm;
         }
@@ -287,9 +318,10 @@ pub fn solve<T: KinematicTask + ?Sized>(
         task.residual_and_jacobian(&ws.q_trial, &mut ws.e_trial, &mut ws.j_trial)?;
         let err_trial = ws.e_trial.norm();
         let finite = err_trial.is_finite() && ws.j_trial.iter().all(|x| x.is_finite());
-        if finite && err_trial < err {
-            // Accept.
-            if err - err_trial <= 1e-9 * err {
+        let accept = finite
+            && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
+        if accept {
+            if !met && err - err_trial <= 1e-9 * err {
                 slow += 1;
             } else {
                 slow = 0;
@@ -299,10 +331,14 @@ pub fn solve<T: KinematicTask + ?Sized>(
             std::mem::swap(&mut ws.j, &mut ws.j_trial);
             err = err_trial;
             lambda = (lambda / 3.0).max(options.min_damping);
+            ns_scale = (ns_scale * 2.0).min(1.0);
             if slow >= options.stall_iterations && err > options.tolerance {
                 break IkStatus::Stalled;
             }
+        } else if secondary && ns_scale > 1e-3 {
+            ns_scale *= 0.25;
         } else {
+            ns_scale = 0.0;
             lambda *= 4.0;
         }
     };
@@ -319,6 +355,40 @@ pub fn solve<T: KinematicTask + ?Sized>(
         damping: lambda,
         sigma_min,
     })
+}
+
+/// [`solve`] from `q0`, then, while not converged, from up to `restarts` random
+/// configurations ([`KinematicTask::random_configuration`], seeded by `seed`); returns the
+/// first converged result or the one with the smallest residual. `iterations` counts all
+/// attempts.
+pub fn solve_with_restarts<T: KinematicTask + ?Sized>(
+    task: &mut T,
+    q0: &DVector<f64>,
+    options: &IkOptions,
+    restarts: usize,
+    seed: u64,
+    ws: &mut IkWorkspace,
+) -> Result<IkResult> {
+    use rand::SeedableRng;
+    let mut best = solve(task, q0, options, ws)?;
+    let mut total = best.iterations;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut seed_q = q0.clone();
+    for _ in 0..restarts {
+        if best.converged {
+            break;
+        }
+        if !task.random_configuration(q0, &mut rng, &mut seed_q) {
+            break;
+        }
+        let r = solve(task, &seed_q, options, ws)?;
+        total += r.iterations;
+        if r.converged || r.residual_norm < best.residual_norm {
+            best = r;
+        }
+    }
+    best.iterations = total;
+    Ok(best)
 }
 
 fn validate_options(o: &IkOptions, nv: usize) -> Result<()> {
@@ -385,6 +455,7 @@ fn damped_step(
     m: usize,
     nv: usize,
     have_grad: bool,
+    ns_scale: f64,
     options: &IkOptions,
 ) -> Result<()> {
     // A = J W⁻¹ Jᵀ + λ I
@@ -409,7 +480,7 @@ fn damped_step(
             gain
         }
         NullSpaceObjective::None => 0.0,
-    };
+    } * ns_scale;
     let use_grad = have_grad && gain > 0.0;
     // y = A⁻¹ (−e − k J W⁻¹ g)   so that δ = W⁻¹ Jᵀ y + k W⁻¹ g
     for r in 0..m {

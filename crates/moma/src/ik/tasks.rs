@@ -38,6 +38,16 @@ pub trait FrameKinematics {
     fn integrate(&self, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>);
     /// Marks the velocity coordinates at a limit that `v` pushes further out.
     fn blocked_velocities(&self, q: &DVector<f64>, v: &DVector<f64>, blocked: &mut [bool]);
+    /// Writes a random configuration within the joint limits (root coordinates copied
+    /// from `current`); false if the model cannot sample one.
+    fn random_configuration(
+        &self,
+        _current: &DVector<f64>,
+        _rng: &mut dyn rand::RngCore,
+        _out: &mut DVector<f64>,
+    ) -> bool {
+        false
+    }
 }
 
 /// Which rows of the 6-D pose error/Jacobian `[linear; angular]` a task uses.
@@ -230,6 +240,14 @@ impl<K: FrameKinematics> KinematicTask for PoseTask<K> {
     fn blocked_inputs(&self, q: &DVector<f64>, delta: &DVector<f64>, blocked: &mut [bool]) {
         self.kinematics.blocked_velocities(q, delta, blocked);
     }
+    fn random_configuration(
+        &self,
+        current: &DVector<f64>,
+        rng: &mut dyn rand::RngCore,
+        out: &mut DVector<f64>,
+    ) -> bool {
+        self.kinematics.random_configuration(current, rng, out)
+    }
     fn posture_gradient(&self, q: &DVector<f64>, gradient: &mut DVector<f64>) -> bool {
         match &self.preferred {
             // For revolute/prismatic joints (nq = nv) the increment is q̇ itself.
@@ -385,6 +403,21 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
     }
     fn manipulability_columns(&self) -> std::ops::Range<usize> {
         2..self.nv()
+    }
+    fn random_configuration(
+        &self,
+        current: &DVector<f64>,
+        rng: &mut dyn rand::RngCore,
+        out: &mut DVector<f64>,
+    ) -> bool {
+        if !self.kinematics.random_configuration(current, rng, out) {
+            return false;
+        }
+        // Keep the base where it is: restarts re-seed the arm only.
+        out[0] = current[0];
+        out[1] = current[1];
+        out[2] = current[2];
+        true
     }
     fn posture_gradient(&self, q: &DVector<f64>, gradient: &mut DVector<f64>) -> bool {
         match &self.preferred {
