@@ -6,6 +6,7 @@
 
 mod cmd;
 mod output;
+mod svg_heatmap;
 
 use clap::{Parser, Subcommand};
 

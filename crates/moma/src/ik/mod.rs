@@ -26,6 +26,7 @@
 //! Tasks on real models (frame pose of a URDF arm, whole-body pose of a mobile
 //! manipulator) live in [`tasks`].
 
+pub mod model;
 pub mod tasks;
 
 use crate::error::{Error, Result, ensure_finite};
