@@ -83,7 +83,8 @@ fn unreachable_target_reports_not_converged() {
     assert_ne!(r.status, IkStatus::Converged);
     // Best effort: the arm stretches towards the target (distance 0.9 from it).
     let dist = (2.0f64.hypot(0.5)) - 0.9;
-    assert!((r.residual_norm - dist).abs() < 1e-3, "{}", r.residual_norm);
+    // (within 1 %: the solver stops once the crawl towards the closest point slows down).
+    assert!(r.residual_norm >= dist - 1e-9 && r.residual_norm < dist * 1.01, "{}", r.residual_norm);
     assert!(r.q.iter().all(|x| x.is_finite()));
     // Stretched arm: the final Jacobian is (nearly) singular, and σ_min says so.
     assert!(r.sigma_min < 1e-2, "{}", r.sigma_min);

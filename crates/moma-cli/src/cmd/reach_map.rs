@@ -88,6 +88,10 @@ struct Output<'a> {
     samples: usize,
     reachable: usize,
     best: Option<PlacementSample>,
+    /// IK iterations over all samples (reachable, unreachable).
+    ik_iterations: [usize; 2],
+    /// Samples decided without IK (target outside the arm's reach sphere).
+    pruned: usize,
     time_s: f64,
     /// Best measure over headings per cell: `ny` rows (from y0) of `nx` values (null =
     /// unreachable at every heading).
@@ -195,6 +199,11 @@ pub fn run(args: Args) -> Result<()> {
         samples: map.samples.len(),
         reachable: map.reachable,
         best: map.best,
+        ik_iterations: [
+            map.samples.iter().filter(|s| s.reachable).map(|s| s.iterations).sum(),
+            map.samples.iter().filter(|s| !s.reachable).map(|s| s.iterations).sum(),
+        ],
+        pruned: map.samples.iter().filter(|s| !s.reachable && s.iterations == 0).count(),
         time_s,
         cells,
     };

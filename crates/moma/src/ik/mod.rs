@@ -119,9 +119,12 @@ pub struct IkOptions {
     pub weights: Option<Vec<f64>>,
     /// Secondary objective in the task null space.
     pub null_space: NullSpaceObjective,
-    /// Stop as stalled after this many consecutive accepted steps that reduce `‖e‖` by
-    /// less than a relative 1e-9.
+    /// Stop as stalled after this many consecutive accepted steps that each reduce `‖e‖`
+    /// by less than the relative amount [`IkOptions::stall_relative`] (the linear crawl
+    /// towards the closest point of an unreachable target).
     pub stall_iterations: usize,
+    /// Relative decrease of `‖e‖` per step below which a step counts as slow.
+    pub stall_relative: f64,
 }
 
 impl Default for IkOptions {
@@ -135,7 +138,8 @@ impl Default for IkOptions {
             max_step: 0.5,
             weights: None,
             null_space: NullSpaceObjective::None,
-            stall_iterations: 8,
+            stall_iterations: 4,
+            stall_relative: 1e-3,
         }
     }
 }
@@ -322,7 +326,7 @@ pub fn solve<T: KinematicTask + ?Sized>(
         let accept = finite
             && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
         if accept {
-            if !met && err - err_trial <= 1e-9 * err {
+            if !met && err - err_trial <= options.stall_relative * err {
                 slow += 1;
             } else {
                 slow = 0;
@@ -340,7 +344,7 @@ pub fn solve<T: KinematicTask + ?Sized>(
             ns_scale *= 0.25;
         } else {
             ns_scale = 0.0;
-            lambda *= 4.0;
+            lambda *= 8.0;
         }
     };
     let sigma_min = JacobianSvd::new(&ws.j)
@@ -404,6 +408,12 @@ fn validate_options(o: &IkOptions, nv: usize) -> Result<()> {
         if !v.is_finite() || v <= 0.0 {
             return Err(Error::invalid(field, format!("must be finite and > 0, got {v}")));
         }
+    }
+    if !o.stall_relative.is_finite() || o.stall_relative < 0.0 {
+        return Err(Error::invalid(
+            "ik stall_relative",
+            format!("must be finite and >= 0, got {}", o.stall_relative),
+        ));
     }
     if let Some(w) = &o.weights {
         crate::error::ensure_len("ik weights", nv, w.len())?;

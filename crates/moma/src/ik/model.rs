@@ -103,6 +103,45 @@ impl ModelFrame {
 }
 
 impl FrameKinematics for ModelFrame {
+    fn reach_bound(&self) -> Option<(nalgebra::Vector3<f64>, f64)> {
+        let m = &*self.model;
+        if m.root != RootJoint::Fixed {
+            return None;
+        }
+        let fr = &m.frames[self.frame.0];
+        let mut path = Vec::new();
+        let mut j = fr.parent_joint.0;
+        while j != 0 {
+            path.push(j);
+            j = m.parents[j].0;
+        }
+        let Some(&first) = path.last() else {
+            // Frame fixed to the world: it reaches exactly one point.
+            let p = fr.placement.translation;
+            return Some((p, 0.0));
+        };
+        let mut radius = fr.placement.translation.norm();
+        for &j in &path {
+            let jt = &m.joint_types[j];
+            if jt.is_prismatic() {
+                let iq = m.idx_q[j];
+                let travel = m.lower_position_limit[iq]
+                    .abs()
+                    .max(m.upper_position_limit[iq].abs());
+                if !travel.is_finite() {
+                    return None;
+                }
+                radius += travel;
+            } else if !jt.is_revolute() {
+                return None;
+            }
+            if j != first {
+                radius += m.joint_placements[j].translation.norm();
+            }
+        }
+        Some((m.joint_placements[first].translation, radius))
+    }
+
     fn nq(&self) -> usize {
         self.model.nq
     }

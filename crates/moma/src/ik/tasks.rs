@@ -38,6 +38,12 @@ pub trait FrameKinematics {
     fn integrate(&self, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>);
     /// Marks the velocity coordinates at a limit that `v` pushes further out.
     fn blocked_velocities(&self, q: &DVector<f64>, v: &DVector<f64>, blocked: &mut [bool]);
+    /// A sphere (centre in the model's world frame, radius) that contains every position
+    /// the frame can reach, if the model allows a cheap bound (fixed root, revolute and
+    /// bounded prismatic joints); used to skip hopeless IK problems.
+    fn reach_bound(&self) -> Option<(nalgebra::Vector3<f64>, f64)> {
+        None
+    }
     /// Writes a random configuration within the joint limits (root coordinates copied
     /// from `current`); false if the model cannot sample one.
     fn random_configuration(

@@ -10,7 +10,7 @@
 use super::{JacobianSvd, Measure, evaluate_svd};
 use crate::error::{Error, Result, ensure_finite};
 use crate::ik::tasks::{FrameKinematics, PoseTask, TaskRows};
-use crate::ik::{IkOptions, IkWorkspace, solve_with_restarts};
+use crate::ik::{IkOptions, IkWorkspace, solve, solve_with_restarts};
 use crate::mobile::DiffDrive;
 use crate::mobile::whole_body::{BaseInputs, compose_jacobian};
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -132,8 +132,15 @@ pub trait PlacementEvaluator: Sync {
     type Workspace: Send;
     /// A fresh workspace.
     fn workspace(&self) -> Self::Workspace;
-    /// Evaluates the base pose `[x, y, θ]`.
-    fn evaluate(&self, ws: &mut Self::Workspace, base: [f64; 3]) -> Result<PlacementSample>;
+    /// Evaluates the base pose `[x, y, θ]`. `warm_start` is the solution found at the
+    /// neighbouring pose (previous cell of the same grid row, same heading), if any; the
+    /// second return value is the solution to pass on.
+    fn evaluate(
+        &self,
+        ws: &mut Self::Workspace,
+        base: [f64; 3],
+        warm_start: Option<&DVector<f64>>,
+    ) -> Result<(PlacementSample, Option<DVector<f64>>)>;
     /// Whether a larger measure is better (for picking the best placement).
     fn larger_is_better(&self) -> bool;
 }
@@ -173,23 +180,36 @@ impl PlacementMap {
 }
 
 /// Evaluates every base pose of `grid` in parallel and picks the best placement.
+///
+/// Grid rows (constant y) are distributed over the rayon workers; along a row the poses
+/// are visited in order and each IK is warm-started from the solution of the previous
+/// cell at the same heading. Every row starts from the evaluator's own seed, so the
+/// result does not depend on the number of threads.
 pub fn placement_map<E: PlacementEvaluator>(evaluator: &E, grid: &PlacementGrid) -> Result<PlacementMap> {
     let h = grid.headings;
-    let cells = grid.nx * grid.ny;
-    let per_cell: Vec<Result<Vec<PlacementSample>>> = (0..cells)
+    let nx = grid.nx;
+    let per_row: Vec<Result<Vec<PlacementSample>>> = (0..grid.ny)
         .into_par_iter()
         .map_init(
             || evaluator.workspace(),
-            |ws, cell| {
-                (0..h)
-                    .map(|k| evaluator.evaluate(ws, grid.pose(cell * h + k)))
-                    .collect()
+            |ws, iy| {
+                let mut warm: Vec<Option<DVector<f64>>> = vec![None; h];
+                let mut row = Vec::with_capacity(nx * h);
+                for ix in 0..nx {
+                    let cell = iy * nx + ix;
+                    for (k, w) in warm.iter_mut().enumerate() {
+                        let (sample, next) = evaluator.evaluate(ws, grid.pose(cell * h + k), w.as_ref())?;
+                        *w = next;
+                        row.push(sample);
+                    }
+                }
+                Ok(row)
             },
         )
         .collect();
     let mut samples = Vec::with_capacity(grid.len());
-    for c in per_cell {
-        samples.extend(c?);
+    for r in per_row {
+        samples.extend(r?);
     }
     let larger = evaluator.larger_is_better();
     let mut best: Option<PlacementSample> = None;
@@ -262,6 +282,7 @@ pub struct ArmReachWorkspace<K: FrameKinematics> {
     jfull: DMatrix<f64>,
     jbar: DMatrix<f64>,
     pose: Isometry3<f64>,
+    reach: Option<(Vector3<f64>, f64)>,
 }
 
 impl<K: FrameKinematics + Clone + Send + Sync> ArmReachEvaluator<K> {
@@ -332,28 +353,79 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
             jfull: DMatrix::zeros(6, n + 3),
             jbar: DMatrix::zeros(6, n + 2),
             pose: Isometry3::identity(),
+            // Pruning by the reach sphere is valid only when all position rows are tasks.
+            reach: if [0, 1, 2].iter().all(|r| self.rows.indices().contains(r)) {
+                self.arm.reach_bound()
+            } else {
+                None
+            },
         }
     }
 
-    fn evaluate(&self, ws: &mut Self::Workspace, base: [f64; 3]) -> Result<PlacementSample> {
+    fn evaluate(
+        &self,
+        ws: &mut Self::Workspace,
+        base: [f64; 3],
+        warm_start: Option<&DVector<f64>>,
+    ) -> Result<(PlacementSample, Option<DVector<f64>>)> {
         let arm_base = platform_pose(base) * self.mount;
-        ws.task.target = arm_base.inverse() * self.target;
-        let seed = self.seed.clone();
-        let seed_rng = (base[0].to_bits() ^ base[1].to_bits().rotate_left(21) ^ base[2].to_bits())
-            .wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        let r = solve_with_restarts(&mut ws.task, &seed, &self.options, self.restarts, seed_rng, &mut ws.ik)?;
+        let local = arm_base.inverse() * self.target;
+        ws.task.target = local;
+        // Far outside the arm's reach sphere: no IK needed.
+        if let Some((center, radius)) = ws.reach {
+            let gap = (local.translation.vector - center).norm() - radius;
+            if gap > self.options.tolerance {
+                let sample = PlacementSample {
+                    base,
+                    reachable: false,
+                    measure: None,
+                    residual: gap,
+                    iterations: 0,
+                };
+                return Ok((sample, None));
+            }
+        }
+        let mut iterations = 0;
+        let mut result = None;
+        if let Some(w) = warm_start {
+            let r = solve(&mut ws.task, w, &self.options, &mut ws.ik)?;
+            iterations += r.iterations;
+            if r.converged {
+                result = Some(r);
+            }
+        }
+        let r = match result {
+            Some(r) => r,
+            None => {
+                let seed_rng = (base[0].to_bits()
+                    ^ base[1].to_bits().rotate_left(21)
+                    ^ base[2].to_bits().rotate_left(42))
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                let r = solve_with_restarts(
+                    &mut ws.task,
+                    &self.seed,
+                    &self.options,
+                    self.restarts,
+                    seed_rng,
+                    &mut ws.ik,
+                )?;
+                iterations += r.iterations;
+                r
+            }
+        };
         let measure = if r.converged {
             self.measure_at(ws, base, &r.q)?
         } else {
             None
         };
-        Ok(PlacementSample {
+        let sample = PlacementSample {
             base,
             reachable: r.converged,
             measure,
             residual: r.residual_norm,
-            iterations: r.iterations,
-        })
+            iterations,
+        };
+        Ok((sample, if r.converged { Some(r.q) } else { None }))
     }
 
     fn larger_is_better(&self) -> bool {
