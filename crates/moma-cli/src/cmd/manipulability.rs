@@ -252,7 +252,7 @@ pub fn run(args: Args) -> Result<()> {
     let model = load_model(&args.robot, root)?;
     let mut kin = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let states = read_states(&args.states)?;
-    let (nq, nv) = (kin.nq(), kin.nv());
+    let nv = kin.nv();
     let arm_start = if drive.is_some() { 3 } else { 0 };
     let mut j6 = DMatrix::zeros(6, nv);
     let mut pose = Isometry3::identity();
@@ -310,7 +310,6 @@ pub fn run(args: Args) -> Result<()> {
                 args.states.display()
             );
         }
-        let _ = nq;
         out_states.push(StateOut {
             index: i,
             q: st.q.iter().copied().collect(),

@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     pub area: String,
     /// Grid step (m).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub step: f64,
     /// Number of base headings per cell.
     #[arg(long, default_value_t = 8)]
@@ -255,7 +255,7 @@ pub fn run(args: Args) -> Result<()> {
                 b.base[1],
                 b.base[2],
                 out.measure,
-                b.measure.unwrap_or(f64::NAN)
+                b.measure.unwrap_or(0.0)
             ),
             None => println!("the target is unreachable from every base pose of the grid"),
         }
