@@ -48,7 +48,9 @@ fn ramp(t: f64) -> (u8, u8, u8) {
 }
 
 fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 /// Renders the heat map as an SVG document.
@@ -57,7 +59,9 @@ pub fn render(h: &HeatMap<'_>) -> String {
         .cells
         .iter()
         .flatten()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     let have = lo.is_finite() && hi.is_finite();
     let span = if have && hi > lo { hi - lo } else { 1.0 };
     // Pixel size per cell: fit the map in about 600 px.

@@ -60,7 +60,11 @@ fn manipulability_arm_and_whole_body() {
         "panda_hand_tcp",
         "--json",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&out);
     let st = v["states"].as_array().unwrap();
     assert_eq!(st.len(), 2);
@@ -98,13 +102,30 @@ fn manipulability_arm_and_whole_body() {
 fn manipulability_bad_input() {
     let states = tmp("bad_states.json");
     std::fs::write(&states, r#"{"states": [{"q": [0.1, 0.2]}]}"#).unwrap();
-    let out = moma(&["manipulability", &panda(), "--states", states.to_str().unwrap()]);
+    let out = moma(&[
+        "manipulability",
+        &panda(),
+        "--states",
+        states.to_str().unwrap(),
+    ]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("states[0].q") && err.contains("expected length 9"), "{err}");
+    assert!(
+        err.contains("states[0].q") && err.contains("expected length 9"),
+        "{err}"
+    );
 
-    std::fs::write(&states, r#"{"states": [{"q": [0, 0, 0, 0, 0, 0, 0, 0, "x"]}]}"#).unwrap();
-    let out = moma(&["manipulability", &panda(), "--states", states.to_str().unwrap()]);
+    std::fs::write(
+        &states,
+        r#"{"states": [{"q": [0, 0, 0, 0, 0, 0, 0, 0, "x"]}]}"#,
+    )
+    .unwrap();
+    let out = moma(&[
+        "manipulability",
+        &panda(),
+        "--states",
+        states.to_str().unwrap(),
+    ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("states[0].q[8]"));
 
@@ -119,7 +140,12 @@ fn manipulability_bad_input() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--measure"));
 
-    let out = moma(&["manipulability", &panda(), "--states", "/nonexistent/states.json"]);
+    let out = moma(&[
+        "manipulability",
+        &panda(),
+        "--states",
+        "/nonexistent/states.json",
+    ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("states.json"));
 }
@@ -139,7 +165,11 @@ fn ik_converges_reports_and_fails_clearly() {
         "10",
         "--json",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&out);
     assert_eq!(v["converged"], true);
     assert!(v["residual_norm"].as_f64().unwrap() <= 1e-6);
@@ -175,7 +205,11 @@ fn ik_converges_reports_and_fails_clearly() {
         BASE,
         "--json",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&out);
     assert_eq!(v["converged"], true);
     assert_eq!(v["q"].as_array().unwrap().len(), 12);
@@ -221,7 +255,11 @@ fn reach_map_writes_svg_and_json() {
         js.to_str().unwrap(),
         "--json",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&out);
     assert_eq!(v["samples"], 9 * 9 * 4);
     let reachable = v["reachable"].as_u64().unwrap();
@@ -234,7 +272,9 @@ fn reach_map_writes_svg_and_json() {
     assert!(d < 1.2, "{d}");
     assert_eq!(v["cells"].as_array().unwrap().len(), 9);
     let text = std::fs::read_to_string(&svg).unwrap();
-    assert!(text.starts_with("<svg") && text.contains("best") && text.trim_end().ends_with("</svg>"));
+    assert!(
+        text.starts_with("<svg") && text.contains("best") && text.trim_end().ends_with("</svg>")
+    );
     let file: Value = serde_json::from_str(&std::fs::read_to_string(&js).unwrap()).unwrap();
     assert_eq!(file["best"], v["best"]);
 
@@ -256,7 +296,16 @@ fn reach_map_writes_svg_and_json() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("area"));
     assert!(!svg2.exists());
     for (area, step) in [("0,0,1", "0.1"), ("0,0,1,1", "0"), ("0,0,1,1", "-1")] {
-        let out = moma(&["reach-map", &panda(), "--target", "1,0.5,0.5", "--area", area, "--step", step]);
+        let out = moma(&[
+            "reach-map",
+            &panda(),
+            "--target",
+            "1,0.5,0.5",
+            "--area",
+            area,
+            "--step",
+            step,
+        ]);
         assert_eq!(out.status.code(), Some(1), "{area} {step}");
     }
 }

@@ -13,7 +13,9 @@ use moma::ik::model::ModelFrame;
 use moma::ik::tasks::{FrameKinematics, PoseTask, TaskRows};
 use moma::ik::{IkOptions, IkWorkspace, solve_with_restarts};
 use moma::io::urdf::model_from_urdf_file;
-use moma::manipulability::placement::{ArmReachEvaluator, MeasureScope, PlacementGrid, placement_map};
+use moma::manipulability::placement::{
+    ArmReachEvaluator, MeasureScope, PlacementGrid, placement_map,
+};
 use moma::manipulability::{Measure, report};
 use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::{BaseInputs, compose_jacobian};
@@ -24,7 +26,10 @@ use std::hint::black_box;
 use std::sync::Arc;
 
 fn panda(root: RootJoint) -> ModelFrame {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/manipulability/panda.urdf");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/manipulability/panda.urdf"
+    );
     let model = model_from_urdf_file(path, root).expect("panda.urdf");
     ModelFrame::by_name(Arc::new(model), "panda_hand_tcp").expect("frame")
 }
@@ -96,7 +101,9 @@ fn bench_ik(c: &mut Criterion) {
         b.iter(|| {
             for (s, t) in targets.iter().enumerate() {
                 task.target = *t;
-                black_box(solve_with_restarts(&mut task, &q0, &opts, 10, s as u64, &mut ws).unwrap());
+                black_box(
+                    solve_with_restarts(&mut task, &q0, &opts, 10, s as u64, &mut ws).unwrap(),
+                );
             }
         })
     });

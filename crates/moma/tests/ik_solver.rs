@@ -84,7 +84,11 @@ fn unreachable_target_reports_not_converged() {
     // Best effort: the arm stretches towards the target (distance 0.9 from it).
     let dist = (2.0f64.hypot(0.5)) - 0.9;
     // (within 1 %: the solver stops once the crawl towards the closest point slows down).
-    assert!(r.residual_norm >= dist - 1e-9 && r.residual_norm < dist * 1.01, "{}", r.residual_norm);
+    assert!(
+        r.residual_norm >= dist - 1e-9 && r.residual_norm < dist * 1.01,
+        "{}",
+        r.residual_norm
+    );
     assert!(r.q.iter().all(|x| x.is_finite()));
     // Stretched arm: the final Jacobian is (nearly) singular, and σ_min says so.
     assert!(r.sigma_min < 0.1, "{}", r.sigma_min);
@@ -131,7 +135,15 @@ fn bad_options_and_seed_are_errors() {
     let mut task = PoseTask::new(chain, Isometry3::identity(), &TaskRows::Position).unwrap();
     let mut ws = IkWorkspace::new(&task);
     let q0 = DVector::from_vec(vec![0.1, 0.2]);
-    assert!(solve(&mut task, &DVector::zeros(3), &IkOptions::default(), &mut ws).is_err());
+    assert!(
+        solve(
+            &mut task,
+            &DVector::zeros(3),
+            &IkOptions::default(),
+            &mut ws
+        )
+        .is_err()
+    );
     let nan = DVector::from_vec(vec![f64::NAN, 0.2]);
     assert!(solve(&mut task, &nan, &IkOptions::default(), &mut ws).is_err());
     let bad = IkOptions {
@@ -202,9 +214,14 @@ fn whole_body_weights_trade_base_against_arm() {
     // Reachable by the arm alone.
     let target = Isometry3::translation(0.6, 0.7, 0.0);
     let base_travel = |w_base: f64| {
-        let mut task =
-            WholeBodyTask::new(chain.clone(), drive, BaseInputs::Platform, target, &TaskRows::Position)
-                .unwrap();
+        let mut task = WholeBodyTask::new(
+            chain.clone(),
+            drive,
+            BaseInputs::Platform,
+            target,
+            &TaskRows::Position,
+        )
+        .unwrap();
         let mut ws = IkWorkspace::new(&task);
         let opts = IkOptions {
             weights: Some(vec![w_base, w_base, 1.0, 1.0, 1.0]),
@@ -275,7 +292,12 @@ fn null_space_manipulability_keeps_the_arm_well_conditioned() {
     // From several seeds: without the null-space term the solver stops wherever it first
     // meets the target; with it, it climbs to a (local) maximum of w on the manifold.
     let mut worst_plain = f64::INFINITY;
-    for q0 in [[-0.8, 2.4, 1.4], [0.1, 0.05, 0.05], [1.5, -2.0, -1.0], [2.5, 1.0, -2.5]] {
+    for q0 in [
+        [-0.8, 2.4, 1.4],
+        [0.1, 0.05, 0.05],
+        [1.5, -2.0, -1.0],
+        [2.5, 1.0, -2.5],
+    ] {
         let q0 = DVector::from_vec(q0.to_vec());
         let plain = w_final(NullSpaceObjective::None, &q0);
         let boosted = w_final(
@@ -288,10 +310,16 @@ fn null_space_manipulability_keeps_the_arm_well_conditioned() {
         assert!(boosted >= plain - 1e-9, "{boosted} vs {plain}");
         // Gradient ascent on the manifold ends at a local maximum of w (the elbow branches
         // have their own); all of them are well conditioned here.
-        assert!(boosted > 0.85 * w_max, "{boosted} vs max {w_max} (plain {plain})");
+        assert!(
+            boosted > 0.85 * w_max,
+            "{boosted} vs max {w_max} (plain {plain})"
+        );
         worst_plain = worst_plain.min(plain);
     }
-    assert!(worst_plain < 0.9 * w_max, "{worst_plain} vs {w_max}: no seed discriminates");
+    assert!(
+        worst_plain < 0.9 * w_max,
+        "{worst_plain} vs {w_max}: no seed discriminates"
+    );
 
     // Preferred posture: among the solutions, ends close to it.
     let pref = DVector::from_vec(vec![0.2, 0.9, 0.6]);

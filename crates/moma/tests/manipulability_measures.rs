@@ -108,7 +108,11 @@ fn check_example_block(j: &DMatrix<f64>, m: &Value) {
     // The full report agrees with the single measures.
     let r = report(j, Some(&u)).unwrap();
     close(r.yoshikawa.unwrap(), f("w_yoshikawa"), 1e-9, "report w");
-    assert_eq!(r.det_jtj.is_none(), j.nrows() < j.ncols(), "det(J^T J) only for m >= n");
+    assert_eq!(
+        r.det_jtj.is_none(),
+        j.nrows() < j.ncols(),
+        "det(J^T J) only for m >= n"
+    );
 }
 
 #[test]
@@ -164,12 +168,7 @@ fn planar_2r_jacobian(l1: f64, l2: f64, q1: f64, q2: f64) -> DMatrix<f64> {
     DMatrix::from_row_slice(
         2,
         2,
-        &[
-            -l1 * s1 - l2 * s12,
-            -l2 * s12,
-            l1 * c1 + l2 * c12,
-            l2 * c12,
-        ],
+        &[-l1 * s1 - l2 * s12, -l2 * s12, l1 * c1 + l2 * c12, l2 * c12],
     )
 }
 
@@ -268,7 +267,12 @@ fn check_m3_block(j: &DMatrix<f64>, b: &Value, what: &str) {
     assert_eq!(j.shape(), (shape[0], shape[1]), "{what} shape");
     let svd = JacobianSvd::new(j).unwrap();
     for (i, s) in vecf(&b["singular_values"]).iter().enumerate() {
-        close(svd.singular_values[i], *s, 1e-9, &format!("{what} sigma[{i}]"));
+        close(
+            svd.singular_values[i],
+            *s,
+            1e-9,
+            &format!("{what} sigma[{i}]"),
+        );
     }
     let f = |k: &str| b[k].as_f64().unwrap();
     close(
@@ -355,7 +359,12 @@ fn measure_names_round_trip_and_errors() {
     // Tall J: Yoshikawa is identically zero → error; det(J^T J) fine.
     let tall = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 2.0, 0.0, 0.0]);
     assert!(evaluate(&Measure::Yoshikawa, &tall).is_err());
-    close(evaluate(&Measure::DetJtJ, &tall).unwrap(), 4.0, 1e-12, "det");
+    close(
+        evaluate(&Measure::DetJtJ, &tall).unwrap(),
+        4.0,
+        1e-12,
+        "det",
+    );
     // Wrong direction length.
     assert!(evaluate(&Measure::Directional(vec![1.0, 0.0]), &tall).is_err());
 }
@@ -402,23 +411,42 @@ fn invariance_scaling_and_ellipsoid_properties() {
         let svd = JacobianSvd::new(&j).unwrap();
         // w = √det(J Jᵀ).
         let w = svd.yoshikawa().unwrap();
-        close(w, (&j * j.transpose()).determinant().abs().sqrt(), 1e-8, "w");
+        close(
+            w,
+            (&j * j.transpose()).determinant().abs().sqrt(),
+            1e-8,
+            "w",
+        );
         // Task rotation (orthogonal Q) leaves w and 1/κ unchanged.
         let a = DMatrix::from_fn(m, m, |_, _| rng.random_range(-1.0..1.0));
         let qr = a.qr().q();
         let svd2 = JacobianSvd::new(&(&qr * &j)).unwrap();
         close(svd2.yoshikawa().unwrap(), w, 1e-9, "rotated w");
-        close(svd2.inverse_condition(), svd.inverse_condition(), 1e-8, "rot 1/k");
+        close(
+            svd2.inverse_condition(),
+            svd.inverse_condition(),
+            1e-8,
+            "rot 1/k",
+        );
         // Scaling by c: w scales by |c|^m, ratios unchanged.
         let c = -2.5;
         let svd3 = JacobianSvd::new(&(&j * c)).unwrap();
-        close(svd3.yoshikawa().unwrap(), w * c.abs().powi(m as i32), 1e-9, "scaled w");
+        close(
+            svd3.yoshikawa().unwrap(),
+            w * c.abs().powi(m as i32),
+            1e-9,
+            "scaled w",
+        );
         close(svd3.eccentricity(), svd.eccentricity(), 1e-8, "scaled ecc");
         // Extra columns never decrease w.
         let extra = DMatrix::from_fn(m, 2, |_, _| rng.random_range(-1.0..1.0));
-        let wide = DMatrix::from_fn(m, n + 2, |i, k| {
-            if k < n { j[(i, k)] } else { extra[(i, k - n)] }
-        });
+        let wide = DMatrix::from_fn(
+            m,
+            n + 2,
+            |i, k| {
+                if k < n { j[(i, k)] } else { extra[(i, k - n)] }
+            },
+        );
         assert!(JacobianSvd::new(&wide).unwrap().yoshikawa().unwrap() >= w * (1.0 - 1e-12));
         // Directional ordering: projection sum ≥ |Jᵀu| ≥ r_v(u); equal along uᵢ.
         let u: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
@@ -428,7 +456,12 @@ fn invariance_scaling_and_ellipsoid_properties() {
         assert!(ps >= sup * (1.0 - 1e-12) && sup >= rv * (1.0 - 1e-12));
         for i in 0..m {
             let ui: Vec<f64> = svd.u.column(i).iter().copied().collect();
-            close(svd.velocity_radius(&ui).unwrap(), svd.singular_values[i], 1e-8, "r_v(u_i)");
+            close(
+                svd.velocity_radius(&ui).unwrap(),
+                svd.singular_values[i],
+                1e-8,
+                "r_v(u_i)",
+            );
         }
         // Points J q̇ with |q̇| = 1 lie inside or on the ellipsoid: xᵀ (J Jᵀ)⁻¹ x ≤ 1.
         let qd = nalgebra::DVector::<f64>::from_fn(n, |_, _| rng.random_range(-1.0..1.0));

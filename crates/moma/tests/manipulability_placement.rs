@@ -60,7 +60,7 @@ fn reachability_matches_the_reach_annulus() {
             let w = 0.2 * (1.0 - c2 * c2).sqrt();
             assert!((m - w).abs() < 1e-6, "{m} vs {w}");
             checked += 1;
-        } else if dist > 0.92 || dist < 0.08 {
+        } else if !(0.08..=0.92).contains(&dist) {
             assert!(!s.reachable, "{s:?} dist {dist}");
             assert!(s.measure.is_none());
             assert!(s.residual.is_finite() && s.residual > 0.0);
@@ -70,7 +70,12 @@ fn reachability_matches_the_reach_annulus() {
     let best = map.best.unwrap();
     assert!(best.reachable);
     let bm = best.measure.unwrap();
-    assert!(map.samples.iter().filter_map(|s| s.measure).all(|m| m <= bm));
+    assert!(
+        map.samples
+            .iter()
+            .filter_map(|s| s.measure)
+            .all(|m| m <= bm)
+    );
     // w is largest at q2 = ±π/2: dist = √(l1² + l2²) = 0.6403.
     assert!((bm - 0.2).abs() < 5e-3, "{bm}");
     // Per-cell summary.
@@ -124,4 +129,3 @@ fn bad_grids_are_errors() {
     ev.seed = DVector::from_vec(vec![0.0]);
     assert!(ev.validate().is_err());
 }
-

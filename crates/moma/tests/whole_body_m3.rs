@@ -53,13 +53,7 @@ impl M3 {
         let rho = self.l1 * th1.sin() + self.l2 * th12.sin();
         let eta = self.l1 * th1.cos() + self.l2 * th12.cos();
         let pt = phi + phi1;
-        DVector::from_vec(vec![
-            xb,
-            yb,
-            xb + rho * pt.cos(),
-            yb + rho * pt.sin(),
-            eta,
-        ])
+        DVector::from_vec(vec![xb, yb, xb + rho * pt.cos(), yb + rho * pt.sin(), eta])
     }
 
     /// dX/dq by central differences (5 × 6): the "frame Jacobian" w.r.t. [ẋ, ẏ, φ̇, …].
@@ -186,13 +180,23 @@ fn bias_term_is_second_derivative_along_constant_inputs() {
             let (v, om) = match inputs {
                 BaseInputs::Wheels => {
                     let w = m3.drive.wheel_to_platform();
-                    (w[(0, 0)] * u[0] + w[(0, 1)] * u[1], w[(1, 0)] * u[0] + w[(1, 1)] * u[1])
+                    (
+                        w[(0, 0)] * u[0] + w[(0, 1)] * u[1],
+                        w[(1, 0)] * u[0] + w[(1, 1)] * u[1],
+                    )
                 }
                 BaseInputs::Platform => (u[0], u[1]),
             };
             let q_t = |t: f64| {
                 let b = integrate_base(&m3.drive, [q[0], q[1], q[2]], v * t, om * t);
-                vec![b[0], b[1], b[2], q[3] + u[2] * t, q[4] + u[3] * t, q[5] + u[4] * t]
+                vec![
+                    b[0],
+                    b[1],
+                    b[2],
+                    q[3] + u[2] * t,
+                    q[4] + u[3] * t,
+                    q[5] + u[4] * t,
+                ]
             };
             let xdd = (m3.x(&q_t(h)) - 2.0 * m3.x(&q) + m3.x(&q_t(-h))) / (h * h);
             let err = (&bias - &xdd).abs().max();
@@ -207,7 +211,27 @@ fn bad_shapes_are_errors() {
     assert!(whole_body_jacobian(&drive, BaseInputs::Platform, 0.0, &DMatrix::zeros(6, 2)).is_err());
     let j = DMatrix::zeros(6, 5);
     let u = DVector::zeros(3);
-    assert!(bias_acceleration(&drive, BaseInputs::Platform, 0.0, &j, &DVector::zeros(6), &u).is_err());
+    assert!(
+        bias_acceleration(
+            &drive,
+            BaseInputs::Platform,
+            0.0,
+            &j,
+            &DVector::zeros(6),
+            &u
+        )
+        .is_err()
+    );
     let u = DVector::from_vec(vec![f64::NAN, 0.0, 0.0, 0.0]);
-    assert!(bias_acceleration(&drive, BaseInputs::Platform, 0.0, &j, &DVector::zeros(6), &u).is_err());
+    assert!(
+        bias_acceleration(
+            &drive,
+            BaseInputs::Platform,
+            0.0,
+            &j,
+            &DVector::zeros(6),
+            &u
+        )
+        .is_err()
+    );
 }

@@ -10,9 +10,11 @@ use moma::io::urdf::model_from_urdf_file;
 use moma::manipulability::JacobianSvd;
 use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::{
-    BaseInputs, bias_acceleration, integrate_base, inputs_to_velocity, whole_body_jacobian,
+    BaseInputs, bias_acceleration, inputs_to_velocity, integrate_base, whole_body_jacobian,
 };
-use moma::multibody::{FrameKind, FrameIndex, JointIndex, JointLimits, JointType, ModelBuilder, RootJoint};
+use moma::multibody::{
+    FrameIndex, FrameKind, JointIndex, JointLimits, JointType, ModelBuilder, RootJoint,
+};
 use moma::spatial::{Inertia, SE3};
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -20,7 +22,10 @@ use serde_json::Value;
 use std::sync::Arc;
 
 fn data_path(name: &str) -> String {
-    format!("{}/tests/data/manipulability/{name}", env!("CARGO_MANIFEST_DIR"))
+    format!(
+        "{}/tests/data/manipulability/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )
 }
 
 fn mat(v: &Value) -> DMatrix<f64> {
@@ -36,9 +41,16 @@ fn m3_model(l: f64, l1: f64, l2: f64) -> (Arc<moma::multibody::Model>, FrameInde
     b.set_root(RootJoint::Planar);
     let small = Inertia::new(1.0, Vector3::zeros(), Matrix3::identity() * 0.01);
     let root = b
-        .add_joint(JointIndex(0), "platform", JointType::Planar, SE3::identity(), JointLimits::unlimited())
+        .add_joint(
+            JointIndex(0),
+            "platform",
+            JointType::Planar,
+            SE3::identity(),
+            JointLimits::unlimited(),
+        )
         .unwrap();
-    b.append_body_inertia(root, &small, &SE3::identity()).unwrap();
+    b.append_body_inertia(root, &small, &SE3::identity())
+        .unwrap();
     let cap = b
         .add_joint(
             root,
@@ -48,9 +60,16 @@ fn m3_model(l: f64, l1: f64, l2: f64) -> (Arc<moma::multibody::Model>, FrameInde
             JointLimits::unlimited(),
         )
         .unwrap();
-    b.append_body_inertia(cap, &small, &SE3::identity()).unwrap();
+    b.append_body_inertia(cap, &small, &SE3::identity())
+        .unwrap();
     let sh = b
-        .add_joint(cap, "shoulder", JointType::RevoluteY, SE3::identity(), JointLimits::unlimited())
+        .add_joint(
+            cap,
+            "shoulder",
+            JointType::RevoluteY,
+            SE3::identity(),
+            JointLimits::unlimited(),
+        )
         .unwrap();
     b.append_body_inertia(sh, &small, &SE3::identity()).unwrap();
     let el = b
@@ -64,7 +83,13 @@ fn m3_model(l: f64, l1: f64, l2: f64) -> (Arc<moma::multibody::Model>, FrameInde
         .unwrap();
     b.append_body_inertia(el, &small, &SE3::identity()).unwrap();
     let fb = b
-        .add_frame("B", cap, FrameIndex(0), SE3::identity(), FrameKind::Operational)
+        .add_frame(
+            "B",
+            cap,
+            FrameIndex(0),
+            SE3::identity(),
+            FrameKind::Operational,
+        )
         .unwrap();
     let fe = b
         .add_frame(
@@ -80,9 +105,10 @@ fn m3_model(l: f64, l1: f64, l2: f64) -> (Arc<moma::multibody::Model>, FrameInde
 
 #[test]
 fn m3_built_with_model_builder_matches_the_reference() {
-    let d: Value =
-        serde_json::from_str(&std::fs::read_to_string(data_path("m3_diffdrive_kinematics.json")).unwrap())
-            .unwrap();
+    let d: Value = serde_json::from_str(
+        &std::fs::read_to_string(data_path("m3_diffdrive_kinematics.json")).unwrap(),
+    )
+    .unwrap();
     for case in d["cases"].as_array().unwrap() {
         let p = &case["params"];
         let g = |k: &str| p[k].as_f64().unwrap();
@@ -93,8 +119,14 @@ fn m3_built_with_model_builder_matches_the_reference() {
         let mut pose = Isometry3::identity();
         let mut jb = DMatrix::zeros(6, model.nv);
         let mut je = DMatrix::zeros(6, model.nv);
-        ModelFrame::new(model.clone(), fb).unwrap().pose_and_jacobian(&q, &mut pose, &mut jb).unwrap();
-        ModelFrame::new(model.clone(), fe).unwrap().pose_and_jacobian(&q, &mut pose, &mut je).unwrap();
+        ModelFrame::new(model.clone(), fb)
+            .unwrap()
+            .pose_and_jacobian(&q, &mut pose, &mut jb)
+            .unwrap();
+        ModelFrame::new(model.clone(), fe)
+            .unwrap()
+            .pose_and_jacobian(&q, &mut pose, &mut je)
+            .unwrap();
         // Position X = [x_B, y_B, x_E, y_E, z_E].
         let x_ref: Vec<f64> = serde_json::from_value(case["outputs"]["X"].clone()).unwrap();
         let t = pose.translation.vector;
@@ -130,12 +162,21 @@ fn panda_planar() -> ModelFrame {
 }
 
 /// Model configuration after applying whole-body inputs `u` for time `t` from `q`.
-fn flow(drive: &DiffDrive, inputs: BaseInputs, q: &DVector<f64>, u: &DVector<f64>, t: f64) -> DVector<f64> {
+fn flow(
+    drive: &DiffDrive,
+    inputs: BaseInputs,
+    q: &DVector<f64>,
+    u: &DVector<f64>,
+    t: f64,
+) -> DVector<f64> {
     let (v, om) = match inputs {
         BaseInputs::Platform => (u[0], u[1]),
         BaseInputs::Wheels => {
             let w = drive.wheel_to_platform();
-            (w[(0, 0)] * u[0] + w[(0, 1)] * u[1], w[(1, 0)] * u[0] + w[(1, 1)] * u[1])
+            (
+                w[(0, 0)] * u[0] + w[(0, 1)] * u[1],
+                w[(1, 0)] * u[0] + w[(1, 1)] * u[1],
+            )
         }
     };
     let b = integrate_base(drive, [q[0], q[1], q[2]], v * t, om * t);
@@ -174,12 +215,18 @@ fn panda_whole_body_jacobian_and_bias_match_finite_differences() {
                 let mut pp = Isometry3::identity();
                 let mut pm = Isometry3::identity();
                 let mut jj = DMatrix::zeros(6, nv);
-                kin.pose_and_jacobian(&flow(&drive, inputs, &q, &u, h), &mut pp, &mut jj).unwrap();
-                kin.pose_and_jacobian(&flow(&drive, inputs, &q, &u, -h), &mut pm, &mut jj).unwrap();
+                kin.pose_and_jacobian(&flow(&drive, inputs, &q, &u, h), &mut pp, &mut jj)
+                    .unwrap();
+                kin.pose_and_jacobian(&flow(&drive, inputs, &q, &u, -h), &mut pm, &mut jj)
+                    .unwrap();
                 let e = pose_error(&pp, &pm);
                 for r in 0..6 {
                     let fd = e[r] / (2.0 * h);
-                    assert!((fd - jbar[(r, k)]).abs() < 1e-6, "{inputs:?} col {k} row {r}: {fd} vs {}", jbar[(r, k)]);
+                    assert!(
+                        (fd - jbar[(r, k)]).abs() < 1e-6,
+                        "{inputs:?} col {k} row {r}: {fd} vs {}",
+                        jbar[(r, k)]
+                    );
                 }
             }
             // Bias J̄̇·u against the second difference of the position along constant u.
@@ -198,7 +245,12 @@ fn panda_whole_body_jacobian_and_bias_match_finite_differences() {
                 + pos(&flow(&drive, inputs, &q, &u, -h), &mut kin))
                 / (h * h);
             for r in 0..3 {
-                assert!((acc[r] - bias[r]).abs() < 1e-5, "{inputs:?} bias row {r}: {} vs {}", acc[r], bias[r]);
+                assert!(
+                    (acc[r] - bias[r]).abs() < 1e-5,
+                    "{inputs:?} bias row {r}: {} vs {}",
+                    acc[r],
+                    bias[r]
+                );
             }
         }
     }
@@ -245,9 +297,25 @@ fn panda_whole_body_ik_reaches_a_far_target() {
     let mut q0 = moma::kinematics::neutral(kin.model());
     q0[6] = -1.5; // joint 4 away from its limit
     q0[8] = 1.5;
-    let mut task = WholeBodyTask::new(kin.clone(), drive, BaseInputs::Platform, target, &TaskRows::Full).unwrap();
+    let mut task = WholeBodyTask::new(
+        kin.clone(),
+        drive,
+        BaseInputs::Platform,
+        target,
+        &TaskRows::Full,
+    )
+    .unwrap();
     let mut ws = IkWorkspace::new(&task);
-    let r = solve(&mut task, &q0, &IkOptions { max_iterations: 500, ..IkOptions::default() }, &mut ws).unwrap();
+    let r = solve(
+        &mut task,
+        &q0,
+        &IkOptions {
+            max_iterations: 500,
+            ..IkOptions::default()
+        },
+        &mut ws,
+    )
+    .unwrap();
     assert!(r.converged, "{r:?}");
     let mut k = kin.clone();
     let mut p = Isometry3::identity();

@@ -177,7 +177,11 @@ pub fn run(args: Args) -> Result<()> {
         },
         other => bail!("--null-space: unknown '{other}'; expected none, manipulability, posture"),
     };
-    let nv_task = if drive.is_some() { model.nv - 1 } else { model.nv };
+    let nv_task = if drive.is_some() {
+        model.nv - 1
+    } else {
+        model.nv
+    };
     let weights = drive.map(|_| {
         let mut w = vec![1.0; nv_task];
         w[0] = args.base_weight;

@@ -119,7 +119,10 @@ fn number_array(v: &Value, field: &str, path: &Path) -> Result<DVector<f64>> {
     let mut out = Vec::with_capacity(arr.len());
     for (i, x) in arr.iter().enumerate() {
         let f = x.as_f64().ok_or_else(|| {
-            anyhow!("{}: {field}[{i}]: expected a number, got {x}", path.display())
+            anyhow!(
+                "{}: {field}[{i}]: expected a number, got {x}",
+                path.display()
+            )
         })?;
         out.push(f);
     }
@@ -129,8 +132,8 @@ fn number_array(v: &Value, field: &str, path: &Path) -> Result<DVector<f64>> {
 fn read_states(path: &Path) -> Result<Vec<State>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    let v: Value = serde_json::from_str(&text)
-        .with_context(|| format!("{}: invalid JSON", path.display()))?;
+    let v: Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: invalid JSON", path.display()))?;
     let list = match &v {
         Value::Array(a) => a.clone(),
         Value::Object(o) => o
@@ -151,9 +154,9 @@ fn read_states(path: &Path) -> Result<Vec<State>> {
                 u: None,
             },
             Value::Object(o) => {
-                let q = o
-                    .get("q")
-                    .ok_or_else(|| anyhow!("{}: states[{i}]: missing field \"q\"", path.display()))?;
+                let q = o.get("q").ok_or_else(|| {
+                    anyhow!("{}: states[{i}]: missing field \"q\"", path.display())
+                })?;
                 State {
                     q: number_array(q, &format!("states[{i}].q"), path)?,
                     u: match o.get("u") {
@@ -216,7 +219,10 @@ fn rows_of(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
 
 /// Runs `moma manipulability`.
 pub fn run(args: Args) -> Result<()> {
-    let measure: Measure = args.measure.parse().map_err(|e| anyhow!("--measure: {e}"))?;
+    let measure: Measure = args
+        .measure
+        .parse()
+        .map_err(|e| anyhow!("--measure: {e}"))?;
     let rows: TaskRows = args.rows.parse().map_err(|e| anyhow!("--rows: {e}"))?;
     let idx = rows.indices();
     let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;
@@ -226,23 +232,23 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(|d| parse_list("--direction", d))
         .transpose()?;
-    if let Some(d) = &direction {
-        if d.len() != idx.len() {
-            bail!(
-                "--direction: expected {} components (one per task row), got {}",
-                idx.len(),
-                d.len()
-            );
-        }
+    if let Some(d) = &direction
+        && d.len() != idx.len()
+    {
+        bail!(
+            "--direction: expected {} components (one per task row), got {}",
+            idx.len(),
+            d.len()
+        );
     }
-    if let Measure::Directional(u) = &measure {
-        if u.len() != idx.len() {
-            bail!(
-                "--measure directional: expected {} components (one per task row), got {}",
-                idx.len(),
-                u.len()
-            );
-        }
+    if let Measure::Directional(u) = &measure
+        && u.len() != idx.len()
+    {
+        bail!(
+            "--measure directional: expected {} components (one per task row), got {}",
+            idx.len(),
+            u.len()
+        );
     }
     let root = if drive.is_some() {
         RootJoint::Planar

@@ -106,8 +106,12 @@ pub fn run(args: Args) -> Result<()> {
     if area.len() != 4 {
         bail!("--area: expected 4 values x0,y0,x1,y1, got {}", area.len());
     }
-    let grid = PlacementGrid::new([area[0], area[1], area[2], area[3]], args.step, args.headings)
-        .map_err(|e| anyhow!("--area/--step/--headings: {e}"))?;
+    let grid = PlacementGrid::new(
+        [area[0], area[1], area[2], area[3]],
+        args.step,
+        args.headings,
+    )
+    .map_err(|e| anyhow!("--area/--step/--headings: {e}"))?;
     let rows: TaskRows = match &args.rows {
         Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
         None if tvals.len() == 3 => TaskRows::Position,
@@ -116,15 +120,18 @@ pub fn run(args: Args) -> Result<()> {
     if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
         bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
     }
-    let measure: Measure = args.measure.parse().map_err(|e| anyhow!("--measure: {e}"))?;
-    if let Measure::Directional(u) = &measure {
-        if u.len() != rows.indices().len() {
-            bail!(
-                "--measure directional: expected {} components, got {}",
-                rows.indices().len(),
-                u.len()
-            );
-        }
+    let measure: Measure = args
+        .measure
+        .parse()
+        .map_err(|e| anyhow!("--measure: {e}"))?;
+    if let Measure::Directional(u) = &measure
+        && u.len() != rows.indices().len()
+    {
+        bail!(
+            "--measure directional: expected {} components, got {}",
+            rows.indices().len(),
+            u.len()
+        );
     }
     let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;
     let scope = match &args.base {
@@ -136,7 +143,10 @@ pub fn run(args: Args) -> Result<()> {
         Some(m) => {
             let v = parse_list("--mount", m)?;
             if v.len() != 3 && v.len() != 4 {
-                bail!("--mount: expected x,y,z or x,y,z,yaw, got {} values", v.len());
+                bail!(
+                    "--mount: expected x,y,z or x,y,z,yaw, got {} values",
+                    v.len()
+                );
             }
             Isometry3::from_parts(
                 Translation3::new(v[0], v[1], v[2]),
@@ -200,10 +210,22 @@ pub fn run(args: Args) -> Result<()> {
         reachable: map.reachable,
         best: map.best,
         ik_iterations: [
-            map.samples.iter().filter(|s| s.reachable).map(|s| s.iterations).sum(),
-            map.samples.iter().filter(|s| !s.reachable).map(|s| s.iterations).sum(),
+            map.samples
+                .iter()
+                .filter(|s| s.reachable)
+                .map(|s| s.iterations)
+                .sum(),
+            map.samples
+                .iter()
+                .filter(|s| !s.reachable)
+                .map(|s| s.iterations)
+                .sum(),
         ],
-        pruned: map.samples.iter().filter(|s| !s.reachable && s.iterations == 0).count(),
+        pruned: map
+            .samples
+            .iter()
+            .filter(|s| !s.reachable && s.iterations == 0)
+            .count(),
         time_s,
         cells,
     };

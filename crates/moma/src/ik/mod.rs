@@ -323,8 +323,8 @@ pub fn solve<T: KinematicTask + ?Sized>(
         task.residual_and_jacobian(&ws.q_trial, &mut ws.e_trial, &mut ws.j_trial)?;
         let err_trial = ws.e_trial.norm();
         let finite = err_trial.is_finite() && ws.j_trial.iter().all(|x| x.is_finite());
-        let accept = finite
-            && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
+        let accept =
+            finite && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
         if accept {
             if !met && err - err_trial <= options.stall_relative * err {
                 slow += 1;
@@ -406,7 +406,10 @@ fn validate_options(o: &IkOptions, nv: usize) -> Result<()> {
     ];
     for (field, v) in positive {
         if !v.is_finite() || v <= 0.0 {
-            return Err(Error::invalid(field, format!("must be finite and > 0, got {v}")));
+            return Err(Error::invalid(
+                field,
+                format!("must be finite and > 0, got {v}"),
+            ));
         }
     }
     if !o.stall_relative.is_finite() || o.stall_relative < 0.0 {
@@ -435,12 +438,18 @@ fn validate_options(o: &IkOptions, nv: usize) -> Result<()> {
                 ));
             }
             if !gain.is_finite() || *gain < 0.0 {
-                return Err(Error::invalid("ik null-space gain", "must be finite and >= 0"));
+                return Err(Error::invalid(
+                    "ik null-space gain",
+                    "must be finite and >= 0",
+                ));
             }
         }
         NullSpaceObjective::Posture { gain } => {
             if !gain.is_finite() || *gain < 0.0 {
-                return Err(Error::invalid("ik null-space gain", "must be finite and >= 0"));
+                return Err(Error::invalid(
+                    "ik null-space gain",
+                    "must be finite and >= 0",
+                ));
             }
         }
         NullSpaceObjective::None => {}

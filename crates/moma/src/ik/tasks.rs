@@ -118,13 +118,18 @@ impl FromStr for TaskRows {
                 let body = t.strip_prefix("rows:").ok_or_else(|| {
                     Error::invalid(
                         "task rows",
-                        format!("unknown '{s}'; expected position, orientation, full or rows:i,j,..."),
+                        format!(
+                            "unknown '{s}'; expected position, orientation, full or rows:i,j,..."
+                        ),
                     )
                 })?;
                 let mut r = Vec::new();
                 for (k, p) in body.split(',').enumerate() {
                     r.push(p.trim().parse::<usize>().map_err(|_| {
-                        Error::invalid(format!("task rows[{k}]"), format!("'{p}' is not a row index"))
+                        Error::invalid(
+                            format!("task rows[{k}]"),
+                            format!("'{p}' is not a row index"),
+                        )
                     })?);
                 }
                 TaskRows::Rows(r)
@@ -348,7 +353,10 @@ impl<K: FrameKinematics> WholeBodyTask<K> {
             BaseInputs::Platform => (u0, u1),
             BaseInputs::Wheels => {
                 let w = self.drive.wheel_to_platform();
-                (w[(0, 0)] * u0 + w[(0, 1)] * u1, w[(1, 0)] * u0 + w[(1, 1)] * u1)
+                (
+                    w[(0, 0)] * u0 + w[(0, 1)] * u1,
+                    w[(1, 0)] * u0 + w[(1, 1)] * u1,
+                )
             }
         }
     }
@@ -403,9 +411,8 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
         }
         let mut b = vec![false; v.len()];
         self.kinematics.blocked_velocities(q, &v, &mut b);
-        for k in 2..delta.len() {
-            blocked[k] = b[k + 1];
-        }
+        let n = delta.len();
+        blocked[2..n].copy_from_slice(&b[3..n + 1]);
     }
     fn manipulability_columns(&self) -> std::ops::Range<usize> {
         2..self.nv()

@@ -512,7 +512,10 @@ pub fn select_rows(jacobian: &DMatrix<f64>, rows: &[usize]) -> Result<DMatrix<f6
         if r >= jacobian.nrows() {
             return Err(Error::invalid(
                 format!("rows[{k}]"),
-                format!("row {r} out of range for a {}-row Jacobian", jacobian.nrows()),
+                format!(
+                    "row {r} out of range for a {}-row Jacobian",
+                    jacobian.nrows()
+                ),
             ));
         }
     }

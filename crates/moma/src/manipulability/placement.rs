@@ -47,7 +47,8 @@ impl PlacementGrid {
     pub fn new(area: [f64; 4], step: f64, headings: usize) -> Result<Self> {
         ensure_finite("area", &area)?;
         let [x0, y0, x1, y1] = area;
-        if !(x1 > x0) || !(y1 > y0) {
+        // (finite already checked, so `<=` is the exact negation of `>`)
+        if x1 <= x0 || y1 <= y0 {
             return Err(Error::invalid(
                 "area",
                 format!(
@@ -185,7 +186,10 @@ impl PlacementMap {
 /// are visited in order and each IK is warm-started from the solution of the previous
 /// cell at the same heading. Every row starts from the evaluator's own seed, so the
 /// result does not depend on the number of threads.
-pub fn placement_map<E: PlacementEvaluator>(evaluator: &E, grid: &PlacementGrid) -> Result<PlacementMap> {
+pub fn placement_map<E: PlacementEvaluator>(
+    evaluator: &E,
+    grid: &PlacementGrid,
+) -> Result<PlacementMap> {
     let h = grid.headings;
     let nx = grid.nx;
     let per_row: Vec<Result<Vec<PlacementSample>>> = (0..grid.ny)
@@ -198,7 +202,8 @@ pub fn placement_map<E: PlacementEvaluator>(evaluator: &E, grid: &PlacementGrid)
                 for ix in 0..nx {
                     let cell = iy * nx + ix;
                     for (k, w) in warm.iter_mut().enumerate() {
-                        let (sample, next) = evaluator.evaluate(ws, grid.pose(cell * h + k), w.as_ref())?;
+                        let (sample, next) =
+                            evaluator.evaluate(ws, grid.pose(cell * h + k), w.as_ref())?;
                         *w = next;
                         row.push(sample);
                     }
