@@ -302,3 +302,21 @@ fn panda_planar_matches_pinocchio() {
 fn ur5_matches_pinocchio() {
     run("ur5.json", RootJoint::Fixed);
 }
+
+// TIAGo: a real differential-drive mobile manipulator of 48 joints (continuous wheels,
+// prismatic torso, 29 fixed joints merged into their parents, a hand), on all three roots.
+
+#[test]
+fn tiago_fixed_matches_pinocchio() {
+    run("tiago_fixed.json", RootJoint::Fixed);
+}
+
+#[test]
+fn tiago_planar_matches_pinocchio() {
+    run("tiago_planar.json", RootJoint::Planar);
+}
+
+#[test]
+fn tiago_free_flyer_matches_pinocchio() {
+    run("tiago_free_flyer.json", RootJoint::FreeFlyer);
+}

@@ -44,6 +44,10 @@ fn finite_pose(p: &urdf_rs::Pose) -> bool {
     p.xyz.0.iter().chain(p.rpy.0.iter()).all(|x| x.is_finite())
 }
 
+/// Largest negative eigenvalue (kg·m²) of a link's rotational inertia accepted as rounding
+/// noise of the URDF export rather than an invalid inertial.
+pub const INERTIA_ROUNDING_TOL: f64 = 1e-6;
+
 /// Validates a link's inertial; `None` for a massless link.
 fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)>> {
     let inl = &link.inertial;
@@ -79,8 +83,12 @@ fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)
             )));
         }
     } else {
+        // Exported URDFs print inertias rounded to ~1e-8 kg·m²; tiny links (TIAGo's 1 µg
+        // antennas) then carry tensors that are indefinite at that level. Like Pinocchio we
+        // keep them as they are, but a negative eigenvalue beyond INERTIA_ROUNDING_TOL is
+        // not rounding: it is an invalid inertial.
         let e = ic.symmetric_eigenvalues();
-        if e.min() <= 0.0 {
+        if e.min() < -INERTIA_ROUNDING_TOL {
             return Err(err(format!(
                 "inertia matrix is not positive definite (eigenvalues {:.3e}, {:.3e}, {:.3e}; mass {m})",
                 e[0], e[1], e[2]
@@ -158,6 +166,16 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
         }
         parent_joint_of[c] = Some(k);
         children[p].push(k);
+    }
+    // Visit children in the byte order of their joint names, as urdfdom (and so Pinocchio)
+    // does: joint, frame and velocity indices then match Pinocchio's for the same URDF.
+    for c in &mut children {
+        c.sort_by(|&a, &b| {
+            robot.joints[a]
+                .name
+                .as_bytes()
+                .cmp(robot.joints[b].name.as_bytes())
+        });
     }
     let roots: Vec<usize> = (0..robot.links.len())
         .filter(|&l| parent_joint_of[l].is_none())
