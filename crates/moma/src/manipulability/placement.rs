@@ -144,6 +144,10 @@ pub trait PlacementEvaluator: Sync {
     ) -> Result<(PlacementSample, Option<DVector<f64>>)>;
     /// Whether a larger measure is better (for picking the best placement).
     fn larger_is_better(&self) -> bool;
+    /// Checks the evaluator's configuration before any workspace is built.
+    fn validate(&self) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// A base-placement map: every sample of the grid and the best reachable placement.
@@ -190,6 +194,7 @@ pub fn placement_map<E: PlacementEvaluator>(
     evaluator: &E,
     grid: &PlacementGrid,
 ) -> Result<PlacementMap> {
+    evaluator.validate()?;
     let h = grid.headings;
     let nx = grid.nx;
     let per_row: Vec<Result<Vec<PlacementSample>>> = (0..grid.ny)
@@ -435,6 +440,10 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
 
     fn larger_is_better(&self) -> bool {
         self.measure.larger_is_better()
+    }
+
+    fn validate(&self) -> Result<()> {
+        ArmReachEvaluator::validate(self)
     }
 }
 
