@@ -324,3 +324,41 @@ fn panda_whole_body_ik_reaches_a_far_target() {
     let e = pose_error(&p, &target);
     assert!(e.iter().map(|x| x * x).sum::<f64>().sqrt() <= 1e-6);
 }
+
+#[test]
+fn panda_whole_body_null_space_raises_arm_manipulability() {
+    use moma::ik::{KinematicTask, NullSpaceObjective};
+    use moma::manipulability::Measure;
+    let kin = panda_planar();
+    let drive = DiffDrive::new(0.08, 0.27, 0.12).unwrap();
+    let target = moma::ik::tasks::target_from_slice(&[3.0, -1.0, 0.4, 1.0, 0.0, 0.0, 0.0]).unwrap();
+    let q0 = DVector::from_vec(vec![0., 0., 0., 0., 0., 0., -1.5, 0., 1.5, 0.7, 0., 0.]);
+    let arm_w = |ns: NullSpaceObjective| {
+        let mut task = WholeBodyTask::new(
+            kin.clone(),
+            drive,
+            BaseInputs::Platform,
+            target,
+            &TaskRows::Full,
+        )
+        .unwrap();
+        let mut ws = IkWorkspace::new(&task);
+        let opts = IkOptions {
+            null_space: ns,
+            ..IkOptions::default()
+        };
+        let r = solve(&mut task, &q0, &opts, &mut ws).unwrap();
+        assert!(r.converged, "{r:?}");
+        let mut e = DVector::zeros(6);
+        let mut j = DMatrix::zeros(6, 11);
+        task.residual_and_jacobian(&r.q, &mut e, &mut j).unwrap();
+        let arm = j.columns(2, 9).into_owned();
+        JacobianSvd::new(&arm).unwrap().yoshikawa().unwrap()
+    };
+    let plain = arm_w(NullSpaceObjective::None);
+    let boosted = arm_w(NullSpaceObjective::Manipulability {
+        measure: Measure::Yoshikawa,
+        gain: 0.2,
+    });
+    assert!(boosted > 1.05 * plain, "{boosted} vs {plain}");
+}
