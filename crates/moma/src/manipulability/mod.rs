@@ -162,7 +162,8 @@ impl FromStr for Measure {
 /// The singular value decomposition of a task Jacobian, with the numerical rank.
 ///
 /// `σ` is sorted in descending order; `u` holds the left singular vectors (the
-/// ellipsoid's principal axes, m × r) and `v` the right ones (n × r).
+/// ellipsoid's principal axes, m × r). The right singular vectors are not needed by any
+/// measure and are not computed.
 #[derive(Clone, Debug)]
 pub struct JacobianSvd {
     /// Task rows m.
@@ -173,8 +174,6 @@ pub struct JacobianSvd {
     pub singular_values: DVector<f64>,
     /// Left singular vectors (columns), m × r.
     pub u: DMatrix<f64>,
-    /// Right singular vectors (columns), n × r.
-    pub v: DMatrix<f64>,
 }
 
 impl JacobianSvd {
@@ -189,21 +188,22 @@ impl JacobianSvd {
             ));
         }
         ensure_finite("jacobian", jacobian.iter())?;
-        let svd = nalgebra::SVD::try_new(jacobian.clone(), true, true, f64::EPSILON, 10_000)
+        let svd = nalgebra::SVD::try_new(jacobian.clone(), true, false, f64::EPSILON, 10_000)
             .ok_or_else(|| Error::Numerical {
                 t: 0.0,
                 message: "singular value decomposition did not converge".into(),
             })?;
         let mut svd = svd;
         svd.sort_by_singular_values();
-        let u = svd.u.expect("requested U");
-        let v_t = svd.v_t.expect("requested V^T");
+        let u = svd.u.ok_or_else(|| Error::Numerical {
+            t: 0.0,
+            message: "singular value decomposition returned no U".into(),
+        })?;
         Ok(Self {
             rows: m,
             cols: n,
             singular_values: svd.singular_values,
             u,
-            v: v_t.transpose(),
         })
     }
 
