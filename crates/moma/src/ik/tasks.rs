@@ -296,6 +296,7 @@ pub struct WholeBodyTask<K: FrameKinematics> {
     j6: DMatrix<f64>,
     jbar: DMatrix<f64>,
     v_model: std::cell::RefCell<DVector<f64>>,
+    blocked_model: std::cell::RefCell<Vec<bool>>,
 }
 
 impl<K: FrameKinematics> WholeBodyTask<K> {
@@ -326,6 +327,7 @@ impl<K: FrameKinematics> WholeBodyTask<K> {
             j6: DMatrix::zeros(6, nv),
             jbar: DMatrix::zeros(6, nv - 1),
             v_model: std::cell::RefCell::new(DVector::zeros(nv)),
+            blocked_model: std::cell::RefCell::new(vec![false; nv]),
         })
     }
 
@@ -409,7 +411,8 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
         for k in 2..delta.len() {
             v[k + 1] = delta[k];
         }
-        let mut b = vec![false; v.len()];
+        let mut b = self.blocked_model.borrow_mut();
+        b.iter_mut().for_each(|x| *x = false);
         self.kinematics.blocked_velocities(q, &v, &mut b);
         let n = delta.len();
         blocked[2..n].copy_from_slice(&b[3..n + 1]);
