@@ -1,1 +1,66 @@
-//! Motion planning on occupancy grids.
+//! Motion planning on occupancy grids (chapter section 5.6).
+//!
+//! The pipeline: load a map ([`load_map`]: ROS `map_server` YAML + image, a bare
+//! PGM/PNG, or a Moving AI `.map`), build the configuration space by dilating the
+//! obstacles with the robot footprint ([`distance_transform`], [`costmap`]), search it
+//! ([`astar`], [`dstar_lite::DStarLite`] for re-planning, [`potential`] fields), then
+//! turn the path into motion ([`smooth`], [`trajectory::time_parameterize`]).
+//! 3-D voxel maps: [`Grid3`] and [`astar3d`].
+
+pub mod astar;
+pub mod costmap;
+pub mod dstar_lite;
+pub mod edt;
+pub mod grid;
+pub mod grid3;
+pub mod movingai;
+pub mod potential;
+pub mod render;
+pub mod rosmap;
+pub mod smooth;
+pub mod trajectory;
+
+pub use astar::{AstarWorkspace, GridPath, SearchGrid, astar, astar_with, octile, wavefront};
+pub use edt::{EdtWorkspace, distance_transform, distance_transform_into};
+pub use grid::{CellCounts, MapKind, OccupancyGrid};
+pub use grid3::{Grid3, Path3, astar3d};
+pub use movingai::{MovingAiScenario, Scen3Problem, ScenProblem, load_3dmap, load_3dscen, load_movingai_map};
+pub use rosmap::{MapMode, RosMapMeta, load_image_map, load_ros_map};
+
+use crate::{Error, Result};
+use std::path::Path;
+
+/// A loaded map with its ROS parameters (`None` for Moving AI maps).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedMap {
+    /// The grid.
+    pub grid: OccupancyGrid,
+    /// The ROS map parameters, for YAML and bare-image maps.
+    pub meta: Option<RosMapMeta>,
+}
+
+/// Loads a map, choosing the format by extension: `.yaml`/`.yml` (ROS map_server),
+/// `.map` (Moving AI), anything else is read as a bare image (PGM, PNG) with the legacy
+/// map_server defaults and `resolution` (default [`rosmap::DEFAULT_RESOLUTION`]).
+pub fn load_map(path: &Path, resolution: Option<f64>) -> Result<LoadedMap> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    match ext.as_str() {
+        "yaml" | "yml" => {
+            if resolution.is_some() {
+                return Err(Error::invalid("resolution", "only applies to a bare image; a YAML map sets its own"));
+            }
+            let (grid, meta) = load_ros_map(path)?;
+            Ok(LoadedMap { grid, meta: Some(meta) })
+        }
+        "map" => {
+            if resolution.is_some() {
+                return Err(Error::invalid("resolution", "only applies to a bare image; Moving AI maps are in cells"));
+            }
+            Ok(LoadedMap { grid: load_movingai_map(path)?, meta: None })
+        }
+        _ => {
+            let (grid, meta) = load_image_map(path, resolution.unwrap_or(rosmap::DEFAULT_RESOLUTION))?;
+            Ok(LoadedMap { grid, meta: Some(meta) })
+        }
+    }
+}

@@ -1,0 +1,488 @@
+//! A* on the 8-connected grid: octile costs (1 and √2), no corner cutting, plus a
+//! cost-aware variant over an inflation costmap and a Dijkstra wavefront.
+//!
+//! The move model is the Moving AI benchmarks' (hog2 `MapEnvironment`): a diagonal step
+//! is legal only if both orthogonal cells it passes between are free.
+//!
+//! Implementation: the grid is stored with a one-cell border of blocked cells so the
+//! eight neighbours are fixed index offsets with no bounds checks; search state lives in
+//! flat arrays reused across queries and invalidated by a generation counter; the open
+//! list is a binary heap ordered by f with ties broken toward larger g.
+
+use super::grid::OccupancyGrid;
+use crate::{Error, Result};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// √2, the diagonal step cost.
+pub const SQRT2: f64 = std::f64::consts::SQRT_2;
+
+/// A padded passability grid for the searches (`true` = traversable).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SearchGrid {
+    pub(super) width: usize,
+    pub(super) height: usize,
+    pub(super) pw: usize,
+    pub(super) pass: Vec<bool>,
+    pub(super) weight: Option<Vec<f32>>,
+}
+
+/// A found path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridPath {
+    /// Cells `(x, y)` from start to goal, both included.
+    pub cells: Vec<(usize, usize)>,
+    /// Path cost: its length in cells (1 per straight, √2 per diagonal step), or for the
+    /// cost-aware search the weighted cost.
+    pub cost: f64,
+    /// Number of expanded (closed) cells.
+    pub expanded: usize,
+}
+
+impl GridPath {
+    /// Geometric length of the path in cells (1 per straight step, √2 per diagonal).
+    pub fn length(&self) -> f64 {
+        self.cells
+            .windows(2)
+            .map(|w| if w[0].0 != w[1].0 && w[0].1 != w[1].1 { SQRT2 } else { 1.0 })
+            .sum()
+    }
+}
+
+impl SearchGrid {
+    /// Builds the search grid from a row-major obstacle mask (`true` = obstacle).
+    pub fn from_obstacles(obstacles: &[bool], width: usize, height: usize) -> Result<Self> {
+        super::grid::check_size(width, height)?;
+        crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
+        let pw = width + 2;
+        let mut pass = vec![false; pw * (height + 2)];
+        for y in 0..height {
+            let src = &obstacles[y * width..(y + 1) * width];
+            let dst = &mut pass[(y + 1) * pw + 1..(y + 1) * pw + 1 + width];
+            for (d, &o) in dst.iter_mut().zip(src) {
+                *d = !o;
+            }
+        }
+        Ok(Self { width, height, pw, pass, weight: None })
+    }
+
+    /// Builds the search grid from an occupancy grid: cells ≥ 100 are obstacles, unknown
+    /// cells too when `unknown_is_obstacle`.
+    pub fn from_grid(grid: &OccupancyGrid, unknown_is_obstacle: bool) -> Self {
+        let obst = grid.obstacle_mask(super::grid::OCCUPIED, unknown_is_obstacle);
+        Self::from_obstacles(&obst, grid.width, grid.height).expect("grid sizes are valid")
+    }
+
+    /// A cost-aware grid from nav2-style costs (see [`super::costmap`]): cells with cost
+    /// ≥ 253 (inscribed, lethal) are obstacles, 255 (unknown) too unless `allow_unknown`;
+    /// every step into a cell of cost c costs `(1 or √2) · (1 + multiplier · c / 252)`
+    /// (Smac 2D's `cost_travel_multiplier`; `multiplier` ≥ 0).
+    pub fn from_costs(costs: &[u8], width: usize, height: usize, multiplier: f64, allow_unknown: bool) -> Result<Self> {
+        if !(multiplier.is_finite() && multiplier >= 0.0) {
+            return Err(Error::invalid("cost multiplier", format!("must be finite and >= 0, got {multiplier}")));
+        }
+        crate::error::ensure_len("costmap", width * height, costs.len())?;
+        let obst: Vec<bool> = costs
+            .iter()
+            .map(|&c| if c == super::costmap::NO_INFORMATION { !allow_unknown } else { c >= super::costmap::INSCRIBED })
+            .collect();
+        let mut g = Self::from_obstacles(&obst, width, height)?;
+        let mut w = vec![1.0f32; g.pass.len()];
+        for y in 0..height {
+            for x in 0..width {
+                let c = costs[y * width + x];
+                let c = if c == super::costmap::NO_INFORMATION { 0 } else { c };
+                w[(y + 1) * g.pw + x + 1] = (1.0 + multiplier * c as f64 / 252.0) as f32;
+            }
+        }
+        g.weight = Some(w);
+        Ok(g)
+    }
+
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Number of rows.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    #[inline]
+    pub(super) fn pidx(&self, x: usize, y: usize) -> usize {
+        (y + 1) * self.pw + x + 1
+    }
+
+    /// `true` if `(x, y)` is inside the grid and traversable.
+    pub fn is_free(&self, x: i64, y: i64) -> bool {
+        x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height && self.pass[self.pidx(x as usize, y as usize)]
+    }
+
+    /// Marks `(x, y)` traversable or blocked.
+    ///
+    /// # Panics
+    /// If the cell is outside the grid.
+    pub fn set_free(&mut self, x: usize, y: usize, free: bool) {
+        assert!(x < self.width && y < self.height, "cell outside the grid");
+        let i = self.pidx(x, y);
+        self.pass[i] = free;
+    }
+
+    /// `true` if the step from `(x, y)` by `(dx, dy)` (each in −1..=1) is legal under the
+    /// no-corner-cutting model.
+    pub fn can_step(&self, x: i64, y: i64, dx: i64, dy: i64) -> bool {
+        self.is_free(x + dx, y + dy) && (dx == 0 || dy == 0 || (self.is_free(x + dx, y) && self.is_free(x, y + dy)))
+    }
+
+    /// The obstacle mask (`true` = blocked), row-major without the border.
+    pub fn obstacles(&self) -> Vec<bool> {
+        let mut out = Vec::with_capacity(self.width * self.height);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                out.push(!self.pass[self.pidx(x, y)]);
+            }
+        }
+        out
+    }
+
+    /// Checks that a query cell lies inside the grid and is free.
+    pub fn check_cell(&self, what: &str, c: (usize, usize)) -> Result<()> {
+        if c.0 >= self.width || c.1 >= self.height {
+            return Err(Error::Planning(format!(
+                "{what} cell ({}, {}) lies outside the {} x {} map",
+                c.0, c.1, self.width, self.height
+            )));
+        }
+        if !self.pass[self.pidx(c.0, c.1)] {
+            return Err(Error::Planning(format!(
+                "{what} cell ({}, {}) is inside an obstacle (or the inflated obstacle region)",
+                c.0, c.1
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The open list: a binary heap of `(f, cell)` plus a stack for the entries whose f equals
+/// the last popped f. A* with a consistent heuristic pops non-decreasing f (f's IEEE bits
+/// serve as exact integer keys), and in open areas most successors keep the parent's f:
+/// those skip the heap entirely, and leaving the stack last-in first-out breaks f ties
+/// toward the most recently generated (deepest, larger-g) cells.
+#[derive(Debug, Clone, Default)]
+struct OpenList {
+    last: u64,
+    ties: Vec<u32>,
+    heap: BinaryHeap<std::cmp::Reverse<(u64, u32)>>,
+}
+
+impl OpenList {
+    fn clear(&mut self) {
+        self.last = 0;
+        self.ties.clear();
+        self.heap.clear();
+    }
+
+    /// Pushes `key`, clamped to the last popped key (float rounding can put a successor's
+    /// f one ulp below its parent's; treating it as equal is harmless).
+    #[inline]
+    fn push(&mut self, key: u64, idx: u32) {
+        if key <= self.last {
+            self.ties.push(idx);
+        } else {
+            self.heap.push(std::cmp::Reverse((key, idx)));
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(u64, u32)> {
+        if let Some(i) = self.ties.pop() {
+            return Some((self.last, i));
+        }
+        let std::cmp::Reverse((k, i)) = self.heap.pop()?;
+        self.last = k;
+        Some((k, i))
+    }
+}
+
+/// Per-cell search state, 16 bytes so one cache line access serves a neighbour.
+#[derive(Clone, Copy, Debug, Default)]
+struct CellState {
+    g: f64,
+    parent: u32,
+    stamp: u32,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    f: f64,
+    idx: u32,
+}
+impl PartialEq for Node {
+    fn eq(&self, o: &Self) -> bool {
+        self.f == o.f && self.idx == o.idx
+    }
+}
+impl Eq for Node {}
+impl Ord for Node {
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.f.total_cmp(&self.f).then(o.idx.cmp(&self.idx))
+    }
+}
+impl PartialOrd for Node {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+/// Reusable search state for [`astar_with`]: allocate once per map size, run any number
+/// of queries without clearing (a generation counter invalidates old entries).
+#[derive(Debug, Default, Clone)]
+pub struct AstarWorkspace {
+    state: Vec<CellState>,
+    generation: u32,
+    heap: OpenList,
+}
+
+impl AstarWorkspace {
+    /// An empty workspace; it grows to the grid on first use.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn prepare(&mut self, n: usize) {
+        if self.state.len() != n {
+            self.state = vec![CellState::default(); n];
+            self.generation = 0;
+        }
+        // Stamps: 2·gen = generated this query, 2·gen + 1 = closed this query.
+        if self.generation >= u32::MAX / 2 - 1 {
+            self.state.iter_mut().for_each(|c| c.stamp = 0);
+            self.generation = 0;
+        }
+        self.generation += 1;
+    }
+}
+
+/// Octile distance: the exact cost of an unobstructed 8-connected path.
+#[inline]
+pub fn octile(dx: i64, dy: i64) -> f64 {
+    let (a, b) = (dx.unsigned_abs() as f64, dy.unsigned_abs() as f64);
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    hi + (SQRT2 - 1.0) * lo
+}
+
+/// A* from `start` to `goal` (cells `(x, y)`); allocates a fresh workspace. Returns
+/// `Ok(None)` when the goal is unreachable; errors if start or goal is outside the grid
+/// or blocked.
+#[doc(alias = "a_star")]
+pub fn astar(grid: &SearchGrid, start: (usize, usize), goal: (usize, usize)) -> Result<Option<GridPath>> {
+    astar_with(grid, &mut AstarWorkspace::new(), start, goal)
+}
+
+/// [`astar`] with a reusable workspace (no allocation after the first query except the
+/// returned path). On a grid built by [`SearchGrid::from_costs`] this is the cost-aware
+/// search.
+pub fn astar_with(
+    grid: &SearchGrid,
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+) -> Result<Option<GridPath>> {
+    grid.check_cell("start", start)?;
+    grid.check_cell("goal", goal)?;
+    let mut expanded = 0;
+    let found = match &grid.weight {
+        None => search::<false>(grid, &[], ws, start, goal, &mut expanded),
+        Some(w) => search::<true>(grid, w, ws, start, goal, &mut expanded),
+    };
+    Ok(found.map(|cost| {
+        let t = grid.pidx(goal.0, goal.1);
+        let mut cells = Vec::new();
+        let mut cur = t as u32;
+        while cur != u32::MAX {
+            let c = cur as usize;
+            cells.push((c % grid.pw - 1, c / grid.pw - 1));
+            cur = ws.state[c].parent;
+        }
+        cells.reverse();
+        GridPath { cells, cost, expanded }
+    }))
+}
+
+/// Runs a search and returns `(cost, expanded)` without building the path (for
+/// benchmarks and scenario runs); `None` cost = unreachable.
+pub fn astar_cost(
+    grid: &SearchGrid,
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+) -> Result<(Option<f64>, usize)> {
+    grid.check_cell("start", start)?;
+    grid.check_cell("goal", goal)?;
+    let mut expanded_out = 0;
+    let r = match &grid.weight {
+        None => search::<false>(grid, &[], ws, start, goal, &mut expanded_out),
+        Some(w) => search::<true>(grid, w, ws, start, goal, &mut expanded_out),
+    };
+    Ok((r, expanded_out))
+}
+
+#[inline(always)]
+fn search<const W: bool>(
+    grid: &SearchGrid,
+    weight: &[f32],
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+    expanded_out: &mut usize,
+) -> Option<f64> {
+    let n = grid.pass.len();
+    ws.prepare(n);
+    let open_stamp = ws.generation * 2;
+    let closed_stamp = open_stamp + 1;
+    let pw = grid.pw;
+    let pwi = pw as isize;
+    let inv_pw = 1.0 / pw as f64;
+    let pass = &grid.pass[..];
+    let st = &mut ws.state[..];
+    let mut heap = std::mem::take(&mut ws.heap);
+    heap.clear();
+    // Heuristic in padded coordinates (the offset cancels).
+    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
+    let h = |x: i64, y: i64| octile(gx - x, gy - y);
+    let s = grid.pidx(start.0, start.1);
+    let t = grid.pidx(goal.0, goal.1);
+    st[s] = CellState { g: 0.0, parent: u32::MAX, stamp: open_stamp };
+    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1).to_bits(), s as u32);
+    // Neighbour order: E, W, N(+y), S(−y), then diagonals NE, NW, SE, SW, each with the
+    // indices (into the cardinals) of the two cells it passes between.
+    let card: [(isize, i64, i64); 4] = [(1, 1, 0), (-1, -1, 0), (pwi, 0, 1), (-pwi, 0, -1)];
+    let diag: [(isize, i64, i64, usize, usize); 4] = [
+        (pwi + 1, 1, 1, 0, 2),
+        (pwi - 1, -1, 1, 1, 2),
+        (-pwi + 1, 1, -1, 0, 3),
+        (-pwi - 1, -1, -1, 1, 3),
+    ];
+    let mut expanded = 0usize;
+    let mut result = None;
+    while let Some((_, ui)) = heap.pop() {
+        let u = ui as usize;
+        let su = st[u];
+        if su.stamp == closed_stamp {
+            continue;
+        }
+        st[u].stamp = closed_stamp;
+        expanded += 1;
+        if u == t {
+            result = Some(su.g);
+            break;
+        }
+        // Row and column without an integer division: a float estimate, corrected.
+        let mut yy = (u as f64 * inv_pw) as usize;
+        if yy * pw > u {
+            yy -= 1;
+        } else if (yy + 1) * pw <= u {
+            yy += 1;
+        }
+        let (x, y) = ((u - yy * pw) as i64, yy as i64);
+        let gu = su.g;
+        let mut open_card = [false; 4];
+        for (k, &(off, dx, dy)) in card.iter().enumerate() {
+            let v = (u as isize + off) as usize;
+            if !pass[v] {
+                continue;
+            }
+            open_card[k] = true;
+            let sv = &mut st[v];
+            if sv.stamp == closed_stamp {
+                continue;
+            }
+            let ng = if W { gu + weight[v] as f64 } else { gu + 1.0 };
+            if sv.stamp != open_stamp || ng < sv.g {
+                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
+                heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
+            }
+        }
+        for &(off, dx, dy, a, b) in &diag {
+            if !(open_card[a] && open_card[b]) {
+                continue;
+            }
+            let v = (u as isize + off) as usize;
+            if !pass[v] {
+                continue;
+            }
+            let sv = &mut st[v];
+            if sv.stamp == closed_stamp {
+                continue;
+            }
+            let ng = if W { gu + SQRT2 * weight[v] as f64 } else { gu + SQRT2 };
+            if sv.stamp != open_stamp || ng < sv.g {
+                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
+                heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
+            }
+        }
+    }
+    *expanded_out = expanded;
+    ws.heap = heap;
+    result
+}
+
+/// Dijkstra wavefront from `goal` over the same move model: the geodesic (shortest-path)
+/// distance in cells from every cell to the goal, `f64::INFINITY` where unreachable or
+/// blocked. On a cost-aware grid the distances are weighted the same way as the search.
+#[doc(alias = "nf1")]
+#[doc(alias = "navigation_function")]
+pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
+    grid.check_cell("goal", goal)?;
+    let mut dist_p = vec![f64::INFINITY; grid.pass.len()];
+    let pw = grid.pw as isize;
+    let t = grid.pidx(goal.0, goal.1);
+    dist_p[t] = 0.0;
+    let mut heap = BinaryHeap::new();
+    heap.push(Node { f: 0.0, idx: t as u32 });
+    let card = [1isize, -1, pw, -pw];
+    let diag = [(pw + 1, 0, 2), (pw - 1, 1, 2), (-pw + 1, 0, 3), (-pw - 1, 1, 3)];
+    while let Some(node) = heap.pop() {
+        let u = node.idx as usize;
+        if node.f > dist_p[u] {
+            continue;
+        }
+        let du = node.f;
+        let mut open = [false; 4];
+        // Steps are symmetric (the same cells must be free in both directions), so the
+        // distance *to* the goal equals the distance *from* it; weights apply to the
+        // cell being entered on the way to the goal, i.e. the cell `u` here.
+        let wu = grid.weight.as_ref().map_or(1.0, |w| w[u] as f64);
+        for (k, &off) in card.iter().enumerate() {
+            let v = (u as isize + off) as usize;
+            if !grid.pass[v] {
+                continue;
+            }
+            open[k] = true;
+            let nd = du + wu;
+            if nd < dist_p[v] {
+                dist_p[v] = nd;
+                heap.push(Node { f: nd, idx: v as u32 });
+            }
+        }
+        for &(off, a, b) in &diag {
+            let v = (u as isize + off) as usize;
+            if !(open[a] && open[b]) || !grid.pass[v] {
+                continue;
+            }
+            let nd = du + SQRT2 * wu;
+            if nd < dist_p[v] {
+                dist_p[v] = nd;
+                heap.push(Node { f: nd, idx: v as u32 });
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(grid.width * grid.height);
+    for y in 0..grid.height {
+        for x in 0..grid.width {
+            out.push(dist_p[grid.pidx(x, y)]);
+        }
+    }
+    Ok(out)
+}

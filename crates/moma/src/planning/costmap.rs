@@ -1,0 +1,410 @@
+//! Configuration space from an occupancy grid: dilation by a disk (one distance
+//! transform, whatever the radius), a nav2-style inflation cost layer, and a polygonal
+//! footprint by per-heading dilation.
+
+use super::edt::distance_transform;
+use crate::{Error, Result};
+
+/// nav2 `FREE_SPACE`.
+pub const FREE_SPACE: u8 = 0;
+/// nav2 `MAX_NON_OBSTACLE`: the highest cost a robot centre may occupy.
+pub const MAX_NON_OBSTACLE: u8 = 252;
+/// nav2 `INSCRIBED_INFLATED_OBSTACLE`: the robot centre here means a collision.
+pub const INSCRIBED: u8 = 253;
+/// nav2 `LETHAL_OBSTACLE`: an obstacle cell.
+pub const LETHAL: u8 = 254;
+/// nav2 `NO_INFORMATION`: unknown cell.
+pub const NO_INFORMATION: u8 = 255;
+
+/// Dilates obstacles by a disk: a cell is in the C-space obstacle if its centre lies
+/// within `radius_cells` of an obstacle cell's centre (`dist ≤ radius`), `dist` being the
+/// output of [`distance_transform`].
+#[doc(alias = "c_space")]
+#[doc(alias = "configuration_space")]
+pub fn dilate_disk(dist: &[f32], radius_cells: f64) -> Vec<bool> {
+    let r = radius_cells as f32;
+    dist.iter().map(|&d| d <= r).collect()
+}
+
+/// Convenience: obstacle mask → distance transform → disk dilation.
+pub fn inflate(obstacles: &[bool], width: usize, height: usize, radius_cells: f64) -> Result<Vec<bool>> {
+    if !(radius_cells.is_finite() && radius_cells >= 0.0) {
+        return Err(Error::invalid("robot radius", format!("must be finite and >= 0, got {radius_cells}")));
+    }
+    crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
+    Ok(dilate_disk(&distance_transform(obstacles, width, height), radius_cells))
+}
+
+/// Parameters of the inflation layer (nav2 `InflationLayer`; lengths in metres).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct InflationParams {
+    /// Radius of the largest circle inside the footprint (m).
+    pub inscribed_radius: f64,
+    /// Distance up to which costs decay (nav2 default 0.55 m).
+    pub inflation_radius: f64,
+    /// Exponential decay rate (nav2 default 10 1/m).
+    pub cost_scaling_factor: f64,
+}
+
+impl InflationParams {
+    /// nav2's defaults (`inflation_radius` 0.55 m, `cost_scaling_factor` 10) with the
+    /// given inscribed radius.
+    pub fn nav2_defaults(inscribed_radius: f64) -> Self {
+        Self { inscribed_radius, inflation_radius: 0.55, cost_scaling_factor: 10.0 }
+    }
+
+    fn validate(&self) -> Result<()> {
+        for (n, v) in [
+            ("inscribed_radius", self.inscribed_radius),
+            ("inflation_radius", self.inflation_radius),
+            ("cost_scaling_factor", self.cost_scaling_factor),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(n, format!("must be finite and >= 0, got {v}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// nav2 `InflationLayer::computeCost` for a distance of `d_cells` cells.
+#[inline]
+pub fn inflation_cost(d_cells: f64, resolution: f64, p: &InflationParams) -> u8 {
+    let d = d_cells * resolution;
+    if d_cells == 0.0 {
+        LETHAL
+    } else if d <= p.inscribed_radius {
+        INSCRIBED
+    } else if d > p.inflation_radius {
+        FREE_SPACE
+    } else {
+        let factor = (-p.cost_scaling_factor * (d - p.inscribed_radius)).exp();
+        ((INSCRIBED - 1) as f64 * factor) as u8
+    }
+}
+
+/// The inflation cost layer over an occupancy grid: 254 on obstacles, 253 within the
+/// inscribed radius, `252 · exp(−k (d − r_in))` out to the inflation radius, 0 beyond.
+/// Unknown cells (when `unknown` marks them) stay 255 unless the inflated cost reaches
+/// 253 (nav2 with `inflate_unknown: false`). Distances come from one exact EDT (as nav2
+/// since 2026), evaluated through a lookup table on the squared distance.
+pub fn inflation_layer(
+    obstacles: &[bool],
+    unknown: Option<&[bool]>,
+    width: usize,
+    height: usize,
+    resolution: f64,
+    params: &InflationParams,
+) -> Result<Vec<u8>> {
+    params.validate()?;
+    if !(resolution.is_finite() && resolution > 0.0) {
+        return Err(Error::invalid("resolution", format!("must be positive, got {resolution}")));
+    }
+    crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
+    if let Some(u) = unknown {
+        crate::error::ensure_len("unknown mask", width * height, u.len())?;
+    }
+    let dist = distance_transform(obstacles, width, height);
+    Ok(dist
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| {
+            let c = if d.is_finite() { inflation_cost(d as f64, resolution, params) } else { FREE_SPACE };
+            match unknown {
+                Some(u) if u[i] && c < INSCRIBED => NO_INFORMATION,
+                _ => c,
+            }
+        })
+        .collect())
+}
+
+/// A robot footprint: a simple polygon in the robot frame (metres), containing the
+/// robot's reference point (the origin).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Footprint {
+    /// Vertices in order (either orientation).
+    pub vertices: Vec<[f64; 2]>,
+}
+
+impl Footprint {
+    /// Validates and builds a footprint.
+    pub fn new(vertices: Vec<[f64; 2]>) -> Result<Self> {
+        if vertices.len() < 3 {
+            return Err(Error::invalid("footprint", format!("needs at least 3 vertices, got {}", vertices.len())));
+        }
+        if vertices.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(Error::NonFinite { field: "footprint".into() });
+        }
+        let f = Self { vertices };
+        if !f.contains(0.0, 0.0) {
+            return Err(Error::invalid("footprint", "the polygon must contain the robot's origin (0, 0)"));
+        }
+        Ok(f)
+    }
+
+    /// Parses `"x1,y1;x2,y2;..."` or the nav2 style `"[[x1, y1], [x2, y2], ...]"`.
+    pub fn parse(text: &str) -> Result<Self> {
+        let nums: Vec<f64> = text
+            .split(|c: char| c == ',' || c == ';' || c == '[' || c == ']' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse::<f64>().map_err(|_| Error::invalid("footprint", format!("'{s}' is not a number"))))
+            .collect::<Result<_>>()?;
+        if nums.len() % 2 != 0 {
+            return Err(Error::invalid("footprint", "expected x,y pairs"));
+        }
+        Self::new(nums.chunks(2).map(|c| [c[0], c[1]]).collect())
+    }
+
+    /// Point-in-polygon test (boundary counts as inside).
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        let v = &self.vertices;
+        let n = v.len();
+        let mut inside = false;
+        for i in 0..n {
+            let (a, b) = (v[i], v[(i + 1) % n]);
+            // On the edge?
+            let cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+            let within = (x - a[0]) * (x - b[0]) <= 1e-12 && (y - a[1]) * (y - b[1]) <= 1e-12;
+            if cross.abs() <= 1e-12 * (1.0 + (b[0] - a[0]).abs() + (b[1] - a[1]).abs()) && within {
+                return true;
+            }
+            if (a[1] > y) != (b[1] > y) {
+                let xi = a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+                if x < xi {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    /// Radius of the largest origin-centred circle inside the polygon (nav2's inscribed
+    /// radius): the distance from the origin to the nearest edge.
+    pub fn inscribed_radius(&self) -> f64 {
+        let v = &self.vertices;
+        (0..v.len())
+            .map(|i| point_segment_distance([0.0, 0.0], v[i], v[(i + 1) % v.len()]))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Distance from the origin to the farthest vertex.
+    pub fn circumscribed_radius(&self) -> f64 {
+        self.vertices.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max)
+    }
+
+    /// Integer cell offsets `(dx, dy)` whose centres lie inside the footprint rotated by
+    /// `theta`, for cells of size `resolution`.
+    pub fn cell_offsets(&self, theta: f64, resolution: f64) -> Vec<(i64, i64)> {
+        let (s, c) = theta.sin_cos();
+        let r = (self.circumscribed_radius() / resolution).ceil() as i64 + 1;
+        let mut out = Vec::new();
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let (wx, wy) = (dx as f64 * resolution, dy as f64 * resolution);
+                // Rotate the offset back into the robot frame.
+                let (bx, by) = (c * wx + s * wy, -s * wx + c * wy);
+                if self.contains(bx, by) {
+                    out.push((dx, dy));
+                }
+            }
+        }
+        out
+    }
+}
+
+fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (abx, aby) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = abx * abx + aby * aby;
+    let t = if len2 > 0.0 { (((p[0] - a[0]) * abx + (p[1] - a[1]) * aby) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    (p[0] - a[0] - t * abx).hypot(p[1] - a[1] - t * aby)
+}
+
+/// The (x, y, θ) configuration space of a polygonal robot: one dilated obstacle mask per
+/// heading `θ_k = 2πk / headings`, plus one per rotation `θ_k → θ_{k+1}` (the footprint
+/// swept by the turn, sampled every ≤ 3°).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FootprintCSpace {
+    /// Number of headings.
+    pub headings: usize,
+    /// Grid width.
+    pub width: usize,
+    /// Grid height.
+    pub height: usize,
+    /// `slices[k][y * width + x]` = robot at (x, y) with heading θ_k collides.
+    pub slices: Vec<Vec<bool>>,
+    /// `sweeps[k]` = turning in place from θ_k to θ_{k+1} at (x, y) collides.
+    pub sweeps: Vec<Vec<bool>>,
+}
+
+/// Builds the per-heading C-space of `footprint` (`resolution` m/cell). A robot pose
+/// collides when an obstacle cell centre lies inside the footprint (cells outside the
+/// map are not obstacles, as for the disk dilation). Cells closer to an obstacle than the
+/// inscribed radius are blocked and cells farther than the circumscribed radius are free
+/// at every heading, so the exact footprint test only runs in the band between.
+pub fn footprint_cspace(
+    obstacles: &[bool],
+    width: usize,
+    height: usize,
+    resolution: f64,
+    footprint: &Footprint,
+    headings: usize,
+) -> Result<FootprintCSpace> {
+    if headings < 4 || headings > 360 {
+        return Err(Error::invalid("headings", format!("must be in 4..=360, got {headings}")));
+    }
+    crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
+    let dist = distance_transform(obstacles, width, height);
+    let r_in = footprint.inscribed_radius() / resolution;
+    let r_out = footprint.circumscribed_radius() / resolution;
+    let step = std::f64::consts::TAU / headings as f64;
+    let dilate = |offsets: &[(i64, i64)]| -> Vec<bool> {
+        let mut out = vec![false; width * height];
+        for y in 0..height {
+            for x in 0..width {
+                let i = y * width + x;
+                let d = dist[i] as f64;
+                out[i] = if d <= r_in {
+                    true
+                } else if d > r_out + 1e-9 {
+                    false
+                } else {
+                    offsets.iter().any(|&(dx, dy)| {
+                        let (ox, oy) = (x as i64 + dx, y as i64 + dy);
+                        ox >= 0 && oy >= 0 && (ox as usize) < width && (oy as usize) < height && obstacles[oy as usize * width + ox as usize]
+                    })
+                };
+            }
+        }
+        out
+    };
+    let mut slices = Vec::with_capacity(headings);
+    let mut sweeps = Vec::with_capacity(headings);
+    let sub = ((step.to_degrees() / 3.0).ceil() as usize).max(1);
+    for k in 0..headings {
+        let theta = k as f64 * step;
+        slices.push(dilate(&footprint.cell_offsets(theta, resolution)));
+        let mut swept: Vec<(i64, i64)> = (0..=sub)
+            .flat_map(|j| footprint.cell_offsets(theta + step * j as f64 / sub as f64, resolution))
+            .collect();
+        swept.sort_unstable();
+        swept.dedup();
+        sweeps.push(dilate(&swept));
+    }
+    Ok(FootprintCSpace { headings, width, height, slices, sweeps })
+}
+
+/// A path of a polygonal robot through its (x, y, θ) C-space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FootprintPath {
+    /// `(x, y, k)` states from start to goal; heading θ = 2πk / 8.
+    pub states: Vec<(usize, usize, usize)>,
+    /// Cost: path length in cells plus `turn_cost` per 45° turn.
+    pub cost: f64,
+    /// Expanded states.
+    pub expanded: usize,
+}
+
+/// A* over (x, y, heading) for a polygonal robot with the C-space of
+/// [`footprint_cspace`] built with **8 headings** (θ_k = k · 45°, the directions of the
+/// 8 grid moves). From state (c, k) the robot may drive one cell along heading k (both
+/// cells free in slice k; for diagonals the two side cells too) or turn in place by ±45°
+/// (the swept footprint free), costing `turn_cost` (cells of travel per 45° turn). The
+/// goal is reached at any heading. `Ok(None)` when unreachable.
+pub fn astar_footprint(
+    cs: &FootprintCSpace,
+    start: (usize, usize, usize),
+    goal: (usize, usize),
+    turn_cost: f64,
+) -> Result<Option<FootprintPath>> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    if cs.headings != 8 {
+        return Err(Error::invalid("headings", "the footprint search needs the 8-heading C-space"));
+    }
+    if !(turn_cost.is_finite() && turn_cost >= 0.0) {
+        return Err(Error::invalid("turn cost", format!("must be finite and >= 0, got {turn_cost}")));
+    }
+    let (w, h) = (cs.width, cs.height);
+    for (what, (x, y)) in [("start", (start.0, start.1)), ("goal", goal)] {
+        if x >= w || y >= h {
+            return Err(Error::Planning(format!("{what} cell ({x}, {y}) lies outside the {w} x {h} map")));
+        }
+    }
+    if start.2 >= 8 {
+        return Err(Error::invalid("start heading", "index must be in 0..8"));
+    }
+    if cs.slices[start.2][start.1 * w + start.0] {
+        return Err(Error::Planning(format!(
+            "start pose ({}, {}, {}°) collides: the footprint overlaps an obstacle",
+            start.0,
+            start.1,
+            start.2 * 45
+        )));
+    }
+    if (0..8).all(|k| cs.slices[k][goal.1 * w + goal.0]) {
+        return Err(Error::Planning(format!("goal cell ({}, {}) collides at every heading", goal.0, goal.1)));
+    }
+    const DIRS: [(i64, i64); 8] = [(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1)];
+    let free = |k: usize, x: i64, y: i64| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && !cs.slices[k][y as usize * w + x as usize];
+    let n = w * h * 8;
+    let sid = |x: usize, y: usize, k: usize| (y * w + x) * 8 + k;
+    let mut g = vec![f64::INFINITY; n];
+    let mut parent = vec![u32::MAX; n];
+    let mut closed = vec![false; n];
+    let hfun = |x: usize, y: usize| super::astar::octile(goal.0 as i64 - x as i64, goal.1 as i64 - y as i64);
+    // Keys as ordered integers (costs are finite and non-negative).
+    let key = |f: f64| Reverse(f.to_bits());
+    let mut heap = BinaryHeap::new();
+    let s = sid(start.0, start.1, start.2);
+    g[s] = 0.0;
+    heap.push((key(hfun(start.0, start.1)), s as u32));
+    let mut expanded = 0;
+    while let Some((_, u)) = heap.pop() {
+        let u = u as usize;
+        if closed[u] {
+            continue;
+        }
+        closed[u] = true;
+        expanded += 1;
+        let (k, cell) = (u % 8, u / 8);
+        let (x, y) = (cell % w, cell / w);
+        if (x, y) == goal {
+            let mut states = Vec::new();
+            let mut c = u as u32;
+            while c != u32::MAX {
+                let ci = c as usize;
+                states.push(((ci / 8) % w, (ci / 8) / w, ci % 8));
+                c = parent[ci];
+            }
+            states.reverse();
+            return Ok(Some(FootprintPath { states, cost: g[u], expanded }));
+        }
+        let mut relax = |v: usize, c: f64, heap: &mut BinaryHeap<(Reverse<u64>, u32)>| {
+            let ng = g[u] + c;
+            if !closed[v] && ng < g[v] {
+                g[v] = ng;
+                parent[v] = u as u32;
+                let (vx, vy) = ((v / 8) % w, (v / 8) / w);
+                heap.push((key(ng + hfun(vx, vy)), v as u32));
+            }
+        };
+        // Drive forward.
+        let (dx, dy) = DIRS[k];
+        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+        if free(k, nx, ny) && (dx == 0 || dy == 0 || (free(k, x as i64 + dx, y as i64) && free(k, x as i64, y as i64 + dy))) {
+            let len = if dx != 0 && dy != 0 { super::astar::SQRT2 } else { 1.0 };
+            relax(sid(nx as usize, ny as usize, k), len, &mut heap);
+        }
+        // Turn in place by +45° (sweep k) or -45° (sweep k-1).
+        let i = y * w + x;
+        let kp = (k + 1) % 8;
+        if !cs.sweeps[k][i] && !cs.slices[kp][i] {
+            relax(sid(x, y, kp), turn_cost, &mut heap);
+        }
+        let km = (k + 7) % 8;
+        if !cs.sweeps[km][i] && !cs.slices[km][i] {
+            relax(sid(x, y, km), turn_cost, &mut heap);
+        }
+    }
+    Ok(None)
+}

@@ -1,0 +1,169 @@
+//! From a path to motion: time parameterisation of a polyline for a differential-drive
+//! robot under velocity and acceleration limits.
+//!
+//! The robot turns in place toward each segment, then drives it straight, both with
+//! trapezoidal (or, when too short to reach the limit, triangular) velocity profiles that
+//! start and end at rest. Every sample therefore satisfies `|v| ≤ v_max`, `|ω| ≤ ω_max`,
+//! `|v̇| ≤ a_max`, `|ω̇| ≤ α_max` and the non-holonomic constraint (the velocity always
+//! points along the heading), so a tracking controller can follow it.
+
+use crate::{Error, Result};
+
+/// Velocity and acceleration limits of a differential drive.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DiffDriveLimits {
+    /// Largest forward speed `v_max` (m/s).
+    pub v_max: f64,
+    /// Largest turn rate `ω_max` (rad/s).
+    pub omega_max: f64,
+    /// Largest linear acceleration `a_max` (m/s²).
+    pub a_max: f64,
+    /// Largest angular acceleration `α_max` (rad/s²).
+    pub alpha_max: f64,
+}
+
+impl DiffDriveLimits {
+    fn validate(&self) -> Result<()> {
+        for (n, v) in [("v_max", self.v_max), ("omega_max", self.omega_max), ("a_max", self.a_max), ("alpha_max", self.alpha_max)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(n, format!("must be finite and > 0, got {v}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One sample of the reference trajectory.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TrajectoryPoint {
+    /// Time (s).
+    pub t: f64,
+    /// Position x (m).
+    pub x: f64,
+    /// Position y (m).
+    pub y: f64,
+    /// Heading θ (rad, in (−π, π]).
+    pub theta: f64,
+    /// Forward speed v (m/s).
+    pub v: f64,
+    /// Turn rate ω (rad/s).
+    pub omega: f64,
+}
+
+/// Trapezoidal rest-to-rest profile over a distance `d ≥ 0`: returns (duration,
+/// position(t), velocity(t)).
+struct Trapezoid {
+    d: f64,
+    vp: f64,
+    a: f64,
+    t_acc: f64,
+    t_cruise: f64,
+}
+
+impl Trapezoid {
+    fn new(d: f64, vmax: f64, amax: f64) -> Self {
+        let (vp, t_acc, t_cruise) = if d * amax >= vmax * vmax {
+            (vmax, vmax / amax, (d - vmax * vmax / amax) / vmax)
+        } else {
+            let vp = (d * amax).sqrt();
+            (vp, vp / amax, 0.0)
+        };
+        Self { d, vp, a: amax, t_acc, t_cruise }
+    }
+    fn duration(&self) -> f64 {
+        2.0 * self.t_acc + self.t_cruise
+    }
+    fn at(&self, t: f64) -> (f64, f64) {
+        let t = t.clamp(0.0, self.duration());
+        if t <= self.t_acc {
+            (0.5 * self.a * t * t, self.a * t)
+        } else if t <= self.t_acc + self.t_cruise {
+            (0.5 * self.a * self.t_acc * self.t_acc + self.vp * (t - self.t_acc), self.vp)
+        } else {
+            let r = self.duration() - t;
+            (self.d - 0.5 * self.a * r * r, self.a * r)
+        }
+    }
+}
+
+fn wrap(a: f64) -> f64 {
+    let mut a = a % std::f64::consts::TAU;
+    if a > std::f64::consts::PI {
+        a -= std::f64::consts::TAU;
+    } else if a <= -std::f64::consts::PI {
+        a += std::f64::consts::TAU;
+    }
+    a
+}
+
+/// Time-parameterises the polyline `waypoints` (world coordinates, metres) for a
+/// differential drive starting at rest with heading `initial_heading` (defaults to the
+/// first segment's direction). Samples every `dt` seconds plus every segment end.
+#[doc(alias = "time_parameterization")]
+pub fn time_parameterize(
+    waypoints: &[[f64; 2]],
+    initial_heading: Option<f64>,
+    limits: &DiffDriveLimits,
+    dt: f64,
+) -> Result<Vec<TrajectoryPoint>> {
+    limits.validate()?;
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(Error::invalid("dt", format!("must be finite and > 0, got {dt}")));
+    }
+    if waypoints.is_empty() {
+        return Err(Error::invalid("waypoints", "the path is empty"));
+    }
+    crate::error::ensure_finite("waypoints", waypoints.iter().flatten())?;
+    let mut pts = vec![waypoints[0]];
+    for w in &waypoints[1..] {
+        let last = pts.last().expect("non-empty");
+        if (w[0] - last[0]).hypot(w[1] - last[1]) > 1e-12 {
+            pts.push(*w);
+        }
+    }
+    let first_dir = if pts.len() > 1 { (pts[1][1] - pts[0][1]).atan2(pts[1][0] - pts[0][0]) } else { 0.0 };
+    let mut theta = wrap(initial_heading.unwrap_or(first_dir));
+    let mut t0 = 0.0;
+    let mut out = vec![TrajectoryPoint { t: 0.0, x: pts[0][0], y: pts[0][1], theta, v: 0.0, omega: 0.0 }];
+    let push_phase = |out: &mut Vec<TrajectoryPoint>, t0: f64, dur: f64, f: &dyn Fn(f64) -> TrajectoryPoint| {
+        let n = (dur / dt).floor() as usize;
+        for k in 1..=n {
+            let tau = k as f64 * dt;
+            if tau < dur - 1e-12 {
+                out.push(f(tau).with_time(t0 + tau));
+            }
+        }
+        out.push(f(dur).with_time(t0 + dur));
+    };
+    for seg in pts.windows(2) {
+        let (a, b) = (seg[0], seg[1]);
+        let heading = (b[1] - a[1]).atan2(b[0] - a[0]);
+        let turn = wrap(heading - theta);
+        if turn.abs() > 1e-12 {
+            let prof = Trapezoid::new(turn.abs(), limits.omega_max, limits.alpha_max);
+            let (th0, sgn) = (theta, turn.signum());
+            push_phase(&mut out, t0, prof.duration(), &|tau| {
+                let (s, w) = prof.at(tau);
+                TrajectoryPoint { t: 0.0, x: a[0], y: a[1], theta: wrap(th0 + sgn * s), v: 0.0, omega: sgn * w }
+            });
+            t0 += prof.duration();
+        }
+        theta = heading;
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let prof = Trapezoid::new(len, limits.v_max, limits.a_max);
+        let (c, s) = (heading.cos(), heading.sin());
+        push_phase(&mut out, t0, prof.duration(), &|tau| {
+            let (d, v) = prof.at(tau);
+            TrajectoryPoint { t: 0.0, x: a[0] + c * d, y: a[1] + s * d, theta: heading, v, omega: 0.0 }
+        });
+        t0 += prof.duration();
+    }
+    Ok(out)
+}
+
+impl TrajectoryPoint {
+    fn with_time(mut self, t: f64) -> Self {
+        self.t = t;
+        self
+    }
+}
