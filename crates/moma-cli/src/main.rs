@@ -6,6 +6,7 @@
 
 mod cmd;
 mod output;
+mod svg_heatmap;
 mod svg_map;
 
 use clap::{Parser, Subcommand};

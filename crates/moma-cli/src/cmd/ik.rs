@@ -1,10 +1,303 @@
-//! PLACEHOLDER: replaced by the work that implements this subcommand.
+//! `moma ik`: inverse kinematics of an arm frame, or whole-body resolved-rate motion of
+//! a manipulator on a differential-drive base.
 
-/// Arguments (to be defined).
+use super::manipulability::{frame_name, frame_of, load_model, parse_base, parse_list};
+use crate::output::{print_json, write_json};
+use anyhow::{Result, anyhow, bail};
+use moma::ik::model::ModelFrame;
+use moma::ik::tasks::{PoseTask, TaskRows, WholeBodyTask, pose_error, target_from_slice};
+use moma::ik::{
+    IkOptions, IkResult, IkWorkspace, KinematicTask, NullSpaceObjective, solve_with_restarts,
+};
+use moma::manipulability::Measure;
+use moma::mobile::whole_body::BaseInputs;
+use moma::multibody::RootJoint;
+use nalgebra::{DVector, Isometry3};
+use rand::SeedableRng;
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// Arguments of `moma ik`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Robot model (URDF).
+    pub robot: PathBuf,
+    /// Target in world: x,y,z (position) or x,y,z,qx,qy,qz,qw (pose).
+    #[arg(long, allow_hyphen_values = true)]
+    pub target: String,
+    /// End-effector frame (default: the deepest link).
+    #[arg(long)]
+    pub frame: Option<String>,
+    /// Move base and arm together (needs --base); q then starts with [x, y, θ].
+    #[arg(long)]
+    pub whole_body: bool,
+    /// Differential-drive platform for --whole-body: diff-drive:r_w=R,b=B,d=D.
+    #[arg(long)]
+    pub base: Option<String>,
+    /// Base inputs for --whole-body: platform (v, ω) or wheels.
+    #[arg(long, default_value = "platform")]
+    pub inputs: String,
+    /// Task rows (default: position for a 3-value target, full for a 7-value one).
+    #[arg(long)]
+    pub rows: Option<String>,
+    /// Initial configuration (nq values, comma separated; whole body: x,y,θ first).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q0: Option<String>,
+    /// Start from a random configuration drawn with this seed (instead of the neutral
+    /// one); also seeds the restarts.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Convergence tolerance on the residual norm (m, rad).
+    #[arg(long, default_value_t = 1e-6)]
+    pub tol: f64,
+    /// Maximum iterations per attempt.
+    #[arg(long, default_value_t = 200)]
+    pub max_iters: usize,
+    /// Random restarts when an attempt does not converge.
+    #[arg(long, default_value_t = 0)]
+    pub restarts: usize,
+    /// Whole body: weight of the base inputs against the arm joints (larger = the base
+    /// moves less).
+    #[arg(long, default_value_t = 1.0)]
+    pub base_weight: f64,
+    /// Secondary objective in the task null space: none, manipulability, posture.
+    #[arg(long, default_value = "none")]
+    pub null_space: String,
+    /// Gain of the null-space objective.
+    #[arg(long, default_value_t = 0.2)]
+    pub null_gain: f64,
+    /// Print JSON on standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the JSON result to this file.
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+}
 
-/// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("this subcommand is not implemented yet")
+#[derive(Serialize)]
+struct Output {
+    robot: String,
+    frame: String,
+    whole_body: bool,
+    target: Vec<f64>,
+    rows: Vec<usize>,
+    converged: bool,
+    status: moma::ik::IkStatus,
+    residual_norm: f64,
+    residual: Vec<f64>,
+    position_error: f64,
+    orientation_error: f64,
+    iterations: usize,
+    sigma_min: f64,
+    q: Vec<f64>,
+    /// Achieved frame pose: x, y, z, qx, qy, qz, qw.
+    pose: Vec<f64>,
+    time_ms: f64,
+}
+
+fn pose_vec(p: &Isometry3<f64>) -> Vec<f64> {
+    let t = p.translation.vector;
+    let q = p.rotation.coords;
+    vec![t.x, t.y, t.z, q.x, q.y, q.z, q.w]
+}
+
+/// Runs `moma ik`. Exits with status 2 (after printing the result) when not converged.
+pub fn run(args: Args) -> Result<()> {
+    let tvals = parse_list("--target", &args.target)?;
+    let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
+    let rows: TaskRows = match &args.rows {
+        Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
+        None if tvals.len() == 3 => TaskRows::Position,
+        None => TaskRows::Full,
+    };
+    if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
+        bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
+    }
+    if !(args.tol.is_finite() && args.tol > 0.0) {
+        bail!("--tol: must be > 0, got {}", args.tol);
+    }
+    if args.max_iters == 0 {
+        bail!("--max-iters: must be at least 1");
+    }
+    if !(args.base_weight.is_finite() && args.base_weight > 0.0) {
+        bail!("--base-weight: must be > 0, got {}", args.base_weight);
+    }
+    let drive = match (&args.base, args.whole_body) {
+        (Some(b), true) => Some(parse_base(b)?),
+        (None, true) => bail!("--whole-body needs --base diff-drive:r_w=R,b=B,d=D"),
+        (Some(_), false) => bail!("--base is only used with --whole-body"),
+        (None, false) => None,
+    };
+    let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;
+    let root = if drive.is_some() {
+        RootJoint::Planar
+    } else {
+        RootJoint::Fixed
+    };
+    let model = load_model(&args.robot, root)?;
+    let kin = frame_of(&model, args.frame.as_deref(), &args.robot)?;
+    let name = frame_name(&kin);
+    let nq = model.nq;
+    let q0 = match (&args.q0, args.seed) {
+        (Some(s), _) => {
+            let v = parse_list("--q0", s)?;
+            if v.len() != nq {
+                bail!(
+                    "--q0: expected {nq} values ({}), got {}",
+                    if drive.is_some() {
+                        "x, y, θ and the joints"
+                    } else {
+                        "one per configuration coordinate"
+                    },
+                    v.len()
+                );
+            }
+            DVector::from_vec(v)
+        }
+        (None, Some(seed)) => {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let mut q = moma::kinematics::random_configuration(&model, &mut rng);
+            if drive.is_some() {
+                q[0] = 0.0;
+                q[1] = 0.0;
+                q[2] = 0.0;
+            }
+            q
+        }
+        (None, None) => moma::kinematics::neutral(&model),
+    };
+    let null_space = match args.null_space.as_str() {
+        "none" => NullSpaceObjective::None,
+        "manipulability" => NullSpaceObjective::Manipulability {
+            measure: Measure::Yoshikawa,
+            gain: args.null_gain,
+        },
+        "posture" => NullSpaceObjective::Posture {
+            gain: args.null_gain,
+        },
+        other => bail!("--null-space: unknown '{other}'; expected none, manipulability, posture"),
+    };
+    let nv_task = if drive.is_some() {
+        model.nv - 1
+    } else {
+        model.nv
+    };
+    let weights = drive.map(|_| {
+        let mut w = vec![1.0; nv_task];
+        w[0] = args.base_weight;
+        w[1] = args.base_weight;
+        w
+    });
+    let options = IkOptions {
+        tolerance: args.tol,
+        max_iterations: args.max_iters,
+        weights,
+        null_space,
+        ..IkOptions::default()
+    };
+    let seed = args.seed.unwrap_or(0);
+    let start = std::time::Instant::now();
+    let (result, pose): (IkResult, Isometry3<f64>) = match drive {
+        Some(drive) => {
+            let mut task = WholeBodyTask::new(kin, drive, inputs, target, &rows)?;
+            if matches!(options.null_space, NullSpaceObjective::Posture { .. }) {
+                let pref = q0.rows(3, nq - 3).into_owned();
+                task = task.with_preferred_posture(pref)?;
+            }
+            run_task(&mut task, &q0, &options, args.restarts, seed)?
+        }
+        None => {
+            let mut task = PoseTask::new(kin, target, &rows)?;
+            if matches!(options.null_space, NullSpaceObjective::Posture { .. }) {
+                task = task.with_preferred_posture(q0.clone())?;
+            }
+            run_task(&mut task, &q0, &options, args.restarts, seed)?
+        }
+    };
+    let time_ms = start.elapsed().as_secs_f64() * 1e3;
+    let e = pose_error(&pose, &target);
+    let out = Output {
+        robot: args.robot.display().to_string(),
+        frame: name,
+        whole_body: drive.is_some(),
+        target: tvals,
+        rows: rows.indices(),
+        converged: result.converged,
+        status: result.status,
+        residual_norm: result.residual_norm,
+        residual: result.residual.iter().copied().collect(),
+        position_error: (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt(),
+        orientation_error: (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt(),
+        iterations: result.iterations,
+        sigma_min: result.sigma_min,
+        q: result.q.iter().copied().collect(),
+        pose: pose_vec(&pose),
+        time_ms,
+    };
+    if let Some(path) = &args.output {
+        write_json(path, &out)?;
+    }
+    if args.json {
+        print_json(&out)?;
+    } else {
+        println!(
+            "{}: frame '{}' {} after {} iterations: residual {:.3e} (position {:.3e} m, orientation {:.3e} rad), σ_min {:.3e}",
+            out.robot,
+            out.frame,
+            if out.converged {
+                "converged".to_string()
+            } else {
+                format!("NOT converged ({:?})", out.status)
+            },
+            out.iterations,
+            out.residual_norm,
+            out.position_error,
+            out.orientation_error,
+            out.sigma_min
+        );
+        let qs: Vec<String> = out.q.iter().map(|x| format!("{x:.6}")).collect();
+        println!("q = [{}]", qs.join(", "));
+    }
+    if !out.converged {
+        eprintln!(
+            "error: inverse kinematics did not converge ({:?}, residual {:.3e} > tol {:.1e}); \
+             the target may be out of reach or blocked by joint limits (try --restarts)",
+            out.status, out.residual_norm, args.tol
+        );
+        std::process::exit(2);
+    }
+    Ok(())
+}
+
+/// Pose-task access for the output.
+trait LastPose {
+    fn last(&self) -> Isometry3<f64>;
+}
+
+impl LastPose for PoseTask<ModelFrame> {
+    fn last(&self) -> Isometry3<f64> {
+        *self.last_pose()
+    }
+}
+
+impl LastPose for WholeBodyTask<ModelFrame> {
+    fn last(&self) -> Isometry3<f64> {
+        *self.last_pose()
+    }
+}
+
+fn run_task<T: KinematicTask + LastPose>(
+    task: &mut T,
+    q0: &DVector<f64>,
+    options: &IkOptions,
+    restarts: usize,
+    seed: u64,
+) -> Result<(IkResult, Isometry3<f64>)> {
+    let mut ws = IkWorkspace::new(task);
+    let r = solve_with_restarts(task, q0, options, restarts, seed, &mut ws)?;
+    // Re-evaluate at the returned q so the reported pose belongs to it.
+    let mut e = DVector::zeros(task.task_dim());
+    let mut j = nalgebra::DMatrix::zeros(task.task_dim(), task.nv());
+    task.residual_and_jacobian(&r.q, &mut e, &mut j)?;
+    Ok((r, task.last()))
 }

@@ -1,1 +1,607 @@
-//! Inverse kinematics: damped least squares / Levenberg–Marquardt for arms, whole-body resolved-rate motion for mobile manipulators.
+//! Inverse kinematics: damped least squares / Levenberg–Marquardt for arms, whole-body
+//! resolved-rate motion for mobile manipulators.
+//!
+//! The solver core ([`solve`]) works on any [`KinematicTask`]: something that maps a
+//! configuration `q` to a task residual `e(q)` (m) and its Jacobian `J = ∂e/∂δ` with
+//! respect to a velocity-like increment `δ` (nv), and that knows how to integrate `q ⊕ δ`.
+//! Each iteration solves the weighted, damped least-squares step (Levenberg–Marquardt)
+//!
+//! ```text
+//! δ = −W⁻¹ Jᵀ (J W⁻¹ Jᵀ + λ I)⁻¹ e  +  k_N (I − J# J) ∇φ
+//! ```
+//!
+//! with `W = diag(weights)` trading one input against another (e.g. base motion against
+//! arm motion), adaptive damping `λ` (decreased after a step that reduces `‖e‖`,
+//! increased and retried after one that does not; this makes the step robust at and near
+//! singularities) and an optional secondary objective `φ` (manipulability, or a preferred
+//! posture) followed in the (damped) null space of the task. Inputs at a joint limit that
+//! the step would push further out are frozen (their `W⁻¹` entry set to zero) and the step
+//! re-solved, so iterates stay within the limits without losing the task.
+//!
+//! The result ([`IkResult`]) says whether the residual fell below the tolerance, with the
+//! final residual, the iteration count and why the solver stopped; an unreachable target
+//! ends as [`IkStatus::Stalled`] (a local minimum of `‖e‖`) or [`IkStatus::MaxIterations`],
+//! never as an error or NaN.
+//!
+//! Tasks on real models (frame pose of a URDF arm, whole-body pose of a mobile
+//! manipulator) live in [`tasks`].
+
+pub mod model;
+pub mod tasks;
+
+use crate::error::{Error, Result, ensure_finite};
+use crate::manipulability::{JacobianSvd, Measure, evaluate_svd};
+use nalgebra::{DMatrix, DVector};
+
+/// Step norm below which the secondary objective counts as settled.
+const SECONDARY_STEP_TOL: f64 = 1e-7;
+
+/// A kinematic task for [`solve`]: residual, Jacobian and configuration update.
+pub trait KinematicTask {
+    /// Number of configuration coordinates `nq`.
+    fn nq(&self) -> usize;
+    /// Number of velocity/increment coordinates `nv` (columns of the Jacobian).
+    fn nv(&self) -> usize;
+    /// Task dimension `m` (rows of the residual and the Jacobian).
+    fn task_dim(&self) -> usize;
+    /// Writes the residual `e(q)` (zero at the solution) and `J = ∂e/∂δ` (m × nv).
+    fn residual_and_jacobian(
+        &mut self,
+        q: &DVector<f64>,
+        residual: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<()>;
+    /// `out = q ⊕ δ`, then projected into the feasible set (joint limits).
+    fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>);
+    /// Marks in `blocked` the increment coordinates that sit at a limit and that `delta`
+    /// would push out of it. The default has no limits.
+    fn blocked_inputs(&self, _q: &DVector<f64>, _delta: &DVector<f64>, _blocked: &mut [bool]) {}
+    /// The columns of the task Jacobian whose manipulability the null-space term
+    /// maximises (default: all; a whole-body task returns the arm's columns).
+    fn manipulability_columns(&self) -> std::ops::Range<usize> {
+        0..self.nv()
+    }
+    /// Writes into `out` a random configuration near `current` for a restart (e.g. the
+    /// same base pose, random arm joints within the limits); false if unsupported.
+    fn random_configuration(
+        &self,
+        _current: &DVector<f64>,
+        _rng: &mut dyn rand::RngCore,
+        _out: &mut DVector<f64>,
+    ) -> bool {
+        false
+    }
+    /// Gradient (in increment coordinates) of a preferred-posture objective
+    /// `−½‖q − q_pref‖²`; returns false when the task has no preferred posture.
+    fn posture_gradient(&self, _q: &DVector<f64>, _gradient: &mut DVector<f64>) -> bool {
+        false
+    }
+}
+
+/// The secondary objective followed in the null space of the task.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum NullSpaceObjective {
+    /// No secondary objective.
+    #[default]
+    None,
+    /// Ascend a manipulability measure of the Jacobian columns
+    /// [`KinematicTask::manipulability_columns`] (finite-difference gradient).
+    Manipulability {
+        /// Which measure (it must be larger-is-better).
+        measure: Measure,
+        /// Gain k_N.
+        gain: f64,
+    },
+    /// Move towards the task's preferred posture ([`KinematicTask::posture_gradient`]).
+    Posture {
+        /// Gain k_N.
+        gain: f64,
+    },
+}
+
+/// Options of [`solve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct IkOptions {
+    /// Convergence tolerance on `‖e‖` (task units: m and rad).
+    pub tolerance: f64,
+    /// Maximum number of iterations (accepted plus rejected steps).
+    pub max_iterations: usize,
+    /// Initial damping λ₀.
+    pub initial_damping: f64,
+    /// Smallest damping λ (keeps the step finite at singularities).
+    pub min_damping: f64,
+    /// Largest damping: beyond it the solver declares itself stalled.
+    pub max_damping: f64,
+    /// Largest step norm `‖δ‖` (rad or m) per iteration.
+    pub max_step: f64,
+    /// Per-input weights (length nv, > 0); a larger weight makes that input move less.
+    /// `None` means all ones.
+    pub weights: Option<Vec<f64>>,
+    /// Secondary objective in the task null space.
+    pub null_space: NullSpaceObjective,
+    /// Stop as stalled after this many consecutive accepted steps that each reduce `‖e‖`
+    /// by less than the relative amount [`IkOptions::stall_relative`] (the linear crawl
+    /// towards the closest point of an unreachable target).
+    pub stall_iterations: usize,
+    /// Relative decrease of `‖e‖` per step below which a step counts as slow.
+    pub stall_relative: f64,
+}
+
+impl Default for IkOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-6,
+            max_iterations: 200,
+            initial_damping: 1e-3,
+            min_damping: 1e-10,
+            max_damping: 1e8,
+            max_step: 0.5,
+            weights: None,
+            null_space: NullSpaceObjective::None,
+            stall_iterations: 4,
+            stall_relative: 1e-3,
+        }
+    }
+}
+
+/// Why [`solve`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum IkStatus {
+    /// `‖e‖ ≤ tolerance`.
+    Converged,
+    /// The iteration budget ran out.
+    MaxIterations,
+    /// No step reduces `‖e‖` any more (a local minimum: typically an unreachable target
+    /// or joint limits in the way).
+    Stalled,
+}
+
+/// The outcome of [`solve`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct IkResult {
+    /// The final configuration (the best one found).
+    pub q: DVector<f64>,
+    /// True when `‖e‖ ≤ tolerance`.
+    pub converged: bool,
+    /// Why the solver stopped.
+    pub status: IkStatus,
+    /// Final residual norm `‖e‖`.
+    pub residual_norm: f64,
+    /// Final residual vector.
+    pub residual: DVector<f64>,
+    /// Iterations used (accepted and rejected steps).
+    pub iterations: usize,
+    /// Final damping λ.
+    pub damping: f64,
+    /// Smallest singular value of the task Jacobian at the final configuration
+    /// (≈ 0 means the solution is at a singularity).
+    pub sigma_min: f64,
+}
+
+/// Reusable buffers for [`solve`] (allocate once per thread, reuse across calls).
+#[derive(Clone, Debug)]
+pub struct IkWorkspace {
+    e: DVector<f64>,
+    e_trial: DVector<f64>,
+    j: DMatrix<f64>,
+    j_trial: DMatrix<f64>,
+    q_trial: DVector<f64>,
+    delta: DVector<f64>,
+    winv: DVector<f64>,
+    winv_eff: DVector<f64>,
+    blocked: Vec<bool>,
+    a: DMatrix<f64>,
+    y: DVector<f64>,
+    grad: DVector<f64>,
+    q_probe: DVector<f64>,
+    e_probe: DVector<f64>,
+    j_probe: DMatrix<f64>,
+}
+
+impl IkWorkspace {
+    /// Buffers sized for `task`.
+    pub fn new<T: KinematicTask + ?Sized>(task: &T) -> Self {
+        let (m, nq, nv) = (task.task_dim(), task.nq(), task.nv());
+        Self {
+            e: DVector::zeros(m),
+            e_trial: DVector::zeros(m),
+            j: DMatrix::zeros(m, nv),
+            j_trial: DMatrix::zeros(m, nv),
+            q_trial: DVector::zeros(nq),
+            delta: DVector::zeros(nv),
+            winv: DVector::from_element(nv, 1.0),
+            winv_eff: DVector::from_element(nv, 1.0),
+            blocked: vec![false; nv],
+            a: DMatrix::zeros(m, m),
+            y: DVector::zeros(m),
+            grad: DVector::zeros(nv),
+            q_probe: DVector::zeros(nq),
+            e_probe: DVector::zeros(m),
+            j_probe: DMatrix::zeros(m, nv),
+        }
+    }
+
+    fn fits<T: KinematicTask + ?Sized>(&self, task: &T) -> bool {
+        self.e.len() == task.task_dim()
+            && self.q_trial.len() == task.nq()
+            && self.delta.len() == task.nv()
+    }
+}
+
+/// Solves `e(q) = 0` from the seed `q0` by weighted damped least squares
+/// (Levenberg–Marquardt), see the module documentation.
+#[doc(alias = "dls")]
+#[doc(alias = "levenberg_marquardt")]
+pub fn solve<T: KinematicTask + ?Sized>(
+    task: &mut T,
+    q0: &DVector<f64>,
+    options: &IkOptions,
+    ws: &mut IkWorkspace,
+) -> Result<IkResult> {
+    let (m, nq, nv) = (task.task_dim(), task.nq(), task.nv());
+    crate::error::ensure_len("ik seed q0", nq, q0.len())?;
+    ensure_finite("ik seed q0", q0.iter())?;
+    validate_options(options, nv)?;
+    if !ws.fits(task) {
+        *ws = IkWorkspace::new(task);
+    }
+    match &options.weights {
+        Some(w) => {
+            for k in 0..nv {
+                ws.winv[k] = 1.0 / w[k];
+            }
+        }
+        None => ws.winv.fill(1.0),
+    }
+
+    // Start from the seed projected into the feasible set.
+    let zero = DVector::zeros(nv);
+    let mut q = DVector::zeros(nq);
+    task.integrate(q0, &zero, &mut q);
+    task.residual_and_jacobian(&q, &mut ws.e, &mut ws.j)?;
+    check_finite_eval(&ws.e, &ws.j)?;
+    let mut err = ws.e.norm();
+    let mut lambda = options.initial_damping;
+    let mut iterations = 0;
+    let mut slow = 0;
+    // With a secondary objective the solver keeps improving it after the task is met,
+    // as long as the residual stays within the tolerance and the step is not negligible.
+    let secondary = match options.null_space {
+        NullSpaceObjective::None => false,
+        NullSpaceObjective::Manipulability { gain, .. } | NullSpaceObjective::Posture { gain } => {
+            gain > 0.0
+        }
+    };
+    // Share of the null-space term in the step: halved after a rejected step before the
+    // damping grows, so the secondary objective never prevents convergence.
+    let mut ns_scale = 1.0;
+    let status = loop {
+        let met = err <= options.tolerance;
+        if met && !secondary {
+            break IkStatus::Converged;
+        }
+        if iterations >= options.max_iterations || lambda > options.max_damping {
+            break if met {
+                IkStatus::Converged
+            } else if iterations >= options.max_iterations {
+                IkStatus::MaxIterations
+            } else {
+                IkStatus::Stalled
+            };
+        }
+        iterations += 1;
+
+        // Null-space direction (computed at the current q, reused across retries).
+        let have_grad = secondary_gradient(task, &q, options, ws)?;
+
+        // Damped weighted step, re-solved once with blocked inputs frozen.
+        ws.winv_eff.copy_from(&ws.winv);
+        ws.blocked.iter_mut().for_each(|b| *b = false);
+        for pass in 0..2 {
+            damped_step(ws, lambda, m, nv, have_grad, ns_scale, options)?;
+            if pass == 0 {
+                task.blocked_inputs(&q, &ws.delta, &mut ws.blocked);
+                if !ws.blocked.iter().any(|&b| b) {
+                    break;
+                }
+                for k in 0..nv {
+                    if ws.blocked[k] {
+                        ws.winv_eff[k] = 0.0;
+                    }
+                }
+            }
+        }
+        let norm = ws.delta.norm();
+        if met && norm < SECONDARY_STEP_TOL {
+            break IkStatus::Converged;
+        }
+        if norm > options.max_step {
+            ws.delta *= options.max_step / norm;
+        }
+        task.integrate(&q, &ws.delta, &mut ws.q_trial);
+        task.residual_and_jacobian(&ws.q_trial, &mut ws.e_trial, &mut ws.j_trial)?;
+        let err_trial = ws.e_trial.norm();
+        let finite = err_trial.is_finite() && ws.j_trial.iter().all(|x| x.is_finite());
+        let accept =
+            finite && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
+        if accept {
+            if !met && err - err_trial <= options.stall_relative * err {
+                slow += 1;
+            } else {
+                slow = 0;
+            }
+            std::mem::swap(&mut q, &mut ws.q_trial);
+            std::mem::swap(&mut ws.e, &mut ws.e_trial);
+            std::mem::swap(&mut ws.j, &mut ws.j_trial);
+            err = err_trial;
+            lambda = (lambda / 3.0).max(options.min_damping);
+            ns_scale = (ns_scale * 2.0).min(1.0);
+            if slow >= options.stall_iterations && err > options.tolerance {
+                break IkStatus::Stalled;
+            }
+        } else if secondary && ns_scale > 1e-3 {
+            ns_scale *= 0.25;
+        } else {
+            ns_scale = 0.0;
+            lambda *= 8.0;
+        }
+    };
+    let sigma_min = JacobianSvd::new(&ws.j)
+        .map(|s| s.sigma_min())
+        .unwrap_or(0.0);
+    Ok(IkResult {
+        converged: status == IkStatus::Converged,
+        q,
+        status,
+        residual_norm: err,
+        residual: ws.e.clone(),
+        iterations,
+        damping: lambda,
+        sigma_min,
+    })
+}
+
+/// [`solve`] from `q0`, then, while not converged, from up to `restarts` random
+/// configurations ([`KinematicTask::random_configuration`], seeded by `seed`); returns the
+/// first converged result or the one with the smallest residual. `iterations` counts all
+/// attempts.
+pub fn solve_with_restarts<T: KinematicTask + ?Sized>(
+    task: &mut T,
+    q0: &DVector<f64>,
+    options: &IkOptions,
+    restarts: usize,
+    seed: u64,
+    ws: &mut IkWorkspace,
+) -> Result<IkResult> {
+    use rand::SeedableRng;
+    let mut best = solve(task, q0, options, ws)?;
+    let mut total = best.iterations;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut seed_q = q0.clone();
+    for _ in 0..restarts {
+        if best.converged {
+            break;
+        }
+        if !task.random_configuration(q0, &mut rng, &mut seed_q) {
+            break;
+        }
+        let r = solve(task, &seed_q, options, ws)?;
+        total += r.iterations;
+        if r.converged || r.residual_norm < best.residual_norm {
+            best = r;
+        }
+    }
+    best.iterations = total;
+    Ok(best)
+}
+
+fn validate_options(o: &IkOptions, nv: usize) -> Result<()> {
+    let positive = [
+        ("ik tolerance", o.tolerance),
+        ("ik initial_damping", o.initial_damping),
+        ("ik min_damping", o.min_damping),
+        ("ik max_damping", o.max_damping),
+        ("ik max_step", o.max_step),
+    ];
+    for (field, v) in positive {
+        if !v.is_finite() || v <= 0.0 {
+            return Err(Error::invalid(
+                field,
+                format!("must be finite and > 0, got {v}"),
+            ));
+        }
+    }
+    if !o.stall_relative.is_finite() || o.stall_relative < 0.0 {
+        return Err(Error::invalid(
+            "ik stall_relative",
+            format!("must be finite and >= 0, got {}", o.stall_relative),
+        ));
+    }
+    if let Some(w) = &o.weights {
+        crate::error::ensure_len("ik weights", nv, w.len())?;
+        for (k, &x) in w.iter().enumerate() {
+            if !x.is_finite() || x <= 0.0 {
+                return Err(Error::invalid(
+                    format!("ik weights[{k}]"),
+                    format!("must be finite and > 0, got {x}"),
+                ));
+            }
+        }
+    }
+    match &o.null_space {
+        NullSpaceObjective::Manipulability { measure, gain } => {
+            if !measure.larger_is_better() {
+                return Err(Error::invalid(
+                    "ik null-space measure",
+                    format!("'{measure}' is smaller-is-better; choose one to maximise"),
+                ));
+            }
+            if !gain.is_finite() || *gain < 0.0 {
+                return Err(Error::invalid(
+                    "ik null-space gain",
+                    "must be finite and >= 0",
+                ));
+            }
+        }
+        NullSpaceObjective::Posture { gain } => {
+            if !gain.is_finite() || *gain < 0.0 {
+                return Err(Error::invalid(
+                    "ik null-space gain",
+                    "must be finite and >= 0",
+                ));
+            }
+        }
+        NullSpaceObjective::None => {}
+    }
+    Ok(())
+}
+
+fn check_finite_eval(e: &DVector<f64>, j: &DMatrix<f64>) -> Result<()> {
+    if e.iter().chain(j.iter()).all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::Numerical {
+            t: 0.0,
+            message: "inverse kinematics: non-finite residual or Jacobian at the seed".into(),
+        })
+    }
+}
+
+/// δ = −W⁻¹Jᵀ(JW⁻¹Jᵀ + λI)⁻¹ e + k (∇φ − W⁻¹Jᵀ(JW⁻¹Jᵀ + λI)⁻¹ J ∇φ).
+fn damped_step(
+    ws: &mut IkWorkspace,
+    lambda: f64,
+    m: usize,
+    nv: usize,
+    have_grad: bool,
+    ns_scale: f64,
+    options: &IkOptions,
+) -> Result<()> {
+    // A = J W⁻¹ Jᵀ + λ I
+    for r in 0..m {
+        for c in 0..=r {
+            let mut s = 0.0;
+            for k in 0..nv {
+                s += ws.j[(r, k)] * ws.winv_eff[k] * ws.j[(c, k)];
+            }
+            ws.a[(r, c)] = s;
+            ws.a[(c, r)] = s;
+        }
+        ws.a[(r, r)] += lambda;
+    }
+    // Right-hand side: −e (+ J ∇φ projected out below).
+    let gain = match options.null_space {
+        NullSpaceObjective::Manipulability { gain, .. } | NullSpaceObjective::Posture { gain } => {
+            gain
+        }
+        NullSpaceObjective::None => 0.0,
+    } * ns_scale;
+    let use_grad = have_grad && gain > 0.0;
+    // y = A⁻¹ (−e − k J W⁻¹ g)   so that δ = W⁻¹ Jᵀ y + k W⁻¹ g
+    for r in 0..m {
+        let mut s = -ws.e[r];
+        if use_grad {
+            let mut jg = 0.0;
+            for k in 0..nv {
+                jg += ws.j[(r, k)] * ws.winv_eff[k] * ws.grad[k];
+            }
+            s -= gain * jg;
+        }
+        ws.y[r] = s;
+    }
+    if !cholesky_solve_in_place(&mut ws.a, &mut ws.y) {
+        return Err(Error::Numerical {
+            t: 0.0,
+            message: "inverse kinematics: damped normal matrix not positive definite".into(),
+        });
+    }
+    for k in 0..nv {
+        let mut s = 0.0;
+        for r in 0..m {
+            s += ws.j[(r, k)] * ws.y[r];
+        }
+        let mut d = ws.winv_eff[k] * s;
+        if use_grad {
+            d += gain * ws.winv_eff[k] * ws.grad[k];
+        }
+        ws.delta[k] = d;
+    }
+    Ok(())
+}
+
+/// Solves `A y = b` for symmetric positive-definite `A` by an in-place Cholesky
+/// factorisation (A is overwritten by its factor; no allocation). False if A is not
+/// positive definite.
+fn cholesky_solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> bool {
+    let n = a.nrows();
+    for j in 0..n {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= a[(j, k)] * a[(j, k)];
+        }
+        if !d.is_finite() || d <= 0.0 {
+            return false;
+        }
+        let l = d.sqrt();
+        a[(j, j)] = l;
+        for i in j + 1..n {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= a[(i, k)] * a[(j, k)];
+            }
+            a[(i, j)] = s / l;
+        }
+    }
+    // L z = b, then Lᵀ y = z.
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= a[(i, k)] * b[k];
+        }
+        b[i] = s / a[(i, i)];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= a[(k, i)] * b[k];
+        }
+        b[i] = s / a[(i, i)];
+    }
+    true
+}
+
+/// Fills `ws.grad` with the gradient of the secondary objective; false if none.
+fn secondary_gradient<T: KinematicTask + ?Sized>(
+    task: &mut T,
+    q: &DVector<f64>,
+    options: &IkOptions,
+    ws: &mut IkWorkspace,
+) -> Result<bool> {
+    match &options.null_space {
+        NullSpaceObjective::None => Ok(false),
+        NullSpaceObjective::Posture { .. } => Ok(task.posture_gradient(q, &mut ws.grad)),
+        NullSpaceObjective::Manipulability { measure, .. } => {
+            let cols = task.manipulability_columns();
+            let value = |j: &DMatrix<f64>| -> f64 {
+                let sub = j.columns(cols.start, cols.len()).into_owned();
+                JacobianSvd::new(&sub)
+                    .and_then(|s| evaluate_svd(measure, &s))
+                    .unwrap_or(0.0)
+            };
+            let w0 = value(&ws.j);
+            let h = 1e-6;
+            let nv = task.nv();
+            let mut unit = DVector::zeros(nv);
+            for k in 0..nv {
+                unit[k] = h;
+                task.integrate(q, &unit, &mut ws.q_probe);
+                unit[k] = 0.0;
+                task.residual_and_jacobian(&ws.q_probe, &mut ws.e_probe, &mut ws.j_probe)?;
+                let g = (value(&ws.j_probe) - w0) / h;
+                ws.grad[k] = if g.is_finite() { g } else { 0.0 };
+            }
+            Ok(true)
+        }
+    }
+}

@@ -4,3 +4,4 @@
 pub mod diff_drive;
 
 pub use diff_drive::DiffDrive;
+pub mod whole_body;

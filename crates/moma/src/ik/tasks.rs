@@ -1,0 +1,451 @@
+//! Pose tasks for [`super::solve`]: an arm frame reaching a target pose, and the same for
+//! a manipulator on a differential-drive platform moving its base and arm together.
+//!
+//! Both are written over [`FrameKinematics`], the forward kinematics of one frame of a
+//! model: its world pose and its `LocalWorldAligned` Jacobian (rows `[linear; angular]`).
+//! The residual of the pose task is
+//!
+//! ```text
+//! e = [ p(q) − p* ;  log(R(q) R*ᵀ) ]      (world axes; a chosen subset of the 6 rows)
+//! ```
+//!
+//! whose Jacobian with respect to the model velocity is the frame Jacobian (exactly for
+//! the position rows, to first order in the orientation error for the angular rows).
+
+use super::KinematicTask;
+use crate::error::{Error, Result, ensure_finite, ensure_len};
+use crate::mobile::DiffDrive;
+use crate::mobile::whole_body::{BaseInputs, compose_jacobian, integrate_base};
+use nalgebra::{DMatrix, DVector, Isometry3, Translation3, UnitQuaternion};
+use std::str::FromStr;
+
+/// Forward kinematics of one frame of a model, as the pose tasks need it.
+pub trait FrameKinematics {
+    /// Configuration dimension nq.
+    fn nq(&self) -> usize;
+    /// Velocity dimension nv.
+    fn nv(&self) -> usize;
+    /// World pose of the frame and its 6 × nv `LocalWorldAligned` Jacobian
+    /// (rows `[linear; angular]`, linear = velocity of the frame origin).
+    fn pose_and_jacobian(
+        &mut self,
+        q: &DVector<f64>,
+        pose: &mut Isometry3<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<()>;
+    /// `out = q ⊕ v` (the model's integration for unit time), projected into the joint
+    /// limits.
+    fn integrate(&self, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>);
+    /// Marks the velocity coordinates at a limit that `v` pushes further out.
+    fn blocked_velocities(&self, q: &DVector<f64>, v: &DVector<f64>, blocked: &mut [bool]);
+    /// A sphere (centre in the model's world frame, radius) that contains every position
+    /// the frame can reach, if the model allows a cheap bound (fixed root, revolute and
+    /// bounded prismatic joints); used to skip hopeless IK problems.
+    fn reach_bound(&self) -> Option<(nalgebra::Vector3<f64>, f64)> {
+        None
+    }
+    /// Writes a random configuration within the joint limits (root coordinates copied
+    /// from `current`); false if the model cannot sample one.
+    fn random_configuration(
+        &self,
+        _current: &DVector<f64>,
+        _rng: &mut dyn rand::RngCore,
+        _out: &mut DVector<f64>,
+    ) -> bool {
+        false
+    }
+}
+
+/// Which rows of the 6-D pose error/Jacobian `[linear; angular]` a task uses.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub enum TaskRows {
+    /// Position only: rows 0, 1, 2.
+    Position,
+    /// Orientation only: rows 3, 4, 5.
+    Orientation,
+    /// Full pose: all six rows.
+    #[default]
+    Full,
+    /// A user-chosen subset of the rows 0..6 (e.g. `[0, 1, 5]` for planar x, y, yaw).
+    Rows(Vec<usize>),
+}
+
+impl TaskRows {
+    /// The row indices into `[vx, vy, vz, ωx, ωy, ωz]`.
+    pub fn indices(&self) -> Vec<usize> {
+        match self {
+            TaskRows::Position => vec![0, 1, 2],
+            TaskRows::Orientation => vec![3, 4, 5],
+            TaskRows::Full => (0..6).collect(),
+            TaskRows::Rows(r) => r.clone(),
+        }
+    }
+
+    /// Validates a row subset (non-empty, each < 6, no repeats).
+    pub fn validate(&self) -> Result<()> {
+        let idx = self.indices();
+        if idx.is_empty() {
+            return Err(Error::invalid("task rows", "no rows selected"));
+        }
+        for (k, &r) in idx.iter().enumerate() {
+            if r >= 6 {
+                return Err(Error::invalid(
+                    format!("task rows[{k}]"),
+                    format!("row {r} out of range 0..6 ([vx, vy, vz, wx, wy, wz])"),
+                ));
+            }
+            if idx[..k].contains(&r) {
+                return Err(Error::invalid(
+                    format!("task rows[{k}]"),
+                    format!("row {r} repeated"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl FromStr for TaskRows {
+    type Err = Error;
+    /// `position`, `orientation`, `full` (or `pose`), or `rows:0,1,5`.
+    fn from_str(s: &str) -> Result<Self> {
+        let t = s.trim().to_ascii_lowercase();
+        let rows = match t.as_str() {
+            "position" | "pos" => TaskRows::Position,
+            "orientation" | "rot" => TaskRows::Orientation,
+            "full" | "pose" | "6d" => TaskRows::Full,
+            _ => {
+                let body = t.strip_prefix("rows:").ok_or_else(|| {
+                    Error::invalid(
+                        "task rows",
+                        format!(
+                            "unknown '{s}'; expected position, orientation, full or rows:i,j,..."
+                        ),
+                    )
+                })?;
+                let mut r = Vec::new();
+                for (k, p) in body.split(',').enumerate() {
+                    r.push(p.trim().parse::<usize>().map_err(|_| {
+                        Error::invalid(
+                            format!("task rows[{k}]"),
+                            format!("'{p}' is not a row index"),
+                        )
+                    })?);
+                }
+                TaskRows::Rows(r)
+            }
+        };
+        rows.validate()?;
+        Ok(rows)
+    }
+}
+
+/// The 6-D pose error `[p − p*; log(R R*ᵀ)]` in world axes.
+pub fn pose_error(pose: &Isometry3<f64>, target: &Isometry3<f64>) -> [f64; 6] {
+    let dp = pose.translation.vector - target.translation.vector;
+    let dr = (pose.rotation * target.rotation.inverse()).scaled_axis();
+    [dp.x, dp.y, dp.z, dr.x, dr.y, dr.z]
+}
+
+/// Builds a target pose from `[x, y, z]` (identity orientation) or
+/// `[x, y, z, qx, qy, qz, qw]` (the quaternion is normalised; it must not be zero).
+pub fn target_from_slice(values: &[f64]) -> Result<Isometry3<f64>> {
+    ensure_finite("target", values)?;
+    match values.len() {
+        3 => Ok(Isometry3::from_parts(
+            Translation3::new(values[0], values[1], values[2]),
+            UnitQuaternion::identity(),
+        )),
+        7 => {
+            let q = nalgebra::Quaternion::new(values[6], values[3], values[4], values[5]);
+            if q.norm() < 1e-9 {
+                return Err(Error::invalid(
+                    "target quaternion",
+                    "qx, qy, qz, qw must not all be zero",
+                ));
+            }
+            Ok(Isometry3::from_parts(
+                Translation3::new(values[0], values[1], values[2]),
+                UnitQuaternion::from_quaternion(q),
+            ))
+        }
+        n => Err(Error::invalid(
+            "target",
+            format!("expected 3 values x,y,z or 7 values x,y,z,qx,qy,qz,qw, got {n}"),
+        )),
+    }
+}
+
+/// An arm frame reaching a target pose (selected rows): [`KinematicTask`] for
+/// [`super::solve`].
+pub struct PoseTask<K: FrameKinematics> {
+    /// The frame's kinematics.
+    pub kinematics: K,
+    /// Target pose in world.
+    pub target: Isometry3<f64>,
+    rows: Vec<usize>,
+    preferred: Option<DVector<f64>>,
+    pose: Isometry3<f64>,
+    j6: DMatrix<f64>,
+}
+
+impl<K: FrameKinematics> PoseTask<K> {
+    /// A pose task on the given rows.
+    pub fn new(kinematics: K, target: Isometry3<f64>, rows: &TaskRows) -> Result<Self> {
+        rows.validate()?;
+        let nv = kinematics.nv();
+        Ok(Self {
+            kinematics,
+            target,
+            rows: rows.indices(),
+            preferred: None,
+            pose: Isometry3::identity(),
+            j6: DMatrix::zeros(6, nv),
+        })
+    }
+
+    /// Sets a preferred posture (length nq; used by the `Posture` null-space objective).
+    pub fn with_preferred_posture(mut self, q: DVector<f64>) -> Result<Self> {
+        ensure_len("preferred posture", self.kinematics.nq(), q.len())?;
+        ensure_finite("preferred posture", q.iter())?;
+        self.preferred = Some(q);
+        Ok(self)
+    }
+
+    /// The frame pose at the last evaluation.
+    pub fn last_pose(&self) -> &Isometry3<f64> {
+        &self.pose
+    }
+}
+
+impl<K: FrameKinematics> KinematicTask for PoseTask<K> {
+    fn nq(&self) -> usize {
+        self.kinematics.nq()
+    }
+    fn nv(&self) -> usize {
+        self.kinematics.nv()
+    }
+    fn task_dim(&self) -> usize {
+        self.rows.len()
+    }
+    fn residual_and_jacobian(
+        &mut self,
+        q: &DVector<f64>,
+        residual: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<()> {
+        self.kinematics
+            .pose_and_jacobian(q, &mut self.pose, &mut self.j6)?;
+        let e6 = pose_error(&self.pose, &self.target);
+        for (i, &r) in self.rows.iter().enumerate() {
+            residual[i] = e6[r];
+            for k in 0..self.j6.ncols() {
+                jacobian[(i, k)] = self.j6[(r, k)];
+            }
+        }
+        Ok(())
+    }
+    fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>) {
+        self.kinematics.integrate(q, delta, out);
+    }
+    fn blocked_inputs(&self, q: &DVector<f64>, delta: &DVector<f64>, blocked: &mut [bool]) {
+        self.kinematics.blocked_velocities(q, delta, blocked);
+    }
+    fn random_configuration(
+        &self,
+        current: &DVector<f64>,
+        rng: &mut dyn rand::RngCore,
+        out: &mut DVector<f64>,
+    ) -> bool {
+        self.kinematics.random_configuration(current, rng, out)
+    }
+    fn posture_gradient(&self, q: &DVector<f64>, gradient: &mut DVector<f64>) -> bool {
+        match &self.preferred {
+            // For revolute/prismatic joints (nq = nv) the increment is q̇ itself.
+            Some(p) if p.len() == gradient.len() => {
+                for k in 0..gradient.len() {
+                    gradient[k] = p[k] - q[k];
+                }
+                true
+            }
+            _ => false,
+        }
+    }
+}
+
+/// A manipulator on a differential-drive platform reaching a target pose with base and
+/// arm together (whole-body resolved-rate motion).
+///
+/// The model's root must be the planar platform joint, `q = [x, y, θ, q_arm…]`,
+/// `q̇ = [ẋ, ẏ, θ̇, q̇_arm…]`. The increments are the whole-body inputs
+/// `u = [u_base(2), q̇_arm]` ([`BaseInputs`]); the base is integrated exactly along the
+/// arc of constant `(v, ω)`, so every iterate is reachable without side slip. Use
+/// [`super::IkOptions::weights`] to trade base motion against arm motion.
+pub struct WholeBodyTask<K: FrameKinematics> {
+    /// The frame's kinematics (planar root first).
+    pub kinematics: K,
+    /// The platform.
+    pub drive: DiffDrive,
+    /// Base input parametrisation.
+    pub inputs: BaseInputs,
+    /// Target pose in world.
+    pub target: Isometry3<f64>,
+    rows: Vec<usize>,
+    preferred: Option<DVector<f64>>,
+    pose: Isometry3<f64>,
+    j6: DMatrix<f64>,
+    jbar: DMatrix<f64>,
+    v_model: std::cell::RefCell<DVector<f64>>,
+    blocked_model: std::cell::RefCell<Vec<bool>>,
+}
+
+impl<K: FrameKinematics> WholeBodyTask<K> {
+    /// A whole-body pose task on the given rows.
+    pub fn new(
+        kinematics: K,
+        drive: DiffDrive,
+        inputs: BaseInputs,
+        target: Isometry3<f64>,
+        rows: &TaskRows,
+    ) -> Result<Self> {
+        rows.validate()?;
+        let nv = kinematics.nv();
+        if nv < 3 || kinematics.nq() < 3 {
+            return Err(Error::invalid(
+                "whole-body model",
+                "the model needs a planar root [x, y, θ] (nq, nv >= 3)",
+            ));
+        }
+        Ok(Self {
+            kinematics,
+            drive,
+            inputs,
+            target,
+            rows: rows.indices(),
+            preferred: None,
+            pose: Isometry3::identity(),
+            j6: DMatrix::zeros(6, nv),
+            jbar: DMatrix::zeros(6, nv - 1),
+            v_model: std::cell::RefCell::new(DVector::zeros(nv)),
+            blocked_model: std::cell::RefCell::new(vec![false; nv]),
+        })
+    }
+
+    /// Sets a preferred arm posture `q_arm` (length nq − 3) for the `Posture` objective.
+    pub fn with_preferred_posture(mut self, q_arm: DVector<f64>) -> Result<Self> {
+        ensure_len("preferred posture", self.kinematics.nq() - 3, q_arm.len())?;
+        ensure_finite("preferred posture", q_arm.iter())?;
+        self.preferred = Some(q_arm);
+        Ok(self)
+    }
+
+    /// The frame pose at the last evaluation.
+    pub fn last_pose(&self) -> &Isometry3<f64> {
+        &self.pose
+    }
+
+    /// The 6-row whole-body Jacobian `J̄` at the last evaluation.
+    pub fn last_whole_body_jacobian(&self) -> &DMatrix<f64> {
+        &self.jbar
+    }
+
+    /// Forward displacement and heading change of the axle midpoint for base increments.
+    fn base_displacement(&self, u0: f64, u1: f64) -> (f64, f64) {
+        match self.inputs {
+            BaseInputs::Platform => (u0, u1),
+            BaseInputs::Wheels => {
+                let w = self.drive.wheel_to_platform();
+                (
+                    w[(0, 0)] * u0 + w[(0, 1)] * u1,
+                    w[(1, 0)] * u0 + w[(1, 1)] * u1,
+                )
+            }
+        }
+    }
+}
+
+impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
+    fn nq(&self) -> usize {
+        self.kinematics.nq()
+    }
+    fn nv(&self) -> usize {
+        self.kinematics.nv() - 1
+    }
+    fn task_dim(&self) -> usize {
+        self.rows.len()
+    }
+    fn residual_and_jacobian(
+        &mut self,
+        q: &DVector<f64>,
+        residual: &mut DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<()> {
+        self.kinematics
+            .pose_and_jacobian(q, &mut self.pose, &mut self.j6)?;
+        compose_jacobian(&self.drive, self.inputs, q[2], &self.j6, &mut self.jbar)?;
+        let e6 = pose_error(&self.pose, &self.target);
+        for (i, &r) in self.rows.iter().enumerate() {
+            residual[i] = e6[r];
+            for k in 0..self.jbar.ncols() {
+                jacobian[(i, k)] = self.jbar[(r, k)];
+            }
+        }
+        Ok(())
+    }
+    fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>) {
+        let mut v = self.v_model.borrow_mut();
+        v.fill(0.0);
+        for k in 2..delta.len() {
+            v[k + 1] = delta[k];
+        }
+        self.kinematics.integrate(q, &v, out);
+        let (s, alpha) = self.base_displacement(delta[0], delta[1]);
+        let base = integrate_base(&self.drive, [q[0], q[1], q[2]], s, alpha);
+        out[0] = base[0];
+        out[1] = base[1];
+        out[2] = base[2];
+    }
+    fn blocked_inputs(&self, q: &DVector<f64>, delta: &DVector<f64>, blocked: &mut [bool]) {
+        let mut v = self.v_model.borrow_mut();
+        v.fill(0.0);
+        for k in 2..delta.len() {
+            v[k + 1] = delta[k];
+        }
+        let mut b = self.blocked_model.borrow_mut();
+        b.iter_mut().for_each(|x| *x = false);
+        self.kinematics.blocked_velocities(q, &v, &mut b);
+        let n = delta.len();
+        blocked[2..n].copy_from_slice(&b[3..n + 1]);
+    }
+    fn manipulability_columns(&self) -> std::ops::Range<usize> {
+        2..self.nv()
+    }
+    fn random_configuration(
+        &self,
+        current: &DVector<f64>,
+        rng: &mut dyn rand::RngCore,
+        out: &mut DVector<f64>,
+    ) -> bool {
+        if !self.kinematics.random_configuration(current, rng, out) {
+            return false;
+        }
+        // Keep the base where it is: restarts re-seed the arm only.
+        out[0] = current[0];
+        out[1] = current[1];
+        out[2] = current[2];
+        true
+    }
+    fn posture_gradient(&self, q: &DVector<f64>, gradient: &mut DVector<f64>) -> bool {
+        match &self.preferred {
+            Some(p) if p.len() + 2 == gradient.len() => {
+                gradient[0] = 0.0;
+                gradient[1] = 0.0;
+                for k in 0..p.len() {
+                    gradient[k + 2] = p[k] - q[k + 3];
+                }
+                true
+            }
+            _ => false,
+        }
+    }
+}
