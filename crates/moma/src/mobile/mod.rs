@@ -2,6 +2,7 @@
 //! reduced dynamics, whole-body Jacobian.
 
 pub mod diff_drive;
+pub mod whole_body;
 
 pub use diff_drive::DiffDrive;
-pub mod whole_body;
+pub use whole_body::whole_body_jacobian;
