@@ -1,1 +1,292 @@
 //! The chapter's robots (m1–m5) in their own coordinates, closed form.
+//!
+//! Each model follows the project's clean specification of the chapter (the printed
+//! equations have lost signs and contain several errors; see `docs/chapter.md`):
+//!
+//! | model | robot | coordinates |
+//! | --- | --- | --- |
+//! | [`m1_unicycle`] | differential-drive platform | `q = [x, y, φ]`, `v = [v_F, v_T]` |
+//! | [`m2_platform_arm`] | platform + horizontal two-link arm | `q = [x, y, φ, θ1, θ2]` |
+//! | [`m3_diffdrive`] | wheel-rate kinematics, whole-body Jacobian | `q = [x, y, φ, φ1, θ1, θ2]` |
+//! | [`m4_cart_two_link`] | cart + two-link arm in a vertical plane | `q = [d0, θ1, θ2]` |
+//! | [`m5_mobile_manipulator`] | 3-D platform + capstan + two-link arm | `q = [x, y, φ, φt, θ1, θ12]` |
+//!
+//! Conventions: `H q̈ + h + G = Q − Cᵀλ`, `C q̇ = 0`, `q̇ = N_C v`, `h = C_cor q̇` with the
+//! Christoffel `C_cor`, `G = ∂V/∂q` including gravity. The mass matrix and potential of
+//! each model are written once in closed form; their derivatives (Christoffel symbols,
+//! G, Ṅ_C, J̇) are exact (forward-mode dual numbers, see [`ad`]).
+
+pub mod ad;
+pub mod cases;
+pub mod lagrange;
+pub mod m1_unicycle;
+pub mod m2_platform_arm;
+pub mod m3_diffdrive;
+pub mod m4_cart_two_link;
+pub mod m5_mobile_manipulator;
+
+use crate::error::{Error, Result};
+use crate::sim::OdeSystem;
+use ad::Real;
+use lagrange::PfaffianSystem;
+use nalgebra::{DMatrix, SMatrix, SVector};
+use serde::Serialize;
+
+/// Smallest |d| (m) for which the lateral-velocity parametrisation `v = [v_F, v_T]` is used
+/// automatically; below it [`PlatformVelocity::YawRate`] is chosen.
+pub const MIN_AXLE_OFFSET: f64 = 1e-9;
+
+/// How the platform's two admissible velocities are parametrised.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlatformVelocity {
+    /// `v = [v_F, v_T]`: forward and lateral velocity of the CM, `v_T = d φ̇`
+    /// (the chapter's choice; singular for `d = 0`).
+    LateralVelocity,
+    /// `v = [v_F, φ̇]`: forward velocity of the CM and yaw rate (valid for every `d`).
+    YawRate,
+}
+
+impl PlatformVelocity {
+    /// The chapter's parametrisation unless `|d| < MIN_AXLE_OFFSET`, then the yaw rate.
+    pub fn auto(d: f64) -> Self {
+        if d.abs() >= MIN_AXLE_OFFSET {
+            PlatformVelocity::LateralVelocity
+        } else {
+            PlatformVelocity::YawRate
+        }
+    }
+
+    /// Checks that this parametrisation is usable with the offset `d`.
+    pub fn check(self, d: f64) -> Result<()> {
+        if self == PlatformVelocity::LateralVelocity && d.abs() < MIN_AXLE_OFFSET {
+            return Err(Error::Singular {
+                what: "N_C with v = [v_F, v_T]".into(),
+                detail: Some(format!(
+                    "d = {d} (CM over the axle); use the yaw-rate parametrisation v = [v_F, φ̇]"
+                )),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The platform block `N11(φ)` (3×2) of the velocity basis, rows `(ẋ, ẏ, φ̇)`.
+///
+/// Lateral velocity: `[[cos φ, −sin φ], [sin φ, cos φ], [0, 1/d]]`;
+/// yaw rate: `[[cos φ, −d sin φ], [sin φ, d cos φ], [0, 1]]`.
+pub fn platform_basis<T: Real>(phi: T, d: f64, param: PlatformVelocity) -> [[T; 2]; 3] {
+    let (c, s) = (phi.cos(), phi.sin());
+    match param {
+        PlatformVelocity::LateralVelocity => [[c, -s], [s, c], [T::cst(0.0), T::cst(1.0 / d)]],
+        PlatformVelocity::YawRate => [[c, -s * d], [s, c * d], [T::cst(0.0), T::cst(1.0)]],
+    }
+}
+
+/// Rejects a non-finite or non-positive parameter.
+pub(crate) fn positive(name: &str, x: f64) -> Result<()> {
+    if !x.is_finite() {
+        return Err(Error::NonFinite {
+            field: format!("params.{name}"),
+        });
+    }
+    if x <= 0.0 {
+        return Err(Error::invalid(
+            format!("params.{name}"),
+            format!("must be positive, got {x}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Rejects a non-finite or negative parameter.
+pub(crate) fn nonnegative(name: &str, x: f64) -> Result<()> {
+    if !x.is_finite() {
+        return Err(Error::NonFinite {
+            field: format!("params.{name}"),
+        });
+    }
+    if x < 0.0 {
+        return Err(Error::invalid(
+            format!("params.{name}"),
+            format!("must not be negative, got {x}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Rejects a non-finite parameter.
+pub(crate) fn finite(name: &str, x: f64) -> Result<()> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::NonFinite {
+            field: format!("params.{name}"),
+        })
+    }
+}
+
+/// Converts a slice of user input into a fixed-size vector, checking length and finiteness.
+pub fn fixed_vector<const K: usize>(field: &str, x: &[f64]) -> Result<SVector<f64, K>> {
+    crate::error::ensure_len(field, K, x.len())?;
+    crate::error::ensure_finite(field, x)?;
+    Ok(SVector::from_column_slice(x))
+}
+
+/// Manipulability measures of a Jacobian `J` (m×n) with singular values `σ`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Manipulability {
+    /// `[m, n]`.
+    pub shape: [usize; 2],
+    /// Singular values of J, descending.
+    pub singular_values: Vec<f64>,
+    /// The chapter's measure `det(JᵀJ)` (≈ 0 for a wide J).
+    #[serde(rename = "det_JtJ")]
+    pub det_jtj: f64,
+    /// Yoshikawa's measure `sqrt(det(J Jᵀ))` (0 for a tall J).
+    #[serde(rename = "yoshikawa_sqrt_det_JJt")]
+    pub yoshikawa: f64,
+    /// `σ_min / σ_max`.
+    pub w2_sigma_ratio: f64,
+    /// Bayle–Fourquet–Renaud eccentricity `sqrt(1 − (σ_min/σ_max)²)`.
+    pub w5_bayle_eccentricity: f64,
+}
+
+/// Computes the [`Manipulability`] measures of `j`.
+#[doc(alias = "Yoshikawa")]
+pub fn manipulability(j: &DMatrix<f64>) -> Manipulability {
+    let (m, n) = j.shape();
+    let mut sv: Vec<f64> = j
+        .clone()
+        .svd(false, false)
+        .singular_values
+        .iter()
+        .copied()
+        .collect();
+    sv.sort_by(|a, b| b.total_cmp(a));
+    let det_jtj = (j.transpose() * j).determinant();
+    let yoshikawa = if m <= n {
+        (j * j.transpose()).determinant().max(0.0).sqrt()
+    } else {
+        0.0
+    };
+    let smax = sv.first().copied().unwrap_or(0.0);
+    let smin = sv.last().copied().unwrap_or(0.0);
+    let w2 = if smax > 0.0 { smin / smax } else { 0.0 };
+    Manipulability {
+        shape: [m, n],
+        singular_values: sv,
+        det_jtj,
+        yoshikawa,
+        w2_sigma_ratio: w2,
+        w5_bayle_eccentricity: (1.0 - w2 * w2).max(0.0).sqrt(),
+    }
+}
+
+/// The reduced dynamics of a constrained model under a constant input `u`, as an
+/// [`OdeSystem`] on the state `x = [q; v]` (`q̇ = N_C(q) v`, `v̇ = Mr⁻¹(Qr − Cr v − Gr)`).
+pub struct ReducedOde<'a, S, const N: usize, const NV: usize, const NU: usize> {
+    /// The model.
+    pub system: &'a S,
+    /// The constant input.
+    pub input: SVector<f64, NU>,
+}
+
+impl<S, const N: usize, const NV: usize, const NU: usize> OdeSystem for ReducedOde<'_, S, N, NV, NU>
+where
+    S: PfaffianSystem<N, NV, NU>,
+{
+    fn dim(&self) -> usize {
+        N + NV
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
+        let q = SVector::<f64, N>::from_column_slice(&x[..N]);
+        let v = SVector::<f64, NV>::from_column_slice(&x[N..N + NV]);
+        let (qd, vd) = lagrange::reduced_forward_dynamics(self.system, &q, &v, &self.input)
+            .map_err(|e| match e {
+                Error::Singular { what, detail } => Error::Singular {
+                    what: format!("{what} at t = {t}"),
+                    detail,
+                },
+                other => other,
+            })?;
+        dx[..N].copy_from_slice(qd.as_slice());
+        dx[N..N + NV].copy_from_slice(vd.as_slice());
+        Ok(())
+    }
+}
+
+/// Integrates a [`ReducedOde`] with Dormand–Prince 5(4) at `rtol = atol = tol` and returns
+/// `(q, v)` at each requested time.
+#[allow(clippy::type_complexity)]
+pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
+    system: &S,
+    q0: &SVector<f64, N>,
+    v0: &SVector<f64, NV>,
+    u: &SVector<f64, NU>,
+    times: &[f64],
+    tol: f64,
+) -> Result<Vec<(SVector<f64, N>, SVector<f64, NV>)>>
+where
+    S: PfaffianSystem<N, NV, NU>,
+{
+    let mut ode = ReducedOde { system, input: *u };
+    let mut x0 = vec![0.0; N + NV];
+    x0[..N].copy_from_slice(q0.as_slice());
+    x0[N..].copy_from_slice(v0.as_slice());
+    let mut dp =
+        crate::sim::DormandPrince45::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+    let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
+    Ok(rows
+        .iter()
+        .map(|r| {
+            (
+                SVector::from_column_slice(&r[..N]),
+                SVector::from_column_slice(&r[N..]),
+            )
+        })
+        .collect())
+}
+
+/// Serde helpers writing nalgebra matrices as row-major nested lists.
+pub mod ser {
+    use nalgebra::{SMatrix, SVector};
+    use serde::Serializer;
+    use serde::ser::SerializeSeq;
+
+    /// A matrix as a list of rows.
+    pub fn mat<const R: usize, const C: usize, S: Serializer>(
+        m: &SMatrix<f64, R, C>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        let mut seq = s.serialize_seq(Some(R))?;
+        for i in 0..R {
+            let row: Vec<f64> = (0..C).map(|j| m[(i, j)]).collect();
+            seq.serialize_element(&row)?;
+        }
+        seq.end()
+    }
+
+    /// A vector as a flat list.
+    pub fn vec<const R: usize, S: Serializer>(
+        v: &SVector<f64, R>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.iter())
+    }
+
+    /// A scalar as a one-element list.
+    pub fn one<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(std::iter::once(x))
+    }
+}
+
+/// Converts a fixed-size matrix to a dynamically sized one.
+pub fn to_dmatrix<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> DMatrix<f64> {
+    DMatrix::from_fn(R, C, |i, j| m[(i, j)])
+}
+
+/// Rejects a vector with a NaN or infinite entry, naming `field`.
+pub fn check_finite<const K: usize>(field: &str, x: &SVector<f64, K>) -> Result<()> {
+    crate::error::ensure_finite(field, x.iter())
+}

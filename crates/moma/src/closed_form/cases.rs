@@ -1,0 +1,362 @@
+//! Evaluating the chapter's models on case files (the schema of the reference vectors).
+//!
+//! A case file is a JSON object with a `model` name and a list of `cases`; each case has
+//! `id`, `params`, `state`, `inputs` and optionally `trajectory.t`. [`evaluate_document`]
+//! returns the same document with every case's `outputs` and `trajectory` filled in (all
+//! other fields preserved). Nothing is returned unless every case succeeds.
+
+use super::fixed_vector;
+use super::m1_unicycle::{Unicycle, UnicycleParams};
+use super::m2_platform_arm::{PlatformArm, PlatformArmParams};
+use super::m3_diffdrive::{DiffDrive, DiffDriveParams};
+use super::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
+use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
+use crate::error::{Error, Result};
+use nalgebra::SVector;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use serde_json::{Map, Value, json};
+
+/// The chapter models `moma eval` knows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChapterModel {
+    /// m1, the unicycle platform.
+    M1Unicycle,
+    /// m2, platform + horizontal two-link arm.
+    M2PlatformArm,
+    /// m3, wheel-rate kinematics and whole-body Jacobian.
+    M3DiffDrive,
+    /// m4, cart + vertical two-link arm.
+    M4CartTwoLink,
+    /// m5, 3-D mobile manipulator.
+    M5MobileManipulator,
+}
+
+/// Canonical model names (as in the reference files) with accepted aliases.
+pub const MODEL_NAMES: [(&str, &[&str], ChapterModel); 5] = [
+    ("m1_unicycle", &["m1"], ChapterModel::M1Unicycle),
+    (
+        "m2_platform_planar_arm",
+        &["m2", "m2_platform_arm"],
+        ChapterModel::M2PlatformArm,
+    ),
+    (
+        "m3_diffdrive_kinematics",
+        &["m3", "m3_diffdrive"],
+        ChapterModel::M3DiffDrive,
+    ),
+    ("m4_cart_two_link", &["m4"], ChapterModel::M4CartTwoLink),
+    (
+        "m5_mobile_manipulator_3d",
+        &["m5", "m5_mobile_manipulator"],
+        ChapterModel::M5MobileManipulator,
+    ),
+];
+
+impl ChapterModel {
+    /// Looks a model up by its canonical name or alias.
+    pub fn from_name(name: &str) -> Result<Self> {
+        for (canon, aliases, m) in MODEL_NAMES {
+            if name == canon || aliases.contains(&name) {
+                return Ok(m);
+            }
+        }
+        let known: Vec<&str> = MODEL_NAMES.iter().map(|(c, _, _)| *c).collect();
+        Err(Error::invalid(
+            "model",
+            format!("unknown model '{name}'; known models: {}", known.join(", ")),
+        ))
+    }
+}
+
+fn field<'a>(case: &'a Value, path: &[&str]) -> Result<&'a Value> {
+    let mut v = case;
+    for (i, key) in path.iter().enumerate() {
+        v = v
+            .get(key)
+            .ok_or_else(|| Error::invalid(path[..=i].join("."), "missing"))?;
+    }
+    Ok(v)
+}
+
+fn numbers(case: &Value, path: &[&str]) -> Result<Vec<f64>> {
+    let name = path.join(".");
+    let arr = field(case, path)?
+        .as_array()
+        .ok_or_else(|| Error::invalid(&name, "expected a list of numbers"))?;
+    arr.iter()
+        .enumerate()
+        .map(|(i, x)| {
+            x.as_f64()
+                .ok_or_else(|| Error::invalid(format!("{name}[{i}]"), "expected a number"))
+        })
+        .collect()
+}
+
+fn vector<const K: usize>(case: &Value, path: &[&str]) -> Result<SVector<f64, K>> {
+    fixed_vector(&path.join("."), &numbers(case, path)?)
+}
+
+fn params<P: DeserializeOwned>(case: &Value) -> Result<P> {
+    let p = field(case, &["params"])?;
+    if let Some(obj) = p.as_object() {
+        for (k, v) in obj {
+            if !v.is_number() {
+                return Err(Error::invalid(format!("params.{k}"), "expected a number"));
+            }
+        }
+    }
+    serde_json::from_value(p.clone()).map_err(|e| Error::invalid("params", e.to_string()))
+}
+
+fn times(case: &Value) -> Result<Option<Vec<f64>>> {
+    match case.get("trajectory").and_then(|t| t.get("t")) {
+        None => Ok(None),
+        Some(_) => {
+            let t = numbers(case, &["trajectory", "t"])?;
+            crate::error::ensure_finite("trajectory.t", &t)?;
+            for (i, w) in t.windows(2).enumerate() {
+                if w[1] < w[0] {
+                    return Err(Error::invalid(
+                        format!("trajectory.t[{}]", i + 1),
+                        "times must be non-decreasing",
+                    ));
+                }
+            }
+            if let Some(&t0) = t.first()
+                && t0 < 0.0
+            {
+                return Err(Error::invalid(
+                    "trajectory.t[0]",
+                    "times start at 0 and must not be negative",
+                ));
+            }
+            Ok(Some(t))
+        }
+    }
+}
+
+fn to_value<T: Serialize>(x: &T) -> Result<Value> {
+    serde_json::to_value(x).map_err(|e| Error::invalid("outputs", e.to_string()))
+}
+
+fn rows<const K: usize>(xs: impl Iterator<Item = SVector<f64, K>>) -> Value {
+    Value::Array(xs.map(|x| json!(x.as_slice())).collect())
+}
+
+fn all_finite(v: &Value) -> bool {
+    match v {
+        Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
+        Value::Null => false,
+        Value::Array(a) => a.iter().all(all_finite),
+        Value::Object(o) => o.values().all(all_finite),
+        _ => true,
+    }
+}
+
+/// Outputs and trajectory (keys `t` plus the state names) of one case.
+fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value, Option<Value>)> {
+    let t = times(case)?;
+    let traj = |names: [&str; 2], data: (Value, Value), t: &[f64]| {
+        let mut m = Map::new();
+        m.insert("t".into(), json!(t));
+        m.insert(names[0].into(), data.0);
+        m.insert(names[1].into(), data.1);
+        Value::Object(m)
+    };
+    match model {
+        ChapterModel::M1Unicycle => {
+            let sys = Unicycle::new(params::<UnicycleParams>(case)?)?;
+            let q = vector::<3>(case, &["state", "q"])?;
+            let v = vector::<2>(case, &["state", "v"])?;
+            let u = vector::<2>(case, &["inputs", "u"])?;
+            let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
+            let tr = match t {
+                Some(t) => {
+                    let s = sys.simulate(&q, &v, &u, &t, tol)?;
+                    Some(traj(
+                        ["q", "v"],
+                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
+                        &t,
+                    ))
+                }
+                None => None,
+            };
+            Ok((out, tr))
+        }
+        ChapterModel::M2PlatformArm => {
+            let sys = PlatformArm::new(params::<PlatformArmParams>(case)?)?;
+            let q = vector::<5>(case, &["state", "q"])?;
+            let v = vector::<4>(case, &["state", "v"])?;
+            let u = vector::<4>(case, &["inputs", "u"])?;
+            let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
+            let tr = match t {
+                Some(t) => {
+                    let s = sys.simulate(&q, &v, &u, &t, tol)?;
+                    Some(traj(
+                        ["q", "v"],
+                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
+                        &t,
+                    ))
+                }
+                None => None,
+            };
+            Ok((out, tr))
+        }
+        ChapterModel::M3DiffDrive => {
+            let sys = DiffDrive::new(params::<DiffDriveParams>(case)?)?;
+            let q = vector::<6>(case, &["state", "q"])?;
+            let v = vector::<5>(case, &["inputs", "v"])?;
+            let out = to_value(&sys.evaluate(&q, &v)?)?;
+            let tr = match t {
+                Some(t) => {
+                    let s = sys.simulate(&q, &v, &t, tol)?;
+                    Some(traj(
+                        ["q", "X"],
+                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
+                        &t,
+                    ))
+                }
+                None => None,
+            };
+            Ok((out, tr))
+        }
+        ChapterModel::M4CartTwoLink => {
+            let sys = CartTwoLink::new(params::<CartTwoLinkParams>(case)?)?;
+            let q = vector::<3>(case, &["state", "q"])?;
+            let qd = vector::<3>(case, &["state", "qdot"])?;
+            let u = vector::<3>(case, &["inputs", "u"])?;
+            if let Some(b) = case.get("balanced") {
+                let b = b
+                    .as_bool()
+                    .ok_or_else(|| Error::invalid("balanced", "expected true or false"))?;
+                let p = &sys.params;
+                let scale = p.arm_mass() * (p.L1 + p.L2);
+                if b && !sys.is_balanced(1e-9 * scale.max(1.0)) {
+                    return Err(Error::invalid(
+                        "balanced",
+                        format!(
+                            "marked balanced but Γ1 = {:e}, Γ2 = {:e} (need L1cm = −(m2+M1+M2) L1/m1, L2cm = −M2 L2/m2)",
+                            p.gamma1(),
+                            p.gamma2()
+                        ),
+                    ));
+                }
+            }
+            let out = to_value(&sys.evaluate(&q, &qd, &u)?)?;
+            let tr = match t {
+                Some(t) => {
+                    let s = sys.simulate(&q, &qd, &u, &t, tol)?;
+                    Some(traj(
+                        ["q", "qdot"],
+                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
+                        &t,
+                    ))
+                }
+                None => None,
+            };
+            Ok((out, tr))
+        }
+        ChapterModel::M5MobileManipulator => {
+            let sys = MobileManipulator::new(params::<MobileManipulatorParams>(case)?)?;
+            let q = vector::<6>(case, &["state", "q"])?;
+            let v = vector::<5>(case, &["state", "v"])?;
+            let u = vector::<5>(case, &["inputs", "u"])?;
+            let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
+            let tr = match t {
+                Some(t) => {
+                    let s = sys.simulate(&q, &v, &u, &t, tol)?;
+                    Some(traj(
+                        ["q", "v"],
+                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
+                        &t,
+                    ))
+                }
+                None => None,
+            };
+            Ok((out, tr))
+        }
+    }
+}
+
+/// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
+/// Errors name the case id and the field.
+pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) -> Result<Value> {
+    let id = case
+        .get("id")
+        .map(|v| v.to_string())
+        .unwrap_or_else(|| format!("#{index}"));
+    let wrap = |e: Error| match e {
+        Error::InvalidInput { field, message } => Error::InvalidInput {
+            field: format!("case {id}: {field}"),
+            message,
+        },
+        Error::NonFinite { field } => Error::NonFinite {
+            field: format!("case {id}: {field}"),
+        },
+        Error::WrongLength {
+            field,
+            expected,
+            got,
+        } => Error::WrongLength {
+            field: format!("case {id}: {field}"),
+            expected,
+            got,
+        },
+        other => Error::invalid(format!("case {id}"), other.to_string()),
+    };
+    if !case.is_object() {
+        return Err(wrap(Error::invalid("case", "expected an object")));
+    }
+    let (outputs, traj) = evaluate_inner(model, case, tol).map_err(wrap)?;
+    if !all_finite(&outputs) || !traj.as_ref().is_none_or(all_finite) {
+        return Err(wrap(Error::Numerical {
+            t: 0.0,
+            message: "non-finite output".into(),
+        }));
+    }
+    let mut out = case.clone();
+    let obj = out.as_object_mut().expect("checked object");
+    obj.insert("outputs".into(), outputs);
+    if let Some(tr) = traj {
+        let mut merged = case
+            .get("trajectory")
+            .and_then(|t| t.as_object())
+            .cloned()
+            .unwrap_or_default();
+        for (k, v) in tr.as_object().expect("object").clone() {
+            merged.insert(k, v);
+        }
+        obj.insert("trajectory".into(), Value::Object(merged));
+    }
+    Ok(out)
+}
+
+/// Default integration tolerance (`rtol = atol`) for trajectories.
+pub const DEFAULT_TOLERANCE: f64 = 1e-12;
+
+/// Evaluates a whole case document (`model`, `cases`, …); every other top-level field is
+/// preserved.
+pub fn evaluate_document(doc: &Value, tol: f64) -> Result<Value> {
+    let name = doc
+        .get("model")
+        .ok_or_else(|| Error::invalid("model", "missing (expected e.g. \"m1_unicycle\")"))?
+        .as_str()
+        .ok_or_else(|| Error::invalid("model", "expected a string"))?;
+    let model = ChapterModel::from_name(name)?;
+    let cases = doc
+        .get("cases")
+        .ok_or_else(|| Error::invalid("cases", "missing"))?
+        .as_array()
+        .ok_or_else(|| Error::invalid("cases", "expected a list"))?;
+    let filled = cases
+        .iter()
+        .enumerate()
+        .map(|(i, c)| evaluate_case(model, c, i, tol))
+        .collect::<Result<Vec<_>>>()?;
+    let mut out = doc.clone();
+    out.as_object_mut()
+        .ok_or_else(|| Error::invalid("document", "expected a JSON object"))?
+        .insert("cases".into(), Value::Array(filled));
+    Ok(out)
+}

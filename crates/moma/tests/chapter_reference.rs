@@ -1,0 +1,119 @@
+//! Every output and trajectory point of every case of the five chapter reference files
+//! (m1–m5), to each file's `tolerance_hint`.
+
+use moma::closed_form::cases::{DEFAULT_TOLERANCE, evaluate_document};
+use serde_json::Value;
+
+fn load(name: &str) -> Value {
+    let path = format!(
+        "{}/tests/data/chapter/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
+}
+
+/// Compares `got` with `want` recursively; numbers must satisfy
+/// `|got − want| ≤ tol·max(1, |want|)` (relative) or `≤ tol` (absolute).
+fn compare(path: &str, got: &Value, want: &Value, tol: f64, relative: bool, worst: &mut f64) {
+    match (got, want) {
+        (Value::Number(a), Value::Number(b)) => {
+            let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
+            let scale = if relative { b.abs().max(1.0) } else { 1.0 };
+            let err = (a - b).abs() / scale;
+            *worst = worst.max(err);
+            assert!(
+                err <= tol,
+                "{path}: got {a}, want {b} (error {err:e} > {tol:e})"
+            );
+        }
+        (Value::Array(a), Value::Array(b)) => {
+            assert_eq!(a.len(), b.len(), "{path}: length");
+            for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                compare(&format!("{path}[{i}]"), x, y, tol, relative, worst);
+            }
+        }
+        (Value::Object(a), Value::Object(b)) => {
+            for (k, y) in b {
+                let x = a
+                    .get(k)
+                    .unwrap_or_else(|| panic!("{path}.{k}: missing in moma's output"));
+                compare(&format!("{path}.{k}"), x, y, tol, relative, worst);
+            }
+        }
+        _ => assert_eq!(got, want, "{path}"),
+    }
+}
+
+fn check_file(name: &str) {
+    let doc = load(name);
+    let rel = doc["tolerance_hint"]["algebraic_rel"].as_f64().unwrap();
+    let abs = doc["tolerance_hint"]["trajectory_abs"].as_f64().unwrap();
+    // Start from a copy with outputs and trajectory states removed, so nothing is echoed.
+    let mut input = doc.clone();
+    for case in input["cases"].as_array_mut().unwrap() {
+        let c = case.as_object_mut().unwrap();
+        c.remove("outputs");
+        let t = c["trajectory"]["t"].clone();
+        c.insert("trajectory".into(), serde_json::json!({ "t": t }));
+    }
+    let out = evaluate_document(&input, DEFAULT_TOLERANCE).unwrap();
+    let (mut worst_alg, mut worst_traj) = (0.0f64, 0.0f64);
+    for (got, want) in out["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(doc["cases"].as_array().unwrap())
+    {
+        let id = &want["id"];
+        compare(
+            &format!("{name} case {id} outputs"),
+            &got["outputs"],
+            &want["outputs"],
+            rel,
+            true,
+            &mut worst_alg,
+        );
+        compare(
+            &format!("{name} case {id} trajectory"),
+            &got["trajectory"],
+            &want["trajectory"],
+            abs,
+            false,
+            &mut worst_traj,
+        );
+    }
+    eprintln!(
+        "{name}: worst algebraic {worst_alg:e} (tol {rel:e}), worst trajectory {worst_traj:e} (tol {abs:e})"
+    );
+    // every top-level field other than `cases` is preserved
+    for (k, v) in doc.as_object().unwrap() {
+        if k != "cases" {
+            assert_eq!(&out[k], v, "top-level field {k}");
+        }
+    }
+}
+
+#[test]
+fn m1_unicycle_reference() {
+    check_file("m1_unicycle");
+}
+
+#[test]
+fn m2_platform_planar_arm_reference() {
+    check_file("m2_platform_planar_arm");
+}
+
+#[test]
+fn m3_diffdrive_kinematics_reference() {
+    check_file("m3_diffdrive_kinematics");
+}
+
+#[test]
+fn m4_cart_two_link_reference() {
+    check_file("m4_cart_two_link");
+}
+
+#[test]
+fn m5_mobile_manipulator_3d_reference() {
+    check_file("m5_mobile_manipulator_3d");
+}
