@@ -8,3 +8,8 @@
 pub mod integrators;
 
 pub use integrators::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+pub mod chapter_models;
+pub mod monitor;
+pub mod recorder;
+pub mod scenario;
+pub mod wheeled;

@@ -129,6 +129,7 @@ pub fn simulate(
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimulationResult> {
     let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
+    crate::error::ensure_len("inputs", nu, input.channels.len())?;
     crate::error::ensure_len("initial q", nq, q0.len())?;
     crate::error::ensure_len("initial v", nv, v0.len())?;
     crate::error::ensure_finite("initial q", q0)?;
@@ -157,7 +158,7 @@ pub fn simulate(
     let mut u = vec![0.0; nu];
     let (t0, p0) = system.energy(q0, v0)?;
     let mut monitor = Monitor::new(options.limits, t0, p0);
-    let mut record = |system: &mut dyn ReducedSystem,
+    let record = |system: &mut dyn ReducedSystem,
                       recorder: &mut Recorder,
                       monitor: &mut Monitor,
                       t: f64,
