@@ -1,1 +1,27 @@
-//! Rigid-body dynamics: RNEA, CRBA, ABA, gravity, nonlinear effects, Coriolis matrix, energy, centre of mass, momentum.
+//! Rigid-body dynamics: inverse dynamics ([`rnea`]), the mass matrix ([`crba`]), forward
+//! dynamics ([`aba`]), gravity and nonlinear effects, a Christoffel-consistent Coriolis
+//! matrix, energies, centre of mass and centroidal momentum.
+//!
+//! Every algorithm is a free function `f(&model, &mut data, q, …)` over a
+//! [`Model`](crate::multibody::Model) and its [`Data`](crate::multibody::Data); inputs are
+//! `&DVector<f64>` (q: nq, v / a / τ: nv); results are borrowed from `data`. After
+//! `Data::new` none of them allocates. Wrong lengths panic (validate user input with
+//! [`crate::kinematics::check_state`]).
+//!
+//! The algorithms use the local (joint-frame) convention of Featherstone and Pinocchio,
+//! with specialised kernels for axis-aligned revolute and prismatic joints.
+
+mod aba;
+mod centroidal;
+mod coriolis;
+mod crba;
+mod rnea;
+
+pub use aba::aba;
+pub use centroidal::{
+    center_of_mass, centroidal_momentum, centroidal_momentum_matrix, kinetic_energy,
+    potential_energy,
+};
+pub use coriolis::coriolis_matrix;
+pub use crba::crba;
+pub use rnea::{gravity_torque, nonlinear_effects, rnea};

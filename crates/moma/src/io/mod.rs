@@ -1,1 +1,3 @@
-//! Input and output: the URDF loader and serde schemas.
+//! Input and output: the URDF loader.
+
+pub mod urdf;

@@ -1,0 +1,349 @@
+//! URDF loader (visuals, collisions and meshes are ignored).
+//!
+//! * Revolute, continuous and prismatic joints become model joints (a continuous joint is
+//!   a revolute joint with one angle and no position limits); fixed joints merge their
+//!   child link's inertia into the parent body and add a `fixed_joint` frame.
+//! * Every link gets a `body` frame and every moving joint a `joint` frame; frame 0 is
+//!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`.
+//! * A link without `<inertial>` is massless. A present inertial must have a finite mass
+//!   ≥ 0 and, when the mass is positive, a positive-definite rotational inertia.
+//! * `floating`, `planar` and `spherical` joints inside the URDF are rejected with a clear
+//!   error (choose the robot's base with [`RootJoint`] instead).
+//! * Mimic joints are loaded as independent joints (the `<mimic>` tag is ignored).
+//! * With a fixed root, the root link's inertia belongs to the world and takes no part in
+//!   the dynamics, the total mass or the CoM (as Pinocchio).
+
+use crate::multibody::{
+    FrameIndex, FrameKind, JointIndex, JointLimits, JointType, Model, ModelBuilder, RootJoint,
+};
+use crate::spatial::{Inertia, SE3};
+use crate::{Error, Result};
+use nalgebra::{Matrix3, Vector3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Loads a robot model from a URDF file with the given root joint.
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read, [`Error::Parse`] (naming the file and the
+/// element) for malformed XML, cycles, unknown links, bad inertials, unsupported joints.
+pub fn model_from_urdf_file(path: impl AsRef<Path>, root: RootJoint) -> Result<Model> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    model_from_urdf_str(&text, root, &path.display().to_string())
+}
+
+fn pose(p: &urdf_rs::Pose) -> SE3 {
+    SE3::from_xyz_rpy(p.xyz.0, p.rpy.0)
+}
+
+fn finite_pose(p: &urdf_rs::Pose) -> bool {
+    p.xyz.0.iter().chain(p.rpy.0.iter()).all(|x| x.is_finite())
+}
+
+/// Validates a link's inertial; `None` for a massless link.
+fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)>> {
+    let inl = &link.inertial;
+    let m = inl.mass.value;
+    let i = &inl.inertia;
+    let vals = [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz];
+    let err = |msg: String| Error::parse(src, format!("link '{}' inertial: {msg}", link.name));
+    if !m.is_finite() {
+        return Err(err(format!("mass is not finite ({m})")));
+    }
+    if m < 0.0 {
+        return Err(err(format!("mass must be >= 0, got {m}")));
+    }
+    if vals.iter().any(|x| !x.is_finite()) {
+        return Err(err("inertia has a non-finite entry".into()));
+    }
+    if !finite_pose(&inl.origin) {
+        return Err(err("origin has a non-finite entry".into()));
+    }
+    let ic = Matrix3::new(
+        i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
+    );
+    if m == 0.0 {
+        if vals.iter().all(|x| *x == 0.0) {
+            return Ok(None);
+        }
+        // massless with a rotational inertia: accept only a positive semi-definite one
+        let e = ic.symmetric_eigenvalues();
+        if e.min() < -1e-12 * e.max().abs().max(1.0) {
+            return Err(err(format!(
+                "inertia matrix is not positive semi-definite (eigenvalues {:.3e}, {:.3e}, {:.3e})",
+                e[0], e[1], e[2]
+            )));
+        }
+    } else {
+        let e = ic.symmetric_eigenvalues();
+        if e.min() <= 0.0 {
+            return Err(err(format!(
+                "inertia matrix is not positive definite (eigenvalues {:.3e}, {:.3e}, {:.3e}; mass {m})",
+                e[0], e[1], e[2]
+            )));
+        }
+    }
+    Ok(Some((
+        Inertia::new(m, Vector3::zeros(), ic),
+        pose(&inl.origin),
+    )))
+}
+
+/// Loads a robot model from URDF text; `source_name` names the input in error messages.
+///
+/// # Errors
+/// As [`model_from_urdf_file`].
+pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Result<Model> {
+    let src = source_name;
+    let robot = urdf_rs::read_from_string(text)
+        .map_err(|e| Error::parse(src, format!("malformed URDF: {e}")))?;
+    if robot.links.is_empty() {
+        return Err(Error::parse(src, "the robot has no <link>"));
+    }
+    let mut link_ix: HashMap<&str, usize> = HashMap::new();
+    for (k, l) in robot.links.iter().enumerate() {
+        if l.name.is_empty() {
+            return Err(Error::parse(src, format!("link #{k} has no name")));
+        }
+        if link_ix.insert(&l.name, k).is_some() {
+            return Err(Error::parse(
+                src,
+                format!("duplicate link name '{}'", l.name),
+            ));
+        }
+    }
+    let mut joint_names: HashMap<&str, ()> = HashMap::new();
+    let mut parent_joint_of: Vec<Option<usize>> = vec![None; robot.links.len()];
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+    for (k, j) in robot.joints.iter().enumerate() {
+        if j.name.is_empty() {
+            return Err(Error::parse(src, format!("joint #{k} has no name")));
+        }
+        if joint_names.insert(&j.name, ()).is_some() {
+            return Err(Error::parse(
+                src,
+                format!("duplicate joint name '{}'", j.name),
+            ));
+        }
+        let Some(&p) = link_ix.get(j.parent.link.as_str()) else {
+            return Err(Error::parse(
+                src,
+                format!(
+                    "joint '{}': parent link '{}' does not exist",
+                    j.name, j.parent.link
+                ),
+            ));
+        };
+        let Some(&c) = link_ix.get(j.child.link.as_str()) else {
+            return Err(Error::parse(
+                src,
+                format!(
+                    "joint '{}': child link '{}' does not exist",
+                    j.name, j.child.link
+                ),
+            ));
+        };
+        if let Some(other) = parent_joint_of[c] {
+            return Err(Error::parse(
+                src,
+                format!(
+                    "link '{}' is the child of two joints ('{}' and '{}'): not a tree",
+                    j.child.link, robot.joints[other].name, j.name
+                ),
+            ));
+        }
+        parent_joint_of[c] = Some(k);
+        children[p].push(k);
+    }
+    let roots: Vec<usize> = (0..robot.links.len())
+        .filter(|&l| parent_joint_of[l].is_none())
+        .collect();
+    let root_link = match roots.as_slice() {
+        [r] => *r,
+        [] => {
+            return Err(Error::parse(
+                src,
+                "the kinematic graph is cyclic: every link has a parent joint",
+            ));
+        }
+        many => {
+            let names: Vec<&str> = many.iter().map(|&l| robot.links[l].name.as_str()).collect();
+            return Err(Error::parse(
+                src,
+                format!(
+                    "several root links (links without a parent joint): {}",
+                    names.join(", ")
+                ),
+            ));
+        }
+    };
+
+    let mut b = ModelBuilder::new(robot.name.clone());
+    b.set_root(root);
+    let ctx = |e: Error| match e {
+        Error::InvalidInput { field, message } => Error::parse(src, format!("{field}: {message}")),
+        Error::NonFinite { field } => Error::parse(src, format!("{field}: non-finite value")),
+        Error::WrongLength {
+            field,
+            expected,
+            got,
+        } => Error::parse(
+            src,
+            format!("{field}: expected {expected} values, got {got}"),
+        ),
+        other => other,
+    };
+    let (root_joint, root_frame) = match root {
+        RootJoint::Fixed => (JointIndex(0), FrameIndex(0)),
+        RootJoint::Planar | RootJoint::FreeFlyer => {
+            let jt = if root == RootJoint::Planar {
+                JointType::Planar
+            } else {
+                JointType::FreeFlyer
+            };
+            let j = b
+                .add_joint(
+                    JointIndex(0),
+                    "root_joint",
+                    jt,
+                    SE3::identity(),
+                    JointLimits::unlimited(),
+                )
+                .map_err(ctx)?;
+            (j, FrameIndex(b.nframes() - 1))
+        }
+    };
+
+    // Depth-first traversal in document order, as a recursive descent would do it.
+    // A stack entry is a URDF joint to process, with the model joint carrying its parent
+    // link, `joint_from_parent_link` and the parent link's body frame.
+    let mut visited = vec![false; robot.links.len()];
+    let mut stack: Vec<(usize, JointIndex, SE3, FrameIndex)> = Vec::new();
+    let mut visit_link = |b: &mut ModelBuilder,
+                          stack: &mut Vec<(usize, JointIndex, SE3, FrameIndex)>,
+                          l: usize,
+                          joint: JointIndex,
+                          joint_from_link: SE3,
+                          parent_frame: FrameIndex|
+     -> Result<()> {
+        visited[l] = true;
+        let link = &robot.links[l];
+        let body_frame = b
+            .add_frame(
+                &link.name,
+                joint,
+                parent_frame,
+                joint_from_link,
+                FrameKind::Body,
+            )
+            .map_err(ctx)?;
+        if let Some((inertia, origin)) = link_inertia(link, src)? {
+            b.append_body_inertia(joint, &inertia, &joint_from_link.compose(&origin))
+                .map_err(ctx)?;
+        }
+        for &jk in children[l].iter().rev() {
+            stack.push((jk, joint, joint_from_link, body_frame));
+        }
+        Ok(())
+    };
+    visit_link(
+        &mut b,
+        &mut stack,
+        root_link,
+        root_joint,
+        SE3::identity(),
+        root_frame,
+    )?;
+    while let Some((jk, joint, joint_from_link, body_frame)) = stack.pop() {
+        let uj = &robot.joints[jk];
+        if !finite_pose(&uj.origin) {
+            return Err(Error::parse(
+                src,
+                format!("joint '{}' origin: non-finite value", uj.name),
+            ));
+        }
+        let placement = joint_from_link.compose(&pose(&uj.origin));
+        let child = link_ix[uj.child.link.as_str()];
+        let axis = Vector3::from(uj.axis.xyz.0);
+        let limit = &uj.limit;
+        let err_axis = |e: Error| match e {
+            Error::InvalidInput { message, .. } => {
+                Error::parse(src, format!("joint '{}' axis: {message}", uj.name))
+            }
+            other => other,
+        };
+        match uj.joint_type {
+            urdf_rs::JointType::Fixed => {
+                let f = b
+                    .add_frame(
+                        &uj.name,
+                        joint,
+                        body_frame,
+                        placement,
+                        FrameKind::FixedJoint,
+                    )
+                    .map_err(ctx)?;
+                visit_link(&mut b, &mut stack, child, joint, placement, f)?;
+            }
+            urdf_rs::JointType::Revolute
+            | urdf_rs::JointType::Continuous
+            | urdf_rs::JointType::Prismatic => {
+                let jt = if uj.joint_type == urdf_rs::JointType::Prismatic {
+                    JointType::prismatic(axis).map_err(err_axis)?
+                } else {
+                    JointType::revolute(axis).map_err(err_axis)?
+                };
+                let vel = if limit.velocity > 0.0 {
+                    limit.velocity
+                } else {
+                    f64::INFINITY
+                };
+                let eff = if limit.effort > 0.0 {
+                    limit.effort
+                } else {
+                    f64::INFINITY
+                };
+                let limits = if uj.joint_type == urdf_rs::JointType::Continuous {
+                    JointLimits::scalar(f64::NEG_INFINITY, f64::INFINITY, vel, eff)
+                } else {
+                    JointLimits::scalar(limit.lower, limit.upper, vel, eff)
+                };
+                let j = b
+                    .add_joint(joint, &uj.name, jt, placement, limits)
+                    .map_err(ctx)?;
+                let jf = FrameIndex(b.nframes() - 1);
+                visit_link(&mut b, &mut stack, child, j, SE3::identity(), jf)?;
+            }
+            ref other => {
+                let kind = match other {
+                    urdf_rs::JointType::Floating => "floating",
+                    urdf_rs::JointType::Planar => "planar",
+                    _ => "spherical",
+                };
+                return Err(Error::parse(
+                    src,
+                    format!(
+                        "joint '{}': unsupported joint type '{kind}' (supported: revolute, \
+                         continuous, prismatic, fixed; choose a planar or free-flyer base with \
+                         the root option instead)",
+                        uj.name
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(l) = visited.iter().position(|v| !v) {
+        return Err(Error::parse(
+            src,
+            format!(
+                "link '{}' is not connected to the root link '{}' (cyclic or disconnected kinematic graph)",
+                robot.links[l].name, robot.links[root_link].name
+            ),
+        ));
+    }
+    b.build().map_err(ctx)
+}
