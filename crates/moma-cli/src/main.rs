@@ -6,6 +6,7 @@
 
 mod cmd;
 mod output;
+mod svg_plots;
 
 use clap::{Parser, Subcommand};
 

@@ -95,7 +95,7 @@ impl Frame {
 fn axes(svg: &mut String, f: &Frame, title: &str, xlabel: &str, ylabel: &str) {
     let _ = write!(
         svg,
-        r#"<rect x="{ML}" y="{MT}" width="{}" height="{}" fill="white" stroke="#333"/>"#,
+        r##"<rect x="{ML}" y="{MT}" width="{}" height="{}" fill="white" stroke="#333"/>"##,
         f.pw, f.ph
     );
     for t in ticks(f.x0, f.x1) {

@@ -4,15 +4,16 @@
 pub mod diff_drive;
 
 pub use diff_drive::DiffDrive;
+pub mod chapter_robots;
 pub mod nullspace;
 pub mod reduced;
 
 pub use nullspace::NullSpaceBasis;
 pub use reduced::{JointSpaceTerms, ReducedDynamics, lagrange_multipliers_dae};
-// pub mod wheeled; (enabled once the rigid-body core is merged)
+pub mod wheeled;
 
-/* pub use wheeled::{
+pub use wheeled::{
     Caster, WheeledBase, WheeledData, WheeledModel, actuation_matrix, admissible_velocity_basis,
     admissible_velocity_basis_dot, constraint_matrix, lagrange_multipliers,
     reduced_forward_dynamics,
-}; */
+};

@@ -13,3 +13,4 @@ pub mod monitor;
 pub mod recorder;
 pub mod scenario;
 pub mod wheeled;
+pub mod wheeled_system;
