@@ -226,6 +226,18 @@ fn build_robot(
 ) -> Result<(Box<dyn ReducedSystem>, String)> {
     match spec {
         RobotSpec::Chapter { model, params } => {
+            for (k, v) in params {
+                match v {
+                    toml::Value::Float(x) if !x.is_finite() => {
+                        bail!("robot.params.{k} is not a finite number ({x})")
+                    }
+                    toml::Value::Float(_) | toml::Value::Integer(_) => {}
+                    other => bail!(
+                        "robot.params.{k} must be a number, got {}",
+                        other.type_str()
+                    ),
+                }
+            }
             let mut json = serde_json::to_value(params).context("robot.params")?;
             if let (Some(g), "m5") = (gravity, model.as_str())
                 && let Some(obj) = json.as_object_mut()

@@ -549,7 +549,7 @@ pub fn lagrange_multipliers<'d>(
     let mut cct = nalgebra::Matrix3::<f64>::zeros();
     let mut rhs = nalgebra::Vector3::<f64>::zeros();
     for i in 0..k {
-        rhs[i] = c.row(i).transpose().dot(&wd.tmp);
+        rhs[i] = c.row(i).iter().zip(wd.tmp.iter()).map(|(a, b)| a * b).sum();
         for j in 0..k {
             cct[(i, j)] = c.row(i).dot(&c.row(j));
         }

@@ -97,7 +97,14 @@ impl ReducedSystem for WheeledSystem {
         self.data.basis.mul_to(&self.v, &mut self.data.qdot);
         let mut r2 = 0.0;
         for i in 0..self.robot.nk() {
-            let ri = self.data.constraint.row(i).transpose().dot(&self.data.qdot);
+            let ri: f64 = self
+                .data
+                .constraint
+                .row(i)
+                .iter()
+                .zip(self.data.qdot.iter())
+                .map(|(a, b)| a * b)
+                .sum();
             r2 += ri * ri;
         }
         Ok(r2.sqrt())
