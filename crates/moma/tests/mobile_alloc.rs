@@ -64,6 +64,26 @@ fn hot_paths_do_not_allocate() {
     let after = ALLOCATIONS.load(Ordering::Relaxed);
     assert_eq!(after - before, 0, "reduced dynamics allocated {} times", after - before);
 
+    // The root-constrained ABA path (wheels not tracked).
+    let mut untracked = robot();
+    untracked = WheeledModel::new(
+        untracked.model.clone(),
+        WheeledBase::new(DiffDrive::new(0.08, 0.25, 0.1).unwrap()),
+    )
+    .unwrap();
+    let mut wd2 = WheeledData::new(&untracked);
+    let q2 = DVector::from_fn(untracked.model.nq, |i, _| 0.1 * i as f64);
+    let v2 = DVector::from_fn(untracked.nr(), |i, _| 0.2 - 0.05 * i as f64);
+    let u2 = vec![0.3; untracked.nu()];
+    reduced_forward_dynamics(&untracked, &mut wd2, &q2, &v2, &u2).unwrap();
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for _ in 0..100 {
+        reduced_forward_dynamics(&untracked, &mut wd2, &q2, &v2, &u2).unwrap();
+        lagrange_multipliers(&untracked, &mut wd2, &q2).unwrap();
+    }
+    let after = ALLOCATIONS.load(Ordering::Relaxed);
+    assert_eq!(after - before, 0, "root-constrained ABA allocated {} times", after - before);
+
     // The simulator's ODE right-hand side.
     let mut sys = WheeledSystem::new(robot());
     let input = InputProfile::zero(sys.robot.nu());

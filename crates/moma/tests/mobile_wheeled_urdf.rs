@@ -273,3 +273,25 @@ fn driven_run_balances_energy_with_input_work() {
     assert!(res.monitor.relative_energy_error() < 1e-5, "{}", res.monitor.relative_energy_error());
     assert!(res.monitor.max_residual < 1e-12);
 }
+
+#[test]
+fn root_constrained_aba_equals_the_joint_space_route_on_panda() {
+    use moma::mobile::wheeled::reduced_forward_dynamics_crba;
+    let path = format!("{}/tests/data/pinocchio/urdf/panda.urdf", env!("CARGO_MANIFEST_DIR"));
+    let model = model_from_urdf_file(path, RootJoint::Planar).unwrap();
+    for d in [0.2, 0.0, -0.3] {
+        let wm = WheeledModel::new(model.clone(), WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap()))
+            .unwrap();
+        let mut wd = WheeledData::new(&wm);
+        for k in 0..5 {
+            let q = DVector::from_fn(wm.model.nq, |i, _| ((i * 7 + k * 3) as f64 * 0.37).sin());
+            let v = DVector::from_fn(wm.nr(), |i, _| ((i * 5 + k) as f64 * 0.53).cos());
+            let u: Vec<f64> = (0..wm.nu()).map(|i| ((i + k) as f64 * 0.71).sin()).collect();
+            let fast = reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u).unwrap().clone();
+            let qdd_fast = wd.reduced.qddot.clone();
+            let slow = reduced_forward_dynamics_crba(&wm, &mut wd, &q, &v, &u).unwrap().clone();
+            assert!((&fast - &slow).norm() < 1e-9 * (1.0 + slow.norm()), "d={d}: {fast} vs {slow}");
+            assert!((&qdd_fast - &wd.reduced.qddot).norm() < 1e-9 * (1.0 + slow.norm()));
+        }
+    }
+}

@@ -5,6 +5,7 @@ pub mod diff_drive;
 
 pub use diff_drive::DiffDrive;
 pub mod chapter_robots;
+pub mod constrained_aba;
 pub mod nullspace;
 pub mod reduced;
 

@@ -116,6 +116,13 @@ impl WheeledModel {
                 model.name, model.nq, model.nv
             )));
         }
+        if let Some(j) = (2..model.njoints).find(|&j| model.nvs[j] != 1) {
+            return Err(Error::Model(format!(
+                "wheeled model '{}': joint '{}' has {} velocities; only one-dof joints may sit \
+                 on the planar base",
+                model.name, model.names[j], model.nvs[j]
+            )));
+        }
         let root = (1..model.njoints)
             .find(|&j| model.joint_types[j] == JointType::Planar)
             .ok_or_else(|| Error::Model("no planar root joint".into()))?;
@@ -399,18 +406,46 @@ fn check_state(wm: &WheeledModel, q: &DVector<f64>, v_r: &DVector<f64>, u: &[f64
     assert_eq!(u.len(), wm.nu(), "u length");
 }
 
-/// Reduced forward dynamics v̇_r (nr) of `Mr v̇ + cr + Gr = Qr` for wheel and joint
-/// torques `u`, stored in `wd.reduced.vdot` (and q̈ in `wd.reduced.qddot`).
+/// Reduced forward dynamics v̇_r (nr) of `Mr v̇ + Cr v + Gr = Qr` for wheel and joint
+/// torques `u`, stored in `wd.reduced.vdot` (q̈ in `wd.reduced.qddot`, q̇ in `wd.qdot`).
 ///
-/// Fast path: one CRBA for H, one RNEA with `a = Ṅ_C v` for `H Ṅ_C v + h + G`, and
+/// Without tracked wheel joints the constraint acts on the root only and the
+/// root-constrained articulated-body algorithm is used (one ABA and a 2×2 solve; see
+/// [`crate::mobile::constrained_aba`]); with tracked wheels,
+/// [`reduced_forward_dynamics_crba`]. Only v̇, q̈ and q̇ are guaranteed afterwards; call
+/// [`reduced_dynamics`] for Mr, Cr, Gr, Qr. Reports [`Error::Singular`] if Mr is not
+/// positive definite. Does not allocate.
+///
+/// # Panics
+/// On wrong vector lengths.
+#[doc(alias = "forward_dynamics")]
+pub fn reduced_forward_dynamics<'d>(
+    wm: &WheeledModel,
+    wd: &'d mut WheeledData,
+    q: &DVector<f64>,
+    v_r: &DVector<f64>,
+    u: &[f64],
+) -> Result<&'d DVector<f64>> {
+    check_state(wm, q, v_r, u);
+    if wm.wheel_dofs.is_none() {
+        crate::mobile::constrained_aba::root_constrained_aba(wm, wd, q, v_r, u)?;
+        Ok(&wd.reduced.vdot)
+    } else {
+        reduced_forward_dynamics_crba(wm, wd, q, v_r, u)
+    }
+}
+
+/// Reduced forward dynamics by the joint-space route, for any wheel set-up: v̇_r in
+/// `wd.reduced.vdot`, q̈ in `wd.reduced.qddot`, Mr in `wd.reduced.mass_matrix`.
+///
+/// One CRBA for H, one RNEA with `a = Ṅ_C v` for `H Ṅ_C v + h + G`, and
 /// `Mr = N_Cᵀ H N_C` formed blockwise from the sparsity of N_C (the arm block of Mr is
 /// the arm block of H; only the two platform columns are products). Reports
 /// [`Error::Singular`] if Mr is not positive definite. Does not allocate.
 ///
 /// # Panics
 /// On wrong vector lengths.
-#[doc(alias = "forward_dynamics")]
-pub fn reduced_forward_dynamics<'d>(
+pub fn reduced_forward_dynamics_crba<'d>(
     wm: &WheeledModel,
     wd: &'d mut WheeledData,
     q: &DVector<f64>,
