@@ -126,6 +126,12 @@ fn bench_simulation(c: &mut Criterion) {
     rk4_bench(c, "sim/m5_multibody/rk4_step", &mut m5_mb, 1e-3);
     let mut arm = WheeledSystem::new(diffdrive_arm());
     rk4_bench(c, "sim/diffdrive_arm_tracked_wheels/rk4_step", &mut arm, 1e-3);
+    let massless = {
+        let wm = diffdrive_arm();
+        WheeledModel::new(wm.model, WheeledBase::new(wm.base.drive)).unwrap()
+    };
+    let mut arm2 = WheeledSystem::new(massless);
+    rk4_bench(c, "sim/diffdrive_arm_massless_wheels/rk4_step", &mut arm2, 1e-3);
     let mut panda = WheeledSystem::new(panda_on_diff_drive());
     rk4_bench(c, "sim/panda_diffdrive/rk4_step", &mut panda, 1e-3);
 }
