@@ -24,7 +24,9 @@ pub struct Series<'a> {
 }
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 /// "Nice" tick positions covering `[lo, hi]`.
@@ -219,7 +221,8 @@ pub fn path_chart(title: &str, x: &[f64], y: &[f64]) -> String {
     );
     axes(&mut svg, &f, title, "x (m)", "y (m)");
     polyline(&mut svg, &f, x, y, COLORS[0]);
-    if let (Some(&xs), Some(&ys), Some(&xe), Some(&ye)) = (x.first(), y.first(), x.last(), y.last()) {
+    if let (Some(&xs), Some(&ys), Some(&xe), Some(&ye)) = (x.first(), y.first(), x.last(), y.last())
+    {
         let _ = write!(
             svg,
             r##"<circle cx="{:.2}" cy="{:.2}" r="4" fill="#2ca02c"/><circle cx="{:.2}" cy="{:.2}" r="4" fill="#d62728"/>"##,

@@ -34,7 +34,11 @@ fn default_scenario_runs_without_an_argument() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     for f in [
         "trajectory.csv",
         "summary.json",
@@ -54,7 +58,12 @@ fn default_scenario_runs_without_an_argument() {
     assert!(csv.starts_with("t,x,y,theta,left_wheel_joint"));
     assert_eq!(csv.lines().count(), 502);
     // The platform moved along a curve.
-    let fq: Vec<f64> = s["final_q"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let fq: Vec<f64> = s["final_q"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
     assert!(fq[0].hypot(fq[1]) > 0.5 && fq[2].abs() > 0.1, "{fq:?}");
 }
 
@@ -69,12 +78,22 @@ fn chapter_scenarios_run_and_print_a_summary() {
             .arg(&out)
             .output()
             .unwrap();
-        assert!(run.status.success(), "{name}: {}", String::from_utf8_lossy(&run.stderr));
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
         let printed: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
         assert_eq!(printed["duration"].as_f64(), Some(3.0));
         let s = summary(&out);
-        assert!(s["max_constraint_residual"].as_f64().unwrap() < 1e-12, "{name}");
-        assert!(s["relative_energy_error"].as_f64().unwrap() < 1e-6, "{name}");
+        assert!(
+            s["max_constraint_residual"].as_f64().unwrap() < 1e-12,
+            "{name}"
+        );
+        assert!(
+            s["relative_energy_error"].as_f64().unwrap() < 1e-6,
+            "{name}"
+        );
         assert!(s["accepted_steps"].as_u64().unwrap() == 3000, "{name}");
     }
 }
@@ -97,7 +116,10 @@ fn fails_with(tag: &str, text: &str, needles: &[&str]) {
         assert!(err.contains(n), "{tag}: error lacks '{n}': {err}");
     }
     assert!(!err.contains("panicked"), "{tag}: {err}");
-    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(), "{tag}: partial output");
+    assert!(
+        !out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(),
+        "{tag}: partial output"
+    );
 }
 
 const M1: &str = r#"
@@ -118,18 +140,44 @@ dt = 0.01
 
 #[test]
 fn bad_scenarios_fail_clearly_without_output() {
-    fails_with("unknown-model", &M1.replace("\"m1\"", "\"m7\""), &["bad.toml", "m7"]);
-    fails_with("missing-param", &M1.replace("b = 0.2\n", ""), &["bad.toml", "missing field `b`"]);
-    fails_with("nan-param", &M1.replace("m = 20.0", "m = nan"), &["bad.toml", "m"]);
-    fails_with("unknown-field", &M1.replace("duration = 1.0", "duration = 1.0\nspeed = 3"), &["bad.toml", "speed", "line"]);
-    fails_with("bad-dt", &M1.replace("dt = 0.01", "dt = -1.0"), &["bad.toml", "integrator.dt"]);
-    fails_with("bad-q", &format!("{M1}\n[initial]\nq = [0.0, 1.0]\n"), &["initial.q", "expected 3"]);
+    fails_with(
+        "unknown-model",
+        &M1.replace("\"m1\"", "\"m7\""),
+        &["bad.toml", "m7"],
+    );
+    fails_with(
+        "missing-param",
+        &M1.replace("b = 0.2\n", ""),
+        &["bad.toml", "missing field `b`"],
+    );
+    fails_with(
+        "nan-param",
+        &M1.replace("m = 20.0", "m = nan"),
+        &["bad.toml", "m"],
+    );
+    fails_with(
+        "unknown-field",
+        &M1.replace("duration = 1.0", "duration = 1.0\nspeed = 3"),
+        &["bad.toml", "speed", "line"],
+    );
+    fails_with(
+        "bad-dt",
+        &M1.replace("dt = 0.01", "dt = -1.0"),
+        &["bad.toml", "integrator.dt"],
+    );
+    fails_with(
+        "bad-q",
+        &format!("{M1}\n[initial]\nq = [0.0, 1.0]\n"),
+        &["initial.q", "expected 3"],
+    );
     fails_with(
         "bad-inputs",
         &format!("{M1}\n[[inputs]]\nkind = \"constant\"\nvalue = 1.0\n"),
         &["inputs", "expected 2"],
     );
-    fails_with("missing-urdf", r#"
+    fails_with(
+        "missing-urdf",
+        r#"
 duration = 1.0
 [robot]
 kind = "urdf"
@@ -138,12 +186,16 @@ drive = { r_w = 0.1, b = 0.2, d = 0.0 }
 [integrator]
 method = "rk4"
 dt = 0.01
-"#, &["nowhere.urdf"]);
+"#,
+        &["nowhere.urdf"],
+    );
     fails_with("syntax", "duration = = 1", &["bad.toml", "line 1"]);
     // A run that blows up writes nothing.
     fails_with(
         "blow-up",
-        &format!("{M1}\n[limits]\nblowup = 1.0\nmax_residual = 1.0\n[initial]\nq = [0.0, 0.0, 0.0]\nv = [5.0, 0.0]\n"),
+        &format!(
+            "{M1}\n[limits]\nblowup = 1.0\nmax_residual = 1.0\n[initial]\nq = [0.0, 0.0, 0.0]\nv = [5.0, 0.0]\n"
+        ),
         &["numerical failure"],
     );
 }

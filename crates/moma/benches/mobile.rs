@@ -33,16 +33,24 @@ fn data(path: &str) -> String {
 }
 
 fn panda_on_diff_drive() -> WheeledModel {
-    let model =
-        model_from_urdf_file(data("tests/data/pinocchio/urdf/panda.urdf"), RootJoint::Planar)
-            .expect("panda");
-    WheeledModel::new(model, WheeledBase::new(DiffDrive::new(0.1, 0.3, 0.2).unwrap())).unwrap()
+    let model = model_from_urdf_file(
+        data("tests/data/pinocchio/urdf/panda.urdf"),
+        RootJoint::Planar,
+    )
+    .expect("panda");
+    WheeledModel::new(
+        model,
+        WheeledBase::new(DiffDrive::new(0.1, 0.3, 0.2).unwrap()),
+    )
+    .unwrap()
 }
 
 fn diffdrive_arm() -> WheeledModel {
-    let model =
-        model_from_urdf_file(data("tests/data/mobile/diffdrive_arm.urdf"), RootJoint::Planar)
-            .expect("diffdrive_arm");
+    let model = model_from_urdf_file(
+        data("tests/data/mobile/diffdrive_arm.urdf"),
+        RootJoint::Planar,
+    )
+    .expect("diffdrive_arm");
     let mut base = WheeledBase::new(DiffDrive::new(0.08, 0.25, 0.1).unwrap());
     base.wheel_joints = Some(["left_wheel_joint".into(), "right_wheel_joint".into()]);
     WheeledModel::new(model, base).unwrap()
@@ -80,25 +88,50 @@ fn bench_dynamics(c: &mut Criterion) {
                 .unwrap()[0]
         })
     });
-    c.bench_function("mobile/panda_diffdrive/reduced_forward_dynamics+lambda", |b| {
-        b.iter(|| {
-            reduced_forward_dynamics(&wm, &mut wd, black_box(&q), black_box(&vr), black_box(&u))
+    c.bench_function(
+        "mobile/panda_diffdrive/reduced_forward_dynamics+lambda",
+        |b| {
+            b.iter(|| {
+                reduced_forward_dynamics(
+                    &wm,
+                    &mut wd,
+                    black_box(&q),
+                    black_box(&vr),
+                    black_box(&u),
+                )
                 .unwrap();
-            lagrange_multipliers(&wm, &mut wd, &q).unwrap()[0]
-        })
-    });
+                lagrange_multipliers(&wm, &mut wd, &q).unwrap()[0]
+            })
+        },
+    );
     let mut d = Data::new(&wm.model);
     let (_, v) = state(wm.model.nq, wm.model.nv);
     let tau = DVector::from_element(wm.model.nv, 0.5);
     c.bench_function("mobile/panda_planar_unconstrained/aba", |b| {
-        b.iter(|| aba(&wm.model, &mut d, black_box(&q), black_box(&v), black_box(&tau))[0])
+        b.iter(|| {
+            aba(
+                &wm.model,
+                &mut d,
+                black_box(&q),
+                black_box(&v),
+                black_box(&tau),
+            )[0]
+        })
     });
     // The two core passes the reduced fast path is built from, for the cost breakdown.
     c.bench_function("mobile/panda_planar_unconstrained/crba", |b| {
         b.iter(|| moma::dynamics::crba(&wm.model, &mut d, black_box(&q))[(0, 0)])
     });
     c.bench_function("mobile/panda_planar_unconstrained/rnea", |b| {
-        b.iter(|| moma::dynamics::rnea(&wm.model, &mut d, black_box(&q), black_box(&v), black_box(&tau))[0])
+        b.iter(|| {
+            moma::dynamics::rnea(
+                &wm.model,
+                &mut d,
+                black_box(&q),
+                black_box(&v),
+                black_box(&tau),
+            )[0]
+        })
     });
 }
 
@@ -125,13 +158,23 @@ fn bench_simulation(c: &mut Criterion) {
     let mut m5_mb = WheeledSystem::new(m5_model(&m5_params()).unwrap());
     rk4_bench(c, "sim/m5_multibody/rk4_step", &mut m5_mb, 1e-3);
     let mut arm = WheeledSystem::new(diffdrive_arm());
-    rk4_bench(c, "sim/diffdrive_arm_tracked_wheels/rk4_step", &mut arm, 1e-3);
+    rk4_bench(
+        c,
+        "sim/diffdrive_arm_tracked_wheels/rk4_step",
+        &mut arm,
+        1e-3,
+    );
     let massless = {
         let wm = diffdrive_arm();
         WheeledModel::new(wm.model, WheeledBase::new(wm.base.drive)).unwrap()
     };
     let mut arm2 = WheeledSystem::new(massless);
-    rk4_bench(c, "sim/diffdrive_arm_massless_wheels/rk4_step", &mut arm2, 1e-3);
+    rk4_bench(
+        c,
+        "sim/diffdrive_arm_massless_wheels/rk4_step",
+        &mut arm2,
+        1e-3,
+    );
     let mut panda = WheeledSystem::new(panda_on_diff_drive());
     rk4_bench(c, "sim/panda_diffdrive/rk4_step", &mut panda, 1e-3);
 }

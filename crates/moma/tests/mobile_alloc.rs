@@ -39,7 +39,10 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 fn robot() -> WheeledModel {
-    let path = format!("{}/tests/data/mobile/diffdrive_arm.urdf", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/tests/data/mobile/diffdrive_arm.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let model = model_from_urdf_file(path, RootJoint::Planar).unwrap();
     let mut base = WheeledBase::new(DiffDrive::new(0.08, 0.25, 0.1).unwrap());
     base.wheel_joints = Some(["left_wheel_joint".into(), "right_wheel_joint".into()]);
@@ -62,7 +65,12 @@ fn hot_paths_do_not_allocate() {
         lagrange_multipliers(&wm, &mut wd, &q).unwrap();
     }
     let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert_eq!(after - before, 0, "reduced dynamics allocated {} times", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "reduced dynamics allocated {} times",
+        after - before
+    );
 
     // The root-constrained ABA path (wheels not tracked).
     let mut untracked = robot();
@@ -82,7 +90,12 @@ fn hot_paths_do_not_allocate() {
         lagrange_multipliers(&untracked, &mut wd2, &q2).unwrap();
     }
     let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert_eq!(after - before, 0, "root-constrained ABA allocated {} times", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "root-constrained ABA allocated {} times",
+        after - before
+    );
 
     // The simulator's ODE right-hand side.
     let mut sys = WheeledSystem::new(robot());
@@ -97,5 +110,10 @@ fn hot_paths_do_not_allocate() {
         ode.rhs(0.01 * k as f64, &x, &mut dx).unwrap();
     }
     let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert_eq!(after - before, 0, "ODE rhs allocated {} times", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "ODE rhs allocated {} times",
+        after - before
+    );
 }

@@ -41,7 +41,10 @@ fn close(what: &str, got: &DMatrix<f64>, want: &DMatrix<f64>, rel: f64) {
     assert_eq!(got.shape(), want.shape(), "{what} shape");
     let err = (got - want).norm();
     let scale = want.norm().max(1.0);
-    assert!(err <= rel * scale, "{what}: error {err:e}\n got {got}\nwant {want}");
+    assert!(
+        err <= rel * scale,
+        "{what}: error {err:e}\n got {got}\nwant {want}"
+    );
 }
 
 fn closev(what: &str, got: &DVector<f64>, want: &DVector<f64>, rel: f64) {
@@ -79,7 +82,12 @@ fn compare(
     let c_cor = coriolis_matrix(&wm.model, &mut wd.data, &q_joint, &qdot).clone();
     reduced_dynamics(wm, &mut wd, &q_joint, &v_r, &u, Some(&c_cor)).unwrap();
     let pt = p.transpose();
-    close("H", &wd.data.mass_matrix, &(&pt * matrix(&out[mass_key]) * p), tol);
+    close(
+        "H",
+        &wd.data.mass_matrix,
+        &(&pt * matrix(&out[mass_key]) * p),
+        tol,
+    );
     let zero = DVector::zeros(p.nrows());
     let h_ref = out.get("h").map(vector).unwrap_or_else(|| zero.clone());
     let g_ref = out.get("G").map(vector).unwrap_or_else(|| zero.clone());
@@ -88,19 +96,29 @@ fn compare(
     close("Mr", &r.mass_matrix, &(&tt * matrix(&out["Mr"]) * t), tol);
     close("Cr", &r.coriolis, &(&tt * matrix(&out["Cr"]) * t), tol);
     closev("cr", &r.velocity_terms, &(&tt * vector(&out["cr"])), tol);
-    let gr_ref = out.get("Gr").map(vector).unwrap_or_else(|| DVector::zeros(t.nrows()));
+    let gr_ref = out
+        .get("Gr")
+        .map(vector)
+        .unwrap_or_else(|| DVector::zeros(t.nrows()));
     closev("Gr", &r.gravity, &(&tt * gr_ref), tol);
     closev("Qr", &r.force, &(&tt * vector(&out["Qr"])), tol);
     closev("vdot", &(t * &r.vdot), &vector(&out["vdot"]), tol);
     closev("qddot", &(p * &r.qddot), &vector(&out["qddot"]), tol);
     closev("lambda", &r.lambda, &vector(&out["lambda"]), tol);
     // Gravity and velocity terms of the full model.
-    closev("G", &moma::dynamics::gravity_torque(&wm.model, &mut wd.data, &q_joint).clone(), &(&pt * &g_ref), tol);
+    closev(
+        "G",
+        &moma::dynamics::gravity_torque(&wm.model, &mut wd.data, &q_joint).clone(),
+        &(&pt * &g_ref),
+        tol,
+    );
     let nle = moma::dynamics::nonlinear_effects(&wm.model, &mut wd.data, &q_joint, &qdot).clone();
     closev("h + G", &nle, &(&pt * (&h_ref + &g_ref)), tol);
     // The fast path gives the same v̇ and λ.
     let v_r = DVector::from_column_slice(v_r.as_slice());
-    let fast = reduced_forward_dynamics(wm, &mut wd, &q_joint, &v_r, &u).unwrap().clone();
+    let fast = reduced_forward_dynamics(wm, &mut wd, &q_joint, &v_r, &u)
+        .unwrap()
+        .clone();
     closev("vdot (fast path)", &(t * fast), &vector(&out["vdot"]), tol);
     let lam = lagrange_multipliers(wm, &mut wd, &q_joint).unwrap().clone();
     closev("lambda (fast path)", &lam, &vector(&out["lambda"]), tol);
@@ -117,22 +135,42 @@ fn m1_general_equals_chapter() {
     for case in load("m1_unicycle.json")["cases"].as_array().unwrap() {
         let p: UnicycleParams = serde_json::from_value(case["params"].clone()).unwrap();
         let wm = m1_model(&p).unwrap();
-        compare(&wm, case, vector(&case["state"]["q"]), &t_platform(p.d, 2), &DMatrix::identity(3, 3), "M");
+        compare(
+            &wm,
+            case,
+            vector(&case["state"]["q"]),
+            &t_platform(p.d, 2),
+            &DMatrix::identity(3, 3),
+            "M",
+        );
     }
 }
 
 #[test]
 fn m2_general_equals_chapter() {
-    for case in load("m2_platform_planar_arm.json")["cases"].as_array().unwrap() {
+    for case in load("m2_platform_planar_arm.json")["cases"]
+        .as_array()
+        .unwrap()
+    {
         let p: PlatformArmParams = serde_json::from_value(case["params"].clone()).unwrap();
         let wm = m2_model(&p).unwrap();
-        compare(&wm, case, vector(&case["state"]["q"]), &t_platform(p.d, 4), &DMatrix::identity(5, 5), "H");
+        compare(
+            &wm,
+            case,
+            vector(&case["state"]["q"]),
+            &t_platform(p.d, 4),
+            &DMatrix::identity(5, 5),
+            "H",
+        );
     }
 }
 
 #[test]
 fn m5_general_equals_chapter() {
-    for case in load("m5_mobile_manipulator_3d.json")["cases"].as_array().unwrap() {
+    for case in load("m5_mobile_manipulator_3d.json")["cases"]
+        .as_array()
+        .unwrap()
+    {
         let p: MobileManipulatorParams = serde_json::from_value(case["params"].clone()).unwrap();
         let wm = m5_model(&p).unwrap();
         let pm = joint_to_absolute();
@@ -147,10 +185,15 @@ fn m5_general_equals_chapter() {
         t[(4, 3)] = 1.0;
         t[(4, 4)] = -1.0;
         let qj = vector(&case["state"]["q_joint"]);
-        close("H_joint", &{
-            let mut wd = WheeledData::new(&wm);
-            moma::dynamics::crba(&wm.model, &mut wd.data, &qj).clone()
-        }, &matrix(&case["outputs"]["H_joint"]), 1e-9);
+        close(
+            "H_joint",
+            &{
+                let mut wd = WheeledData::new(&wm);
+                moma::dynamics::crba(&wm.model, &mut wd.data, &qj).clone()
+            },
+            &matrix(&case["outputs"]["H_joint"]),
+            1e-9,
+        );
         compare(&wm, case, qj, &t, &pm, "H");
     }
 }

@@ -25,7 +25,7 @@ fn matrix(v: &Value) -> DMatrix<f64> {
     let r = rows.len();
     if rows[0].is_number() {
         // A row vector stored flat.
-        return DMatrix::from_row_slice(1, r, &vector(v).as_slice().to_vec());
+        return DMatrix::from_row_slice(1, r, vector(v).as_slice());
     }
     let c = rows[0].as_array().unwrap().len();
     DMatrix::from_fn(r, c, |i, j| rows[i][j].as_f64().unwrap())
@@ -35,7 +35,10 @@ fn close(what: &str, got: &DMatrix<f64>, want: &DMatrix<f64>, rel: f64) {
     assert_eq!(got.shape(), want.shape(), "{what} shape");
     let err = (got - want).norm();
     let scale = want.norm().max(1.0);
-    assert!(err <= rel * scale, "{what}: error {err:e} (scale {scale})\n got {got}\nwant {want}");
+    assert!(
+        err <= rel * scale,
+        "{what}: error {err:e} (scale {scale})\n got {got}\nwant {want}"
+    );
 }
 
 fn closev(what: &str, got: &DVector<f64>, want: &DVector<f64>, rel: f64) {
@@ -96,10 +99,8 @@ fn check_model(file: &str, mass_key: &str) -> usize {
         // The DAE formula with Ċ q̇ for C = [−sin φ, cos φ, −d, 0…].
         let qdot = &n_c * &v;
         let phi = q[2];
-        let cdot_qdot = DVector::from_element(
-            1,
-            (-phi.cos() * qdot[0] - phi.sin() * qdot[1]) * qdot[2],
-        );
+        let cdot_qdot =
+            DVector::from_element(1, (-phi.cos() * qdot[0] - phi.sin() * qdot[1]) * qdot[2]);
         let lambda_dae = lagrange_multipliers_dae(&terms, &c, &cdot_qdot).unwrap();
         closev("lambda (DAE)", &lambda_dae, &rd.lambda, 1e-9);
         // C q̇ = 0 and C N_C = 0.

@@ -20,7 +20,10 @@ use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::{DMatrix, DVector, Vector2};
 
 fn urdf() -> String {
-    format!("{}/tests/data/mobile/diffdrive_arm.urdf", env!("CARGO_MANIFEST_DIR"))
+    format!(
+        "{}/tests/data/mobile/diffdrive_arm.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    )
 }
 
 fn robot(track_wheels: bool, d: f64) -> WheeledModel {
@@ -31,8 +34,12 @@ fn robot(track_wheels: bool, d: f64) -> WheeledModel {
             name: "rear".into(),
             position: [0.25, 0.0],
         }],
-        wheel_joints: track_wheels
-            .then(|| ["left_wheel_joint".to_string(), "right_wheel_joint".to_string()]),
+        wheel_joints: track_wheels.then(|| {
+            [
+                "left_wheel_joint".to_string(),
+                "right_wheel_joint".to_string(),
+            ]
+        }),
     };
     WheeledModel::new(model, base).unwrap()
 }
@@ -40,7 +47,9 @@ fn robot(track_wheels: bool, d: f64) -> WheeledModel {
 fn state(wm: &WheeledModel) -> (DVector<f64>, DVector<f64>, Vec<f64>) {
     let q = DVector::from_fn(wm.model.nq, |i, _| 0.3 * ((i as f64) * 1.7).sin() + 0.1);
     let v = DVector::from_fn(wm.nr(), |i, _| 0.4 * ((i as f64) * 2.3 + 0.5).cos());
-    let u = (0..wm.nu()).map(|i| 0.7 * ((i as f64) * 0.9).sin() + 0.2).collect();
+    let u = (0..wm.nu())
+        .map(|i| 0.7 * ((i as f64) * 0.9).sin() + 0.2)
+        .collect();
     (q, v, u)
 }
 
@@ -66,7 +75,13 @@ fn layout_names_and_dimensions() {
     assert!(err.to_string().contains("turret_joint"), "{err}");
     // A fixed-root model is rejected.
     let fixed = model_from_urdf_file(urdf(), RootJoint::Fixed).unwrap();
-    assert!(WheeledModel::new(fixed, WheeledBase::new(DiffDrive::new(0.1, 0.2, 0.0).unwrap())).is_err());
+    assert!(
+        WheeledModel::new(
+            fixed,
+            WheeledBase::new(DiffDrive::new(0.1, 0.2, 0.0).unwrap())
+        )
+        .is_err()
+    );
 }
 
 #[test]
@@ -99,7 +114,10 @@ fn basis_annihilates_constraints_and_its_derivative_matches_finite_differences()
             let want = w.transpose();
             for i in 0..2 {
                 for j in 0..2 {
-                    assert!((qr[(i, j)] - want[(i, j)]).abs() < 1e-12, "Nᵀ S wheel block");
+                    assert!(
+                        (qr[(i, j)] - want[(i, j)]).abs() < 1e-12,
+                        "Nᵀ S wheel block"
+                    );
                 }
             }
         }
@@ -137,10 +155,16 @@ fn multipliers_agree_with_the_full_coordinate_dae() {
             force: &qf,
         };
         let lam_dae = lagrange_multipliers_dae(&terms, &c, &cdot_qdot).unwrap();
-        assert!((&lam - &lam_dae).norm() < 1e-7 * (1.0 + lam.norm()), "{lam} vs {lam_dae}");
+        assert!(
+            (&lam - &lam_dae).norm() < 1e-7 * (1.0 + lam.norm()),
+            "{lam} vs {lam_dae}"
+        );
         // The full equation of motion holds with the constraint force.
         let resid = &hm * &qddot + &hv + &g - &qf + c.transpose() * &lam;
-        assert!(resid.norm() < 1e-9 * (1.0 + qf.norm()), "DAE residual {resid}");
+        assert!(
+            resid.norm() < 1e-9 * (1.0 + qf.norm()),
+            "DAE residual {resid}"
+        );
         // And the acceleration satisfies C q̈ + Ċ q̇ = 0.
         assert!((&c * &qddot + &cdot_qdot).norm() < 1e-7);
     }
@@ -183,16 +207,32 @@ fn singular_reduced_mass_is_reported() {
     let mut b = ModelBuilder::new("massless_arm");
     b.set_root(RootJoint::Planar);
     let base = b
-        .add_joint(JointIndex(0), "base", JointType::Planar, SE3::identity(), JointLimits::unlimited())
+        .add_joint(
+            JointIndex(0),
+            "base",
+            JointType::Planar,
+            SE3::identity(),
+            JointLimits::unlimited(),
+        )
         .unwrap();
     b.append_body_inertia(
         base,
-        &Inertia::new(10.0, nalgebra::Vector3::zeros(), nalgebra::Matrix3::identity()),
+        &Inertia::new(
+            10.0,
+            nalgebra::Vector3::zeros(),
+            nalgebra::Matrix3::identity(),
+        ),
         &SE3::identity(),
     )
     .unwrap();
-    b.add_joint(base, "empty", JointType::RevoluteZ, SE3::identity(), JointLimits::unlimited())
-        .unwrap();
+    b.add_joint(
+        base,
+        "empty",
+        JointType::RevoluteZ,
+        SE3::identity(),
+        JointLimits::unlimited(),
+    )
+    .unwrap();
     let wm = WheeledModel::new(
         b.build().unwrap(),
         WheeledBase::new(DiffDrive::new(0.08, 0.25, 0.0).unwrap()),
@@ -229,7 +269,10 @@ fn unforced_run(track: bool, d: f64) {
     )
     .unwrap();
     let drift = res.monitor.relative_energy_error();
-    assert!(drift < 1e-9, "track={track} d={d}: relative energy drift {drift:e}");
+    assert!(
+        drift < 1e-9,
+        "track={track} d={d}: relative energy drift {drift:e}"
+    );
     assert!(
         res.monitor.max_residual < 1e-12,
         "track={track} d={d}: residual {:e}",
@@ -256,8 +299,16 @@ fn driven_run_balances_energy_with_input_work() {
     let input = InputProfile {
         channels: vec![
             ChannelProfile::Constant { value: 1.0 },
-            ChannelProfile::Sinusoid { offset: 1.5, amplitude: 0.5, frequency: 0.5, phase: 0.0 },
-            ChannelProfile::Piecewise { times: vec![0.0, 1.0], values: vec![0.5, -0.5] },
+            ChannelProfile::Sinusoid {
+                offset: 1.5,
+                amplitude: 0.5,
+                frequency: 0.5,
+                phase: 0.0,
+            },
+            ChannelProfile::Piecewise {
+                times: vec![0.0, 1.0],
+                values: vec![0.5, -0.5],
+            },
             ChannelProfile::Constant { value: 0.0 },
             ChannelProfile::Constant { value: 0.0 },
         ],
@@ -268,29 +319,56 @@ fn driven_run_balances_energy_with_input_work() {
         record_interval: 0.01,
         limits: MonitorLimits::default(),
     };
-    let res = simulate(&mut sys, &input, q.as_slice(), v.as_slice(), &opts, &mut |_| {}).unwrap();
+    let res = simulate(
+        &mut sys,
+        &input,
+        q.as_slice(),
+        v.as_slice(),
+        &opts,
+        &mut |_| {},
+    )
+    .unwrap();
     assert!(res.recorder.work.last().unwrap().abs() > 0.1);
-    assert!(res.monitor.relative_energy_error() < 1e-5, "{}", res.monitor.relative_energy_error());
+    assert!(
+        res.monitor.relative_energy_error() < 1e-5,
+        "{}",
+        res.monitor.relative_energy_error()
+    );
     assert!(res.monitor.max_residual < 1e-12);
 }
 
 #[test]
 fn root_constrained_aba_equals_the_joint_space_route_on_panda() {
     use moma::mobile::wheeled::reduced_forward_dynamics_crba;
-    let path = format!("{}/tests/data/pinocchio/urdf/panda.urdf", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/tests/data/pinocchio/urdf/panda.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let model = model_from_urdf_file(path, RootJoint::Planar).unwrap();
     for d in [0.2, 0.0, -0.3] {
-        let wm = WheeledModel::new(model.clone(), WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap()))
-            .unwrap();
+        let wm = WheeledModel::new(
+            model.clone(),
+            WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap()),
+        )
+        .unwrap();
         let mut wd = WheeledData::new(&wm);
         for k in 0..5 {
             let q = DVector::from_fn(wm.model.nq, |i, _| ((i * 7 + k * 3) as f64 * 0.37).sin());
             let v = DVector::from_fn(wm.nr(), |i, _| ((i * 5 + k) as f64 * 0.53).cos());
-            let u: Vec<f64> = (0..wm.nu()).map(|i| ((i + k) as f64 * 0.71).sin()).collect();
-            let fast = reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u).unwrap().clone();
+            let u: Vec<f64> = (0..wm.nu())
+                .map(|i| ((i + k) as f64 * 0.71).sin())
+                .collect();
+            let fast = reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u)
+                .unwrap()
+                .clone();
             let qdd_fast = wd.reduced.qddot.clone();
-            let slow = reduced_forward_dynamics_crba(&wm, &mut wd, &q, &v, &u).unwrap().clone();
-            assert!((&fast - &slow).norm() < 1e-9 * (1.0 + slow.norm()), "d={d}: {fast} vs {slow}");
+            let slow = reduced_forward_dynamics_crba(&wm, &mut wd, &q, &v, &u)
+                .unwrap()
+                .clone();
+            assert!(
+                (&fast - &slow).norm() < 1e-9 * (1.0 + slow.norm()),
+                "d={d}: {fast} vs {slow}"
+            );
             assert!((&qdd_fast - &wd.reduced.qddot).norm() < 1e-9 * (1.0 + slow.norm()));
         }
     }

@@ -13,7 +13,11 @@ fn load(name: &str) -> Value {
 }
 
 fn floats(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 fn constant(u: &[f64]) -> InputProfile {
@@ -53,15 +57,31 @@ fn check_trajectories(file: &str, model: &str, tol_abs: f64) {
         let tv = case["trajectory"]["v"].as_array().unwrap();
         for k in 0..2 {
             for (a, b) in rec.q_row(k + 1).iter().zip(floats(&tq[k])) {
-                assert!((a - b).abs() < tol_abs, "{model} q at t={}: {a} vs {b}", rec.times[k + 1]);
+                assert!(
+                    (a - b).abs() < tol_abs,
+                    "{model} q at t={}: {a} vs {b}",
+                    rec.times[k + 1]
+                );
             }
             for (a, b) in rec.v_row(k + 1).iter().zip(floats(&tv[k])) {
-                assert!((a - b).abs() < tol_abs, "{model} v at t={}: {a} vs {b}", rec.times[k + 1]);
+                assert!(
+                    (a - b).abs() < tol_abs,
+                    "{model} v at t={}: {a} vs {b}",
+                    rec.times[k + 1]
+                );
             }
         }
         // Energy balance with inputs: T + V − E0 − W stays at integration accuracy.
-        assert!(res.monitor.relative_energy_error() < 1e-8, "{}", res.monitor.relative_energy_error());
-        assert!(res.monitor.max_residual < 1e-12, "{}", res.monitor.max_residual);
+        assert!(
+            res.monitor.relative_energy_error() < 1e-8,
+            "{}",
+            res.monitor.relative_energy_error()
+        );
+        assert!(
+            res.monitor.max_residual < 1e-12,
+            "{}",
+            res.monitor.max_residual
+        );
     }
 }
 
@@ -102,7 +122,11 @@ fn unforced_energy_drift_below_1e9_over_10_s_and_residual_below_1e12() {
         let res = simulate(sys.as_mut(), &zero, &q0, &v0, &opts, &mut |_| {}).unwrap();
         let drift = res.monitor.relative_energy_error();
         assert!(drift < 1e-9, "{model}: relative energy drift {drift:e}");
-        assert!(res.monitor.max_residual < 1e-12, "{model}: residual {:e}", res.monitor.max_residual);
+        assert!(
+            res.monitor.max_residual < 1e-12,
+            "{model}: residual {:e}",
+            res.monitor.max_residual
+        );
         assert_eq!(res.recorder.work.iter().copied().fold(0.0, f64::max), 0.0);
         assert_eq!(res.recorder.len(), 101);
     }
@@ -127,11 +151,19 @@ fn rk4_converges_at_fourth_order() {
         };
         let res = simulate(sys.as_mut(), &u, &q0, &v0, &opts, &mut |_| {}).unwrap();
         let got = res.recorder.q_row(2);
-        errs.push(got.iter().zip(&want).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max));
+        errs.push(
+            got.iter()
+                .zip(&want)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max),
+        );
         assert!(res.monitor.max_residual < 1e-12);
     }
     let ratio = errs[0] / errs[1];
-    assert!(ratio > 12.0 && ratio < 20.0, "RK4 error ratio {ratio} ({errs:?})");
+    assert!(
+        ratio > 12.0 && ratio < 20.0,
+        "RK4 error ratio {ratio} ({errs:?})"
+    );
 }
 
 #[test]
@@ -151,14 +183,38 @@ fn bad_inputs_and_blow_up_are_reported() {
         },
     };
     // Huge torques drive the state past the blow-up bound: a Numerical error with the time.
-    let err = simulate(sys.as_mut(), &constant(&[1e6, 1e6]), &q0, &v0, &opts, &mut |_| {})
-        .unwrap_err();
+    let err = simulate(
+        sys.as_mut(),
+        &constant(&[1e6, 1e6]),
+        &q0,
+        &v0,
+        &opts,
+        &mut |_| {},
+    )
+    .unwrap_err();
     assert!(matches!(err, moma::Error::Numerical { .. }), "{err}");
     // Wrong input count and NaN initial state.
-    assert!(simulate(sys.as_mut(), &constant(&[0.0]), &q0, &v0, &opts, &mut |_| {}).is_err());
+    assert!(
+        simulate(
+            sys.as_mut(),
+            &constant(&[0.0]),
+            &q0,
+            &v0,
+            &opts,
+            &mut |_| {}
+        )
+        .is_err()
+    );
     let nan_q = vec![f64::NAN, 0.0, 0.0];
-    let err = simulate(sys.as_mut(), &constant(&[0.0, 0.0]), &nan_q, &v0, &opts, &mut |_| {})
-        .unwrap_err();
+    let err = simulate(
+        sys.as_mut(),
+        &constant(&[0.0, 0.0]),
+        &nan_q,
+        &v0,
+        &opts,
+        &mut |_| {},
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("initial q"), "{err}");
     // Unknown model and missing parameter.
     assert!(chapter_system("m9", &case["params"]).is_err());

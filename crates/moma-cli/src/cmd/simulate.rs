@@ -286,8 +286,7 @@ fn build_urdf_robot(
             .collect(),
         wheel_joints,
     };
-    let mut model =
-        moma::io::urdf::model_from_urdf_file(path, moma::multibody::RootJoint::Planar)?;
+    let mut model = moma::io::urdf::model_from_urdf_file(path, moma::multibody::RootJoint::Planar)?;
     let g = gravity.unwrap_or(9.81);
     if !g.is_finite() {
         bail!("gravity is not a finite number");
@@ -316,7 +315,10 @@ fn render(
         let col = |row: &dyn Fn(usize) -> f64| (0..n).map(row).collect::<Vec<f64>>();
         let x = col(&|i| rec.q_row(i)[0]);
         let y = col(&|i| rec.q_row(i)[1]);
-        files.push((dir.join("path.svg"), path_chart("Platform path", &x, &y).into_bytes()));
+        files.push((
+            dir.join("path.svg"),
+            path_chart("Platform path", &x, &y).into_bytes(),
+        ));
         let joint_names: Vec<&str> = rec.q_names.iter().skip(2).map(String::as_str).collect();
         let joints: Vec<Series> = joint_names
             .iter()
@@ -341,7 +343,11 @@ fn render(
             dir.join("energy.svg"),
             line_chart("Energy balance", "t (s)", "energy (J)", &energy).into_bytes(),
         ));
-        let drift = vec![series(t, "(T+V) − (T₀+V₀) − W", col(&|i| rec.energy_error(i)))];
+        let drift = vec![series(
+            t,
+            "(T+V) − (T₀+V₀) − W",
+            col(&|i| rec.energy_error(i)),
+        )];
         files.push((
             dir.join("energy_error.svg"),
             line_chart("Energy balance error", "t (s)", "J", &drift).into_bytes(),
@@ -358,7 +364,12 @@ fn render(
     }
     summary.files = files
         .iter()
-        .map(|(p, _)| p.file_name().unwrap_or_default().to_string_lossy().into_owned())
+        .map(|(p, _)| {
+            p.file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned()
+        })
         .chain(std::iter::once("summary.json".to_string()))
         .collect();
     let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
@@ -373,7 +384,13 @@ pub fn run(args: Args) -> Result<()> {
     let sc = load_scenario(&path)?;
     let ctx = |what: &str| format!("{}: {what}", path.display());
     if !(sc.duration.is_finite() && sc.duration > 0.0) {
-        bail!("{}", ctx(&format!("duration must be a positive finite number, got {}", sc.duration)));
+        bail!(
+            "{}",
+            ctx(&format!(
+                "duration must be a positive finite number, got {}",
+                sc.duration
+            ))
+        );
     }
     if let Some(g) = sc.gravity
         && !g.is_finite()
@@ -430,7 +447,9 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     };
-    sc.integrator.validate().with_context(|| ctx("integrator"))?;
+    sc.integrator
+        .validate()
+        .with_context(|| ctx("integrator"))?;
     let options = SimulationOptions {
         duration: sc.duration,
         integrator: sc.integrator,

@@ -19,11 +19,7 @@ use crate::mobile::wheeled::{WheeledBase, WheeledModel};
 use crate::multibody::{JointIndex, JointLimits, JointType, ModelBuilder, RootJoint};
 use crate::spatial::{Inertia, SE3};
 
-fn platform(
-    b: &mut ModelBuilder,
-    mass: f64,
-    yaw_inertia: f64,
-) -> Result<JointIndex> {
+fn platform(b: &mut ModelBuilder, mass: f64, yaw_inertia: f64) -> Result<JointIndex> {
     b.set_root(RootJoint::Planar);
     let base = b.add_joint(
         JointIndex(0),
@@ -48,7 +44,10 @@ pub fn m1_model(p: &UnicycleParams) -> Result<WheeledModel> {
     let mut b = ModelBuilder::new("m1_unicycle");
     b.set_gravity(Vector3::new(0.0, 0.0, -9.81));
     platform(&mut b, p.m, p.inertia)?;
-    WheeledModel::new(b.build()?, WheeledBase::new(DiffDrive::new(p.r_w, p.b, p.d)?))
+    WheeledModel::new(
+        b.build()?,
+        WheeledBase::new(DiffDrive::new(p.r_w, p.b, p.d)?),
+    )
 }
 
 /// m2: platform + horizontal two-link arm with lumped elbow and tip masses.
@@ -93,7 +92,10 @@ pub fn m2_model(p: &PlatformArmParams) -> Result<WheeledModel> {
         &Inertia::point_mass(p.M2, Vector3::new(p.L2, 0.0, 0.0)),
         &SE3::identity(),
     )?;
-    WheeledModel::new(b.build()?, WheeledBase::new(DiffDrive::new(p.r_w, p.b, p.d)?))
+    WheeledModel::new(
+        b.build()?,
+        WheeledBase::new(DiffDrive::new(p.r_w, p.b, p.d)?),
+    )
 }
 
 /// m5: platform + capstan (yaw inertia I_c) + shoulder (pitch θ1 from the upward
@@ -126,7 +128,11 @@ pub fn m5_model(p: &MobileManipulatorParams) -> Result<WheeledModel> {
         JointLimits::unlimited(),
     )?;
     let link = |m: f64, k: f64, ky: f64, cm: f64| {
-        Inertia::new(m, Vector3::new(0.0, 0.0, cm), diag(m * ky * ky, m * k * k, 0.0))
+        Inertia::new(
+            m,
+            Vector3::new(0.0, 0.0, cm),
+            diag(m * ky * ky, m * k * k, 0.0),
+        )
     };
     b.append_body_inertia(shoulder, &link(p.m1, p.k1, p.k1y, p.L1cm), &SE3::identity())?;
     b.append_body_inertia(
@@ -147,5 +153,8 @@ pub fn m5_model(p: &MobileManipulatorParams) -> Result<WheeledModel> {
         &Inertia::point_mass(p.M2, Vector3::new(0.0, 0.0, p.L2)),
         &SE3::identity(),
     )?;
-    WheeledModel::new(b.build()?, WheeledBase::new(DiffDrive::new(p.r_w, p.b, p.d)?))
+    WheeledModel::new(
+        b.build()?,
+        WheeledBase::new(DiffDrive::new(p.r_w, p.b, p.d)?),
+    )
 }

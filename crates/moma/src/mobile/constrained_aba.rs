@@ -78,7 +78,7 @@ pub(crate) fn root_constrained_aba(
         let p = model.parents[i].0;
         let uvec = ia.mul_motion(&data.s[iv]);
         let d = data.s[iv].dot(&uvec);
-        if !(d > 0.0) || !d.is_finite() {
+        if !d.is_finite() || d <= 0.0 {
             return Err(Error::Singular {
                 what: "reduced mass matrix Mr (articulated inertia)".into(),
                 detail: Some(format!(
@@ -126,7 +126,11 @@ pub(crate) fn root_constrained_aba(
     let m2 = nb.transpose() * dmat * nb;
     let r2 = nb.transpose() * (rhs - dmat * ndv);
     let det = m2[(0, 0)] * m2[(1, 1)] - m2[(0, 1)] * m2[(1, 0)];
-    if !(m2[(0, 0)] > 0.0) || !(det > 1e-14 * m2.norm_squared()) || !det.is_finite() {
+    if !det.is_finite()
+        || m2[(0, 0)].is_nan()
+        || m2[(0, 0)] <= 0.0
+        || det <= 1e-14 * m2.norm_squared()
+    {
         return Err(Error::Singular {
             what: "reduced mass matrix Mr (platform block)".into(),
             detail: Some(format!("det = {det:e}")),

@@ -89,7 +89,11 @@ impl NullSpaceBasis {
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
         let smax = svd.singular_values[order[0]];
-        let smin = if k > 0 { svd.singular_values[order[k - 1]] } else { smax };
+        let smin = if k > 0 {
+            svd.singular_values[order[k - 1]]
+        } else {
+            smax
+        };
         if k > 0 && (smax <= 0.0 || smin <= self.rank_tolerance * smax) {
             return Err(Error::Singular {
                 what: "constraint matrix C".into(),
@@ -181,7 +185,10 @@ mod tests {
         assert!((gram - DMatrix::identity(3, 3)).norm() < 1e-13);
         let n0 = nb.basis.clone();
         let nd = nb.basis_dot.clone();
-        assert!((n0.transpose() * &nd).norm() < 1e-13, "parallel-transport gauge");
+        assert!(
+            (n0.transpose() * &nd).norm() < 1e-13,
+            "parallel-transport gauge"
+        );
         // Finite difference of the aligned basis: forward and back by h.
         let h = 1e-5;
         let (c1, cd1) = rows(t0 + h);

@@ -133,8 +133,7 @@ impl ReducedDynamics {
         // cr = N_Cᵀ (H Ṅ_C v + h).
         n_c_dot.mul_to(v, &mut self.nd_v);
         self.tmp_n.copy_from(terms.velocity_terms);
-        self.tmp_n
-            .gemv(1.0, terms.mass_matrix, &self.nd_v, 1.0);
+        self.tmp_n.gemv(1.0, terms.mass_matrix, &self.nd_v, 1.0);
         n_c.tr_mul_to(&self.tmp_n, &mut self.velocity_terms);
         n_c.tr_mul_to(terms.gravity, &mut self.gravity);
         n_c.tr_mul_to(terms.force, &mut self.force);
@@ -204,8 +203,7 @@ impl ReducedDynamics {
         self.tmp_n.copy_from(terms.force);
         self.tmp_n -= terms.gravity;
         self.tmp_n -= terms.velocity_terms;
-        self.tmp_n
-            .gemv(-1.0, terms.mass_matrix, &self.qddot, 1.0);
+        self.tmp_n.gemv(-1.0, terms.mass_matrix, &self.qddot, 1.0);
         c.mul_to(&self.tmp_n, &mut self.tmp_k);
         for i in 0..self.k {
             for j in 0..self.k {
@@ -274,7 +272,7 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<f64>) -> std::result::Result<(),
         for k in 0..j {
             d -= a[(j, k)] * a[(j, k)];
         }
-        if !(d > 1e-14 * scale) || !d.is_finite() {
+        if !d.is_finite() || d <= 1e-14 * scale {
             return Err(j);
         }
         let d = d.sqrt();

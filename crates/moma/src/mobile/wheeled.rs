@@ -127,7 +127,9 @@ impl WheeledModel {
             .find(|&j| model.joint_types[j] == JointType::Planar)
             .ok_or_else(|| Error::Model("no planar root joint".into()))?;
         if model.idx_v[root] != 0 {
-            return Err(Error::Model("the planar root must own velocities 0..3".into()));
+            return Err(Error::Model(
+                "the planar root must own velocities 0..3".into(),
+            ));
         }
         let mut wheel_dofs = None;
         let mut wheel_signs = [1.0, 1.0];
@@ -139,7 +141,9 @@ impl WheeledModel {
                 if model.parents[j].0 != root {
                     return Err(Error::invalid(field, "must be a child of the planar base"));
                 }
-                let axis = model.joint_types[j].axis().filter(|_| model.joint_types[j].is_revolute());
+                let axis = model.joint_types[j]
+                    .axis()
+                    .filter(|_| model.joint_types[j].is_revolute());
                 let axis = axis.ok_or_else(|| {
                     Error::invalid(field.clone(), "must be a revolute (continuous) joint")
                 })?;
@@ -216,14 +220,22 @@ impl WheeledModel {
     /// Names of the reduced velocities `[v, omega, <arm joint>_dot…]`.
     pub fn v_names(&self) -> Vec<String> {
         let mut names = vec!["v".to_string(), "omega".into()];
-        names.extend(self.arm_dofs.iter().map(|&i| format!("{}_dot", self.dof_name(i))));
+        names.extend(
+            self.arm_dofs
+                .iter()
+                .map(|&i| format!("{}_dot", self.dof_name(i))),
+        );
         names
     }
 
     /// Names of the inputs `[tau_left, tau_right, tau_<arm joint>…]`.
     pub fn u_names(&self) -> Vec<String> {
         let mut names = vec!["tau_left".to_string(), "tau_right".into()];
-        names.extend(self.arm_dofs.iter().map(|&i| format!("tau_{}", self.dof_name(i))));
+        names.extend(
+            self.arm_dofs
+                .iter()
+                .map(|&i| format!("tau_{}", self.dof_name(i))),
+        );
         names
     }
 
@@ -556,8 +568,7 @@ pub fn reduced_dynamics(
         gravity: &wd.gravity,
         force: &wd.force,
     };
-    wd.reduced
-        .compute(&terms, &wd.basis, &wd.basis_dot, v_r)?;
+    wd.reduced.compute(&terms, &wd.basis, &wd.basis_dot, v_r)?;
     if let Some(c) = coriolis {
         wd.reduced
             .compute_coriolis(&wd.data.mass_matrix, c, &wd.basis, &wd.basis_dot);

@@ -53,9 +53,7 @@ pub fn m2(params: PlatformArmParams) -> Result<ClosedFormSystem<PlatformArm, 5, 
 }
 
 /// The chapter's model m5 (platform + capstan + two-link arm), `q = [x, y, φ, φt, θ1, θ12]`.
-pub fn m5(
-    params: MobileManipulatorParams,
-) -> Result<ClosedFormSystem<MobileManipulator, 6, 5, 5>> {
+pub fn m5(params: MobileManipulatorParams) -> Result<ClosedFormSystem<MobileManipulator, 6, 5, 5>> {
     let model = MobileManipulator::new(params)?;
     let [a, b] = platform_v_names(model.velocity);
     Ok(ClosedFormSystem {
@@ -152,7 +150,10 @@ where
         let qd = self.qdot(q, v);
         let h = lagrange::mass_matrix(&self.model, &qv);
         let qa: [f64; N] = q.try_into().expect("length checked by the caller");
-        Ok((0.5 * qd.dot(&(h * qd)), self.model.potential_generic::<f64>(&qa)))
+        Ok((
+            0.5 * qd.dot(&(h * qd)),
+            self.model.potential_generic::<f64>(&qa),
+        ))
     }
     fn input_power(&mut self, q: &[f64], v: &[f64], u: &[f64]) -> Result<f64> {
         let qv = SVector::<f64, N>::from_column_slice(q);

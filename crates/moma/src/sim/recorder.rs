@@ -110,14 +110,24 @@ impl Recorder {
     pub fn to_csv(&self) -> String {
         let mut out = String::new();
         out.push('t');
-        for n in self.q_names.iter().chain(&self.v_names).chain(&self.u_names) {
+        for n in self
+            .q_names
+            .iter()
+            .chain(&self.v_names)
+            .chain(&self.u_names)
+        {
             out.push(',');
             out.push_str(n);
         }
         out.push_str(",kinetic,potential,work,energy_error,residual\n");
         for i in 0..self.len() {
             let mut line = format!("{:e}", self.times[i]);
-            for x in self.q_row(i).iter().chain(self.v_row(i)).chain(self.u_row(i)) {
+            for x in self
+                .q_row(i)
+                .iter()
+                .chain(self.v_row(i))
+                .chain(self.u_row(i))
+            {
                 line.push_str(&format!(",{x:e}"));
             }
             line.push_str(&format!(

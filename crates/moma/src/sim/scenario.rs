@@ -199,7 +199,12 @@ mod tests {
             times: vec![1.0, 0.5],
             values: vec![1.0, 2.0],
         };
-        assert!(bad.validate("u[1]").unwrap_err().to_string().contains("u[1].times"));
+        assert!(
+            bad.validate("u[1]")
+                .unwrap_err()
+                .to_string()
+                .contains("u[1].times")
+        );
         assert!(
             ChannelProfile::Constant { value: f64::NAN }
                 .validate("u[2]")

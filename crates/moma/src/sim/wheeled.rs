@@ -144,14 +144,22 @@ pub fn simulate(
     if !(options.record_interval.is_finite() && options.record_interval > 0.0) {
         return Err(Error::invalid(
             "record interval",
-            format!("must be a positive finite number, got {}", options.record_interval),
+            format!(
+                "must be a positive finite number, got {}",
+                options.record_interval
+            ),
         ));
     }
     for (i, ch) in input.channels.iter().enumerate() {
         ch.validate(&format!("inputs[{i}]"))?;
     }
     let n_samples = (options.duration / options.record_interval).ceil() as usize + 1;
-    let mut recorder = Recorder::new(system.q_names(), system.v_names(), system.u_names(), n_samples);
+    let mut recorder = Recorder::new(
+        system.q_names(),
+        system.v_names(),
+        system.u_names(),
+        n_samples,
+    );
     let mut x = vec![0.0; nq + nv + 1];
     x[..nq].copy_from_slice(q0);
     x[nq..nq + nv].copy_from_slice(v0);
@@ -159,11 +167,11 @@ pub fn simulate(
     let (t0, p0) = system.energy(q0, v0)?;
     let mut monitor = Monitor::new(options.limits, t0, p0);
     let record = |system: &mut dyn ReducedSystem,
-                      recorder: &mut Recorder,
-                      monitor: &mut Monitor,
-                      t: f64,
-                      x: &[f64],
-                      u: &mut [f64]|
+                  recorder: &mut Recorder,
+                  monitor: &mut Monitor,
+                  t: f64,
+                  x: &[f64],
+                  u: &mut [f64]|
      -> Result<()> {
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         input.eval(t, u);

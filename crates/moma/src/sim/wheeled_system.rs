@@ -85,14 +85,22 @@ impl ReducedSystem for WheeledSystem {
     }
     fn input_power(&mut self, q: &[f64], v: &[f64], u: &[f64]) -> Result<f64> {
         self.load(q, v);
-        crate::mobile::wheeled::admissible_velocity_basis(&self.robot, &self.q, &mut self.data.basis);
+        crate::mobile::wheeled::admissible_velocity_basis(
+            &self.robot,
+            &self.q,
+            &mut self.data.basis,
+        );
         self.data.basis.mul_to(&self.v, &mut self.data.qdot);
         crate::mobile::wheeled::generalized_force(&self.robot, &self.q, u, &mut self.data.force);
         Ok(self.data.force.dot(&self.data.qdot))
     }
     fn constraint_residual(&mut self, q: &[f64], v: &[f64]) -> Result<f64> {
         self.load(q, v);
-        crate::mobile::wheeled::admissible_velocity_basis(&self.robot, &self.q, &mut self.data.basis);
+        crate::mobile::wheeled::admissible_velocity_basis(
+            &self.robot,
+            &self.q,
+            &mut self.data.basis,
+        );
         crate::mobile::wheeled::constraint_matrix(&self.robot, &self.q, &mut self.data.constraint);
         self.data.basis.mul_to(&self.v, &mut self.data.qdot);
         let mut r2 = 0.0;
