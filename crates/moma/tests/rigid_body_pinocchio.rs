@@ -193,6 +193,15 @@ fn run(file: &str, root: RootJoint) {
             );
         }
     }
+    // the default end-effector ("last link") is the shared reference files' last_frame
+    if !file.starts_with("tiago") {
+        let last = j["states"][0]["last_frame"]["name"].as_str().unwrap();
+        assert_eq!(
+            model.frames[model.last_link_frame().0].name,
+            last,
+            "last link"
+        );
+    }
     let mut data = Data::new(&model);
     let mut worst: f64 = 0.0;
     for (si, s) in j["states"].as_array().unwrap().iter().enumerate() {
@@ -301,4 +310,17 @@ fn panda_planar_matches_pinocchio() {
 #[test]
 fn ur5_matches_pinocchio() {
     run("ur5.json", RootJoint::Fixed);
+}
+
+/// TIAGo (48 joints + base: continuous wheels, prismatic torso, 29 fixed joints, point
+/// masses) on a planar base, against Pinocchio (`generate_tiago.py`).
+#[test]
+fn tiago_planar_matches_pinocchio() {
+    run("tiago_planar.json", RootJoint::Planar);
+}
+
+/// TIAGo on a free-flyer base.
+#[test]
+fn tiago_freeflyer_matches_pinocchio() {
+    run("tiago_freeflyer.json", RootJoint::FreeFlyer);
 }

@@ -1,10 +1,225 @@
-//! PLACEHOLDER: replaced by the work that implements this subcommand.
+//! `moma bench ROBOT.urdf --root R [--frame NAME] [--json]`: median nanoseconds per call
+//! of the rigid-body algorithms, with the method of the Pinocchio benchmark
+//! (`bench/pinocchio/pinocchio_bench.cpp`): 100 seeded random states (q = neutral ⊕ dq,
+//! dq ~ π·U(−1, 1), v, a, τ ~ U(−1, 1)); each batch calls the algorithm once per state;
+//! WARMUP batches are discarded, then the median per-call time over NBATCH batches is
+//! reported (env `NBATCH`, default 300; `WARMUP`, default 30).
 
-/// Arguments (to be defined).
+use super::inspect::{load_model, parse_root};
+use anyhow::{Context, Result};
+use moma::dynamics;
+use moma::kinematics::{self, ReferenceFrame};
+use moma::multibody::{Data, RootJoint};
+use nalgebra::{DVector, Matrix6xX};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `moma bench`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// The robot description (URDF).
+    pub urdf: PathBuf,
+    /// Root joint: fixed, planar or free-flyer.
+    #[arg(long, value_parser = parse_root)]
+    pub root: RootJoint,
+    /// Frame for the Jacobian benchmark (default: the last link).
+    #[arg(long)]
+    pub frame: Option<String>,
+    /// Label printed as "robot" (default: the URDF robot name).
+    #[arg(long)]
+    pub label: Option<String>,
+    /// Zero gravity (as the Pinocchio benchmark does for free-floating robots).
+    #[arg(long)]
+    pub zero_gravity: bool,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the JSON report to this file (atomically).
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+}
 
-/// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("this subcommand is not implemented yet")
+const NSTATES: usize = 100;
+
+#[derive(Serialize)]
+struct Times {
+    rnea: f64,
+    crba: f64,
+    aba: f64,
+    fk: f64,
+    frame_jacobian: f64,
+    nle: f64,
+    gravity: f64,
+    fk_frames: f64,
+    joint_jacobians: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    robot: String,
+    root: String,
+    frame: String,
+    nq: usize,
+    nv: usize,
+    nstates: usize,
+    nbatch: usize,
+    warmup: usize,
+    median_ns: Times,
+    min_ns: Times,
+}
+
+fn env_usize(name: &str, default: usize) -> usize {
+    std::env::var(name)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
+/// (median, min) per-call nanoseconds of `f(i)` over batches of `NSTATES` calls.
+fn time(nbatch: usize, warmup: usize, mut f: impl FnMut(usize) -> f64) -> (f64, f64) {
+    let mut per_call = Vec::with_capacity(nbatch);
+    let mut sink = 0.0;
+    for b in 0..warmup + nbatch {
+        let t0 = Instant::now();
+        for i in 0..NSTATES {
+            sink += f(i);
+        }
+        let dt = t0.elapsed().as_secs_f64() * 1e9 / NSTATES as f64;
+        if b >= warmup {
+            per_call.push(dt);
+        }
+    }
+    black_box(sink);
+    per_call.sort_by(f64::total_cmp);
+    (per_call[per_call.len() / 2], per_call[0])
+}
+
+/// Runs `moma bench`.
+pub fn run(args: Args) -> Result<()> {
+    let mut model = load_model(&args.urdf, args.root)?;
+    if args.zero_gravity {
+        model.gravity = nalgebra::Vector3::zeros();
+    }
+    let fid = match &args.frame {
+        Some(name) => model
+            .frame_id(name)
+            .with_context(|| format!("{}: --frame", args.urdf.display()))?,
+        None => model.last_link_frame(),
+    };
+    let (nq, nv) = (model.nq, model.nv);
+    let mut rng = ChaCha8Rng::seed_from_u64(42);
+    let q0 = kinematics::neutral(&model);
+    let mut qs = Vec::new();
+    let (mut vs, mut as_, mut ts) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..NSTATES {
+        let dq = DVector::from_fn(nv, |_, _| {
+            std::f64::consts::PI * rng.random_range(-1.0..1.0)
+        });
+        let mut q = q0.clone();
+        kinematics::integrate(&model, &q0, &dq, &mut q);
+        qs.push(q);
+        vs.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
+        as_.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
+        ts.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
+    }
+    let nbatch = env_usize("NBATCH", 300).max(1);
+    let warmup = env_usize("WARMUP", 30);
+    let mut data = Data::new(&model);
+    let mut jac = Matrix6xX::zeros(nv);
+    let m = &model;
+    let last = model.njoints - 1;
+    let rnea = time(nbatch, warmup, |i| {
+        dynamics::rnea(m, &mut data, &qs[i], &vs[i], &as_[i])[0]
+    });
+    let nle = time(nbatch, warmup, |i| {
+        dynamics::nonlinear_effects(m, &mut data, &qs[i], &vs[i])[0]
+    });
+    let gravity = time(nbatch, warmup, |i| {
+        dynamics::gravity_torque(m, &mut data, &qs[i])[0]
+    });
+    let crba = time(nbatch, warmup, |i| {
+        dynamics::crba(m, &mut data, &qs[i])[(0, 0)]
+    });
+    let aba = time(nbatch, warmup, |i| {
+        dynamics::aba(m, &mut data, &qs[i], &vs[i], &ts[i])[0]
+    });
+    let fk = time(nbatch, warmup, |i| {
+        kinematics::forward_kinematics(m, &mut data, &qs[i]);
+        data.world_from_joint[last].translation[0]
+    });
+    let fk_frames = time(nbatch, warmup, |i| {
+        kinematics::frames_forward_kinematics(m, &mut data, &qs[i]);
+        data.world_from_frame[fid.0].translation[0]
+    });
+    let frame_jacobian = time(nbatch, warmup, |i| {
+        kinematics::frame_jacobian(
+            m,
+            &mut data,
+            &qs[i],
+            fid,
+            ReferenceFrame::LocalWorldAligned,
+            &mut jac,
+        );
+        jac[(0, nv - 1)]
+    });
+    let joint_jacobians = time(nbatch, warmup, |i| {
+        kinematics::compute_joint_jacobians(m, &mut data, &qs[i]);
+        data.joint_jacobians[(0, nv - 1)]
+    });
+    let pick = |f: fn(&(f64, f64)) -> f64| Times {
+        rnea: f(&rnea),
+        crba: f(&crba),
+        aba: f(&aba),
+        fk: f(&fk),
+        frame_jacobian: f(&frame_jacobian),
+        nle: f(&nle),
+        gravity: f(&gravity),
+        fk_frames: f(&fk_frames),
+        joint_jacobians: f(&joint_jacobians),
+    };
+    let report = Report {
+        robot: args.label.clone().unwrap_or_else(|| model.name.clone()),
+        root: model.root.to_string(),
+        frame: model.frames[fid.0].name.clone(),
+        nq,
+        nv,
+        nstates: NSTATES,
+        nbatch,
+        warmup,
+        median_ns: pick(|x| x.0),
+        min_ns: pick(|x| x.1),
+    };
+    if let Some(p) = &args.output {
+        let mut text = serde_json::to_string_pretty(&report).context("serialising JSON output")?;
+        text.push('\n');
+        crate::output::write_all_atomic(&[(p.clone(), text.into_bytes())])?;
+    }
+    if args.json {
+        return crate::output::print_json(&report);
+    }
+    println!(
+        "# moma bench {} (root {}, frame {}, nq {nq}, nv {nv}; {NSTATES} states, {nbatch} batches after {warmup} warm-up)",
+        report.robot, report.root, report.frame
+    );
+    println!("# robot algorithm nq nv median_ns min_ns");
+    let med = &report.median_ns;
+    let min = &report.min_ns;
+    for (name, a, b) in [
+        ("rnea", med.rnea, min.rnea),
+        ("nle", med.nle, min.nle),
+        ("gravity", med.gravity, min.gravity),
+        ("crba", med.crba, min.crba),
+        ("aba", med.aba, min.aba),
+        ("fk", med.fk, min.fk),
+        ("fk_frames", med.fk_frames, min.fk_frames),
+        ("frame_jacobian", med.frame_jacobian, min.frame_jacobian),
+        ("joint_jacobians", med.joint_jacobians, min.joint_jacobians),
+    ] {
+        println!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
+    }
+    Ok(())
 }

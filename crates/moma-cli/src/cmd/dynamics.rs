@@ -1,10 +1,232 @@
-//! PLACEHOLDER: replaced by the work that implements this subcommand.
+//! `moma dynamics ROBOT.urdf --root R --states STATES.json [--frame NAME]
+//! [--gravity GX,GY,GZ] [--output OUT.json]`: RNEA, CRBA, ABA, nonlinear effects, gravity,
+//! CoM, centroidal map and one frame's placement and Jacobian for each state. Schema:
+//! `docs/cli.md`.
 
-/// Arguments (to be defined).
+use super::inspect::{load_model, parse_root};
+use anyhow::{Context, Result, bail};
+use moma::dynamics;
+use moma::kinematics::{self, ReferenceFrame};
+use moma::multibody::{Data, RootJoint};
+use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `moma dynamics`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// The robot description (URDF).
+    pub urdf: PathBuf,
+    /// Root joint: fixed, planar (q = [x, y, θ], v world axes) or free-flyer.
+    #[arg(long, value_parser = parse_root)]
+    pub root: RootJoint,
+    /// States file: `{"states": [{"q": [..], "v": [..], "a": [..], "tau": [..]}, ..]}`.
+    #[arg(long)]
+    pub states: PathBuf,
+    /// Frame for the placement and Jacobian outputs (default: the last link).
+    #[arg(long)]
+    pub frame: Option<String>,
+    /// Gravity in world axes, m/s² (default 0,0,-9.81).
+    #[arg(long, value_parser = parse_gravity, allow_hyphen_values = true)]
+    pub gravity: Option<Vector3<f64>>,
+    /// Write the JSON here (atomically) instead of standard output.
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+}
 
-/// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("this subcommand is not implemented yet")
+fn parse_gravity(s: &str) -> Result<Vector3<f64>, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!(
+            "expected GX,GY,GZ (three comma-separated numbers), got '{s}'"
+        ));
+    }
+    let mut g = [0.0; 3];
+    for (k, p) in parts.iter().enumerate() {
+        let x: f64 = p
+            .trim()
+            .parse()
+            .map_err(|_| format!("component {k} '{p}' is not a number"))?;
+        if !x.is_finite() {
+            return Err(format!("component {k} '{p}' is not finite"));
+        }
+        g[k] = x;
+    }
+    Ok(Vector3::from(g))
+}
+
+/// One input state.
+#[derive(Deserialize)]
+pub(crate) struct StateIn {
+    q: Vec<f64>,
+    #[serde(default)]
+    v: Option<Vec<f64>>,
+    #[serde(default)]
+    a: Option<Vec<f64>>,
+    #[serde(default)]
+    tau: Option<Vec<f64>>,
+}
+
+/// The states file.
+#[derive(Deserialize)]
+pub(crate) struct StatesIn {
+    states: Vec<StateIn>,
+}
+
+#[derive(Serialize)]
+struct StateOut {
+    rnea_tau: Vec<f64>,
+    #[serde(rename = "crba_M")]
+    crba_m: Vec<Vec<f64>>,
+    aba_ddq: Vec<f64>,
+    nle: Vec<f64>,
+    gravity_torque: Vec<f64>,
+    com: [f64; 3],
+    #[serde(rename = "centroidal_map_Ag")]
+    centroidal_map_ag: Vec<Vec<f64>>,
+    kinetic_energy: f64,
+    potential_energy: f64,
+    position: [f64; 3],
+    rotation: [[f64; 3]; 3],
+    quaternion_xyzw: [f64; 4],
+    jacobian_local_world_aligned: Vec<Vec<f64>>,
+}
+
+#[derive(Serialize)]
+struct Output {
+    robot: String,
+    source: String,
+    root: String,
+    nq: usize,
+    nv: usize,
+    gravity: [f64; 3],
+    frame: String,
+    states: Vec<StateOut>,
+}
+
+fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    m.row_iter().map(|r| r.iter().copied().collect()).collect()
+}
+
+fn rows6(m: &Matrix6xX<f64>) -> Vec<Vec<f64>> {
+    m.row_iter().map(|r| r.iter().copied().collect()).collect()
+}
+
+/// Reads and validates a states file against the model sizes.
+pub(crate) fn read_states(path: &Path) -> Result<StatesIn> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read states file", path.display()))?;
+    serde_json::from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: invalid states file (expected {{\"states\": [{{\"q\": [..], \"v\": [..], \"a\": [..], \"tau\": [..]}}]}}): {e}",
+            path.display()
+        )
+    })
+}
+
+/// Runs `moma dynamics`.
+pub fn run(args: Args) -> Result<()> {
+    let mut model = load_model(&args.urdf, args.root)?;
+    if let Some(g) = args.gravity {
+        model.gravity = g;
+    }
+    let fid = match &args.frame {
+        Some(name) => model
+            .frame_id(name)
+            .with_context(|| format!("{}: --frame", args.urdf.display()))?,
+        None => model.last_link_frame(),
+    };
+    let states = read_states(&args.states)?;
+    if states.states.is_empty() {
+        bail!("{}: 'states' is empty", args.states.display());
+    }
+    let nv = model.nv;
+    let mut data = Data::new(&model);
+    let mut out_states = Vec::with_capacity(states.states.len());
+    for (k, s) in states.states.iter().enumerate() {
+        let src = format!("{}: states[{k}]", args.states.display());
+        kinematics::check_state(
+            &model,
+            &src,
+            Some(&s.q),
+            s.v.as_deref(),
+            s.a.as_deref(),
+            s.tau.as_deref(),
+        )?;
+        let q = DVector::from_column_slice(&s.q);
+        let get = |x: &Option<Vec<f64>>| {
+            x.as_ref()
+                .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x))
+        };
+        let (v, a, tau) = (get(&s.v), get(&s.a), get(&s.tau));
+        let rnea_tau = dynamics::rnea(&model, &mut data, &q, &v, &a)
+            .as_slice()
+            .to_vec();
+        let crba_m = rows(dynamics::crba(&model, &mut data, &q));
+        let aba_ddq = dynamics::aba(&model, &mut data, &q, &v, &tau)
+            .as_slice()
+            .to_vec();
+        if let Some(i) = aba_ddq.iter().position(|x| !x.is_finite()) {
+            bail!(
+                "{src}: forward dynamics gave a non-finite acceleration at v[{i}] (singular mass matrix: massless subtree?)"
+            );
+        }
+        let nle = dynamics::nonlinear_effects(&model, &mut data, &q, &v)
+            .as_slice()
+            .to_vec();
+        let gravity_torque = dynamics::gravity_torque(&model, &mut data, &q)
+            .as_slice()
+            .to_vec();
+        let ag = rows6(dynamics::centroidal_momentum_matrix(&model, &mut data, &q));
+        let com = data.com;
+        let kinetic_energy = dynamics::kinetic_energy(&model, &mut data, &q, &v);
+        let potential_energy = dynamics::potential_energy(&model, &mut data, &q);
+        let mut jac = Matrix6xX::zeros(nv);
+        kinematics::frame_jacobian(
+            &model,
+            &mut data,
+            &q,
+            fid,
+            ReferenceFrame::LocalWorldAligned,
+            &mut jac,
+        );
+        let m = data.world_from_frame[fid.0];
+        let r = m.rotation;
+        let quat = m.quaternion();
+        let c = quat.as_ref().coords;
+        let st = StateOut {
+            rnea_tau,
+            crba_m,
+            aba_ddq,
+            nle,
+            gravity_torque,
+            com: [com.x, com.y, com.z],
+            centroidal_map_ag: ag,
+            kinetic_energy,
+            potential_energy,
+            position: [m.translation.x, m.translation.y, m.translation.z],
+            rotation: [
+                [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+            ],
+            quaternion_xyzw: [c[0], c[1], c[2], c[3]],
+            jacobian_local_world_aligned: rows6(&jac),
+        };
+        out_states.push(st);
+    }
+    let out = Output {
+        robot: model.name.clone(),
+        source: args.urdf.display().to_string(),
+        root: model.root.to_string(),
+        nq: model.nq,
+        nv: model.nv,
+        gravity: [model.gravity.x, model.gravity.y, model.gravity.z],
+        frame: model.frames[fid.0].name.clone(),
+        states: out_states,
+    };
+    match &args.output {
+        Some(p) => crate::output::write_json(p, &out),
+        None => crate::output::print_json(&out),
+    }
 }

@@ -1,13 +1,19 @@
 //! Composite rigid-body algorithm.
 
 use crate::kinematics::{assert_sizes, update_joint_placement};
-use crate::multibody::{Data, Model};
+use crate::multibody::{Data, JointType, Model};
+use crate::spatial::Motion;
 use nalgebra::{DMatrix, DVector};
 
 /// Joint-space inertia matrix H(q) (nv × nv, symmetric positive definite; both triangles
 /// filled) by the composite rigid-body algorithm, returned and stored in
-/// `data.mass_matrix`. Also fills `data.parent_from_joint` and
-/// `data.composite_inertias` (joint frames).
+/// `data.mass_matrix`.
+///
+/// Runs in the world frame: forward kinematics (`data.world_from_joint`), composite
+/// inertias summed in world coordinates (`data.composite_inertias`), then
+/// H[j, i] = S_jᵀ·(I^c_i S_i) for every ancestor j of i, with no per-ancestor transform.
+/// Entries coupling joints on different branches are structurally zero: they are zeroed
+/// by `Data::new` and never written (do not write into `data.mass_matrix` yourself).
 ///
 /// # Panics
 /// If q has the wrong length or `data` was not made for `model`.
@@ -24,51 +30,59 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &DVector<f64>) -> &'d DMat
     let nv = model.nv;
     for i in 1..n {
         update_joint_placement(model, data, i, qs);
-        data.composite_inertias[i] = model.inertias[i];
-    }
-    let mm = data.mass_matrix.as_mut_slice();
-    mm.fill(0.0);
-    for i in (1..n).rev() {
+        let p = model.parents[i].0;
+        let m = if p == 0 {
+            data.parent_from_joint[i]
+        } else {
+            data.world_from_joint[p].compose(&data.parent_from_joint[i])
+        };
+        data.world_from_joint[i] = m;
+        data.composite_inertias[i] = model.inertias[i].transformed(&m);
         let iv = model.idx_v[i];
-        let nvi = model.nvs[i];
-        let yi = data.composite_inertias[i];
-        for k in 0..nvi {
-            data.fcol[k] = yi.mul_motion(&data.s[iv + k]);
-        }
-        let mut j = i;
-        loop {
-            let jv = model.idx_v[j];
-            let jt = &model.joint_types[j];
-            if model.nvs[j] == 1 {
-                for k in 0..nvi {
-                    let val = jt.project_force_1dof(&data.fcol[k]);
-                    mm[(iv + k) * nv + jv] = val;
-                    mm[jv * nv + iv + k] = val;
+        data.sw[iv] = match model.joint_types[i] {
+            // world column of an axis-aligned revolute joint: [p × ω; ω], ω a column of R
+            JointType::RevoluteX | JointType::RevoluteY | JointType::RevoluteZ => {
+                let c = match model.joint_types[i] {
+                    JointType::RevoluteX => 0,
+                    JointType::RevoluteY => 1,
+                    _ => 2,
+                };
+                let w = m.rotation.column(c).into_owned();
+                Motion::new(m.translation.cross(&w), w)
+            }
+            _ => {
+                for k in 1..model.nvs[i] {
+                    data.sw[iv + k] = m.act_motion(&data.s[iv + k]);
                 }
-            } else {
-                for l in 0..model.nvs[j] {
-                    let s = data.s[jv + l];
-                    for k in 0..nvi {
-                        let val = s.dot(&data.fcol[k]);
-                        mm[(iv + k) * nv + jv + l] = val;
-                        mm[(jv + l) * nv + iv + k] = val;
-                    }
-                }
+                m.act_motion(&data.s[iv])
             }
-            let pj = model.parents[j].0;
-            if pj == 0 {
-                break;
-            }
-            let x = data.parent_from_joint[j];
-            for k in 0..nvi {
-                data.fcol[k] = x.act_force(&data.fcol[k]);
-            }
-            j = pj;
-        }
+        };
+    }
+    for i in (2..n).rev() {
         let p = model.parents[i].0;
         if p > 0 {
-            let yp = yi.transformed(&data.parent_from_joint[i]);
-            data.composite_inertias[p] += yp;
+            let yi = data.composite_inertias[i];
+            data.composite_inertias[p] += yi;
+        }
+    }
+    let mm = data.mass_matrix.as_mut_slice();
+    for i in 1..n {
+        let iv = model.idx_v[i];
+        let yi = data.composite_inertias[i];
+        for k in 0..model.nvs[i] {
+            let f = yi.mul_motion(&data.sw[iv + k]);
+            let col = iv + k;
+            let mut j = i;
+            while j != 0 {
+                let jv = model.idx_v[j];
+                let nvj = if j == i { k + 1 } else { model.nvs[j] };
+                for l in 0..nvj {
+                    let val = data.sw[jv + l].dot(&f);
+                    mm[col * nv + jv + l] = val;
+                    mm[(jv + l) * nv + col] = val;
+                }
+                j = model.parents[j].0;
+            }
         }
     }
     &data.mass_matrix

@@ -6,7 +6,10 @@
 //! * Every link gets a `body` frame and every moving joint a `joint` frame; frame 0 is
 //!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`.
 //! * A link without `<inertial>` is massless. A present inertial must have a finite mass
-//!   ≥ 0 and, when the mass is positive, a positive-definite rotational inertia.
+//!   ≥ 0 and a positive (semi-)definite rotational inertia: an eigenvalue below
+//!   −[`INERTIA_TOLERANCE`] is an error; zero eigenvalues are accepted (point masses and
+//!   thin rods exist in real robot descriptions, e.g. TIAGo's tool links, and Pinocchio
+//!   loads them).
 //! * `floating`, `planar` and `spherical` joints inside the URDF are rejected with a clear
 //!   error (choose the robot's base with [`RootJoint`] instead).
 //! * Mimic joints are loaded as independent joints (the `<mimic>` tag is ignored).
@@ -44,6 +47,10 @@ fn finite_pose(p: &urdf_rs::Pose) -> bool {
     p.xyz.0.iter().chain(p.rpy.0.iter()).all(|x| x.is_finite())
 }
 
+/// Most negative eigenvalue (kg·m²) tolerated in a link's rotational inertia: round-off in
+/// published URDFs (e.g. TIAGo's 1 mg antenna links have eigenvalues of −3.5e-8).
+pub const INERTIA_TOLERANCE: f64 = 1e-6;
+
 /// Validates a link's inertial; `None` for a massless link.
 fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)>> {
     let inl = &link.inertial;
@@ -66,26 +73,16 @@ fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)
     let ic = Matrix3::new(
         i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
     );
-    if m == 0.0 {
-        if vals.iter().all(|x| *x == 0.0) {
-            return Ok(None);
-        }
-        // massless with a rotational inertia: accept only a positive semi-definite one
-        let e = ic.symmetric_eigenvalues();
-        if e.min() < -1e-12 * e.max().abs().max(1.0) {
-            return Err(err(format!(
-                "inertia matrix is not positive semi-definite (eigenvalues {:.3e}, {:.3e}, {:.3e})",
-                e[0], e[1], e[2]
-            )));
-        }
-    } else {
-        let e = ic.symmetric_eigenvalues();
-        if e.min() <= 0.0 {
-            return Err(err(format!(
-                "inertia matrix is not positive definite (eigenvalues {:.3e}, {:.3e}, {:.3e}; mass {m})",
-                e[0], e[1], e[2]
-            )));
-        }
+    if m == 0.0 && vals.iter().all(|x| *x == 0.0) {
+        return Ok(None);
+    }
+    let e = ic.symmetric_eigenvalues();
+    if e.min() < -INERTIA_TOLERANCE {
+        return Err(err(format!(
+            "inertia matrix is not positive definite (eigenvalues {:.3e}, {:.3e}, {:.3e} kg·m²; \
+             only round-off down to -{INERTIA_TOLERANCE:e} is tolerated)",
+            e[0], e[1], e[2]
+        )));
     }
     Ok(Some((
         Inertia::new(m, Vector3::zeros(), ic),
@@ -158,6 +155,11 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
         }
         parent_joint_of[c] = Some(k);
         children[p].push(k);
+    }
+    // Children in the order Pinocchio (urdfdom) visits them: sorted by joint name. This
+    // makes the joint order, hence the layout of q and v, identical to Pinocchio's.
+    for c in &mut children {
+        c.sort_by(|&x, &y| robot.joints[x].name.cmp(&robot.joints[y].name));
     }
     let roots: Vec<usize> = (0..robot.links.len())
         .filter(|&l| parent_joint_of[l].is_none())

@@ -67,7 +67,7 @@ pub fn frame_jacobian_from_kinematics(
     let fr = &model.frames[frame.0];
     let m = data.world_from_joint[fr.parent_joint.0].compose(&fr.placement);
     data.world_from_frame[frame.0] = m;
-    out.fill(0.0);
+    out.as_mut_slice().fill(0.0);
     let mut j = fr.parent_joint.0;
     while j != 0 {
         let mj = &data.world_from_joint[j];

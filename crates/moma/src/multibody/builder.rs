@@ -349,7 +349,9 @@ impl ModelBuilder {
                 joint_of_dof[idx_v[i] + k] = JointIndex(i);
             }
         }
+        let last_link = last_body_frame(&self.frames);
         Ok(Model {
+            last_link,
             name: self.name,
             nq,
             nv,
@@ -373,4 +375,11 @@ impl ModelBuilder {
             root: self.root,
         })
     }
+}
+
+fn last_body_frame(frames: &[Frame]) -> FrameIndex {
+    frames
+        .iter()
+        .rposition(|f| f.kind == FrameKind::Body)
+        .map_or(FrameIndex(frames.len().saturating_sub(1)), FrameIndex)
 }

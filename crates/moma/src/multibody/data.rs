@@ -62,8 +62,8 @@ pub struct Data {
     pub composite_inertias: Vec<Inertia>,
     /// Motion subspace columns S (local), one per velocity coordinate (nv).
     pub(crate) s: Vec<Motion>,
-    /// Scratch: per-dof forces (nv).
-    pub(crate) fcol: Vec<Force>,
+    /// Scratch: motion subspace columns in the world frame (nv).
+    pub(crate) sw: Vec<Motion>,
     /// Scratch: velocity-product accelerations c_i (ABA) per joint.
     pub(crate) c: Vec<Motion>,
     /// Scratch: articulated inertias (ABA).
@@ -123,7 +123,7 @@ impl Data {
             potential_energy: 0.0,
             composite_inertias: vec![Inertia::zero(); n],
             s,
-            fcol: vec![Force::zero(); nv.max(6)],
+            sw: vec![Motion::zero(); nv],
             c: vec![Motion::zero(); n],
             ia: vec![ArticulatedInertia::default(); n],
             pa: vec![Force::zero(); n],

@@ -139,6 +139,9 @@ pub struct Model {
     pub joint_of_dof: Vec<JointIndex>,
     /// The root joint kind.
     pub root: RootJoint,
+    /// The "last link" frame, default end-effector of the CLI (see
+    /// [`Model::last_link_frame`]).
+    pub last_link: FrameIndex,
 }
 
 impl Model {
@@ -185,26 +188,13 @@ impl Model {
         self.inertias.iter().skip(1).map(Inertia::mass).sum()
     }
 
-    /// The "last link": the body frame deepest in the frame tree (most ancestors), the first
-    /// in frame order on ties. Used as the default end-effector frame by the CLI.
+    /// The "last link": the last body (link) frame in frame order. URDF models are
+    /// traversed depth-first with child joints sorted by name, as Pinocchio does, so this
+    /// is the frame `model.frames[-1]` Pinocchio would report (e.g. `panda_hand_tcp`,
+    /// `tool0` on UR5). Used as the default end-effector frame by the CLI.
     #[must_use]
     pub fn last_link_frame(&self) -> FrameIndex {
-        let mut best = (0usize, 0usize);
-        for (i, f) in self.frames.iter().enumerate() {
-            if f.kind != FrameKind::Body {
-                continue;
-            }
-            let mut depth = 0;
-            let mut k = i;
-            while k != 0 && depth <= self.frames.len() {
-                k = self.frames[k].parent_frame.0;
-                depth += 1;
-            }
-            if depth > best.1 {
-                best = (i, depth);
-            }
-        }
-        FrameIndex(best.0)
+        self.last_link
     }
 
     /// True if `ancestor` is `joint` or one of its ancestors.

@@ -109,15 +109,44 @@ impl Inertia {
         let r = &a_from_b.rotation;
         let p = &a_from_b.translation;
         let rh = r * self.first_moment;
-        let rir = r * self.inertia_origin * r.transpose();
-        // I_o' = R I_o Rᵀ − [Rh]×[p]× − [p]×[Rh]× − m [p]×²
-        let px = skew(p);
-        let rhx = skew(&rh);
-        let cross = rhx * px;
+        let m = self.mass;
+        let mp = p * m;
+        // I_o' = R I_o Rᵀ − ([Rh]×[p]× + [p]×[Rh]×) − m [p]×², with [a]×[b]× = b aᵀ − (a·b) 1:
+        //      = R I_o Rᵀ − (p (Rh)ᵀ + (Rh) pᵀ) − m p pᵀ + (2 Rh·p + m |p|²) 1.
+        // Only the 6 unique entries are computed: (R S Rᵀ)_ij = r_i · (S r_j).
+        let s = &self.inertia_origin;
+        let (s00, s01, s02, s11, s12, s22) = (
+            s[(0, 0)],
+            s[(0, 1)],
+            s[(0, 2)],
+            s[(1, 1)],
+            s[(1, 2)],
+            s[(2, 2)],
+        );
+        let row = |i: usize| Vector3::new(r[(i, 0)], r[(i, 1)], r[(i, 2)]);
+        let (r0, r1, r2) = (row(0), row(1), row(2));
+        let su = |v: &Vector3<f64>| {
+            Vector3::new(
+                s00 * v.x + s01 * v.y + s02 * v.z,
+                s01 * v.x + s11 * v.y + s12 * v.z,
+                s02 * v.x + s12 * v.y + s22 * v.z,
+            )
+        };
+        let (u0, u1, u2) = (su(&r0), su(&r1), su(&r2));
+        let diag = 2.0 * rh.dot(p) + mp.dot(p);
+        let e = |ri: &Vector3<f64>, uj: &Vector3<f64>, i: usize, j: usize| {
+            ri.dot(uj) - p[i] * rh[j] - rh[i] * p[j] - mp[i] * p[j]
+        };
+        let a00 = e(&r0, &u0, 0, 0) + diag;
+        let a01 = e(&r0, &u1, 0, 1);
+        let a02 = e(&r0, &u2, 0, 2);
+        let a11 = e(&r1, &u1, 1, 1) + diag;
+        let a12 = e(&r1, &u2, 1, 2);
+        let a22 = e(&r2, &u2, 2, 2) + diag;
         Inertia {
-            mass: self.mass,
-            first_moment: rh + p * self.mass,
-            inertia_origin: rir - cross - cross.transpose() - px * px * self.mass,
+            mass: m,
+            first_moment: rh + mp,
+            inertia_origin: Matrix3::new(a00, a01, a02, a01, a11, a12, a02, a12, a22),
         }
     }
 
