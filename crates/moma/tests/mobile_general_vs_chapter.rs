@@ -197,3 +197,63 @@ fn m5_general_equals_chapter() {
         compare(&wm, case, qj, &t, &pm, "H");
     }
 }
+
+#[test]
+fn wheel_rate_kinematics_match_the_chapter_m3_reference() {
+    use moma::mobile::wheeled::{frame_velocity_world, velocity_from_wheel_rates};
+    let data = load("m3_diffdrive_kinematics.json");
+    for case in data["cases"].as_array().unwrap() {
+        let g = &case["params"];
+        let f = |k: &str| g[k].as_f64().unwrap();
+        // m3 is m5's geometry; masses are irrelevant to kinematics.
+        let p: MobileManipulatorParams = serde_json::from_value(serde_json::json!({
+            "M_cart": 20.0, "I_p": 2.0, "I_c": 0.01, "d": f("d"), "L": f("L"), "r_w": f("r_w"),
+            "b": f("b"), "m1": 2.0, "m2": 1.5, "M1": 0.3, "M2": 0.2, "L1": f("L1"), "L2": f("L2"),
+            "L1cm": 0.5 * f("L1"), "L2cm": 0.5 * f("L2"), "k1": 0.1, "k2": 0.1, "k1y": 0.05,
+            "k2y": 0.05, "g": 9.81
+        }))
+        .unwrap();
+        let wm = m5_model(&p).unwrap();
+        let mut wd = WheeledData::new(&wm);
+        let q = vector(&case["state"]["q"]);
+        let rates = vector(&case["inputs"]["v"]);
+        let mut qdot = DVector::zeros(wm.nv());
+        velocity_from_wheel_rates(
+            &wm,
+            &q,
+            [rates[0], rates[1]],
+            &rates.as_slice()[2..],
+            &mut qdot,
+        );
+        closev(
+            "qdot from wheel rates",
+            &qdot,
+            &vector(&case["outputs"]["qdot"]),
+            1e-12,
+        );
+        let xdot = vector(&case["outputs"]["Xdot"]);
+        let b = frame_velocity_world(&wm, &mut wd, &q, &qdot, wm.model.frame_id("phi1").unwrap());
+        assert!(
+            (b[0] - xdot[0]).abs() < 1e-12 && (b[1] - xdot[1]).abs() < 1e-12,
+            "B velocity"
+        );
+        assert!(b[2].abs() < 1e-12);
+        let e = frame_velocity_world(&wm, &mut wd, &q, &qdot, wm.model.frame_id("tip").unwrap());
+        for k in 0..3 {
+            assert!(
+                (e[k] - xdot[2 + k]).abs() < 1e-12,
+                "E velocity {k}: {} vs {}",
+                e[k],
+                xdot[2 + k]
+            );
+        }
+        // The arm base B is a platform point L ahead of the CM.
+        let pb = moma::mobile::wheeled::platform_point_velocity(
+            &wm.base.drive,
+            q[2],
+            [p.L, 0.0],
+            [rates[0], rates[1]],
+        );
+        assert!((pb[0] - xdot[0]).abs() < 1e-12 && (pb[1] - xdot[1]).abs() < 1e-12);
+    }
+}

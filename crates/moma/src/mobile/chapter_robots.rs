@@ -16,7 +16,9 @@ use crate::closed_form::m5_mobile_manipulator::MobileManipulatorParams;
 use crate::error::Result;
 use crate::mobile::diff_drive::DiffDrive;
 use crate::mobile::wheeled::{WheeledBase, WheeledModel};
-use crate::multibody::{JointIndex, JointLimits, JointType, ModelBuilder, RootJoint};
+use crate::multibody::{
+    FrameIndex, FrameKind, JointIndex, JointLimits, JointType, ModelBuilder, RootJoint,
+};
 use crate::spatial::{Inertia, SE3};
 
 fn platform(b: &mut ModelBuilder, mass: f64, yaw_inertia: f64) -> Result<JointIndex> {
@@ -102,7 +104,8 @@ pub fn m2_model(p: &PlatformArmParams) -> Result<WheeledModel> {
 /// vertical, about the capstan's y axis) + elbow (θ2, about −y so that link 2 is at
 /// θ12 = θ1 − θ2 from the vertical); slender links with pitch radius of gyration k_i and
 /// k_iy about the in-plane normal, lumped masses M1 at the elbow and M2 at the tip.
-/// Gravity is `(0, 0, −g)`.
+/// Gravity is `(0, 0, −g)`. The capstan axis B is the joint frame `phi1`; the end
+/// effector E is the operational frame `tip`.
 pub fn m5_model(p: &MobileManipulatorParams) -> Result<WheeledModel> {
     p.validate()?;
     let mut b = ModelBuilder::new("m5_mobile_manipulator_3d");
@@ -152,6 +155,15 @@ pub fn m5_model(p: &MobileManipulatorParams) -> Result<WheeledModel> {
         elbow,
         &Inertia::point_mass(p.M2, Vector3::new(0.0, 0.0, p.L2)),
         &SE3::identity(),
+    )?;
+    // The end effector E (link 2's tip) as an operational frame named "tip".
+    let parent_frame = FrameIndex(b.nframes() - 1);
+    b.add_frame(
+        "tip",
+        elbow,
+        parent_frame,
+        SE3::from_translation(Vector3::new(0.0, 0.0, p.L2)),
+        FrameKind::Operational,
     )?;
     WheeledModel::new(
         b.build()?,
