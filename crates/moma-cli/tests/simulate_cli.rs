@@ -47,6 +47,7 @@ fn default_scenario_runs_without_an_argument() {
         "energy.svg",
         "energy_error.svg",
         "residual.svg",
+        "multipliers.svg",
     ] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
@@ -56,6 +57,12 @@ fn default_scenario_runs_without_an_argument() {
     assert_eq!(s["samples"].as_u64().unwrap(), 501);
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     assert!(csv.starts_with("t,x,y,theta,left_wheel_joint"));
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with("residual,lambda_0,lambda_1,lambda_2")
+    );
     assert_eq!(csv.lines().count(), 502);
     // The platform moved along a curve.
     let fq: Vec<f64> = s["final_q"]

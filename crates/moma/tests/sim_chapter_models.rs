@@ -71,6 +71,14 @@ fn check_trajectories(file: &str, model: &str, tol_abs: f64) {
                 );
             }
         }
+        // The recorded multiplier at t = 0 is the reference λ.
+        let lam0 = case["outputs"]["lambda"]
+            .as_f64()
+            .unwrap_or_else(|| floats(&case["outputs"]["lambda"])[0]);
+        assert!(
+            (rec.lambda_row(0)[0] - lam0).abs() < 1e-9 * (1.0 + lam0.abs()),
+            "{model} λ"
+        );
         // Energy balance with inputs: T + V − E0 − W stays at integration accuracy.
         assert!(
             res.monitor.relative_energy_error() < 1e-8,

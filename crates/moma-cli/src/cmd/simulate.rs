@@ -352,6 +352,25 @@ fn render(
             dir.join("energy_error.svg"),
             line_chart("Energy balance error", "t (s)", "J", &drift).into_bytes(),
         ));
+        if !rec.lambda_names.is_empty() {
+            let k = rec.lambda_names.len();
+            let forces: Vec<Series> = rec
+                .lambda_names
+                .iter()
+                .enumerate()
+                .map(|(j, name)| series(t, name, col(&|i| rec.lambda[i * k + j])))
+                .collect();
+            files.push((
+                dir.join("multipliers.svg"),
+                line_chart(
+                    "Constraint multipliers (−λ₀: lateral ground force on the axle)",
+                    "t (s)",
+                    "λ (N)",
+                    &forces,
+                )
+                .into_bytes(),
+            ));
+        }
         let res = vec![series(
             t,
             "log10 |C q̇|",

@@ -166,4 +166,17 @@ where
         let qd = self.qdot(q, v);
         Ok((0..N).map(|i| c[i] * qd[i]).sum::<f64>().abs())
     }
+    fn nk(&self) -> usize {
+        1
+    }
+    fn multipliers(&mut self, q: &[f64], v: &[f64], u: &[f64], out: &mut [f64]) -> Result<()> {
+        let ev = lagrange::evaluate_constrained(
+            &self.model,
+            &SVector::<f64, N>::from_column_slice(q),
+            &SVector::<f64, NV>::from_column_slice(v),
+            &SVector::<f64, NU>::from_column_slice(u),
+        )?;
+        out[0] = ev.lambda;
+        Ok(())
+    }
 }

@@ -27,6 +27,10 @@ pub struct Recorder {
     pub work: Vec<f64>,
     /// Constraint residual ‖C(q) q̇‖ per sample.
     pub residual: Vec<f64>,
+    /// Names of the Lagrange multipliers (empty if not recorded).
+    pub lambda_names: Vec<String>,
+    /// Lagrange multipliers λ, `times.len() × lambda_names.len()` row-major.
+    pub lambda: Vec<f64>,
 }
 
 impl Recorder {
@@ -50,6 +54,8 @@ impl Recorder {
             potential: Vec::with_capacity(capacity),
             work: Vec::with_capacity(capacity),
             residual: Vec::with_capacity(capacity),
+            lambda_names: Vec::new(),
+            lambda: Vec::new(),
         }
     }
 
@@ -99,13 +105,23 @@ impl Recorder {
         &self.u[i * n..(i + 1) * n]
     }
 
+    /// Multipliers λ of sample `i` (empty if not recorded).
+    pub fn lambda_row(&self, i: usize) -> &[f64] {
+        let n = self.lambda_names.len();
+        if n == 0 || self.lambda.len() < (i + 1) * n {
+            return &[];
+        }
+        &self.lambda[i * n..(i + 1) * n]
+    }
+
     /// Energy balance error of sample `i`: `(T + V) − (T₀ + V₀) − W` (J). Zero for an
     /// exact solution, because the constraint forces do no work.
     pub fn energy_error(&self, i: usize) -> f64 {
         (self.kinetic[i] + self.potential[i]) - (self.kinetic[0] + self.potential[0]) - self.work[i]
     }
 
-    /// The trajectory as CSV text: a header `t,q…,v…,u…,kinetic,potential,work,energy_error,residual`
+    /// The trajectory as CSV text: a header
+    /// `t,q…,v…,u…,kinetic,potential,work,energy_error,residual[,lambda…]`
     /// and one line per sample (full precision).
     pub fn to_csv(&self) -> String {
         let mut out = String::new();
@@ -119,7 +135,12 @@ impl Recorder {
             out.push(',');
             out.push_str(n);
         }
-        out.push_str(",kinetic,potential,work,energy_error,residual\n");
+        out.push_str(",kinetic,potential,work,energy_error,residual");
+        for n in &self.lambda_names {
+            out.push(',');
+            out.push_str(n);
+        }
+        out.push('\n');
         for i in 0..self.len() {
             let mut line = format!("{:e}", self.times[i]);
             for x in self
@@ -131,13 +152,17 @@ impl Recorder {
                 line.push_str(&format!(",{x:e}"));
             }
             line.push_str(&format!(
-                ",{:e},{:e},{:e},{:e},{:e}\n",
+                ",{:e},{:e},{:e},{:e},{:e}",
                 self.kinetic[i],
                 self.potential[i],
                 self.work[i],
                 self.energy_error(i),
                 self.residual[i]
             ));
+            for x in self.lambda_row(i) {
+                line.push_str(&format!(",{x:e}"));
+            }
+            line.push('\n');
             out.push_str(&line);
         }
         out

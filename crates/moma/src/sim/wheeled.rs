@@ -45,6 +45,11 @@ pub trait ReducedSystem {
     fn input_power(&mut self, q: &[f64], v: &[f64], u: &[f64]) -> Result<f64>;
     /// Constraint residual `‖C(q) N_C(q) v‖`.
     fn constraint_residual(&mut self, q: &[f64], v: &[f64]) -> Result<f64>;
+    /// Number of constraint rows k (length of the multiplier vector).
+    fn nk(&self) -> usize;
+    /// Lagrange multipliers λ (k) at `(q, v)` under input `u`; for the no-side-slip row,
+    /// `−λ` is the lateral ground force on the axle along `e_lat = (−sin θ, cos θ)`.
+    fn multipliers(&mut self, q: &[f64], v: &[f64], u: &[f64], out: &mut [f64]) -> Result<()>;
 }
 
 /// The ODE `ẋ = f(t, x)` of a [`ReducedSystem`] under an [`InputProfile`], state
@@ -160,6 +165,9 @@ pub fn simulate(
         system.u_names(),
         n_samples,
     );
+    let nk = system.nk();
+    recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
+    let mut lam = vec![0.0; nk];
     let mut x = vec![0.0; nq + nv + 1];
     x[..nq].copy_from_slice(q0);
     x[nq..nq + nv].copy_from_slice(v0);
@@ -171,13 +179,16 @@ pub fn simulate(
                   monitor: &mut Monitor,
                   t: f64,
                   x: &[f64],
-                  u: &mut [f64]|
+                  u: &mut [f64],
+                  lam: &mut [f64]|
      -> Result<()> {
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         input.eval(t, u);
         let (kin, pot) = system.energy(q, v)?;
         let res = system.constraint_residual(q, v)?;
         monitor.check(t, x, kin, pot, x[nq + nv], res)?;
+        system.multipliers(q, v, u, lam)?;
+        recorder.lambda.extend_from_slice(lam);
         recorder.push(Sample {
             t,
             q,
@@ -190,7 +201,15 @@ pub fn simulate(
         });
         Ok(())
     };
-    record(system, &mut recorder, &mut monitor, 0.0, &x, &mut u)?;
+    record(
+        system,
+        &mut recorder,
+        &mut monitor,
+        0.0,
+        &x,
+        &mut u,
+        &mut lam,
+    )?;
     let stats;
     match options.integrator {
         IntegratorSettings::Rk4 { dt } => {
@@ -207,7 +226,15 @@ pub fn simulate(
                 }
                 if (s + 1) % every == 0 || s + 1 == steps {
                     let t1 = (s + 1) as f64 * h;
-                    record(system, &mut recorder, &mut monitor, t1, &x, &mut u)?;
+                    record(
+                        system,
+                        &mut recorder,
+                        &mut monitor,
+                        t1,
+                        &x,
+                        &mut u,
+                        &mut lam,
+                    )?;
                     progress(t1);
                 }
             }
@@ -233,7 +260,15 @@ pub fn simulate(
                     let mut ode = ReducedOde::new(&mut *system, input)?;
                     dp.integrate_to(&mut ode, &mut t, &mut x, te)?;
                 }
-                record(system, &mut recorder, &mut monitor, te, &x, &mut u)?;
+                record(
+                    system,
+                    &mut recorder,
+                    &mut monitor,
+                    te,
+                    &x,
+                    &mut u,
+                    &mut lam,
+                )?;
                 progress(te);
                 if te >= options.duration {
                     break;

@@ -117,4 +117,21 @@ impl ReducedSystem for WheeledSystem {
         }
         Ok(r2.sqrt())
     }
+    fn nk(&self) -> usize {
+        self.robot.nk()
+    }
+    fn multipliers(&mut self, q: &[f64], v: &[f64], u: &[f64], out: &mut [f64]) -> Result<()> {
+        self.load(q, v);
+        crate::mobile::wheeled::reduced_forward_dynamics(
+            &self.robot,
+            &mut self.data,
+            &self.q,
+            &self.v,
+            u,
+        )?;
+        let lam =
+            crate::mobile::wheeled::lagrange_multipliers(&self.robot, &mut self.data, &self.q)?;
+        out.copy_from_slice(lam.as_slice());
+        Ok(())
+    }
 }
