@@ -279,6 +279,13 @@ fn unforced_run(track: bool, d: f64) {
         res.monitor.max_residual
     );
     assert!(res.recorder.kinetic[0] > 0.1, "the run must actually move");
+    // Independent of the potential's datum: the drift relative to the initial kinetic energy.
+    let t0 = res.recorder.kinetic[0];
+    let rel_t = res.monitor.max_energy_error / t0;
+    assert!(
+        rel_t < 1e-9,
+        "track={track} d={d}: drift relative to T0 {rel_t:e}"
+    );
 }
 
 #[test]

@@ -130,6 +130,8 @@ fn unforced_energy_drift_below_1e9_over_10_s_and_residual_below_1e12() {
         let res = simulate(sys.as_mut(), &zero, &q0, &v0, &opts, &mut |_| {}).unwrap();
         let drift = res.monitor.relative_energy_error();
         assert!(drift < 1e-9, "{model}: relative energy drift {drift:e}");
+        let rel_t = res.monitor.max_energy_error / res.recorder.kinetic[0];
+        assert!(rel_t < 1e-9, "{model}: drift relative to T0 {rel_t:e}");
         assert!(
             res.monitor.max_residual < 1e-12,
             "{model}: residual {:e}",

@@ -638,7 +638,8 @@ pub fn energy(
 
 // ---- wheel-rate kinematics (chapter 5.20–5.28) -------------------------------------------
 
-/// Full velocity `q̇ = N_C(q) v_r` from wheel rates `[φ̇_L, φ̇_R]` and arm rates.
+/// Full velocity `q̇ = N_C(q) v_r` from wheel rates `[φ̇_L, φ̇_R]` and arm rates
+/// (chapter 5.21–5.27). Allocates its temporaries; meant for analysis, not hot loops.
 pub fn velocity_from_wheel_rates(
     wm: &WheeledModel,
     q: &DVector<f64>,

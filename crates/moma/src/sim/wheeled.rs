@@ -250,7 +250,7 @@ pub fn simulate(
             opts.atol = atol;
             opts.blowup = options.limits.blowup;
             opts.max_step = max_step.unwrap_or(f64::INFINITY).min(options.duration);
-            opts.max_steps = usize::MAX / 2;
+            opts.max_steps = 50_000_000;
             let mut dp = DormandPrince45::new(nq + nv + 1, opts)?;
             let mut t = 0.0;
             let mut k = 1usize;
