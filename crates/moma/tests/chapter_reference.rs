@@ -55,6 +55,15 @@ fn check_file(name: &str) {
         c.remove("outputs");
         let t = c["trajectory"]["t"].clone();
         c.insert("trajectory".into(), serde_json::json!({ "t": t }));
+        if let Some(ctl) = c.get_mut("control").and_then(|v| v.as_object_mut()) {
+            for k in [
+                "x_d0", "xdot_d0", "xddot_d0", "tau_x0", "u0", "e0", "edot0", "W0",
+            ] {
+                ctl.remove(k);
+            }
+            let t = ctl["closed_loop"]["t"].clone();
+            ctl.insert("closed_loop".into(), serde_json::json!({ "t": t }));
+        }
     }
     let out = evaluate_document(&input, DEFAULT_TOLERANCE).unwrap();
     let (mut worst_alg, mut worst_traj) = (0.0f64, 0.0f64);
@@ -116,4 +125,37 @@ fn m4_cart_two_link_reference() {
 #[test]
 fn m5_mobile_manipulator_3d_reference() {
     check_file("m5_mobile_manipulator_3d");
+}
+
+/// A case with d = 0 is evaluated with v = [v_F, φ̇] (the chapter's v_T = d φ̇ is singular).
+#[test]
+fn zero_offset_case_uses_the_yaw_rate() {
+    let mut doc = load("m1_unicycle");
+    let case = &mut doc["cases"].as_array_mut().unwrap()[0];
+    case["params"]["d"] = serde_json::json!(0.0);
+    case["state"]["v"] = serde_json::json!([0.5, 0.8]);
+    case["trajectory"] = serde_json::json!({ "t": [0.0, 1.0] });
+    doc["cases"] = serde_json::json!([case.clone()]);
+    let out = evaluate_document(&doc, DEFAULT_TOLERANCE).unwrap();
+    let o = &out["cases"][0]["outputs"];
+    // φ̇ = v[1]; C = [−sin φ, cos φ, 0]; C q̇ = 0
+    assert!((o["qdot"][2].as_f64().unwrap() - 0.8).abs() < 1e-15);
+    assert_eq!(o["C"][0][2].as_f64().unwrap(), 0.0);
+    let q0 = &out["cases"][0]["trajectory"]["q"][0];
+    assert_eq!(q0, &doc["cases"][0]["state"]["q"]);
+}
+
+/// Errors name the case id as written (strings without quotes).
+#[test]
+fn string_ids_are_named_in_errors() {
+    let mut doc = load("m2_platform_planar_arm");
+    doc["cases"][1]["id"] = serde_json::json!("left-turn");
+    doc["cases"][1]["params"]["b"] = serde_json::json!(-0.2);
+    let e = evaluate_document(&doc, DEFAULT_TOLERANCE)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("case left-turn") && e.contains("params.b"),
+        "{e}"
+    );
 }

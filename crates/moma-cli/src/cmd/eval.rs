@@ -1,10 +1,43 @@
-//! PLACEHOLDER: replaced by the work that implements this subcommand.
+//! `moma eval CASES.json [--output OUT.json]`: evaluates the chapter's closed-form models
+//! (m1–m5) on a case file in the schema of the reference vectors and writes the same
+//! document with every case's `outputs` and `trajectory` filled in.
 
-/// Arguments (to be defined).
+use crate::output::{print_json, write_json};
+use anyhow::{Context, Result, anyhow};
+use moma::closed_form::cases::{DEFAULT_TOLERANCE, evaluate_document};
+use std::path::PathBuf;
+
+/// Arguments of `moma eval`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Case file (JSON): `model` (m1_unicycle, m2_platform_planar_arm,
+    /// m3_diffdrive_kinematics, m4_cart_two_link, m5_mobile_manipulator_3d) and `cases`
+    /// with `params`, `state`, `inputs` and optionally `trajectory.t`.
+    pub cases: PathBuf,
+    /// Output file (JSON); standard output if omitted. Written only if every case succeeds.
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Integration tolerance (rtol = atol) for trajectories.
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE)]
+    pub tol: f64,
+}
 
-/// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("this subcommand is not implemented yet")
+/// Runs `moma eval`.
+pub fn run(args: Args) -> Result<()> {
+    if !(args.tol > 0.0 && args.tol.is_finite()) {
+        return Err(anyhow!(
+            "--tol must be positive and finite, got {}",
+            args.tol
+        ));
+    }
+    let path = &args.cases;
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read case file", path.display()))?;
+    let doc: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| anyhow!("{}: malformed JSON: {e}", path.display()))?;
+    let out = evaluate_document(&doc, args.tol).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    match &args.output {
+        Some(o) => write_json(o, &out),
+        None => print_json(&out),
+    }
 }

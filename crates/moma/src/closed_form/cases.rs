@@ -10,9 +10,9 @@ use super::m1_unicycle::{Unicycle, UnicycleParams};
 use super::m2_platform_arm::{PlatformArm, PlatformArmParams};
 use super::m3_diffdrive::{DiffDrive, DiffDriveParams};
 use super::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
-use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
+use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams, TaskController};
 use crate::error::{Error, Result};
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value, json};
@@ -155,7 +155,12 @@ fn all_finite(v: &Value) -> bool {
 }
 
 /// Outputs and trajectory (keys `t` plus the state names) of one case.
-fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value, Option<Value>)> {
+#[allow(clippy::type_complexity)]
+fn evaluate_inner(
+    model: ChapterModel,
+    case: &Value,
+    tol: f64,
+) -> Result<(Value, Option<Value>, Option<Value>)> {
     let t = times(case)?;
     let traj = |names: [&str; 2], data: (Value, Value), t: &[f64]| {
         let mut m = Map::new();
@@ -182,7 +187,7 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
                 }
                 None => None,
             };
-            Ok((out, tr))
+            Ok((out, tr, None))
         }
         ChapterModel::M2PlatformArm => {
             let sys = PlatformArm::new(params::<PlatformArmParams>(case)?)?;
@@ -201,7 +206,7 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
                 }
                 None => None,
             };
-            Ok((out, tr))
+            Ok((out, tr, None))
         }
         ChapterModel::M3DiffDrive => {
             let sys = DiffDrive::new(params::<DiffDriveParams>(case)?)?;
@@ -219,7 +224,7 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
                 }
                 None => None,
             };
-            Ok((out, tr))
+            Ok((out, tr, None))
         }
         ChapterModel::M4CartTwoLink => {
             let sys = CartTwoLink::new(params::<CartTwoLinkParams>(case)?)?;
@@ -232,7 +237,7 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
                     .ok_or_else(|| Error::invalid("balanced", "expected true or false"))?;
                 let p = &sys.params;
                 let scale = p.arm_mass() * (p.L1 + p.L2);
-                if b && !sys.is_balanced(1e-9 * scale.max(1.0)) {
+                if b && !sys.is_balanced(1e-6 * scale.max(1.0)) {
                     return Err(Error::invalid(
                         "balanced",
                         format!(
@@ -255,7 +260,7 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
                 }
                 None => None,
             };
-            Ok((out, tr))
+            Ok((out, tr, None))
         }
         ChapterModel::M5MobileManipulator => {
             let sys = MobileManipulator::new(params::<MobileManipulatorParams>(case)?)?;
@@ -274,7 +279,11 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
                 }
                 None => None,
             };
-            Ok((out, tr))
+            let control = match case.get("control") {
+                Some(_) => Some(control_block(&sys, case, tol)?),
+                None => None,
+            };
+            Ok((out, tr, control))
         }
     }
 }
@@ -282,10 +291,11 @@ fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<(Value,
 /// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
 /// Errors name the case id and the field.
 pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) -> Result<Value> {
-    let id = case
-        .get("id")
-        .map(|v| v.to_string())
-        .unwrap_or_else(|| format!("#{index}"));
+    let id = match case.get("id") {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => format!("#{index}"),
+    };
     let wrap = |e: Error| match e {
         Error::InvalidInput { field, message } => Error::InvalidInput {
             field: format!("case {id}: {field}"),
@@ -308,8 +318,11 @@ pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) 
     if !case.is_object() {
         return Err(wrap(Error::invalid("case", "expected an object")));
     }
-    let (outputs, traj) = evaluate_inner(model, case, tol).map_err(wrap)?;
-    if !all_finite(&outputs) || !traj.as_ref().is_none_or(all_finite) {
+    let (outputs, traj, control) = evaluate_inner(model, case, tol).map_err(wrap)?;
+    if !all_finite(&outputs)
+        || !traj.as_ref().is_none_or(all_finite)
+        || !control.as_ref().is_none_or(all_finite)
+    {
         return Err(wrap(Error::Numerical {
             t: 0.0,
             message: "non-finite output".into(),
@@ -328,6 +341,9 @@ pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) 
             merged.insert(k, v);
         }
         obj.insert("trajectory".into(), Value::Object(merged));
+    }
+    if let Some(c) = control {
+        obj.insert("control".into(), c);
     }
     Ok(out)
 }
@@ -359,4 +375,88 @@ pub fn evaluate_document(doc: &Value, tol: f64) -> Result<Value> {
         .ok_or_else(|| Error::invalid("document", "expected a JSON object"))?
         .insert("cases".into(), Value::Array(filled));
     Ok(out)
+}
+
+fn matrix5(case: &Value, path: &[&str]) -> Result<SMatrix<f64, 5, 5>> {
+    let name = path.join(".");
+    let rows = field(case, path)?
+        .as_array()
+        .ok_or_else(|| Error::invalid(&name, "expected a 5×5 matrix (list of rows)"))?;
+    crate::error::ensure_len(&name, 5, rows.len())?;
+    let mut m = SMatrix::<f64, 5, 5>::zeros();
+    for (i, r) in rows.iter().enumerate() {
+        let row_name = format!("{name}[{i}]");
+        let r = r
+            .as_array()
+            .ok_or_else(|| Error::invalid(&row_name, "expected a row"))?;
+        crate::error::ensure_len(&row_name, 5, r.len())?;
+        for (j, x) in r.iter().enumerate() {
+            let x = x
+                .as_f64()
+                .ok_or_else(|| Error::invalid(format!("{row_name}[{j}]"), "expected a number"))?;
+            if !x.is_finite() {
+                return Err(Error::NonFinite {
+                    field: format!("{row_name}[{j}]"),
+                });
+            }
+            m[(i, j)] = x;
+        }
+    }
+    Ok(m)
+}
+
+/// The m5 `control` block: set-up preserved, controller outputs at t = 0 and the closed
+/// loop at `control.closed_loop.t` filled in.
+fn control_block(sys: &MobileManipulator, case: &Value, tol: f64) -> Result<Value> {
+    let ctl = TaskController {
+        x_ref: vector::<5>(case, &["control", "x_ref"])?,
+        amp: vector::<5>(case, &["control", "amp"])?,
+        omega: vector::<5>(case, &["control", "omega"])?,
+        kp: matrix5(case, &["control", "Kp"])?,
+        kd: matrix5(case, &["control", "Kd"])?,
+    };
+    ctl.validate()?;
+    let q0 = vector::<6>(case, &["control", "q0"])?;
+    let v0 = vector::<5>(case, &["control", "v0"])?;
+    let c0 = ctl.control(sys, 0.0, &q0, &v0)?;
+    let mut out = case["control"].as_object().cloned().unwrap_or_default();
+    for (k, v) in [
+        ("x_d0", json!(c0.x_d.as_slice())),
+        ("xdot_d0", json!(c0.xdot_d.as_slice())),
+        ("xddot_d0", json!(c0.xddot_d.as_slice())),
+        ("tau_x0", json!(c0.tau_x.as_slice())),
+        ("u0", json!(c0.u.as_slice())),
+        ("e0", json!(c0.e.as_slice())),
+        ("edot0", json!(c0.edot.as_slice())),
+        ("W0", json!(c0.w)),
+    ] {
+        out.insert(k.into(), v);
+    }
+    if case["control"]
+        .get("closed_loop")
+        .and_then(|c| c.get("t"))
+        .is_some()
+    {
+        let t = numbers(case, &["control", "closed_loop", "t"])?;
+        crate::error::ensure_finite("control.closed_loop.t", &t)?;
+        let samples = ctl.simulate(sys, &q0, &v0, &t, tol)?;
+        let mut cl = case["control"]["closed_loop"]
+            .as_object()
+            .cloned()
+            .unwrap_or_default();
+        cl.insert("t".into(), json!(t));
+        cl.insert("q".into(), rows(samples.iter().map(|s| s.q)));
+        cl.insert("v".into(), rows(samples.iter().map(|s| s.v)));
+        cl.insert("e".into(), rows(samples.iter().map(|s| s.e)));
+        cl.insert(
+            "W".into(),
+            json!(samples.iter().map(|s| s.w).collect::<Vec<_>>()),
+        );
+        cl.insert(
+            "dissipated".into(),
+            json!(samples.iter().map(|s| s.dissipated).collect::<Vec<_>>()),
+        );
+        out.insert("closed_loop".into(), Value::Object(cl));
+    }
+    Ok(Value::Object(out))
 }

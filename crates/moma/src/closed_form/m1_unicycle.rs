@@ -12,6 +12,9 @@ use crate::error::Result;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// State `(q, v)` of this model.
+pub type State = super::ModelState<3, 2>;
+
 /// Parameters of the unicycle platform (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 pub struct UnicycleParams {
@@ -115,6 +118,15 @@ impl Unicycle {
         Ok(Unicycle { params, velocity })
     }
 
+    /// The reduced ODE right-hand side `(q̇, v̇) = (N_C v, Mr⁻¹(Qr − Cr v − Gr))` at `state`.
+    pub fn state_derivative(&self, state: &State, u: &SVector<f64, 2>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.v", &state.v)?;
+        check_finite("inputs.u", u)?;
+        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        Ok(State { q, v })
+    }
+
     /// Evaluates every output at `(q, v, u)`.
     pub fn evaluate(
         &self,
@@ -153,7 +165,7 @@ impl Unicycle {
     }
 
     /// States `(q, v)` at `times` under constant `u`, from `(q0, v0)` at t = 0
-    /// (Dormand–Prince 5(4) at `rtol = atol = tol`).
+    /// (DOP853 at `rtol = atol = tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,

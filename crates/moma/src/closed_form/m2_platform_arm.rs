@@ -12,6 +12,9 @@ use crate::error::Result;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// State `(q, v)` of this model.
+pub type State = super::ModelState<5, 4>;
+
 /// Parameters of m2 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
@@ -177,6 +180,15 @@ impl PlatformArm {
         Ok(PlatformArm { params, velocity })
     }
 
+    /// The reduced ODE right-hand side `(q̇, v̇) = (N_C v, Mr⁻¹(Qr − Cr v − Gr))` at `state`.
+    pub fn state_derivative(&self, state: &State, u: &SVector<f64, 4>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.v", &state.v)?;
+        check_finite("inputs.u", u)?;
+        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        Ok(State { q, v })
+    }
+
     /// Evaluates every output at `(q, v, u)`.
     pub fn evaluate(
         &self,
@@ -217,7 +229,7 @@ impl PlatformArm {
         0.5 * ct.qdot.dot(&(h * ct.qdot))
     }
 
-    /// States `(q, v)` at `times` under constant `u` (Dormand–Prince 5(4), tolerance `tol`).
+    /// States `(q, v)` at `times` under constant `u` (DOP853, tolerance `tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,

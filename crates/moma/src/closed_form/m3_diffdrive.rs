@@ -15,9 +15,13 @@
 use super::ad::{Real, seed_all};
 use super::{Manipulability, check_finite, finite, manipulability, positive, ser, to_dmatrix};
 use crate::error::{Error, Result};
-use crate::sim::{AdaptiveOptions, DormandPrince45, OdeSystem};
+use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
+
+/// Configuration `q = [x, y, φ, φ1, θ1, θ2]` of this kinematic model (its inputs are the
+/// rates `v = [θ̇_L, θ̇_R, φ̇1, θ̇1, θ̇2]`).
+pub type Configuration = SVector<f64, 6>;
 
 /// Parameters of m3 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
@@ -197,7 +201,7 @@ impl DiffDrive {
     }
 
     /// Integrates `q̇ = N_C(q) v` with constant rates `v` from `q0` at t = 0 and returns
-    /// `(q, X)` at `times` (Dormand–Prince 5(4), tolerance `tol`).
+    /// `(q, X)` at `times` (DOP853, tolerance `tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,
@@ -209,7 +213,7 @@ impl DiffDrive {
         check_finite("state.q", q0)?;
         check_finite("inputs.v", v)?;
         let mut ode = KinematicOde { model: self, v: *v };
-        let mut dp = DormandPrince45::new(6, AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = Dop853::new(6, AdaptiveOptions::with_tolerance(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, q0.as_slice(), times)?;
         Ok(rows
             .iter()

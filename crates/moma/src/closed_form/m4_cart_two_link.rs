@@ -15,9 +15,12 @@ use super::ad::Real;
 use super::lagrange::{self, LagrangianSystem};
 use super::{check_finite, finite, nonnegative, positive, ser};
 use crate::error::Result;
-use crate::sim::{AdaptiveOptions, DormandPrince45, OdeSystem};
+use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{SMatrix, SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
+
+/// State `(q, v)` of this model (`v = q̇`).
+pub type State = super::ModelState<3, 3>;
 
 /// Parameters of m4 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
@@ -170,6 +173,17 @@ impl CartTwoLink {
         lagrange::spd_solve(&t.mass, &(u - t.h - t.gravity), "mass matrix H")
     }
 
+    /// The ODE right-hand side `(q̇, q̈)` at `state = (q, q̇)`.
+    pub fn state_derivative(&self, state: &State, u: &Vector3<f64>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.qdot", &state.v)?;
+        check_finite("inputs.u", u)?;
+        Ok(State {
+            q: state.v,
+            v: self.forward_dynamics(&state.q, &state.v, u)?,
+        })
+    }
+
     /// Evaluates every output at `(q, q̇, u)`.
     pub fn evaluate(
         &self,
@@ -218,7 +232,7 @@ impl CartTwoLink {
         0.5 * qdot.dot(&(h * qdot)) + v
     }
 
-    /// States `(q, q̇)` at `times` under constant `u` (Dormand–Prince 5(4), tolerance `tol`).
+    /// States `(q, q̇)` at `times` under constant `u` (DOP853, tolerance `tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,
@@ -233,7 +247,7 @@ impl CartTwoLink {
         check_finite("inputs.u", u)?;
         let mut ode = CartOde { model: self, u: *u };
         let x0 = [q0[0], q0[1], q0[2], qdot0[0], qdot0[1], qdot0[2]];
-        let mut dp = DormandPrince45::new(6, AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = Dop853::new(6, AdaptiveOptions::with_tolerance(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
         Ok(rows
             .iter()

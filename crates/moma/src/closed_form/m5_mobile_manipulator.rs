@@ -24,6 +24,9 @@ use crate::error::{Error, Result};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// State `(q, v)` of this model.
+pub type State = super::ModelState<6, 5>;
+
 /// Parameters of m5 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
@@ -124,6 +127,17 @@ pub fn joint_to_absolute() -> SMatrix<f64, 6, 6> {
     p[(5, 5)] = -1.0; // θ12 = θ1 − θ2
     p[(5, 4)] = 1.0;
     p
+}
+
+struct TaskCore {
+    x: SVector<f64, 5>,
+    xdot: SVector<f64, 5>,
+    j: SMatrix<f64, 5, 6>,
+    a: SMatrix<f64, 5, 5>,
+    adot: SMatrix<f64, 5, 5>,
+    hx: SMatrix<f64, 5, 5>,
+    b: SMatrix<f64, 5, 6>,
+    vm: SMatrix<f64, 6, 5>,
 }
 
 /// The m5 model.
@@ -326,20 +340,23 @@ impl MobileManipulator {
         check_finite("inputs.u", u)
     }
 
-    /// The task-space quantities from a constrained evaluation at `(q, v)`.
-    pub fn task_space(
+    /// The task-space core at `(q, v)`: `x, ẋ, J, A, Ȧ, A⁻¹, Hx, B, V` (no manipulability,
+    /// no input-dependent terms). Singular A is [`Error::Singular`].
+    fn task_core(
         &self,
         q: &SVector<f64, 6>,
         v: &SVector<f64, 5>,
-        e: &ConstrainedEvaluation<6, 5, 5>,
-    ) -> Result<TaskSpace> {
+        ct: &lagrange::ConstraintTerms<6, 5>,
+        terms: &lagrange::LagrangeTerms<6>,
+    ) -> Result<TaskCore> {
         let qa: [f64; 6] = q.as_slice().try_into().expect("length 6");
-        let qd: [f64; 6] = e.constraint.qdot.as_slice().try_into().expect("length 6");
-        let j = SMatrix::<f64, 5, 6>::from_fn(|i, k| self.task_jacobian_generic(&qa)[i][k]);
+        let qd: [f64; 6] = ct.qdot.as_slice().try_into().expect("length 6");
+        let jr = self.task_jacobian_generic(&qa);
+        let j = SMatrix::<f64, 5, 6>::from_fn(|i, k| jr[i][k]);
         let jd_raw = self.task_jacobian_generic(&seed_direction(&qa, &qd));
         let jdot = SMatrix::<f64, 5, 6>::from_fn(|i, k| jd_raw[i][k].du[0]);
-        let n = &e.constraint.basis;
-        let ndot = &e.constraint.basis_rate;
+        let n = &ct.basis;
+        let ndot = &ct.basis_rate;
         let a = j * n;
         let adot = jdot * n + j * ndot;
         let a_inv = a.try_inverse().ok_or_else(|| Error::Singular {
@@ -356,26 +373,55 @@ impl MobileManipulator {
             });
         }
         let a_inv_t = a_inv.transpose();
-        let h = &e.terms.mass;
-        let hx = a_inv_t * e.mr * a_inv;
+        let h = &terms.mass;
+        let mr = n.transpose() * h * n;
+        let hx = a_inv_t * mr * a_inv;
         let b = a_inv_t * n.transpose();
-        let vm = (h * ndot + e.terms.coriolis * n - h * n * a_inv * adot) * a_inv;
-        let x = SVector::<f64, 5>::from(self.task_generic(&qa));
-        Ok(TaskSpace {
-            x,
+        let vm = (h * ndot + terms.coriolis * n - h * n * a_inv * adot) * a_inv;
+        Ok(TaskCore {
+            x: SVector::from(self.task_generic(&qa)),
             xdot: a * v,
-            xddot: a * e.vdot + adot * v,
-            J: j,
-            A: a,
-            Adot: adot,
-            Hx: hx,
-            B: b,
-            V: vm,
-            BV: b * vm,
-            BgG: b * e.terms.gravity,
-            BQ: b * e.q_force,
-            manipulability_A: manipulability(&to_dmatrix(&a)),
+            j,
+            a,
+            adot,
+            hx,
+            b,
+            vm,
         })
+    }
+
+    /// The task-space quantities from a constrained evaluation at `(q, v)`.
+    pub fn task_space(
+        &self,
+        q: &SVector<f64, 6>,
+        v: &SVector<f64, 5>,
+        e: &ConstrainedEvaluation<6, 5, 5>,
+    ) -> Result<TaskSpace> {
+        let c = self.task_core(q, v, &e.constraint, &e.terms)?;
+        Ok(TaskSpace {
+            x: c.x,
+            xdot: c.xdot,
+            xddot: c.a * e.vdot + c.adot * v,
+            J: c.j,
+            A: c.a,
+            Adot: c.adot,
+            Hx: c.hx,
+            B: c.b,
+            V: c.vm,
+            BV: c.b * c.vm,
+            BgG: c.b * e.terms.gravity,
+            BQ: c.b * e.q_force,
+            manipulability_A: manipulability(&to_dmatrix(&c.a)),
+        })
+    }
+
+    /// The reduced ODE right-hand side `(q̇, v̇) = (N_C v, Mr⁻¹(Qr − Cr v − Gr))` at `state`.
+    pub fn state_derivative(&self, state: &State, u: &SVector<f64, 5>) -> Result<State> {
+        check_finite("state.q", &state.q)?;
+        check_finite("state.v", &state.v)?;
+        check_finite("inputs.u", u)?;
+        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        Ok(State { q, v })
     }
 
     /// Evaluates every output at `(q, v, u)`.
@@ -427,7 +473,7 @@ impl MobileManipulator {
         0.5 * ct.qdot.dot(&(h * ct.qdot)) + pot
     }
 
-    /// States `(q, v)` at `times` under constant `u` (Dormand–Prince 5(4), tolerance `tol`).
+    /// States `(q, v)` at `times` under constant `u` (DOP853, tolerance `tol`).
     #[allow(clippy::type_complexity)]
     pub fn simulate(
         &self,
@@ -520,5 +566,198 @@ impl PfaffianSystem<6, 5, 5> for MobileManipulator {
         m[(4, 4)] = 1.0;
         m[(5, 4)] = -1.0;
         m
+    }
+}
+
+/// Task-space tracking controller of m5 (chapter 5.5, corrected): PD+ with computed
+/// feed-forward,
+/// `τ_x = Hx ẍ_d + (B V) ẋ_d + B G − Kd ė − Kp e` (B V at the actual state), actuators from
+/// `N_Cᵀ S u = Aᵀ τ_x`. With a Christoffel-consistent V the closed loop is
+/// `Hx ë + (Kd + B V) ė + Kp e = 0` and `W = ½ ėᵀ Hx ė + ½ eᵀ Kp e` has `Ẇ = −ėᵀ Kd ė`.
+/// The desired trajectory is `x_d(t) = x_ref + amp ⊙ sin(ω ⊙ t)`.
+#[derive(Clone, Debug)]
+pub struct TaskController {
+    /// Reference offset `x_ref`.
+    pub x_ref: SVector<f64, 5>,
+    /// Amplitudes.
+    pub amp: SVector<f64, 5>,
+    /// Angular frequencies ω (rad/s).
+    pub omega: SVector<f64, 5>,
+    /// Stiffness `Kp` (positive definite).
+    pub kp: SMatrix<f64, 5, 5>,
+    /// Damping `Kd` (positive definite).
+    pub kd: SMatrix<f64, 5, 5>,
+}
+
+/// Controller outputs at one instant.
+#[derive(Clone, Debug)]
+pub struct ControlOutput {
+    /// `x_d(t)`.
+    pub x_d: SVector<f64, 5>,
+    /// `ẋ_d(t)`.
+    pub xdot_d: SVector<f64, 5>,
+    /// `ẍ_d(t)`.
+    pub xddot_d: SVector<f64, 5>,
+    /// Task-space force `τ_x`.
+    pub tau_x: SVector<f64, 5>,
+    /// Actuator torques `u`.
+    pub u: SVector<f64, 5>,
+    /// `e = x − x_d`.
+    pub e: SVector<f64, 5>,
+    /// `ė = ẋ − ẋ_d`.
+    pub edot: SVector<f64, 5>,
+    /// Lyapunov function `W = ½ ėᵀ Hx ė + ½ eᵀ Kp e`.
+    pub w: f64,
+    /// Dissipation rate `ėᵀ Kd ė`.
+    pub dissipation: f64,
+}
+
+/// A closed-loop sample: state, error, W and the dissipated energy `∫ ėᵀ Kd ė dt`.
+#[derive(Clone, Debug)]
+pub struct ClosedLoopSample {
+    /// Time.
+    pub t: f64,
+    /// q.
+    pub q: SVector<f64, 6>,
+    /// v.
+    pub v: SVector<f64, 5>,
+    /// e.
+    pub e: SVector<f64, 5>,
+    /// W.
+    pub w: f64,
+    /// `∫₀ᵗ ėᵀ Kd ė dt`.
+    pub dissipated: f64,
+}
+
+impl TaskController {
+    /// Checks finiteness and that Kp, Kd are symmetric positive definite.
+    pub fn validate(&self) -> Result<()> {
+        check_finite("control.x_ref", &self.x_ref)?;
+        check_finite("control.amp", &self.amp)?;
+        check_finite("control.omega", &self.omega)?;
+        for (name, k) in [("control.Kp", &self.kp), ("control.Kd", &self.kd)] {
+            crate::error::ensure_finite(name, k.iter())?;
+            if (k - k.transpose()).norm() > 1e-12 * (1.0 + k.norm()) || k.cholesky().is_none() {
+                return Err(Error::invalid(name, "must be symmetric positive definite"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Desired `(x_d, ẋ_d, ẍ_d)` at time t.
+    pub fn desired(&self, t: f64) -> (SVector<f64, 5>, SVector<f64, 5>, SVector<f64, 5>) {
+        let s = self.omega.map(|w| (w * t).sin());
+        let c = self.omega.map(|w| (w * t).cos());
+        let x = self.x_ref + self.amp.component_mul(&s);
+        let xd = self.amp.component_mul(&self.omega).component_mul(&c);
+        let xdd = -self
+            .amp
+            .component_mul(&self.omega)
+            .component_mul(&self.omega)
+            .component_mul(&s);
+        (x, xd, xdd)
+    }
+
+    /// Controller outputs at `(t, q, v)`.
+    pub fn control(
+        &self,
+        model: &MobileManipulator,
+        t: f64,
+        q: &SVector<f64, 6>,
+        v: &SVector<f64, 5>,
+    ) -> Result<ControlOutput> {
+        let ct = lagrange::constraint_terms(model, q, v);
+        let terms = lagrange::lagrange_terms(model, q, &ct.qdot);
+        let core = model.task_core(q, v, &ct, &terms)?;
+        let (x_d, xdot_d, xddot_d) = self.desired(t);
+        let e = core.x - x_d;
+        let edot = core.xdot - xdot_d;
+        let bv = core.b * core.vm;
+        let tau_x =
+            core.hx * xddot_d + bv * xdot_d + core.b * terms.gravity - self.kd * edot - self.kp * e;
+        let ns = ct.basis.transpose() * model.input_matrix(q);
+        let u = ns
+            .lu()
+            .solve(&(core.a.transpose() * tau_x))
+            .ok_or_else(|| Error::Singular {
+                what: "actuator map N_Cᵀ S".into(),
+                detail: None,
+            })?;
+        let w = 0.5 * edot.dot(&(core.hx * edot)) + 0.5 * e.dot(&(self.kp * e));
+        Ok(ControlOutput {
+            x_d,
+            xdot_d,
+            xddot_d,
+            tau_x,
+            u,
+            e,
+            edot,
+            w,
+            dissipation: edot.dot(&(self.kd * edot)),
+        })
+    }
+
+    /// Simulates the closed loop from `(q0, v0)` at t = 0 and samples it at `times`
+    /// (DOP853 at `rtol = atol = tol`; the dissipated energy is integrated alongside).
+    pub fn simulate(
+        &self,
+        model: &MobileManipulator,
+        q0: &SVector<f64, 6>,
+        v0: &SVector<f64, 5>,
+        times: &[f64],
+        tol: f64,
+    ) -> Result<Vec<ClosedLoopSample>> {
+        self.validate()?;
+        check_finite("control.q0", q0)?;
+        check_finite("control.v0", v0)?;
+        let mut ode = ClosedLoopOde {
+            model,
+            controller: self,
+        };
+        let mut x0 = [0.0; 12];
+        x0[..6].copy_from_slice(q0.as_slice());
+        x0[6..11].copy_from_slice(v0.as_slice());
+        let mut dp = crate::sim::Dop853::new(12, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+        let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
+        rows.iter()
+            .zip(times)
+            .map(|(r, &t)| {
+                let q = SVector::<f64, 6>::from_column_slice(&r[..6]);
+                let v = SVector::<f64, 5>::from_column_slice(&r[6..11]);
+                let c = self.control(model, t, &q, &v)?;
+                Ok(ClosedLoopSample {
+                    t,
+                    q,
+                    v,
+                    e: c.e,
+                    w: c.w,
+                    dissipated: r[11],
+                })
+            })
+            .collect()
+    }
+}
+
+/// The m5 closed loop as an [`crate::sim::OdeSystem`] on `[q; v; ∫ ėᵀKdė]`.
+pub struct ClosedLoopOde<'a> {
+    /// The model.
+    pub model: &'a MobileManipulator,
+    /// The controller.
+    pub controller: &'a TaskController,
+}
+
+impl crate::sim::OdeSystem for ClosedLoopOde<'_> {
+    fn dim(&self) -> usize {
+        12
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
+        let q = SVector::<f64, 6>::from_column_slice(&x[..6]);
+        let v = SVector::<f64, 5>::from_column_slice(&x[6..11]);
+        let c = self.controller.control(self.model, t, &q, &v)?;
+        let (qd, vd) = lagrange::reduced_forward_dynamics(self.model, &q, &v, &c.u)?;
+        dx[..6].copy_from_slice(qd.as_slice());
+        dx[6..11].copy_from_slice(vd.as_slice());
+        dx[11] = c.dissipation;
+        Ok(())
     }
 }

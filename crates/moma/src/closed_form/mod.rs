@@ -183,6 +183,41 @@ pub fn manipulability(j: &DMatrix<f64>) -> Manipulability {
     }
 }
 
+/// A state `(q, v)` of a closed-form model: configuration `q` (N) and velocities `v` (NV;
+/// `v = q̇` for the unconstrained m4, admissible velocities `q̇ = N_C v` otherwise).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelState<const N: usize, const NV: usize> {
+    /// Configuration q.
+    pub q: SVector<f64, N>,
+    /// Velocities v.
+    pub v: SVector<f64, NV>,
+}
+
+impl<const N: usize, const NV: usize> ModelState<N, NV> {
+    /// A state from slices, checking lengths and finiteness (fields named `state.q`,
+    /// `state.v`).
+    pub fn from_slices(q: &[f64], v: &[f64]) -> Result<Self> {
+        Ok(ModelState {
+            q: fixed_vector("state.q", q)?,
+            v: fixed_vector("state.v", v)?,
+        })
+    }
+
+    /// The ODE state vector `[q; v]`.
+    pub fn to_ode(&self) -> Vec<f64> {
+        self.q.iter().chain(self.v.iter()).copied().collect()
+    }
+
+    /// Splits an ODE state vector `[q; v]` (length N + NV).
+    pub fn from_ode(x: &[f64]) -> Result<Self> {
+        crate::error::ensure_len("ODE state", N + NV, x.len())?;
+        Ok(ModelState {
+            q: SVector::from_column_slice(&x[..N]),
+            v: SVector::from_column_slice(&x[N..]),
+        })
+    }
+}
+
 /// The reduced dynamics of a constrained model under a constant input `u`, as an
 /// [`OdeSystem`] on the state `x = [q; v]` (`q̇ = N_C(q) v`, `v̇ = Mr⁻¹(Qr − Cr v − Gr)`).
 pub struct ReducedOde<'a, S, const N: usize, const NV: usize, const NU: usize> {
@@ -216,7 +251,7 @@ where
     }
 }
 
-/// Integrates a [`ReducedOde`] with Dormand–Prince 5(4) at `rtol = atol = tol` and returns
+/// Integrates a [`ReducedOde`] with DOP853 at `rtol = atol = tol` and returns
 /// `(q, v)` at each requested time.
 #[allow(clippy::type_complexity)]
 pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
@@ -234,8 +269,7 @@ where
     let mut x0 = vec![0.0; N + NV];
     x0[..N].copy_from_slice(q0.as_slice());
     x0[N..].copy_from_slice(v0.as_slice());
-    let mut dp =
-        crate::sim::DormandPrince45::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+    let mut dp = crate::sim::Dop853::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
     let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
     Ok(rows
         .iter()
