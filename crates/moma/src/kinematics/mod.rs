@@ -43,7 +43,7 @@ pub(crate) fn assert_nv(model: &Model, v: &DVector<f64>, what: &str) {
 
 /// Updates `data.parent_from_joint[i]` (and the q-dependent motion subspace columns) of
 /// joint `i` for configuration `q`.
-#[inline(always)]
+#[inline]
 pub(crate) fn update_joint_placement(model: &Model, data: &mut Data, i: usize, q: &[f64]) {
     let jt = &model.joint_types[i];
     let qi = &q[model.idx_q[i]..model.idx_q[i] + model.nqs[i]];
