@@ -257,3 +257,92 @@ fn wheel_rate_kinematics_match_the_chapter_m3_reference() {
         assert!((pb[0] - xdot[0]).abs() < 1e-12 && (pb[1] - xdot[1]).abs() < 1e-12);
     }
 }
+
+/// Closed form (chapter branch code) against the general multibody result at seeded
+/// random states and perturbed parameters, beyond the reference cases.
+#[test]
+fn closed_forms_equal_the_general_model_at_random_states() {
+    use moma::closed_form::lagrange::evaluate_constrained;
+    use moma::closed_form::m2_platform_arm::PlatformArm;
+    use moma::closed_form::m5_mobile_manipulator::MobileManipulator;
+    use nalgebra::SVector;
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let m2_cases = load("m2_platform_planar_arm.json");
+    let m5_cases = load("m5_mobile_manipulator_3d.json");
+    for k in 0..10 {
+        // m2
+        let mut params = m2_cases["cases"][k % 5]["params"].clone();
+        for (_, v) in params.as_object_mut().unwrap() {
+            *v = serde_json::json!(v.as_f64().unwrap() * rng.random_range(0.8..1.25));
+        }
+        let p: PlatformArmParams = serde_json::from_value(params).unwrap();
+        let cf = PlatformArm::new(p.clone()).unwrap();
+        let wm = m2_model(&p).unwrap();
+        let q = SVector::<f64, 5>::from_fn(|_, _| rng.random_range(-3.0..3.0));
+        let v = SVector::<f64, 4>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+        let u = SVector::<f64, 4>::from_fn(|_, _| rng.random_range(-2.0..2.0));
+        let ev = evaluate_constrained(&cf, &q, &v, &u).unwrap();
+        let t = t_platform(p.d, 4);
+        let qd = DVector::from_column_slice(q.as_slice());
+        let vr = t
+            .clone()
+            .lu()
+            .solve(&DVector::from_column_slice(v.as_slice()))
+            .unwrap();
+        let mut wd = WheeledData::new(&wm);
+        reduced_dynamics(&wm, &mut wd, &qd, &vr, u.as_slice(), None).unwrap();
+        let tt = t.transpose();
+        let mr_cf = DMatrix::from_fn(4, 4, |i, j| ev.mr[(i, j)]);
+        close("m2 Mr", &wd.reduced.mass_matrix, &(&tt * mr_cf * &t), 1e-10);
+        let vd_cf = DVector::from_column_slice(ev.vdot.as_slice());
+        closev("m2 vdot", &(&t * &wd.reduced.vdot), &vd_cf, 1e-10);
+        assert!((wd.reduced.lambda[0] - ev.lambda).abs() < 1e-10 * (1.0 + ev.lambda.abs()));
+        // m5 (joint coordinates on the general side)
+        let mut params = m5_cases["cases"][k % 5]["params"].clone();
+        for (name, v) in params.as_object_mut().unwrap() {
+            if name != "g" {
+                *v = serde_json::json!(v.as_f64().unwrap() * rng.random_range(0.8..1.25));
+            }
+        }
+        let p: MobileManipulatorParams = serde_json::from_value(params).unwrap();
+        let cf = MobileManipulator::new(p.clone()).unwrap();
+        let wm = m5_model(&p).unwrap();
+        let qj = DVector::from_fn(6, |_, _| rng.random_range(-3.0..3.0));
+        let pm = joint_to_absolute();
+        let q_abs = pm * SVector::<f64, 6>::from_column_slice(qj.as_slice());
+        let v = SVector::<f64, 5>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+        let u = SVector::<f64, 5>::from_fn(|_, _| rng.random_range(-2.0..2.0));
+        let ev = evaluate_constrained(&cf, &q_abs, &v, &u).unwrap();
+        let mut t = DMatrix::zeros(5, 5);
+        t[(0, 0)] = 1.0;
+        t[(1, 1)] = p.d;
+        t[(2, 1)] = 1.0;
+        t[(2, 2)] = 1.0;
+        t[(3, 3)] = 1.0;
+        t[(4, 3)] = 1.0;
+        t[(4, 4)] = -1.0;
+        let vr = t
+            .clone()
+            .lu()
+            .solve(&DVector::from_column_slice(v.as_slice()))
+            .unwrap();
+        let mut wd = WheeledData::new(&wm);
+        reduced_dynamics(&wm, &mut wd, &qj, &vr, u.as_slice(), None).unwrap();
+        let mr_cf = DMatrix::from_fn(5, 5, |i, j| ev.mr[(i, j)]);
+        close(
+            "m5 Mr",
+            &wd.reduced.mass_matrix,
+            &(t.transpose() * mr_cf * &t),
+            1e-10,
+        );
+        let vd_cf = DVector::from_column_slice(ev.vdot.as_slice());
+        closev("m5 vdot", &(&t * &wd.reduced.vdot), &vd_cf, 1e-9);
+        assert!((wd.reduced.lambda[0] - ev.lambda).abs() < 1e-9 * (1.0 + ev.lambda.abs()));
+        // Fast path too.
+        let fast = reduced_forward_dynamics(&wm, &mut wd, &qj, &vr, u.as_slice())
+            .unwrap()
+            .clone();
+        closev("m5 vdot (fast)", &(&t * fast), &vd_cf, 1e-9);
+    }
+}
