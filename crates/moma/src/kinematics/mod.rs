@@ -1,8 +1,8 @@
 //! Forward kinematics, frame placements, frame Jacobians, J̇·q̇, and the configuration
 //! manifold (`integrate`, `difference`, `neutral`, `random_configuration`).
 //!
-//! Every function takes the immutable [`Model`](crate::multibody::Model) and writes into a
-//! [`Data`](crate::multibody::Data) made for it; none allocates. Vector inputs are
+//! Every function takes the immutable [`Model`] and writes into a
+//! [`Data`] made for it; none allocates. Vector inputs are
 //! `&DVector<f64>` (q: nq entries, v and a: nv entries); a wrong length is a programming
 //! error and panics (validate user input first, e.g. with [`check_state`]).
 
