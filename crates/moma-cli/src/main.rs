@@ -8,6 +8,7 @@ mod cmd;
 mod output;
 mod svg_heatmap;
 mod svg_map;
+mod svg_plots;
 
 use clap::{Parser, Subcommand};
 

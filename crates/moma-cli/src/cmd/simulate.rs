@@ -1,10 +1,540 @@
-//! PLACEHOLDER: replaced by the work that implements this subcommand.
+//! `moma simulate [SCENARIO.toml]`: run a constrained (wheeled) simulation in reduced
+//! coordinates and write a CSV trajectory, a JSON summary and SVG plots.
+//!
+//! Without an argument the bundled `scenarios/default.toml` runs (looked up in the
+//! current directory, then next to the source tree this binary was built from). The
+//! scenario schema is documented in `docs/simulate.md`.
 
-/// Arguments (to be defined).
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use moma::sim::chapter_models::chapter_system;
+use moma::sim::monitor::MonitorLimits;
+use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
+use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate};
+use serde::{Deserialize, Serialize};
+
+use crate::output::write_all_atomic;
+use crate::svg_plots::{Series, line_chart, path_chart};
+
+/// Arguments of `moma simulate`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scenario file (TOML). Default: the bundled scenarios/default.toml.
+    pub scenario: Option<PathBuf>,
+    /// Output directory (overrides the scenario's `output.dir`).
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Do not print the summary on standard output.
+    #[arg(long)]
+    pub quiet: bool,
+}
 
-/// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("this subcommand is not implemented yet")
+/// A scenario file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Free-text name, copied into the summary.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Simulated time (s).
+    pub duration: f64,
+    /// Gravity magnitude g (m/s², acting along −z). For URDF robots it sets the model's
+    /// gravity (default 9.81); for m5 it sets `params.g` if that is absent.
+    #[serde(default)]
+    pub gravity: Option<f64>,
+    /// The robot.
+    pub robot: RobotSpec,
+    /// Initial state.
+    #[serde(default)]
+    pub initial: InitialState,
+    /// One profile per input channel (default: all zero).
+    #[serde(default)]
+    pub inputs: Option<Vec<ChannelProfile>>,
+    /// Integrator.
+    pub integrator: IntegratorSettings,
+    /// Outputs.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Monitor limits.
+    #[serde(default)]
+    pub limits: Option<MonitorLimits>,
+}
+
+/// The robot of a scenario.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RobotSpec {
+    /// A URDF model on a differential-drive base.
+    Urdf {
+        /// URDF file, relative to the scenario file.
+        urdf: PathBuf,
+        /// Differential drive: `{ r_w, b, d }`.
+        drive: DriveSpec,
+        /// Names of the `[left, right]` wheel joints to track (optional).
+        #[serde(default)]
+        wheel_joints: Option<[String; 2]>,
+        /// Passive casters (optional).
+        #[serde(default)]
+        casters: Vec<CasterSpec>,
+    },
+    /// One of the chapter's closed-form models.
+    Chapter {
+        /// `m1`, `m2` or `m5`.
+        model: String,
+        /// Its parameters (names as in docs/simulate.md).
+        params: toml::Table,
+    },
+}
+
+/// Differential-drive geometry.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveSpec {
+    /// Wheel radius (m).
+    pub r_w: f64,
+    /// Half track (m).
+    pub b: f64,
+    /// Base origin ahead of the axle midpoint (m).
+    pub d: f64,
+}
+
+/// A passive caster.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CasterSpec {
+    /// Name.
+    pub name: String,
+    /// Contact point in the base frame `[x, y]` (m).
+    pub position: [f64; 2],
+}
+
+/// Initial configuration and reduced velocity (default: zeros).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialState {
+    /// Configuration q.
+    #[serde(default)]
+    pub q: Option<Vec<f64>>,
+    /// Reduced velocity v.
+    #[serde(default)]
+    pub v: Option<Vec<f64>>,
+}
+
+/// Output settings.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Output directory (relative to the current directory).
+    #[serde(default = "default_dir")]
+    pub dir: PathBuf,
+    /// Recording interval (s).
+    #[serde(default = "default_interval")]
+    pub record_interval: f64,
+    /// Write the SVG plots.
+    #[serde(default = "default_true")]
+    pub plots: bool,
+}
+
+fn default_dir() -> PathBuf {
+    PathBuf::from("simulation-output")
+}
+fn default_interval() -> f64 {
+    0.01
+}
+fn default_true() -> bool {
+    true
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            dir: default_dir(),
+            record_interval: default_interval(),
+            plots: true,
+        }
+    }
+}
+
+/// The summary written as `summary.json`.
+#[derive(Debug, Serialize)]
+struct Summary {
+    scenario: String,
+    robot: String,
+    duration: f64,
+    samples: usize,
+    q_names: Vec<String>,
+    v_names: Vec<String>,
+    final_q: Vec<f64>,
+    final_v: Vec<f64>,
+    initial_energy: f64,
+    final_energy: f64,
+    input_work: f64,
+    max_energy_error: f64,
+    relative_energy_error: f64,
+    max_constraint_residual: f64,
+    integrator: IntegratorSettings,
+    accepted_steps: usize,
+    rejected_steps: usize,
+    rhs_evaluations: usize,
+    wall_time_s: f64,
+    steps_per_second: f64,
+    files: Vec<String>,
+}
+
+/// Finds the scenario: the argument, else `scenarios/default.toml` in the current
+/// directory, else the one in the source tree.
+fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
+    if let Some(p) = arg {
+        return Ok(p);
+    }
+    let local = PathBuf::from("scenarios/default.toml");
+    if local.is_file() {
+        return Ok(local);
+    }
+    let bundled = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/default.toml");
+    if bundled.is_file() {
+        return Ok(bundled);
+    }
+    bail!(
+        "no scenario given and no scenarios/default.toml found in the current directory or at {}",
+        bundled.display()
+    )
+}
+
+/// Parses a scenario file, with errors naming the file and the line/field.
+pub fn load_scenario(path: &Path) -> Result<Scenario> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read scenario file", path.display()))?;
+    toml::from_str(&text).map_err(|e| anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
+}
+
+fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
+    if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
+        bail!("{field}[{i}] is not a finite number");
+    }
+    Ok(())
+}
+
+/// Builds the robot of a scenario; `base_dir` resolves relative URDF paths.
+fn build_robot(
+    spec: &RobotSpec,
+    gravity: Option<f64>,
+    base_dir: &Path,
+) -> Result<(Box<dyn ReducedSystem>, String)> {
+    match spec {
+        RobotSpec::Chapter { model, params } => {
+            for (k, v) in params {
+                match v {
+                    toml::Value::Float(x) if !x.is_finite() => {
+                        bail!("robot.params.{k} is not a finite number ({x})")
+                    }
+                    toml::Value::Float(_) | toml::Value::Integer(_) => {}
+                    other => bail!(
+                        "robot.params.{k} must be a number, got {}",
+                        other.type_str()
+                    ),
+                }
+            }
+            let mut json = serde_json::to_value(params).context("robot.params")?;
+            if let (Some(g), "m5") = (gravity, model.as_str())
+                && let Some(obj) = json.as_object_mut()
+            {
+                if obj.contains_key("g") {
+                    bail!("gravity is given twice: top-level `gravity` and robot.params.g");
+                }
+                obj.insert("g".into(), serde_json::json!(g));
+            }
+            let sys = chapter_system(model, &json).context("robot")?;
+            Ok((sys, format!("chapter model {model}")))
+        }
+        RobotSpec::Urdf {
+            urdf,
+            drive,
+            wheel_joints,
+            casters,
+        } => {
+            let path = base_dir.join(urdf);
+            let sys = build_urdf_robot(&path, drive, wheel_joints.clone(), casters, gravity)?;
+            Ok((sys, format!("URDF {}", urdf.display())))
+        }
+    }
+}
+
+fn build_urdf_robot(
+    path: &Path,
+    drive: &DriveSpec,
+    wheel_joints: Option<[String; 2]>,
+    casters: &[CasterSpec],
+    gravity: Option<f64>,
+) -> Result<Box<dyn ReducedSystem>> {
+    use moma::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
+    let dd = DiffDrive::new(drive.r_w, drive.b, drive.d).context("robot.drive")?;
+    for c in casters {
+        ensure_finite(&format!("robot.casters '{}' position", c.name), &c.position)?;
+    }
+    let base = WheeledBase {
+        drive: dd,
+        casters: casters
+            .iter()
+            .map(|c| Caster {
+                name: c.name.clone(),
+                position: c.position,
+            })
+            .collect(),
+        wheel_joints,
+    };
+    let mut model = moma::io::urdf::model_from_urdf_file(path, moma::multibody::RootJoint::Planar)?;
+    let g = gravity.unwrap_or(9.81);
+    if !g.is_finite() {
+        bail!("gravity is not a finite number");
+    }
+    model.gravity = nalgebra::Vector3::new(0.0, 0.0, -g);
+    let wm = WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))?;
+    Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
+}
+
+fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
+    Series { name, x: t, y }
+}
+
+/// Builds every output file in memory.
+fn render(
+    dir: &Path,
+    result: &SimulationResult,
+    summary: &mut Summary,
+    plots: bool,
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let rec = &result.recorder;
+    let mut files = vec![(dir.join("trajectory.csv"), rec.to_csv().into_bytes())];
+    if plots {
+        let t = &rec.times;
+        let n = rec.len();
+        let col = |row: &dyn Fn(usize) -> f64| (0..n).map(row).collect::<Vec<f64>>();
+        let x = col(&|i| rec.q_row(i)[0]);
+        let y = col(&|i| rec.q_row(i)[1]);
+        files.push((
+            dir.join("path.svg"),
+            path_chart("Platform path", &x, &y).into_bytes(),
+        ));
+        let joint_names: Vec<&str> = rec.q_names.iter().skip(2).map(String::as_str).collect();
+        let joints: Vec<Series> = joint_names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| series(t, name, col(&|i| rec.q_row(i)[2 + k])))
+            .collect();
+        files.push((
+            dir.join("joints.svg"),
+            line_chart("Heading and joint angles", "t (s)", "angle (rad)", &joints).into_bytes(),
+        ));
+        let energy = vec![
+            series(t, "kinetic T", rec.kinetic.clone()),
+            series(t, "potential V", rec.potential.clone()),
+            series(t, "input work W", rec.work.clone()),
+            series(
+                t,
+                "T + V − W",
+                col(&|i| rec.kinetic[i] + rec.potential[i] - rec.work[i]),
+            ),
+        ];
+        files.push((
+            dir.join("energy.svg"),
+            line_chart("Energy balance", "t (s)", "energy (J)", &energy).into_bytes(),
+        ));
+        let drift = vec![series(
+            t,
+            "(T+V) − (T₀+V₀) − W",
+            col(&|i| rec.energy_error(i)),
+        )];
+        files.push((
+            dir.join("energy_error.svg"),
+            line_chart("Energy balance error", "t (s)", "J", &drift).into_bytes(),
+        ));
+        if !rec.lambda_names.is_empty() {
+            let k = rec.lambda_names.len();
+            let forces: Vec<Series> = rec
+                .lambda_names
+                .iter()
+                .enumerate()
+                .map(|(j, name)| series(t, name, col(&|i| rec.lambda[i * k + j])))
+                .collect();
+            files.push((
+                dir.join("multipliers.svg"),
+                line_chart(
+                    "Constraint multipliers (−λ₀: lateral ground force on the axle)",
+                    "t (s)",
+                    "λ (N)",
+                    &forces,
+                )
+                .into_bytes(),
+            ));
+        }
+        let res = vec![series(
+            t,
+            "log10 |C q̇|",
+            col(&|i| rec.residual[i].max(1e-20).log10()),
+        )];
+        files.push((
+            dir.join("residual.svg"),
+            line_chart("Constraint residual", "t (s)", "log10 |C q̇|", &res).into_bytes(),
+        ));
+    }
+    summary.files = files
+        .iter()
+        .map(|(p, _)| {
+            p.file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .chain(std::iter::once("summary.json".to_string()))
+        .collect();
+    let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
+    json.push('\n');
+    files.push((dir.join("summary.json"), json.into_bytes()));
+    Ok(files)
+}
+
+/// Runs `moma simulate`.
+pub fn run(args: Args) -> Result<()> {
+    let path = resolve_scenario(args.scenario)?;
+    let sc = load_scenario(&path)?;
+    let ctx = |what: &str| format!("{}: {what}", path.display());
+    if !(sc.duration.is_finite() && sc.duration > 0.0) {
+        bail!(
+            "{}",
+            ctx(&format!(
+                "duration must be a positive finite number, got {}",
+                sc.duration
+            ))
+        );
+    }
+    if let Some(g) = sc.gravity
+        && !g.is_finite()
+    {
+        bail!("{}", ctx("gravity is not a finite number"));
+    }
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    let (mut system, robot_name) =
+        build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
+    let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
+    let q0 = sc.initial.q.clone().unwrap_or_else(|| vec![0.0; nq]);
+    let v0 = sc.initial.v.clone().unwrap_or_else(|| vec![0.0; nv]);
+    if q0.len() != nq {
+        bail!(
+            "{}",
+            ctx(&format!(
+                "initial.q: expected {nq} values ({}), got {}",
+                system.q_names().join(", "),
+                q0.len()
+            ))
+        );
+    }
+    if v0.len() != nv {
+        bail!(
+            "{}",
+            ctx(&format!(
+                "initial.v: expected {nv} values ({}), got {}",
+                system.v_names().join(", "),
+                v0.len()
+            ))
+        );
+    }
+    ensure_finite("initial.q", &q0).with_context(|| ctx("initial state"))?;
+    ensure_finite("initial.v", &v0).with_context(|| ctx("initial state"))?;
+    let input = match &sc.inputs {
+        None => InputProfile::zero(nu),
+        Some(ch) => {
+            if ch.len() != nu {
+                bail!(
+                    "{}",
+                    ctx(&format!(
+                        "inputs: expected {nu} channels ({}), got {}",
+                        system.u_names().join(", "),
+                        ch.len()
+                    ))
+                );
+            }
+            for (i, c) in ch.iter().enumerate() {
+                c.validate(&format!("inputs[{i}]"))
+                    .with_context(|| ctx("inputs"))?;
+            }
+            InputProfile {
+                channels: ch.clone(),
+            }
+        }
+    };
+    sc.integrator
+        .validate()
+        .with_context(|| ctx("integrator"))?;
+    let options = SimulationOptions {
+        duration: sc.duration,
+        integrator: sc.integrator,
+        record_interval: sc.output.record_interval,
+        limits: sc.limits.unwrap_or_default(),
+    };
+    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
+    let bar = if std::io::stderr().is_terminal() {
+        let pb = indicatif::ProgressBar::new((sc.duration * 1000.0).round() as u64);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} simulating [{bar:40}] {pos}/{len} ms  {elapsed_precise}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        Some(pb)
+    } else {
+        None
+    };
+    let start = Instant::now();
+    let result = simulate(system.as_mut(), &input, &q0, &v0, &options, &mut |t| {
+        if let Some(pb) = &bar {
+            pb.set_position((t * 1000.0).round() as u64);
+        }
+    });
+    if let Some(pb) = &bar {
+        pb.finish_and_clear();
+    }
+    let result = result.with_context(|| ctx("simulation failed"))?;
+    let wall = start.elapsed().as_secs_f64();
+    let rec = &result.recorder;
+    let last = rec.len() - 1;
+    let steps = result.stats.accepted;
+    let mut summary = Summary {
+        scenario: sc
+            .name
+            .clone()
+            .unwrap_or_else(|| path.display().to_string()),
+        robot: robot_name,
+        duration: sc.duration,
+        samples: rec.len(),
+        q_names: rec.q_names.clone(),
+        v_names: rec.v_names.clone(),
+        final_q: rec.q_row(last).to_vec(),
+        final_v: rec.v_row(last).to_vec(),
+        initial_energy: rec.kinetic[0] + rec.potential[0],
+        final_energy: rec.kinetic[last] + rec.potential[last],
+        input_work: rec.work[last],
+        max_energy_error: result.monitor.max_energy_error,
+        relative_energy_error: result.monitor.relative_energy_error(),
+        max_constraint_residual: result.monitor.max_residual,
+        integrator: sc.integrator,
+        accepted_steps: steps,
+        rejected_steps: result.stats.rejected,
+        rhs_evaluations: result.stats.rhs_evals,
+        wall_time_s: wall,
+        steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
+        files: Vec::new(),
+    };
+    let files = render(&dir, &result, &mut summary, sc.output.plots)?;
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("{}: cannot create output directory", dir.display()))?;
+    write_all_atomic(&files)?;
+    if !args.quiet {
+        crate::output::print_json(&summary)?;
+    }
+    Ok(())
 }

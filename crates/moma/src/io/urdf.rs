@@ -22,7 +22,7 @@ use crate::multibody::{
 use crate::spatial::{Inertia, SE3};
 use crate::{Error, Result};
 use nalgebra::{Matrix3, Vector3};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 /// Loads a robot model from a URDF file with the given root joint.
@@ -113,14 +113,14 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
             ));
         }
     }
-    let mut joint_names: HashMap<&str, ()> = HashMap::new();
+    let mut joint_names: HashSet<&str> = HashSet::new();
     let mut parent_joint_of: Vec<Option<usize>> = vec![None; robot.links.len()];
     let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
     for (k, j) in robot.joints.iter().enumerate() {
         if j.name.is_empty() {
             return Err(Error::parse(src, format!("joint #{k} has no name")));
         }
-        if joint_names.insert(&j.name, ()).is_some() {
+        if !joint_names.insert(&j.name) {
             return Err(Error::parse(
                 src,
                 format!("duplicate joint name '{}'", j.name),

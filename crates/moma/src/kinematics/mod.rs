@@ -1,8 +1,8 @@
 //! Forward kinematics, frame placements, frame Jacobians, J̇·q̇, and the configuration
 //! manifold (`integrate`, `difference`, `neutral`, `random_configuration`).
 //!
-//! Every function takes the immutable [`Model`](crate::multibody::Model) and writes into a
-//! [`Data`](crate::multibody::Data) made for it; none allocates. Vector inputs are
+//! Every function takes the immutable [`Model`] and writes into a
+//! [`Data`] made for it; none allocates. Vector inputs are
 //! `&DVector<f64>` (q: nq entries, v and a: nv entries); a wrong length is a programming
 //! error and panics (validate user input first, e.g. with [`check_state`]).
 
@@ -43,7 +43,7 @@ pub(crate) fn assert_nv(model: &Model, v: &DVector<f64>, what: &str) {
 
 /// Updates `data.parent_from_joint[i]` (and the q-dependent motion subspace columns) of
 /// joint `i` for configuration `q`.
-#[inline(always)]
+#[inline]
 pub(crate) fn update_joint_placement(model: &Model, data: &mut Data, i: usize, q: &[f64]) {
     let jt = &model.joint_types[i];
     let qi = &q[model.idx_q[i]..model.idx_q[i] + model.nqs[i]];

@@ -1,8 +1,20 @@
 //! Wheeled platforms: wheel contacts, Pfaffian constraints, admissible-velocity basis,
 //! reduced dynamics, whole-body Jacobian.
 
+pub mod chapter_robots;
+pub mod constrained_aba;
 pub mod diff_drive;
+pub mod nullspace;
+pub mod reduced;
+pub mod wheeled;
 pub mod whole_body;
 
 pub use diff_drive::DiffDrive;
+pub use nullspace::NullSpaceBasis;
+pub use reduced::{JointSpaceTerms, ReducedDynamics, lagrange_multipliers_dae};
+pub use wheeled::{
+    Caster, WheeledBase, WheeledData, WheeledModel, actuation_matrix, admissible_velocity_basis,
+    admissible_velocity_basis_dot, constraint_matrix, lagrange_multipliers,
+    reduced_forward_dynamics,
+};
 pub use whole_body::whole_body_jacobian;

@@ -21,7 +21,7 @@ pub struct FrameIndex(pub usize);
 /// body and add a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum JointType {
-    /// Revolute about the joint frame's x axis; q = [θ], v = [θ̇].
+    /// Revolute about the joint frame's x axis; `q = [θ]`, `v = [θ̇]`.
     RevoluteX,
     /// Revolute about the joint frame's y axis.
     RevoluteY,
@@ -32,7 +32,7 @@ pub enum JointType {
         /// Unit rotation axis in the joint frame.
         axis: Vector3<f64>,
     },
-    /// Prismatic along the joint frame's x axis; q = [d] (m), v = [ḋ].
+    /// Prismatic along the joint frame's x axis; `q = [d]` (m), `v = [ḋ]`.
     PrismaticX,
     /// Prismatic along the joint frame's y axis.
     PrismaticY,

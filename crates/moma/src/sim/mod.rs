@@ -11,3 +11,9 @@ pub mod integrators;
 pub use integrators::{
     AdaptiveOptions, AdaptiveRk, Dop853, DormandPrince45, EmbeddedMethod, OdeSystem, Rk4, StepStats,
 };
+pub mod chapter_models;
+pub mod monitor;
+pub mod recorder;
+pub mod scenario;
+pub mod wheeled;
+pub mod wheeled_system;

@@ -6,7 +6,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3};
 /// Spatial inertia of a rigid body, expressed in some frame.
 ///
 /// Stored as the mass m, the first mass moment h = m·c (c: centre of mass in the frame)
-/// and the rotational inertia about the frame origin I_o = I_c − m [c]×² (kg·m²). This
+/// and the rotational inertia about the frame origin `I_o = I_c − m [c]×²` (kg·m²). This
 /// makes sums of inertias (composite bodies) component-wise and their action on a twist
 /// cheap. Build it from the usual (mass, centre of mass, inertia about the centre of mass)
 /// with [`Inertia::new`].

@@ -1,0 +1,277 @@
+//! Small, dependency-free SVG line charts for simulation outputs: time series with axes,
+//! ticks and a legend, and an equal-aspect x–y path plot.
+
+use std::fmt::Write;
+
+const W: f64 = 720.0;
+const H: f64 = 420.0;
+const ML: f64 = 80.0;
+const MR: f64 = 160.0;
+const MT: f64 = 40.0;
+const MB: f64 = 56.0;
+const COLORS: [&str; 8] = [
+    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+];
+
+/// One named curve `(x_i, y_i)`.
+pub struct Series<'a> {
+    /// Legend label.
+    pub name: &'a str,
+    /// Abscissae.
+    pub x: &'a [f64],
+    /// Ordinates.
+    pub y: Vec<f64>,
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// "Nice" tick positions covering `[lo, hi]`.
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let span = (hi - lo).max(1e-300);
+    let raw = span / 6.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= 7.0)
+        .unwrap_or(10.0 * mag);
+    let mut t = (lo / step).ceil() * step;
+    let mut out = Vec::new();
+    while t <= hi + 1e-9 * step && out.len() < 20 {
+        out.push(if t.abs() < 1e-12 * step { 0.0 } else { t });
+        t += step;
+    }
+    out
+}
+
+fn fmt_tick(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if x.abs() >= 1e4 || x.abs() < 1e-3 {
+        format!("{x:.1e}")
+    } else {
+        let s = format!("{x:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    if hi - lo < 1e-12 * (1.0 + lo.abs()) {
+        let pad = 0.5 * (1.0 + lo.abs()) * 1e-3;
+        return (lo - pad.max(1e-12), hi + pad.max(1e-12));
+    }
+    let pad = 0.05 * (hi - lo);
+    (lo - pad, hi + pad)
+}
+
+struct Frame {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    pw: f64,
+    ph: f64,
+}
+
+impl Frame {
+    fn px(&self, x: f64) -> f64 {
+        ML + (x - self.x0) / (self.x1 - self.x0) * self.pw
+    }
+    fn py(&self, y: f64) -> f64 {
+        MT + (1.0 - (y - self.y0) / (self.y1 - self.y0)) * self.ph
+    }
+}
+
+fn axes(svg: &mut String, f: &Frame, title: &str, xlabel: &str, ylabel: &str) {
+    let _ = write!(
+        svg,
+        r##"<rect x="{ML}" y="{MT}" width="{}" height="{}" fill="white" stroke="#333"/>"##,
+        f.pw, f.ph
+    );
+    for t in ticks(f.x0, f.x1) {
+        let x = f.px(t);
+        let _ = write!(
+            svg,
+            r##"<line x1="{x:.2}" y1="{MT}" x2="{x:.2}" y2="{}" stroke="#e5e5e5"/><text x="{x:.2}" y="{}" font-size="11" text-anchor="middle">{}</text>"##,
+            MT + f.ph,
+            MT + f.ph + 16.0,
+            fmt_tick(t)
+        );
+    }
+    for t in ticks(f.y0, f.y1) {
+        let y = f.py(t);
+        let _ = write!(
+            svg,
+            r##"<line x1="{ML}" y1="{y:.2}" x2="{}" y2="{y:.2}" stroke="#e5e5e5"/><text x="{}" y="{:.2}" font-size="11" text-anchor="end">{}</text>"##,
+            ML + f.pw,
+            ML - 6.0,
+            y + 4.0,
+            fmt_tick(t)
+        );
+    }
+    let _ = write!(
+        svg,
+        r#"<text x="{}" y="24" font-size="15" text-anchor="middle">{}</text><text x="{}" y="{}" font-size="12" text-anchor="middle">{}</text><text x="18" y="{}" font-size="12" text-anchor="middle" transform="rotate(-90 18 {})">{}</text>"#,
+        ML + f.pw / 2.0,
+        escape(title),
+        ML + f.pw / 2.0,
+        H - 12.0,
+        escape(xlabel),
+        MT + f.ph / 2.0,
+        MT + f.ph / 2.0,
+        escape(ylabel)
+    );
+}
+
+fn polyline(svg: &mut String, f: &Frame, x: &[f64], y: &[f64], color: &str) {
+    let mut pts = String::new();
+    for (a, b) in x.iter().zip(y) {
+        if a.is_finite() && b.is_finite() {
+            let _ = write!(pts, "{:.2},{:.2} ", f.px(*a), f.py(*b));
+        }
+    }
+    let _ = write!(
+        svg,
+        r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="1.6"/>"#,
+        pts.trim_end()
+    );
+}
+
+fn legend(svg: &mut String, names: &[&str]) {
+    for (i, n) in names.iter().enumerate() {
+        let y = MT + 14.0 + 18.0 * i as f64;
+        let x = W - MR + 14.0;
+        let _ = write!(
+            svg,
+            r#"<line x1="{x}" y1="{y}" x2="{}" y2="{y}" stroke="{}" stroke-width="2.5"/><text x="{}" y="{}" font-size="12">{}</text>"#,
+            x + 22.0,
+            COLORS[i % COLORS.len()],
+            x + 28.0,
+            y + 4.0,
+            escape(n)
+        );
+    }
+}
+
+/// A time-series chart of several curves sharing one y axis.
+pub fn line_chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series<'_>]) -> String {
+    let (x0, x1) = range(series.iter().flat_map(|s| s.x.iter().copied()));
+    let (y0, y1) = range(series.iter().flat_map(|s| s.y.iter().copied()));
+    let f = Frame {
+        x0,
+        x1,
+        y0,
+        y1,
+        pw: W - ML - MR,
+        ph: H - MT - MB,
+    };
+    let mut svg = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif">"#
+    );
+    axes(&mut svg, &f, title, xlabel, ylabel);
+    for (i, s) in series.iter().enumerate() {
+        polyline(&mut svg, &f, s.x, &s.y, COLORS[i % COLORS.len()]);
+    }
+    legend(&mut svg, &series.iter().map(|s| s.name).collect::<Vec<_>>());
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// The path `(x(t), y(t))` in the plane with equal axis scales, start and end marked.
+pub fn path_chart(title: &str, x: &[f64], y: &[f64]) -> String {
+    let (mut x0, mut x1) = range(x.iter().copied());
+    let (mut y0, mut y1) = range(y.iter().copied());
+    let (pw, ph) = (W - ML - MR, H - MT - MB);
+    // Equal scale: widen the narrower range.
+    let sx = (x1 - x0) / pw;
+    let sy = (y1 - y0) / ph;
+    if sx > sy {
+        let c = 0.5 * (y0 + y1);
+        let half = 0.5 * sx * ph;
+        y0 = c - half;
+        y1 = c + half;
+    } else {
+        let c = 0.5 * (x0 + x1);
+        let half = 0.5 * sy * pw;
+        x0 = c - half;
+        x1 = c + half;
+    }
+    let f = Frame {
+        x0,
+        x1,
+        y0,
+        y1,
+        pw,
+        ph,
+    };
+    let mut svg = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif">"#
+    );
+    axes(&mut svg, &f, title, "x (m)", "y (m)");
+    polyline(&mut svg, &f, x, y, COLORS[0]);
+    if let (Some(&xs), Some(&ys), Some(&xe), Some(&ye)) = (x.first(), y.first(), x.last(), y.last())
+    {
+        let _ = write!(
+            svg,
+            r##"<circle cx="{:.2}" cy="{:.2}" r="4" fill="#2ca02c"/><circle cx="{:.2}" cy="{:.2}" r="4" fill="#d62728"/>"##,
+            f.px(xs),
+            f.py(ys),
+            f.px(xe),
+            f.py(ye)
+        );
+    }
+    legend(&mut svg, &["path"]);
+    let _ = write!(
+        svg,
+        r##"<circle cx="{}" cy="{}" r="4" fill="#2ca02c"/><text x="{}" y="{}" font-size="12">start</text><circle cx="{}" cy="{}" r="4" fill="#d62728"/><text x="{}" y="{}" font-size="12">end</text>"##,
+        W - MR + 25.0,
+        MT + 32.0,
+        W - MR + 42.0,
+        MT + 36.0,
+        W - MR + 25.0,
+        MT + 50.0,
+        W - MR + 42.0,
+        MT + 54.0
+    );
+    svg.push_str("</svg>\n");
+    svg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn charts_are_well_formed_svg() {
+        let t = [0.0, 0.5, 1.0];
+        let svg = line_chart(
+            "energy",
+            "t (s)",
+            "J",
+            &[Series {
+                name: "a<b",
+                x: &t,
+                y: vec![1.0, 2.0, f64::NAN],
+            }],
+        );
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        assert!(svg.contains("a&lt;b") && !svg.contains("NaN"));
+        let p = path_chart("path", &[0.0, 1.0], &[0.0, 0.0]);
+        assert!(p.contains("polyline"));
+        let tk = ticks(0.0, 1.0);
+        assert_eq!(tk.len(), 6);
+        assert!((tk[5] - 1.0).abs() < 1e-12 && tk[0] == 0.0);
+    }
+}

@@ -1,0 +1,168 @@
+//! Reduced forward dynamics by the articulated-body algorithm with the no-side-slip
+//! constraint applied at the root.
+//!
+//! When the wheels are massless traction actuators (no tracked wheel joints), the only
+//! constraint `C = [C_b, 0]` acts on the planar root's three velocities. The ABA's
+//! backward pass condenses the whole arm onto the root: with the root's articulated
+//! inertia `IA`, bias `pA`, motion subspace `S_b` and `U = IA S_b`, the root equation is
+//!
+//! ```text
+//! D q̈_b = τ_b − S_bᵀ pA − Uᵀ a₀ − C_bᵀ λ,     D = S_bᵀ IA S_b  (3×3)
+//! ```
+//!
+//! (`a₀` the root's acceleration with `q̈_b = 0`: gravity and velocity-product terms),
+//! which is the Schur complement of the arm in `H q̈ + h + G = Q − Cᵀλ` — exact, because
+//! λ enters only the root rows. With `q̈_b = N_b v̇_b + Ṅ_b v_b` the constraint force
+//! drops out of the 2×2 system `N_bᵀ D N_b v̇_b = N_bᵀ (rhs − D Ṅ_b v_b)`; the forward pass
+//! then gives the arm accelerations as in ABA. The cost is one ABA plus a 2×2 solve.
+//!
+//! Reference for the passes: R. Featherstone, *Rigid Body Dynamics Algorithms*,
+//! Springer 2008, §7.3.
+
+use nalgebra::{DVector, Matrix3, Matrix3x2, Vector2, Vector3};
+
+use crate::error::{Error, Result};
+use crate::kinematics::update_joint_placement;
+use crate::mobile::wheeled::{
+    WheeledData, WheeledModel, admissible_velocity_basis, generalized_force,
+};
+use crate::multibody::ArticulatedInertia;
+use crate::spatial::{Force, Motion};
+
+/// Reduced forward dynamics for a wheeled model without tracked wheel joints, by the
+/// root-constrained ABA (see the module docs). Fills `wd.reduced.vdot`,
+/// `wd.reduced.qddot`, `wd.qdot`, `wd.force`. Reports [`Error::Singular`] if a joint's
+/// articulated inertia or the platform's 2×2 reduced inertia is not positive.
+pub(crate) fn root_constrained_aba(
+    wm: &WheeledModel,
+    wd: &mut WheeledData,
+    q: &DVector<f64>,
+    v_r: &DVector<f64>,
+    u: &[f64],
+) -> Result<()> {
+    debug_assert!(wm.wheel_dofs().is_none());
+    let model = &wm.model;
+    admissible_velocity_basis(wm, q, &mut wd.basis);
+    wd.basis.mul_to(v_r, &mut wd.qdot);
+    generalized_force(wm, q, u, &mut wd.force);
+    let data = &mut wd.data;
+    let (qs, vs, ts) = (q.as_slice(), wd.qdot.as_slice(), wd.force.as_slice());
+    let n = model.njoints;
+    let root = 1usize;
+    // Forward pass: velocities, bias accelerations, rigid-body inertias and biases.
+    data.v[0] = Motion::zero();
+    for i in 1..n {
+        update_joint_placement(model, data, i, qs);
+        let jt = &model.joint_types[i];
+        let p = model.parents[i].0;
+        let (iq, iv) = (model.idx_q[i], model.idx_v[i]);
+        let qi = &qs[iq..iq + model.nqs[i]];
+        let vi = &vs[iv..iv + model.nvs[i]];
+        let vj = jt.motion(qi, vi);
+        let vel = data.parent_from_joint[i].inverse_act_motion(&data.v[p]) + vj;
+        let mut c = vel.cross_motion(&vj);
+        if jt.has_bias() {
+            c += jt.bias(qi, vi);
+        }
+        data.v[i] = vel;
+        data.c[i] = c;
+        let inertia = &model.inertias[i];
+        data.ia[i] = ArticulatedInertia::from_inertia(inertia);
+        data.pa[i] = vel.cross_force(&inertia.mul_motion(&vel));
+    }
+    // Backward pass over the arm (all one-dof joints), condensing onto the root.
+    for i in (root + 1..n).rev() {
+        let iv = model.idx_v[i];
+        let ia = data.ia[i];
+        let pa = data.pa[i];
+        let p = model.parents[i].0;
+        let uvec = ia.mul_motion(&data.s[iv]);
+        let d = data.s[iv].dot(&uvec);
+        if !d.is_finite() || d <= 0.0 {
+            return Err(Error::Singular {
+                what: "reduced mass matrix Mr (articulated inertia)".into(),
+                detail: Some(format!(
+                    "joint '{}' moves no inertia (D = {d:e})",
+                    model.names[i]
+                )),
+            });
+        }
+        let dinv = 1.0 / d;
+        let uu = ts[iv] - data.s[iv].dot(&pa);
+        data.u[iv] = uvec;
+        data.uu[iv] = uu;
+        data.dinv[i][(0, 0)] = dinv;
+        let mut ia2 = ia;
+        ia2.sub_outer(&uvec, &uvec, dinv);
+        let pa2 = pa + ia2.mul_motion(&data.c[i]) + uvec * (dinv * uu);
+        let x = data.parent_from_joint[i];
+        data.ia[p] += ia2.transformed(&x);
+        data.pa[p] += x.act_force(&pa2);
+    }
+    // Root: D q̈_b = rhs − C_bᵀ λ with q̈_b = N_b v̇_b + Ṅ_b v_b.
+    let ia = data.ia[root];
+    let pa = data.pa[root];
+    let mut uroot = [Force::zero(); 3];
+    let mut dmat = Matrix3::zeros();
+    for k in 0..3 {
+        uroot[k] = ia.mul_motion(&data.s[k]);
+    }
+    for k in 0..3 {
+        for l in 0..3 {
+            dmat[(k, l)] = data.s[k].dot(&uroot[l]);
+        }
+    }
+    data.a[0] = Motion::new(-model.gravity, Vector3::zeros());
+    let acc0 = data.parent_from_joint[root].inverse_act_motion(&data.a[0]) + data.c[root];
+    let mut rhs = Vector3::zeros();
+    for k in 0..3 {
+        rhs[k] = ts[k] - data.s[k].dot(&pa) - uroot[k].dot(&acc0);
+    }
+    let dd = &wm.base.drive;
+    let theta = q[2];
+    let nb: Matrix3x2<f64> = dd.basis(theta);
+    let vb = Vector2::new(v_r[0], v_r[1]);
+    let ndv = dd.basis_dot(theta, wd.qdot[2]) * vb;
+    let m2 = nb.transpose() * dmat * nb;
+    let r2 = nb.transpose() * (rhs - dmat * ndv);
+    let det = m2[(0, 0)] * m2[(1, 1)] - m2[(0, 1)] * m2[(1, 0)];
+    if !det.is_finite()
+        || m2[(0, 0)].is_nan()
+        || m2[(0, 0)] <= 0.0
+        || det <= 1e-14 * m2.norm_squared()
+    {
+        return Err(Error::Singular {
+            what: "reduced mass matrix Mr (platform block)".into(),
+            detail: Some(format!("det = {det:e}")),
+        });
+    }
+    let vdb = Vector2::new(
+        (m2[(1, 1)] * r2[0] - m2[(0, 1)] * r2[1]) / det,
+        (m2[(0, 0)] * r2[1] - m2[(1, 0)] * r2[0]) / det,
+    );
+    let qddb = nb * vdb + ndv;
+    let mut acc = acc0;
+    for k in 0..3 {
+        data.ddq[k] = qddb[k];
+        acc += data.s[k] * qddb[k];
+    }
+    data.a[root] = acc;
+    // Forward pass over the arm.
+    for i in root + 1..n {
+        let iv = model.idx_v[i];
+        let p = model.parents[i].0;
+        let mut acc = data.parent_from_joint[i].inverse_act_motion(&data.a[p]) + data.c[i];
+        let qdd = data.dinv[i][(0, 0)] * (data.uu[iv] - data.u[iv].dot(&acc));
+        data.ddq[iv] = qdd;
+        acc += data.s[iv] * qdd;
+        data.a[i] = acc;
+    }
+    let red = &mut wd.reduced;
+    red.vdot[0] = vdb[0];
+    red.vdot[1] = vdb[1];
+    for (k, &i) in wm.arm_dofs().iter().enumerate() {
+        red.vdot[2 + k] = data.ddq[i];
+    }
+    red.qddot.copy_from(&data.ddq);
+    Ok(())
+}

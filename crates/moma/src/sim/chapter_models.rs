@@ -1,0 +1,182 @@
+//! The chapter's closed-form constrained models (m1, m2, m5 of
+//! [`crate::closed_form`]) as [`ReducedSystem`]s for the simulator.
+
+use nalgebra::SVector;
+
+use crate::closed_form::PlatformVelocity;
+use crate::closed_form::lagrange::{self, PfaffianSystem};
+use crate::closed_form::m1_unicycle::{Unicycle, UnicycleParams};
+use crate::closed_form::m2_platform_arm::{PlatformArm, PlatformArmParams};
+use crate::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
+use crate::error::{Error, Result};
+use crate::sim::wheeled::ReducedSystem;
+
+/// A closed-form Pfaffian system with `N` coordinates, `NV` reduced velocities and `NU`
+/// inputs, with the names of its channels.
+pub struct ClosedFormSystem<S, const N: usize, const NV: usize, const NU: usize> {
+    /// The closed-form model.
+    pub model: S,
+    q_names: [&'static str; N],
+    v_names: [&'static str; NV],
+    u_names: [&'static str; NU],
+}
+
+fn platform_v_names(velocity: PlatformVelocity) -> [&'static str; 2] {
+    match velocity {
+        PlatformVelocity::LateralVelocity => ["v_F", "v_T"],
+        PlatformVelocity::YawRate => ["v_F", "phi_dot"],
+    }
+}
+
+/// The chapter's model m1 (unicycle platform), `q = [x, y, φ]`, `u = [τ_L, τ_R]`.
+pub fn m1(params: UnicycleParams) -> Result<ClosedFormSystem<Unicycle, 3, 2, 2>> {
+    let model = Unicycle::new(params)?;
+    let v_names = platform_v_names(model.velocity);
+    Ok(ClosedFormSystem {
+        model,
+        q_names: ["x", "y", "phi"],
+        v_names,
+        u_names: ["tau_L", "tau_R"],
+    })
+}
+
+/// The chapter's model m2 (platform + horizontal two-link arm), `q = [x, y, φ, θ1, θ2]`.
+pub fn m2(params: PlatformArmParams) -> Result<ClosedFormSystem<PlatformArm, 5, 4, 4>> {
+    let model = PlatformArm::new(params)?;
+    let [a, b] = platform_v_names(model.velocity);
+    Ok(ClosedFormSystem {
+        model,
+        q_names: ["x", "y", "phi", "theta1", "theta2"],
+        v_names: [a, b, "theta1_dot", "theta2_dot"],
+        u_names: ["tau_L", "tau_R", "tau_1", "tau_2"],
+    })
+}
+
+/// The chapter's model m5 (platform + capstan + two-link arm), `q = [x, y, φ, φt, θ1, θ12]`.
+pub fn m5(params: MobileManipulatorParams) -> Result<ClosedFormSystem<MobileManipulator, 6, 5, 5>> {
+    let model = MobileManipulator::new(params)?;
+    let [a, b] = platform_v_names(model.velocity);
+    Ok(ClosedFormSystem {
+        model,
+        q_names: ["x", "y", "phi", "phit", "theta1", "theta12"],
+        v_names: [a, b, "phit_dot", "theta1_dot", "theta12_dot"],
+        u_names: ["tau_L", "tau_R", "tau_c", "tau_s", "tau_e"],
+    })
+}
+
+/// Builds the chapter model `name` (`m1`, `m2` or `m5`) from a table of parameters
+/// (the field names of the reference vectors, e.g. `m`, `I`, `d`, `r_w`, `b` for m1).
+/// Unknown names and missing or malformed parameters are errors naming the field.
+pub fn chapter_system(name: &str, params: &serde_json::Value) -> Result<Box<dyn ReducedSystem>> {
+    fn parse<T: serde::de::DeserializeOwned>(name: &str, params: &serde_json::Value) -> Result<T> {
+        if let Some(obj) = params.as_object() {
+            for (k, v) in obj {
+                if !v.is_number() {
+                    return Err(Error::invalid(
+                        format!("params.{k}"),
+                        format!("must be a number for model {name}, got {v}"),
+                    ));
+                }
+            }
+        }
+        serde_json::from_value(params.clone())
+            .map_err(|e| Error::invalid(format!("params of model {name}"), e.to_string()))
+    }
+    match name {
+        "m1" => Ok(Box::new(m1(parse(name, params)?)?)),
+        "m2" => Ok(Box::new(m2(parse(name, params)?)?)),
+        "m5" => Ok(Box::new(m5(parse(name, params)?)?)),
+        other => Err(Error::Unknown {
+            kind: "chapter model (expected m1, m2 or m5)",
+            name: other.to_string(),
+        }),
+    }
+}
+
+impl<S, const N: usize, const NV: usize, const NU: usize> ClosedFormSystem<S, N, NV, NU>
+where
+    S: PfaffianSystem<N, NV, NU>,
+{
+    fn qdot(&self, q: &[f64], v: &[f64]) -> SVector<f64, N> {
+        let qa: [f64; N] = q.try_into().expect("length checked by the caller");
+        let nb = self.model.velocity_basis_generic::<f64>(&qa);
+        SVector::from_fn(|i, _| (0..NV).map(|j| nb[i][j] * v[j]).sum())
+    }
+}
+
+impl<S, const N: usize, const NV: usize, const NU: usize> ReducedSystem
+    for ClosedFormSystem<S, N, NV, NU>
+where
+    S: PfaffianSystem<N, NV, NU>,
+{
+    fn nq(&self) -> usize {
+        N
+    }
+    fn nv(&self) -> usize {
+        NV
+    }
+    fn nu(&self) -> usize {
+        NU
+    }
+    fn q_names(&self) -> Vec<String> {
+        self.q_names.iter().map(|s| s.to_string()).collect()
+    }
+    fn v_names(&self) -> Vec<String> {
+        self.v_names.iter().map(|s| s.to_string()).collect()
+    }
+    fn u_names(&self) -> Vec<String> {
+        self.u_names.iter().map(|s| s.to_string()).collect()
+    }
+    fn dynamics(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        u: &[f64],
+        qdot: &mut [f64],
+        vdot: &mut [f64],
+    ) -> Result<()> {
+        let (qd, vd) = lagrange::reduced_forward_dynamics(
+            &self.model,
+            &SVector::<f64, N>::from_column_slice(q),
+            &SVector::<f64, NV>::from_column_slice(v),
+            &SVector::<f64, NU>::from_column_slice(u),
+        )?;
+        qdot.copy_from_slice(qd.as_slice());
+        vdot.copy_from_slice(vd.as_slice());
+        Ok(())
+    }
+    fn energy(&mut self, q: &[f64], v: &[f64]) -> Result<(f64, f64)> {
+        let qv = SVector::<f64, N>::from_column_slice(q);
+        let qd = self.qdot(q, v);
+        let h = lagrange::mass_matrix(&self.model, &qv);
+        let qa: [f64; N] = q.try_into().expect("length checked by the caller");
+        Ok((
+            0.5 * qd.dot(&(h * qd)),
+            self.model.potential_generic::<f64>(&qa),
+        ))
+    }
+    fn input_power(&mut self, q: &[f64], v: &[f64], u: &[f64]) -> Result<f64> {
+        let qv = SVector::<f64, N>::from_column_slice(q);
+        let force = self.model.input_matrix(&qv) * SVector::<f64, NU>::from_column_slice(u);
+        Ok(force.dot(&self.qdot(q, v)))
+    }
+    fn constraint_residual(&mut self, q: &[f64], v: &[f64]) -> Result<f64> {
+        let qa: [f64; N] = q.try_into().expect("length checked by the caller");
+        let c = self.model.constraint_row_generic::<f64>(&qa);
+        let qd = self.qdot(q, v);
+        Ok((0..N).map(|i| c[i] * qd[i]).sum::<f64>().abs())
+    }
+    fn nk(&self) -> usize {
+        1
+    }
+    fn multipliers(&mut self, q: &[f64], v: &[f64], u: &[f64], out: &mut [f64]) -> Result<()> {
+        let ev = lagrange::evaluate_constrained(
+            &self.model,
+            &SVector::<f64, N>::from_column_slice(q),
+            &SVector::<f64, NV>::from_column_slice(v),
+            &SVector::<f64, NU>::from_column_slice(u),
+        )?;
+        out[0] = ev.lambda;
+        Ok(())
+    }
+}
