@@ -6,14 +6,14 @@
 //! [`Dop853`]), exact output at requested times, step statistics, NaN / blow-up detection
 //! and a step-count guard.
 
-pub mod integrators;
-
-pub use integrators::{
-    AdaptiveOptions, AdaptiveRk, Dop853, DormandPrince45, EmbeddedMethod, OdeSystem, Rk4, StepStats,
-};
 pub mod chapter_models;
+pub mod integrators;
 pub mod monitor;
 pub mod recorder;
 pub mod scenario;
 pub mod wheeled;
 pub mod wheeled_system;
+
+pub use integrators::{
+    AdaptiveOptions, AdaptiveRk, Dop853, DormandPrince45, EmbeddedMethod, OdeSystem, Rk4, StepStats,
+};
