@@ -103,7 +103,7 @@ impl Inertia {
     }
 
     /// The inertia expressed in frame `a`, given `a_from_b` and this inertia in `b`.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn transformed(&self, a_from_b: &SE3) -> Inertia {
         let r = &a_from_b.rotation;
@@ -112,8 +112,9 @@ impl Inertia {
         let m = self.mass;
         let mp = p * m;
         // I_o' = R I_o Rᵀ − ([Rh]×[p]× + [p]×[Rh]×) − m [p]×², with [a]×[b]× = b aᵀ − (a·b) 1:
-        //      = R I_o Rᵀ − (p (Rh)ᵀ + (Rh) pᵀ) − m p pᵀ + (2 Rh·p + m |p|²) 1.
+        //      = R I_o Rᵀ − (p gᵀ + g pᵀ) + 2 (g·p) 1, with g = Rh + m p / 2.
         // Only the 6 unique entries are computed: (R S Rᵀ)_ij = r_i · (S r_j).
+        let g = rh + mp * 0.5;
         let s = &self.inertia_origin;
         let (s00, s01, s02, s11, s12, s22) = (
             s[(0, 0)],
@@ -133,9 +134,9 @@ impl Inertia {
             )
         };
         let (u0, u1, u2) = (su(&r0), su(&r1), su(&r2));
-        let diag = 2.0 * rh.dot(p) + mp.dot(p);
+        let diag = 2.0 * g.dot(p);
         let e = |ri: &Vector3<f64>, uj: &Vector3<f64>, i: usize, j: usize| {
-            ri.dot(uj) - p[i] * rh[j] - rh[i] * p[j] - mp[i] * p[j]
+            ri.dot(uj) - (p[i] * g[j] + g[i] * p[j])
         };
         let a00 = e(&r0, &u0, 0, 0) + diag;
         let a01 = e(&r0, &u1, 0, 1);
