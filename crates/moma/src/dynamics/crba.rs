@@ -126,7 +126,31 @@ fn composite_columns(model: &Model, data: &mut Data) {
             }
         }
         let p = model.parents[i].0;
-        if p > 0 {
+        let axis = match model.joint_types[p] {
+            JointType::RevoluteX => 0,
+            JointType::RevoluteY => 1,
+            JointType::RevoluteZ => 2,
+            _ => 3,
+        };
+        if p > 0 && model.parents[p].0 == 0 && axis < 3 {
+            // p is a root revolute joint: its rows of H need only one moment component of
+            // the transformed forces (6 products per column instead of 30).
+            let m = &data.parent_from_joint[i];
+            head[p] += yi.transformed(m);
+            let cols = [
+                &mut l0[r.clone()],
+                &mut l1[r.clone()],
+                &mut l2[r.clone()],
+                &mut a0[r.clone()],
+                &mut a1[r.clone()],
+                &mut a2[r],
+            ];
+            match axis {
+                0 => act_force_moment::<0>(m, cols),
+                1 => act_force_moment::<1>(m, cols),
+                _ => act_force_moment::<2>(m, cols),
+            }
+        } else if p > 0 {
             let m = &data.parent_from_joint[i];
             head[p] += yi.transformed(m);
             act_force_columns(
@@ -149,6 +173,31 @@ fn composite_columns(model: &Model, data: &mut Data) {
         }
     }
 }
+/// Component `3 + K` (moment about axis K) of `m.act_force` on force columns stored by
+/// component; only that row is overwritten.
+#[inline]
+fn act_force_moment<const K: usize>(m: &SE3, f: [&mut [f64]; 6]) {
+    let [l0, l1, l2, a0, a1, a2] = f;
+    let n = l0.len();
+    let (l1, l2, a0, a1, a2) = (&l1[..n], &l2[..n], &mut a0[..n], &mut a1[..n], &mut a2[..n]);
+    let r = &m.rotation;
+    let t = &m.translation;
+    // moment_K = R_K·n + (t × R f)_K = R_K·n + (t_U R_V − t_V R_U)·f, (K, U, V) cyclic
+    let (u, v) = ((K + 1) % 3, (K + 2) % 3);
+    let (rk0, rk1, rk2) = (r[(K, 0)], r[(K, 1)], r[(K, 2)]);
+    let w0 = t[u] * r[(v, 0)] - t[v] * r[(u, 0)];
+    let w1 = t[u] * r[(v, 1)] - t[v] * r[(u, 1)];
+    let w2 = t[u] * r[(v, 2)] - t[v] * r[(u, 2)];
+    for c in 0..n {
+        let val = rk0 * a0[c] + rk1 * a1[c] + rk2 * a2[c] + w0 * l0[c] + w1 * l1[c] + w2 * l2[c];
+        match K {
+            0 => a0[c] = val,
+            1 => a1[c] = val,
+            _ => a2[c] = val,
+        }
+    }
+}
+
 /// `m.act_force` on force columns stored by component.
 #[inline]
 fn act_force_columns(m: &SE3, f: [&mut [f64]; 6]) {
@@ -245,9 +294,9 @@ mod tests {
 
     /// A branched tree with every joint type; `interleaved` adds the two branches'
     /// joints alternately, so subtree dofs are not contiguous.
-    fn tree(interleaved: bool) -> Model {
+    fn tree(interleaved: bool, root: RootJoint) -> Model {
         let mut b = ModelBuilder::new("tree");
-        b.set_root(RootJoint::Planar);
+        b.set_root(root);
         let axis = Vector3::new(1.0, 2.0, -0.5).normalize();
         let types = [
             JointType::RevoluteX,
@@ -280,7 +329,18 @@ mod tests {
             .unwrap();
             j
         };
-        let root = JointIndex(b.njoints() - 1);
+        let root = if root == RootJoint::Planar {
+            b.add_joint(
+                JointIndex(0),
+                "base",
+                JointType::Planar,
+                SE3::identity(),
+                JointLimits::unlimited(),
+            )
+            .unwrap()
+        } else {
+            JointIndex(0)
+        };
         let base = add(&mut b, root, 0);
         let (mut left, mut right) = (base, base);
         if interleaved {
@@ -313,8 +373,13 @@ mod tests {
 
     #[test]
     fn both_backward_passes_match_inverse_dynamics() {
-        for interleaved in [false, true] {
-            let model = tree(interleaved);
+        for (interleaved, root) in [
+            (false, RootJoint::Planar),
+            (true, RootJoint::Planar),
+            (false, RootJoint::Fixed),
+            (true, RootJoint::Fixed),
+        ] {
+            let model = tree(interleaved, root);
             let mut data = Data::new(&model);
             assert_eq!(data.nv_subtree.is_some(), !interleaved);
             let q0 = neutral(&model);
