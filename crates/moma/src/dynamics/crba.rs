@@ -112,6 +112,11 @@ fn composite_columns(model: &Model, data: &mut Data) {
                 JointType::PrismaticX => copy(h, &l0[r.clone()]),
                 JointType::PrismaticY => copy(h, &l1[r.clone()]),
                 JointType::PrismaticZ => copy(h, &l2[r.clone()]),
+                // S = 1 (6 × 6): row k of H's block is component k of F
+                JointType::FreeFlyer => {
+                    let rows: [&[f64]; 6] = [&*l0, &*l1, &*l2, &*a0, &*a1, &*a2];
+                    copy(h, &rows[k][r.clone()]);
+                }
                 _ => {
                     let s = &data.s[col];
                     for (c, hc) in r.clone().zip(h.iter_mut()) {
