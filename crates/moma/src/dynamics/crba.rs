@@ -2,16 +2,18 @@
 
 use crate::kinematics::{assert_sizes, update_joint_placement};
 use crate::multibody::{Data, JointType, Model};
-use crate::spatial::Motion;
-use nalgebra::{DMatrix, DVector};
+use crate::spatial::{Force, Inertia, Motion, SE3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 /// Joint-space inertia matrix H(q) (nv × nv, symmetric positive definite; both triangles
 /// filled) by the composite rigid-body algorithm, returned and stored in
 /// `data.mass_matrix`.
 ///
-/// Runs in the world frame: forward kinematics (`data.world_from_joint`), composite
-/// inertias summed in world coordinates (`data.composite_inertias`), then
-/// H[j, i] = S_jᵀ·(I^c_i S_i) for every ancestor j of i, with no per-ancestor transform.
+/// Runs in local joint frames (Featherstone's CRBA): joint placements
+/// (`data.parent_from_joint`), composite inertias I^c_i summed in each joint's own frame
+/// (`data.composite_inertias`), then for every dof column F = I^c_i S_i is carried up the
+/// ancestor chain with the parent transforms and H[j, i] = S_jᵀ F. The upper triangle is
+/// computed and mirrored into the lower one. `data.world_from_joint` is not updated.
 /// Entries coupling joints on different branches are structurally zero: they are zeroed
 /// by `Data::new` and never written (do not write into `data.mass_matrix` yourself).
 ///
@@ -27,63 +29,379 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &DVector<f64>) -> &'d DMat
     assert_sizes(model, data, q);
     let qs = q.as_slice();
     let n = model.njoints;
-    let nv = model.nv;
     for i in 1..n {
         update_joint_placement(model, data, i, qs);
-        let p = model.parents[i].0;
-        let m = if p == 0 {
-            data.parent_from_joint[i]
-        } else {
-            data.world_from_joint[p].compose(&data.parent_from_joint[i])
-        };
-        data.world_from_joint[i] = m;
-        data.composite_inertias[i] = model.inertias[i].transformed(&m);
-        let iv = model.idx_v[i];
-        data.sw[iv] = match model.joint_types[i] {
-            // world column of an axis-aligned revolute joint: [p × ω; ω], ω a column of R
-            JointType::RevoluteX | JointType::RevoluteY | JointType::RevoluteZ => {
-                let c = match model.joint_types[i] {
-                    JointType::RevoluteX => 0,
-                    JointType::RevoluteY => 1,
-                    _ => 2,
-                };
-                let w = m.rotation.column(c).into_owned();
-                Motion::new(m.translation.cross(&w), w)
-            }
-            _ => {
-                for k in 1..model.nvs[i] {
-                    data.sw[iv + k] = m.act_motion(&data.s[iv + k]);
-                }
-                m.act_motion(&data.s[iv])
-            }
-        };
+        data.composite_inertias[i] = model.inertias[i];
     }
-    for i in (2..n).rev() {
-        let p = model.parents[i].0;
-        if p > 0 {
-            let yi = data.composite_inertias[i];
-            data.composite_inertias[p] += yi;
-        }
-    }
-    let mm = data.mass_matrix.as_mut_slice();
-    for i in 1..n {
-        let iv = model.idx_v[i];
-        let yi = data.composite_inertias[i];
-        for k in 0..model.nvs[i] {
-            let f = yi.mul_motion(&data.sw[iv + k]);
-            let col = iv + k;
-            let mut j = i;
-            while j != 0 {
-                let jv = model.idx_v[j];
-                let nvj = if j == i { k + 1 } else { model.nvs[j] };
-                for l in 0..nvj {
-                    let val = data.sw[jv + l].dot(&f);
-                    mm[col * nv + jv + l] = val;
-                    mm[(jv + l) * nv + col] = val;
-                }
-                j = model.parents[j].0;
-            }
-        }
+    if data.nv_subtree.is_some() {
+        composite_columns(model, data);
+    } else {
+        ancestor_walk(model, data);
     }
     &data.mass_matrix
+}
+
+/// F = I·S for one motion-subspace column S of joint type `jt` (both in the joint frame);
+/// axis-aligned joints have a unit S, so F is one column of the 6 × 6 inertia.
+#[inline]
+fn inertia_times_subspace(y: &Inertia, jt: &JointType, s: &Motion) -> Force {
+    let h = y.first_moment();
+    let io = y.inertia_about_origin();
+    // I·[0; e_k] = [−h × e_k; I_o e_k]
+    match jt {
+        JointType::RevoluteX => Force::new(Vector3::new(0.0, -h.z, h.y), io.column(0).into()),
+        JointType::RevoluteY => Force::new(Vector3::new(h.z, 0.0, -h.x), io.column(1).into()),
+        JointType::RevoluteZ => Force::new(Vector3::new(-h.y, h.x, 0.0), io.column(2).into()),
+        _ => y.mul_motion(s),
+    }
+}
+
+/// Sᵀ·F for one motion-subspace column S of joint type `jt`.
+#[inline]
+fn subspace_dot(jt: &JointType, s: &Motion, f: &Force) -> f64 {
+    match jt {
+        JointType::RevoluteX => f.angular.x,
+        JointType::RevoluteY => f.angular.y,
+        JointType::RevoluteZ => f.angular.z,
+        JointType::PrismaticX => f.linear.x,
+        JointType::PrismaticY => f.linear.y,
+        JointType::PrismaticZ => f.linear.z,
+        _ => s.dot(f),
+    }
+}
+
+/// Backward pass for depth-first models (Pinocchio's local CRBA): when joint i is reached,
+/// the force columns of its whole subtree are in frame i; Sᵢᵀ F fills rows `idx_v[i]..` of
+/// those columns (written as the contiguous lower-triangle part of H's columns of joint
+/// i), then all of them move to the parent frame at once, component-wise.
+fn composite_columns(model: &Model, data: &mut Data) {
+    let nv = model.nv;
+    let Some(nsub) = data.nv_subtree.as_deref() else {
+        return;
+    };
+    let mm = data.mass_matrix.as_mut_slice();
+    let (l0, rest) = data.fcrb.split_at_mut(nv);
+    let (l1, rest) = rest.split_at_mut(nv);
+    let (l2, rest) = rest.split_at_mut(nv);
+    let (a0, rest) = rest.split_at_mut(nv);
+    let (a1, a2) = rest.split_at_mut(nv);
+    for i in (1..model.njoints).rev() {
+        let iv = model.idx_v[i];
+        let ns = nsub[i];
+        let jt = &model.joint_types[i];
+        let (head, tail) = data.composite_inertias.split_at_mut(i);
+        let yi = &tail[0];
+        for k in 0..model.nvs[i] {
+            let f = inertia_times_subspace(yi, jt, &data.s[iv + k]);
+            l0[iv + k] = f.linear.x;
+            l1[iv + k] = f.linear.y;
+            l2[iv + k] = f.linear.z;
+            a0[iv + k] = f.angular.x;
+            a1[iv + k] = f.angular.y;
+            a2[iv + k] = f.angular.z;
+        }
+        let r = iv..iv + ns;
+        for k in 0..model.nvs[i] {
+            let col = iv + k;
+            // H[c, col] = S_colᵀ F_c for the subtree's columns c (H symmetric)
+            let h = &mut mm[col * nv + iv..col * nv + iv + ns];
+            match jt {
+                JointType::RevoluteX => copy(h, &a0[r.clone()]),
+                JointType::RevoluteY => copy(h, &a1[r.clone()]),
+                JointType::RevoluteZ => copy(h, &a2[r.clone()]),
+                JointType::PrismaticX => copy(h, &l0[r.clone()]),
+                JointType::PrismaticY => copy(h, &l1[r.clone()]),
+                JointType::PrismaticZ => copy(h, &l2[r.clone()]),
+                // S = 1 (6 × 6): row k of H's block is component k of F
+                JointType::FreeFlyer => {
+                    let rows: [&[f64]; 6] = [&*l0, &*l1, &*l2, &*a0, &*a1, &*a2];
+                    copy(h, &rows[k][r.clone()]);
+                }
+                _ => {
+                    let s = &data.s[col];
+                    for (c, hc) in r.clone().zip(h.iter_mut()) {
+                        *hc = s.linear.x * l0[c]
+                            + s.linear.y * l1[c]
+                            + s.linear.z * l2[c]
+                            + s.angular.x * a0[c]
+                            + s.angular.y * a1[c]
+                            + s.angular.z * a2[c];
+                    }
+                }
+            }
+        }
+        let p = model.parents[i].0;
+        let axis = match model.joint_types[p] {
+            JointType::RevoluteX => 0,
+            JointType::RevoluteY => 1,
+            JointType::RevoluteZ => 2,
+            _ => 3,
+        };
+        if p > 0 && model.parents[p].0 == 0 && axis < 3 {
+            // p is a root revolute joint: its rows of H need only one moment component of
+            // the transformed forces (6 products per column instead of 30).
+            let m = &data.parent_from_joint[i];
+            head[p] += yi.transformed(m);
+            let cols = [
+                &mut l0[r.clone()],
+                &mut l1[r.clone()],
+                &mut l2[r.clone()],
+                &mut a0[r.clone()],
+                &mut a1[r.clone()],
+                &mut a2[r],
+            ];
+            match axis {
+                0 => act_force_moment::<0>(m, cols),
+                1 => act_force_moment::<1>(m, cols),
+                _ => act_force_moment::<2>(m, cols),
+            }
+        } else if p > 0 {
+            let m = &data.parent_from_joint[i];
+            head[p] += yi.transformed(m);
+            act_force_columns(
+                m,
+                [
+                    &mut l0[r.clone()],
+                    &mut l1[r.clone()],
+                    &mut l2[r.clone()],
+                    &mut a0[r.clone()],
+                    &mut a1[r.clone()],
+                    &mut a2[r],
+                ],
+            );
+        }
+    }
+    // mirror the lower triangle into the upper one
+    for c in 0..nv {
+        for r in c + 1..nv {
+            mm[r * nv + c] = mm[c * nv + r];
+        }
+    }
+}
+/// Component `3 + K` (moment about axis K) of `m.act_force` on force columns stored by
+/// component; only that row is overwritten.
+#[inline]
+fn act_force_moment<const K: usize>(m: &SE3, f: [&mut [f64]; 6]) {
+    let [l0, l1, l2, a0, a1, a2] = f;
+    let n = l0.len();
+    let (l1, l2, a0, a1, a2) = (&l1[..n], &l2[..n], &mut a0[..n], &mut a1[..n], &mut a2[..n]);
+    let r = &m.rotation;
+    let t = &m.translation;
+    // moment_K = R_K·n + (t × R f)_K = R_K·n + (t_U R_V − t_V R_U)·f, (K, U, V) cyclic
+    let (u, v) = ((K + 1) % 3, (K + 2) % 3);
+    let (rk0, rk1, rk2) = (r[(K, 0)], r[(K, 1)], r[(K, 2)]);
+    let w0 = t[u] * r[(v, 0)] - t[v] * r[(u, 0)];
+    let w1 = t[u] * r[(v, 1)] - t[v] * r[(u, 1)];
+    let w2 = t[u] * r[(v, 2)] - t[v] * r[(u, 2)];
+    for c in 0..n {
+        let val = rk0 * a0[c] + rk1 * a1[c] + rk2 * a2[c] + w0 * l0[c] + w1 * l1[c] + w2 * l2[c];
+        match K {
+            0 => a0[c] = val,
+            1 => a1[c] = val,
+            _ => a2[c] = val,
+        }
+    }
+}
+
+/// `m.act_force` on force columns stored by component.
+#[inline]
+fn act_force_columns(m: &SE3, f: [&mut [f64]; 6]) {
+    let [l0, l1, l2, a0, a1, a2] = f;
+    let n = l0.len();
+    let (l1, l2, a0, a1, a2) = (
+        &mut l1[..n],
+        &mut l2[..n],
+        &mut a0[..n],
+        &mut a1[..n],
+        &mut a2[..n],
+    );
+    let r = &m.rotation;
+    let (r00, r01, r02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
+    let (r10, r11, r12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
+    let (r20, r21, r22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
+    let (px, py, pz) = (m.translation.x, m.translation.y, m.translation.z);
+    for c in 0..n {
+        let (x, y, z) = (l0[c], l1[c], l2[c]);
+        let fx = r00 * x + r01 * y + r02 * z;
+        let fy = r10 * x + r11 * y + r12 * z;
+        let fz = r20 * x + r21 * y + r22 * z;
+        let (x, y, z) = (a0[c], a1[c], a2[c]);
+        a0[c] = r00 * x + r01 * y + r02 * z + (py * fz - pz * fy);
+        a1[c] = r10 * x + r11 * y + r12 * z + (pz * fx - px * fz);
+        a2[c] = r20 * x + r21 * y + r22 * z + (px * fy - py * fx);
+        l0[c] = fx;
+        l1[c] = fy;
+        l2[c] = fz;
+    }
+}
+
+/// Backward pass for any joint order: each force column is carried up its ancestor chain
+/// and fills the upper-triangle part of its H column.
+fn ancestor_walk(model: &Model, data: &mut Data) {
+    let nv = model.nv;
+    let mm = data.mass_matrix.as_mut_slice();
+    for i in (1..model.njoints).rev() {
+        let iv = model.idx_v[i];
+        let jt = &model.joint_types[i];
+        let yi = data.composite_inertias[i];
+        for k in 0..model.nvs[i] {
+            let col = iv + k;
+            // column `col` of H, rows ≤ col (upper triangle), stored contiguously
+            let hcol = &mut mm[col * nv..col * nv + col + 1];
+            let mut f = inertia_times_subspace(&yi, jt, &data.s[col]);
+            for l in 0..=k {
+                hcol[iv + l] = subspace_dot(jt, &data.s[iv + l], &f);
+            }
+            let mut j = i;
+            loop {
+                let p = model.parents[j].0;
+                if p == 0 {
+                    break;
+                }
+                f = data.parent_from_joint[j].act_force(&f);
+                let pv = model.idx_v[p];
+                let jp = &model.joint_types[p];
+                for l in 0..model.nvs[p] {
+                    hcol[pv + l] = subspace_dot(jp, &data.s[pv + l], &f);
+                }
+                j = p;
+            }
+        }
+        let p = model.parents[i].0;
+        if p > 0 {
+            data.composite_inertias[p] += yi.transformed(&data.parent_from_joint[i]);
+        }
+    }
+    // mirror the upper triangle into the lower one
+    for c in 0..nv {
+        for r in c + 1..nv {
+            mm[c * nv + r] = mm[r * nv + c];
+        }
+    }
+}
+
+/// `dst.copy_from_slice(src)` for the short slices of CRBA (no `memcpy` call).
+#[inline]
+fn copy(dst: &mut [f64], src: &[f64]) {
+    for (d, s) in dst.iter_mut().zip(src) {
+        *d = *s;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::rnea;
+    use crate::kinematics::{integrate, neutral};
+    use crate::multibody::{JointIndex, JointLimits, ModelBuilder, RootJoint};
+    use crate::spatial::SE3;
+    use nalgebra::{Matrix3, Vector3};
+
+    /// A branched tree with every joint type; `interleaved` adds the two branches'
+    /// joints alternately, so subtree dofs are not contiguous.
+    fn tree(interleaved: bool, root: RootJoint) -> Model {
+        let mut b = ModelBuilder::new("tree");
+        b.set_root(root);
+        let axis = Vector3::new(1.0, 2.0, -0.5).normalize();
+        let types = [
+            JointType::RevoluteX,
+            JointType::RevoluteY,
+            JointType::RevoluteZ,
+            JointType::PrismaticX,
+            JointType::PrismaticY,
+            JointType::PrismaticZ,
+            JointType::RevoluteUnaligned { axis },
+            JointType::PrismaticUnaligned { axis },
+        ];
+        let add = |b: &mut ModelBuilder, parent: JointIndex, k: usize| {
+            let x = SE3::from_xyz_rpy([0.1 * k as f64, 0.2, -0.05], [0.3, -0.2, 0.1 * k as f64]);
+            let j = b
+                .add_joint(
+                    parent,
+                    &format!("j{k}"),
+                    types[k % 8],
+                    x,
+                    JointLimits::unlimited(),
+                )
+                .unwrap();
+            let c = Vector3::new(0.05, -0.02 * k as f64, 0.1);
+            let ic = Matrix3::new(0.02, 0.001, 0.0, 0.001, 0.03, -0.002, 0.0, -0.002, 0.04);
+            b.append_body_inertia(
+                j,
+                &Inertia::new(1.0 + 0.1 * k as f64, c, ic),
+                &SE3::identity(),
+            )
+            .unwrap();
+            j
+        };
+        let root = if root == RootJoint::Planar {
+            b.add_joint(
+                JointIndex(0),
+                "base",
+                JointType::Planar,
+                SE3::identity(),
+                JointLimits::unlimited(),
+            )
+            .unwrap()
+        } else {
+            JointIndex(0)
+        };
+        let base = add(&mut b, root, 0);
+        let (mut left, mut right) = (base, base);
+        if interleaved {
+            for k in 0..4 {
+                left = add(&mut b, left, 1 + 2 * k);
+                right = add(&mut b, right, 2 + 2 * k);
+            }
+        } else {
+            for k in 0..4 {
+                left = add(&mut b, left, 1 + 2 * k);
+            }
+            for k in 0..4 {
+                right = add(&mut b, right, 2 + 2 * k);
+            }
+        }
+        b.build().unwrap()
+    }
+
+    /// H by columns of inverse dynamics: H e_k = τ(q, 0, e_k) − τ(q, 0, 0).
+    fn h_by_rnea(model: &Model, q: &DVector<f64>) -> DMatrix<f64> {
+        let mut data = Data::new(model);
+        let zero = DVector::zeros(model.nv);
+        let g = rnea(model, &mut data, q, &zero, &zero).clone();
+        DMatrix::from_fn(model.nv, model.nv, |r, c| {
+            let mut e = DVector::zeros(model.nv);
+            e[c] = 1.0;
+            rnea(model, &mut data, q, &zero, &e)[r] - g[r]
+        })
+    }
+
+    #[test]
+    fn both_backward_passes_match_inverse_dynamics() {
+        for (interleaved, root) in [
+            (false, RootJoint::Planar),
+            (true, RootJoint::Planar),
+            (false, RootJoint::Fixed),
+            (true, RootJoint::Fixed),
+        ] {
+            let model = tree(interleaved, root);
+            let mut data = Data::new(&model);
+            assert_eq!(data.nv_subtree.is_some(), !interleaved);
+            let q0 = neutral(&model);
+            let dq = DVector::from_fn(model.nv, |i, _| 0.7 * ((i * 7 + 3) as f64).sin());
+            let mut q = q0.clone();
+            integrate(&model, &q0, &dq, &mut q);
+            let want = h_by_rnea(&model, &q);
+            let got = crba(&model, &mut data, &q).clone();
+            assert!((&got - &want).amax() < 1e-12, "interleaved={interleaved}");
+            assert_eq!(got, got.transpose());
+            // the general path on a depth-first model gives the same matrix
+            if !interleaved {
+                data.mass_matrix.fill(0.0);
+                data.composite_inertias.clone_from(&model.inertias);
+                ancestor_walk(&model, &mut data);
+                assert!((&data.mass_matrix - &want).amax() < 1e-12);
+            }
+        }
+    }
 }

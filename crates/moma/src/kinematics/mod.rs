@@ -49,10 +49,11 @@ pub(crate) fn update_joint_placement(model: &Model, data: &mut Data, i: usize, q
     let qi = &q[model.idx_q[i]..model.idx_q[i] + model.nqs[i]];
     data.parent_from_joint[i] = jt.parent_from_joint(&model.joint_placements[i], qi);
     if matches!(jt, crate::multibody::JointType::Planar) {
+        // S = [[c, −s, 0; 0], [s, c, 0; 0], [0; e_z]] (the third column is constant)
         let iv = model.idx_v[i];
-        for k in 0..3 {
-            data.s[iv + k] = jt.subspace_column(qi, k);
-        }
+        let (s, c) = qi[2].sin_cos();
+        data.s[iv].linear = nalgebra::Vector3::new(c, -s, 0.0);
+        data.s[iv + 1].linear = nalgebra::Vector3::new(s, c, 0.0);
     }
 }
 

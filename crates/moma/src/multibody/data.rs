@@ -62,8 +62,6 @@ pub struct Data {
     pub composite_inertias: Vec<Inertia>,
     /// Motion subspace columns S (local), one per velocity coordinate (nv).
     pub(crate) s: Vec<Motion>,
-    /// Scratch: motion subspace columns in the world frame (nv).
-    pub(crate) sw: Vec<Motion>,
     /// Scratch: velocity-product accelerations c_i (ABA) per joint.
     pub(crate) c: Vec<Motion>,
     /// Scratch: articulated inertias (ABA).
@@ -86,6 +84,11 @@ pub struct Data {
     pub(crate) vworld: Vec<Motion>,
     /// Scratch: d/dt of world Jacobian columns (6 × nv).
     pub(crate) jdot: Matrix6xX<f64>,
+    /// CRBA: dofs in each joint's subtree when they form the contiguous range
+    /// `idx_v[i]..idx_v[i] + n` (depth-first joint order), else `None` for every joint.
+    pub(crate) nv_subtree: Option<Vec<usize>>,
+    /// Scratch: CRBA composite-force columns F = I^c S, stored by component (6 rows of nv).
+    pub(crate) fcrb: Vec<f64>,
 }
 
 impl Data {
@@ -123,7 +126,6 @@ impl Data {
             potential_energy: 0.0,
             composite_inertias: vec![Inertia::zero(); n],
             s,
-            sw: vec![Motion::zero(); nv],
             c: vec![Motion::zero(); n],
             ia: vec![ArticulatedInertia::default(); n],
             pa: vec![Force::zero(); n],
@@ -135,6 +137,8 @@ impl Data {
             mat6b: vec![Matrix6::zeros(); n],
             vworld: vec![Motion::zero(); n],
             jdot: Matrix6xX::zeros(nv),
+            nv_subtree: contiguous_subtrees(model),
+            fcrb: vec![0.0; 6 * nv],
         }
     }
 
@@ -145,4 +149,24 @@ impl Data {
             && self.tau.len() == model.nv
             && self.world_from_frame.len() == model.frames.len()
     }
+}
+
+/// Per joint, the number of dofs of its subtree, if every subtree's dofs form the range
+/// starting at the joint's own `idx_v` (true for depth-first joint orders).
+fn contiguous_subtrees(model: &Model) -> Option<Vec<usize>> {
+    let n = model.njoints;
+    let mut count = model.nvs.clone();
+    let mut lo = model.idx_v.clone();
+    let mut hi: Vec<usize> = (0..n).map(|i| model.idx_v[i] + model.nvs[i]).collect();
+    for i in (1..n).rev() {
+        let p = model.parents[i].0;
+        if p > 0 {
+            count[p] += count[i];
+            lo[p] = lo[p].min(lo[i]);
+            hi[p] = hi[p].max(hi[i]);
+        }
+    }
+    (1..n)
+        .all(|i| lo[i] == model.idx_v[i] && hi[i] - lo[i] == count[i])
+        .then_some(count)
 }

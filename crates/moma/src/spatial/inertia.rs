@@ -103,7 +103,7 @@ impl Inertia {
     }
 
     /// The inertia expressed in frame `a`, given `a_from_b` and this inertia in `b`.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn transformed(&self, a_from_b: &SE3) -> Inertia {
         let r = &a_from_b.rotation;
@@ -112,37 +112,43 @@ impl Inertia {
         let m = self.mass;
         let mp = p * m;
         // I_o' = R I_o Rᵀ − ([Rh]×[p]× + [p]×[Rh]×) − m [p]×², with [a]×[b]× = b aᵀ − (a·b) 1:
-        //      = R I_o Rᵀ − (p (Rh)ᵀ + (Rh) pᵀ) − m p pᵀ + (2 Rh·p + m |p|²) 1.
-        // Only the 6 unique entries are computed: (R S Rᵀ)_ij = r_i · (S r_j).
+        //      = R I_o Rᵀ − (p gᵀ + g pᵀ) + 2 (g·p) 1, with g = Rh + m p / 2.
+        let g = rh + mp * 0.5;
         let s = &self.inertia_origin;
-        let (s00, s01, s02, s11, s12, s22) = (
+        let (d0, d1, d2, d3, d4, d5) = (
             s[(0, 0)],
             s[(0, 1)],
-            s[(0, 2)],
             s[(1, 1)],
+            s[(0, 2)],
             s[(1, 2)],
             s[(2, 2)],
         );
-        let row = |i: usize| Vector3::new(r[(i, 0)], r[(i, 1)], r[(i, 2)]);
-        let (r0, r1, r2) = (row(0), row(1), row(2));
-        let su = |v: &Vector3<f64>| {
-            Vector3::new(
-                s00 * v.x + s01 * v.y + s02 * v.z,
-                s01 * v.x + s11 * v.y + s12 * v.z,
-                s02 * v.x + s12 * v.y + s22 * v.z,
-            )
-        };
-        let (u0, u1, u2) = (su(&r0), su(&r1), su(&r2));
-        let diag = 2.0 * rh.dot(p) + mp.dot(p);
-        let e = |ri: &Vector3<f64>, uj: &Vector3<f64>, i: usize, j: usize| {
-            ri.dot(uj) - p[i] * rh[j] - rh[i] * p[j] - mp[i] * p[j]
-        };
-        let a00 = e(&r0, &u0, 0, 0) + diag;
-        let a01 = e(&r0, &u1, 0, 1);
-        let a02 = e(&r0, &u2, 0, 2);
-        let a11 = e(&r1, &u1, 1, 1) + diag;
-        let a12 = e(&r1, &u2, 1, 2);
-        let a22 = e(&r2, &u2, 2, 2) + diag;
+        // R S Rᵀ in 30 products (the scheme of Pinocchio's Symmetric3::rotate): write
+        // S = d5·1 + (S − d5·1), whose last diagonal entry is zero, and use RᵀR = 1.
+        let (l00, l11, l20, l21) = (d0 - d5, d2 - d5, 2.0 * d3, 2.0 * d4);
+        let y00 = r[(1, 0)] * l00 + r[(1, 1)] * d1 + r[(1, 2)] * l20;
+        let y01 = r[(1, 0)] * d1 + r[(1, 1)] * l11 + r[(1, 2)] * l21;
+        let y10 = r[(2, 0)] * l00 + r[(2, 1)] * d1 + r[(2, 2)] * l20;
+        let y11 = r[(2, 0)] * d1 + r[(2, 1)] * l11 + r[(2, 2)] * l21;
+        let o11 = y00 * r[(1, 0)] + y01 * r[(1, 1)];
+        let o22 = y10 * r[(2, 0)] + y11 * r[(2, 1)];
+        let w0 = -r[(0, 0)] * d4 + r[(0, 1)] * d3;
+        let w1 = -r[(1, 0)] * d4 + r[(1, 1)] * d3;
+        let w2 = -r[(2, 0)] * d4 + r[(2, 1)] * d3;
+        let rs00 = l00 + l11 - o11 - o22 + d5;
+        let rs01 = y00 * r[(0, 0)] + y01 * r[(0, 1)] + w2;
+        let rs11 = o11 + d5;
+        let rs02 = y10 * r[(0, 0)] + y11 * r[(0, 1)] - w1;
+        let rs12 = y10 * r[(1, 0)] + y11 * r[(1, 1)] + w0;
+        let rs22 = o22 + d5;
+        let diag = 2.0 * g.dot(p);
+        let e = |i: usize, j: usize| p[i] * g[j] + g[i] * p[j];
+        let a00 = rs00 - e(0, 0) + diag;
+        let a01 = rs01 - e(0, 1);
+        let a02 = rs02 - e(0, 2);
+        let a11 = rs11 - e(1, 1) + diag;
+        let a12 = rs12 - e(1, 2);
+        let a22 = rs22 - e(2, 2) + diag;
         Inertia {
             mass: m,
             first_moment: rh + mp,
