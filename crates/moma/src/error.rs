@@ -60,13 +60,11 @@ pub enum Error {
     },
 
     // ---- rigid-body core --------------------------------------------------------------
-
     /// The robot model is invalid (cyclic tree, bad inertia, unsupported joint, ...).
     #[error("invalid model: {0}")]
     Model(String),
 
     // ---- non-holonomic mobile robots and simulation ----------------------------------
-
     /// A matrix that must be invertible is (numerically) singular.
     #[error("singular {what}{}", .detail.as_ref().map(|d| format!(": {d}")).unwrap_or_default())]
     Singular {
@@ -77,7 +75,6 @@ pub enum Error {
     },
 
     // ---- numerical trouble during simulation -----------------------------------------
-
     /// A simulation or iterative solver went numerically wrong (NaN, blow-up, drift).
     #[error("numerical failure at t = {t}: {message}")]
     Numerical {
@@ -88,7 +85,6 @@ pub enum Error {
     },
 
     // ---- motion planning ------------------------------------------------------------
-
     /// A planning query is invalid (start/goal outside the map or in an obstacle, ...).
     #[error("planning: {0}")]
     Planning(String),
