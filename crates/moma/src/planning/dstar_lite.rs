@@ -4,7 +4,7 @@
 //! The search runs from the goal toward the robot, keeping for every cell its cost-to-goal
 //! `g` and a one-step look-ahead `rhs`; after a change only the locally inconsistent cells
 //! are re-expanded, and the key modifier `k_m` keeps the queue valid as the robot moves.
-//! Move model as [`super::astar`]: 8-connected, costs 1 / √2, no corner cutting, so
+//! Move model as [`super::astar()`]: 8-connected, costs 1 / √2, no corner cutting, so
 //! the cost after any change equals that of A* from scratch on the changed map.
 
 use super::astar::{SQRT2, SearchGrid, octile};

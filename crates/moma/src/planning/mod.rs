@@ -3,7 +3,7 @@
 //! The pipeline: load a map ([`load_map`]: ROS `map_server` YAML + image, a bare
 //! PGM/PNG, or a Moving AI `.map`), build the configuration space by dilating the
 //! obstacles with the robot footprint ([`distance_transform`], [`costmap`]), search it
-//! ([`astar`], [`dstar_lite::DStarLite`] for re-planning, [`potential`] fields), then
+//! ([`astar()`], [`dstar_lite::DStarLite`] for re-planning, [`potential`] fields), then
 //! turn the path into motion ([`smooth`], [`trajectory::time_parameterize`]).
 //! 3-D voxel maps: [`Grid3`] and [`astar3d`].
 
