@@ -148,7 +148,7 @@ fn astar3d_matches_3dscen_subsample() {
 }
 
 #[test]
-#[ignore = "1,000 3-D problems: minutes in release"]
+#[ignore = "1,000 3-D problems: the longest expand millions of voxels, hours in release"]
 fn astar3d_matches_full_3dscen_subsample() {
     let g = planning::load_3dmap(&data("movingai/3d/A1.3dmap")).unwrap();
     for p in planning::load_3dscen(&data("movingai/3d/A1.every10.3dscen")).unwrap() {
