@@ -6,9 +6,13 @@
 //!
 //! Implementation: the grid is stored with a one-cell border of blocked cells so the
 //! eight neighbours are fixed index offsets with no bounds checks; search state lives in
-//! flat arrays reused across queries and invalidated by a generation counter; the open
-//! list is a binary heap on f plus a last-in first-out stack for successors that keep
-//! the current f (ties broken toward the deepest, larger-g cells, without heap traffic).
+//! flat arrays reused across queries and invalidated by a generation counter. The
+//! unweighted search orders by exact fixed-point integer f (straight = 2^k, diagonal =
+//! round(√2·2^k)) and packs each cell's state (g, parent direction, stamp) into 8 bytes,
+//! so the state of a 512 × 512 map fits in the L2 cache; the open list is a radix heap
+//! on those monotone integer keys whose equal-key bucket is a stack (f ties broken toward
+//! the deepest, larger-g cells). The reported cost is recomputed in floating point from
+//! the moves of the path found.
 
 use super::grid::OccupancyGrid;
 use crate::{Error, Result};
@@ -201,51 +205,96 @@ impl SearchGrid {
     }
 }
 
-/// The open list: a binary heap of `(f, cell)` plus a stack for the entries whose f equals
-/// the last popped f. A* with a consistent heuristic pops non-decreasing f (f's IEEE bits
-/// serve as exact integer keys), and in open areas most successors keep the parent's f:
-/// those skip the heap entirely, and leaving the stack last-in first-out breaks f ties
-/// toward the most recently generated (deepest, larger-g) cells.
-#[derive(Debug, Clone, Default)]
+/// The open list: a radix heap (Ahuja, Mehlhorn, Orlin, Tarjan 1990) on monotone `u64`
+/// keys. A* with a consistent heuristic pops non-decreasing f, so every key pushed is at
+/// least the last popped one: bucket `b` holds the keys whose highest bit differing from
+/// the last popped key is bit `b − 1`; bucket 0 holds keys equal to it and is a
+/// last-in first-out stack, which breaks f ties toward the most recently generated
+/// (deepest, larger-g) cells without any reordering. A pop only scans the smallest
+/// non-empty bucket when bucket 0 is empty, and every entry moves to a lower bucket at most
+/// 64 times, so the cost per operation is small and independent of the frontier size.
+#[derive(Debug, Clone)]
 struct OpenList {
     last: u64,
-    ties: Vec<u32>,
-    heap: BinaryHeap<std::cmp::Reverse<(u64, u32)>>,
+    /// Bit b set ⇔ bucket b may be non-empty (bucket 0's bit is not maintained).
+    mask: u128,
+    buckets: Vec<Vec<(u64, u32)>>,
+}
+
+impl Default for OpenList {
+    fn default() -> Self {
+        Self {
+            last: 0,
+            mask: 0,
+            buckets: vec![Vec::new(); 65],
+        }
+    }
 }
 
 impl OpenList {
     fn clear(&mut self) {
         self.last = 0;
-        self.ties.clear();
-        self.heap.clear();
+        self.mask = 0;
+        self.buckets.iter_mut().for_each(Vec::clear);
     }
 
-    /// Pushes `key`, clamped to the last popped key (float rounding can put a successor's
-    /// f one ulp below its parent's; treating it as equal is harmless).
+    #[inline]
+    fn bucket(last: u64, key: u64) -> usize {
+        64 - (key ^ last).leading_zeros() as usize
+    }
+
+    /// Pushes `key`, clamped to the last popped key (with float keys rounding can put a
+    /// successor's f one ulp below its parent's; treating it as equal is harmless).
     #[inline]
     fn push(&mut self, key: u64, idx: u32) {
-        if key <= self.last {
-            self.ties.push(idx);
-        } else {
-            self.heap.push(std::cmp::Reverse((key, idx)));
-        }
+        let key = key.max(self.last);
+        let b = Self::bucket(self.last, key);
+        self.mask |= 1u128 << b;
+        self.buckets[b].push((key, idx));
     }
 
-    #[inline]
+    #[inline(always)]
     fn pop(&mut self) -> Option<(u64, u32)> {
-        if let Some(i) = self.ties.pop() {
-            return Some((self.last, i));
+        if let Some(e) = self.buckets[0].pop() {
+            return Some(e);
         }
-        let std::cmp::Reverse((k, i)) = self.heap.pop()?;
-        self.last = k;
-        Some((k, i))
+        self.refill()
+    }
+
+    /// Bucket 0 is empty: redistribute the smallest non-empty bucket around its minimum.
+    #[inline(never)]
+    fn refill(&mut self) -> Option<(u64, u32)> {
+        let rest = self.mask & !1;
+        if rest == 0 {
+            return None;
+        }
+        let b = rest.trailing_zeros() as usize;
+        self.mask &= !(1u128 << b);
+        let mut moved = std::mem::take(&mut self.buckets[b]);
+        let min = moved
+            .iter()
+            .map(|e| e.0)
+            .min()
+            .expect("bucket is non-empty");
+        self.last = min;
+        // Every key of bucket b shares the bits above b − 1 with the new minimum and so
+        // lands in a bucket below b.
+        for &(k, i) in &moved {
+            let nb = Self::bucket(min, k);
+            self.mask |= 1u128 << nb;
+            self.buckets[nb].push((k, i));
+        }
+        moved.clear();
+        self.buckets[b] = moved;
+        self.buckets[0].pop()
     }
 }
 
-/// Per-cell search state, 16 bytes so one cache line access serves a neighbour.
+/// Per-cell search state, 16 bytes so one cache line access serves a neighbour. `g` is
+/// the fixed-point cost (unweighted search) or the IEEE bits of the f64 cost (weighted).
 #[derive(Clone, Copy, Debug, Default)]
 struct CellState {
-    g: f64,
+    g: u64,
     parent: u32,
     stamp: u32,
 }
@@ -278,6 +327,10 @@ impl PartialOrd for Node {
 pub struct AstarWorkspace {
     state: Vec<CellState>,
     generation: u32,
+    /// Packed 8-byte states of the unweighted search (see [`search_octile`]).
+    packed: Vec<u64>,
+    packed_generation: u64,
+    moves: Vec<u8>,
     heap: OpenList,
 }
 
@@ -298,6 +351,19 @@ impl AstarWorkspace {
             self.generation = 0;
         }
         self.generation += 1;
+    }
+
+    fn prepare_packed(&mut self, n: usize) {
+        if self.packed.len() != n {
+            self.packed = vec![0; n];
+            self.packed_generation = 0;
+        }
+        // Stamps (top 16 bits): 2·gen = generated this query, 2·gen + 1 = closed.
+        if self.packed_generation >= (1 << 15) - 1 {
+            self.packed.iter_mut().for_each(|c| *c = 0);
+            self.packed_generation = 0;
+        }
+        self.packed_generation += 1;
     }
 }
 
@@ -334,17 +400,29 @@ pub fn astar_with(
     grid.check_cell("goal", goal)?;
     let mut expanded = 0;
     let found = match &grid.weight {
-        None => search::<false>(grid, &[], ws, start, goal, &mut expanded),
-        Some(w) => search::<true>(grid, w, ws, start, goal, &mut expanded),
+        None => search_octile(grid, ws, start, goal, &mut expanded),
+        Some(w) => search_weighted(grid, w, ws, start, goal, &mut expanded),
     };
     Ok(found.map(|cost| {
         let t = grid.pidx(goal.0, goal.1);
         let mut cells = Vec::new();
-        let mut cur = t as u32;
-        while cur != u32::MAX {
-            let c = cur as usize;
-            cells.push((c % grid.pw - 1, c / grid.pw - 1));
-            cur = ws.state[c].parent;
+        let xy = |c: usize| (c % grid.pw - 1, c / grid.pw - 1);
+        if grid.weight.is_some() {
+            let mut cur = t as u32;
+            while cur != u32::MAX {
+                cells.push(xy(cur as usize));
+                cur = ws.state[cur as usize].parent;
+            }
+        } else {
+            let s = grid.pidx(start.0, start.1);
+            let off = move_offsets(grid.pw);
+            let mut cur = t;
+            cells.push(xy(cur));
+            while cur != s {
+                let k = ((ws.packed[cur] >> DIR_SHIFT) & 7) as usize;
+                cur = (cur as isize - off[k]) as usize;
+                cells.push(xy(cur));
+            }
         }
         cells.reverse();
         GridPath {
@@ -367,14 +445,162 @@ pub fn astar_cost(
     grid.check_cell("goal", goal)?;
     let mut expanded_out = 0;
     let r = match &grid.weight {
-        None => search::<false>(grid, &[], ws, start, goal, &mut expanded_out),
-        Some(w) => search::<true>(grid, w, ws, start, goal, &mut expanded_out),
+        None => search_octile(grid, ws, start, goal, &mut expanded_out),
+        Some(w) => search_weighted(grid, w, ws, start, goal, &mut expanded_out),
     };
     Ok((r, expanded_out))
 }
 
-#[inline(always)]
-fn search<const W: bool>(
+/// Bits of the packed state word holding g (fixed point), then 3 bits of parent direction,
+/// then a 16-bit stamp (2·generation = generated, 2·generation + 1 = closed).
+const G_BITS: u32 = 45;
+const G_MASK: u64 = (1 << G_BITS) - 1;
+const DIR_SHIFT: u32 = G_BITS;
+const STAMP_SHIFT: u32 = 48;
+
+/// Padded-index offsets of the eight moves: E, W, N(+y), S(−y), NE, NW, SE, SW.
+#[inline]
+fn move_offsets(pw: usize) -> [isize; 8] {
+    let p = pw as isize;
+    [1, -1, p, -p, p + 1, p - 1, -p + 1, -p - 1]
+}
+
+/// Fixed-point scale of the unweighted search for a grid of `n` padded cells: a straight
+/// step costs 2^shift, a diagonal round(√2 · 2^shift), with shift ≤ 20 chosen so that any
+/// path cost fits in [`G_BITS`] bits. Keys and g are exact integers, so equal-f ties are
+/// exact and the search needs no float compares; the rounding of √2 (relative ≤ 4e-7) can
+/// only prefer a path whose true length exceeds the optimum by less than that relative
+/// amount, and the reported cost is recomputed in floating point from the moves (1 or
+/// √2) of the path found. The integer heuristic uses the per-diagonal term
+/// `diag − one`, which keeps it consistent with the integer step costs.
+#[inline]
+fn fixed_point_steps(n: usize) -> (u64, u64) {
+    let bits = usize::BITS - n.leading_zeros();
+    let shift = (G_BITS - 1 - bits).min(20);
+    let one = 1u64 << shift;
+    let diag = (SQRT2 * one as f64).round() as u64;
+    (one, diag)
+}
+
+/// The unweighted (octile) search on fixed-point costs with 8-byte packed cell states;
+/// returns the exact length.
+fn search_octile(
+    grid: &SearchGrid,
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+    expanded_out: &mut usize,
+) -> Option<f64> {
+    let n = grid.pass.len();
+    ws.prepare_packed(n);
+    let open_stamp = (ws.packed_generation * 2) << STAMP_SHIFT;
+    let closed_bit = 1u64 << STAMP_SHIFT;
+    let stamp_mask = !0u64 << STAMP_SHIFT;
+    let (one, diag_cost) = fixed_point_steps(n);
+    let extra = diag_cost - one;
+    let pw = grid.pw;
+    let inv_pw = 1.0 / pw as f64;
+    let pass = &grid.pass[..];
+    let st = &mut ws.packed[..];
+    let mut heap = std::mem::take(&mut ws.heap);
+    heap.clear();
+    // Heuristic in padded coordinates (the offset cancels).
+    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
+    let h = |x: i64, y: i64| {
+        let (a, b) = ((gx - x).unsigned_abs(), (gy - y).unsigned_abs());
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        hi * one + lo * extra
+    };
+    let s = grid.pidx(start.0, start.1);
+    let t = grid.pidx(goal.0, goal.1);
+    st[s] = open_stamp;
+    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1), s as u32);
+    let off = move_offsets(pw);
+    // (dx, dy) of each move; diagonals 4..8 pass between cardinals (0|1) and (2|3).
+    const DXY: [(i64, i64); 8] = [
+        (1, 0),
+        (-1, 0),
+        (0, 1),
+        (0, -1),
+        (1, 1),
+        (-1, 1),
+        (1, -1),
+        (-1, -1),
+    ];
+    let mut expanded = 0usize;
+    let mut found = false;
+    while let Some((_, ui)) = heap.pop() {
+        let u = ui as usize;
+        let su = st[u];
+        if su & stamp_mask != open_stamp {
+            continue; // closed already (a stale duplicate entry)
+        }
+        st[u] = su | closed_bit;
+        expanded += 1;
+        if u == t {
+            found = true;
+            break;
+        }
+        // Row and column without an integer division: a float estimate, corrected.
+        let mut yy = (u as f64 * inv_pw) as usize;
+        if yy * pw > u {
+            yy -= 1;
+        } else if (yy + 1) * pw <= u {
+            yy += 1;
+        }
+        let (x, y) = ((u - yy * pw) as i64, yy as i64);
+        let gu = su & G_MASK;
+        let mut open_card = [false; 4];
+        for k in 0..8 {
+            if k >= 4 {
+                let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
+                if !(open_card[a] && open_card[b]) {
+                    continue;
+                }
+            }
+            let v = (u as isize + off[k]) as usize;
+            if !pass[v] {
+                continue;
+            }
+            if k < 4 {
+                open_card[k] = true;
+            }
+            let ng = gu + if k < 4 { one } else { diag_cost };
+            let sv = st[v];
+            // A closed cell already has its optimal g (integer costs, consistent
+            // heuristic), so `ng < g` also rejects it.
+            if (sv & stamp_mask) | closed_bit != open_stamp | closed_bit || ng < sv & G_MASK {
+                st[v] = open_stamp | ((k as u64) << DIR_SHIFT) | ng;
+                let (dx, dy) = DXY[k];
+                heap.push(ng + h(x + dx, y + dy), v as u32);
+            }
+        }
+    }
+    *expanded_out = expanded;
+    ws.heap = heap;
+    if !found {
+        return None;
+    }
+    // The length in floating point, recomputed from the moves of the path found and
+    // accumulated from the start as a float search would (1 or √2 per move).
+    let mut moves = std::mem::take(&mut ws.moves);
+    moves.clear();
+    let mut cur = t;
+    while cur != s {
+        let k = ((st[cur] >> DIR_SHIFT) & 7) as u8;
+        moves.push(k);
+        cur = (cur as isize - off[k as usize]) as usize;
+    }
+    let length = moves
+        .iter()
+        .rev()
+        .fold(0.0, |g, &k| g + if k < 4 { 1.0 } else { SQRT2 });
+    ws.moves = moves;
+    Some(length)
+}
+
+/// The cost-aware search: f64 costs, keys = IEEE bits of f (monotone for f ≥ 0).
+fn search_weighted(
     grid: &SearchGrid,
     weight: &[f32],
     ws: &mut AstarWorkspace,
@@ -399,7 +625,7 @@ fn search<const W: bool>(
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
     st[s] = CellState {
-        g: 0.0,
+        g: 0.0f64.to_bits(),
         parent: u32::MAX,
         stamp: open_stamp,
     };
@@ -427,7 +653,7 @@ fn search<const W: bool>(
         st[u].stamp = closed_stamp;
         expanded += 1;
         if u == t {
-            result = Some(su.g);
+            result = Some(f64::from_bits(su.g));
             break;
         }
         // Row and column without an integer division: a float estimate, corrected.
@@ -438,7 +664,7 @@ fn search<const W: bool>(
             yy += 1;
         }
         let (x, y) = ((u - yy * pw) as i64, yy as i64);
-        let gu = su.g;
+        let gu = f64::from_bits(su.g);
         let mut open_card = [false; 4];
         for (k, &(off, dx, dy)) in card.iter().enumerate() {
             let v = (u as isize + off) as usize;
@@ -450,10 +676,10 @@ fn search<const W: bool>(
             if sv.stamp == closed_stamp {
                 continue;
             }
-            let ng = if W { gu + weight[v] as f64 } else { gu + 1.0 };
-            if sv.stamp != open_stamp || ng < sv.g {
+            let ng = gu + weight[v] as f64;
+            if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
                 *sv = CellState {
-                    g: ng,
+                    g: ng.to_bits(),
                     parent: u as u32,
                     stamp: open_stamp,
                 };
@@ -472,14 +698,10 @@ fn search<const W: bool>(
             if sv.stamp == closed_stamp {
                 continue;
             }
-            let ng = if W {
-                gu + SQRT2 * weight[v] as f64
-            } else {
-                gu + SQRT2
-            };
-            if sv.stamp != open_stamp || ng < sv.g {
+            let ng = gu + SQRT2 * weight[v] as f64;
+            if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
                 *sv = CellState {
-                    g: ng,
+                    g: ng.to_bits(),
                     parent: u as u32,
                     stamp: open_stamp,
                 };
