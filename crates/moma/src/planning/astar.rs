@@ -11,8 +11,8 @@
 //! round(√2·2^k)) and packs each cell's state (g, parent direction, stamp) into 8 bytes,
 //! so the state of a 512 × 512 map fits in the L2 cache; the open list is a radix heap
 //! on those monotone integer keys whose equal-key bucket is a stack (f ties broken toward
-//! the deepest, larger-g cells). The reported cost is recomputed in floating point from
-//! the moves of the path found.
+//! the deepest, larger-g cells). The reported cost is n_straight + n_diag · √2 of the
+//! path found, recovered exactly from its integer cost.
 
 use super::grid::OccupancyGrid;
 use crate::{Error, Result};
@@ -330,7 +330,6 @@ pub struct AstarWorkspace {
     /// Packed 8-byte states of the unweighted search (see [`search_octile`]).
     packed: Vec<u64>,
     packed_generation: u64,
-    moves: Vec<u8>,
     heap: OpenList,
 }
 
@@ -453,7 +452,7 @@ pub fn astar_cost(
 
 /// Bits of the packed state word holding g (fixed point), then 3 bits of parent direction,
 /// then a 16-bit stamp (2·generation = generated, 2·generation + 1 = closed).
-const G_BITS: u32 = 45;
+pub(super) const G_BITS: u32 = 45;
 const G_MASK: u64 = (1 << G_BITS) - 1;
 const DIR_SHIFT: u32 = G_BITS;
 const STAMP_SHIFT: u32 = 48;
@@ -466,20 +465,38 @@ fn move_offsets(pw: usize) -> [isize; 8] {
 }
 
 /// Fixed-point scale of the unweighted search for a grid of `n` padded cells: a straight
-/// step costs 2^shift, a diagonal round(√2 · 2^shift), with shift ≤ 20 chosen so that any
-/// path cost fits in [`G_BITS`] bits. Keys and g are exact integers, so equal-f ties are
-/// exact and the search needs no float compares; the rounding of √2 (relative ≤ 4e-7) can
-/// only prefer a path whose true length exceeds the optimum by less than that relative
-/// amount, and the reported cost is recomputed in floating point from the moves (1 or
-/// √2) of the path found. The integer heuristic uses the per-diagonal term
-/// `diag − one`, which keeps it consistent with the integer step costs.
+/// step costs `one` = 2^shift, a diagonal `diag` ≈ √2 · 2^shift (rounded to the nearest odd
+/// integer), with shift ≤ 20 chosen so that any path cost fits in [`G_BITS`] bits. Keys
+/// and g are exact integers, so equal-f ties are exact and the search needs no float
+/// compares; the rounding of √2 (relative ≤ 1e-6) can only prefer a path whose true length
+/// exceeds the optimum by less than that relative amount. The integer heuristic uses the
+/// per-diagonal term `diag − one`, which keeps it consistent with the integer step costs.
 #[inline]
-fn fixed_point_steps(n: usize) -> (u64, u64) {
+pub(super) fn fixed_point_steps(n: usize) -> (u64, u64) {
     let bits = usize::BITS - n.leading_zeros();
     let shift = (G_BITS - 1 - bits).min(20);
     let one = 1u64 << shift;
-    let diag = (SQRT2 * one as f64).round() as u64;
+    let diag = (SQRT2 * one as f64).round() as u64 | 1;
     (one, diag)
+}
+
+/// Splits a fixed-point path cost `g = n_straight · one + n_diag · diag` back into its move
+/// counts and returns the length `n_straight + n_diag · √2` (one rounding). `diag` is odd,
+/// hence invertible modulo `one` = 2^shift, which gives `n_diag mod one`; that is `n_diag`
+/// itself whenever `g / diag < one`. Returns `None` beyond that (only possible on maps of
+/// more than 2^24 cells), when the caller recounts the moves along the path.
+pub(super) fn fixed_point_length(g: u64, one: u64, diag: u64) -> Option<f64> {
+    if g / diag >= one {
+        return None;
+    }
+    let mut inv = diag; // Newton iteration for the inverse of an odd number modulo 2^64
+    for _ in 0..6 {
+        inv = inv.wrapping_mul(2u64.wrapping_sub(diag.wrapping_mul(inv)));
+    }
+    let n_diag = g.wrapping_mul(inv) & (one - 1);
+    let rest = g.checked_sub(n_diag * diag)?;
+    debug_assert_eq!(rest % one, 0);
+    Some((rest / one) as f64 + n_diag as f64 * SQRT2)
 }
 
 /// The unweighted (octile) search on fixed-point costs with 8-byte packed cell states;
@@ -581,22 +598,23 @@ fn search_octile(
     if !found {
         return None;
     }
-    // The length in floating point, recomputed from the moves of the path found and
-    // accumulated from the start as a float search would (1 or √2 per move).
-    let mut moves = std::mem::take(&mut ws.moves);
-    moves.clear();
+    // The length n_straight + n_diag · √2 of the path found, from its exact integer cost
+    // (or, on huge maps, from its moves).
+    if let Some(length) = fixed_point_length(st[t] & G_MASK, one, diag_cost) {
+        return Some(length);
+    }
+    let (mut straight, mut diagonal) = (0u64, 0u64);
     let mut cur = t;
     while cur != s {
-        let k = ((st[cur] >> DIR_SHIFT) & 7) as u8;
-        moves.push(k);
-        cur = (cur as isize - off[k as usize]) as usize;
+        let k = ((st[cur] >> DIR_SHIFT) & 7) as usize;
+        if k < 4 {
+            straight += 1;
+        } else {
+            diagonal += 1;
+        }
+        cur = (cur as isize - off[k]) as usize;
     }
-    let length = moves
-        .iter()
-        .rev()
-        .fold(0.0, |g, &k| g + if k < 4 { 1.0 } else { SQRT2 });
-    ws.moves = moves;
-    Some(length)
+    Some(straight as f64 + diagonal as f64 * SQRT2)
 }
 
 /// The cost-aware search: f64 costs, keys = IEEE bits of f (monotone for f ≥ 0).

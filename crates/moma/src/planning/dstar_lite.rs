@@ -6,16 +6,21 @@
 //! are re-expanded, and the key modifier `k_m` keeps the queue valid as the robot moves.
 //! Move model as [`super::astar()`]: 8-connected, costs 1 / √2, no corner cutting, so
 //! the cost after any change equals that of A* from scratch on the changed map.
+//!
+//! Costs and keys are exact fixed-point integers (the same scale as the A* search: a
+//! straight step 2^k, a diagonal ≈ √2 · 2^k), so cells on the equal-cost plateaus of open
+//! maps tie exactly instead of being ordered by floating-point rounding noise, and the
+//! reported cost n_straight + n_diag · √2 is recovered exactly from the integer g.
 
-use super::astar::{SQRT2, SearchGrid, octile};
+use super::astar::{SQRT2, SearchGrid, fixed_point_length, fixed_point_steps};
 use crate::{Error, Result};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 #[derive(Clone, Copy, Debug)]
 struct QEntry {
-    k1: f64,
-    k2: f64,
+    k1: u64,
+    k2: u64,
     idx: u32,
 }
 impl PartialEq for QEntry {
@@ -27,7 +32,7 @@ impl Eq for QEntry {}
 impl Ord for QEntry {
     fn cmp(&self, o: &Self) -> Ordering {
         // Max-heap → reverse: the smallest key is the greatest entry.
-        o.k1.total_cmp(&self.k1).then(o.k2.total_cmp(&self.k2))
+        o.k1.cmp(&self.k1).then(o.k2.cmp(&self.k2))
     }
 }
 impl PartialOrd for QEntry {
@@ -37,9 +42,12 @@ impl PartialOrd for QEntry {
 }
 
 #[inline]
-fn key_less(a: (f64, f64), b: (f64, f64)) -> bool {
-    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+fn key_less(a: (u64, u64), b: (u64, u64)) -> bool {
+    a < b
 }
+
+/// "Infinite" cost-to-goal.
+const INF: u64 = u64::MAX;
 
 /// An incremental planner from a moving robot (`start`) to a fixed goal.
 #[derive(Debug, Clone)]
@@ -47,12 +55,15 @@ fn key_less(a: (f64, f64), b: (f64, f64)) -> bool {
 #[doc(alias = "d_star_lite")]
 pub struct DStarLite {
     grid: SearchGrid,
-    g: Vec<f64>,
-    rhs: Vec<f64>,
-    open_key: Vec<(f64, f64)>,
+    g: Vec<u64>,
+    rhs: Vec<u64>,
+    open_key: Vec<(u64, u64)>,
     in_open: Vec<bool>,
     heap: BinaryHeap<QEntry>,
-    km: f64,
+    km: u64,
+    /// Fixed-point step costs (see the module documentation).
+    one: u64,
+    diag: u64,
     start: usize,
     last: usize,
     goal: usize,
@@ -60,7 +71,7 @@ pub struct DStarLite {
     offsets: [(isize, bool); 8],
 }
 
-const NONE_KEY: (f64, f64) = (f64::INFINITY, f64::INFINITY);
+const NONE_KEY: (u64, u64) = (INF, INF);
 
 impl DStarLite {
     /// Sets up a planner on a copy of `grid` from `start` to `goal` (cells `(x, y)`);
@@ -76,14 +87,17 @@ impl DStarLite {
         }
         let n = grid.pass.len();
         let pw = grid.pw as isize;
+        let (one, diag) = fixed_point_steps(n);
         let mut s = Self {
             grid: grid.clone(),
-            g: vec![f64::INFINITY; n],
-            rhs: vec![f64::INFINITY; n],
+            g: vec![INF; n],
+            rhs: vec![INF; n],
             open_key: vec![NONE_KEY; n],
             in_open: vec![false; n],
             heap: BinaryHeap::new(),
-            km: 0.0,
+            km: 0,
+            one,
+            diag,
             start: grid.pidx(start.0, start.1),
             last: grid.pidx(start.0, start.1),
             goal: grid.pidx(goal.0, goal.1),
@@ -99,7 +113,7 @@ impl DStarLite {
                 (-pw - 1, true),
             ],
         };
-        s.rhs[s.goal] = 0.0;
+        s.rhs[s.goal] = 0;
         let k = s.key(s.goal);
         s.push(s.goal, k);
         Ok(s)
@@ -111,19 +125,24 @@ impl DStarLite {
     }
 
     #[inline]
-    fn h(&self, a: usize, b: usize) -> f64 {
+    fn h(&self, a: usize, b: usize) -> u64 {
         let (ax, ay) = self.xy(a);
         let (bx, by) = self.xy(b);
-        octile(ax - bx, ay - by)
+        let (dx, dy) = ((ax - bx).unsigned_abs(), (ay - by).unsigned_abs());
+        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+        hi * self.one + lo * (self.diag - self.one)
     }
 
     #[inline]
-    fn key(&self, s: usize) -> (f64, f64) {
+    fn key(&self, s: usize) -> (u64, u64) {
         let m = self.g[s].min(self.rhs[s]);
+        if m == INF {
+            return NONE_KEY;
+        }
         (m + self.h(self.start, s) + self.km, m)
     }
 
-    fn push(&mut self, s: usize, k: (f64, f64)) {
+    fn push(&mut self, s: usize, k: (u64, u64)) {
         self.open_key[s] = k;
         self.in_open[s] = true;
         self.heap.push(QEntry {
@@ -135,11 +154,11 @@ impl DStarLite {
 
     /// Cost of the step from `u` by offset `k`, infinite if illegal.
     #[inline]
-    fn step_cost(&self, u: usize, off: isize, diag: bool) -> f64 {
+    fn step_cost(&self, u: usize, off: isize, diag: bool) -> u64 {
         let pass = &self.grid.pass;
         let v = (u as isize + off) as usize;
         if !pass[u] || !pass[v] {
-            return f64::INFINITY;
+            return INF;
         }
         if diag {
             let pw = self.grid.pw as isize;
@@ -150,11 +169,11 @@ impl DStarLite {
             };
             let dy_off = off - dx;
             if !pass[(u as isize + dx) as usize] || !pass[(u as isize + dy_off) as usize] {
-                return f64::INFINITY;
+                return INF;
             }
-            SQRT2
+            self.diag
         } else {
-            1.0
+            self.one
         }
     }
 
@@ -165,13 +184,13 @@ impl DStarLite {
 
     fn update_vertex(&mut self, u: usize) {
         if u != self.goal {
-            let mut best = f64::INFINITY;
+            let mut best = INF;
             if self.grid.pass[u] {
                 for &(off, diag) in &self.offsets {
                     let c = self.step_cost(u, off, diag);
-                    if c.is_finite() {
+                    if c != INF {
                         let v = (u as isize + off) as usize;
-                        best = best.min(c + self.g[v]);
+                        best = best.min(c.saturating_add(self.g[v]));
                     }
                 }
             }
@@ -184,7 +203,7 @@ impl DStarLite {
         }
     }
 
-    fn top(&mut self) -> Option<((f64, f64), usize)> {
+    fn top(&mut self) -> Option<((u64, u64), usize)> {
         while let Some(e) = self.heap.peek() {
             let i = e.idx as usize;
             if self.in_open[i] && self.open_key[i] == (e.k1, e.k2) {
@@ -214,13 +233,33 @@ impl DStarLite {
                 self.g[u] = self.rhs[u];
                 self.update_neighbours(u);
             } else {
-                self.g[u] = f64::INFINITY;
+                self.g[u] = INF;
                 self.update_vertex(u);
                 self.update_neighbours(u);
             }
         }
         let c = self.g[self.start].min(self.rhs[self.start]);
-        c.is_finite().then_some(c)
+        if c == INF {
+            return None;
+        }
+        fixed_point_length(c, self.one, self.diag).or_else(|| self.path_length())
+    }
+
+    /// n_straight + n_diag · √2 along [`DStarLite::path`] (huge maps only; see
+    /// [`fixed_point_length`]).
+    fn path_length(&self) -> Option<f64> {
+        let p = self.path()?;
+        Some(
+            p.windows(2)
+                .map(|w| {
+                    if w[0].0 != w[1].0 && w[0].1 != w[1].1 {
+                        SQRT2
+                    } else {
+                        1.0
+                    }
+                })
+                .sum(),
+        )
     }
 
     fn update_neighbours(&mut self, u: usize) {
@@ -287,8 +326,8 @@ impl DStarLite {
                 if self.inside(u) {
                     if !self.grid.pass[u] {
                         // A blocked cell has no steps: its cost-to-goal is infinite.
-                        self.rhs[u] = f64::INFINITY;
-                        self.g[u] = f64::INFINITY;
+                        self.rhs[u] = INF;
+                        self.g[u] = INF;
                         self.in_open[u] = false;
                     } else {
                         self.update_vertex(u);
@@ -302,19 +341,19 @@ impl DStarLite {
     /// The current best path from the robot to the goal (greedy descent of `c + g`),
     /// `None` if unreachable. Call after [`DStarLite::compute`].
     pub fn path(&self) -> Option<Vec<(usize, usize)>> {
-        if !self.g[self.start].is_finite() {
+        if self.g[self.start] == INF {
             return None;
         }
         let mut out = vec![self.start()];
         let mut u = self.start;
         let limit = self.grid.pass.len();
         while u != self.goal {
-            let mut best = (f64::INFINITY, usize::MAX);
+            let mut best = (INF, usize::MAX);
             for &(off, diag) in &self.offsets {
                 let c = self.step_cost(u, off, diag);
-                if c.is_finite() {
+                if c != INF {
                     let v = (u as isize + off) as usize;
-                    let val = c + self.g[v];
+                    let val = c.saturating_add(self.g[v]);
                     if val < best.0 {
                         best = (val, v);
                     }
