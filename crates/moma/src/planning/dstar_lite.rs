@@ -50,13 +50,13 @@ fn key_less(a: (u64, u64), b: (u64, u64)) -> bool {
 const INF: u64 = u64::MAX;
 
 /// An incremental planner from a moving robot (`start`) to a fixed goal.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 #[doc(alias = "dstar")]
 #[doc(alias = "d_star_lite")]
 pub struct DStarLite {
     grid: SearchGrid,
-    g: Vec<u64>,
-    rhs: Vec<u64>,
+    /// `(g, rhs)` per cell, side by side so one cache line serves both.
+    gr: Vec<(u64, u64)>,
     open_key: Vec<(u64, u64)>,
     in_open: Vec<bool>,
     heap: BinaryHeap<QEntry>,
@@ -65,6 +65,8 @@ pub struct DStarLite {
     one: u64,
     diag: u64,
     start: usize,
+    /// Padded coordinates of `start`.
+    start_xy: (i64, i64),
     last: usize,
     goal: usize,
     expanded: usize,
@@ -72,6 +74,51 @@ pub struct DStarLite {
 }
 
 const NONE_KEY: (u64, u64) = (INF, INF);
+
+impl Clone for DStarLite {
+    /// A copy that keeps the queue's spare capacity, so re-planning on the copy does not
+    /// start by reallocating (and copying) a queue of the map's size.
+    fn clone(&self) -> Self {
+        let mut queue = Vec::with_capacity(self.heap.capacity());
+        queue.extend_from_slice(self.heap.as_slice());
+        Self {
+            grid: self.grid.clone(),
+            gr: self.gr.clone(),
+            open_key: self.open_key.clone(),
+            in_open: self.in_open.clone(),
+            // Already a valid heap: rebuilding it moves nothing.
+            heap: BinaryHeap::from(queue),
+            km: self.km,
+            one: self.one,
+            diag: self.diag,
+            start: self.start,
+            start_xy: self.start_xy,
+            last: self.last,
+            goal: self.goal,
+            expanded: self.expanded,
+            offsets: self.offsets,
+        }
+    }
+
+    /// Copies `source` into `self` reusing `self`'s allocations (a snapshot without
+    /// allocating when both plan on the same map size).
+    fn clone_from(&mut self, source: &Self) {
+        self.grid.clone_from(&source.grid);
+        self.gr.clone_from(&source.gr);
+        self.open_key.clone_from(&source.open_key);
+        self.in_open.clone_from(&source.in_open);
+        self.heap.clone_from(&source.heap);
+        self.km = source.km;
+        self.one = source.one;
+        self.diag = source.diag;
+        self.start = source.start;
+        self.start_xy = source.start_xy;
+        self.last = source.last;
+        self.goal = source.goal;
+        self.expanded = source.expanded;
+        self.offsets = source.offsets;
+    }
+}
 
 impl DStarLite {
     /// Sets up a planner on a copy of `grid` from `start` to `goal` (cells `(x, y)`);
@@ -90,8 +137,7 @@ impl DStarLite {
         let (one, diag) = fixed_point_steps(n);
         let mut s = Self {
             grid: grid.clone(),
-            g: vec![INF; n],
-            rhs: vec![INF; n],
+            gr: vec![(INF, INF); n],
             open_key: vec![NONE_KEY; n],
             in_open: vec![false; n],
             heap: BinaryHeap::new(),
@@ -99,6 +145,7 @@ impl DStarLite {
             one,
             diag,
             start: grid.pidx(start.0, start.1),
+            start_xy: (start.0 as i64 + 1, start.1 as i64 + 1),
             last: grid.pidx(start.0, start.1),
             goal: grid.pidx(goal.0, goal.1),
             expanded: 0,
@@ -113,7 +160,7 @@ impl DStarLite {
                 (-pw - 1, true),
             ],
         };
-        s.rhs[s.goal] = 0;
+        s.gr[s.goal].1 = 0;
         let k = s.key(s.goal);
         s.push(s.goal, k);
         Ok(s)
@@ -121,7 +168,8 @@ impl DStarLite {
 
     #[inline]
     fn xy(&self, i: usize) -> (i64, i64) {
-        ((i % self.grid.pw) as i64, (i / self.grid.pw) as i64)
+        let y = i / self.grid.pw;
+        ((i - y * self.grid.pw) as i64, y as i64)
     }
 
     #[inline]
@@ -135,11 +183,17 @@ impl DStarLite {
 
     #[inline]
     fn key(&self, s: usize) -> (u64, u64) {
-        let m = self.g[s].min(self.rhs[s]);
+        let m = self.gr[s].0.min(self.gr[s].1);
         if m == INF {
             return NONE_KEY;
         }
-        (m + self.h(self.start, s) + self.km, m)
+        let (x, y) = self.xy(s);
+        let (dx, dy) = (
+            (x - self.start_xy.0).unsigned_abs(),
+            (y - self.start_xy.1).unsigned_abs(),
+        );
+        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+        (m + hi * self.one + lo * (self.diag - self.one) + self.km, m)
     }
 
     fn push(&mut self, s: usize, k: (u64, u64)) {
@@ -182,25 +236,65 @@ impl DStarLite {
         x >= 1 && y >= 1 && (x as usize) <= self.grid.width && (y as usize) <= self.grid.height
     }
 
-    fn update_vertex(&mut self, u: usize) {
-        if u != self.goal {
-            let mut best = INF;
-            if self.grid.pass[u] {
-                for &(off, diag) in &self.offsets {
-                    let c = self.step_cost(u, off, diag);
-                    if c != INF {
-                        let v = (u as isize + off) as usize;
-                        best = best.min(c.saturating_add(self.g[v]));
-                    }
-                }
+    /// The costs of the eight steps from `u` (offsets as `self.offsets`), `INF` if illegal.
+    #[inline]
+    fn step_costs(&self, u: usize) -> [u64; 8] {
+        let pass = &self.grid.pass;
+        let mut c = [INF; 8];
+        if !pass[u] {
+            return c;
+        }
+        let mut open = [false; 4];
+        for k in 0..4 {
+            open[k] = pass[(u as isize + self.offsets[k].0) as usize];
+            if open[k] {
+                c[k] = self.one;
             }
-            self.rhs[u] = best;
         }
-        self.in_open[u] = false;
-        if self.g[u] != self.rhs[u] {
+        // Diagonals 4..8 pass between cardinals (0 | 1) and (2 | 3), as in the A* search.
+        for k in 4..8 {
+            let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
+            if open[a] && open[b] && pass[(u as isize + self.offsets[k].0) as usize] {
+                c[k] = self.diag;
+            }
+        }
+        c
+    }
+
+    /// rhs(u) = min over the steps u → v of c(u, v) + g(v) (0 at the goal).
+    #[inline]
+    fn recompute_rhs(&mut self, u: usize) {
+        if u == self.goal {
+            return;
+        }
+        let c = self.step_costs(u);
+        let mut best = INF;
+        for (k, &ck) in c.iter().enumerate() {
+            if ck != INF {
+                let v = (u as isize + self.offsets[k].0) as usize;
+                best = best.min(ck.saturating_add(self.gr[v].0));
+            }
+        }
+        self.gr[u].1 = best;
+    }
+
+    /// Puts `u` in the queue with its current key if it is inconsistent (unless it is
+    /// already there with that key), takes it out otherwise.
+    #[inline]
+    fn update_queue(&mut self, u: usize) {
+        if self.gr[u].0 != self.gr[u].1 {
             let k = self.key(u);
-            self.push(u, k);
+            if !(self.in_open[u] && self.open_key[u] == k) {
+                self.push(u, k);
+            }
+        } else {
+            self.in_open[u] = false;
         }
+    }
+
+    fn update_vertex(&mut self, u: usize) {
+        self.recompute_rhs(u);
+        self.update_queue(u);
     }
 
     fn top(&mut self) -> Option<((u64, u64), usize)> {
@@ -219,8 +313,14 @@ impl DStarLite {
     pub fn compute(&mut self) -> Option<f64> {
         self.expanded = 0;
         while let Some((k_old, u)) = self.top() {
-            let ks = self.key(self.start);
-            if !(key_less(k_old, ks) || self.rhs[self.start] != self.g[self.start]) {
+            let st = self.start;
+            let ms = self.gr[st].0.min(self.gr[st].1);
+            let ks = if ms == INF {
+                NONE_KEY
+            } else {
+                (ms + self.km, ms)
+            };
+            if !(key_less(k_old, ks) || self.gr[st].1 != self.gr[st].0) {
                 break;
             }
             self.heap.pop();
@@ -229,16 +329,39 @@ impl DStarLite {
             let k_new = self.key(u);
             if key_less(k_old, k_new) {
                 self.push(u, k_new);
-            } else if self.g[u] > self.rhs[u] {
-                self.g[u] = self.rhs[u];
-                self.update_neighbours(u);
+            } else if self.gr[u].0 > self.gr[u].1 {
+                // Overconsistent: g(u) drops to rhs(u); a neighbour's rhs can only fall
+                // to the cost through u (Koenig & Likhachev's optimized D* Lite).
+                let gu = self.gr[u].1;
+                self.gr[u].0 = gu;
+                let c = self.step_costs(u);
+                for (k, &ck) in c.iter().enumerate() {
+                    if ck != INF {
+                        let v = (u as isize + self.offsets[k].0) as usize;
+                        if v != self.goal && ck + gu < self.gr[v].1 {
+                            self.gr[v].1 = ck + gu;
+                            self.update_queue(v);
+                        }
+                    }
+                }
             } else {
-                self.g[u] = INF;
+                // Underconsistent: g(u) becomes infinite; only the neighbours whose rhs
+                // came through u (and u itself) need their rhs recomputed.
+                let g_old = self.gr[u].0;
+                self.gr[u].0 = INF;
+                let c = self.step_costs(u);
+                for (k, &ck) in c.iter().enumerate() {
+                    if ck != INF {
+                        let v = (u as isize + self.offsets[k].0) as usize;
+                        if v != self.goal && self.gr[v].1 == ck.saturating_add(g_old) {
+                            self.update_vertex(v);
+                        }
+                    }
+                }
                 self.update_vertex(u);
-                self.update_neighbours(u);
             }
         }
-        let c = self.g[self.start].min(self.rhs[self.start]);
+        let c = self.gr[self.start].0.min(self.gr[self.start].1);
         if c == INF {
             return None;
         }
@@ -260,15 +383,6 @@ impl DStarLite {
                 })
                 .sum(),
         )
-    }
-
-    fn update_neighbours(&mut self, u: usize) {
-        for k in 0..8 {
-            let v = (u as isize + self.offsets[k].0) as usize;
-            if self.grid.pass[v] {
-                self.update_vertex(v);
-            }
-        }
     }
 
     /// Number of cells expanded by the last [`DStarLite::compute`].
@@ -294,6 +408,7 @@ impl DStarLite {
         self.km += self.h(self.last, s);
         self.last = s;
         self.start = s;
+        self.start_xy = self.xy(s);
         Ok(())
     }
 
@@ -326,8 +441,8 @@ impl DStarLite {
                 if self.inside(u) {
                     if !self.grid.pass[u] {
                         // A blocked cell has no steps: its cost-to-goal is infinite.
-                        self.rhs[u] = INF;
-                        self.g[u] = INF;
+                        self.gr[u].1 = INF;
+                        self.gr[u].0 = INF;
                         self.in_open[u] = false;
                     } else {
                         self.update_vertex(u);
@@ -341,7 +456,7 @@ impl DStarLite {
     /// The current best path from the robot to the goal (greedy descent of `c + g`),
     /// `None` if unreachable. Call after [`DStarLite::compute`].
     pub fn path(&self) -> Option<Vec<(usize, usize)>> {
-        if self.g[self.start] == INF {
+        if self.gr[self.start].0 == INF {
             return None;
         }
         let mut out = vec![self.start()];
@@ -353,7 +468,7 @@ impl DStarLite {
                 let c = self.step_cost(u, off, diag);
                 if c != INF {
                     let v = (u as isize + off) as usize;
-                    let val = c.saturating_add(self.g[v]);
+                    let val = c.saturating_add(self.gr[v].0);
                     if val < best.0 {
                         best = (val, v);
                     }
