@@ -55,10 +55,8 @@ const INF: u64 = u64::MAX;
 #[doc(alias = "d_star_lite")]
 pub struct DStarLite {
     grid: SearchGrid,
-    /// `(g, rhs)` per cell, side by side so one cache line serves both.
-    gr: Vec<(u64, u64)>,
-    open_key: Vec<(u64, u64)>,
-    in_open: Vec<bool>,
+    /// Per-cell g, rhs and queue key, side by side so one cache line serves all three.
+    cells: Vec<CellState>,
     heap: BinaryHeap<QEntry>,
     km: u64,
     /// Fixed-point step costs (see the module documentation).
@@ -73,7 +71,17 @@ pub struct DStarLite {
     offsets: [(isize, bool); 8],
 }
 
+/// Queue key of a cell that is not in the queue (an inconsistent cell always has a finite
+/// key).
 const NONE_KEY: (u64, u64) = (INF, INF);
+
+/// g, rhs and the key under which the cell is queued ([`NONE_KEY`] = not queued).
+#[derive(Clone, Copy, Debug)]
+struct CellState {
+    g: u64,
+    rhs: u64,
+    key: (u64, u64),
+}
 
 impl Clone for DStarLite {
     /// A copy that keeps the queue's spare capacity, so re-planning on the copy does not
@@ -83,9 +91,7 @@ impl Clone for DStarLite {
         queue.extend_from_slice(self.heap.as_slice());
         Self {
             grid: self.grid.clone(),
-            gr: self.gr.clone(),
-            open_key: self.open_key.clone(),
-            in_open: self.in_open.clone(),
+            cells: self.cells.clone(),
             // Already a valid heap: rebuilding it moves nothing.
             heap: BinaryHeap::from(queue),
             km: self.km,
@@ -104,9 +110,7 @@ impl Clone for DStarLite {
     /// allocating when both plan on the same map size).
     fn clone_from(&mut self, source: &Self) {
         self.grid.clone_from(&source.grid);
-        self.gr.clone_from(&source.gr);
-        self.open_key.clone_from(&source.open_key);
-        self.in_open.clone_from(&source.in_open);
+        self.cells.clone_from(&source.cells);
         self.heap.clone_from(&source.heap);
         self.km = source.km;
         self.one = source.one;
@@ -137,9 +141,14 @@ impl DStarLite {
         let (one, diag) = fixed_point_steps(n);
         let mut s = Self {
             grid: grid.clone(),
-            gr: vec![(INF, INF); n],
-            open_key: vec![NONE_KEY; n],
-            in_open: vec![false; n],
+            cells: vec![
+                CellState {
+                    g: INF,
+                    rhs: INF,
+                    key: NONE_KEY
+                };
+                n
+            ],
             heap: BinaryHeap::new(),
             km: 0,
             one,
@@ -160,7 +169,7 @@ impl DStarLite {
                 (-pw - 1, true),
             ],
         };
-        s.gr[s.goal].1 = 0;
+        s.cells[s.goal].rhs = 0;
         let k = s.key(s.goal);
         s.push(s.goal, k);
         Ok(s)
@@ -183,7 +192,7 @@ impl DStarLite {
 
     #[inline]
     fn key(&self, s: usize) -> (u64, u64) {
-        let m = self.gr[s].0.min(self.gr[s].1);
+        let m = self.cells[s].g.min(self.cells[s].rhs);
         if m == INF {
             return NONE_KEY;
         }
@@ -197,8 +206,7 @@ impl DStarLite {
     }
 
     fn push(&mut self, s: usize, k: (u64, u64)) {
-        self.open_key[s] = k;
-        self.in_open[s] = true;
+        self.cells[s].key = k;
         self.heap.push(QEntry {
             k1: k.0,
             k2: k.1,
@@ -272,23 +280,23 @@ impl DStarLite {
         for (k, &ck) in c.iter().enumerate() {
             if ck != INF {
                 let v = (u as isize + self.offsets[k].0) as usize;
-                best = best.min(ck.saturating_add(self.gr[v].0));
+                best = best.min(ck.saturating_add(self.cells[v].g));
             }
         }
-        self.gr[u].1 = best;
+        self.cells[u].rhs = best;
     }
 
     /// Puts `u` in the queue with its current key if it is inconsistent (unless it is
     /// already there with that key), takes it out otherwise.
     #[inline]
     fn update_queue(&mut self, u: usize) {
-        if self.gr[u].0 != self.gr[u].1 {
+        if self.cells[u].g != self.cells[u].rhs {
             let k = self.key(u);
-            if !(self.in_open[u] && self.open_key[u] == k) {
+            if self.cells[u].key != k {
                 self.push(u, k);
             }
         } else {
-            self.in_open[u] = false;
+            self.cells[u].key = NONE_KEY;
         }
     }
 
@@ -300,7 +308,7 @@ impl DStarLite {
     fn top(&mut self) -> Option<((u64, u64), usize)> {
         while let Some(e) = self.heap.peek() {
             let i = e.idx as usize;
-            if self.in_open[i] && self.open_key[i] == (e.k1, e.k2) {
+            if self.cells[i].key == (e.k1, e.k2) {
                 return Some(((e.k1, e.k2), i));
             }
             self.heap.pop();
@@ -314,32 +322,32 @@ impl DStarLite {
         self.expanded = 0;
         while let Some((k_old, u)) = self.top() {
             let st = self.start;
-            let ms = self.gr[st].0.min(self.gr[st].1);
+            let ms = self.cells[st].g.min(self.cells[st].rhs);
             let ks = if ms == INF {
                 NONE_KEY
             } else {
                 (ms + self.km, ms)
             };
-            if !(key_less(k_old, ks) || self.gr[st].1 != self.gr[st].0) {
+            if !(key_less(k_old, ks) || self.cells[st].rhs != self.cells[st].g) {
                 break;
             }
             self.heap.pop();
-            self.in_open[u] = false;
+            self.cells[u].key = NONE_KEY;
             self.expanded += 1;
             let k_new = self.key(u);
             if key_less(k_old, k_new) {
                 self.push(u, k_new);
-            } else if self.gr[u].0 > self.gr[u].1 {
+            } else if self.cells[u].g > self.cells[u].rhs {
                 // Overconsistent: g(u) drops to rhs(u); a neighbour's rhs can only fall
                 // to the cost through u (Koenig & Likhachev's optimized D* Lite).
-                let gu = self.gr[u].1;
-                self.gr[u].0 = gu;
+                let gu = self.cells[u].rhs;
+                self.cells[u].g = gu;
                 let c = self.step_costs(u);
                 for (k, &ck) in c.iter().enumerate() {
                     if ck != INF {
                         let v = (u as isize + self.offsets[k].0) as usize;
-                        if v != self.goal && ck + gu < self.gr[v].1 {
-                            self.gr[v].1 = ck + gu;
+                        if v != self.goal && ck + gu < self.cells[v].rhs {
+                            self.cells[v].rhs = ck + gu;
                             self.update_queue(v);
                         }
                     }
@@ -347,13 +355,13 @@ impl DStarLite {
             } else {
                 // Underconsistent: g(u) becomes infinite; only the neighbours whose rhs
                 // came through u (and u itself) need their rhs recomputed.
-                let g_old = self.gr[u].0;
-                self.gr[u].0 = INF;
+                let g_old = self.cells[u].g;
+                self.cells[u].g = INF;
                 let c = self.step_costs(u);
                 for (k, &ck) in c.iter().enumerate() {
                     if ck != INF {
                         let v = (u as isize + self.offsets[k].0) as usize;
-                        if v != self.goal && self.gr[v].1 == ck.saturating_add(g_old) {
+                        if v != self.goal && self.cells[v].rhs == ck.saturating_add(g_old) {
                             self.update_vertex(v);
                         }
                     }
@@ -361,7 +369,7 @@ impl DStarLite {
                 self.update_vertex(u);
             }
         }
-        let c = self.gr[self.start].0.min(self.gr[self.start].1);
+        let c = self.cells[self.start].g.min(self.cells[self.start].rhs);
         if c == INF {
             return None;
         }
@@ -441,9 +449,9 @@ impl DStarLite {
                 if self.inside(u) {
                     if !self.grid.pass[u] {
                         // A blocked cell has no steps: its cost-to-goal is infinite.
-                        self.gr[u].1 = INF;
-                        self.gr[u].0 = INF;
-                        self.in_open[u] = false;
+                        self.cells[u].rhs = INF;
+                        self.cells[u].g = INF;
+                        self.cells[u].key = NONE_KEY;
                     } else {
                         self.update_vertex(u);
                     }
@@ -456,7 +464,7 @@ impl DStarLite {
     /// The current best path from the robot to the goal (greedy descent of `c + g`),
     /// `None` if unreachable. Call after [`DStarLite::compute`].
     pub fn path(&self) -> Option<Vec<(usize, usize)>> {
-        if self.gr[self.start].0 == INF {
+        if self.cells[self.start].g == INF {
             return None;
         }
         let mut out = vec![self.start()];
@@ -468,7 +476,7 @@ impl DStarLite {
                 let c = self.step_cost(u, off, diag);
                 if c != INF {
                     let v = (u as isize + off) as usize;
-                    let val = c.saturating_add(self.gr[v].0);
+                    let val = c.saturating_add(self.cells[v].g);
                     if val < best.0 {
                         best = (val, v);
                     }
