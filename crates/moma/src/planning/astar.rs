@@ -804,3 +804,53 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_costs_decode_to_exact_lengths() {
+        // Map sizes from tiny to the largest the 45-bit state can hold at full scale.
+        for n in [16usize, 264_196, 1 << 24] {
+            let (one, diag) = fixed_point_steps(n);
+            assert_eq!(diag % 2, 1);
+            assert!(((diag as f64 / one as f64) - SQRT2).abs() < 2.0 / one as f64);
+            for (ns, nd) in [
+                (0u64, 0u64),
+                (1, 0),
+                (0, 1),
+                (7, 3),
+                (123_456, 98_765),
+                (3, 400_000),
+            ] {
+                let g = ns * one + nd * diag;
+                let l = fixed_point_length(g, one, diag).unwrap();
+                assert_eq!(l, ns as f64 + nd as f64 * SQRT2, "n = {n}, ({ns}, {nd})");
+            }
+        }
+        // Too many diagonals for the modular decoding: the caller must count moves.
+        let (one, diag) = fixed_point_steps(1 << 30);
+        assert!(fixed_point_length(one * diag, one, diag).is_none());
+    }
+
+    #[test]
+    fn radix_open_list_pops_in_key_order_with_lifo_ties() {
+        let mut q = OpenList::default();
+        for (k, i) in [(5u64, 0u32), (9, 1), (5, 2), (1 << 40, 3), (7, 4)] {
+            q.push(k, i);
+        }
+        let mut out = Vec::new();
+        while let Some((k, i)) = q.pop() {
+            out.push((k, i));
+            if i == 2 {
+                q.push(5, 5); // equal to the last popped key: popped next
+                q.push(8, 6);
+            }
+        }
+        assert_eq!(
+            out,
+            [(5, 2), (5, 5), (5, 0), (7, 4), (8, 6), (9, 1), (1 << 40, 3)]
+        );
+    }
+}
