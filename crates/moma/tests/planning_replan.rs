@@ -115,3 +115,42 @@ fn dstar_lite_unreachable_and_errors() {
             .contains("obstacle")
     );
 }
+
+#[test]
+fn dstar_lite_snapshot_replans_like_the_original() {
+    // A snapshot taken with `clone_from` (buffers reused) re-plans exactly like the
+    // planner it was copied from, and the original is unaffected by the copy's changes.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/planning/movingai/random512-10-0.map");
+    let sg = SearchGrid::from_grid(&load_map(&path, None).unwrap().grid, true);
+    let (start, goal) = ((20, 20), (300, 200));
+    let (start, goal) = (
+        (0..60)
+            .map(|d| (start.0 + d, start.1))
+            .find(|&c| sg.is_free(c.0 as i64, c.1 as i64))
+            .unwrap(),
+        (0..60)
+            .map(|d| (goal.0 + d, goal.1))
+            .find(|&c| sg.is_free(c.0 as i64, c.1 as i64))
+            .unwrap(),
+    );
+    let mut d = DStarLite::new(&sg, start, goal).unwrap();
+    let before = d.compute().unwrap();
+    let mut other = DStarLite::new(&sg, start, goal).unwrap();
+    let ahead = d.path().unwrap()[3];
+    for _ in 0..3 {
+        other.clone_from(&d);
+        other.set_blocked(ahead, true).unwrap();
+        let c = other.compute().unwrap();
+        let a = planning::astar(other.grid(), start, goal)
+            .unwrap()
+            .unwrap()
+            .cost;
+        assert_eq!(c, a);
+        assert!(c >= before);
+        assert!(!other.path().unwrap().contains(&ahead));
+    }
+    // The original never saw the change.
+    assert!(d.grid().is_free(ahead.0 as i64, ahead.1 as i64));
+    assert_eq!(d.compute().unwrap(), before);
+}
