@@ -6,8 +6,13 @@
 //!
 //! Implementation: the grid is stored with a one-cell border of blocked cells so the
 //! eight neighbours are fixed index offsets with no bounds checks; search state lives in
-//! flat arrays reused across queries and invalidated by a generation counter; the open
-//! list is a binary heap ordered by f with ties broken toward larger g.
+//! flat arrays reused across queries and invalidated by a generation counter. The
+//! unweighted search orders by exact fixed-point integer f (straight = 2^k, diagonal =
+//! round(√2·2^k)) and packs each cell's state (g, parent direction, stamp) into 8 bytes,
+//! so the state of a 512 × 512 map fits in the L2 cache; the open list is a radix heap
+//! on those monotone integer keys whose equal-key bucket is a stack (f ties broken toward
+//! the deepest, larger-g cells). The reported cost is n_straight + n_diag · √2 of the
+//! path found, recovered exactly from its integer cost.
 
 use super::grid::OccupancyGrid;
 use crate::{Error, Result};
@@ -44,7 +49,13 @@ impl GridPath {
     pub fn length(&self) -> f64 {
         self.cells
             .windows(2)
-            .map(|w| if w[0].0 != w[1].0 && w[0].1 != w[1].1 { SQRT2 } else { 1.0 })
+            .map(|w| {
+                if w[0].0 != w[1].0 && w[0].1 != w[1].1 {
+                    SQRT2
+                } else {
+                    1.0
+                }
+            })
             .sum()
     }
 }
@@ -63,7 +74,13 @@ impl SearchGrid {
                 *d = !o;
             }
         }
-        Ok(Self { width, height, pw, pass, weight: None })
+        Ok(Self {
+            width,
+            height,
+            pw,
+            pass,
+            weight: None,
+        })
     }
 
     /// Builds the search grid from an occupancy grid: cells ≥ 100 are obstacles, unknown
@@ -77,21 +94,40 @@ impl SearchGrid {
     /// ≥ 253 (inscribed, lethal) are obstacles, 255 (unknown) too unless `allow_unknown`;
     /// every step into a cell of cost c costs `(1 or √2) · (1 + multiplier · c / 252)`
     /// (Smac 2D's `cost_travel_multiplier`; `multiplier` ≥ 0).
-    pub fn from_costs(costs: &[u8], width: usize, height: usize, multiplier: f64, allow_unknown: bool) -> Result<Self> {
+    pub fn from_costs(
+        costs: &[u8],
+        width: usize,
+        height: usize,
+        multiplier: f64,
+        allow_unknown: bool,
+    ) -> Result<Self> {
         if !(multiplier.is_finite() && multiplier >= 0.0) {
-            return Err(Error::invalid("cost multiplier", format!("must be finite and >= 0, got {multiplier}")));
+            return Err(Error::invalid(
+                "cost multiplier",
+                format!("must be finite and >= 0, got {multiplier}"),
+            ));
         }
         crate::error::ensure_len("costmap", width * height, costs.len())?;
         let obst: Vec<bool> = costs
             .iter()
-            .map(|&c| if c == super::costmap::NO_INFORMATION { !allow_unknown } else { c >= super::costmap::INSCRIBED })
+            .map(|&c| {
+                if c == super::costmap::NO_INFORMATION {
+                    !allow_unknown
+                } else {
+                    c >= super::costmap::INSCRIBED
+                }
+            })
             .collect();
         let mut g = Self::from_obstacles(&obst, width, height)?;
         let mut w = vec![1.0f32; g.pass.len()];
         for y in 0..height {
             for x in 0..width {
                 let c = costs[y * width + x];
-                let c = if c == super::costmap::NO_INFORMATION { 0 } else { c };
+                let c = if c == super::costmap::NO_INFORMATION {
+                    0
+                } else {
+                    c
+                };
                 w[(y + 1) * g.pw + x + 1] = (1.0 + multiplier * c as f64 / 252.0) as f32;
             }
         }
@@ -116,7 +152,11 @@ impl SearchGrid {
 
     /// `true` if `(x, y)` is inside the grid and traversable.
     pub fn is_free(&self, x: i64, y: i64) -> bool {
-        x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height && self.pass[self.pidx(x as usize, y as usize)]
+        x >= 0
+            && y >= 0
+            && (x as usize) < self.width
+            && (y as usize) < self.height
+            && self.pass[self.pidx(x as usize, y as usize)]
     }
 
     /// Marks `(x, y)` traversable or blocked.
@@ -132,7 +172,8 @@ impl SearchGrid {
     /// `true` if the step from `(x, y)` by `(dx, dy)` (each in −1..=1) is legal under the
     /// no-corner-cutting model.
     pub fn can_step(&self, x: i64, y: i64, dx: i64, dy: i64) -> bool {
-        self.is_free(x + dx, y + dy) && (dx == 0 || dy == 0 || (self.is_free(x + dx, y) && self.is_free(x, y + dy)))
+        self.is_free(x + dx, y + dy)
+            && (dx == 0 || dy == 0 || (self.is_free(x + dx, y) && self.is_free(x, y + dy)))
     }
 
     /// The obstacle mask (`true` = blocked), row-major without the border.
@@ -164,51 +205,96 @@ impl SearchGrid {
     }
 }
 
-/// The open list: a binary heap of `(f, cell)` plus a stack for the entries whose f equals
-/// the last popped f. A* with a consistent heuristic pops non-decreasing f (f's IEEE bits
-/// serve as exact integer keys), and in open areas most successors keep the parent's f:
-/// those skip the heap entirely, and leaving the stack last-in first-out breaks f ties
-/// toward the most recently generated (deepest, larger-g) cells.
-#[derive(Debug, Clone, Default)]
+/// The open list: a radix heap (Ahuja, Mehlhorn, Orlin, Tarjan 1990) on monotone `u64`
+/// keys. A* with a consistent heuristic pops non-decreasing f, so every key pushed is at
+/// least the last popped one: bucket `b` holds the keys whose highest bit differing from
+/// the last popped key is bit `b − 1`; bucket 0 holds keys equal to it and is a
+/// last-in first-out stack, which breaks f ties toward the most recently generated
+/// (deepest, larger-g) cells without any reordering. A pop only scans the smallest
+/// non-empty bucket when bucket 0 is empty, and every entry moves to a lower bucket at most
+/// 64 times, so the cost per operation is small and independent of the frontier size.
+#[derive(Debug, Clone)]
 struct OpenList {
     last: u64,
-    ties: Vec<u32>,
-    heap: BinaryHeap<std::cmp::Reverse<(u64, u32)>>,
+    /// Bit b set ⇔ bucket b may be non-empty (bucket 0's bit is not maintained).
+    mask: u128,
+    buckets: Vec<Vec<(u64, u32)>>,
+}
+
+impl Default for OpenList {
+    fn default() -> Self {
+        Self {
+            last: 0,
+            mask: 0,
+            buckets: vec![Vec::new(); 65],
+        }
+    }
 }
 
 impl OpenList {
     fn clear(&mut self) {
         self.last = 0;
-        self.ties.clear();
-        self.heap.clear();
+        self.mask = 0;
+        self.buckets.iter_mut().for_each(Vec::clear);
     }
 
-    /// Pushes `key`, clamped to the last popped key (float rounding can put a successor's
-    /// f one ulp below its parent's; treating it as equal is harmless).
+    #[inline]
+    fn bucket(last: u64, key: u64) -> usize {
+        64 - (key ^ last).leading_zeros() as usize
+    }
+
+    /// Pushes `key`, clamped to the last popped key (with float keys rounding can put a
+    /// successor's f one ulp below its parent's; treating it as equal is harmless).
     #[inline]
     fn push(&mut self, key: u64, idx: u32) {
-        if key <= self.last {
-            self.ties.push(idx);
-        } else {
-            self.heap.push(std::cmp::Reverse((key, idx)));
-        }
+        let key = key.max(self.last);
+        let b = Self::bucket(self.last, key);
+        self.mask |= 1u128 << b;
+        self.buckets[b].push((key, idx));
     }
 
-    #[inline]
+    #[inline(always)]
     fn pop(&mut self) -> Option<(u64, u32)> {
-        if let Some(i) = self.ties.pop() {
-            return Some((self.last, i));
+        if let Some(e) = self.buckets[0].pop() {
+            return Some(e);
         }
-        let std::cmp::Reverse((k, i)) = self.heap.pop()?;
-        self.last = k;
-        Some((k, i))
+        self.refill()
+    }
+
+    /// Bucket 0 is empty: redistribute the smallest non-empty bucket around its minimum.
+    #[inline(never)]
+    fn refill(&mut self) -> Option<(u64, u32)> {
+        let rest = self.mask & !1;
+        if rest == 0 {
+            return None;
+        }
+        let b = rest.trailing_zeros() as usize;
+        self.mask &= !(1u128 << b);
+        let mut moved = std::mem::take(&mut self.buckets[b]);
+        let min = moved
+            .iter()
+            .map(|e| e.0)
+            .min()
+            .expect("bucket is non-empty");
+        self.last = min;
+        // Every key of bucket b shares the bits above b − 1 with the new minimum and so
+        // lands in a bucket below b.
+        for &(k, i) in &moved {
+            let nb = Self::bucket(min, k);
+            self.mask |= 1u128 << nb;
+            self.buckets[nb].push((k, i));
+        }
+        moved.clear();
+        self.buckets[b] = moved;
+        self.buckets[0].pop()
     }
 }
 
-/// Per-cell search state, 16 bytes so one cache line access serves a neighbour.
+/// Per-cell search state, 16 bytes so one cache line access serves a neighbour. `g` is
+/// the fixed-point cost (unweighted search) or the IEEE bits of the f64 cost (weighted).
 #[derive(Clone, Copy, Debug, Default)]
 struct CellState {
-    g: f64,
+    g: u64,
     parent: u32,
     stamp: u32,
 }
@@ -241,6 +327,9 @@ impl PartialOrd for Node {
 pub struct AstarWorkspace {
     state: Vec<CellState>,
     generation: u32,
+    /// Packed 8-byte states of the unweighted search (see [`search_octile`]).
+    packed: Vec<u64>,
+    packed_generation: u64,
     heap: OpenList,
 }
 
@@ -262,6 +351,19 @@ impl AstarWorkspace {
         }
         self.generation += 1;
     }
+
+    fn prepare_packed(&mut self, n: usize) {
+        if self.packed.len() != n {
+            self.packed = vec![0; n];
+            self.packed_generation = 0;
+        }
+        // Stamps (top 16 bits): 2·gen = generated this query, 2·gen + 1 = closed.
+        if self.packed_generation >= (1 << 15) - 1 {
+            self.packed.iter_mut().for_each(|c| *c = 0);
+            self.packed_generation = 0;
+        }
+        self.packed_generation += 1;
+    }
 }
 
 /// Octile distance: the exact cost of an unobstructed 8-connected path.
@@ -276,7 +378,11 @@ pub fn octile(dx: i64, dy: i64) -> f64 {
 /// `Ok(None)` when the goal is unreachable; errors if start or goal is outside the grid
 /// or blocked.
 #[doc(alias = "a_star")]
-pub fn astar(grid: &SearchGrid, start: (usize, usize), goal: (usize, usize)) -> Result<Option<GridPath>> {
+pub fn astar(
+    grid: &SearchGrid,
+    start: (usize, usize),
+    goal: (usize, usize),
+) -> Result<Option<GridPath>> {
     astar_with(grid, &mut AstarWorkspace::new(), start, goal)
 }
 
@@ -293,20 +399,36 @@ pub fn astar_with(
     grid.check_cell("goal", goal)?;
     let mut expanded = 0;
     let found = match &grid.weight {
-        None => search::<false>(grid, &[], ws, start, goal, &mut expanded),
-        Some(w) => search::<true>(grid, w, ws, start, goal, &mut expanded),
+        None => search_octile(grid, ws, start, goal, &mut expanded),
+        Some(w) => search_weighted(grid, w, ws, start, goal, &mut expanded),
     };
     Ok(found.map(|cost| {
         let t = grid.pidx(goal.0, goal.1);
         let mut cells = Vec::new();
-        let mut cur = t as u32;
-        while cur != u32::MAX {
-            let c = cur as usize;
-            cells.push((c % grid.pw - 1, c / grid.pw - 1));
-            cur = ws.state[c].parent;
+        let xy = |c: usize| (c % grid.pw - 1, c / grid.pw - 1);
+        if grid.weight.is_some() {
+            let mut cur = t as u32;
+            while cur != u32::MAX {
+                cells.push(xy(cur as usize));
+                cur = ws.state[cur as usize].parent;
+            }
+        } else {
+            let s = grid.pidx(start.0, start.1);
+            let off = move_offsets(grid.pw);
+            let mut cur = t;
+            cells.push(xy(cur));
+            while cur != s {
+                let k = ((ws.packed[cur] >> DIR_SHIFT) & 7) as usize;
+                cur = (cur as isize - off[k]) as usize;
+                cells.push(xy(cur));
+            }
         }
         cells.reverse();
-        GridPath { cells, cost, expanded }
+        GridPath {
+            cells,
+            cost,
+            expanded,
+        }
     }))
 }
 
@@ -322,14 +444,181 @@ pub fn astar_cost(
     grid.check_cell("goal", goal)?;
     let mut expanded_out = 0;
     let r = match &grid.weight {
-        None => search::<false>(grid, &[], ws, start, goal, &mut expanded_out),
-        Some(w) => search::<true>(grid, w, ws, start, goal, &mut expanded_out),
+        None => search_octile(grid, ws, start, goal, &mut expanded_out),
+        Some(w) => search_weighted(grid, w, ws, start, goal, &mut expanded_out),
     };
     Ok((r, expanded_out))
 }
 
-#[inline(always)]
-fn search<const W: bool>(
+/// Bits of the packed state word holding g (fixed point), then 3 bits of parent direction,
+/// then a 16-bit stamp (2·generation = generated, 2·generation + 1 = closed).
+pub(super) const G_BITS: u32 = 45;
+const G_MASK: u64 = (1 << G_BITS) - 1;
+const DIR_SHIFT: u32 = G_BITS;
+const STAMP_SHIFT: u32 = 48;
+
+/// Padded-index offsets of the eight moves: E, W, N(+y), S(−y), NE, NW, SE, SW.
+#[inline]
+fn move_offsets(pw: usize) -> [isize; 8] {
+    let p = pw as isize;
+    [1, -1, p, -p, p + 1, p - 1, -p + 1, -p - 1]
+}
+
+/// Fixed-point scale of the unweighted search for a grid of `n` padded cells: a straight
+/// step costs `one` = 2^shift, a diagonal `diag` ≈ √2 · 2^shift (rounded to the nearest odd
+/// integer), with shift ≤ 20 chosen so that any path cost fits in [`G_BITS`] bits. Keys
+/// and g are exact integers, so equal-f ties are exact and the search needs no float
+/// compares; the rounding of √2 (relative ≤ 1e-6) can only prefer a path whose true length
+/// exceeds the optimum by less than that relative amount. The integer heuristic uses the
+/// per-diagonal term `diag − one`, which keeps it consistent with the integer step costs.
+#[inline]
+pub(super) fn fixed_point_steps(n: usize) -> (u64, u64) {
+    let bits = usize::BITS - n.leading_zeros();
+    let shift = (G_BITS - 1 - bits).min(20);
+    let one = 1u64 << shift;
+    let diag = (SQRT2 * one as f64).round() as u64 | 1;
+    (one, diag)
+}
+
+/// Splits a fixed-point path cost `g = n_straight · one + n_diag · diag` back into its move
+/// counts and returns the length `n_straight + n_diag · √2` (one rounding). `diag` is odd,
+/// hence invertible modulo `one` = 2^shift, which gives `n_diag mod one`; that is `n_diag`
+/// itself whenever `g / diag < one`. Returns `None` beyond that (only possible on maps of
+/// more than 2^24 cells), when the caller recounts the moves along the path.
+pub(super) fn fixed_point_length(g: u64, one: u64, diag: u64) -> Option<f64> {
+    if g / diag >= one {
+        return None;
+    }
+    let mut inv = diag; // Newton iteration for the inverse of an odd number modulo 2^64
+    for _ in 0..6 {
+        inv = inv.wrapping_mul(2u64.wrapping_sub(diag.wrapping_mul(inv)));
+    }
+    let n_diag = g.wrapping_mul(inv) & (one - 1);
+    let rest = g.checked_sub(n_diag * diag)?;
+    debug_assert_eq!(rest % one, 0);
+    Some((rest / one) as f64 + n_diag as f64 * SQRT2)
+}
+
+/// The unweighted (octile) search on fixed-point costs with 8-byte packed cell states;
+/// returns the exact length.
+fn search_octile(
+    grid: &SearchGrid,
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+    expanded_out: &mut usize,
+) -> Option<f64> {
+    let n = grid.pass.len();
+    ws.prepare_packed(n);
+    let open_stamp = (ws.packed_generation * 2) << STAMP_SHIFT;
+    let closed_bit = 1u64 << STAMP_SHIFT;
+    let stamp_mask = !0u64 << STAMP_SHIFT;
+    let (one, diag_cost) = fixed_point_steps(n);
+    let extra = diag_cost - one;
+    let pw = grid.pw;
+    let inv_pw = 1.0 / pw as f64;
+    let pass = &grid.pass[..];
+    let st = &mut ws.packed[..];
+    let mut heap = std::mem::take(&mut ws.heap);
+    heap.clear();
+    // Heuristic in padded coordinates (the offset cancels).
+    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
+    let h = |x: i64, y: i64| {
+        let (a, b) = ((gx - x).unsigned_abs(), (gy - y).unsigned_abs());
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        hi * one + lo * extra
+    };
+    let s = grid.pidx(start.0, start.1);
+    let t = grid.pidx(goal.0, goal.1);
+    st[s] = open_stamp;
+    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1), s as u32);
+    let off = move_offsets(pw);
+    // (dx, dy) of each move; diagonals 4..8 pass between cardinals (0|1) and (2|3).
+    const DXY: [(i64, i64); 8] = [
+        (1, 0),
+        (-1, 0),
+        (0, 1),
+        (0, -1),
+        (1, 1),
+        (-1, 1),
+        (1, -1),
+        (-1, -1),
+    ];
+    let mut expanded = 0usize;
+    let mut found = false;
+    while let Some((_, ui)) = heap.pop() {
+        let u = ui as usize;
+        let su = st[u];
+        if su & stamp_mask != open_stamp {
+            continue; // closed already (a stale duplicate entry)
+        }
+        st[u] = su | closed_bit;
+        expanded += 1;
+        if u == t {
+            found = true;
+            break;
+        }
+        // Row and column without an integer division: a float estimate, corrected.
+        let mut yy = (u as f64 * inv_pw) as usize;
+        if yy * pw > u {
+            yy -= 1;
+        } else if (yy + 1) * pw <= u {
+            yy += 1;
+        }
+        let (x, y) = ((u - yy * pw) as i64, yy as i64);
+        let gu = su & G_MASK;
+        let mut open_card = [false; 4];
+        for k in 0..8 {
+            if k >= 4 {
+                let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
+                if !(open_card[a] && open_card[b]) {
+                    continue;
+                }
+            }
+            let v = (u as isize + off[k]) as usize;
+            if !pass[v] {
+                continue;
+            }
+            if k < 4 {
+                open_card[k] = true;
+            }
+            let ng = gu + if k < 4 { one } else { diag_cost };
+            let sv = st[v];
+            // A closed cell already has its optimal g (integer costs, consistent
+            // heuristic), so `ng < g` also rejects it.
+            if (sv & stamp_mask) | closed_bit != open_stamp | closed_bit || ng < sv & G_MASK {
+                st[v] = open_stamp | ((k as u64) << DIR_SHIFT) | ng;
+                let (dx, dy) = DXY[k];
+                heap.push(ng + h(x + dx, y + dy), v as u32);
+            }
+        }
+    }
+    *expanded_out = expanded;
+    ws.heap = heap;
+    if !found {
+        return None;
+    }
+    // The length n_straight + n_diag · √2 of the path found, from its exact integer cost
+    // (or, on huge maps, from its moves).
+    if let Some(length) = fixed_point_length(st[t] & G_MASK, one, diag_cost) {
+        return Some(length);
+    }
+    let (mut straight, mut diagonal) = (0u64, 0u64);
+    let mut cur = t;
+    while cur != s {
+        let k = ((st[cur] >> DIR_SHIFT) & 7) as usize;
+        if k < 4 {
+            straight += 1;
+        } else {
+            diagonal += 1;
+        }
+        cur = (cur as isize - off[k]) as usize;
+    }
+    Some(straight as f64 + diagonal as f64 * SQRT2)
+}
+
+/// The cost-aware search: f64 costs, keys = IEEE bits of f (monotone for f ≥ 0).
+fn search_weighted(
     grid: &SearchGrid,
     weight: &[f32],
     ws: &mut AstarWorkspace,
@@ -353,8 +642,15 @@ fn search<const W: bool>(
     let h = |x: i64, y: i64| octile(gx - x, gy - y);
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
-    st[s] = CellState { g: 0.0, parent: u32::MAX, stamp: open_stamp };
-    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1).to_bits(), s as u32);
+    st[s] = CellState {
+        g: 0.0f64.to_bits(),
+        parent: u32::MAX,
+        stamp: open_stamp,
+    };
+    heap.push(
+        h(start.0 as i64 + 1, start.1 as i64 + 1).to_bits(),
+        s as u32,
+    );
     // Neighbour order: E, W, N(+y), S(−y), then diagonals NE, NW, SE, SW, each with the
     // indices (into the cardinals) of the two cells it passes between.
     let card: [(isize, i64, i64); 4] = [(1, 1, 0), (-1, -1, 0), (pwi, 0, 1), (-pwi, 0, -1)];
@@ -375,7 +671,7 @@ fn search<const W: bool>(
         st[u].stamp = closed_stamp;
         expanded += 1;
         if u == t {
-            result = Some(su.g);
+            result = Some(f64::from_bits(su.g));
             break;
         }
         // Row and column without an integer division: a float estimate, corrected.
@@ -386,7 +682,7 @@ fn search<const W: bool>(
             yy += 1;
         }
         let (x, y) = ((u - yy * pw) as i64, yy as i64);
-        let gu = su.g;
+        let gu = f64::from_bits(su.g);
         let mut open_card = [false; 4];
         for (k, &(off, dx, dy)) in card.iter().enumerate() {
             let v = (u as isize + off) as usize;
@@ -398,9 +694,13 @@ fn search<const W: bool>(
             if sv.stamp == closed_stamp {
                 continue;
             }
-            let ng = if W { gu + weight[v] as f64 } else { gu + 1.0 };
-            if sv.stamp != open_stamp || ng < sv.g {
-                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
+            let ng = gu + weight[v] as f64;
+            if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
+                *sv = CellState {
+                    g: ng.to_bits(),
+                    parent: u as u32,
+                    stamp: open_stamp,
+                };
                 heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
             }
         }
@@ -416,9 +716,13 @@ fn search<const W: bool>(
             if sv.stamp == closed_stamp {
                 continue;
             }
-            let ng = if W { gu + SQRT2 * weight[v] as f64 } else { gu + SQRT2 };
-            if sv.stamp != open_stamp || ng < sv.g {
-                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
+            let ng = gu + SQRT2 * weight[v] as f64;
+            if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
+                *sv = CellState {
+                    g: ng.to_bits(),
+                    parent: u as u32,
+                    stamp: open_stamp,
+                };
                 heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
             }
         }
@@ -440,9 +744,17 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
     let t = grid.pidx(goal.0, goal.1);
     dist_p[t] = 0.0;
     let mut heap = BinaryHeap::new();
-    heap.push(Node { f: 0.0, idx: t as u32 });
+    heap.push(Node {
+        f: 0.0,
+        idx: t as u32,
+    });
     let card = [1isize, -1, pw, -pw];
-    let diag = [(pw + 1, 0, 2), (pw - 1, 1, 2), (-pw + 1, 0, 3), (-pw - 1, 1, 3)];
+    let diag = [
+        (pw + 1, 0, 2),
+        (pw - 1, 1, 2),
+        (-pw + 1, 0, 3),
+        (-pw - 1, 1, 3),
+    ];
     while let Some(node) = heap.pop() {
         let u = node.idx as usize;
         if node.f > dist_p[u] {
@@ -463,18 +775,24 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
             let nd = du + wu;
             if nd < dist_p[v] {
                 dist_p[v] = nd;
-                heap.push(Node { f: nd, idx: v as u32 });
+                heap.push(Node {
+                    f: nd,
+                    idx: v as u32,
+                });
             }
         }
         for &(off, a, b) in &diag {
             let v = (u as isize + off) as usize;
-            if !(open[a] && open[b]) || !grid.pass[v] {
+            if !(open[a] && open[b] && grid.pass[v]) {
                 continue;
             }
             let nd = du + SQRT2 * wu;
             if nd < dist_p[v] {
                 dist_p[v] = nd;
-                heap.push(Node { f: nd, idx: v as u32 });
+                heap.push(Node {
+                    f: nd,
+                    idx: v as u32,
+                });
             }
         }
     }
@@ -485,4 +803,54 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_costs_decode_to_exact_lengths() {
+        // Map sizes from tiny to the largest the 45-bit state can hold at full scale.
+        for n in [16usize, 264_196, 1 << 24] {
+            let (one, diag) = fixed_point_steps(n);
+            assert_eq!(diag % 2, 1);
+            assert!(((diag as f64 / one as f64) - SQRT2).abs() < 2.0 / one as f64);
+            for (ns, nd) in [
+                (0u64, 0u64),
+                (1, 0),
+                (0, 1),
+                (7, 3),
+                (123_456, 98_765),
+                (3, 400_000),
+            ] {
+                let g = ns * one + nd * diag;
+                let l = fixed_point_length(g, one, diag).unwrap();
+                assert_eq!(l, ns as f64 + nd as f64 * SQRT2, "n = {n}, ({ns}, {nd})");
+            }
+        }
+        // Too many diagonals for the modular decoding: the caller must count moves.
+        let (one, diag) = fixed_point_steps(1 << 30);
+        assert!(fixed_point_length(one * diag, one, diag).is_none());
+    }
+
+    #[test]
+    fn radix_open_list_pops_in_key_order_with_lifo_ties() {
+        let mut q = OpenList::default();
+        for (k, i) in [(5u64, 0u32), (9, 1), (5, 2), (1 << 40, 3), (7, 4)] {
+            q.push(k, i);
+        }
+        let mut out = Vec::new();
+        while let Some((k, i)) = q.pop() {
+            out.push((k, i));
+            if i == 2 {
+                q.push(5, 5); // equal to the last popped key: popped next
+                q.push(8, 6);
+            }
+        }
+        assert_eq!(
+            out,
+            [(5, 2), (5, 5), (5, 0), (7, 4), (8, 6), (9, 1), (1 << 40, 3)]
+        );
+    }
 }
