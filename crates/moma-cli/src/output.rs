@@ -35,10 +35,37 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
 }
 
 /// Writes several outputs only once all of them were produced: the caller builds every
-/// `(path, bytes)` pair first, then calls this, so an error midway writes nothing.
+/// `(path, bytes)` pair first, then calls this. Every file is first written to its
+/// temporary sibling; only when all of them succeeded are they renamed into place, so an
+/// unwritable path (e.g. a missing directory) leaves none of the outputs behind.
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+    let mut written: Vec<(PathBuf, &Path)> = Vec::with_capacity(files.len());
+    let cleanup = |written: &[(PathBuf, &Path)]| {
+        for (tmp, _) in written {
+            let _ = std::fs::remove_file(tmp);
+        }
+    };
     for (path, bytes) in files {
-        write_atomic(path, bytes)?;
+        let tmp = temp_sibling(path);
+        let result = (|| -> std::io::Result<()> {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            cleanup(&written);
+            return Err(anyhow::Error::new(e)
+                .context(format!("{}: cannot write output file", path.display())));
+        }
+        written.push((tmp, path.as_path()));
+    }
+    for (i, (tmp, path)) in written.iter().enumerate() {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            cleanup(&written[i..]);
+            return Err(anyhow::Error::new(e)
+                .context(format!("{}: cannot write output file", path.display())));
+        }
     }
     Ok(())
 }
