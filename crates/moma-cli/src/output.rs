@@ -30,8 +30,13 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
 /// Prints `value` as pretty JSON on standard output.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).context("serialising JSON output")?;
-    println!("{text}");
-    Ok(())
+    // `println!` panics when the reader went away (`moma ... --json | head`); a closed
+    // pipe is the reader's choice, not an error, and any other failure is reported.
+    let mut stdout = std::io::stdout().lock();
+    match writeln!(stdout, "{text}").and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("cannot write to standard output"),
+    }
 }
 
 /// Writes several outputs only once all of them were produced: the caller builds every

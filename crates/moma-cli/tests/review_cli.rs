@@ -138,3 +138,40 @@ fn plan_with_a_zero_area_footprint_is_an_error() {
     ]);
     assert_clean_error(&o, "footprint");
 }
+
+#[test]
+fn scen_with_no_problems_is_an_error_not_a_vacuous_success() {
+    let map = tmp("tiny.map");
+    std::fs::write(&map, "type octile\nheight 2\nwidth 3\nmap\n...\n...\n").unwrap();
+    let scen = tmp("empty.scen");
+    std::fs::write(&scen, "").unwrap();
+    let out = tmp("empty.csv");
+    let o = moma(&[
+        "scen",
+        map.to_str().unwrap(),
+        scen.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_error(&o, "empty.scen");
+    assert!(!out.exists());
+}
+
+#[test]
+fn json_to_a_closed_pipe_does_not_panic() {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_moma"))
+        .args([
+            "inspect",
+            &root("crates/moma/tests/data/pinocchio/urdf/panda.urdf"),
+            "--json",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the read end before the child writes.
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+}
