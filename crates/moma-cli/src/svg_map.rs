@@ -26,21 +26,11 @@ fn b64(data: &[u8]) -> String {
     const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::with_capacity(data.len().div_ceil(3) * 4);
     for c in data.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
+        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
         s.push(T[(n >> 18) as usize & 63] as char);
         s.push(T[(n >> 12) as usize & 63] as char);
-        s.push(if c.len() > 1 {
-            T[(n >> 6) as usize & 63] as char
-        } else {
-            '='
-        });
-        s.push(if c.len() > 2 {
-            T[n as usize & 63] as char
-        } else {
-            '='
-        });
+        s.push(if c.len() > 1 { T[(n >> 6) as usize & 63] as char } else { '=' });
+        s.push(if c.len() > 2 { T[n as usize & 63] as char } else { '=' });
     }
     s
 }
@@ -64,22 +54,14 @@ pub fn render(scene: &Scene) -> Result<String> {
     })?;
     // Cell centre → picture coordinates.
     let px = |c: (usize, usize)| -> (f64, f64) {
-        let yy = if y_up {
-            (h - 1 - c.1) as f64
-        } else {
-            c.1 as f64
-        };
+        let yy = if y_up { (h - 1 - c.1) as f64 } else { c.1 as f64 };
         (c.0 as f64 + 0.5, yy + 0.5)
     };
     let poly = |cells: &[(usize, usize)]| -> String {
-        cells
-            .iter()
-            .map(|&c| {
-                let (x, y) = px(c);
-                format!("{x:.1},{y:.1}")
-            })
-            .collect::<Vec<_>>()
-            .join(" ")
+        cells.iter().map(|&c| {
+            let (x, y) = px(c);
+            format!("{x:.1},{y:.1}")
+        }).collect::<Vec<_>>().join(" ")
     };
     let scale = (1000.0 / w.max(h) as f64).clamp(0.25, 16.0);
     let stroke = (1.5 / scale).max(0.3);
@@ -107,16 +89,12 @@ pub fn render(scene: &Scene) -> Result<String> {
         ));
     }
     let r = (4.0 / scale).max(0.6);
-    s.push_str(&format!(
-        "<circle cx=\"{sx:.1}\" cy=\"{sy:.1}\" r=\"{r:.2}\" fill=\"#2ca02c\"/>\n"
-    ));
+    s.push_str(&format!("<circle cx=\"{sx:.1}\" cy=\"{sy:.1}\" r=\"{r:.2}\" fill=\"#2ca02c\"/>\n"));
     s.push_str(&format!("<circle cx=\"{gx:.1}\" cy=\"{gy:.1}\" r=\"{r:.2}\" fill=\"none\" stroke=\"#9467bd\" stroke-width=\"{stroke:.2}\"/>\n"));
     s.push_str("</svg>\n");
     Ok(s)
 }
 
 fn xml_escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
+    t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }

@@ -4,24 +4,15 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn moma(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_moma"))
-        .args(args)
-        .output()
-        .expect("run moma")
+    Command::new(env!("CARGO_BIN_EXE_moma")).args(args).output().expect("run moma")
 }
 
 fn data(p: &str) -> String {
-    format!(
-        "{}/../moma/tests/data/planning/{p}",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    format!("{}/../moma/tests/data/planning/{p}", env!("CARGO_MANIFEST_DIR"))
 }
 
 fn trap() -> String {
-    format!(
-        "{}/../../scenarios/maps/potential_trap.map",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    format!("{}/../../scenarios/maps/potential_trap.map", env!("CARGO_MANIFEST_DIR"))
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -31,57 +22,22 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn json(o: &Output) -> serde_json::Value {
-    assert!(
-        o.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
 #[test]
 fn map_info_counts() {
-    let v = json(&moma(&[
-        "map-info",
-        &data("rosmaps/nav2/tb3_sandbox.yaml"),
-        "--json",
-    ]));
-    assert_eq!(
-        (v["width"].as_u64(), v["height"].as_u64()),
-        (Some(384), Some(384))
-    );
-    assert_eq!(
-        (
-            v["occupied"].as_u64(),
-            v["free"].as_u64(),
-            v["unknown"].as_u64()
-        ),
-        (Some(870), Some(7_903), Some(138_683))
-    );
+    let v = json(&moma(&["map-info", &data("rosmaps/nav2/tb3_sandbox.yaml"), "--json"]));
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(384), Some(384)));
+    assert_eq!((v["occupied"].as_u64(), v["free"].as_u64(), v["unknown"].as_u64()), (Some(870), Some(7_903), Some(138_683)));
     assert_eq!(v["resolution"].as_f64(), Some(0.05));
     assert_eq!(v["origin"][0].as_f64(), Some(-10.0));
     // A bare image takes the legacy defaults; --resolution overrides 0.05.
-    let v = json(&moma(&[
-        "map-info",
-        &data("rosmaps/willow_garage/willow-full-0.05.png"),
-        "--json",
-        "--resolution",
-        "0.1",
-    ]));
-    assert_eq!(
-        (
-            v["occupied"].as_u64(),
-            v["free"].as_u64(),
-            v["unknown"].as_u64()
-        ),
-        (Some(13_459), Some(549_308), Some(538_158))
-    );
+    let v = json(&moma(&["map-info", &data("rosmaps/willow_garage/willow-full-0.05.png"), "--json", "--resolution", "0.1"]));
+    assert_eq!((v["occupied"].as_u64(), v["free"].as_u64(), v["unknown"].as_u64()), (Some(13_459), Some(549_308), Some(538_158)));
     assert_eq!(v["resolution"].as_f64(), Some(0.1));
-    let v = json(&moma(&[
-        "map-info",
-        &data("movingai/Berlin_0_256.map"),
-        "--json",
-    ]));
+    let v = json(&moma(&["map-info", &data("movingai/Berlin_0_256.map"), "--json"]));
     assert_eq!(v["free"].as_u64(), Some(48_147));
     let text = moma(&["map-info", &data("rosmaps/nav2/depot.yaml")]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("free:       179481"));
@@ -90,40 +46,24 @@ fn map_info_counts() {
 #[test]
 fn map_info_bad_input() {
     let bad = tmp("broken.yaml");
-    std::fs::write(
-        &bad,
-        "image: nowhere.pgm\nresolution: 0.05\norigin: [0, 0]\n",
-    )
-    .unwrap();
+    std::fs::write(&bad, "image: nowhere.pgm\nresolution: 0.05\norigin: [0, 0]\n").unwrap();
     let o = moma(&["map-info", bad.to_str().unwrap()]);
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("broken.yaml") && e.contains("origin"), "{e}");
     let o = moma(&["map-info", "/nonexistent/map.pgm"]);
-    assert!(
-        !o.status.success() && String::from_utf8_lossy(&o.stderr).contains("/nonexistent/map.pgm")
-    );
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("/nonexistent/map.pgm"));
 }
 
 #[test]
 fn plan_on_a_ros_map_writes_path_and_svg() {
     let (out, svg) = (tmp("p.json"), tmp("p.svg"));
     let o = moma(&[
-        "plan",
-        &data("rosmaps/turtlebot3/map.yaml"),
-        "--start=-2.0,-0.5",
-        "--goal",
-        "1.5,0.5",
-        "--radius",
-        "0.1",
-        "--output",
-        out.to_str().unwrap(),
-        "--svg",
-        svg.to_str().unwrap(),
+        "plan", &data("rosmaps/turtlebot3/map.yaml"), "--start=-2.0,-0.5", "--goal", "1.5,0.5", "--radius", "0.1",
+        "--output", out.to_str().unwrap(), "--svg", svg.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["status"], "found");
     assert_eq!(v["frame"], "world");
     let wp = v["waypoints"].as_array().unwrap();
@@ -139,9 +79,7 @@ fn plan_on_a_ros_map_writes_path_and_svg() {
     }
     assert!(v["cost"].as_f64().unwrap() >= v["length"].as_f64().unwrap() - 1e-9);
     let s = std::fs::read_to_string(&svg).unwrap();
-    assert!(
-        s.starts_with("<svg") && s.contains("data:image/png;base64,") && s.contains("<polyline")
-    );
+    assert!(s.starts_with("<svg") && s.contains("data:image/png;base64,") && s.contains("<polyline"));
 }
 
 #[test]
@@ -149,25 +87,9 @@ fn plan_algorithms_agree_and_potential_trap_is_reported() {
     let map = data("movingai/den520d.map");
     let cost = |algo: &str| {
         let out = tmp(&format!("{algo}.json"));
-        let o = moma(&[
-            "plan",
-            &map,
-            "--start",
-            "100,163",
-            "--goal",
-            "200,200",
-            "--algo",
-            algo,
-            "--output",
-            out.to_str().unwrap(),
-        ]);
-        assert!(
-            o.status.success(),
-            "{algo}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let o = moma(&["plan", &map, "--start", "100,163", "--goal", "200,200", "--algo", algo, "--output", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{algo}: {}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
         v["cost"].as_f64().unwrap()
     };
     let a = cost("astar");
@@ -175,46 +97,16 @@ fn plan_algorithms_agree_and_potential_trap_is_reported() {
     assert!(cost("potential-geodesic") >= a - 1e-9);
     // The literal field is stuck in the shipped trap map: exit code 2, report, status.
     let out = tmp("trap.json");
-    let o = moma(&[
-        "plan",
-        &trap(),
-        "--start",
-        "16,12",
-        "--goal",
-        "34,12",
-        "--algo",
-        "potential",
-        "--output",
-        out.to_str().unwrap(),
-    ]);
+    let o = moma(&["plan", &trap(), "--start", "16,12", "--goal", "34,12", "--algo", "potential", "--output", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("local minimum"));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["status"], "local_minimum");
-    let o = moma(&[
-        "plan",
-        &trap(),
-        "--start",
-        "16,12",
-        "--goal",
-        "34,12",
-        "--algo",
-        "potential-geodesic",
-    ]);
+    let o = moma(&["plan", &trap(), "--start", "16,12", "--goal", "34,12", "--algo", "potential-geodesic"]);
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stdout).contains("reached the goal"));
     // Footprint planning on the trap map.
-    let o = moma(&[
-        "plan",
-        &trap(),
-        "--start",
-        "16,12",
-        "--goal",
-        "34,12",
-        "--footprint",
-        "-1,-1;3,-1;3,1;-1,1",
-    ]);
+    let o = moma(&["plan", &trap(), "--start", "16,12", "--goal", "34,12", "--footprint", "-1,-1;3,-1;3,1;-1,1"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
@@ -237,30 +129,12 @@ fn plan_bad_input_gives_errors_and_no_output() {
     // Corridors are one cell wide: any robot radius >= 1 closes them all.
     let e = run(&["--start", "1,1", "--goal", "3,1", "--radius", "1"]);
     assert!(e.contains("radius"), "{e}");
-    let e = run(&[
-        "--start",
-        "1,1",
-        "--goal",
-        "3,1",
-        "--footprint",
-        "-2,-2;2,-2;2,2;-2,2",
-    ]);
+    let e = run(&["--start", "1,1", "--goal", "3,1", "--footprint", "-2,-2;2,-2;2,2;-2,2"]);
     assert!(e.contains("collides") || e.contains("no path"), "{e}");
     // Unreachable goal on a map split by a wall.
     let split = tmp("split.map");
-    std::fs::write(
-        &split,
-        "type octile\nheight 3\nwidth 5\nmap\n..@..\n..@..\n..@..\n",
-    )
-    .unwrap();
-    let o = moma(&[
-        "plan",
-        split.to_str().unwrap(),
-        "--start",
-        "0,0",
-        "--goal",
-        "4,2",
-    ]);
+    std::fs::write(&split, "type octile\nheight 3\nwidth 5\nmap\n..@..\n..@..\n..@..\n").unwrap();
+    let o = moma(&["plan", split.to_str().unwrap(), "--start", "0,0", "--goal", "4,2"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("no path"));
 }
@@ -268,27 +142,13 @@ fn plan_bad_input_gives_errors_and_no_output() {
 #[test]
 fn scen_csv_and_summary() {
     let out = tmp("arena.csv");
-    let o = moma(&[
-        "scen",
-        &data("movingai/arena.map"),
-        &data("movingai/arena.map.scen"),
-        "--every",
-        "4",
-        "--output",
-        out.to_str().unwrap(),
-    ]);
+    let o = moma(&["scen", &data("movingai/arena.map"), &data("movingai/arena.map.scen"), "--every", "4", "--output", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        stdout.contains("mismatches (relative tolerance 1e-5): 0") && stdout.contains("median"),
-        "{stdout}"
-    );
+    assert!(stdout.contains("mismatches (relative tolerance 1e-5): 0") && stdout.contains("median"), "{stdout}");
     let csv = std::fs::read_to_string(&out).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(
-        lines.next(),
-        Some("index,start,goal,cost,optimal,expanded,micros")
-    );
+    assert_eq!(lines.next(), Some("index,start,goal,cost,optimal,expanded,micros"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 40);
     assert_eq!(rows[1][0], "4");
@@ -297,19 +157,10 @@ fn scen_csv_and_summary() {
     let s3 = tmp("short.3dscen");
     std::fs::write(&s3, "version 1\nA1.3dmap\n286 160 147 288 169 141 12.70674230 1.000\n737 294 120 749 249 110 53.24531152 1.000\n").unwrap();
     let out3 = tmp("a1.csv");
-    let o = moma(&[
-        "scen",
-        &data("movingai/3d/A1.3dmap"),
-        s3.to_str().unwrap(),
-        "--output",
-        out3.to_str().unwrap(),
-    ]);
+    let o = moma(&["scen", &data("movingai/3d/A1.3dmap"), s3.to_str().unwrap(), "--output", out3.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(&out3).unwrap();
-    assert_eq!(
-        csv.lines().nth(1).unwrap().split(',').nth(1),
-        Some("286 160 147")
-    );
+    assert_eq!(csv.lines().nth(1).unwrap().split(',').nth(1), Some("286 160 147"));
     // Bad scenario: a clear error naming the file and line.
     let bad = tmp("bad.scen");
     std::fs::write(&bad, "version 1\n0\tarena.map\t1\t1\t2\t2\t1.41421\n").unwrap();

@@ -11,18 +11,14 @@
 //! for a native build).
 
 use criterion::{BatchSize, Criterion, criterion_group};
-use moma::planning::{
-    self, AstarWorkspace, MovingAiScenario, SearchGrid, astar_with, dstar_lite::DStarLite, load_map,
-};
+use moma::planning::{self, AstarWorkspace, MovingAiScenario, SearchGrid, astar_with, dstar_lite::DStarLite, load_map};
 use pathfinding::num_traits::Zero;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 fn data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/planning")
-        .join(p)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning").join(p)
 }
 
 const MAPS: [&str; 4] = ["den520d", "Berlin_0_256", "random512-10-0", "maze512-1-0"];
@@ -61,9 +57,7 @@ struct MapCase {
 }
 
 fn load_case(name: &'static str) -> MapCase {
-    let g = load_map(&data(&format!("movingai/{name}.map")), None)
-        .unwrap()
-        .grid;
+    let g = load_map(&data(&format!("movingai/{name}.map")), None).unwrap().grid;
     let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
     // About 100 problems spread over all buckets (lengths).
     let step = (scen.problems.len() / 100).max(1);
@@ -73,12 +67,7 @@ fn load_case(name: &'static str) -> MapCase {
         free: g.cells.iter().map(|&v| v == 0).collect(),
         w: g.width as i32,
         h: g.height as i32,
-        problems: scen
-            .problems
-            .iter()
-            .step_by(step)
-            .map(|p| (p.start, p.goal, p.optimal))
-            .collect(),
+        problems: scen.problems.iter().step_by(step).map(|p| (p.start, p.goal, p.optimal)).collect(),
     }
 }
 
@@ -91,12 +80,7 @@ fn crate_astar(c: &MapCase, s: (usize, usize), t: (usize, usize)) -> Option<f64>
         &(s.0 as i32, s.1 as i32),
         |&(x, y)| {
             let mut out = [None; 8];
-            let (e, wv, n, so) = (
-                free(x + 1, y),
-                free(x - 1, y),
-                free(x, y + 1),
-                free(x, y - 1),
-            );
+            let (e, wv, n, so) = (free(x + 1, y), free(x - 1, y), free(x, y + 1), free(x, y - 1));
             if e {
                 out[0] = Some(((x + 1, y), Cost(1.0)));
             }
@@ -133,11 +117,7 @@ fn crate_astar(c: &MapCase, s: (usize, usize), t: (usize, usize)) -> Option<f64>
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 /// Per-query medians, moma and the crate interleaved query by query.
@@ -185,17 +165,10 @@ fn per_query_table(cases: &[MapCase]) {
 
 fn bench_astar(cr: &mut Criterion, cases: &[MapCase]) {
     let mut g = cr.benchmark_group("astar");
-    g.sample_size(10)
-        .measurement_time(std::time::Duration::from_secs(4));
+    g.sample_size(10).measurement_time(std::time::Duration::from_secs(4));
     for c in cases {
         // A fixed subset of 20 problems per iteration.
-        let sub: Vec<_> = c
-            .problems
-            .iter()
-            .step_by((c.problems.len() / 20).max(1))
-            .take(20)
-            .copied()
-            .collect();
+        let sub: Vec<_> = c.problems.iter().step_by((c.problems.len() / 20).max(1)).take(20).copied().collect();
         let mut ws = AstarWorkspace::new();
         g.bench_function(format!("{}/moma_20_queries", c.name), |b| {
             b.iter(|| {
@@ -225,15 +198,7 @@ fn bench_edt(cr: &mut Criterion) {
     grp.sample_size(20);
     grp.throughput(criterion::Throughput::Elements((g.width * g.height) as u64));
     grp.bench_function("100by100_20 (2000x2000)", |b| {
-        b.iter(|| {
-            planning::distance_transform_into(
-                black_box(&obst),
-                g.width,
-                g.height,
-                &mut ws,
-                &mut out,
-            )
-        })
+        b.iter(|| planning::distance_transform_into(black_box(&obst), g.width, g.height, &mut ws, &mut out))
     });
     grp.finish();
 }
@@ -242,17 +207,11 @@ fn bench_dstar(cr: &mut Criterion) {
     let mut grp = cr.benchmark_group("replan");
     grp.sample_size(20);
     for name in ["den520d", "Berlin_0_256", "random512-10-0"] {
-        let g = load_map(&data(&format!("movingai/{name}.map")), None)
-            .unwrap()
-            .grid;
+        let g = load_map(&data(&format!("movingai/{name}.map")), None).unwrap().grid;
         let sg = SearchGrid::from_grid(&g, true);
         let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
         // The longest problem of the file.
-        let p = scen
-            .problems
-            .iter()
-            .max_by(|a, b| a.optimal.total_cmp(&b.optimal))
-            .unwrap();
+        let p = scen.problems.iter().max_by(|a, b| a.optimal.total_cmp(&b.optimal)).unwrap();
         let mut d = DStarLite::new(&sg, p.start, p.goal).unwrap();
         d.compute().unwrap();
         // The robot drives 10 cells, then senses a blocked cell 3 cells ahead on its path.
@@ -269,10 +228,7 @@ fn bench_dstar(cr: &mut Criterion) {
         let mut check = d.clone();
         check.set_blocked(ahead, true).unwrap();
         let c1 = check.compute().unwrap();
-        let c2 = planning::astar(&changed, robot, p.goal)
-            .unwrap()
-            .unwrap()
-            .cost;
+        let c2 = planning::astar(&changed, robot, p.goal).unwrap().unwrap().cost;
         assert!((c1 - c2).abs() < 1e-9, "{name}: D* Lite {c1} vs A* {c2}");
         grp.bench_function(format!("{name}/dstar_lite_replan"), |b| {
             b.iter_batched(

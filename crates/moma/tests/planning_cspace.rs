@@ -1,9 +1,7 @@
 //! Configuration space: disk dilation equals brute-force dilation; nav2 inflation costs;
 //! polygonal footprints; smoothing and time parameterisation.
 
-use moma::planning::costmap::{
-    self, Footprint, INSCRIBED, InflationParams, LETHAL, NO_INFORMATION,
-};
+use moma::planning::costmap::{self, Footprint, InflationParams, LETHAL, INSCRIBED, NO_INFORMATION};
 use moma::planning::smooth::{line_of_sight, polyline_length, smooth};
 use moma::planning::trajectory::{DiffDriveLimits, time_parameterize};
 use moma::planning::{self, SearchGrid, load_map};
@@ -26,18 +24,12 @@ fn disk_dilation_equals_brute_force() {
                 let mut hit = false;
                 for oy in 0..h as i64 {
                     for ox in 0..w as i64 {
-                        if obst[(oy * w as i64 + ox) as usize]
-                            && (((ox - x).pow(2) + (oy - y).pow(2)) as f64) <= r * r
-                        {
+                        if obst[(oy * w as i64 + ox) as usize] && (((ox - x).pow(2) + (oy - y).pow(2)) as f64) <= r * r {
                             hit = true;
                         }
                     }
                 }
-                assert_eq!(
-                    fast[(y * w as i64 + x) as usize],
-                    hit,
-                    "r {r} at ({x}, {y})"
-                );
+                assert_eq!(fast[(y * w as i64 + x) as usize], hit, "r {r} at ({x}, {y})");
             }
         }
     }
@@ -52,24 +44,14 @@ fn inflation_costs_follow_nav2() {
     assert_eq!(costmap::inflation_cost(4.0, res, &p), INSCRIBED); // 0.20 m
     // 0.30 m: 252 exp(-10 * 0.1) = 92.7 -> 92 (truncated as nav2).
     assert_eq!(costmap::inflation_cost(6.0, res, &p), 92);
-    assert_eq!(
-        costmap::inflation_cost(11.0, res, &p),
-        (252.0 * (-10.0f64 * 0.35).exp()) as u8
-    );
+    assert_eq!(costmap::inflation_cost(11.0, res, &p), (252.0 * (-10.0f64 * 0.35).exp()) as u8);
     assert_eq!(costmap::inflation_cost(12.0, res, &p), 0); // beyond 0.55 m
     // A layer over a real map: unknown stays 255 away from obstacles, obstacles 254.
-    let m = load_map(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data/planning/rosmaps/turtlebot3/map.yaml"),
-        None,
-    )
-    .unwrap();
+    let m = load_map(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning/rosmaps/turtlebot3/map.yaml"), None).unwrap();
     let g = &m.grid;
     let obst = g.obstacle_mask(100, false);
     let unknown: Vec<bool> = g.cells.iter().map(|&v| v < 0).collect();
-    let costs =
-        costmap::inflation_layer(&obst, Some(&unknown), g.width, g.height, g.resolution, &p)
-            .unwrap();
+    let costs = costmap::inflation_layer(&obst, Some(&unknown), g.width, g.height, g.resolution, &p).unwrap();
     assert_eq!(costs.iter().filter(|&&c| c == LETHAL).count(), 795);
     for i in 0..costs.len() {
         if obst[i] {
@@ -92,33 +74,16 @@ fn cost_aware_search_prefers_clearance() {
             obst[y * w + x] = true;
         }
     }
-    let p = InflationParams {
-        inscribed_radius: 1.0,
-        inflation_radius: 8.0,
-        cost_scaling_factor: 0.5,
-    };
+    let p = InflationParams { inscribed_radius: 1.0, inflation_radius: 8.0, cost_scaling_factor: 0.5 };
     let costs = costmap::inflation_layer(&obst, None, w, h, 1.0, &p).unwrap();
     let weighted = SearchGrid::from_costs(&costs, w, h, 2.0, false).unwrap();
     let plain = SearchGrid::from_costs(&costs, w, h, 0.0, false).unwrap();
-    let a = planning::astar(&weighted, (5, 20), (55, 20))
-        .unwrap()
-        .unwrap();
+    let a = planning::astar(&weighted, (5, 20), (55, 20)).unwrap().unwrap();
     let b = planning::astar(&plain, (5, 20), (55, 20)).unwrap().unwrap();
     assert!(a.cost >= a.length() - 1e-9);
     assert!(a.length() >= b.length() - 1e-9);
-    let clearance = |path: &planning::GridPath| {
-        path.cells
-            .iter()
-            .map(|&(x, y)| costs[y * w + x])
-            .max()
-            .unwrap()
-    };
-    assert!(
-        clearance(&a) < clearance(&b),
-        "weighted {} vs plain {}",
-        clearance(&a),
-        clearance(&b)
-    );
+    let clearance = |path: &planning::GridPath| path.cells.iter().map(|&(x, y)| costs[y * w + x]).max().unwrap();
+    assert!(clearance(&a) < clearance(&b), "weighted {} vs plain {}", clearance(&a), clearance(&b));
     // Optimality of the weighted search against Dijkstra (the wavefront).
     let wf = planning::wavefront(&weighted, (55, 20)).unwrap();
     assert!((wf[20 * w + 5] - a.cost).abs() < 1e-6 * a.cost);
@@ -142,11 +107,7 @@ fn footprint_cspace_matches_brute_force_and_bounds() {
                 let i = (y * w as i64 + x) as usize;
                 let brute = offs.iter().any(|&(dx, dy)| {
                     let (ox, oy) = (x + dx, y + dy);
-                    ox >= 0
-                        && oy >= 0
-                        && ox < w as i64
-                        && oy < h as i64
-                        && obst[(oy * w as i64 + ox) as usize]
+                    ox >= 0 && oy >= 0 && ox < w as i64 && oy < h as i64 && obst[(oy * w as i64 + ox) as usize]
                 });
                 assert_eq!(cs.slices[k][i], brute, "heading {k} at ({x}, {y})");
                 assert!(!disk_in[i] || cs.slices[k][i]);
@@ -157,12 +118,7 @@ fn footprint_cspace_matches_brute_force_and_bounds() {
     }
     // Headings differ for an elongated robot.
     assert_ne!(cs.slices[0], cs.slices[2]);
-    assert!(
-        Footprint::parse("1,1;2,1;2,2")
-            .unwrap_err()
-            .to_string()
-            .contains("origin")
-    );
+    assert!(Footprint::parse("1,1;2,1;2,2").unwrap_err().to_string().contains("origin"));
     assert!(Footprint::parse("1,1;2").is_err());
 }
 
@@ -171,9 +127,7 @@ fn smoothing_is_collision_free_and_shorter() {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning/movingai/den520d.map");
     let grid = load_map(&p, None).unwrap().grid;
     let sg = SearchGrid::from_grid(&grid, true);
-    let path = planning::astar(&sg, (100, 163), (200, 200))
-        .unwrap()
-        .unwrap();
+    let path = planning::astar(&sg, (100, 163), (200, 200)).unwrap().unwrap();
     let s = smooth(&sg, &path.cells);
     assert_eq!(s[0], path.cells[0]);
     assert_eq!(s.last(), path.cells.last());
@@ -186,13 +140,7 @@ fn smoothing_is_collision_free_and_shorter() {
             let t = k as f64 / 200.0;
             let x = w[0].0 as f64 + t * (w[1].0 as f64 - w[0].0 as f64);
             let y = w[0].1 as f64 + t * (w[1].1 as f64 - w[0].1 as f64);
-            assert!(
-                sg.is_free((x + 0.5).floor() as i64, (y + 0.5).floor() as i64)
-                    || sg.is_free(
-                        (x + 0.5 - 1e-9).floor() as i64,
-                        (y + 0.5 - 1e-9).floor() as i64
-                    )
-            );
+            assert!(sg.is_free((x + 0.5).floor() as i64, (y + 0.5).floor() as i64) || sg.is_free((x + 0.5 - 1e-9).floor() as i64, (y + 0.5 - 1e-9).floor() as i64));
         }
     }
     // Line of sight rejects a segment through a wall and a corner squeeze.
@@ -209,12 +157,7 @@ fn smoothing_is_collision_free_and_shorter() {
 
 #[test]
 fn time_parameterisation_respects_limits() {
-    let lim = DiffDriveLimits {
-        v_max: 0.5,
-        omega_max: 1.0,
-        a_max: 0.4,
-        alpha_max: 2.0,
-    };
+    let lim = DiffDriveLimits { v_max: 0.5, omega_max: 1.0, a_max: 0.4, alpha_max: 2.0 };
     let wp = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.5], [2.05, 1.55], [0.0, 3.0]];
     let traj = time_parameterize(&wp, Some(0.0), &lim, 0.01).unwrap();
     let last = traj.last().unwrap();
@@ -225,11 +168,7 @@ fn time_parameterisation_respects_limits() {
         let dt = b.t - a.t;
         assert!(dt > 0.0);
         assert!(b.v.abs() <= lim.v_max + 1e-12 && b.omega.abs() <= lim.omega_max + 1e-12);
-        assert!(
-            (b.v - a.v).abs() <= lim.a_max * dt + 1e-9,
-            "acc at t = {}",
-            b.t
-        );
+        assert!((b.v - a.v).abs() <= lim.a_max * dt + 1e-9, "acc at t = {}", b.t);
         assert!((b.omega - a.omega).abs() <= lim.alpha_max * dt + 1e-9);
         // Non-holonomic: displacement along the heading only.
         let (dx, dy) = (b.x - a.x, b.y - a.y);
@@ -239,18 +178,10 @@ fn time_parameterisation_respects_limits() {
         assert!((dx.hypot(dy) - 0.5 * (a.v + b.v) * dt).abs() <= lim.a_max * dt * dt / 4.0 + 1e-12);
     }
     // 2 m at 0.5 m/s with a = 0.4: 1.25 s up, 2.75 s cruise, 1.25 s down = 5.25 s.
-    let first_end = traj
-        .iter()
-        .find(|p| (p.x - 2.0).abs() < 1e-12 && p.y == 0.0)
-        .unwrap();
+    let first_end = traj.iter().find(|p| (p.x - 2.0).abs() < 1e-12 && p.y == 0.0).unwrap();
     assert!((first_end.t - 5.25).abs() < 1e-9);
     let bad = DiffDriveLimits { v_max: 0.0, ..lim };
-    assert!(
-        time_parameterize(&wp, None, &bad, 0.01)
-            .unwrap_err()
-            .to_string()
-            .contains("v_max")
-    );
+    assert!(time_parameterize(&wp, None, &bad, 0.01).unwrap_err().to_string().contains("v_max"));
     assert!(time_parameterize(&[], None, &lim, 0.01).is_err());
     assert!(time_parameterize(&[[0.0, f64::NAN]], None, &lim, 0.01).is_err());
 }

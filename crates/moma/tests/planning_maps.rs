@@ -6,9 +6,7 @@ use moma::planning::{self, MapKind, MovingAiScenario, load_map};
 use std::path::{Path, PathBuf};
 
 fn data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/planning")
-        .join(p)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning").join(p)
 }
 
 fn counts(path: &str, res: Option<f64>) -> (usize, usize, usize, usize, usize) {
@@ -20,39 +18,15 @@ fn counts(path: &str, res: Option<f64>) -> (usize, usize, usize, usize, usize) {
 
 #[test]
 fn ros_maps_reproduce_reference_counts() {
-    assert_eq!(
-        counts("rosmaps/nav2/tb3_sandbox.yaml", None),
-        (384, 384, 870, 7_903, 138_683)
-    );
-    assert_eq!(
-        counts("rosmaps/nav2/depot.yaml", None),
-        (604, 307, 5_947, 179_481, 0)
-    );
-    assert_eq!(
-        counts("rosmaps/nav2/warehouse_png.yaml", None),
-        (1006, 1674, 30_951, 1_422_292, 230_801)
-    );
-    assert_eq!(
-        counts("rosmaps/nav2/100by100_20_png.yaml", None),
-        (2000, 2000, 824_415, 3_175_585, 0)
-    );
-    assert_eq!(
-        counts("rosmaps/turtlebot3/map.yaml", None),
-        (384, 384, 795, 7_939, 138_722)
-    );
-    assert_eq!(
-        counts("rosmaps/willow_garage/willow-full-0.05.png", Some(0.05)),
-        (1165, 945, 13_459, 549_308, 538_158)
-    );
+    assert_eq!(counts("rosmaps/nav2/tb3_sandbox.yaml", None), (384, 384, 870, 7_903, 138_683));
+    assert_eq!(counts("rosmaps/nav2/depot.yaml", None), (604, 307, 5_947, 179_481, 0));
+    assert_eq!(counts("rosmaps/nav2/warehouse_png.yaml", None), (1006, 1674, 30_951, 1_422_292, 230_801));
+    assert_eq!(counts("rosmaps/nav2/100by100_20_png.yaml", None), (2000, 2000, 824_415, 3_175_585, 0));
+    assert_eq!(counts("rosmaps/turtlebot3/map.yaml", None), (384, 384, 795, 7_939, 138_722));
+    assert_eq!(counts("rosmaps/willow_garage/willow-full-0.05.png", Some(0.05)), (1165, 945, 13_459, 549_308, 538_158));
     // The PGM and PNG versions of testmap are the same image.
-    assert_eq!(
-        counts("rosmaps/nav2/testmap.pgm", None),
-        (10, 10, 29, 71, 0)
-    );
-    assert_eq!(
-        counts("rosmaps/nav2/testmap.yaml", None),
-        (10, 10, 29, 71, 0)
-    );
+    assert_eq!(counts("rosmaps/nav2/testmap.pgm", None), (10, 10, 29, 71, 0));
+    assert_eq!(counts("rosmaps/nav2/testmap.yaml", None), (10, 10, 29, 71, 0));
 }
 
 #[test]
@@ -117,24 +91,10 @@ fn scen_files_parse_with_blank_lines_and_versions() {
     let berlin = MovingAiScenario::load(&data("movingai/Berlin_0_256.map.scen")).unwrap();
     assert_eq!(berlin.problems.len(), 930);
     assert_eq!(berlin.problems[0].map, "Berlin_0_256.map");
-    let counts: usize = [
-        "arena",
-        "den520d",
-        "brc202d",
-        "Berlin_0_256",
-        "Berlin_0_1024",
-        "maze512-1-0",
-        "random512-10-0",
-        "32room_000",
-    ]
-    .iter()
-    .map(|n| {
-        MovingAiScenario::load(&data(&format!("movingai/{n}.map.scen")))
-            .unwrap()
-            .problems
-            .len()
-    })
-    .sum();
+    let counts: usize = ["arena", "den520d", "brc202d", "Berlin_0_256", "Berlin_0_1024", "maze512-1-0", "random512-10-0", "32room_000"]
+        .iter()
+        .map(|n| MovingAiScenario::load(&data(&format!("movingai/{n}.map.scen"))).unwrap().problems.len())
+        .sum();
     assert_eq!(counts, 23_877);
     // Version 0: no header, no width/height columns; CRLF endings and blank lines.
     let v0 = "0\tmaps/a.map\t1\t2\t3\t4\t5.5\r\n\r\n1\tmaps/a.map\t0\t0\t4\t0\t4\r\n";
@@ -169,46 +129,24 @@ fn write_tmp(name: &str, text: &[u8]) -> PathBuf {
 #[test]
 fn bad_inputs_give_clear_errors() {
     let e = |p: &Path| load_map(p, None).unwrap_err().to_string();
-    let missing_img = write_tmp(
-        "noimg.yaml",
-        b"image: nothere.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n",
-    );
+    let missing_img = write_tmp("noimg.yaml", b"image: nothere.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n");
     let m = e(&missing_img);
-    assert!(
-        m.contains("nothere.pgm") && m.contains("cannot read"),
-        "{m}"
-    );
+    assert!(m.contains("nothere.pgm") && m.contains("cannot read"), "{m}");
     let bad_yaml = write_tmp("bad.yaml", b"image: [unterminated\nresolution: 0.05\n");
     assert!(e(&bad_yaml).contains("bad.yaml"), "{}", e(&bad_yaml));
     let no_res = write_tmp("nores.yaml", b"image: a.pgm\norigin: [0, 0, 0]\n");
     assert!(e(&no_res).contains("'resolution'"), "{}", e(&no_res));
-    let bad_origin = write_tmp(
-        "origin.yaml",
-        b"image: a.pgm\nresolution: 0.05\norigin: [0, 0]\n",
-    );
+    let bad_origin = write_tmp("origin.yaml", b"image: a.pgm\nresolution: 0.05\norigin: [0, 0]\n");
     assert!(e(&bad_origin).contains("'origin'"), "{}", e(&bad_origin));
-    let neg_res = write_tmp(
-        "negres.yaml",
-        b"image: a.pgm\nresolution: -1\norigin: [0, 0, 0]\n",
-    );
+    let neg_res = write_tmp("negres.yaml", b"image: a.pgm\nresolution: -1\norigin: [0, 0, 0]\n");
     assert!(e(&neg_res).contains("'resolution'"), "{}", e(&neg_res));
-    let bad_mode = write_tmp(
-        "mode.yaml",
-        b"image: a.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nmode: fancy\n",
-    );
+    let bad_mode = write_tmp("mode.yaml", b"image: a.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nmode: fancy\n");
     assert!(e(&bad_mode).contains("'mode'"), "{}", e(&bad_mode));
     let thresh = write_tmp("th.yaml", b"image: a.pgm\nresolution: 0.05\norigin: [0,0,0]\nfree_thresh: 0.7\noccupied_thresh: 0.6\n");
     assert!(e(&thresh).contains("free_thresh"), "{}", e(&thresh));
     let garbage_img = write_tmp("garbage.pgm", b"P5\n10 10\n255\nshort");
-    assert!(
-        e(&garbage_img).contains("garbage.pgm"),
-        "{}",
-        e(&garbage_img)
-    );
-    let short_map = write_tmp(
-        "short.map",
-        b"type octile\nheight 3\nwidth 2\nmap\n..\n.\n..\n",
-    );
+    assert!(e(&garbage_img).contains("garbage.pgm"), "{}", e(&garbage_img));
+    let short_map = write_tmp("short.map", b"type octile\nheight 3\nwidth 2\nmap\n..\n.\n..\n");
     assert!(e(&short_map).contains("row 1"), "{}", e(&short_map));
     let few_rows = write_tmp("few.map", b"type octile\nheight 3\nwidth 2\nmap\n..\n");
     assert!(e(&few_rows).contains("expected height"), "{}", e(&few_rows));

@@ -6,9 +6,7 @@ use rand::{Rng, SeedableRng};
 use std::path::Path;
 
 fn walk_and_check(map: &str, start: (usize, usize), goal: (usize, usize), seed: u64) -> usize {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/planning/movingai")
-        .join(map);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning/movingai").join(map);
     let grid = load_map(&path, None).unwrap().grid;
     let sg = SearchGrid::from_grid(&grid, true);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -29,8 +27,7 @@ fn walk_and_check(map: &str, start: (usize, usize), goal: (usize, usize), seed: 
         let (rx, ry) = d.start();
         for _ in 0..3 {
             let x = (rx as i64 + rng.random_range(-4..=4)).clamp(0, grid.width as i64 - 1) as usize;
-            let y =
-                (ry as i64 + rng.random_range(-4..=4)).clamp(0, grid.height as i64 - 1) as usize;
+            let y = (ry as i64 + rng.random_range(-4..=4)).clamp(0, grid.height as i64 - 1) as usize;
             if (x, y) == (rx, ry) || (x, y) == goal {
                 continue;
             }
@@ -42,25 +39,14 @@ fn walk_and_check(map: &str, start: (usize, usize), goal: (usize, usize), seed: 
             d.set_blocked(p[2], true).unwrap();
         }
         let c = d.compute();
-        let a = planning::astar(d.grid(), d.start(), goal)
-            .unwrap()
-            .map(|p| p.cost);
+        let a = planning::astar(d.grid(), d.start(), goal).unwrap().map(|p| p.cost);
         match (c, a) {
             (Some(c), Some(a)) => assert!((c - a).abs() < 1e-9, "D* Lite {c} vs A* {a}"),
             (None, None) => break,
             other => panic!("D* Lite and A* disagree on reachability: {other:?}"),
         }
         if let Some(p) = d.path() {
-            let len: f64 = p
-                .windows(2)
-                .map(|w| {
-                    if w[0].0 != w[1].0 && w[0].1 != w[1].1 {
-                        std::f64::consts::SQRT_2
-                    } else {
-                        1.0
-                    }
-                })
-                .sum();
+            let len: f64 = p.windows(2).map(|w| if w[0].0 != w[1].0 && w[0].1 != w[1].1 { std::f64::consts::SQRT_2 } else { 1.0 }).sum();
             assert!((len - c.unwrap()).abs() < 1e-9);
             for w in p.windows(2) {
                 let (dx, dy) = (w[1].0 as i64 - w[0].0 as i64, w[1].1 as i64 - w[0].1 as i64);
@@ -95,23 +81,8 @@ fn dstar_lite_unreachable_and_errors() {
     assert_eq!(d.compute(), None);
     assert!(d.path().is_none());
     d.set_blocked((4, 2), false).unwrap();
-    assert_eq!(
-        d.compute(),
-        planning::astar(d.grid(), (0, 0), (7, 3))
-            .unwrap()
-            .map(|p| p.cost)
-    );
-    assert!(
-        d.set_blocked((7, 3), true)
-            .unwrap_err()
-            .to_string()
-            .contains("goal")
-    );
+    assert_eq!(d.compute(), planning::astar(d.grid(), (0, 0), (7, 3)).unwrap().map(|p| p.cost));
+    assert!(d.set_blocked((7, 3), true).unwrap_err().to_string().contains("goal"));
     assert!(d.set_blocked((9, 3), true).is_err());
-    assert!(
-        DStarLite::new(&sg, (4, 0), (7, 3))
-            .unwrap_err()
-            .to_string()
-            .contains("obstacle")
-    );
+    assert!(DStarLite::new(&sg, (4, 0), (7, 3)).unwrap_err().to_string().contains("obstacle"));
 }

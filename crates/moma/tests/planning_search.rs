@@ -1,34 +1,19 @@
 //! A* reproduces the Moving AI optimal lengths (2-D and 3-D); the distance transform is
 //! exact against brute force.
 
-use moma::planning::{
-    self, AstarWorkspace, MovingAiScenario, SearchGrid, astar::astar_cost, load_map,
-};
+use moma::planning::{self, AstarWorkspace, MovingAiScenario, SearchGrid, astar::astar_cost, load_map};
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 
 fn data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/planning")
-        .join(p)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning").join(p)
 }
 
-const MAPS: [&str; 8] = [
-    "arena",
-    "den520d",
-    "brc202d",
-    "Berlin_0_256",
-    "Berlin_0_1024",
-    "maze512-1-0",
-    "random512-10-0",
-    "32room_000",
-];
+const MAPS: [&str; 8] = ["arena", "den520d", "brc202d", "Berlin_0_256", "Berlin_0_1024", "maze512-1-0", "random512-10-0", "32room_000"];
 
 /// Runs every `every`-th problem of a map; returns (problems run, mismatches).
 fn run_scen(name: &str, every: usize) -> (usize, usize) {
-    let grid = load_map(&data(&format!("movingai/{name}.map")), None)
-        .unwrap()
-        .grid;
+    let grid = load_map(&data(&format!("movingai/{name}.map")), None).unwrap().grid;
     let sg = SearchGrid::from_grid(&grid, true);
     let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
     let mut ws = AstarWorkspace::new();
@@ -81,10 +66,7 @@ fn astar_path_is_valid_and_costs_its_length() {
     for w in path.cells.windows(2) {
         let (dx, dy) = (w[1].0 as i64 - w[0].0 as i64, w[1].1 as i64 - w[0].1 as i64);
         assert!(dx.abs() <= 1 && dy.abs() <= 1 && (dx, dy) != (0, 0));
-        assert!(
-            sg.can_step(w[0].0 as i64, w[0].1 as i64, dx, dy),
-            "illegal step {w:?}"
-        );
+        assert!(sg.can_step(w[0].0 as i64, w[0].1 as i64, dx, dy), "illegal step {w:?}");
     }
     assert!((path.length() - path.cost).abs() < 1e-9);
     assert!((path.cost - p.optimal).abs() < 1e-5 * p.optimal);
@@ -100,13 +82,9 @@ fn unreachable_and_invalid_queries() {
     let sg = SearchGrid::from_obstacles(&obst, 10, 5).unwrap();
     assert!(planning::astar(&sg, (0, 0), (9, 4)).unwrap().is_none());
     assert!(planning::astar(&sg, (0, 0), (4, 4)).unwrap().is_some());
-    let e = planning::astar(&sg, (0, 0), (5, 2))
-        .unwrap_err()
-        .to_string();
+    let e = planning::astar(&sg, (0, 0), (5, 2)).unwrap_err().to_string();
     assert!(e.contains("goal") && e.contains("obstacle"), "{e}");
-    let e = planning::astar(&sg, (10, 0), (1, 1))
-        .unwrap_err()
-        .to_string();
+    let e = planning::astar(&sg, (10, 0), (1, 1)).unwrap_err().to_string();
     assert!(e.contains("start") && e.contains("outside"), "{e}");
     // Corner cutting is not allowed: two diagonal blocks close the gap.
     let mut obst = vec![false; 3 * 3];
@@ -124,22 +102,10 @@ fn astar3d_matches_3dscen_subsample() {
     // The shorter problems of the subsample (long 3-D problems expand millions of
     // voxels; the full subsample is the ignored test below).
     for p in probs.iter().filter(|p| p.optimal <= 100.0).step_by(3) {
-        let r = planning::astar3d(&g, p.start, p.goal)
-            .unwrap()
-            .expect("solvable");
-        assert!(
-            (r.cost - p.optimal).abs() <= 1e-5 * p.optimal,
-            "problem {}: {} vs {}",
-            p.index,
-            r.cost,
-            p.optimal
-        );
+        let r = planning::astar3d(&g, p.start, p.goal).unwrap().expect("solvable");
+        assert!((r.cost - p.optimal).abs() <= 1e-5 * p.optimal, "problem {}: {} vs {}", p.index, r.cost, p.optimal);
         for w in r.voxels.windows(2) {
-            let d = [
-                w[1].0 as i64 - w[0].0 as i64,
-                w[1].1 as i64 - w[0].1 as i64,
-                w[1].2 as i64 - w[0].2 as i64,
-            ];
+            let d = [w[1].0 as i64 - w[0].0 as i64, w[1].1 as i64 - w[0].1 as i64, w[1].2 as i64 - w[0].2 as i64];
             assert!(d.iter().all(|v| v.abs() <= 1));
         }
         n += 1;
@@ -152,16 +118,8 @@ fn astar3d_matches_3dscen_subsample() {
 fn astar3d_matches_full_3dscen_subsample() {
     let g = planning::load_3dmap(&data("movingai/3d/A1.3dmap")).unwrap();
     for p in planning::load_3dscen(&data("movingai/3d/A1.every10.3dscen")).unwrap() {
-        let r = planning::astar3d(&g, p.start, p.goal)
-            .unwrap()
-            .expect("solvable");
-        assert!(
-            (r.cost - p.optimal).abs() <= 1e-5 * p.optimal,
-            "problem {}: {} vs {}",
-            p.index,
-            r.cost,
-            p.optimal
-        );
+        let r = planning::astar3d(&g, p.start, p.goal).unwrap().expect("solvable");
+        assert!((r.cost - p.optimal).abs() <= 1e-5 * p.optimal, "problem {}: {} vs {}", p.index, r.cost, p.optimal);
     }
 }
 

@@ -67,10 +67,7 @@ pub fn run(args: Args) -> Result<()> {
     println!("map:        {} ({})", info.file, info.format);
     println!("size:       {} x {} cells", info.width, info.height);
     println!("resolution: {} m/cell", info.resolution);
-    println!(
-        "origin:     [{}, {}, {}]",
-        info.origin[0], info.origin[1], info.origin[2]
-    );
+    println!("origin:     [{}, {}, {}]", info.origin[0], info.origin[1], info.origin[2]);
     if let Some(r) = &info.ros {
         println!(
             "thresholds: occupied > {}, free < {}, negate {}, mode {:?}",

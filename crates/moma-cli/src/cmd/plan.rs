@@ -142,17 +142,10 @@ struct PlanOutput {
 fn parse_xy(what: &str, s: &str) -> Result<(f64, f64, Option<f64>)> {
     let v: Vec<f64> = s
         .split(',')
-        .map(|t| {
-            t.trim()
-                .parse::<f64>()
-                .with_context(|| format!("--{what}: '{t}' is not a number"))
-        })
+        .map(|t| t.trim().parse::<f64>().with_context(|| format!("--{what}: '{t}' is not a number")))
         .collect::<Result<_>>()?;
     if !(v.len() == 2 || (v.len() == 3 && what == "start")) {
-        bail!(
-            "--{what}: expected X,Y{}",
-            if what == "start" { " or X,Y,YAW" } else { "" }
-        );
+        bail!("--{what}: expected X,Y{}", if what == "start" { " or X,Y,YAW" } else { "" });
     }
     if v.iter().any(|x| !x.is_finite()) {
         bail!("--{what}: values must be finite");
@@ -173,18 +166,8 @@ pub fn run(args: Args) -> Result<()> {
         if world {
             Ok(grid.world_to_cell(what, x, y)?)
         } else {
-            if x < 0.0
-                || y < 0.0
-                || x.fract() != 0.0
-                || y.fract() != 0.0
-                || x >= grid.width as f64
-                || y >= grid.height as f64
-            {
-                bail!(
-                    "{what} ({x}, {y}) must be a cell of the {} x {} map (integers from 0)",
-                    grid.width,
-                    grid.height
-                );
+            if x < 0.0 || y < 0.0 || x.fract() != 0.0 || y.fract() != 0.0 || x >= grid.width as f64 || y >= grid.height as f64 {
+                bail!("{what} ({x}, {y}) must be a cell of the {} x {} map (integers from 0)", grid.width, grid.height);
             }
             Ok((x as usize, y as usize))
         }
@@ -195,20 +178,11 @@ pub fn run(args: Args) -> Result<()> {
     let raw_grid = SearchGrid::from_obstacles(&obst, grid.width, grid.height)?;
     for (what, c) in [("start", start), ("goal", goal)] {
         if !raw_grid.is_free(c.0 as i64, c.1 as i64) {
-            let kind = if grid.cells[c.1 * grid.width + c.0] < 0 {
-                "an unknown cell (use --unknown free to allow)"
-            } else {
-                "an obstacle"
-            };
+            let kind = if grid.cells[c.1 * grid.width + c.0] < 0 { "an unknown cell (use --unknown free to allow)" } else { "an obstacle" };
             bail!("{what} ({}, {}) lies in {kind}", c.0, c.1);
         }
     }
-    let limits = DiffDriveLimits {
-        v_max: args.v_max,
-        omega_max: args.omega_max,
-        a_max: args.a_max,
-        alpha_max: args.alpha_max,
-    };
+    let limits = DiffDriveLimits { v_max: args.v_max, omega_max: args.omega_max, a_max: args.a_max, alpha_max: args.alpha_max };
     let mut robot = serde_json::json!({ "kind": "point" });
     let units = if world { "m" } else { "cells" };
 
@@ -226,12 +200,7 @@ pub fn run(args: Args) -> Result<()> {
     let cspace = costmap::inflate(&obst, grid.width, grid.height, radius_cells)?;
     let mut sg = SearchGrid::from_obstacles(&cspace, grid.width, grid.height)?;
     let clearance_msg = |what: &str, c: (usize, usize)| {
-        format!(
-            "{what} ({}, {}) is closer than the robot radius {} {units} to an obstacle (inside the configuration-space obstacle)",
-            c.0,
-            c.1,
-            args.radius.unwrap_or(0.0)
-        )
+        format!("{what} ({}, {}) is closer than the robot radius {} {units} to an obstacle (inside the configuration-space obstacle)", c.0, c.1, args.radius.unwrap_or(0.0))
     };
     for (what, c) in [("start", start), ("goal", goal)] {
         if !sg.is_free(c.0 as i64, c.1 as i64) {
@@ -246,12 +215,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         let fp = Footprint::parse(fp_text).context("--footprint")?;
         robot = serde_json::json!({ "kind": "polygon", "vertices": fp.vertices });
-        let fp_cells = Footprint::new(
-            fp.vertices
-                .iter()
-                .map(|v| [to_cells(v[0]), to_cells(v[1])])
-                .collect(),
-        )?;
+        let fp_cells = Footprint::new(fp.vertices.iter().map(|v| [to_cells(v[0]), to_cells(v[1])]).collect())?;
         let cs = costmap::footprint_cspace(&obst, grid.width, grid.height, 1.0, &fp_cells, 8)?;
         let yaw = syaw.unwrap_or(0.0) - if world { grid.origin[2] } else { 0.0 };
         let k = ((yaw / std::f64::consts::FRAC_PI_4).round() as i64).rem_euclid(8) as usize;
@@ -262,37 +226,10 @@ pub fn run(args: Args) -> Result<()> {
             );
         };
         // One cell per state, keeping the heading changes as repeated cells.
-        sg = SearchGrid::from_obstacles(
-            &cs.slices
-                .iter()
-                .fold(vec![true; grid.width * grid.height], |acc, s| {
-                    acc.iter().zip(s).map(|(a, b)| *a && *b).collect()
-                }),
-            grid.width,
-            grid.height,
-        )?;
-        headings = Some(
-            p.states
-                .iter()
-                .map(|s| s.2 as f64 * std::f64::consts::FRAC_PI_4)
-                .collect::<Vec<_>>(),
-        );
+        sg = SearchGrid::from_obstacles(&cs.slices.iter().fold(vec![true; grid.width * grid.height], |acc, s| acc.iter().zip(s).map(|(a, b)| *a && *b).collect()), grid.width, grid.height)?;
+        headings = Some(p.states.iter().map(|s| s.2 as f64 * std::f64::consts::FRAC_PI_4).collect::<Vec<_>>());
         let cells: Vec<(usize, usize)> = p.states.iter().map(|s| (s.0, s.1)).collect();
-        (
-            cells,
-            Some(p.cost),
-            p.expanded,
-            "found",
-            format!(
-                "found a path for the footprint (cost {:.3} {units}, {} states expanded)",
-                if world {
-                    p.cost * grid.resolution
-                } else {
-                    p.cost
-                },
-                p.expanded
-            ),
-        )
+        (cells, Some(p.cost), p.expanded, "found", format!("found a path for the footprint (cost {:.3} {units}, {} states expanded)", if world { p.cost * grid.resolution } else { p.cost }, p.expanded))
     } else {
         match args.algo {
             Algo::Astar | Algo::DstarLite => {
@@ -303,33 +240,12 @@ pub fn run(args: Args) -> Result<()> {
                     let res = if world { grid.resolution } else { 1.0 };
                     let params = InflationParams {
                         inscribed_radius: args.radius.unwrap_or(0.0),
-                        inflation_radius: args.inflation_radius.unwrap_or(if world {
-                            0.55
-                        } else {
-                            11.0
-                        }),
-                        cost_scaling_factor: args.cost_scaling.unwrap_or(if world {
-                            10.0
-                        } else {
-                            0.5
-                        }),
+                        inflation_radius: args.inflation_radius.unwrap_or(if world { 0.55 } else { 11.0 }),
+                        cost_scaling_factor: args.cost_scaling.unwrap_or(if world { 10.0 } else { 0.5 }),
                     };
                     let unknown: Vec<bool> = grid.cells.iter().map(|&v| v < 0).collect();
-                    let costs = costmap::inflation_layer(
-                        &obst,
-                        Some(&unknown),
-                        grid.width,
-                        grid.height,
-                        res,
-                        &params,
-                    )?;
-                    sg = SearchGrid::from_costs(
-                        &costs,
-                        grid.width,
-                        grid.height,
-                        args.cost_multiplier,
-                        args.unknown == Unknown::Free,
-                    )?;
+                    let costs = costmap::inflation_layer(&obst, Some(&unknown), grid.width, grid.height, res, &params)?;
+                    sg = SearchGrid::from_costs(&costs, grid.width, grid.height, args.cost_multiplier, args.unknown == Unknown::Free)?;
                     robot["inflation"] = serde_json::to_value(params)?;
                 }
                 let (path, expanded) = if args.algo == Algo::Astar {
@@ -345,36 +261,17 @@ pub fn run(args: Args) -> Result<()> {
                     bail!(
                         "no path: the goal is not reachable from the start{}",
                         if args.radius.is_some() {
-                            format!(
-                                " for a robot of radius {} {units} (the inflated obstacles close every passage between them)",
-                                args.radius.unwrap_or(0.0)
-                            )
+                            format!(" for a robot of radius {} {units} (the inflated obstacles close every passage between them)", args.radius.unwrap_or(0.0))
                         } else {
                             " (they lie in disconnected free regions)".into()
                         }
                     );
                 };
-                (
-                    cells,
-                    Some(cost),
-                    expanded,
-                    "found",
-                    format!(
-                        "found a path of cost {:.3} {units} ({expanded} cells expanded)",
-                        if world { cost * grid.resolution } else { cost }
-                    ),
-                )
+                (cells, Some(cost), expanded, "found", format!("found a path of cost {:.3} {units} ({expanded} cells expanded)", if world { cost * grid.resolution } else { cost }))
             }
             Algo::Potential | Algo::PotentialGeodesic => {
-                let term = if args.algo == Algo::Potential {
-                    GoalTerm::Euclidean
-                } else {
-                    GoalTerm::Geodesic
-                };
-                let params = PotentialParams {
-                    goal_weight: args.goal_weight,
-                    influence: args.influence.map(to_cells).unwrap_or(5.0),
-                };
+                let term = if args.algo == Algo::Potential { GoalTerm::Euclidean } else { GoalTerm::Geodesic };
+                let params = PotentialParams { goal_weight: args.goal_weight, influence: args.influence.map(to_cells).unwrap_or(5.0) };
                 let field = potential_field(&sg, goal, term, &params)?;
                 let d = descend(&sg, &field, start)?;
                 let status = match d.end {
@@ -382,10 +279,7 @@ pub fn run(args: Args) -> Result<()> {
                     DescentEnd::LocalMinimum { .. } => "local_minimum",
                     DescentEnd::Unreachable => bail!("no path: {}", d.report()),
                 };
-                let cost = (status == "found").then(|| {
-                    moma::planning::smooth::polyline_length(&d.cells)
-                        * if world { grid.resolution } else { 1.0 }
-                });
+                let cost = (status == "found").then(|| moma::planning::smooth::polyline_length(&d.cells) * if world { grid.resolution } else { 1.0 });
                 let report = d.report();
                 (d.cells, cost, 0, status, report)
             }
@@ -393,31 +287,14 @@ pub fn run(args: Args) -> Result<()> {
     };
 
     // Report costs in map units (m on ROS maps).
-    let cost = cost.map(|c| {
-        if world
-            && status == "found"
-            && args.algo != Algo::Potential
-            && args.algo != Algo::PotentialGeodesic
-        {
-            c * grid.resolution
-        } else {
-            c
-        }
-    });
-    let smoothed = if args.no_smooth || headings.is_some() {
-        compress(&cells)
-    } else {
-        smooth(&sg, &cells)
-    };
+    let cost = cost.map(|c| if world && status == "found" && args.algo != Algo::Potential && args.algo != Algo::PotentialGeodesic { c * grid.resolution } else { c });
+    let smoothed = if args.no_smooth || headings.is_some() { compress(&cells) } else { smooth(&sg, &cells) };
     let to_world = |c: &(usize, usize)| grid.cell_to_world(c.0 as f64, c.1 as f64);
     let waypoints: Vec<[f64; 2]> = smoothed.iter().map(to_world).collect();
     let yaw0 = syaw;
     let trajectory = time_parameterize(&waypoints, yaw0, &limits, args.dt)?;
     let duration = trajectory.last().map_or(0.0, |p| p.t);
-    let length: f64 = waypoints
-        .windows(2)
-        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-        .sum();
+    let length: f64 = waypoints.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
     let out = PlanOutput {
         map: args.map.display().to_string(),
         frame: if world { "world" } else { "cells" },

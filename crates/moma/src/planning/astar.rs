@@ -44,13 +44,7 @@ impl GridPath {
     pub fn length(&self) -> f64 {
         self.cells
             .windows(2)
-            .map(|w| {
-                if w[0].0 != w[1].0 && w[0].1 != w[1].1 {
-                    SQRT2
-                } else {
-                    1.0
-                }
-            })
+            .map(|w| if w[0].0 != w[1].0 && w[0].1 != w[1].1 { SQRT2 } else { 1.0 })
             .sum()
     }
 }
@@ -69,13 +63,7 @@ impl SearchGrid {
                 *d = !o;
             }
         }
-        Ok(Self {
-            width,
-            height,
-            pw,
-            pass,
-            weight: None,
-        })
+        Ok(Self { width, height, pw, pass, weight: None })
     }
 
     /// Builds the search grid from an occupancy grid: cells ≥ 100 are obstacles, unknown
@@ -89,40 +77,21 @@ impl SearchGrid {
     /// ≥ 253 (inscribed, lethal) are obstacles, 255 (unknown) too unless `allow_unknown`;
     /// every step into a cell of cost c costs `(1 or √2) · (1 + multiplier · c / 252)`
     /// (Smac 2D's `cost_travel_multiplier`; `multiplier` ≥ 0).
-    pub fn from_costs(
-        costs: &[u8],
-        width: usize,
-        height: usize,
-        multiplier: f64,
-        allow_unknown: bool,
-    ) -> Result<Self> {
+    pub fn from_costs(costs: &[u8], width: usize, height: usize, multiplier: f64, allow_unknown: bool) -> Result<Self> {
         if !(multiplier.is_finite() && multiplier >= 0.0) {
-            return Err(Error::invalid(
-                "cost multiplier",
-                format!("must be finite and >= 0, got {multiplier}"),
-            ));
+            return Err(Error::invalid("cost multiplier", format!("must be finite and >= 0, got {multiplier}")));
         }
         crate::error::ensure_len("costmap", width * height, costs.len())?;
         let obst: Vec<bool> = costs
             .iter()
-            .map(|&c| {
-                if c == super::costmap::NO_INFORMATION {
-                    !allow_unknown
-                } else {
-                    c >= super::costmap::INSCRIBED
-                }
-            })
+            .map(|&c| if c == super::costmap::NO_INFORMATION { !allow_unknown } else { c >= super::costmap::INSCRIBED })
             .collect();
         let mut g = Self::from_obstacles(&obst, width, height)?;
         let mut w = vec![1.0f32; g.pass.len()];
         for y in 0..height {
             for x in 0..width {
                 let c = costs[y * width + x];
-                let c = if c == super::costmap::NO_INFORMATION {
-                    0
-                } else {
-                    c
-                };
+                let c = if c == super::costmap::NO_INFORMATION { 0 } else { c };
                 w[(y + 1) * g.pw + x + 1] = (1.0 + multiplier * c as f64 / 252.0) as f32;
             }
         }
@@ -147,11 +116,7 @@ impl SearchGrid {
 
     /// `true` if `(x, y)` is inside the grid and traversable.
     pub fn is_free(&self, x: i64, y: i64) -> bool {
-        x >= 0
-            && y >= 0
-            && (x as usize) < self.width
-            && (y as usize) < self.height
-            && self.pass[self.pidx(x as usize, y as usize)]
+        x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height && self.pass[self.pidx(x as usize, y as usize)]
     }
 
     /// Marks `(x, y)` traversable or blocked.
@@ -167,8 +132,7 @@ impl SearchGrid {
     /// `true` if the step from `(x, y)` by `(dx, dy)` (each in −1..=1) is legal under the
     /// no-corner-cutting model.
     pub fn can_step(&self, x: i64, y: i64, dx: i64, dy: i64) -> bool {
-        self.is_free(x + dx, y + dy)
-            && (dx == 0 || dy == 0 || (self.is_free(x + dx, y) && self.is_free(x, y + dy)))
+        self.is_free(x + dx, y + dy) && (dx == 0 || dy == 0 || (self.is_free(x + dx, y) && self.is_free(x, y + dy)))
     }
 
     /// The obstacle mask (`true` = blocked), row-major without the border.
@@ -312,11 +276,7 @@ pub fn octile(dx: i64, dy: i64) -> f64 {
 /// `Ok(None)` when the goal is unreachable; errors if start or goal is outside the grid
 /// or blocked.
 #[doc(alias = "a_star")]
-pub fn astar(
-    grid: &SearchGrid,
-    start: (usize, usize),
-    goal: (usize, usize),
-) -> Result<Option<GridPath>> {
+pub fn astar(grid: &SearchGrid, start: (usize, usize), goal: (usize, usize)) -> Result<Option<GridPath>> {
     astar_with(grid, &mut AstarWorkspace::new(), start, goal)
 }
 
@@ -346,11 +306,7 @@ pub fn astar_with(
             cur = ws.state[c].parent;
         }
         cells.reverse();
-        GridPath {
-            cells,
-            cost,
-            expanded,
-        }
+        GridPath { cells, cost, expanded }
     }))
 }
 
@@ -397,15 +353,8 @@ fn search<const W: bool>(
     let h = |x: i64, y: i64| octile(gx - x, gy - y);
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
-    st[s] = CellState {
-        g: 0.0,
-        parent: u32::MAX,
-        stamp: open_stamp,
-    };
-    heap.push(
-        h(start.0 as i64 + 1, start.1 as i64 + 1).to_bits(),
-        s as u32,
-    );
+    st[s] = CellState { g: 0.0, parent: u32::MAX, stamp: open_stamp };
+    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1).to_bits(), s as u32);
     // Neighbour order: E, W, N(+y), S(−y), then diagonals NE, NW, SE, SW, each with the
     // indices (into the cardinals) of the two cells it passes between.
     let card: [(isize, i64, i64); 4] = [(1, 1, 0), (-1, -1, 0), (pwi, 0, 1), (-pwi, 0, -1)];
@@ -451,11 +400,7 @@ fn search<const W: bool>(
             }
             let ng = if W { gu + weight[v] as f64 } else { gu + 1.0 };
             if sv.stamp != open_stamp || ng < sv.g {
-                *sv = CellState {
-                    g: ng,
-                    parent: u as u32,
-                    stamp: open_stamp,
-                };
+                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
                 heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
             }
         }
@@ -471,17 +416,9 @@ fn search<const W: bool>(
             if sv.stamp == closed_stamp {
                 continue;
             }
-            let ng = if W {
-                gu + SQRT2 * weight[v] as f64
-            } else {
-                gu + SQRT2
-            };
+            let ng = if W { gu + SQRT2 * weight[v] as f64 } else { gu + SQRT2 };
             if sv.stamp != open_stamp || ng < sv.g {
-                *sv = CellState {
-                    g: ng,
-                    parent: u as u32,
-                    stamp: open_stamp,
-                };
+                *sv = CellState { g: ng, parent: u as u32, stamp: open_stamp };
                 heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
             }
         }
@@ -503,17 +440,9 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
     let t = grid.pidx(goal.0, goal.1);
     dist_p[t] = 0.0;
     let mut heap = BinaryHeap::new();
-    heap.push(Node {
-        f: 0.0,
-        idx: t as u32,
-    });
+    heap.push(Node { f: 0.0, idx: t as u32 });
     let card = [1isize, -1, pw, -pw];
-    let diag = [
-        (pw + 1, 0, 2),
-        (pw - 1, 1, 2),
-        (-pw + 1, 0, 3),
-        (-pw - 1, 1, 3),
-    ];
+    let diag = [(pw + 1, 0, 2), (pw - 1, 1, 2), (-pw + 1, 0, 3), (-pw - 1, 1, 3)];
     while let Some(node) = heap.pop() {
         let u = node.idx as usize;
         if node.f > dist_p[u] {
@@ -534,10 +463,7 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
             let nd = du + wu;
             if nd < dist_p[v] {
                 dist_p[v] = nd;
-                heap.push(Node {
-                    f: nd,
-                    idx: v as u32,
-                });
+                heap.push(Node { f: nd, idx: v as u32 });
             }
         }
         for &(off, a, b) in &diag {
@@ -548,10 +474,7 @@ pub fn wavefront(grid: &SearchGrid, goal: (usize, usize)) -> Result<Vec<f64>> {
             let nd = du + SQRT2 * wu;
             if nd < dist_p[v] {
                 dist_p[v] = nd;
-                heap.push(Node {
-                    f: nd,
-                    idx: v as u32,
-                });
+                heap.push(Node { f: nd, idx: v as u32 });
             }
         }
     }

@@ -69,10 +69,7 @@ impl DStarLite {
         grid.check_cell("start", start)?;
         grid.check_cell("goal", goal)?;
         if grid.weight.is_some() {
-            return Err(Error::invalid(
-                "grid",
-                "D* Lite runs on an unweighted grid (octile costs)",
-            ));
+            return Err(Error::invalid("grid", "D* Lite runs on an unweighted grid (octile costs)"));
         }
         let n = grid.pass.len();
         let pw = grid.pw as isize;
@@ -88,16 +85,7 @@ impl DStarLite {
             last: grid.pidx(start.0, start.1),
             goal: grid.pidx(goal.0, goal.1),
             expanded: 0,
-            offsets: [
-                (1, false),
-                (-1, false),
-                (pw, false),
-                (-pw, false),
-                (pw + 1, true),
-                (pw - 1, true),
-                (-pw + 1, true),
-                (-pw - 1, true),
-            ],
+            offsets: [(1, false), (-1, false), (pw, false), (-pw, false), (pw + 1, true), (pw - 1, true), (-pw + 1, true), (-pw - 1, true)],
         };
         s.rhs[s.goal] = 0.0;
         let k = s.key(s.goal);
@@ -126,11 +114,7 @@ impl DStarLite {
     fn push(&mut self, s: usize, k: (f64, f64)) {
         self.open_key[s] = k;
         self.in_open[s] = true;
-        self.heap.push(QEntry {
-            k1: k.0,
-            k2: k.1,
-            idx: s as u32,
-        });
+        self.heap.push(QEntry { k1: k.0, k2: k.1, idx: s as u32 });
     }
 
     /// Cost of the step from `u` by offset `k`, infinite if illegal.
@@ -143,11 +127,7 @@ impl DStarLite {
         }
         if diag {
             let pw = self.grid.pw as isize;
-            let dx = if off == pw + 1 || off == -pw + 1 {
-                1
-            } else {
-                -1
-            };
+            let dx = if off == pw + 1 || off == -pw + 1 { 1 } else { -1 };
             let dy_off = off - dx;
             if !pass[(u as isize + dx) as usize] || !pass[(u as isize + dy_off) as usize] {
                 return f64::INFINITY;
@@ -263,17 +243,11 @@ impl DStarLite {
     /// next [`DStarLite::compute`] re-plans. Blocking the goal is an error.
     pub fn set_blocked(&mut self, cell: (usize, usize), blocked: bool) -> Result<()> {
         if cell.0 >= self.grid.width || cell.1 >= self.grid.height {
-            return Err(Error::Planning(format!(
-                "changed cell ({}, {}) lies outside the map",
-                cell.0, cell.1
-            )));
+            return Err(Error::Planning(format!("changed cell ({}, {}) lies outside the map", cell.0, cell.1)));
         }
         let c = self.grid.pidx(cell.0, cell.1);
         if blocked && c == self.goal {
-            return Err(Error::Planning(format!(
-                "cannot block the goal cell ({}, {})",
-                cell.0, cell.1
-            )));
+            return Err(Error::Planning(format!("cannot block the goal cell ({}, {})", cell.0, cell.1)));
         }
         if self.grid.pass[c] == !blocked {
             return Ok(());

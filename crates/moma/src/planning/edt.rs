@@ -50,11 +50,7 @@ pub fn distance_transform_into(
     ws: &mut EdtWorkspace,
     out: &mut Vec<f32>,
 ) {
-    assert_eq!(
-        obstacles.len(),
-        width * height,
-        "obstacle mask must have width * height cells"
-    );
+    assert_eq!(obstacles.len(), width * height, "obstacle mask must have width * height cells");
     out.resize(width * height, 0.0);
     if width == 0 || height == 0 {
         return;
@@ -93,14 +89,7 @@ pub fn distance_transform_into(
 }
 
 #[inline]
-fn envelope_row(
-    row: &[u32],
-    inf: u32,
-    f: &mut [f64],
-    v: &mut [u32],
-    z: &mut [f64],
-    dst: &mut [f32],
-) {
+fn envelope_row(row: &[u32], inf: u32, f: &mut [f64], v: &mut [u32], z: &mut [f64], dst: &mut [f32]) {
     let n = row.len();
     // f[q] = g(q)^2 + q^2 (the parabola's offset term), only for columns with an obstacle.
     let mut k: usize = 0;

@@ -72,12 +72,7 @@ impl OccupancyGrid {
     }
 
     /// Builds a grid from a row-major passability mask (`true` = free).
-    pub fn from_free_mask(
-        width: usize,
-        height: usize,
-        free: &[bool],
-        kind: MapKind,
-    ) -> Result<Self> {
+    pub fn from_free_mask(width: usize, height: usize, free: &[bool], kind: MapKind) -> Result<Self> {
         check_size(width, height)?;
         crate::error::ensure_len("free mask", width * height, free.len())?;
         Ok(Self {
@@ -85,10 +80,7 @@ impl OccupancyGrid {
             height,
             resolution: 1.0,
             origin: [0.0; 3],
-            cells: free
-                .iter()
-                .map(|&f| if f { FREE } else { OCCUPIED })
-                .collect(),
+            cells: free.iter().map(|&f| if f { FREE } else { OCCUPIED }).collect(),
             kind,
         })
     }
@@ -138,13 +130,7 @@ impl OccupancyGrid {
     pub fn obstacle_mask(&self, lethal_threshold: i8, unknown_is_obstacle: bool) -> Vec<bool> {
         self.cells
             .iter()
-            .map(|&v| {
-                if v < 0 {
-                    unknown_is_obstacle
-                } else {
-                    v >= lethal_threshold
-                }
-            })
+            .map(|&v| if v < 0 { unknown_is_obstacle } else { v >= lethal_threshold })
             .collect()
     }
 
@@ -159,10 +145,7 @@ impl OccupancyGrid {
                 let (s, c) = self.origin[2].sin_cos();
                 let lx = (x + 0.5) * self.resolution;
                 let ly = (y + 0.5) * self.resolution;
-                [
-                    self.origin[0] + c * lx - s * ly,
-                    self.origin[1] + s * lx + c * ly,
-                ]
+                [self.origin[0] + c * lx - s * ly, self.origin[1] + s * lx + c * ly]
             }
         }
     }
@@ -176,10 +159,7 @@ impl OccupancyGrid {
                 let (s, c) = self.origin[2].sin_cos();
                 let dx = wx - self.origin[0];
                 let dy = wy - self.origin[1];
-                [
-                    (c * dx + s * dy) / self.resolution,
-                    (-s * dx + c * dy) / self.resolution,
-                ]
+                [(c * dx + s * dy) / self.resolution, (-s * dx + c * dy) / self.resolution]
             }
         }
     }
@@ -188,9 +168,7 @@ impl OccupancyGrid {
     /// the grid or is not finite.
     pub fn world_to_cell(&self, what: &str, wx: f64, wy: f64) -> Result<(usize, usize)> {
         if !wx.is_finite() || !wy.is_finite() {
-            return Err(Error::NonFinite {
-                field: what.to_string(),
-            });
+            return Err(Error::NonFinite { field: what.to_string() });
         }
         let [fx, fy] = self.world_to_cell_f(wx, wy);
         let (ix, iy) = (fx.floor(), fy.floor());
@@ -206,15 +184,9 @@ impl OccupancyGrid {
 
 pub(crate) fn check_size(width: usize, height: usize) -> Result<()> {
     if width == 0 || height == 0 {
-        return Err(Error::invalid(
-            "map size",
-            format!("{width} x {height}: a map needs at least one cell"),
-        ));
+        return Err(Error::invalid("map size", format!("{width} x {height}: a map needs at least one cell")));
     }
-    if width >= u16::MAX as usize - 2
-        || height >= u16::MAX as usize - 2
-        || width * height >= (u32::MAX / 2) as usize
-    {
+    if width >= u16::MAX as usize - 2 || height >= u16::MAX as usize - 2 || width * height >= (u32::MAX / 2) as usize {
         return Err(Error::invalid(
             "map size",
             format!("{width} x {height}: at most 65,532 cells per side and 2^31 cells in all"),

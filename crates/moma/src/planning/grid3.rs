@@ -18,32 +18,15 @@ pub struct Grid3 {
 impl Grid3 {
     /// An all-free grid of `nx × ny × nz` voxels.
     pub fn new(nx: usize, ny: usize, nz: usize) -> Result<Self> {
-        let n = nx
-            .checked_mul(ny)
-            .and_then(|v| v.checked_mul(nz))
-            .unwrap_or(usize::MAX);
+        let n = nx.checked_mul(ny).and_then(|v| v.checked_mul(nz)).unwrap_or(usize::MAX);
         let side = u16::MAX as usize;
-        if nx == 0
-            || ny == 0
-            || nz == 0
-            || nx > side
-            || ny > side
-            || nz > side
-            || n >= u32::MAX as usize / 2
-        {
+        if nx == 0 || ny == 0 || nz == 0 || nx > side || ny > side || nz > side || n >= u32::MAX as usize / 2 {
             return Err(Error::invalid(
                 "voxel grid size",
-                format!(
-                    "{nx} x {ny} x {nz}: need 1 to 65,535 voxels per side and fewer than 2^31 in all"
-                ),
+                format!("{nx} x {ny} x {nz}: need 1 to 65,535 voxels per side and fewer than 2^31 in all"),
             ));
         }
-        Ok(Self {
-            nx,
-            ny,
-            nz,
-            bits: vec![0; n.div_ceil(64)],
-        })
+        Ok(Self { nx, ny, nz, bits: vec![0; n.div_ceil(64)] })
     }
 
     /// Linear index of voxel `(x, y, z)` (x fastest).
@@ -57,10 +40,7 @@ impl Grid3 {
     /// # Panics
     /// If the voxel is outside the grid.
     pub fn set_blocked(&mut self, x: usize, y: usize, z: usize, blocked: bool) {
-        assert!(
-            x < self.nx && y < self.ny && z < self.nz,
-            "voxel outside the grid"
-        );
+        assert!(x < self.nx && y < self.ny && z < self.nz, "voxel outside the grid");
         let i = self.index(x, y, z);
         if blocked {
             self.bits[i >> 6] |= 1 << (i & 63);
@@ -72,13 +52,7 @@ impl Grid3 {
     /// `true` if the voxel is blocked or outside the grid.
     #[inline]
     pub fn is_blocked(&self, x: i64, y: i64, z: i64) -> bool {
-        if x < 0
-            || y < 0
-            || z < 0
-            || x as usize >= self.nx
-            || y as usize >= self.ny
-            || z as usize >= self.nz
-        {
+        if x < 0 || y < 0 || z < 0 || x as usize >= self.nx || y as usize >= self.ny || z as usize >= self.nz {
             return true;
         }
         let i = self.index(x as usize, y as usize, z as usize);
@@ -110,11 +84,7 @@ struct VoxelState {
     closed: bool,
 }
 
-const UNSEEN: VoxelState = VoxelState {
-    g: f64::INFINITY,
-    parent: u32::MAX,
-    closed: false,
-};
+const UNSEEN: VoxelState = VoxelState { g: f64::INFINITY, parent: u32::MAX, closed: false };
 
 /// Search state stored in lazily allocated 8 x 8 x 8 blocks: dense-array speed without
 /// allocating state for the whole (possibly 10^8-voxel) grid.
@@ -128,12 +98,7 @@ struct BlockStates {
 impl BlockStates {
     fn new(g: &Grid3) -> Self {
         let (nbx, nby, nbz) = (g.nx.div_ceil(8), g.ny.div_ceil(8), g.nz.div_ceil(8));
-        Self {
-            nbx,
-            nby,
-            slot: vec![u32::MAX; nbx * nby * nbz],
-            blocks: Vec::new(),
-        }
+        Self { nbx, nby, slot: vec![u32::MAX; nbx * nby * nbz], blocks: Vec::new() }
     }
     #[inline]
     fn get_mut(&mut self, x: i64, y: i64, z: i64) -> &mut VoxelState {
@@ -189,22 +154,13 @@ pub fn octile3(dx: i64, dy: i64, dz: i64) -> f64 {
 ///
 /// Errors if the start or goal lies outside the grid or in a blocked voxel.
 #[doc(alias = "a_star_3d")]
-pub fn astar3d(
-    grid: &Grid3,
-    start: (usize, usize, usize),
-    goal: (usize, usize, usize),
-) -> Result<Option<Path3>> {
+pub fn astar3d(grid: &Grid3, start: (usize, usize, usize), goal: (usize, usize, usize)) -> Result<Option<Path3>> {
     for (what, p) in [("start", start), ("goal", goal)] {
         if p.0 >= grid.nx || p.1 >= grid.ny || p.2 >= grid.nz {
-            return Err(Error::Planning(format!(
-                "{what} {p:?} lies outside the {} x {} x {} grid",
-                grid.nx, grid.ny, grid.nz
-            )));
+            return Err(Error::Planning(format!("{what} {p:?} lies outside the {} x {} x {} grid", grid.nx, grid.ny, grid.nz)));
         }
         if grid.is_blocked(p.0 as i64, p.1 as i64, p.2 as i64) {
-            return Err(Error::Planning(format!(
-                "{what} {p:?} is inside an obstacle"
-            )));
+            return Err(Error::Planning(format!("{what} {p:?} is inside an obstacle")));
         }
     }
     // The 26 moves and, for each, the bit mask of the 3x3x3 neighbourhood voxels that
@@ -239,29 +195,15 @@ pub fn astar3d(
     }
     let coords = |i: u32| {
         let i = i as usize;
-        (
-            (i % grid.nx) as i64,
-            ((i / grid.nx) % grid.ny) as i64,
-            (i / (grid.nx * grid.ny)) as i64,
-        )
+        ((i % grid.nx) as i64, ((i / grid.nx) % grid.ny) as i64, (i / (grid.nx * grid.ny)) as i64)
     };
     let (gx, gy, gz) = (goal.0 as i64, goal.1 as i64, goal.2 as i64);
     let h = |x: i64, y: i64, z: i64| octile3(gx - x, gy - y, gz - z);
     let mut state = BlockStates::new(grid);
     let mut open = BinaryHeap::new();
     let (sx, sy, sz) = (start.0 as i64, start.1 as i64, start.2 as i64);
-    *state.get_mut(sx, sy, sz) = VoxelState {
-        g: 0.0,
-        parent: u32::MAX,
-        closed: false,
-    };
-    open.push(Entry3 {
-        f: h(sx, sy, sz),
-        g: 0.0,
-        x: sx as u16,
-        y: sy as u16,
-        z: sz as u16,
-    });
+    *state.get_mut(sx, sy, sz) = VoxelState { g: 0.0, parent: u32::MAX, closed: false };
+    open.push(Entry3 { f: h(sx, sy, sz), g: 0.0, x: sx as u16, y: sy as u16, z: sz as u16 });
     let mut expanded = 0;
     while let Some(Entry3 { g, x, y, z, .. }) = open.pop() {
         let (x, y, z) = (x as i64, y as i64, z as i64);
@@ -280,11 +222,7 @@ pub fn astar3d(
                 cur = state.get_mut(cx, cy, cz).parent;
             }
             voxels.reverse();
-            return Ok(Some(Path3 {
-                voxels,
-                cost: g,
-                expanded,
-            }));
+            return Ok(Some(Path3 { voxels, cost: g, expanded }));
         }
         let idx = grid.index(x as usize, y as usize, z as usize) as u32;
         let mut free = 0u32;
@@ -307,18 +245,8 @@ pub fn astar3d(
             if e.closed || ng >= e.g {
                 continue;
             }
-            *e = VoxelState {
-                g: ng,
-                parent: idx,
-                closed: false,
-            };
-            open.push(Entry3 {
-                f: ng + h(nx, ny, nz),
-                g: ng,
-                x: nx as u16,
-                y: ny as u16,
-                z: nz as u16,
-            });
+            *e = VoxelState { g: ng, parent: idx, closed: false };
+            open.push(Entry3 { f: ng + h(nx, ny, nz), g: ng, x: nx as u16, y: ny as u16, z: nz as u16 });
         }
     }
     Ok(None)

@@ -24,9 +24,7 @@ pub use astar::{AstarWorkspace, GridPath, SearchGrid, astar, astar_with, octile,
 pub use edt::{EdtWorkspace, distance_transform, distance_transform_into};
 pub use grid::{CellCounts, MapKind, OccupancyGrid};
 pub use grid3::{Grid3, Path3, astar3d};
-pub use movingai::{
-    MovingAiScenario, Scen3Problem, ScenProblem, load_3dmap, load_3dscen, load_movingai_map,
-};
+pub use movingai::{MovingAiScenario, Scen3Problem, ScenProblem, load_3dmap, load_3dscen, load_movingai_map};
 pub use rosmap::{MapMode, RosMapMeta, load_image_map, load_ros_map};
 
 use crate::{Error, Result};
@@ -45,44 +43,24 @@ pub struct LoadedMap {
 /// `.map` (Moving AI), anything else is read as a bare image (PGM, PNG) with the legacy
 /// map_server defaults and `resolution` (default [`rosmap::DEFAULT_RESOLUTION`]).
 pub fn load_map(path: &Path, resolution: Option<f64>) -> Result<LoadedMap> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
     match ext.as_str() {
         "yaml" | "yml" => {
             if resolution.is_some() {
-                return Err(Error::invalid(
-                    "resolution",
-                    "only applies to a bare image; a YAML map sets its own",
-                ));
+                return Err(Error::invalid("resolution", "only applies to a bare image; a YAML map sets its own"));
             }
             let (grid, meta) = load_ros_map(path)?;
-            Ok(LoadedMap {
-                grid,
-                meta: Some(meta),
-            })
+            Ok(LoadedMap { grid, meta: Some(meta) })
         }
         "map" => {
             if resolution.is_some() {
-                return Err(Error::invalid(
-                    "resolution",
-                    "only applies to a bare image; Moving AI maps are in cells",
-                ));
+                return Err(Error::invalid("resolution", "only applies to a bare image; Moving AI maps are in cells"));
             }
-            Ok(LoadedMap {
-                grid: load_movingai_map(path)?,
-                meta: None,
-            })
+            Ok(LoadedMap { grid: load_movingai_map(path)?, meta: None })
         }
         _ => {
-            let (grid, meta) =
-                load_image_map(path, resolution.unwrap_or(rosmap::DEFAULT_RESOLUTION))?;
-            Ok(LoadedMap {
-                grid,
-                meta: Some(meta),
-            })
+            let (grid, meta) = load_image_map(path, resolution.unwrap_or(rosmap::DEFAULT_RESOLUTION))?;
+            Ok(LoadedMap { grid, meta: Some(meta) })
         }
     }
 }

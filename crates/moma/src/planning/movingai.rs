@@ -10,10 +10,7 @@ use crate::{Error, Result};
 use std::path::Path;
 
 fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
     String::from_utf8(bytes).map_err(|_| Error::parse(path, "not a text file (invalid UTF-8)"))
 }
 
@@ -39,24 +36,15 @@ pub fn parse_movingai_map(text: &str, path: &Path) -> Result<OccupancyGrid> {
         let mut it = line.split_whitespace();
         let key = it.next().unwrap_or("");
         let num = |name: &str, v: Option<&str>| -> Result<usize> {
-            v.and_then(|s| s.parse().ok()).ok_or_else(|| {
-                Error::parse(
-                    path,
-                    format!("line {}: '{name}' needs a positive integer", n + 1),
-                )
-            })
+            v.and_then(|s| s.parse().ok())
+                .ok_or_else(|| Error::parse(path, format!("line {}: '{name}' needs a positive integer", n + 1)))
         };
         match key {
             "type" => {}
             "height" => height = Some(num("height", it.next())?),
             "width" => width = Some(num("width", it.next())?),
             "map" => break,
-            other => {
-                return Err(Error::parse(
-                    path,
-                    format!("line {}: unexpected header '{other}'", n + 1),
-                ));
-            }
+            other => return Err(Error::parse(path, format!("line {}: unexpected header '{other}'", n + 1))),
         }
     }
     let width = width.ok_or_else(|| Error::parse(path, "missing 'width' header"))?;
@@ -69,44 +57,21 @@ pub fn parse_movingai_map(text: &str, path: &Path) -> Result<OccupancyGrid> {
             continue;
         }
         if rows == height {
-            return Err(Error::parse(
-                path,
-                format!("line {}: more than height = {height} rows", n + 1),
-            ));
+            return Err(Error::parse(path, format!("line {}: more than height = {height} rows", n + 1)));
         }
         if line.len() != width {
             return Err(Error::parse(
                 path,
-                format!(
-                    "line {}: row {rows} has {} characters, expected width = {width}",
-                    n + 1,
-                    line.len()
-                ),
+                format!("line {}: row {rows} has {} characters, expected width = {width}", n + 1, line.len()),
             ));
         }
-        cells.extend(line.bytes().map(|b| {
-            if matches!(b, b'.' | b'G' | b'S') {
-                FREE
-            } else {
-                OCCUPIED
-            }
-        }));
+        cells.extend(line.bytes().map(|b| if matches!(b, b'.' | b'G' | b'S') { FREE } else { OCCUPIED }));
         rows += 1;
     }
     if rows != height {
-        return Err(Error::parse(
-            path,
-            format!("{rows} map rows, expected height = {height}"),
-        ));
+        return Err(Error::parse(path, format!("{rows} map rows, expected height = {height}")));
     }
-    Ok(OccupancyGrid {
-        width,
-        height,
-        resolution: 1.0,
-        origin: [0.0; 3],
-        cells,
-        kind: MapKind::MovingAi,
-    })
+    Ok(OccupancyGrid { width, height, resolution: 1.0, origin: [0.0; 3], cells, kind: MapKind::MovingAi })
 }
 
 /// One problem of a 2-D `.scen` file.
@@ -161,42 +126,28 @@ impl MovingAiScenario {
                 let t = line.trim();
                 if let Some(v) = t.strip_prefix("version") {
                     let v = v.trim();
-                    version = v.parse::<f64>().map_err(|_| {
-                        Error::parse(path, format!("line {}: bad version '{v}'", n + 1))
-                    })? as u32;
+                    version = v
+                        .parse::<f64>()
+                        .map_err(|_| Error::parse(path, format!("line {}: bad version '{v}'", n + 1)))?
+                        as u32;
                     seen_version = true;
                     continue;
                 }
             }
-            let f: Vec<&str> = if line.contains('\t') {
-                line.split('\t').collect()
-            } else {
-                line.split_whitespace().collect()
-            };
+            let f: Vec<&str> = if line.contains('\t') { line.split('\t').collect() } else { line.split_whitespace().collect() };
             let err = |what: &str| Error::parse(path, format!("line {}: {what}", n + 1));
             let (bucket, map, wh, rest) = match (f.len(), version) {
                 (9, v) if v >= 1 || !seen_version => (f[0], f[1], Some((f[2], f[3])), &f[4..]),
                 (7, 0) => (f[0], f[1], None, &f[2..]),
                 (k, v) => {
-                    let want = if v >= 1 {
-                        "9 (version 1)"
-                    } else {
-                        "7 (version 0) or 9"
-                    };
-                    return Err(err(&format!(
-                        "expected {want} tab-separated fields, got {k}"
-                    )));
+                    let want = if v >= 1 { "9 (version 1)" } else { "7 (version 0) or 9" };
+                    return Err(err(&format!("expected {want} tab-separated fields, got {k}")));
                 }
             };
             let int = |s: &str, name: &str| -> Result<usize> {
-                s.trim()
-                    .parse::<usize>()
-                    .map_err(|_| err(&format!("{name} '{s}' is not a non-negative integer")))
+                s.trim().parse::<usize>().map_err(|_| err(&format!("{name} '{s}' is not a non-negative integer")))
             };
-            let optimal: f64 = rest[4]
-                .trim()
-                .parse()
-                .map_err(|_| err(&format!("optimal length '{}' is not a number", rest[4])))?;
+            let optimal: f64 = rest[4].trim().parse().map_err(|_| err(&format!("optimal length '{}' is not a number", rest[4])))?;
             if !optimal.is_finite() || optimal < 0.0 {
                 return Err(err("optimal length must be finite and non-negative"));
             }
@@ -226,43 +177,24 @@ pub fn load_3dmap(path: &Path) -> Result<Grid3> {
 
 /// Parses the text of a `.3dmap`; `path` only names the file in errors.
 pub fn parse_3dmap(text: &str, path: &Path) -> Result<Grid3> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
-    let (_, header) = lines
-        .next()
-        .ok_or_else(|| Error::parse(path, "empty file"))?;
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let (_, header) = lines.next().ok_or_else(|| Error::parse(path, "empty file"))?;
     let h: Vec<&str> = header.split_whitespace().collect();
     if h.len() != 4 || h[0] != "voxel" {
         return Err(Error::parse(path, "line 1: expected 'voxel X Y Z'"));
     }
-    let dim = |s: &str| {
-        s.parse::<usize>()
-            .ok()
-            .filter(|&v| v > 0)
-            .ok_or_else(|| Error::parse(path, format!("line 1: bad size '{s}'")))
-    };
-    let mut grid = Grid3::new(dim(h[1])?, dim(h[2])?, dim(h[3])?)
-        .map_err(|e| Error::parse(path, e.to_string()))?;
+    let dim = |s: &str| s.parse::<usize>().ok().filter(|&v| v > 0).ok_or_else(|| Error::parse(path, format!("line 1: bad size '{s}'")));
+    let mut grid = Grid3::new(dim(h[1])?, dim(h[2])?, dim(h[3])?).map_err(|e| Error::parse(path, e.to_string()))?;
     for (n, line) in lines {
         let mut it = line.split_whitespace().map(|s| s.parse::<usize>());
         match (it.next(), it.next(), it.next(), it.next()) {
             (Some(Ok(x)), Some(Ok(y)), Some(Ok(z)), None) => {
                 if x >= grid.nx || y >= grid.ny || z >= grid.nz {
-                    return Err(Error::parse(
-                        path,
-                        format!("line {}: voxel ({x}, {y}, {z}) outside the map", n + 1),
-                    ));
+                    return Err(Error::parse(path, format!("line {}: voxel ({x}, {y}, {z}) outside the map", n + 1)));
                 }
                 grid.set_blocked(x, y, z, true);
             }
-            _ => {
-                return Err(Error::parse(
-                    path,
-                    format!("line {}: expected 'x y z'", n + 1),
-                ));
-            }
+            _ => return Err(Error::parse(path, format!("line {}: expected 'x y z'", n + 1))),
         }
     }
     Ok(grid)
@@ -298,21 +230,10 @@ pub fn parse_3dscen(text: &str, path: &Path) -> Result<Vec<Scen3Problem>> {
         }
         let err = |what: &str| Error::parse(path, format!("line {}: {what}", n + 1));
         if f.len() != 8 {
-            return Err(err(&format!(
-                "expected 8 fields 'sx sy sz gx gy gz length ratio', got {}",
-                f.len()
-            )));
+            return Err(err(&format!("expected 8 fields 'sx sy sz gx gy gz length ratio', got {}", f.len())));
         }
-        let int = |s: &str| {
-            s.parse::<usize>()
-                .map_err(|_| err(&format!("'{s}' is not a non-negative integer")))
-        };
-        let num = |s: &str| {
-            s.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| err(&format!("'{s}' is not a number")))
-        };
+        let int = |s: &str| s.parse::<usize>().map_err(|_| err(&format!("'{s}' is not a non-negative integer")));
+        let num = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| err(&format!("'{s}' is not a number")));
         out.push(Scen3Problem {
             index: out.len(),
             start: (int(f[0])?, int(f[1])?, int(f[2])?),

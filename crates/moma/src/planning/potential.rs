@@ -46,10 +46,7 @@ pub struct PotentialParams {
 
 impl Default for PotentialParams {
     fn default() -> Self {
-        Self {
-            goal_weight: 2.0,
-            influence: 5.0,
-        }
+        Self { goal_weight: 2.0, influence: 5.0 }
     }
 }
 
@@ -101,15 +98,8 @@ impl Descent {
     /// A one-line human-readable report.
     pub fn report(&self) -> String {
         match &self.end {
-            DescentEnd::Reached => format!(
-                "reached the goal in {} steps",
-                self.cells.len().saturating_sub(1)
-            ),
-            DescentEnd::LocalMinimum {
-                cell,
-                potential,
-                distance_to_goal,
-            } => format!(
+            DescentEnd::Reached => format!("reached the goal in {} steps", self.cells.len().saturating_sub(1)),
+            DescentEnd::LocalMinimum { cell, potential, distance_to_goal } => format!(
                 "stuck in a local minimum of the potential at cell ({}, {}) (V = {potential:.3}), {distance_to_goal:.1} cells from the goal, after {} steps: no neighbour has a lower potential",
                 cell.0,
                 cell.1,
@@ -122,19 +112,11 @@ impl Descent {
 
 /// Builds the potential over the C-space `grid` for `goal`.
 #[doc(alias = "artificial_potential_field")]
-pub fn potential_field(
-    grid: &SearchGrid,
-    goal: (usize, usize),
-    term: GoalTerm,
-    params: &PotentialParams,
-) -> Result<PotentialField> {
+pub fn potential_field(grid: &SearchGrid, goal: (usize, usize), term: GoalTerm, params: &PotentialParams) -> Result<PotentialField> {
     grid.check_cell("goal", goal)?;
     let w = params.goal_weight;
     if !(w.is_finite() && w > 0.0) {
-        return Err(Error::invalid(
-            "goal weight",
-            format!("must be finite and > 0, got {w}"),
-        ));
+        return Err(Error::invalid("goal weight", format!("must be finite and > 0, got {w}")));
     }
     if term == GoalTerm::Geodesic && w <= 1.0 {
         return Err(Error::invalid(
@@ -143,19 +125,12 @@ pub fn potential_field(
         ));
     }
     if !(params.influence.is_finite() && params.influence >= 0.0) {
-        return Err(Error::invalid(
-            "influence",
-            format!("must be finite and >= 0, got {}", params.influence),
-        ));
+        return Err(Error::invalid("influence", format!("must be finite and >= 0, got {}", params.influence)));
     }
     let (width, height) = (grid.width(), grid.height());
     let obst = grid.obstacles();
     let clearance = distance_transform(&obst, width, height);
-    let geo = if term == GoalTerm::Geodesic {
-        Some(wavefront(grid, goal)?)
-    } else {
-        None
-    };
+    let geo = if term == GoalTerm::Geodesic { Some(wavefront(grid, goal)?) } else { None };
     let mut values = vec![f64::INFINITY; width * height];
     for y in 0..height {
         for x in 0..width {
@@ -165,52 +140,31 @@ pub fn potential_field(
             }
             let gdist = match &geo {
                 Some(g) => g[i],
-                None => {
-                    ((x as f64 - goal.0 as f64).powi(2) + (y as f64 - goal.1 as f64).powi(2)).sqrt()
-                }
+                None => ((x as f64 - goal.0 as f64).powi(2) + (y as f64 - goal.1 as f64).powi(2)).sqrt(),
             };
             values[i] = w * gdist - (clearance[i] as f64).min(params.influence);
         }
     }
-    Ok(PotentialField {
-        width,
-        height,
-        goal,
-        term,
-        values,
-    })
+    Ok(PotentialField { width, height, goal, term, values })
 }
 
 /// Follows the steepest descent of `field` from `start` over the C-space `grid`.
-pub fn descend(
-    grid: &SearchGrid,
-    field: &PotentialField,
-    start: (usize, usize),
-) -> Result<Descent> {
+pub fn descend(grid: &SearchGrid, field: &PotentialField, start: (usize, usize)) -> Result<Descent> {
     grid.check_cell("start", start)?;
     if (grid.width(), grid.height()) != (field.width, field.height) {
-        return Err(Error::invalid(
-            "potential field",
-            "size differs from the grid",
-        ));
+        return Err(Error::invalid("potential field", "size differs from the grid"));
     }
     let v = |c: (i64, i64)| field.values[c.1 as usize * field.width + c.0 as usize];
     let mut cur = (start.0 as i64, start.1 as i64);
     let mut cells = vec![start];
     if !v(cur).is_finite() {
-        return Ok(Descent {
-            cells,
-            end: DescentEnd::Unreachable,
-        });
+        return Ok(Descent { cells, end: DescentEnd::Unreachable });
     }
     let goal = (field.goal.0 as i64, field.goal.1 as i64);
     // V strictly decreases, so the walk cannot cycle; the bound is a safety net.
     for _ in 0..field.values.len() {
         if cur == goal {
-            return Ok(Descent {
-                cells,
-                end: DescentEnd::Reached,
-            });
+            return Ok(Descent { cells, end: DescentEnd::Reached });
         }
         let here = v(cur);
         let mut best: Option<((i64, i64), f64)> = None;
@@ -236,17 +190,10 @@ pub fn descend(
                 let d = (((cur.0 - goal.0).pow(2) + (cur.1 - goal.1).pow(2)) as f64).sqrt();
                 return Ok(Descent {
                     cells,
-                    end: DescentEnd::LocalMinimum {
-                        cell: (cur.0 as usize, cur.1 as usize),
-                        potential: here,
-                        distance_to_goal: d,
-                    },
+                    end: DescentEnd::LocalMinimum { cell: (cur.0 as usize, cur.1 as usize), potential: here, distance_to_goal: d },
                 });
             }
         }
     }
-    Err(Error::Numerical {
-        t: 0.0,
-        message: "potential descent did not terminate".into(),
-    })
+    Err(Error::Numerical { t: 0.0, message: "potential descent did not terminate".into() })
 }

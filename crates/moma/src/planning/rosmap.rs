@@ -68,21 +68,12 @@ impl RosMapMeta {
     fn validate(&self, file: &Path) -> Result<()> {
         let bad = |m: String| Err(Error::parse(file, m));
         if !(self.resolution.is_finite() && self.resolution > 0.0) {
-            return bad(format!(
-                "field 'resolution': must be a positive number, got {}",
-                self.resolution
-            ));
+            return bad(format!("field 'resolution': must be a positive number, got {}", self.resolution));
         }
         if self.origin.iter().any(|v| !v.is_finite()) {
-            return bad(format!(
-                "field 'origin': values must be finite, got {:?}",
-                self.origin
-            ));
+            return bad(format!("field 'origin': values must be finite, got {:?}", self.origin));
         }
-        for (name, v) in [
-            ("occupied_thresh", self.occupied_thresh),
-            ("free_thresh", self.free_thresh),
-        ] {
+        for (name, v) in [("occupied_thresh", self.occupied_thresh), ("free_thresh", self.free_thresh)] {
             if !(0.0..=1.0).contains(&v) {
                 return bad(format!("field '{name}': must lie in [0, 1], got {v}"));
             }
@@ -125,18 +116,15 @@ struct RawYaml {
 
 /// Reads a ROS map YAML (does not load the image).
 pub fn read_ros_yaml(path: &Path) -> Result<RosMapMeta> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
     parse_ros_yaml(&text, path)
 }
 
 /// Parses the text of a ROS map YAML; `path` names the file in errors and anchors the
 /// relative image path.
 pub fn parse_ros_yaml(text: &str, path: &Path) -> Result<RosMapMeta> {
-    let raw: RawYaml = serde_saphyr::from_str(text)
-        .map_err(|e| Error::parse(path, format!("malformed map YAML: {e}")))?;
+    let raw: RawYaml =
+        serde_saphyr::from_str(text).map_err(|e| Error::parse(path, format!("malformed map YAML: {e}")))?;
     let missing = |k: &str| Error::parse(path, format!("missing required field '{k}'"));
     let image = raw.image.ok_or_else(|| missing("image"))?;
     if image.trim().is_empty() {
@@ -147,10 +135,7 @@ pub fn parse_ros_yaml(text: &str, path: &Path) -> Result<RosMapMeta> {
     if origin.len() != 3 {
         return Err(Error::parse(
             path,
-            format!(
-                "field 'origin': expected [x, y, yaw] (3 numbers), got {} numbers",
-                origin.len()
-            ),
+            format!("field 'origin': expected [x, y, yaw] (3 numbers), got {} numbers", origin.len()),
         ));
     }
     let negate = match raw.negate {
@@ -174,11 +159,7 @@ pub fn parse_ros_yaml(text: &str, path: &Path) -> Result<RosMapMeta> {
     };
     let folder = path.parent().unwrap_or(Path::new(""));
     let image_path = Path::new(&image);
-    let image = if image_path.is_absolute() {
-        image_path.to_path_buf()
-    } else {
-        folder.join(image_path)
-    };
+    let image = if image_path.is_absolute() { image_path.to_path_buf() } else { folder.join(image_path) };
     let meta = RosMapMeta {
         image,
         resolution,
@@ -211,10 +192,7 @@ pub fn load_image_map(image: &Path, resolution: f64) -> Result<(OccupancyGrid, R
 /// Loads the image named by `meta` and converts it with `meta`'s thresholds and mode.
 pub fn load_image_with_meta(meta: &RosMapMeta) -> Result<OccupancyGrid> {
     let path = &meta.image;
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.clone(),
-        source,
-    })?;
+    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.clone(), source })?;
     let img = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::parse(path, format!("cannot read image: {e}")))?
@@ -230,27 +208,15 @@ pub fn load_image_with_meta(meta: &RosMapMeta) -> Result<OccupancyGrid> {
             .pixels()
             .map(|p| {
                 let [l, a] = p.0;
-                let grey = if trinary {
-                    ((l as u32 + a as u32) / 2) as u8
-                } else {
-                    l
-                };
+                let grey = if trinary { ((l as u32 + a as u32) / 2) as u8 } else { l };
                 (grey, a)
             })
             .collect(),
         image::DynamicImage::ImageRgb8(b) => b
             .pixels()
-            .map(|p| {
-                (
-                    ((p.0[0] as u32 + p.0[1] as u32 + p.0[2] as u32) / 3) as u8,
-                    255,
-                )
-            })
+            .map(|p| (((p.0[0] as u32 + p.0[1] as u32 + p.0[2] as u32) / 3) as u8, 255))
             .collect(),
-        image::DynamicImage::ImageLuma16(b) => b
-            .pixels()
-            .map(|p| (((p.0[0] as u32 + 128) / 257) as u8, 255))
-            .collect(),
+        image::DynamicImage::ImageLuma16(b) => b.pixels().map(|p| (((p.0[0] as u32 + 128) / 257) as u8, 255)).collect(),
         other => {
             let has_alpha = other.color().has_alpha();
             let rgba = other.to_rgba8();
@@ -290,11 +256,7 @@ pub fn grey_to_cell(meta: &RosMapMeta, x: u8, alpha: u8) -> i8 {
     if meta.mode == MapMode::Raw {
         return if x <= 100 { x as i8 } else { UNKNOWN };
     }
-    let p = if meta.negate {
-        x as f64 / 255.0
-    } else {
-        (255.0 - x as f64) / 255.0
-    };
+    let p = if meta.negate { x as f64 / 255.0 } else { (255.0 - x as f64) / 255.0 };
     if p > meta.occupied_thresh {
         OCCUPIED
     } else if p < meta.free_thresh {
@@ -303,9 +265,7 @@ pub fn grey_to_cell(meta: &RosMapMeta, x: u8, alpha: u8) -> i8 {
         if alpha < 255 {
             UNKNOWN
         } else {
-            (100.0 * (p - meta.free_thresh) / (meta.occupied_thresh - meta.free_thresh))
-                .round()
-                .clamp(0.0, 100.0) as i8
+            (100.0 * (p - meta.free_thresh) / (meta.occupied_thresh - meta.free_thresh)).round().clamp(0.0, 100.0) as i8
         }
     } else {
         UNKNOWN

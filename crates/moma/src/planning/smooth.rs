@@ -73,9 +73,6 @@ pub fn smooth(grid: &SearchGrid, cells: &[(usize, usize)]) -> Vec<(usize, usize)
 pub fn polyline_length(cells: &[(usize, usize)]) -> f64 {
     cells
         .windows(2)
-        .map(|w| {
-            ((w[1].0 as f64 - w[0].0 as f64).powi(2) + (w[1].1 as f64 - w[0].1 as f64).powi(2))
-                .sqrt()
-        })
+        .map(|w| ((w[1].0 as f64 - w[0].0 as f64).powi(2) + (w[1].1 as f64 - w[0].1 as f64).powi(2)).sqrt())
         .sum()
 }

@@ -24,17 +24,9 @@ pub struct DiffDriveLimits {
 
 impl DiffDriveLimits {
     fn validate(&self) -> Result<()> {
-        for (n, v) in [
-            ("v_max", self.v_max),
-            ("omega_max", self.omega_max),
-            ("a_max", self.a_max),
-            ("alpha_max", self.alpha_max),
-        ] {
+        for (n, v) in [("v_max", self.v_max), ("omega_max", self.omega_max), ("a_max", self.a_max), ("alpha_max", self.alpha_max)] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be finite and > 0, got {v}"),
-                ));
+                return Err(Error::invalid(n, format!("must be finite and > 0, got {v}")));
             }
         }
         Ok(())
@@ -76,13 +68,7 @@ impl Trapezoid {
             let vp = (d * amax).sqrt();
             (vp, vp / amax, 0.0)
         };
-        Self {
-            d,
-            vp,
-            a: amax,
-            t_acc,
-            t_cruise,
-        }
+        Self { d, vp, a: amax, t_acc, t_cruise }
     }
     fn duration(&self) -> f64 {
         2.0 * self.t_acc + self.t_cruise
@@ -92,10 +78,7 @@ impl Trapezoid {
         if t <= self.t_acc {
             (0.5 * self.a * t * t, self.a * t)
         } else if t <= self.t_acc + self.t_cruise {
-            (
-                0.5 * self.a * self.t_acc * self.t_acc + self.vp * (t - self.t_acc),
-                self.vp,
-            )
+            (0.5 * self.a * self.t_acc * self.t_acc + self.vp * (t - self.t_acc), self.vp)
         } else {
             let r = self.duration() - t;
             (self.d - 0.5 * self.a * r * r, self.a * r)
@@ -125,10 +108,7 @@ pub fn time_parameterize(
 ) -> Result<Vec<TrajectoryPoint>> {
     limits.validate()?;
     if !(dt.is_finite() && dt > 0.0) {
-        return Err(Error::invalid(
-            "dt",
-            format!("must be finite and > 0, got {dt}"),
-        ));
+        return Err(Error::invalid("dt", format!("must be finite and > 0, got {dt}")));
     }
     if waypoints.is_empty() {
         return Err(Error::invalid("waypoints", "the path is empty"));
@@ -141,32 +121,20 @@ pub fn time_parameterize(
             pts.push(*w);
         }
     }
-    let first_dir = if pts.len() > 1 {
-        (pts[1][1] - pts[0][1]).atan2(pts[1][0] - pts[0][0])
-    } else {
-        0.0
-    };
+    let first_dir = if pts.len() > 1 { (pts[1][1] - pts[0][1]).atan2(pts[1][0] - pts[0][0]) } else { 0.0 };
     let mut theta = wrap(initial_heading.unwrap_or(first_dir));
     let mut t0 = 0.0;
-    let mut out = vec![TrajectoryPoint {
-        t: 0.0,
-        x: pts[0][0],
-        y: pts[0][1],
-        theta,
-        v: 0.0,
-        omega: 0.0,
-    }];
-    let push_phase =
-        |out: &mut Vec<TrajectoryPoint>, t0: f64, dur: f64, f: &dyn Fn(f64) -> TrajectoryPoint| {
-            let n = (dur / dt).floor() as usize;
-            for k in 1..=n {
-                let tau = k as f64 * dt;
-                if tau < dur - 1e-12 {
-                    out.push(f(tau).with_time(t0 + tau));
-                }
+    let mut out = vec![TrajectoryPoint { t: 0.0, x: pts[0][0], y: pts[0][1], theta, v: 0.0, omega: 0.0 }];
+    let push_phase = |out: &mut Vec<TrajectoryPoint>, t0: f64, dur: f64, f: &dyn Fn(f64) -> TrajectoryPoint| {
+        let n = (dur / dt).floor() as usize;
+        for k in 1..=n {
+            let tau = k as f64 * dt;
+            if tau < dur - 1e-12 {
+                out.push(f(tau).with_time(t0 + tau));
             }
-            out.push(f(dur).with_time(t0 + dur));
-        };
+        }
+        out.push(f(dur).with_time(t0 + dur));
+    };
     for seg in pts.windows(2) {
         let (a, b) = (seg[0], seg[1]);
         let heading = (b[1] - a[1]).atan2(b[0] - a[0]);
@@ -176,14 +144,7 @@ pub fn time_parameterize(
             let (th0, sgn) = (theta, turn.signum());
             push_phase(&mut out, t0, prof.duration(), &|tau| {
                 let (s, w) = prof.at(tau);
-                TrajectoryPoint {
-                    t: 0.0,
-                    x: a[0],
-                    y: a[1],
-                    theta: wrap(th0 + sgn * s),
-                    v: 0.0,
-                    omega: sgn * w,
-                }
+                TrajectoryPoint { t: 0.0, x: a[0], y: a[1], theta: wrap(th0 + sgn * s), v: 0.0, omega: sgn * w }
             });
             t0 += prof.duration();
         }
@@ -193,14 +154,7 @@ pub fn time_parameterize(
         let (c, s) = (heading.cos(), heading.sin());
         push_phase(&mut out, t0, prof.duration(), &|tau| {
             let (d, v) = prof.at(tau);
-            TrajectoryPoint {
-                t: 0.0,
-                x: a[0] + c * d,
-                y: a[1] + s * d,
-                theta: heading,
-                v,
-                omega: 0.0,
-            }
+            TrajectoryPoint { t: 0.0, x: a[0] + c * d, y: a[1] + s * d, theta: heading, v, omega: 0.0 }
         });
         t0 += prof.duration();
     }
