@@ -57,8 +57,13 @@ pub fn run(args: Args) -> Result<()> {
     let mut csv = String::from("index,start,goal,cost,optimal,expanded,micros\n");
     for r in &rows {
         let cost = r.cost.map(|c| format!("{c:.8}")).unwrap_or_default();
-        csv.push_str(&format!("{},{},{},{},{},{},{:.1}\n", r.index, r.start, r.goal, cost, r.optimal, r.expanded, r.micros));
-        let ok = r.cost.is_some_and(|c| (c - r.optimal).abs() <= args.tolerance * r.optimal.max(1.0));
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{:.1}\n",
+            r.index, r.start, r.goal, cost, r.optimal, r.expanded, r.micros
+        ));
+        let ok = r
+            .cost
+            .is_some_and(|c| (c - r.optimal).abs() <= args.tolerance * r.optimal.max(1.0));
         if !ok {
             mismatches.push(r);
         }
@@ -68,13 +73,29 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut t: Vec<f64> = rows.iter().map(|r| r.micros).collect();
     t.sort_by(f64::total_cmp);
-    let pct = |p: f64| if t.is_empty() { 0.0 } else { t[((t.len() - 1) as f64 * p).round() as usize] };
+    let pct = |p: f64| {
+        if t.is_empty() {
+            0.0
+        } else {
+            t[((t.len() - 1) as f64 * p).round() as usize]
+        }
+    };
     let total: f64 = t.iter().sum();
     println!("{} problems from {}", rows.len(), args.scen.display());
-    println!("mismatches (relative tolerance {:e}): {}", args.tolerance, mismatches.len());
+    println!(
+        "mismatches (relative tolerance {:e}): {}",
+        args.tolerance,
+        mismatches.len()
+    );
     for r in mismatches.iter().take(10) {
-        let c = r.cost.map(|c| format!("{c:.8}")).unwrap_or_else(|| "no path".into());
-        println!("  #{} {} -> {}: found {c}, optimal {}", r.index, r.start, r.goal, r.optimal);
+        let c = r
+            .cost
+            .map(|c| format!("{c:.8}"))
+            .unwrap_or_else(|| "no path".into());
+        println!(
+            "  #{} {} -> {}: found {c}, optimal {}",
+            r.index, r.start, r.goal, r.optimal
+        );
     }
     println!(
         "time per problem (us): median {:.1}, p90 {:.1}, p99 {:.1}, max {:.1}; total {:.3} s",
@@ -85,7 +106,11 @@ pub fn run(args: Args) -> Result<()> {
         total * 1e-6
     );
     if !mismatches.is_empty() {
-        bail!("{} of {} problems do not match the optimal length", mismatches.len(), rows.len());
+        bail!(
+            "{} of {} problems do not match the optimal length",
+            mismatches.len(),
+            rows.len()
+        );
     }
     Ok(())
 }
@@ -100,7 +125,14 @@ fn run2(args: &Args) -> Result<Vec<Row>> {
         if let (Some(w), Some(h)) = (p.map_width, p.map_height)
             && (w, h) != (grid.width, grid.height)
         {
-            bail!("{}: problem {} is for a {w} x {h} map, but {} is {} x {}", args.scen.display(), p.index, args.map.display(), grid.width, grid.height);
+            bail!(
+                "{}: problem {} is for a {w} x {h} map, but {} is {} x {}",
+                args.scen.display(),
+                p.index,
+                args.map.display(),
+                grid.width,
+                grid.height
+            );
         }
         let t0 = Instant::now();
         let (cost, expanded) = astar_cost(&sg, &mut ws, p.start, p.goal)
@@ -125,7 +157,8 @@ fn run3(args: &Args) -> Result<Vec<Row>> {
     let mut rows = Vec::new();
     for p in probs.iter().step_by(args.every) {
         let t0 = Instant::now();
-        let r = planning::astar3d(&grid, p.start, p.goal).with_context(|| format!("{}: problem {}", args.scen.display(), p.index))?;
+        let r = planning::astar3d(&grid, p.start, p.goal)
+            .with_context(|| format!("{}: problem {}", args.scen.display(), p.index))?;
         let micros = t0.elapsed().as_secs_f64() * 1e6;
         rows.push(Row {
             index: p.index,

@@ -27,12 +27,23 @@ pub fn dilate_disk(dist: &[f32], radius_cells: f64) -> Vec<bool> {
 }
 
 /// Convenience: obstacle mask → distance transform → disk dilation.
-pub fn inflate(obstacles: &[bool], width: usize, height: usize, radius_cells: f64) -> Result<Vec<bool>> {
+pub fn inflate(
+    obstacles: &[bool],
+    width: usize,
+    height: usize,
+    radius_cells: f64,
+) -> Result<Vec<bool>> {
     if !(radius_cells.is_finite() && radius_cells >= 0.0) {
-        return Err(Error::invalid("robot radius", format!("must be finite and >= 0, got {radius_cells}")));
+        return Err(Error::invalid(
+            "robot radius",
+            format!("must be finite and >= 0, got {radius_cells}"),
+        ));
     }
     crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
-    Ok(dilate_disk(&distance_transform(obstacles, width, height), radius_cells))
+    Ok(dilate_disk(
+        &distance_transform(obstacles, width, height),
+        radius_cells,
+    ))
 }
 
 /// Parameters of the inflation layer (nav2 `InflationLayer`; lengths in metres).
@@ -50,7 +61,11 @@ impl InflationParams {
     /// nav2's defaults (`inflation_radius` 0.55 m, `cost_scaling_factor` 10) with the
     /// given inscribed radius.
     pub fn nav2_defaults(inscribed_radius: f64) -> Self {
-        Self { inscribed_radius, inflation_radius: 0.55, cost_scaling_factor: 10.0 }
+        Self {
+            inscribed_radius,
+            inflation_radius: 0.55,
+            cost_scaling_factor: 10.0,
+        }
     }
 
     fn validate(&self) -> Result<()> {
@@ -60,7 +75,10 @@ impl InflationParams {
             ("cost_scaling_factor", self.cost_scaling_factor),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(n, format!("must be finite and >= 0, got {v}")));
+                return Err(Error::invalid(
+                    n,
+                    format!("must be finite and >= 0, got {v}"),
+                ));
             }
         }
         Ok(())
@@ -98,7 +116,10 @@ pub fn inflation_layer(
 ) -> Result<Vec<u8>> {
     params.validate()?;
     if !(resolution.is_finite() && resolution > 0.0) {
-        return Err(Error::invalid("resolution", format!("must be positive, got {resolution}")));
+        return Err(Error::invalid(
+            "resolution",
+            format!("must be positive, got {resolution}"),
+        ));
     }
     crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
     if let Some(u) = unknown {
@@ -109,7 +130,11 @@ pub fn inflation_layer(
         .iter()
         .enumerate()
         .map(|(i, &d)| {
-            let c = if d.is_finite() { inflation_cost(d as f64, resolution, params) } else { FREE_SPACE };
+            let c = if d.is_finite() {
+                inflation_cost(d as f64, resolution, params)
+            } else {
+                FREE_SPACE
+            };
             match unknown {
                 Some(u) if u[i] && c < INSCRIBED => NO_INFORMATION,
                 _ => c,
@@ -130,10 +155,15 @@ impl Footprint {
     /// Validates and builds a footprint.
     pub fn new(vertices: Vec<[f64; 2]>) -> Result<Self> {
         if vertices.len() < 3 {
-            return Err(Error::invalid("footprint", format!("needs at least 3 vertices, got {}", vertices.len())));
+            return Err(Error::invalid(
+                "footprint",
+                format!("needs at least 3 vertices, got {}", vertices.len()),
+            ));
         }
         if vertices.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { field: "footprint".into() });
+            return Err(Error::NonFinite {
+                field: "footprint".into(),
+            });
         }
         let f = Self { vertices };
         let v = &f.vertices;
@@ -150,7 +180,10 @@ impl Footprint {
             ));
         }
         if !f.contains(0.0, 0.0) {
-            return Err(Error::invalid("footprint", "the polygon must contain the robot's origin (0, 0)"));
+            return Err(Error::invalid(
+                "footprint",
+                "the polygon must contain the robot's origin (0, 0)",
+            ));
         }
         Ok(f)
     }
@@ -160,7 +193,10 @@ impl Footprint {
         let nums: Vec<f64> = text
             .split(|c: char| c == ',' || c == ';' || c == '[' || c == ']' || c.is_whitespace())
             .filter(|s| !s.is_empty())
-            .map(|s| s.parse::<f64>().map_err(|_| Error::invalid("footprint", format!("'{s}' is not a number"))))
+            .map(|s| {
+                s.parse::<f64>()
+                    .map_err(|_| Error::invalid("footprint", format!("'{s}' is not a number")))
+            })
             .collect::<Result<_>>()?;
         if !nums.len().is_multiple_of(2) {
             return Err(Error::invalid("footprint", "expected x,y pairs"));
@@ -202,7 +238,10 @@ impl Footprint {
 
     /// Distance from the origin to the farthest vertex.
     pub fn circumscribed_radius(&self) -> f64 {
-        self.vertices.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max)
+        self.vertices
+            .iter()
+            .map(|p| p[0].hypot(p[1]))
+            .fold(0.0, f64::max)
     }
 
     /// Integer cell offsets `(dx, dy)` whose centres lie inside the footprint rotated by
@@ -228,7 +267,11 @@ impl Footprint {
 fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (abx, aby) = (b[0] - a[0], b[1] - a[1]);
     let len2 = abx * abx + aby * aby;
-    let t = if len2 > 0.0 { (((p[0] - a[0]) * abx + (p[1] - a[1]) * aby) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * abx + (p[1] - a[1]) * aby) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     (p[0] - a[0] - t * abx).hypot(p[1] - a[1] - t * aby)
 }
 
@@ -263,7 +306,10 @@ pub fn footprint_cspace(
     headings: usize,
 ) -> Result<FootprintCSpace> {
     if !(4..=360).contains(&headings) {
-        return Err(Error::invalid("headings", format!("must be in 4..=360, got {headings}")));
+        return Err(Error::invalid(
+            "headings",
+            format!("must be in 4..=360, got {headings}"),
+        ));
     }
     crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
     let dist = distance_transform(obstacles, width, height);
@@ -294,7 +340,11 @@ pub fn footprint_cspace(
                 } else {
                     offsets.iter().any(|&(dx, dy)| {
                         let (ox, oy) = (x as i64 + dx, y as i64 + dy);
-                        ox >= 0 && oy >= 0 && (ox as usize) < width && (oy as usize) < height && obstacles[oy as usize * width + ox as usize]
+                        ox >= 0
+                            && oy >= 0
+                            && (ox as usize) < width
+                            && (oy as usize) < height
+                            && obstacles[oy as usize * width + ox as usize]
                     })
                 };
             }
@@ -314,7 +364,13 @@ pub fn footprint_cspace(
         swept.dedup();
         sweeps.push(dilate(&swept));
     }
-    Ok(FootprintCSpace { headings, width, height, slices, sweeps })
+    Ok(FootprintCSpace {
+        headings,
+        width,
+        height,
+        slices,
+        sweeps,
+    })
 }
 
 /// A path of a polygonal robot through its (x, y, θ) C-space.
@@ -343,15 +399,23 @@ pub fn astar_footprint(
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
     if cs.headings != 8 {
-        return Err(Error::invalid("headings", "the footprint search needs the 8-heading C-space"));
+        return Err(Error::invalid(
+            "headings",
+            "the footprint search needs the 8-heading C-space",
+        ));
     }
     if !(turn_cost.is_finite() && turn_cost >= 0.0) {
-        return Err(Error::invalid("turn cost", format!("must be finite and >= 0, got {turn_cost}")));
+        return Err(Error::invalid(
+            "turn cost",
+            format!("must be finite and >= 0, got {turn_cost}"),
+        ));
     }
     let (w, h) = (cs.width, cs.height);
     for (what, (x, y)) in [("start", (start.0, start.1)), ("goal", goal)] {
         if x >= w || y >= h {
-            return Err(Error::Planning(format!("{what} cell ({x}, {y}) lies outside the {w} x {h} map")));
+            return Err(Error::Planning(format!(
+                "{what} cell ({x}, {y}) lies outside the {w} x {h} map"
+            )));
         }
     }
     if start.2 >= 8 {
@@ -366,16 +430,36 @@ pub fn astar_footprint(
         )));
     }
     if (0..8).all(|k| cs.slices[k][goal.1 * w + goal.0]) {
-        return Err(Error::Planning(format!("goal cell ({}, {}) collides at every heading", goal.0, goal.1)));
+        return Err(Error::Planning(format!(
+            "goal cell ({}, {}) collides at every heading",
+            goal.0, goal.1
+        )));
     }
-    const DIRS: [(i64, i64); 8] = [(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1)];
-    let free = |k: usize, x: i64, y: i64| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && !cs.slices[k][y as usize * w + x as usize];
+    const DIRS: [(i64, i64); 8] = [
+        (1, 0),
+        (1, 1),
+        (0, 1),
+        (-1, 1),
+        (-1, 0),
+        (-1, -1),
+        (0, -1),
+        (1, -1),
+    ];
+    let free = |k: usize, x: i64, y: i64| {
+        x >= 0
+            && y >= 0
+            && (x as usize) < w
+            && (y as usize) < h
+            && !cs.slices[k][y as usize * w + x as usize]
+    };
     let n = w * h * 8;
     let sid = |x: usize, y: usize, k: usize| (y * w + x) * 8 + k;
     let mut g = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
     let mut closed = vec![false; n];
-    let hfun = |x: usize, y: usize| super::astar::octile(goal.0 as i64 - x as i64, goal.1 as i64 - y as i64);
+    let hfun = |x: usize, y: usize| {
+        super::astar::octile(goal.0 as i64 - x as i64, goal.1 as i64 - y as i64)
+    };
     // Keys as ordered integers (costs are finite and non-negative).
     let key = |f: f64| Reverse(f.to_bits());
     let mut heap = BinaryHeap::new();
@@ -401,7 +485,11 @@ pub fn astar_footprint(
                 c = parent[ci];
             }
             states.reverse();
-            return Ok(Some(FootprintPath { states, cost: g[u], expanded }));
+            return Ok(Some(FootprintPath {
+                states,
+                cost: g[u],
+                expanded,
+            }));
         }
         let mut relax = |v: usize, c: f64, heap: &mut BinaryHeap<(Reverse<u64>, u32)>| {
             let ng = g[u] + c;
@@ -415,8 +503,16 @@ pub fn astar_footprint(
         // Drive forward.
         let (dx, dy) = DIRS[k];
         let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-        if free(k, nx, ny) && (dx == 0 || dy == 0 || (free(k, x as i64 + dx, y as i64) && free(k, x as i64, y as i64 + dy))) {
-            let len = if dx != 0 && dy != 0 { super::astar::SQRT2 } else { 1.0 };
+        if free(k, nx, ny)
+            && (dx == 0
+                || dy == 0
+                || (free(k, x as i64 + dx, y as i64) && free(k, x as i64, y as i64 + dy)))
+        {
+            let len = if dx != 0 && dy != 0 {
+                super::astar::SQRT2
+            } else {
+                1.0
+            };
             relax(sid(nx as usize, ny as usize, k), len, &mut heap);
         }
         // Turn in place by +45° (sweep k) or -45° (sweep k-1).
