@@ -30,15 +30,47 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
 /// Prints `value` as pretty JSON on standard output.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).context("serialising JSON output")?;
-    println!("{text}");
-    Ok(())
+    // `println!` panics when the reader went away (`moma ... --json | head`); a closed
+    // pipe is the reader's choice, not an error, and any other failure is reported.
+    let mut stdout = std::io::stdout().lock();
+    match writeln!(stdout, "{text}").and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("cannot write to standard output"),
+    }
 }
 
 /// Writes several outputs only once all of them were produced: the caller builds every
-/// `(path, bytes)` pair first, then calls this, so an error midway writes nothing.
+/// `(path, bytes)` pair first, then calls this. Every file is first written to its
+/// temporary sibling; only when all of them succeeded are they renamed into place, so an
+/// unwritable path (e.g. a missing directory) leaves none of the outputs behind.
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+    let mut written: Vec<(PathBuf, &Path)> = Vec::with_capacity(files.len());
+    let cleanup = |written: &[(PathBuf, &Path)]| {
+        for (tmp, _) in written {
+            let _ = std::fs::remove_file(tmp);
+        }
+    };
     for (path, bytes) in files {
-        write_atomic(path, bytes)?;
+        let tmp = temp_sibling(path);
+        let result = (|| -> std::io::Result<()> {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            cleanup(&written);
+            return Err(anyhow::Error::new(e)
+                .context(format!("{}: cannot write output file", path.display())));
+        }
+        written.push((tmp, path.as_path()));
+    }
+    for (i, (tmp, path)) in written.iter().enumerate() {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            cleanup(&written[i..]);
+            return Err(anyhow::Error::new(e)
+                .context(format!("{}: cannot write output file", path.display())));
+        }
     }
     Ok(())
 }

@@ -46,6 +46,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     let is3d = args.map.extension().is_some_and(|e| e == "3dmap");
     let rows = if is3d { run3(&args)? } else { run2(&args)? };
+    if rows.is_empty() {
+        bail!(
+            "{}: no problems to run (empty scenario file, or --every {} skips them all)",
+            args.scen.display(),
+            args.every
+        );
+    }
     let mut mismatches = Vec::new();
     let mut csv = String::from("index,start,goal,cost,optimal,expanded,micros\n");
     for r in &rows {

@@ -166,6 +166,19 @@ impl Footprint {
             });
         }
         let f = Self { vertices };
+        let v = &f.vertices;
+        let twice_area: f64 = (0..v.len())
+            .map(|i| {
+                let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                a[0] * b[1] - b[0] * a[1]
+            })
+            .sum();
+        if !(twice_area.abs() > 0.0 && twice_area.is_finite()) {
+            return Err(Error::invalid(
+                "footprint",
+                "the polygon must have a finite, non-zero area",
+            ));
+        }
         if !f.contains(0.0, 0.0) {
             return Err(Error::invalid(
                 "footprint",
@@ -302,6 +315,17 @@ pub fn footprint_cspace(
     let dist = distance_transform(obstacles, width, height);
     let r_in = footprint.inscribed_radius() / resolution;
     let r_out = footprint.circumscribed_radius() / resolution;
+    // A footprint wider than the whole map collides everywhere, and its cell stencil
+    // (side 2 r_out) would take for ever to build or overflow the cell index.
+    let map_diagonal = (width as f64).hypot(height as f64);
+    if r_out.is_nan() || r_out > map_diagonal {
+        return Err(Error::invalid(
+            "footprint",
+            format!(
+                "circumscribed radius {r_out:.3e} cells exceeds the map diagonal ({map_diagonal:.0} cells)"
+            ),
+        ));
+    }
     let step = std::f64::consts::TAU / headings as f64;
     let dilate = |offsets: &[(i64, i64)]| -> Vec<bool> {
         let mut out = vec![false; width * height];

@@ -195,7 +195,14 @@ pub fn parse_ros_yaml(text: &str, path: &Path) -> Result<RosMapMeta> {
 /// Loads a ROS map from its YAML file.
 pub fn load_ros_map(yaml: &Path) -> Result<(OccupancyGrid, RosMapMeta)> {
     let meta = read_ros_yaml(yaml)?;
-    let grid = load_image_with_meta(&meta)?;
+    // A missing or unreadable image is a fault of the YAML's `image` field: name both.
+    let grid = load_image_with_meta(&meta).map_err(|e| match e {
+        Error::Io { path, source } => Error::parse(
+            yaml,
+            format!("field 'image': cannot read '{}': {source}", path.display()),
+        ),
+        other => other,
+    })?;
     Ok((grid, meta))
 }
 

@@ -15,6 +15,14 @@ use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::{Recorder, Sample};
 use crate::sim::scenario::{InputProfile, IntegratorSettings};
 
+/// Largest number of recorded samples [`simulate`] accepts (`duration / record_interval`):
+/// beyond it the recorder's buffers would exhaust memory before the first step.
+pub const MAX_RECORDED_SAMPLES: f64 = 10_000_000.0;
+
+/// Largest number of fixed RK4 steps [`simulate`] accepts (`duration / dt`): beyond it a
+/// run would not finish in any useful time.
+pub const MAX_RK4_STEPS: f64 = 100_000_000.0;
+
 /// A constrained mechanical system in reduced coordinates `q̇ = N_C(q) v`,
 /// `Mr v̇ + Cr v + Gr = Qr`.
 pub trait ReducedSystem {
@@ -158,7 +166,25 @@ pub fn simulate(
     for (i, ch) in input.channels.iter().enumerate() {
         ch.validate(&format!("inputs[{i}]"))?;
     }
-    let n_samples = (options.duration / options.record_interval).ceil() as usize + 1;
+    let n_samples_f = (options.duration / options.record_interval).ceil();
+    if n_samples_f > MAX_RECORDED_SAMPLES {
+        return Err(Error::invalid(
+            "record interval",
+            format!(
+                "duration / record interval = {n_samples_f:e} samples exceeds the limit of {MAX_RECORDED_SAMPLES:e}"
+            ),
+        ));
+    }
+    if let IntegratorSettings::Rk4 { dt } = options.integrator {
+        let steps = (options.duration / dt).round();
+        if steps > MAX_RK4_STEPS {
+            return Err(Error::invalid(
+                "integrator.dt",
+                format!("duration / dt = {steps:e} steps exceeds the limit of {MAX_RK4_STEPS:e}"),
+            ));
+        }
+    }
+    let n_samples = n_samples_f as usize + 1;
     let mut recorder = Recorder::new(
         system.q_names(),
         system.v_names(),
