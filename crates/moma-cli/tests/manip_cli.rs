@@ -185,7 +185,7 @@ fn ik_converges_reports_and_fails_clearly() {
         "3,0,0.4",
         "--json",
     ]);
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(3));
     let v = json(&out);
     assert_eq!(v["converged"], false);
     let r = v["residual_norm"].as_f64().unwrap();

@@ -101,7 +101,7 @@ fn pose_vec(p: &Isometry3<f64>) -> Vec<f64> {
     vec![t.x, t.y, t.z, q.x, q.y, q.z, q.w]
 }
 
-/// Runs `moma ik`. Exits with status 2 (after printing the result) when not converged.
+/// Runs `moma ik`. Exits with status 3 (after printing the result) when not converged.
 pub fn run(args: Args) -> Result<()> {
     let tvals = parse_list("--target", &args.target)?;
     let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
@@ -264,7 +264,7 @@ pub fn run(args: Args) -> Result<()> {
              the target may be out of reach or blocked by joint limits (try --restarts)",
             out.status, out.residual_norm, args.tol
         );
-        std::process::exit(2);
+        std::process::exit(3);
     }
     Ok(())
 }

@@ -26,8 +26,9 @@ pub(crate) fn parse_root(s: &str) -> Result<RootJoint, String> {
 
 /// Loads a URDF model, with the file named in any error.
 pub(crate) fn load_model(path: &Path, root: RootJoint) -> Result<Model> {
-    // moma's URDF errors already name the file and the element at fault
-    moma::io::urdf::model_from_urdf_file(path, root).map_err(|e| anyhow::anyhow!("{e}"))
+    // moma's URDF errors already name the file and the element at fault; keep the error
+    // itself (not its text) so the cause of an I/O error is printed too
+    Ok(moma::io::urdf::model_from_urdf_file(path, root)?)
 }
 
 /// One joint in the `inspect` output.

@@ -5,7 +5,7 @@
 //! path, the smoothed waypoints and the reference trajectory. A search that finds no
 //! path is an error (non-zero exit, no file written) whose message gives the reason. A
 //! potential-field descent stuck in a local minimum writes its outputs with
-//! `"status": "local_minimum"` (so the trap can be inspected) and exits with code 2.
+//! `"status": "local_minimum"` (so the trap can be inspected) and exits with code 3 (2 is a malformed command line).
 
 use crate::output::{write_all_atomic, write_atomic, write_json};
 use crate::svg_map::{Scene, render};
@@ -480,7 +480,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     if status == "local_minimum" {
         eprintln!("error: the potential-field descent is stuck: {report}");
-        std::process::exit(2);
+        std::process::exit(3);
     }
     Ok(())
 }
