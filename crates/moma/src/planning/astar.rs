@@ -111,10 +111,10 @@ impl SearchGrid {
         let obst: Vec<bool> = costs
             .iter()
             .map(|&c| {
-                if c == super::costmap::NO_INFORMATION {
+                if c == super::grid::NO_INFORMATION {
                     !allow_unknown
                 } else {
-                    c >= super::costmap::INSCRIBED
+                    c >= super::grid::INSCRIBED
                 }
             })
             .collect();
@@ -123,7 +123,7 @@ impl SearchGrid {
         for y in 0..height {
             for x in 0..width {
                 let c = costs[y * width + x];
-                let c = if c == super::costmap::NO_INFORMATION {
+                let c = if c == super::grid::NO_INFORMATION {
                     0
                 } else {
                     c

@@ -5,16 +5,9 @@
 use super::edt::distance_transform;
 use crate::{Error, Result};
 
-/// nav2 `FREE_SPACE`.
-pub const FREE_SPACE: u8 = 0;
-/// nav2 `MAX_NON_OBSTACLE`: the highest cost a robot centre may occupy.
-pub const MAX_NON_OBSTACLE: u8 = 252;
-/// nav2 `INSCRIBED_INFLATED_OBSTACLE`: the robot centre here means a collision.
-pub const INSCRIBED: u8 = 253;
-/// nav2 `LETHAL_OBSTACLE`: an obstacle cell.
-pub const LETHAL: u8 = 254;
-/// nav2 `NO_INFORMATION`: unknown cell.
-pub const NO_INFORMATION: u8 = 255;
+// The cost values are the grid's vocabulary (nav2's `cost_values.hpp`); re-exported here
+// because the cost layer is where users meet them.
+pub use super::grid::{FREE_SPACE, INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION};
 
 /// Dilates obstacles by a disk: a cell is in the C-space obstacle if its centre lies
 /// within `radius_cells` of an obstacle cell's centre (`dist ≤ radius`), `dist` being the

@@ -3,6 +3,19 @@
 
 use crate::{Error, Result};
 
+// Cost values of a cost layer, as nav2 defines them (`nav2_costmap_2d/cost_values.hpp`).
+
+/// nav2 `FREE_SPACE`.
+pub const FREE_SPACE: u8 = 0;
+/// nav2 `MAX_NON_OBSTACLE`: the highest cost a robot centre may occupy.
+pub const MAX_NON_OBSTACLE: u8 = 252;
+/// nav2 `INSCRIBED_INFLATED_OBSTACLE`: the robot centre here means a collision.
+pub const INSCRIBED: u8 = 253;
+/// nav2 `LETHAL_OBSTACLE`: an obstacle cell.
+pub const LETHAL: u8 = 254;
+/// nav2 `NO_INFORMATION`: unknown cell.
+pub const NO_INFORMATION: u8 = 255;
+
 /// Cell value of an occupied cell (ROS `nav_msgs/OccupancyGrid` convention).
 pub const OCCUPIED: i8 = 100;
 /// Cell value of a free cell.
