@@ -154,6 +154,19 @@ fn all_finite(v: &Value) -> bool {
     }
 }
 
+/// A trajectory object: `t` plus the two state parts of each sample, as rows.
+fn trajectory<const A: usize, const B: usize>(
+    names: [&str; 2],
+    samples: &[(SVector<f64, A>, SVector<f64, B>)],
+    t: &[f64],
+) -> Value {
+    let mut m = Map::new();
+    m.insert("t".into(), json!(t));
+    m.insert(names[0].into(), rows(samples.iter().map(|x| x.0)));
+    m.insert(names[1].into(), rows(samples.iter().map(|x| x.1)));
+    Value::Object(m)
+}
+
 /// Outputs and trajectory (keys `t` plus the state names) of one case.
 #[allow(clippy::type_complexity)]
 fn evaluate_inner(
@@ -162,13 +175,6 @@ fn evaluate_inner(
     tol: f64,
 ) -> Result<(Value, Option<Value>, Option<Value>)> {
     let t = times(case)?;
-    let traj = |names: [&str; 2], data: (Value, Value), t: &[f64]| {
-        let mut m = Map::new();
-        m.insert("t".into(), json!(t));
-        m.insert(names[0].into(), data.0);
-        m.insert(names[1].into(), data.1);
-        Value::Object(m)
-    };
     match model {
         ChapterModel::M1Unicycle => {
             let sys = Unicycle::new(params::<UnicycleParams>(case)?)?;
@@ -176,15 +182,12 @@ fn evaluate_inner(
             let v = vector::<2>(case, &["state", "v"])?;
             let u = vector::<2>(case, &["inputs", "u"])?;
             let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
-            let tr = match t {
-                Some(t) => {
-                    let s = sys.simulate(&q, &v, &u, &t, tol)?;
-                    Some(traj(
-                        ["q", "v"],
-                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
-                        &t,
-                    ))
-                }
+            let tr = match &t {
+                Some(t) => Some(trajectory(
+                    ["q", "v"],
+                    &sys.simulate(&q, &v, &u, t, tol)?,
+                    t,
+                )),
                 None => None,
             };
             Ok((out, tr, None))
@@ -195,15 +198,12 @@ fn evaluate_inner(
             let v = vector::<4>(case, &["state", "v"])?;
             let u = vector::<4>(case, &["inputs", "u"])?;
             let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
-            let tr = match t {
-                Some(t) => {
-                    let s = sys.simulate(&q, &v, &u, &t, tol)?;
-                    Some(traj(
-                        ["q", "v"],
-                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
-                        &t,
-                    ))
-                }
+            let tr = match &t {
+                Some(t) => Some(trajectory(
+                    ["q", "v"],
+                    &sys.simulate(&q, &v, &u, t, tol)?,
+                    t,
+                )),
                 None => None,
             };
             Ok((out, tr, None))
@@ -213,15 +213,8 @@ fn evaluate_inner(
             let q = vector::<6>(case, &["state", "q"])?;
             let v = vector::<5>(case, &["inputs", "v"])?;
             let out = to_value(&sys.evaluate(&q, &v)?)?;
-            let tr = match t {
-                Some(t) => {
-                    let s = sys.simulate(&q, &v, &t, tol)?;
-                    Some(traj(
-                        ["q", "X"],
-                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
-                        &t,
-                    ))
-                }
+            let tr = match &t {
+                Some(t) => Some(trajectory(["q", "X"], &sys.simulate(&q, &v, t, tol)?, t)),
                 None => None,
             };
             Ok((out, tr, None))
@@ -249,15 +242,12 @@ fn evaluate_inner(
                 }
             }
             let out = to_value(&sys.evaluate(&q, &qd, &u)?)?;
-            let tr = match t {
-                Some(t) => {
-                    let s = sys.simulate(&q, &qd, &u, &t, tol)?;
-                    Some(traj(
-                        ["q", "qdot"],
-                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
-                        &t,
-                    ))
-                }
+            let tr = match &t {
+                Some(t) => Some(trajectory(
+                    ["q", "qdot"],
+                    &sys.simulate(&q, &qd, &u, t, tol)?,
+                    t,
+                )),
                 None => None,
             };
             Ok((out, tr, None))
@@ -268,15 +258,12 @@ fn evaluate_inner(
             let v = vector::<5>(case, &["state", "v"])?;
             let u = vector::<5>(case, &["inputs", "u"])?;
             let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
-            let tr = match t {
-                Some(t) => {
-                    let s = sys.simulate(&q, &v, &u, &t, tol)?;
-                    Some(traj(
-                        ["q", "v"],
-                        (rows(s.iter().map(|x| x.0)), rows(s.iter().map(|x| x.1))),
-                        &t,
-                    ))
-                }
+            let tr = match &t {
+                Some(t) => Some(trajectory(
+                    ["q", "v"],
+                    &sys.simulate(&q, &v, &u, t, tol)?,
+                    t,
+                )),
                 None => None,
             };
             let control = match case.get("control") {

@@ -101,27 +101,7 @@ pub fn aba<'d>(
     assert_nv(model, tau, "tau");
     let (qs, vs, ts) = (q.as_slice(), v.as_slice(), tau.as_slice());
     let n = model.njoints;
-    data.v[0] = Motion::zero();
-    for i in 1..n {
-        update_joint_placement(model, data, i, qs);
-        let jt = &model.joint_types[i];
-        let p = model.parents[i].0;
-        let (iq, iv) = (model.idx_q[i], model.idx_v[i]);
-        let qi = &qs[iq..iq + model.nqs[i]];
-        let vi = &vs[iv..iv + model.nvs[i]];
-        let m = data.parent_from_joint[i];
-        let vj = jt.motion(qi, vi);
-        let vel = m.inverse_act_motion(&data.v[p]) + vj;
-        let mut c = vel.cross_motion(&vj);
-        if jt.has_bias() {
-            c += jt.bias(qi, vi);
-        }
-        data.v[i] = vel;
-        data.c[i] = c;
-        let inertia = &model.inertias[i];
-        data.ia[i] = ArticulatedInertia::from_inertia(inertia);
-        data.pa[i] = vel.cross_force(&inertia.mul_motion(&vel));
-    }
+    aba_forward_pass(model, data, qs, vs);
     for i in (1..n).rev() {
         let iv = model.idx_v[i];
         let nvi = model.nvs[i];
@@ -209,4 +189,32 @@ pub fn aba<'d>(
         data.a[i] = acc;
     }
     &data.ddq
+}
+
+/// First pass of the articulated-body algorithm, shared with the root-constrained variant
+/// in `mobile::constrained_aba`: joint placements, body velocities, velocity-product
+/// accelerations `c`, and each body's rigid inertia and bias force as the starting
+/// articulated quantities.
+#[inline]
+pub(crate) fn aba_forward_pass(model: &Model, data: &mut Data, qs: &[f64], vs: &[f64]) {
+    data.v[0] = Motion::zero();
+    for i in 1..model.njoints {
+        update_joint_placement(model, data, i, qs);
+        let jt = &model.joint_types[i];
+        let p = model.parents[i].0;
+        let (iq, iv) = (model.idx_q[i], model.idx_v[i]);
+        let qi = &qs[iq..iq + model.nqs[i]];
+        let vi = &vs[iv..iv + model.nvs[i]];
+        let vj = jt.motion(qi, vi);
+        let vel = data.parent_from_joint[i].inverse_act_motion(&data.v[p]) + vj;
+        let mut c = vel.cross_motion(&vj);
+        if jt.has_bias() {
+            c += jt.bias(qi, vi);
+        }
+        data.v[i] = vel;
+        data.c[i] = c;
+        let inertia = &model.inertias[i];
+        data.ia[i] = ArticulatedInertia::from_inertia(inertia);
+        data.pa[i] = vel.cross_force(&inertia.mul_motion(&vel));
+    }
 }

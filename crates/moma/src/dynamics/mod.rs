@@ -12,6 +12,7 @@
 //! with specialised kernels for axis-aligned revolute and prismatic joints.
 
 mod aba;
+pub(crate) use aba::aba_forward_pass;
 mod centroidal;
 mod coriolis;
 mod crba;

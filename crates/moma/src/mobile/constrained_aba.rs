@@ -22,11 +22,9 @@
 use nalgebra::{DVector, Matrix3, Matrix3x2, Vector2, Vector3};
 
 use crate::error::{Error, Result};
-use crate::kinematics::update_joint_placement;
 use crate::mobile::wheeled::{
     WheeledData, WheeledModel, admissible_velocity_basis, generalized_force,
 };
-use crate::multibody::ArticulatedInertia;
 use crate::spatial::{Force, Motion};
 
 /// Reduced forward dynamics for a wheeled model without tracked wheel joints, by the
@@ -50,26 +48,7 @@ pub(crate) fn root_constrained_aba(
     let n = model.njoints;
     let root = 1usize;
     // Forward pass: velocities, bias accelerations, rigid-body inertias and biases.
-    data.v[0] = Motion::zero();
-    for i in 1..n {
-        update_joint_placement(model, data, i, qs);
-        let jt = &model.joint_types[i];
-        let p = model.parents[i].0;
-        let (iq, iv) = (model.idx_q[i], model.idx_v[i]);
-        let qi = &qs[iq..iq + model.nqs[i]];
-        let vi = &vs[iv..iv + model.nvs[i]];
-        let vj = jt.motion(qi, vi);
-        let vel = data.parent_from_joint[i].inverse_act_motion(&data.v[p]) + vj;
-        let mut c = vel.cross_motion(&vj);
-        if jt.has_bias() {
-            c += jt.bias(qi, vi);
-        }
-        data.v[i] = vel;
-        data.c[i] = c;
-        let inertia = &model.inertias[i];
-        data.ia[i] = ArticulatedInertia::from_inertia(inertia);
-        data.pa[i] = vel.cross_force(&inertia.mul_motion(&vel));
-    }
+    crate::dynamics::aba_forward_pass(model, data, qs, vs);
     // Backward pass over the arm (all one-dof joints), condensing onto the root.
     for i in (root + 1..n).rev() {
         let iv = model.idx_v[i];
