@@ -41,17 +41,37 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &DVector<f64>) -> &'d DMat
     &data.mass_matrix
 }
 
-/// F = I·S for one motion-subspace column S of joint type `jt` (both in the joint frame);
-/// axis-aligned joints have a unit S, so F is one column of the 6 × 6 inertia.
+/// F = I·S for column `k` of the motion subspace S of joint type `jt` (both in the joint
+/// frame); axis-aligned and free-flyer joints have unit columns, so F is one column of
+/// the 6 × 6 inertia `[m·1, −[h]×; [h]×, I_o]`.
 #[inline]
-fn inertia_times_subspace(y: &Inertia, jt: &JointType, s: &Motion) -> Force {
+fn inertia_times_subspace(y: &Inertia, jt: &JointType, k: usize, s: &Motion) -> Force {
     let h = y.first_moment();
     let io = y.inertia_about_origin();
-    // I·[0; e_k] = [−h × e_k; I_o e_k]
+    let m = y.mass();
+    // I·[e_k; 0] = [m e_k; h × e_k], I·[0; e_k] = [−h × e_k; I_o e_k]
+    let linear = |axis: usize| match axis {
+        0 => Force::new(Vector3::new(m, 0.0, 0.0), Vector3::new(0.0, h.z, -h.y)),
+        1 => Force::new(Vector3::new(0.0, m, 0.0), Vector3::new(-h.z, 0.0, h.x)),
+        _ => Force::new(Vector3::new(0.0, 0.0, m), Vector3::new(h.y, -h.x, 0.0)),
+    };
+    let angular = |axis: usize| match axis {
+        0 => Force::new(Vector3::new(0.0, -h.z, h.y), io.column(0).into()),
+        1 => Force::new(Vector3::new(h.z, 0.0, -h.x), io.column(1).into()),
+        _ => Force::new(Vector3::new(-h.y, h.x, 0.0), io.column(2).into()),
+    };
     match jt {
-        JointType::RevoluteX => Force::new(Vector3::new(0.0, -h.z, h.y), io.column(0).into()),
-        JointType::RevoluteY => Force::new(Vector3::new(h.z, 0.0, -h.x), io.column(1).into()),
-        JointType::RevoluteZ => Force::new(Vector3::new(-h.y, h.x, 0.0), io.column(2).into()),
+        JointType::RevoluteX => angular(0),
+        JointType::RevoluteY => angular(1),
+        JointType::RevoluteZ => angular(2),
+        JointType::FreeFlyer if k < 3 => linear(k),
+        JointType::FreeFlyer => angular(k - 3),
+        // S = [(c, −s, 0); 0], [(s, c, 0); 0], [0; e_z]
+        JointType::Planar if k < 2 => {
+            let v = s.linear;
+            Force::new(v * m, h.cross(&v))
+        }
+        JointType::Planar => angular(2),
         _ => y.mul_motion(s),
     }
 }
@@ -92,7 +112,7 @@ fn composite_columns(model: &Model, data: &mut Data) {
         let (head, tail) = data.composite_inertias.split_at_mut(i);
         let yi = &tail[0];
         for k in 0..model.nvs[i] {
-            let f = inertia_times_subspace(yi, jt, &data.s[iv + k]);
+            let f = inertia_times_subspace(yi, jt, k, &data.s[iv + k]);
             l0[iv + k] = f.linear.x;
             l1[iv + k] = f.linear.y;
             l2[iv + k] = f.linear.z;
@@ -103,29 +123,45 @@ fn composite_columns(model: &Model, data: &mut Data) {
         let r = iv..iv + ns;
         for k in 0..model.nvs[i] {
             let col = iv + k;
-            // H[c, col] = S_colᵀ F_c for the subtree's columns c (H symmetric)
-            let h = &mut mm[col * nv + iv..col * nv + iv + ns];
+            // H[c, col] = S_colᵀ F_c for the subtree's columns c ≥ col, stored in both
+            // triangles (entries above the diagonal of this joint's own block come from
+            // its earlier columns, so every entry is written once and H is exactly
+            // symmetric)
+            let rows = col..iv + ns;
             match jt {
-                JointType::RevoluteX => copy(h, &a0[r.clone()]),
-                JointType::RevoluteY => copy(h, &a1[r.clone()]),
-                JointType::RevoluteZ => copy(h, &a2[r.clone()]),
-                JointType::PrismaticX => copy(h, &l0[r.clone()]),
-                JointType::PrismaticY => copy(h, &l1[r.clone()]),
-                JointType::PrismaticZ => copy(h, &l2[r.clone()]),
+                JointType::RevoluteX => store_symmetric(mm, nv, col, &a0[rows]),
+                JointType::RevoluteY => store_symmetric(mm, nv, col, &a1[rows]),
+                JointType::RevoluteZ => store_symmetric(mm, nv, col, &a2[rows]),
+                JointType::PrismaticX => store_symmetric(mm, nv, col, &l0[rows]),
+                JointType::PrismaticY => store_symmetric(mm, nv, col, &l1[rows]),
+                JointType::PrismaticZ => store_symmetric(mm, nv, col, &l2[rows]),
                 // S = 1 (6 × 6): row k of H's block is component k of F
                 JointType::FreeFlyer => {
-                    let rows: [&[f64]; 6] = [&*l0, &*l1, &*l2, &*a0, &*a1, &*a2];
-                    copy(h, &rows[k][r.clone()]);
+                    let comps: [&[f64]; 6] = [&*l0, &*l1, &*l2, &*a0, &*a1, &*a2];
+                    store_symmetric(mm, nv, col, &comps[k][rows]);
+                }
+                JointType::Planar if k == 2 => store_symmetric(mm, nv, col, &a2[rows]),
+                // S_k = [(s_x, s_y, 0); 0]: only F's x and y force components are needed
+                // (the planar-root shortcut below leaves the other components stale)
+                JointType::Planar => {
+                    let (sx, sy) = (data.s[col].linear.x, data.s[col].linear.y);
+                    for c in rows {
+                        let v = sx * l0[c] + sy * l1[c];
+                        mm[col * nv + c] = v;
+                        mm[c * nv + col] = v;
+                    }
                 }
                 _ => {
                     let s = &data.s[col];
-                    for (c, hc) in r.clone().zip(h.iter_mut()) {
-                        *hc = s.linear.x * l0[c]
+                    for c in rows {
+                        let v = s.linear.x * l0[c]
                             + s.linear.y * l1[c]
                             + s.linear.z * l2[c]
                             + s.angular.x * a0[c]
                             + s.angular.y * a1[c]
                             + s.angular.z * a2[c];
+                        mm[col * nv + c] = v;
+                        mm[c * nv + col] = v;
                     }
                 }
             }
@@ -137,7 +173,24 @@ fn composite_columns(model: &Model, data: &mut Data) {
             JointType::RevoluteZ => 2,
             _ => 3,
         };
-        if p > 0 && model.parents[p].0 == 0 && axis < 3 {
+        let planar_root = matches!(model.joint_types[p], JointType::Planar);
+        if p > 0 && model.parents[p].0 == 0 && planar_root {
+            // p is a planar root: its rows need only the x and y forces and the z moment
+            // of the transformed columns (11 products per column instead of 24)
+            let m = &data.parent_from_joint[i];
+            head[p] += yi.transformed(m);
+            act_force_planar(
+                m,
+                (
+                    &mut l0[r.clone()],
+                    &mut l1[r.clone()],
+                    &l2[r.clone()],
+                    &a0[r.clone()],
+                    &a1[r.clone()],
+                    &mut a2[r],
+                ),
+            );
+        } else if p > 0 && model.parents[p].0 == 0 && axis < 3 {
             // p is a root revolute joint: its rows of H need only one moment component of
             // the transformed forces (6 products per column instead of 30).
             let m = &data.parent_from_joint[i];
@@ -171,12 +224,6 @@ fn composite_columns(model: &Model, data: &mut Data) {
             );
         }
     }
-    // mirror the lower triangle into the upper one
-    for c in 0..nv {
-        for r in c + 1..nv {
-            mm[r * nv + c] = mm[c * nv + r];
-        }
-    }
 }
 /// Component `3 + K` (moment about axis K) of `m.act_force` on force columns stored by
 /// component; only that row is overwritten.
@@ -200,6 +247,29 @@ fn act_force_moment<const K: usize>(m: &SE3, f: [&mut [f64]; 6]) {
             1 => a1[c] = val,
             _ => a2[c] = val,
         }
+    }
+}
+
+/// The x and y forces and the z moment of `m.act_force` on force columns stored by
+/// component; the other components are left as they were.
+#[inline]
+fn act_force_planar(m: &SE3, f: (&mut [f64], &mut [f64], &[f64], &[f64], &[f64], &mut [f64])) {
+    let (l0, l1, l2, a0, a1, a2) = f;
+    let n = l0.len();
+    let (l1, l2, a0, a1, a2) = (&mut l1[..n], &l2[..n], &a0[..n], &a1[..n], &mut a2[..n]);
+    let r = &m.rotation;
+    let t = &m.translation;
+    // moment_z = R_z·n + t_x (R f)_y − t_y (R f)_x
+    let (r00, r01, r02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
+    let (r10, r11, r12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
+    let (r20, r21, r22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
+    for c in 0..n {
+        let (x, y, z) = (l0[c], l1[c], l2[c]);
+        let fx = r00 * x + r01 * y + r02 * z;
+        let fy = r10 * x + r11 * y + r12 * z;
+        a2[c] = r20 * a0[c] + r21 * a1[c] + r22 * a2[c] + (t.x * fy - t.y * fx);
+        l0[c] = fx;
+        l1[c] = fy;
     }
 }
 
@@ -248,7 +318,7 @@ fn ancestor_walk(model: &Model, data: &mut Data) {
             let col = iv + k;
             // column `col` of H, rows ≤ col (upper triangle), stored contiguously
             let hcol = &mut mm[col * nv..col * nv + col + 1];
-            let mut f = inertia_times_subspace(&yi, jt, &data.s[col]);
+            let mut f = inertia_times_subspace(&yi, jt, k, &data.s[col]);
             for l in 0..=k {
                 hcol[iv + l] = subspace_dot(jt, &data.s[iv + l], &f);
             }
@@ -280,11 +350,13 @@ fn ancestor_walk(model: &Model, data: &mut Data) {
     }
 }
 
-/// `dst.copy_from_slice(src)` for the short slices of CRBA (no `memcpy` call).
+/// H[col + o, col] = H[col, col + o] = `vals[o]` (column `col` of the column-major nv × nv
+/// matrix `mm` from its diagonal down, and the matching part of row `col`).
 #[inline]
-fn copy(dst: &mut [f64], src: &[f64]) {
-    for (d, s) in dst.iter_mut().zip(src) {
-        *d = *s;
+fn store_symmetric(mm: &mut [f64], nv: usize, col: usize, vals: &[f64]) {
+    for (o, &v) in vals.iter().enumerate() {
+        mm[col * nv + col + o] = v;
+        mm[(col + o) * nv + col] = v;
     }
 }
 
