@@ -100,11 +100,8 @@ fn composite_columns(model: &Model, data: &mut Data) {
         return;
     };
     let mm = data.mass_matrix.as_mut_slice();
-    let (l0, rest) = data.fcrb.split_at_mut(nv);
-    let (l1, rest) = rest.split_at_mut(nv);
-    let (l2, rest) = rest.split_at_mut(nv);
-    let (a0, rest) = rest.split_at_mut(nv);
-    let (a1, a2) = rest.split_at_mut(nv);
+    // force column c = [f_x, f_y, f_z, n_x, n_y, n_z]
+    let (fc, _) = data.fcrb.as_chunks_mut::<6>();
     for i in (1..model.njoints).rev() {
         let iv = model.idx_v[i];
         let ns = nsub[i];
@@ -113,125 +110,95 @@ fn composite_columns(model: &Model, data: &mut Data) {
         let yi = &tail[0];
         for k in 0..model.nvs[i] {
             let f = inertia_times_subspace(yi, jt, k, &data.s[iv + k]);
-            l0[iv + k] = f.linear.x;
-            l1[iv + k] = f.linear.y;
-            l2[iv + k] = f.linear.z;
-            a0[iv + k] = f.angular.x;
-            a1[iv + k] = f.angular.y;
-            a2[iv + k] = f.angular.z;
+            fc[iv + k] = [
+                f.linear.x,
+                f.linear.y,
+                f.linear.z,
+                f.angular.x,
+                f.angular.y,
+                f.angular.z,
+            ];
         }
-        let r = iv..iv + ns;
+        let sub = &mut fc[iv..iv + ns];
         for k in 0..model.nvs[i] {
             let col = iv + k;
             // H[c, col] = S_colᵀ F_c for the subtree's columns c ≥ col, stored in both
             // triangles (entries above the diagonal of this joint's own block come from
             // its earlier columns, so every entry is written once and H is exactly
             // symmetric)
-            let rows = col..iv + ns;
+            let cols = &sub[k..];
             match jt {
-                JointType::RevoluteX => store_symmetric(mm, nv, col, &a0[rows]),
-                JointType::RevoluteY => store_symmetric(mm, nv, col, &a1[rows]),
-                JointType::RevoluteZ => store_symmetric(mm, nv, col, &a2[rows]),
-                JointType::PrismaticX => store_symmetric(mm, nv, col, &l0[rows]),
-                JointType::PrismaticY => store_symmetric(mm, nv, col, &l1[rows]),
-                JointType::PrismaticZ => store_symmetric(mm, nv, col, &l2[rows]),
+                JointType::RevoluteX => store_symmetric(mm, nv, col, cols, |f| f[3]),
+                JointType::RevoluteY => store_symmetric(mm, nv, col, cols, |f| f[4]),
+                JointType::RevoluteZ => store_symmetric(mm, nv, col, cols, |f| f[5]),
+                JointType::PrismaticX => store_symmetric(mm, nv, col, cols, |f| f[0]),
+                JointType::PrismaticY => store_symmetric(mm, nv, col, cols, |f| f[1]),
+                JointType::PrismaticZ => store_symmetric(mm, nv, col, cols, |f| f[2]),
                 // S = 1 (6 × 6): row k of H's block is component k of F
-                JointType::FreeFlyer => {
-                    let comps: [&[f64]; 6] = [&*l0, &*l1, &*l2, &*a0, &*a1, &*a2];
-                    store_symmetric(mm, nv, col, &comps[k][rows]);
-                }
-                JointType::Planar if k == 2 => store_symmetric(mm, nv, col, &a2[rows]),
+                JointType::FreeFlyer => store_symmetric(mm, nv, col, cols, |f| f[k]),
+                JointType::Planar if k == 2 => store_symmetric(mm, nv, col, cols, |f| f[5]),
                 // S_k = [(s_x, s_y, 0); 0]: only F's x and y force components are needed
                 // (the planar-root shortcut below leaves the other components stale)
                 JointType::Planar => {
                     let (sx, sy) = (data.s[col].linear.x, data.s[col].linear.y);
-                    for c in rows {
-                        let v = sx * l0[c] + sy * l1[c];
-                        mm[col * nv + c] = v;
-                        mm[c * nv + col] = v;
-                    }
+                    store_symmetric(mm, nv, col, cols, |f| sx * f[0] + sy * f[1]);
                 }
                 _ => {
                     let s = &data.s[col];
-                    for c in rows {
-                        let v = s.linear.x * l0[c]
-                            + s.linear.y * l1[c]
-                            + s.linear.z * l2[c]
-                            + s.angular.x * a0[c]
-                            + s.angular.y * a1[c]
-                            + s.angular.z * a2[c];
-                        mm[col * nv + c] = v;
-                        mm[c * nv + col] = v;
-                    }
+                    store_symmetric(mm, nv, col, cols, |f| {
+                        s.linear.x * f[0]
+                            + s.linear.y * f[1]
+                            + s.linear.z * f[2]
+                            + s.angular.x * f[3]
+                            + s.angular.y * f[4]
+                            + s.angular.z * f[5]
+                    });
                 }
             }
         }
         let p = model.parents[i].0;
-        let axis = match model.joint_types[p] {
-            JointType::RevoluteX => 0,
-            JointType::RevoluteY => 1,
-            JointType::RevoluteZ => 2,
-            _ => 3,
-        };
-        let planar_root = matches!(model.joint_types[p], JointType::Planar);
-        if p > 0 && model.parents[p].0 == 0 && planar_root {
-            // p is a planar root: its rows need only the x and y forces and the z moment
-            // of the transformed columns (11 products per column instead of 24)
-            let m = &data.parent_from_joint[i];
-            head[p] += yi.transformed(m);
-            act_force_planar(
-                m,
-                (
-                    &mut l0[r.clone()],
-                    &mut l1[r.clone()],
-                    &l2[r.clone()],
-                    &a0[r.clone()],
-                    &a1[r.clone()],
-                    &mut a2[r],
-                ),
-            );
-        } else if p > 0 && model.parents[p].0 == 0 && axis < 3 {
-            // p is a root revolute joint: its rows of H need only one moment component of
-            // the transformed forces (6 products per column instead of 30).
-            let m = &data.parent_from_joint[i];
-            head[p] += yi.transformed(m);
-            let cols = [
-                &mut l0[r.clone()],
-                &mut l1[r.clone()],
-                &mut l2[r.clone()],
-                &mut a0[r.clone()],
-                &mut a1[r.clone()],
-                &mut a2[r],
-            ];
-            match axis {
-                0 => act_force_moment::<0>(m, cols),
-                1 => act_force_moment::<1>(m, cols),
-                _ => act_force_moment::<2>(m, cols),
+        if p == 0 {
+            continue;
+        }
+        let m = &data.parent_from_joint[i];
+        head[p] += yi.transformed(m);
+        if model.parents[p].0 == 0 {
+            // p is the root joint: its rows need only S_pᵀ of the transformed columns
+            match model.joint_types[p] {
+                JointType::RevoluteX => act_force_moment::<0>(m, sub),
+                JointType::RevoluteY => act_force_moment::<1>(m, sub),
+                JointType::RevoluteZ => act_force_moment::<2>(m, sub),
+                JointType::Planar => act_force_planar(m, sub),
+                _ => act_force_columns(m, sub),
             }
-        } else if p > 0 {
-            let m = &data.parent_from_joint[i];
-            head[p] += yi.transformed(m);
-            act_force_columns(
-                m,
-                [
-                    &mut l0[r.clone()],
-                    &mut l1[r.clone()],
-                    &mut l2[r.clone()],
-                    &mut a0[r.clone()],
-                    &mut a1[r.clone()],
-                    &mut a2[r],
-                ],
-            );
+        } else {
+            act_force_columns(m, sub);
         }
     }
 }
-/// Component `3 + K` (moment about axis K) of `m.act_force` on force columns stored by
-/// component; only that row is overwritten.
+
+/// H[col + o, col] = H[col, col + o] = `value(cols[o])` (column `col` of the column-major
+/// nv × nv matrix `mm` from its diagonal down, and the matching part of row `col`).
+#[inline(always)]
+fn store_symmetric(
+    mm: &mut [f64],
+    nv: usize,
+    col: usize,
+    cols: &[[f64; 6]],
+    value: impl Fn(&[f64; 6]) -> f64,
+) {
+    for (o, f) in cols.iter().enumerate() {
+        let v = value(f);
+        mm[col * nv + col + o] = v;
+        mm[(col + o) * nv + col] = v;
+    }
+}
+
+/// Moment about axis K (component `3 + K`) of `m.act_force` on force columns; only that
+/// component is overwritten (what a root revolute joint about axis K needs: 6 products
+/// per column instead of 24).
 #[inline]
-fn act_force_moment<const K: usize>(m: &SE3, f: [&mut [f64]; 6]) {
-    let [l0, l1, l2, a0, a1, a2] = f;
-    let n = l0.len();
-    let (l1, l2, a0, a1, a2) = (&l1[..n], &l2[..n], &mut a0[..n], &mut a1[..n], &mut a2[..n]);
+fn act_force_moment<const K: usize>(m: &SE3, cols: &mut [[f64; 6]]) {
     let r = &m.rotation;
     let t = &m.translation;
     // moment_K = R_K·n + (t × R f)_K = R_K·n + (t_U R_V − t_V R_U)·f, (K, U, V) cyclic
@@ -240,68 +207,53 @@ fn act_force_moment<const K: usize>(m: &SE3, f: [&mut [f64]; 6]) {
     let w0 = t[u] * r[(v, 0)] - t[v] * r[(u, 0)];
     let w1 = t[u] * r[(v, 1)] - t[v] * r[(u, 1)];
     let w2 = t[u] * r[(v, 2)] - t[v] * r[(u, 2)];
-    for c in 0..n {
-        let val = rk0 * a0[c] + rk1 * a1[c] + rk2 * a2[c] + w0 * l0[c] + w1 * l1[c] + w2 * l2[c];
-        match K {
-            0 => a0[c] = val,
-            1 => a1[c] = val,
-            _ => a2[c] = val,
-        }
+    for f in cols {
+        f[3 + K] = rk0 * f[3] + rk1 * f[4] + rk2 * f[5] + w0 * f[0] + w1 * f[1] + w2 * f[2];
     }
 }
 
-/// The x and y forces and the z moment of `m.act_force` on force columns stored by
-/// component; the other components are left as they were.
+/// The x and y forces and the z moment of `m.act_force` on force columns (what a planar
+/// root needs: 11 products per column instead of 24); the other components are left as
+/// they were.
 #[inline]
-fn act_force_planar(m: &SE3, f: (&mut [f64], &mut [f64], &[f64], &[f64], &[f64], &mut [f64])) {
-    let (l0, l1, l2, a0, a1, a2) = f;
-    let n = l0.len();
-    let (l1, l2, a0, a1, a2) = (&mut l1[..n], &l2[..n], &a0[..n], &a1[..n], &mut a2[..n]);
+fn act_force_planar(m: &SE3, cols: &mut [[f64; 6]]) {
     let r = &m.rotation;
     let t = &m.translation;
-    // moment_z = R_z·n + t_x (R f)_y − t_y (R f)_x
     let (r00, r01, r02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
     let (r10, r11, r12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
     let (r20, r21, r22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
-    for c in 0..n {
-        let (x, y, z) = (l0[c], l1[c], l2[c]);
+    for f in cols {
+        let [x, y, z, nx, ny, nz] = *f;
         let fx = r00 * x + r01 * y + r02 * z;
         let fy = r10 * x + r11 * y + r12 * z;
-        a2[c] = r20 * a0[c] + r21 * a1[c] + r22 * a2[c] + (t.x * fy - t.y * fx);
-        l0[c] = fx;
-        l1[c] = fy;
+        // moment_z = R_z·n + t_x (R f)_y − t_y (R f)_x
+        f[5] = r20 * nx + r21 * ny + r22 * nz + (t.x * fy - t.y * fx);
+        f[0] = fx;
+        f[1] = fy;
     }
 }
 
-/// `m.act_force` on force columns stored by component.
+/// `m.act_force` on force columns.
 #[inline]
-fn act_force_columns(m: &SE3, f: [&mut [f64]; 6]) {
-    let [l0, l1, l2, a0, a1, a2] = f;
-    let n = l0.len();
-    let (l1, l2, a0, a1, a2) = (
-        &mut l1[..n],
-        &mut l2[..n],
-        &mut a0[..n],
-        &mut a1[..n],
-        &mut a2[..n],
-    );
+fn act_force_columns(m: &SE3, cols: &mut [[f64; 6]]) {
     let r = &m.rotation;
     let (r00, r01, r02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
     let (r10, r11, r12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
     let (r20, r21, r22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
     let (px, py, pz) = (m.translation.x, m.translation.y, m.translation.z);
-    for c in 0..n {
-        let (x, y, z) = (l0[c], l1[c], l2[c]);
+    for f in cols {
+        let [x, y, z, nx, ny, nz] = *f;
         let fx = r00 * x + r01 * y + r02 * z;
         let fy = r10 * x + r11 * y + r12 * z;
         let fz = r20 * x + r21 * y + r22 * z;
-        let (x, y, z) = (a0[c], a1[c], a2[c]);
-        a0[c] = r00 * x + r01 * y + r02 * z + (py * fz - pz * fy);
-        a1[c] = r10 * x + r11 * y + r12 * z + (pz * fx - px * fz);
-        a2[c] = r20 * x + r21 * y + r22 * z + (px * fy - py * fx);
-        l0[c] = fx;
-        l1[c] = fy;
-        l2[c] = fz;
+        *f = [
+            fx,
+            fy,
+            fz,
+            r00 * nx + r01 * ny + r02 * nz + (py * fz - pz * fy),
+            r10 * nx + r11 * ny + r12 * nz + (pz * fx - px * fz),
+            r20 * nx + r21 * ny + r22 * nz + (px * fy - py * fx),
+        ];
     }
 }
 
@@ -347,16 +299,6 @@ fn ancestor_walk(model: &Model, data: &mut Data) {
         for r in c + 1..nv {
             mm[c * nv + r] = mm[r * nv + c];
         }
-    }
-}
-
-/// H[col + o, col] = H[col, col + o] = `vals[o]` (column `col` of the column-major nv × nv
-/// matrix `mm` from its diagonal down, and the matching part of row `col`).
-#[inline]
-fn store_symmetric(mm: &mut [f64], nv: usize, col: usize, vals: &[f64]) {
-    for (o, &v) in vals.iter().enumerate() {
-        mm[col * nv + col + o] = v;
-        mm[(col + o) * nv + col] = v;
     }
 }
 
