@@ -44,7 +44,7 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &DVector<f64>) -> &'d DMat
 /// F = I·S for column `k` of the motion subspace S of joint type `jt` (both in the joint
 /// frame); axis-aligned and free-flyer joints have unit columns, so F is one column of
 /// the 6 × 6 inertia `[m·1, −[h]×; [h]×, I_o]`.
-#[inline]
+#[inline(always)]
 fn inertia_times_subspace(y: &Inertia, jt: &JointType, k: usize, s: &Motion) -> Force {
     let h = y.first_moment();
     let io = y.inertia_about_origin();
@@ -237,23 +237,17 @@ fn act_force_planar(m: &SE3, cols: &mut [[f64; 6]]) {
 #[inline]
 fn act_force_columns(m: &SE3, cols: &mut [[f64; 6]]) {
     let r = &m.rotation;
-    let (r00, r01, r02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
-    let (r10, r11, r12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
-    let (r20, r21, r22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
-    let (px, py, pz) = (m.translation.x, m.translation.y, m.translation.z);
+    let (c0, c1, c2) = (
+        r.column(0).into_owned(),
+        r.column(1).into_owned(),
+        r.column(2).into_owned(),
+    );
+    let p = m.translation;
     for f in cols {
         let [x, y, z, nx, ny, nz] = *f;
-        let fx = r00 * x + r01 * y + r02 * z;
-        let fy = r10 * x + r11 * y + r12 * z;
-        let fz = r20 * x + r21 * y + r22 * z;
-        *f = [
-            fx,
-            fy,
-            fz,
-            r00 * nx + r01 * ny + r02 * nz + (py * fz - pz * fy),
-            r10 * nx + r11 * ny + r12 * nz + (pz * fx - px * fz),
-            r20 * nx + r21 * ny + r22 * nz + (px * fy - py * fx),
-        ];
+        let fl = c0 * x + c1 * y + c2 * z;
+        let fa = c0 * nx + c1 * ny + c2 * nz + p.cross(&fl);
+        *f = [fl.x, fl.y, fl.z, fa.x, fa.y, fa.z];
     }
 }
 
