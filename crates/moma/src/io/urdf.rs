@@ -1,5 +1,8 @@
 //! URDF loader (visuals, collisions and meshes are ignored).
 //!
+//! * `<visual>`, `<collision>` and `<material>` elements are removed before parsing, so
+//!   their content (meshes, textures...) can neither be required nor make a file fail to
+//!   load (e.g. iCub's `<texture/>` without a file name, which urdfdom accepts).
 //! * Revolute, continuous and prismatic joints become model joints (a continuous joint is
 //!   a revolute joint with one angle and no position limits); fixed joints merge their
 //!   child link's inertia into the parent body and add a `fixed_joint` frame.
@@ -22,6 +25,7 @@ use crate::multibody::{
 use crate::spatial::{Inertia, SE3};
 use crate::{Error, Result};
 use nalgebra::{Matrix3, Vector3};
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
@@ -96,7 +100,8 @@ fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)
 /// As [`model_from_urdf_file`].
 pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Result<Model> {
     let src = source_name;
-    let robot = urdf_rs::read_from_string(text)
+    let text = strip_ignored_elements(text);
+    let robot = urdf_rs::read_from_string(&text)
         .map_err(|e| Error::parse(src, format!("malformed URDF: {e}")))?;
     if robot.links.is_empty() {
         return Err(Error::parse(src, "the robot has no <link>"));
@@ -348,4 +353,137 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
         ));
     }
     b.build().map_err(ctx)
+}
+
+/// Elements the loader ignores and removes before parsing.
+const IGNORED_ELEMENTS: [&str; 3] = ["visual", "collision", "material"];
+
+/// What [`next_tag`] found.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Tag<'a> {
+    /// `<name ...>`.
+    Start(&'a str),
+    /// `</name>`.
+    End,
+    /// `<name .../>`.
+    Empty(&'a str),
+    /// A comment, CDATA section, processing instruction or declaration.
+    Other,
+}
+
+/// The first tag at or after byte `from`: (its first byte, one past its last byte, kind).
+/// `None` at the end of the text or for an unterminated construct.
+fn next_tag(text: &str, from: usize) -> Option<(usize, usize, Tag<'_>)> {
+    let start = from + text.get(from..)?.find('<')?;
+    let rest = &text[start..];
+    let until = |pat: &str, skip: usize| rest.find(pat).map(|k| start + k + skip);
+    if rest.starts_with("<!--") {
+        return until("-->", 3).map(|e| (start, e, Tag::Other));
+    }
+    if rest.starts_with("<![CDATA[") {
+        return until("]]>", 3).map(|e| (start, e, Tag::Other));
+    }
+    if rest.starts_with("<?") {
+        return until("?>", 2).map(|e| (start, e, Tag::Other));
+    }
+    // the end of a start/end tag or declaration: the first '>' outside quotes
+    let mut quote = None;
+    let mut end = None;
+    for (k, c) in rest.char_indices().skip(1) {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, '"' | '\'') => quote = Some(c),
+            (None, '>') => {
+                end = Some(start + k + 1);
+                break;
+            }
+            _ => {}
+        }
+    }
+    let end = end?;
+    if rest.starts_with("<!") {
+        return Some((start, end, Tag::Other));
+    }
+    if rest.starts_with("</") {
+        return Some((start, end, Tag::End));
+    }
+    let name_len = rest[1..]
+        .find(|c: char| c.is_whitespace() || c == '/' || c == '>')
+        .unwrap_or(0);
+    let name = &rest[1..1 + name_len];
+    if text[..end - 1].ends_with('/') {
+        Some((start, end, Tag::Empty(name)))
+    } else {
+        Some((start, end, Tag::Start(name)))
+    }
+}
+
+/// `text` without its [`IGNORED_ELEMENTS`] (and their content). Malformed XML is
+/// returned as far as it could be scanned, for the parser to report.
+fn strip_ignored_elements(text: &str) -> Cow<'_, str> {
+    let mut out = String::new();
+    let mut copied = 0; // text[..copied] is in `out` (or dropped)
+    let mut pos = 0;
+    // (start of the ignored element, depth of open elements inside it)
+    let mut skipping: Option<(usize, usize)> = None;
+    while let Some((start, end, tag)) = next_tag(text, pos) {
+        pos = end;
+        match (skipping, tag) {
+            (None, Tag::Start(name)) if IGNORED_ELEMENTS.contains(&name) => {
+                skipping = Some((start, 1));
+            }
+            (None, Tag::Empty(name)) if IGNORED_ELEMENTS.contains(&name) => {
+                out.push_str(&text[copied..start]);
+                copied = end;
+            }
+            (Some((s, d)), Tag::Start(_)) => skipping = Some((s, d + 1)),
+            (Some((s, 1)), Tag::End) => {
+                out.push_str(&text[copied..s]);
+                copied = end;
+                skipping = None;
+            }
+            (Some((s, d)), Tag::End) => skipping = Some((s, d - 1)),
+            _ => {}
+        }
+    }
+    if copied == 0 {
+        return Cow::Borrowed(text);
+    }
+    out.push_str(&text[copied..]);
+    Cow::Owned(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::strip_ignored_elements;
+
+    #[test]
+    fn strips_visuals_collisions_and_materials_only() {
+        let text = r#"<?xml version="1.0"?><!-- <visual> in a comment stays -->
+<robot name="r"><material name="m"><texture/></material>
+<link name="a"><inertial><mass value="1"/></inertial>
+  <visual name="x>y"><geometry><mesh/></geometry><material name="n"/></visual>
+  <collision/><collision><geometry><box size="1 1 1"/></geometry></collision>
+  <visualise/></link><![CDATA[<collision>]]></robot>"#;
+        let got = strip_ignored_elements(text);
+        assert_eq!(
+            got,
+            r#"<?xml version="1.0"?><!-- <visual> in a comment stays -->
+<robot name="r">
+<link name="a"><inertial><mass value="1"/></inertial>
+  
+  
+  <visualise/></link><![CDATA[<collision>]]></robot>"#
+        );
+        // nothing to strip: the text itself
+        let plain = r#"<robot name="r"><link name="a"/></robot>"#;
+        assert!(matches!(
+            strip_ignored_elements(plain),
+            std::borrow::Cow::Borrowed(_)
+        ));
+        // unterminated: scanned as far as possible, the parser reports the rest
+        let bad = r#"<robot name="r"><visual><geometry>"#;
+        assert_eq!(strip_ignored_elements(bad), bad);
+    }
 }

@@ -1,0 +1,131 @@
+//! Dumps every rigid-body output of moma for a URDF and a list of states, as JSON on
+//! standard output: the companion of `bench/xcheck_pinocchio.py`, which compares it with
+//! Pinocchio on many robot descriptions. Unlike `moma dynamics` it reports every frame
+//! (placement and LOCAL_WORLD_ALIGNED Jacobian) and keeps going when forward dynamics is
+//! singular (a massless subtree): the non-finite accelerations are written as `null`.
+//!
+//! Usage: `cargo run --release --example rigid_body_dump -- ROBOT.urdf ROOT STATES.json`
+//! with ROOT `fixed`, `planar` or `free-flyer` and STATES.json as for `moma dynamics`
+//! (`{"states": [{"q": [..], "v": [..], "a": [..], "tau": [..]}]}`, all four required).
+//! Gravity is [0, 0, −9.81].
+
+use moma::dynamics;
+use moma::io::urdf::model_from_urdf_file;
+use moma::kinematics::{self, ReferenceFrame};
+use moma::multibody::{Data, FrameIndex, RootJoint};
+use nalgebra::{DMatrix, DVector, Matrix6xX};
+use serde_json::{Value, json};
+
+fn rows(m: &DMatrix<f64>) -> Value {
+    json!(
+        m.row_iter()
+            .map(|r| r.iter().copied().collect::<Vec<_>>())
+            .collect::<Vec<_>>()
+    )
+}
+
+fn rows6(m: &Matrix6xX<f64>) -> Value {
+    json!(
+        m.row_iter()
+            .map(|r| r.iter().copied().collect::<Vec<_>>())
+            .collect::<Vec<_>>()
+    )
+}
+
+fn vecf(v: &Value, what: &str) -> Result<DVector<f64>, String> {
+    let a = v
+        .as_array()
+        .ok_or_else(|| format!("{what}: expected an array"))?;
+    let x: Option<Vec<f64>> = a.iter().map(Value::as_f64).collect();
+    x.map(DVector::from_vec)
+        .ok_or_else(|| format!("{what}: expected numbers"))
+}
+
+fn run() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().collect();
+    let [_, urdf, root, states] = args.as_slice() else {
+        return Err("usage: rigid_body_dump ROBOT.urdf fixed|planar|free-flyer STATES.json".into());
+    };
+    let root: RootJoint = root.parse().map_err(|e| format!("{e}"))?;
+    let model = model_from_urdf_file(urdf, root).map_err(|e| e.to_string())?;
+    let text = std::fs::read_to_string(states).map_err(|e| format!("{states}: {e}"))?;
+    let input: Value = serde_json::from_str(&text).map_err(|e| format!("{states}: {e}"))?;
+    let list = input["states"]
+        .as_array()
+        .ok_or_else(|| format!("{states}: no 'states' array"))?;
+    let mut data = Data::new(&model);
+    let nv = model.nv;
+    let mut out = Vec::new();
+    for (k, s) in list.iter().enumerate() {
+        let tag = format!("{states}: states[{k}]");
+        let q = vecf(&s["q"], &format!("{tag}.q"))?;
+        let v = vecf(&s["v"], &format!("{tag}.v"))?;
+        let a = vecf(&s["a"], &format!("{tag}.a"))?;
+        let tau = vecf(&s["tau"], &format!("{tag}.tau"))?;
+        kinematics::check_state(
+            &model,
+            &tag,
+            Some(q.as_slice()),
+            Some(v.as_slice()),
+            Some(a.as_slice()),
+            Some(tau.as_slice()),
+        )
+        .map_err(|e| e.to_string())?;
+        let rnea = dynamics::rnea(&model, &mut data, &q, &v, &a).clone();
+        let crba = dynamics::crba(&model, &mut data, &q).clone();
+        let aba: Vec<Option<f64>> = dynamics::aba(&model, &mut data, &q, &v, &tau)
+            .iter()
+            .map(|x| x.is_finite().then_some(*x))
+            .collect();
+        let nle = dynamics::nonlinear_effects(&model, &mut data, &q, &v).clone();
+        let grav = dynamics::gravity_torque(&model, &mut data, &q).clone();
+        let coriolis = dynamics::coriolis_matrix(&model, &mut data, &q, &v).clone();
+        let com = dynamics::center_of_mass(&model, &mut data, &q);
+        let ag = dynamics::centroidal_momentum_matrix(&model, &mut data, &q).clone();
+        let ke = dynamics::kinetic_energy(&model, &mut data, &q, &v);
+        let pe = dynamics::potential_energy(&model, &mut data, &q);
+        let mut frames = Vec::with_capacity(model.nframes());
+        let mut jac = Matrix6xX::zeros(nv);
+        for f in 0..model.nframes() {
+            kinematics::frame_jacobian(
+                &model,
+                &mut data,
+                &q,
+                FrameIndex(f),
+                ReferenceFrame::LocalWorldAligned,
+                &mut jac,
+            );
+            let m = kinematics::update_frame_placement(&model, &mut data, FrameIndex(f));
+            let r = m.rotation;
+            frames.push(json!({
+                "position": [m.translation.x, m.translation.y, m.translation.z],
+                "rotation": [[r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                             [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                             [r[(2, 0)], r[(2, 1)], r[(2, 2)]]],
+                "jacobian_local_world_aligned": rows6(&jac),
+            }));
+        }
+        out.push(json!({
+            "rnea_tau": rnea.as_slice(),
+            "crba_M": rows(&crba),
+            "aba_ddq": aba,
+            "nle": nle.as_slice(),
+            "gravity_torque": grav.as_slice(),
+            "coriolis_C": rows(&coriolis),
+            "com": [com.x, com.y, com.z],
+            "centroidal_map_Ag": rows6(&ag),
+            "kinetic_energy": ke,
+            "potential_energy": pe,
+            "frames": frames,
+        }));
+    }
+    println!("{}", json!({ "nq": model.nq, "nv": nv, "states": out }));
+    Ok(())
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
