@@ -6,8 +6,14 @@
 //!
 //! Usage: `cargo run --release --example rigid_body_dump -- ROBOT.urdf ROOT STATES.json`
 //! with ROOT `fixed`, `planar` or `free-flyer` and STATES.json as for `moma dynamics`
-//! (`{"states": [{"q": [..], "v": [..], "a": [..], "tau": [..]}]}`, all four required).
-//! Gravity is [0, 0, −9.81].
+//! (`{"states": [{"q": [..], "v": [..], "a": [..], "tau": [..], "q1": [..]}]}`, all five
+//! required). Gravity is [0, 0, −9.81].
+//!
+//! Per state: rnea, crba, aba (`null` where non-finite), nonlinear effects, gravity,
+//! Coriolis matrix, CoM, centroidal map, energies, `integrate(q, v)`, `difference(q, q1)`,
+//! and per frame its placement, and in the three reference frames its Jacobian, its
+//! velocity and its acceleration bias J̇·q̇ (the frame acceleration for q̈ = 0; the
+//! LOCAL_WORLD_ALIGNED one is the classical acceleration [p̈; ω̇]).
 
 use moma::dynamics;
 use moma::io::urdf::model_from_urdf_file;
@@ -30,6 +36,17 @@ fn rows6(m: &Matrix6xX<f64>) -> Value {
             .map(|r| r.iter().copied().collect::<Vec<_>>())
             .collect::<Vec<_>>()
     )
+}
+
+fn motion(m: &moma::spatial::Motion) -> Value {
+    json!([
+        m.linear.x,
+        m.linear.y,
+        m.linear.z,
+        m.angular.x,
+        m.angular.y,
+        m.angular.z
+    ])
 }
 
 fn vecf(v: &Value, what: &str) -> Result<DVector<f64>, String> {
@@ -62,6 +79,7 @@ fn run() -> Result<(), String> {
         let v = vecf(&s["v"], &format!("{tag}.v"))?;
         let a = vecf(&s["a"], &format!("{tag}.a"))?;
         let tau = vecf(&s["tau"], &format!("{tag}.tau"))?;
+        let q1 = vecf(&s["q1"], &format!("{tag}.q1"))?;
         kinematics::check_state(
             &model,
             &tag,
@@ -84,26 +102,50 @@ fn run() -> Result<(), String> {
         let ag = dynamics::centroidal_momentum_matrix(&model, &mut data, &q).clone();
         let ke = dynamics::kinetic_energy(&model, &mut data, &q, &v);
         let pe = dynamics::potential_energy(&model, &mut data, &q);
+        let mut q_next = DVector::zeros(model.nq);
+        kinematics::integrate(&model, &q, &v, &mut q_next);
+        kinematics::check_state(&model, &tag, Some(q1.as_slice()), None, None, None)
+            .map_err(|e| e.to_string())?;
+        let mut dq = DVector::zeros(nv);
+        kinematics::difference(&model, &q, &q1, &mut dq);
+        const RFS: [(&str, ReferenceFrame); 3] = [
+            ("local_world_aligned", ReferenceFrame::LocalWorldAligned),
+            ("world", ReferenceFrame::World),
+            ("local", ReferenceFrame::Local),
+        ];
         let mut frames = Vec::with_capacity(model.nframes());
         let mut jac = Matrix6xX::zeros(nv);
         for f in 0..model.nframes() {
-            kinematics::frame_jacobian(
-                &model,
-                &mut data,
-                &q,
-                FrameIndex(f),
-                ReferenceFrame::LocalWorldAligned,
-                &mut jac,
-            );
-            let m = kinematics::update_frame_placement(&model, &mut data, FrameIndex(f));
+            let fid = FrameIndex(f);
+            let mut fr = serde_json::Map::new();
+            for (name, rf) in RFS {
+                kinematics::frame_jacobian(&model, &mut data, &q, fid, rf, &mut jac);
+                fr.insert(format!("jacobian_{name}"), rows6(&jac));
+            }
+            let m = kinematics::update_frame_placement(&model, &mut data, fid);
             let r = m.rotation;
-            frames.push(json!({
-                "position": [m.translation.x, m.translation.y, m.translation.z],
-                "rotation": [[r[(0, 0)], r[(0, 1)], r[(0, 2)]],
-                             [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
-                             [r[(2, 0)], r[(2, 1)], r[(2, 2)]]],
-                "jacobian_local_world_aligned": rows6(&jac),
-            }));
+            fr.insert(
+                "position".into(),
+                json!([m.translation.x, m.translation.y, m.translation.z]),
+            );
+            fr.insert(
+                "rotation".into(),
+                json!([
+                    [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                    [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                    [r[(2, 0)], r[(2, 1)], r[(2, 2)]]
+                ]),
+            );
+            for (name, rf) in RFS {
+                let b = kinematics::frame_acceleration_bias(&model, &mut data, &q, &v, fid, rf);
+                fr.insert(format!("bias_{name}"), motion(&b));
+            }
+            kinematics::forward_kinematics_second_order(&model, &mut data, &q, &v, &a);
+            for (name, rf) in RFS {
+                let w = kinematics::frame_velocity(&model, &data, fid, rf);
+                fr.insert(format!("velocity_{name}"), motion(&w));
+            }
+            frames.push(Value::Object(fr));
         }
         out.push(json!({
             "rnea_tau": rnea.as_slice(),
@@ -116,6 +158,8 @@ fn run() -> Result<(), String> {
             "centroidal_map_Ag": rows6(&ag),
             "kinetic_energy": ke,
             "potential_energy": pe,
+            "integrate_q_v": q_next.as_slice(),
+            "difference_q_q1": dq.as_slice(),
             "frames": frames,
         }));
     }

@@ -218,7 +218,8 @@ fn check_structure(model: &Model, j: &Value, conv: &Conv) {
             ] {
                 let want = if theirs == 0.0 { f64::INFINITY } else { theirs };
                 assert!(
-                    ours == want || check(&format!("{what} limit of {name}"), &[ours], &[want]) <= REL_TOL,
+                    ours == want
+                        || check(&format!("{what} limit of {name}"), &[ours], &[want]) <= REL_TOL,
                     "{what} limit of {name}: {ours} vs {theirs}"
                 );
             }
@@ -310,7 +311,11 @@ fn run(file: &str, root: RootJoint) {
         cmp("centroidal_map_Ag", got.as_slice(), want.as_slice());
 
         let ke = dynamics::kinetic_energy(&model, &mut data, &q, &v);
-        cmp("kinetic_energy", &[ke], &[s["kinetic_energy"].as_f64().unwrap()]);
+        cmp(
+            "kinetic_energy",
+            &[ke],
+            &[s["kinetic_energy"].as_f64().unwrap()],
+        );
         let pe = dynamics::potential_energy(&model, &mut data, &q);
         cmp(
             "potential_energy",
@@ -421,7 +426,10 @@ fn visuals_collisions_and_materials_are_ignored() {
         "messy.urdf",
     )
     .unwrap();
-    assert_eq!((messy.nq, messy.nv, messy.nframes()), (plain.nq, plain.nv, plain.nframes()));
+    assert_eq!(
+        (messy.nq, messy.nv, messy.nframes()),
+        (plain.nq, plain.nv, plain.nframes())
+    );
     assert_eq!(messy.inertias, plain.inertias);
     assert_eq!(messy.joint_placements, plain.joint_placements);
 }
