@@ -10,12 +10,14 @@ of the `moma` command line and of the `rigid_body_dump` example:
 
 Usage:
     python bench/xcheck_pinocchio.py [--robots ROBOTS_DIR] [--extra URDF_OR_DIR ...]
-        [--filter SUBSTRING] [--states N] [--tol 1e-9] [--markdown OUT.md] [--json OUT.json]
+        [--filter SUBSTRING] [--random N] [--states N] [--tol 1e-9] [--markdown OUT.md] [--json OUT.json]
         [--moma PATH/TO/moma] [--dump PATH/TO/rigid_body_dump]
 
 ROBOTS_DIR defaults to example-robot-data's `robots` folder found next to the installed
 Pinocchio (`<prefix>/share/example-robot-data/robots`); every `*.urdf` two levels below it
-is checked, plus the `--extra` files (default: the edge cases in `bench/xcheck_urdf/`).
+is checked, plus the `--extra` files (default: the edge cases in `bench/xcheck_urdf/`)
+and `--random N` seeded random robot descriptions (random trees with every joint kind,
+odd axes, rotated origins and inertials, massless links).
 The binaries default to `$CARGO_TARGET_DIR` (or `target`)`/release/`.
 Each file is loaded with each root: `fixed` (Pinocchio: no root joint), `planar`
 (`pin.JointModelPlanar()`) and `free-flyer` (`pin.JointModelFreeFlyer()`).
@@ -491,6 +493,68 @@ def check_case(args, urdf, robot, root, tmp):
     return case
 
 
+def random_urdf(rng, index):
+    """A random robot description: a random tree of 2-14 links with revolute, continuous,
+    prismatic and fixed joints, joint names in random case/order, unit / negative /
+    non-normalised / arbitrary axes, rotated origins, rotated inertials (some zero-mass with
+    inertia, some point masses, a few links without <inertial>)."""
+    def f(x):
+        return " ".join("%.17g" % v for v in x)
+
+    def name():
+        alphabet = "abcXYZ_019"
+        return "".join(rng.choice(list(alphabet), size=rng.integers(1, 6)))
+
+    n = int(rng.integers(2, 15))
+    links = ["L%d_%s" % (k, name()) for k in range(n)]
+    out = ['<?xml version="1.0"?>', '<robot name="random_%d">' % index]
+    for k, ln in enumerate(links):
+        u = rng.uniform()
+        if u < 0.08 and k > 0:
+            out.append('  <link name="%s"/>' % ln)
+            continue
+        # a massless root body next to a prismatic joint makes a free-flyer or planar
+        # root redundant (H singular): keep the root massive
+        mass = 0.0 if u < 0.15 and k > 0 else float(rng.uniform(0.05, 5.0))
+        if u > 0.92:
+            inertia = np.zeros((3, 3))  # point mass
+        else:
+            p = rng.uniform(0.01, 0.3, 3)
+            moments = np.array([p[1] + p[2], p[0] + p[2], p[0] + p[1]]) * max(mass, 0.1) * 0.05
+            q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+            inertia = q @ np.diag(moments) @ q.T
+        out.append('  <link name="%s"><inertial><origin xyz="%s" rpy="%s"/><mass value="%.17g"/>'
+                   '<inertia ixx="%.17g" ixy="%.17g" ixz="%.17g" iyy="%.17g" iyz="%.17g" '
+                   'izz="%.17g"/></inertial></link>'
+                   % (ln, f(rng.uniform(-0.2, 0.2, 3)), f(rng.uniform(-np.pi, np.pi, 3)), mass,
+                      inertia[0, 0], inertia[0, 1], inertia[0, 2], inertia[1, 1],
+                      inertia[1, 2], inertia[2, 2]))
+    used = set()
+    for k in range(1, n):
+        parent = links[int(rng.integers(0, k))]
+        jt = rng.choice(["revolute", "continuous", "prismatic", "fixed"], p=[0.4, 0.15, 0.2, 0.25])
+        jn = name()
+        while jn in used:
+            jn = name()
+        used.add(jn)
+        kind = rng.integers(0, 4)
+        if kind == 0:
+            axis = np.eye(3)[rng.integers(0, 3)] * rng.choice([-1.0, 1.0])
+        elif kind == 1:
+            axis = np.eye(3)[rng.integers(0, 3)] * rng.uniform(0.2, 3.0)
+        else:
+            axis = rng.normal(size=3)
+        lo = float(rng.uniform(-3, 0))
+        out.append('  <joint name="%s" type="%s"><parent link="%s"/><child link="%s"/>'
+                   '<origin xyz="%s" rpy="%s"/><axis xyz="%s"/>'
+                   '<limit lower="%.17g" upper="%.17g" effort="%.17g" velocity="%.17g"/></joint>'
+                   % (jn, jt, parent, links[k], f(rng.uniform(-0.5, 0.5, 3)),
+                      f(rng.uniform(-np.pi, np.pi, 3)), f(axis), lo, lo + float(rng.uniform(0.1, 4)),
+                      float(rng.uniform(0, 100)), float(rng.uniform(0, 10))))
+    out.append("</robot>")
+    return "\n".join(out) + "\n"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--moma", default=os.path.join(target_dir(), "release", "moma"))
@@ -500,6 +564,8 @@ def main():
     ap.add_argument("--extra", nargs="*", default=[os.path.join(
         os.path.dirname(os.path.abspath(__file__)), "xcheck_urdf")])
     ap.add_argument("--filter", default="")
+    ap.add_argument("--random", type=int, default=0,
+                    help="also check this many seeded random robot descriptions")
     ap.add_argument("--states", type=int, default=3)
     ap.add_argument("--tol", type=float, default=1e-9)
     ap.add_argument("--markdown", default=None)
@@ -514,6 +580,12 @@ def main():
     files = [(n, f) for n, f in files if args.filter in n]
     cases = []
     with tempfile.TemporaryDirectory() as tmp:
+        rng = np.random.default_rng(SEED)
+        for k in range(args.random):
+            path = os.path.join(tmp, "random_%03d.urdf" % k)
+            with open(path, "w") as f:
+                f.write(random_urdf(rng, k))
+            files.append(("random_%03d.urdf" % k, path))
         for robot, f in files:
             for root in ROOTS:
                 c = check_case(args, f, robot, root, tmp)
