@@ -10,7 +10,8 @@ of the `moma` command line and of the `rigid_body_dump` example:
 
 Usage:
     python bench/xcheck_pinocchio.py [--robots ROBOTS_DIR] [--extra URDF_OR_DIR ...]
-        [--filter SUBSTRING] [--random N] [--states N] [--tol 1e-9] [--markdown OUT.md] [--json OUT.json]
+        [--filter SUBSTRING] [--random N] [--states N] [--gravity GX,GY,GZ]
+        [--tol 1e-9] [--markdown OUT.md] [--json OUT.json]
         [--moma PATH/TO/moma] [--dump PATH/TO/rigid_body_dump]
 
 ROBOTS_DIR defaults to example-robot-data's `robots` folder found next to the installed
@@ -358,6 +359,7 @@ def check_case(args, urdf, robot, root, tmp):
         case.status, case.message = "FAIL", "; ".join(case.problems[:3])
         return case
 
+    model.gravity.linear = np.array(args.gravity)
     data = model.createData()
     rng = np.random.default_rng(SEED)
     pstates, mstates = [], []
@@ -376,7 +378,7 @@ def check_case(args, urdf, robot, root, tmp):
                         "q1": conv.q(q1p).tolist()})
     sfile = os.path.join(tmp, "states.json")
     with open(sfile, "w") as f:
-        json.dump({"states": mstates}, f)
+        json.dump({"states": mstates, "gravity": args.gravity}, f)
 
     frames = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
     if frames and info["last_link"] != model.frames[frames[-1]].name:
@@ -495,7 +497,8 @@ def check_case(args, urdf, robot, root, tmp):
 
 def random_urdf(rng, index):
     """A random robot description: a random tree of 2-14 links with revolute, continuous,
-    prismatic and fixed joints, joint names in random case/order, unit / negative /
+    prismatic and fixed joints, links and joints in random document order, random joint
+    names (mixed case, digits, underscores), unit / negative /
     non-normalised / arbitrary axes, rotated origins, rotated inertials (some zero-mass with
     inertia, some point masses, a few links without <inertial>)."""
     def f(x):
@@ -551,8 +554,9 @@ def random_urdf(rng, index):
                    % (jn, jt, parent, links[k], f(rng.uniform(-0.5, 0.5, 3)),
                       f(rng.uniform(-np.pi, np.pi, 3)), f(axis), lo, lo + float(rng.uniform(0.1, 4)),
                       float(rng.uniform(0, 100)), float(rng.uniform(0, 10))))
-    out.append("</robot>")
-    return "\n".join(out) + "\n"
+    body = out[2:]
+    rng.shuffle(body)  # document order must not matter
+    return "\n".join(out[:2] + body + ["</robot>"]) + "\n"
 
 
 def main():
@@ -567,10 +571,13 @@ def main():
     ap.add_argument("--random", type=int, default=0,
                     help="also check this many seeded random robot descriptions")
     ap.add_argument("--states", type=int, default=3)
+    ap.add_argument("--gravity", default="0,0,-9.81",
+                    help="gravity gx,gy,gz (world axes) for both libraries")
     ap.add_argument("--tol", type=float, default=1e-9)
     ap.add_argument("--markdown", default=None)
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
+    args.gravity = [float(x) for x in args.gravity.split(",")]
     robots = args.robots or default_robots_dir()
     files = [(os.path.relpath(f, robots), f)
              for f in sorted(glob.glob(os.path.join(robots, "*", "*", "*.urdf")))]

@@ -7,7 +7,7 @@
 //! Usage: `cargo run --release --example rigid_body_dump -- ROBOT.urdf ROOT STATES.json`
 //! with ROOT `fixed`, `planar` or `free-flyer` and STATES.json as for `moma dynamics`
 //! (`{"states": [{"q": [..], "v": [..], "a": [..], "tau": [..], "q1": [..]}]}`, all five
-//! required). Gravity is [0, 0, −9.81].
+//! required) and an optional top-level `"gravity": [gx, gy, gz]` (default [0, 0, −9.81]).
 //!
 //! Per state: rnea, crba, aba (`null` where non-finite), nonlinear effects, gravity,
 //! Coriolis matrix, CoM, centroidal map, energies, `integrate(q, v)`, `difference(q, q1)`,
@@ -64,12 +64,19 @@ fn run() -> Result<(), String> {
         return Err("usage: rigid_body_dump ROBOT.urdf fixed|planar|free-flyer STATES.json".into());
     };
     let root: RootJoint = root.parse().map_err(|e| format!("{e}"))?;
-    let model = model_from_urdf_file(urdf, root).map_err(|e| e.to_string())?;
+    let mut model = model_from_urdf_file(urdf, root).map_err(|e| e.to_string())?;
     let text = std::fs::read_to_string(states).map_err(|e| format!("{states}: {e}"))?;
     let input: Value = serde_json::from_str(&text).map_err(|e| format!("{states}: {e}"))?;
     let list = input["states"]
         .as_array()
         .ok_or_else(|| format!("{states}: no 'states' array"))?;
+    if !input["gravity"].is_null() {
+        let g = vecf(&input["gravity"], &format!("{states}: gravity"))?;
+        if g.len() != 3 {
+            return Err(format!("{states}: gravity must have 3 entries"));
+        }
+        model.gravity = nalgebra::Vector3::new(g[0], g[1], g[2]);
+    }
     let mut data = Data::new(&model);
     let nv = model.nv;
     let mut out = Vec::new();
