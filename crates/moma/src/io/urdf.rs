@@ -101,8 +101,13 @@ fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)
 pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Result<Model> {
     let src = source_name;
     let text = strip_ignored_elements(text);
-    let robot = urdf_rs::read_from_string(&text)
-        .map_err(|e| Error::parse(src, format!("malformed URDF: {e}")))?;
+    let robot = urdf_rs::read_from_string(&text).map_err(|e| {
+        let msg = match locate_parse_error(&text) {
+            Some((kind, name, err)) => format!("{kind} '{name}': {err}"),
+            None => e.to_string(),
+        };
+        Error::parse(src, format!("malformed URDF: {msg}"))
+    })?;
     if robot.links.is_empty() {
         return Err(Error::parse(src, "the robot has no <link>"));
     }
@@ -454,9 +459,97 @@ fn strip_ignored_elements(text: &str) -> Cow<'_, str> {
     Cow::Owned(out)
 }
 
+/// The value of attribute `name` in a start tag.
+fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let mut rest = tag;
+    while let Some(k) = rest.find(name) {
+        let before_ok = rest[..k].ends_with(char::is_whitespace);
+        let after = rest[k + name.len()..].trim_start();
+        if before_ok && let Some(v) = after.strip_prefix('=') {
+            let v = v.trim_start();
+            let q = v.chars().next()?;
+            if q == '"' || q == '\'' {
+                return v[1..].find(q).map(|e| &v[1..1 + e]);
+            }
+        }
+        rest = &rest[k + name.len()..];
+    }
+    None
+}
+
+/// When the parser refuses a file, the first `<link>` or `<joint>` (a child of `<robot>`)
+/// that it refuses on its own: (element, its name, the parser's message).
+fn locate_parse_error(text: &str) -> Option<(&'static str, String, String)> {
+    let mut pos = 0;
+    let mut depth = 0usize;
+    let mut open: Option<(usize, &str)> = None; // start of the current robot child
+    while let Some((start, end, tag)) = next_tag(text, pos) {
+        pos = end;
+        let element = match tag {
+            Tag::Start(n) => {
+                depth += 1;
+                if depth == 2 {
+                    open = Some((start, n));
+                }
+                None
+            }
+            Tag::End => {
+                depth = depth.saturating_sub(1);
+                if depth == 1 {
+                    open.take().map(|(s, n)| (s, n, &text[s..end]))
+                } else {
+                    None
+                }
+            }
+            Tag::Empty(n) if depth == 1 => Some((start, n, &text[start..end])),
+            _ => None,
+        };
+        let Some((s, kind, body)) = element else {
+            continue;
+        };
+        let kind = match kind {
+            "link" => "link",
+            "joint" => "joint",
+            _ => continue,
+        };
+        let probe = format!("<robot name=\"probe\">{body}</robot>");
+        if let Err(e) = urdf_rs::read_from_string(&probe) {
+            let start_tag = &text[s..next_tag(text, s).map_or(s, |t| t.1)];
+            let name = attribute(start_tag, "name").unwrap_or("?").to_string();
+            return Some((kind, name, e.to_string()));
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
-    use super::strip_ignored_elements;
+    use super::{attribute, locate_parse_error, strip_ignored_elements};
+
+    #[test]
+    fn parse_errors_name_the_element() {
+        let text = r#"<robot name="r"><link name="a"/>
+            <joint name='j1' type="revolute"><parent link="a"/><child link="b"/>
+              <limit lower="0" upper="1" effort="1" velocity="1"/></joint>
+            <link name="b"><inertial><mass value="1"/></inertial></link>
+            <joint name="j2" type="revolute"><parent link="b"/><child link="c"/>
+              <limit lower="0" upper="1" effort="1"/></joint></robot>"#;
+        let (kind, name, err) = locate_parse_error(text).unwrap();
+        assert_eq!((kind, name.as_str()), ("link", "b"));
+        assert!(err.contains("inertia"), "{err}");
+        let fixed = text.replace(
+            "<mass value=\"1\"/>",
+            "<mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>",
+        );
+        let (kind, name, err) = locate_parse_error(&fixed).unwrap();
+        assert_eq!((kind, name.as_str()), ("joint", "j2"));
+        assert!(err.contains("velocity"), "{err}");
+        assert_eq!(
+            attribute(r#"<joint type="x" name = 'n'>"#, "name"),
+            Some("n")
+        );
+        assert_eq!(attribute(r#"<joint myname="x">"#, "name"), None);
+    }
 
     #[test]
     fn strips_visuals_collisions_and_materials_only() {
