@@ -40,6 +40,9 @@ For each (URDF, root) the script
      H(q) is ill-conditioned (iCub: cond(H) up to 4e9), a q̈ beyond the tolerance passes
      if its backward error |H q̈ + h − τ| / (|H| |q̈| + |h| + |τ|) is ≤ 1e-14 and its
      forward error ≤ 100 cond(H) ε (noted in the table).
+  4. runs `moma dynamics` (the command line, default frame) on the same states and checks
+     that it prints the same numbers as the library (and a unit quaternion of the frame
+     rotation); it must refuse exactly the states whose ABA is singular.
      A massless model has no CoM (Pinocchio: NaN, moma: the origin, documented).
 
 Errors are |moma − pinocchio| / max(|pinocchio|, 1) (relative, absolute below 1); a case
@@ -485,6 +488,38 @@ def check_case(args, urdf, robot, root, tmp):
                  [pin.computeKineticEnergy(model, data, qp, vp)], args.tol)
         case.err(tag + "potential", [r["potential_energy"]],
                  [pin.computePotentialEnergy(model, data, qp)], args.tol)
+    # the command line: `moma dynamics` (default frame: the last link) must print the
+    # library's values (row-major matrices, unit quaternion; to the tolerance, as the
+    # order of the calls differs from the dump's)
+    g = ",".join("%.17g" % x for x in args.gravity)
+    rc, out, err = run([args.moma, "dynamics", urdf, "--root", root, "--states", sfile,
+                        "--gravity", g])
+    if rc != 0:
+        if "singular" in err and "ABA singular in both (massless subtree)" in notes:
+            notes.add("moma dynamics refuses the singular ABA, as documented")
+        else:
+            case.mismatch("moma dynamics: " + (err.splitlines()[-1] if err else "exit %d" % rc))
+    else:
+        cli = json.loads(out)
+        fid = [i for i, f in enumerate(model.frames) if f.name == cli["frame"]][0]
+        for si, (c, r) in enumerate(zip(cli["states"], res)):
+            tag = "cli s%d " % si
+            for key in ("rnea_tau", "nle", "gravity_torque", "com", "kinetic_energy",
+                        "potential_energy"):
+                case.err(tag + key, np.atleast_1d(c[key]), np.atleast_1d(r[key]), args.tol)
+            for key in ("crba_M", "centroidal_map_Ag"):
+                case.err(tag + key, np.array(c[key], dtype=float).ravel(),
+                         np.array(r[key], dtype=float).ravel(), args.tol)
+            case.err(tag + "aba_ddq", c["aba_ddq"], r["aba_ddq"], args.tol)
+            rf = r["frames"][fid]
+            case.err(tag + "position", c["position"], rf["position"], args.tol)
+            case.err(tag + "rotation", c["rotation"], rf["rotation"], args.tol)
+            case.err(tag + "jacobian", np.array(c["jacobian_local_world_aligned"]).ravel(),
+                     np.array(rf["jacobian_local_world_aligned"]).ravel(), args.tol)
+            quat = np.array(c["quaternion_xyzw"])
+            rot = pin.Quaternion(quat[3], quat[0], quat[1], quat[2]).toRotationMatrix()
+            case.err(tag + "quaternion", rot, np.array(rf["rotation"]), args.tol)
+            case.err(tag + "quaternion norm", [np.linalg.norm(quat)], [1.0], args.tol)
     case.notes += sorted(notes)
     if case.problems:
         case.status = "FAIL"
