@@ -87,6 +87,10 @@ EXPECTED = {
         "planar root); Pinocchio adds a planar joint and ignores its axis"),
     "edge_negative_mass.urdf": (
         "moma refuses", "negative mass: not a rigid body; Pinocchio loads it unchecked"),
+    "edge_root_joint_name.urdf": (
+        "moma refuses",
+        "a URDF joint named 'root_joint' clashes with the planar/free-flyer root joint: moma "
+        "refuses those roots naming it; Pinocchio makes two joints of that name"),
     "edge_reversed_limits.urdf": (
         "moma refuses",
         "lower position limit above the upper one: an empty range, rejected naming the joint; "

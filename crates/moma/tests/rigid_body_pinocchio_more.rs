@@ -433,3 +433,25 @@ fn visuals_collisions_and_materials_are_ignored() {
     assert_eq!(messy.inertias, plain.inertias);
     assert_eq!(messy.joint_placements, plain.joint_placements);
 }
+
+/// A URDF joint called `root_joint` clashes with the planar / free-flyer root joint's name
+/// (Pinocchio then has two joints of that name): a clear error with those roots, fine with
+/// the fixed root.
+#[test]
+fn urdf_joint_named_like_the_root_joint() {
+    let text = r#"<robot name="r"><link name="a"/><link name="b"><inertial><mass value="1"/>
+        <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+        <joint name="root_joint" type="revolute"><parent link="a"/><child link="b"/>
+        <limit lower="0" upper="1" effort="1" velocity="1"/></joint></robot>"#;
+    for root in [RootJoint::Planar, RootJoint::FreeFlyer] {
+        let e = model_from_urdf_str(text, root, "rj.urdf")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("rj.urdf") && e.contains("'root_joint'") && e.contains("reserved"),
+            "{e}"
+        );
+    }
+    let m = model_from_urdf_str(text, RootJoint::Fixed, "rj.urdf").unwrap();
+    assert_eq!(m.names[1], "root_joint");
+}

@@ -7,7 +7,8 @@
 //!   a revolute joint with one angle and no position limits); fixed joints merge their
 //!   child link's inertia into the parent body and add a `fixed_joint` frame.
 //! * Every link gets a `body` frame and every moving joint a `joint` frame; frame 0 is
-//!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`.
+//!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`
+//!   ([`ROOT_JOINT_NAME`]; a URDF joint of that name is then an error).
 //! * A link without `<inertial>` is massless. A present inertial must have a finite mass
 //!   ≥ 0 and a positive (semi-)definite rotational inertia: an eigenvalue below
 //!   −[`INERTIA_TOLERANCE`] is an error; zero eigenvalues are accepted (point masses and
@@ -50,6 +51,10 @@ fn pose(p: &urdf_rs::Pose) -> SE3 {
 fn finite_pose(p: &urdf_rs::Pose) -> bool {
     p.xyz.0.iter().chain(p.rpy.0.iter()).all(|x| x.is_finite())
 }
+
+/// Name of the planar or free-flyer root joint (as Pinocchio's default); a URDF joint of
+/// that name is an error with those roots.
+pub const ROOT_JOINT_NAME: &str = "root_joint";
 
 /// Most negative eigenvalue (kg·m²) tolerated in a link's rotational inertia: round-off in
 /// published URDFs (e.g. TIAGo's 1 mg antenna links have eigenvalues of −3.5e-8).
@@ -209,6 +214,15 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
         ),
         other => other,
     };
+    if root != RootJoint::Fixed && joint_names.contains(ROOT_JOINT_NAME) {
+        return Err(Error::parse(
+            src,
+            format!(
+                "joint '{ROOT_JOINT_NAME}': this name is reserved for the {root} root joint \
+                 (rename the URDF joint, or use the fixed root)"
+            ),
+        ));
+    }
     let (root_joint, root_frame) = match root {
         RootJoint::Fixed => (JointIndex(0), FrameIndex(0)),
         RootJoint::Planar | RootJoint::FreeFlyer => {
@@ -220,7 +234,7 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
             let j = b
                 .add_joint(
                     JointIndex(0),
-                    "root_joint",
+                    ROOT_JOINT_NAME,
                     jt,
                     SE3::identity(),
                     JointLimits::unlimited(),
