@@ -497,10 +497,16 @@ fn locate_parse_error(text: &str) -> Option<(&'static str, String, String)> {
     let mut pos = 0;
     let mut depth = 0usize;
     let mut open: Option<(usize, &str)> = None; // start of the current robot child
+    let mut version = String::new(); // the URDF version changes how limits are read
     while let Some((start, end, tag)) = next_tag(text, pos) {
         pos = end;
         let element = match tag {
             Tag::Start(n) => {
+                if depth == 0
+                    && let Some(v) = attribute(&text[start..end], "version")
+                {
+                    version = format!(" version=\"{v}\"");
+                }
                 depth += 1;
                 if depth == 2 {
                     open = Some((start, n));
@@ -526,7 +532,7 @@ fn locate_parse_error(text: &str) -> Option<(&'static str, String, String)> {
             "joint" => "joint",
             _ => continue,
         };
-        let probe = format!("<robot name=\"probe\">{body}</robot>");
+        let probe = format!("<robot name=\"probe\"{version}>{body}</robot>");
         if let Err(e) = urdf_rs::read_from_string(&probe) {
             let start_tag = &text[s..next_tag(text, s).map_or(s, |t| t.1)];
             let name = attribute(start_tag, "name").unwrap_or("?").to_string();
