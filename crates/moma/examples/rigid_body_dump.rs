@@ -13,7 +13,8 @@
 //! Coriolis matrix, CoM, centroidal map, energies, `integrate(q, v)`, `difference(q, q1)`,
 //! and per frame its placement, and in the three reference frames its Jacobian, its
 //! velocity and its acceleration bias J̇·q̇ (the frame acceleration for q̈ = 0; the
-//! LOCAL_WORLD_ALIGNED one is the classical acceleration [p̈; ω̇]).
+//! LOCAL_WORLD_ALIGNED one is the classical acceleration [p̈; ω̇]), and its spatial
+//! acceleration in its own axes for the state's a (`forward_kinematics_second_order`).
 
 use moma::dynamics;
 use moma::io::urdf::model_from_urdf_file;
@@ -152,6 +153,11 @@ fn run() -> Result<(), String> {
                 let w = kinematics::frame_velocity(&model, &data, fid, rf);
                 fr.insert(format!("velocity_{name}"), motion(&w));
             }
+            let frame = &model.frames[f];
+            let acc = frame
+                .placement
+                .inverse_act_motion(&data.a[frame.parent_joint.0]);
+            fr.insert("acceleration_local".into(), motion(&acc));
             frames.push(Value::Object(fr));
         }
         out.push(json!({
