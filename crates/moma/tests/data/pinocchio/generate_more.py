@@ -7,8 +7,8 @@ where ROBOTS_DIR is example-robot-data's `robots` folder. Run from this folder.
 
 1. Copies three robot descriptions of example-robot-data into `urdf/`, without their
    <visual> and <collision> elements (meshes are not shipped; the dynamics does not use
-   them), keeping every comment (copyright notices) and adding a provenance and license
-   comment at the top:
+   them), with a provenance and license comment at the top (ElementTree drops the
+   comments before <robot>; the license text is written in full instead):
      * anymal_c.urdf: a quadruped with unaligned joint axes
        (anymal_c_simple_description/urdf/anymal.urdf),
      * g1_29dof.urdf: a 29-joint humanoid (g1_description/urdf/g1_29dof_rev_1_0.urdf),
@@ -102,7 +102,8 @@ def strip_copy(robots, out, rel, license_file):
     note = ET.Comment(
         "\nCopied from example-robot-data 5.0.0, robots/%s, by moma's\n"
         "tests/data/pinocchio/generate_more.py, which removed the <visual> and <collision>\n"
-        "elements (nothing else is changed).\n\n%s\n" % (rel, lic.replace("--", "- -")))
+        "elements and the comments before <robot>, and re-indented the file; links, joints\n"
+        "and inertials are unchanged.\n\n%s\n" % (rel, lic.replace("--", "- -")))
     root.insert(0, note)
     ET.indent(tree, space="  ")
     tree.write("urdf/" + out, encoding="unicode", xml_declaration=True)
