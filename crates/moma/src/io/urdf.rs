@@ -1,10 +1,14 @@
 //! URDF loader (visuals, collisions and meshes are ignored).
 //!
+//! * `<visual>`, `<collision>` and `<material>` elements are removed before parsing, so
+//!   their content (meshes, textures...) can neither be required nor make a file fail to
+//!   load (e.g. iCub's `<texture/>` without a file name, which urdfdom accepts).
 //! * Revolute, continuous and prismatic joints become model joints (a continuous joint is
 //!   a revolute joint with one angle and no position limits); fixed joints merge their
 //!   child link's inertia into the parent body and add a `fixed_joint` frame.
 //! * Every link gets a `body` frame and every moving joint a `joint` frame; frame 0 is
-//!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`.
+//!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`
+//!   ([`ROOT_JOINT_NAME`]; a URDF joint of that name is then an error).
 //! * A link without `<inertial>` is massless. A present inertial must have a finite mass
 //!   ≥ 0 and a positive (semi-)definite rotational inertia: an eigenvalue below
 //!   −[`INERTIA_TOLERANCE`] is an error; zero eigenvalues are accepted (point masses and
@@ -22,6 +26,7 @@ use crate::multibody::{
 use crate::spatial::{Inertia, SE3};
 use crate::{Error, Result};
 use nalgebra::{Matrix3, Vector3};
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
@@ -46,6 +51,10 @@ fn pose(p: &urdf_rs::Pose) -> SE3 {
 fn finite_pose(p: &urdf_rs::Pose) -> bool {
     p.xyz.0.iter().chain(p.rpy.0.iter()).all(|x| x.is_finite())
 }
+
+/// Name of the planar or free-flyer root joint (as Pinocchio's default); a URDF joint of
+/// that name is an error with those roots.
+pub const ROOT_JOINT_NAME: &str = "root_joint";
 
 /// Most negative eigenvalue (kg·m²) tolerated in a link's rotational inertia: round-off in
 /// published URDFs (e.g. TIAGo's 1 mg antenna links have eigenvalues of −3.5e-8).
@@ -96,8 +105,14 @@ fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)
 /// As [`model_from_urdf_file`].
 pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Result<Model> {
     let src = source_name;
-    let robot = urdf_rs::read_from_string(text)
-        .map_err(|e| Error::parse(src, format!("malformed URDF: {e}")))?;
+    let text = strip_ignored_elements(text);
+    let robot = urdf_rs::read_from_string(&text).map_err(|e| {
+        let msg = match locate_parse_error(&text) {
+            Some((kind, name, err)) => format!("{kind} '{name}': {err}"),
+            None => e.to_string(),
+        };
+        Error::parse(src, format!("malformed URDF: {msg}"))
+    })?;
     if robot.links.is_empty() {
         return Err(Error::parse(src, "the robot has no <link>"));
     }
@@ -199,6 +214,15 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
         ),
         other => other,
     };
+    if root != RootJoint::Fixed && joint_names.contains(ROOT_JOINT_NAME) {
+        return Err(Error::parse(
+            src,
+            format!(
+                "joint '{ROOT_JOINT_NAME}': this name is reserved for the {root} root joint \
+                 (rename the URDF joint, or use the fixed root)"
+            ),
+        ));
+    }
     let (root_joint, root_frame) = match root {
         RootJoint::Fixed => (JointIndex(0), FrameIndex(0)),
         RootJoint::Planar | RootJoint::FreeFlyer => {
@@ -210,7 +234,7 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
             let j = b
                 .add_joint(
                     JointIndex(0),
-                    "root_joint",
+                    ROOT_JOINT_NAME,
                     jt,
                     SE3::identity(),
                     JointLimits::unlimited(),
@@ -348,4 +372,231 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
         ));
     }
     b.build().map_err(ctx)
+}
+
+/// Elements the loader ignores and removes before parsing.
+const IGNORED_ELEMENTS: [&str; 3] = ["visual", "collision", "material"];
+
+/// What [`next_tag`] found.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Tag<'a> {
+    /// `<name ...>`.
+    Start(&'a str),
+    /// `</name>`.
+    End,
+    /// `<name .../>`.
+    Empty(&'a str),
+    /// A comment, CDATA section, processing instruction or declaration.
+    Other,
+}
+
+/// The first tag at or after byte `from`: (its first byte, one past its last byte, kind).
+/// `None` at the end of the text or for an unterminated construct.
+fn next_tag(text: &str, from: usize) -> Option<(usize, usize, Tag<'_>)> {
+    let start = from + text.get(from..)?.find('<')?;
+    let rest = &text[start..];
+    let until = |pat: &str, skip: usize| rest.find(pat).map(|k| start + k + skip);
+    if rest.starts_with("<!--") {
+        return until("-->", 3).map(|e| (start, e, Tag::Other));
+    }
+    if rest.starts_with("<![CDATA[") {
+        return until("]]>", 3).map(|e| (start, e, Tag::Other));
+    }
+    if rest.starts_with("<?") {
+        return until("?>", 2).map(|e| (start, e, Tag::Other));
+    }
+    // the end of a start/end tag or declaration: the first '>' outside quotes
+    let mut quote = None;
+    let mut end = None;
+    for (k, c) in rest.char_indices().skip(1) {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, '"' | '\'') => quote = Some(c),
+            (None, '>') => {
+                end = Some(start + k + 1);
+                break;
+            }
+            _ => {}
+        }
+    }
+    let end = end?;
+    if rest.starts_with("<!") {
+        return Some((start, end, Tag::Other));
+    }
+    if rest.starts_with("</") {
+        return Some((start, end, Tag::End));
+    }
+    let name_len = rest[1..]
+        .find(|c: char| c.is_whitespace() || c == '/' || c == '>')
+        .unwrap_or(0);
+    let name = &rest[1..1 + name_len];
+    if text[..end - 1].ends_with('/') {
+        Some((start, end, Tag::Empty(name)))
+    } else {
+        Some((start, end, Tag::Start(name)))
+    }
+}
+
+/// `text` without its [`IGNORED_ELEMENTS`] (and their content). Malformed XML is
+/// returned as far as it could be scanned, for the parser to report.
+fn strip_ignored_elements(text: &str) -> Cow<'_, str> {
+    let mut out = String::new();
+    let mut copied = 0; // text[..copied] is in `out` (or dropped)
+    let mut pos = 0;
+    // (start of the ignored element, depth of open elements inside it)
+    let mut skipping: Option<(usize, usize)> = None;
+    while let Some((start, end, tag)) = next_tag(text, pos) {
+        pos = end;
+        match (skipping, tag) {
+            (None, Tag::Start(name)) if IGNORED_ELEMENTS.contains(&name) => {
+                skipping = Some((start, 1));
+            }
+            (None, Tag::Empty(name)) if IGNORED_ELEMENTS.contains(&name) => {
+                out.push_str(&text[copied..start]);
+                copied = end;
+            }
+            (Some((s, d)), Tag::Start(_)) => skipping = Some((s, d + 1)),
+            (Some((s, 1)), Tag::End) => {
+                out.push_str(&text[copied..s]);
+                copied = end;
+                skipping = None;
+            }
+            (Some((s, d)), Tag::End) => skipping = Some((s, d - 1)),
+            _ => {}
+        }
+    }
+    if copied == 0 {
+        return Cow::Borrowed(text);
+    }
+    out.push_str(&text[copied..]);
+    Cow::Owned(out)
+}
+
+/// The value of attribute `name` in a start tag.
+fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let mut rest = tag;
+    while let Some(k) = rest.find(name) {
+        let before_ok = rest[..k].ends_with(char::is_whitespace);
+        let after = rest[k + name.len()..].trim_start();
+        if before_ok && let Some(v) = after.strip_prefix('=') {
+            let v = v.trim_start();
+            let q = v.chars().next()?;
+            if q == '"' || q == '\'' {
+                return v[1..].find(q).map(|e| &v[1..1 + e]);
+            }
+        }
+        rest = &rest[k + name.len()..];
+    }
+    None
+}
+
+/// When the parser refuses a file, the first `<link>` or `<joint>` (a child of `<robot>`)
+/// that it refuses on its own: (element, its name, the parser's message).
+fn locate_parse_error(text: &str) -> Option<(&'static str, String, String)> {
+    let mut pos = 0;
+    let mut depth = 0usize;
+    let mut open: Option<(usize, &str)> = None; // start of the current robot child
+    let mut version = String::new(); // the URDF version changes how limits are read
+    while let Some((start, end, tag)) = next_tag(text, pos) {
+        pos = end;
+        let element = match tag {
+            Tag::Start(n) => {
+                if depth == 0
+                    && let Some(v) = attribute(&text[start..end], "version")
+                {
+                    version = format!(" version=\"{v}\"");
+                }
+                depth += 1;
+                if depth == 2 {
+                    open = Some((start, n));
+                }
+                None
+            }
+            Tag::End => {
+                depth = depth.saturating_sub(1);
+                if depth == 1 {
+                    open.take().map(|(s, n)| (s, n, &text[s..end]))
+                } else {
+                    None
+                }
+            }
+            Tag::Empty(n) if depth == 1 => Some((start, n, &text[start..end])),
+            _ => None,
+        };
+        let Some((s, kind, body)) = element else {
+            continue;
+        };
+        let kind = match kind {
+            "link" => "link",
+            "joint" => "joint",
+            _ => continue,
+        };
+        let probe = format!("<robot name=\"probe\"{version}>{body}</robot>");
+        if let Err(e) = urdf_rs::read_from_string(&probe) {
+            let start_tag = &text[s..next_tag(text, s).map_or(s, |t| t.1)];
+            let name = attribute(start_tag, "name").unwrap_or("?").to_string();
+            return Some((kind, name, e.to_string()));
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{attribute, locate_parse_error, strip_ignored_elements};
+
+    #[test]
+    fn parse_errors_name_the_element() {
+        let text = r#"<robot name="r"><link name="a"/>
+            <joint name='j1' type="revolute"><parent link="a"/><child link="b"/>
+              <limit lower="0" upper="1" effort="1" velocity="1"/></joint>
+            <link name="b"><inertial><mass value="1"/></inertial></link>
+            <joint name="j2" type="revolute"><parent link="b"/><child link="c"/>
+              <limit lower="0" upper="1" effort="1"/></joint></robot>"#;
+        let (kind, name, err) = locate_parse_error(text).unwrap();
+        assert_eq!((kind, name.as_str()), ("link", "b"));
+        assert!(err.contains("inertia"), "{err}");
+        let fixed = text.replace(
+            "<mass value=\"1\"/>",
+            "<mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>",
+        );
+        let (kind, name, err) = locate_parse_error(&fixed).unwrap();
+        assert_eq!((kind, name.as_str()), ("joint", "j2"));
+        assert!(err.contains("velocity"), "{err}");
+        assert_eq!(
+            attribute(r#"<joint type="x" name = 'n'>"#, "name"),
+            Some("n")
+        );
+        assert_eq!(attribute(r#"<joint myname="x">"#, "name"), None);
+    }
+
+    #[test]
+    fn strips_visuals_collisions_and_materials_only() {
+        let text = r#"<?xml version="1.0"?><!-- <visual> in a comment stays -->
+<robot name="r"><material name="m"><texture/></material>
+<link name="a"><inertial><mass value="1"/></inertial>
+  <visual name="x>y"><geometry><mesh/></geometry><material name="n"/></visual>
+  <collision/><collision><geometry><box size="1 1 1"/></geometry></collision>
+  <visualise/></link><![CDATA[<collision>]]></robot>"#;
+        let got = strip_ignored_elements(text);
+        assert_eq!(
+            got,
+            r#"<?xml version="1.0"?><!-- <visual> in a comment stays -->
+<robot name="r">
+<link name="a"><inertial><mass value="1"/></inertial>
+  
+  
+  <visualise/></link><![CDATA[<collision>]]></robot>"#
+        );
+        // nothing to strip: the text itself
+        let plain = r#"<robot name="r"><link name="a"/></robot>"#;
+        assert!(matches!(
+            strip_ignored_elements(plain),
+            std::borrow::Cow::Borrowed(_)
+        ));
+        // unterminated: scanned as far as possible, the parser reports the rest
+        let bad = r#"<robot name="r"><visual><geometry>"#;
+        assert_eq!(strip_ignored_elements(bad), bad);
+    }
 }
