@@ -188,6 +188,27 @@ fn bench_reports_medians() {
     }
 }
 
+#[test]
+fn bench_refuses_a_model_without_joints_and_keeps_one_batch() {
+    let urdf = write(
+        "no_joints.urdf",
+        r#"<robot name="box"><link name="base"><inertial><mass value="1"/>
+           <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link></robot>"#,
+    );
+    fails(
+        &run(moma().arg("bench").arg(&urdf).args(["--root", "fixed"])),
+        &["no_joints.urdf", "no degrees of freedom"],
+    );
+    // more warm-up batches than batches: still one timed batch, no panic
+    let j = ok_json(&run(moma()
+        .env("NBATCH", "1")
+        .env("WARMUP", "30")
+        .arg("bench")
+        .arg(panda())
+        .args(["--root", "fixed", "--json"])));
+    assert!(j["median_ns"]["crba"].as_f64().unwrap() > 0.0);
+}
+
 fn write(name: &str, text: &str) -> PathBuf {
     let p = tmp(name);
     std::fs::write(&p, text).unwrap();

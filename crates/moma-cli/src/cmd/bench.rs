@@ -111,6 +111,12 @@ pub fn run(args: Args) -> Result<()> {
         None => model.last_link_frame(),
     };
     let (nq, nv) = (model.nq, model.nv);
+    if nv == 0 {
+        anyhow::bail!(
+            "{}: the model has no degrees of freedom: nothing to benchmark",
+            args.urdf.display()
+        );
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(42);
     let q0 = kinematics::neutral(&model);
     let mut qs = Vec::new();
@@ -127,7 +133,8 @@ pub fn run(args: Args) -> Result<()> {
         ts.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
     }
     let nbatch = env_usize("NBATCH", 300).max(1);
-    let warmup = env_usize("WARMUP", 30);
+    // at least one timed batch
+    let warmup = env_usize("WARMUP", 30).min(nbatch - 1);
     let mut data = Data::new(&model);
     let mut jac = Matrix6xX::zeros(nv);
     let m = &model;
