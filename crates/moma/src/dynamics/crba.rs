@@ -33,7 +33,7 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &DVector<f64>) -> &'d DMat
         update_joint_placement(model, data, i, qs);
         data.composite_inertias[i] = model.inertias[i];
     }
-    if data.nv_subtree.is_some() {
+    if data.crba_plan.is_some() {
         composite_columns(model, data);
     } else {
         ancestor_walk(model, data);
@@ -96,7 +96,7 @@ fn subspace_dot(jt: &JointType, s: &Motion, f: &Force) -> f64 {
 /// i), then all of them move to the parent frame at once, component-wise.
 fn composite_columns(model: &Model, data: &mut Data) {
     let nv = model.nv;
-    let Some(nsub) = data.nv_subtree.as_deref() else {
+    let Some(plan) = data.crba_plan.as_ref() else {
         return;
     };
     let mm = data.mass_matrix.as_mut_slice();
@@ -104,7 +104,7 @@ fn composite_columns(model: &Model, data: &mut Data) {
     let (fc, _) = data.fcrb.as_chunks_mut::<6>();
     for i in (1..model.njoints).rev() {
         let iv = model.idx_v[i];
-        let ns = nsub[i];
+        let ns = plan.nv_subtree[i];
         let jt = &model.joint_types[i];
         let (head, tail) = data.composite_inertias.split_at_mut(i);
         let yi = &tail[0];
@@ -119,40 +119,38 @@ fn composite_columns(model: &Model, data: &mut Data) {
                 f.angular.z,
             ];
         }
-        let sub = &mut fc[iv..iv + ns];
+        let live = plan.live(i);
         for k in 0..model.nvs[i] {
             let col = iv + k;
-            // H[c, col] = S_colᵀ F_c for the subtree's columns c ≥ col, stored in both
-            // triangles (entries above the diagonal of this joint's own block come from
-            // its earlier columns, so every entry is written once and H is exactly
+            // H[c, col] = S_colᵀ F_c for the subtree's live columns c ≥ col, stored in
+            // both triangles (entries above the diagonal of this joint's own block come
+            // from its earlier columns, so every entry is written once and H is exactly
             // symmetric)
-            let cols = &sub[k..];
-            match jt {
-                JointType::RevoluteX => store_symmetric(mm, nv, col, cols, |f| f[3]),
-                JointType::RevoluteY => store_symmetric(mm, nv, col, cols, |f| f[4]),
-                JointType::RevoluteZ => store_symmetric(mm, nv, col, cols, |f| f[5]),
-                JointType::PrismaticX => store_symmetric(mm, nv, col, cols, |f| f[0]),
-                JointType::PrismaticY => store_symmetric(mm, nv, col, cols, |f| f[1]),
-                JointType::PrismaticZ => store_symmetric(mm, nv, col, cols, |f| f[2]),
-                // S = 1 (6 × 6): row k of H's block is component k of F
-                JointType::FreeFlyer => store_symmetric(mm, nv, col, cols, |f| f[k]),
-                JointType::Planar if k == 2 => store_symmetric(mm, nv, col, cols, |f| f[5]),
-                // S_k = [(s_x, s_y, 0); 0]: only F's x and y force components are needed
-                // (the planar-root shortcut below leaves the other components stale)
-                JointType::Planar => {
-                    let (sx, sy) = (data.s[col].linear.x, data.s[col].linear.y);
-                    store_symmetric(mm, nv, col, cols, |f| sx * f[0] + sy * f[1]);
-                }
-                _ => {
-                    let s = &data.s[col];
-                    store_symmetric(mm, nv, col, cols, |f| {
-                        s.linear.x * f[0]
-                            + s.linear.y * f[1]
-                            + s.linear.z * f[2]
-                            + s.angular.x * f[3]
-                            + s.angular.y * f[4]
-                            + s.angular.z * f[5]
-                    });
+            for &(lo, hi) in live {
+                let lo = lo.max(col);
+                let cols = &fc[lo..hi];
+                match jt {
+                    JointType::RevoluteX => store_symmetric(mm, nv, col, lo, cols, |f| f[3]),
+                    JointType::RevoluteY => store_symmetric(mm, nv, col, lo, cols, |f| f[4]),
+                    JointType::RevoluteZ => store_symmetric(mm, nv, col, lo, cols, |f| f[5]),
+                    JointType::PrismaticX => store_symmetric(mm, nv, col, lo, cols, |f| f[0]),
+                    JointType::PrismaticY => store_symmetric(mm, nv, col, lo, cols, |f| f[1]),
+                    JointType::PrismaticZ => store_symmetric(mm, nv, col, lo, cols, |f| f[2]),
+                    // S = 1 (6 × 6): row k of H's block is component k of F
+                    JointType::FreeFlyer => store_symmetric(mm, nv, col, lo, cols, |f| f[k]),
+                    JointType::Planar if k == 2 => {
+                        store_symmetric(mm, nv, col, lo, cols, |f| f[5]);
+                    }
+                    // S_k = [(s_x, s_y, 0); 0]: only F's x and y force components are
+                    // needed (the planar-root shortcut below leaves the others stale)
+                    JointType::Planar => {
+                        let (sx, sy) = (data.s[col].linear.x, data.s[col].linear.y);
+                        store_symmetric(mm, nv, col, lo, cols, |f| sx * f[0] + sy * f[1]);
+                    }
+                    _ => {
+                        let s = &data.s[col];
+                        store_symmetric(mm, nv, col, lo, cols, |f| dot6(s, f));
+                    }
                 }
             }
         }
@@ -162,35 +160,255 @@ fn composite_columns(model: &Model, data: &mut Data) {
         }
         let m = &data.parent_from_joint[i];
         head[p] += yi.transformed(m);
-        if model.parents[p].0 == 0 {
-            // p is the root joint: its rows need only S_pᵀ of the transformed columns
-            match model.joint_types[p] {
-                JointType::RevoluteX => act_force_moment::<0>(m, sub),
-                JointType::RevoluteY => act_force_moment::<1>(m, sub),
-                JointType::RevoluteZ => act_force_moment::<2>(m, sub),
-                JointType::Planar => act_force_planar(m, sub),
-                _ => act_force_columns(m, sub),
+        if plan.finish_here[i] {
+            finish_subtree(
+                model,
+                &data.parent_from_joint,
+                &data.s,
+                i,
+                &fc[iv..iv + ns],
+                mm,
+            );
+            continue;
+        }
+        for &(lo, hi) in live {
+            let sub = &mut fc[lo..hi];
+            if model.parents[p].0 == 0 {
+                // p is the root joint: its rows need only S_pᵀ of the transformed columns
+                match model.joint_types[p] {
+                    JointType::RevoluteX => act_force_moment::<0>(m, sub),
+                    JointType::RevoluteY => act_force_moment::<1>(m, sub),
+                    JointType::RevoluteZ => act_force_moment::<2>(m, sub),
+                    JointType::PrismaticX => act_force_force::<0>(m, sub),
+                    JointType::PrismaticY => act_force_force::<1>(m, sub),
+                    JointType::PrismaticZ => act_force_force::<2>(m, sub),
+                    JointType::Planar => act_force_planar(m, sub),
+                    _ => act_force_columns(m, sub),
+                }
+            } else {
+                act_force_columns(m, sub);
             }
-        } else {
-            act_force_columns(m, sub);
         }
     }
 }
 
-/// H[col + o, col] = H[col, col + o] = `value(cols[o])` (column `col` of the column-major
-/// nv × nv matrix `mm` from its diagonal down, and the matching part of row `col`).
+/// Rows of every proper ancestor j of joint `i` for the force columns `cols` of i's
+/// subtree (in frame i, starting at dof `idx_v[i]`): H[j, c] = (X_{i←j} S_j) · F_c, the
+/// ancestor's motion subspace brought down to frame i instead of every column carried up.
+fn finish_subtree(
+    model: &Model,
+    parent_from_joint: &[SE3],
+    subspace: &[Motion],
+    i: usize,
+    cols: &[[f64; 6]],
+    mm: &mut [f64],
+) {
+    let nv = model.nv;
+    let iv = model.idx_v[i];
+    // i_from_j, starting with j = parent(i)
+    let mut i_from_j = parent_from_joint[i].inverse();
+    let mut j = model.parents[i].0;
+    while j > 0 {
+        let jv = model.idx_v[j];
+        for k in 0..model.nvs[j] {
+            let s = i_from_j.act_motion(&subspace[jv + k]);
+            let row = jv + k;
+            for (o, f) in cols.iter().enumerate() {
+                let v = dot6(&s, f);
+                mm[row * nv + iv + o] = v;
+                mm[(iv + o) * nv + row] = v;
+            }
+        }
+        let p = model.parents[j].0;
+        if p > 0 {
+            i_from_j = i_from_j.compose(&parent_from_joint[j].inverse());
+        }
+        j = p;
+    }
+}
+
+/// Sᵀ F for a motion vector S and a force column F = [f; n].
+#[inline(always)]
+fn dot6(s: &Motion, f: &[f64; 6]) -> f64 {
+    s.linear.x * f[0]
+        + s.linear.y * f[1]
+        + s.linear.z * f[2]
+        + s.angular.x * f[3]
+        + s.angular.y * f[4]
+        + s.angular.z * f[5]
+}
+
+/// How `composite_columns` handles a depth-first model, fixed once per model by
+/// [`CrbaPlan::new`].
+///
+/// Carrying a column F_c from frame i to its parent costs 24 products (fewer for the
+/// last step to a revolute, prismatic or planar root); bringing an ancestor's motion
+/// subspace down to frame i instead costs about 45 + 24 per ancestor dof, after which
+/// each entry H[j, c] is a 6-product dot. For a large subtree under a long chain (a
+/// hand on an arm) the second way is several times cheaper, so such subtrees are
+/// "finished" at their root joint: their columns are never carried further.
+#[derive(Clone, Debug)]
+pub(crate) struct CrbaPlan {
+    /// Dofs in each joint's subtree, the range `idx_v[i]..idx_v[i] + n`.
+    pub(crate) nv_subtree: Vec<usize>,
+    /// Joints whose subtree columns are finished there ([`finish_subtree`]); no two are
+    /// on one root path.
+    pub(crate) finish_here: Vec<bool>,
+    /// Per joint, the column ranges of its subtree still carried up: the subtree minus
+    /// finished descendants' subtrees, `live[live_start[i]..live_start[i + 1]]`.
+    live_start: Vec<usize>,
+    live: Vec<(usize, usize)>,
+}
+
+impl CrbaPlan {
+    /// The plan for `model`, or `None` when its joints are not in depth-first order (some
+    /// subtree's dofs are not one contiguous range).
+    pub(crate) fn new(model: &Model) -> Option<Self> {
+        let n = model.njoints;
+        let nv_subtree = contiguous_subtrees(model)?;
+        let root_of = |mut i: usize| {
+            while model.parents[i].0 != 0 {
+                i = model.parents[i].0;
+            }
+            i
+        };
+        // cost per column of one step from joint a to its parent b
+        let step = |b: usize| {
+            if model.parents[b].0 != 0 {
+                return 24.0;
+            }
+            match model.joint_types[b] {
+                JointType::RevoluteX | JointType::RevoluteY | JointType::RevoluteZ => 6.0,
+                JointType::PrismaticX | JointType::PrismaticY | JointType::PrismaticZ => 3.0,
+                JointType::Planar => 11.0,
+                _ => 24.0,
+            }
+        };
+        let mut saving = vec![0.0; n];
+        for i in 1..n {
+            if model.parents[i].0 == 0 {
+                continue;
+            }
+            let m = nv_subtree[i] as f64;
+            let (mut carry, mut finish) = (0.0, 0.0);
+            let mut a = i;
+            while model.parents[a].0 != 0 {
+                let b = model.parents[a].0;
+                carry += m * step(b);
+                finish += 45.0 + model.nvs[b] as f64 * (24.0 + 6.0 * m);
+                a = b;
+            }
+            debug_assert_eq!(a, root_of(i));
+            // finish only where it is clearly cheaper
+            if finish < 0.75 * carry {
+                saving[i] = carry - finish;
+            }
+        }
+        let mut order: Vec<usize> = (1..n).filter(|&i| saving[i] > 0.0).collect();
+        order.sort_by(|&a, &b| saving[b].total_cmp(&saving[a]));
+        let mut finish_here = vec![false; n];
+        let is_ancestor = |a: usize, mut d: usize| {
+            while d != 0 {
+                if d == a {
+                    return true;
+                }
+                d = model.parents[d].0;
+            }
+            false
+        };
+        for i in order {
+            let clash = (1..n).any(|j| finish_here[j] && (is_ancestor(j, i) || is_ancestor(i, j)));
+            if !clash {
+                finish_here[i] = true;
+            }
+        }
+        let mut live_start = Vec::with_capacity(n + 1);
+        let mut live = Vec::new();
+        for i in 0..n {
+            live_start.push(live.len());
+            if i == 0 {
+                continue;
+            }
+            let (lo, hi) = (model.idx_v[i], model.idx_v[i] + nv_subtree[i]);
+            let mut holes: Vec<(usize, usize)> = (i + 1..n)
+                .filter(|&d| finish_here[d] && d != i && is_ancestor(i, d))
+                .map(|d| (model.idx_v[d], model.idx_v[d] + nv_subtree[d]))
+                .collect();
+            holes.sort_unstable();
+            let mut at = lo;
+            for (a, b) in holes {
+                if a > at {
+                    live.push((at, a));
+                }
+                at = b;
+            }
+            if at < hi {
+                live.push((at, hi));
+            }
+        }
+        live_start.push(live.len());
+        Some(Self {
+            nv_subtree,
+            finish_here,
+            live_start,
+            live,
+        })
+    }
+
+    /// The column ranges of joint i's subtree still carried up (see the type's docs).
+    #[inline]
+    pub(crate) fn live(&self, i: usize) -> &[(usize, usize)] {
+        &self.live[self.live_start[i]..self.live_start[i + 1]]
+    }
+}
+
+/// Per joint, the number of dofs of its subtree, if every subtree's dofs form the range
+/// starting at the joint's own `idx_v` (true for depth-first joint orders).
+fn contiguous_subtrees(model: &Model) -> Option<Vec<usize>> {
+    let n = model.njoints;
+    let mut count = model.nvs.clone();
+    let mut lo = model.idx_v.clone();
+    let mut hi: Vec<usize> = (0..n).map(|i| model.idx_v[i] + model.nvs[i]).collect();
+    for i in (1..n).rev() {
+        let p = model.parents[i].0;
+        if p > 0 {
+            count[p] += count[i];
+            lo[p] = lo[p].min(lo[i]);
+            hi[p] = hi[p].max(hi[i]);
+        }
+    }
+    (1..n)
+        .all(|i| lo[i] == model.idx_v[i] && hi[i] - lo[i] == count[i])
+        .then_some(count)
+}
+
+/// H[lo + o, col] = H[col, lo + o] = `value(cols[o])` (part of column `col` of the
+/// column-major nv × nv matrix `mm` at or below its diagonal, and the matching part of
+/// row `col`).
 #[inline(always)]
 fn store_symmetric(
     mm: &mut [f64],
     nv: usize,
     col: usize,
+    lo: usize,
     cols: &[[f64; 6]],
     value: impl Fn(&[f64; 6]) -> f64,
 ) {
     for (o, f) in cols.iter().enumerate() {
         let v = value(f);
-        mm[col * nv + col + o] = v;
-        mm[(col + o) * nv + col] = v;
+        mm[col * nv + lo + o] = v;
+        mm[(lo + o) * nv + col] = v;
+    }
+}
+
+/// Force component K of `m.act_force` on force columns; only that component is
+/// overwritten (what a root prismatic joint along axis K needs: 3 products per column).
+#[inline]
+fn act_force_force<const K: usize>(m: &SE3, cols: &mut [[f64; 6]]) {
+    let r = &m.rotation;
+    let (rk0, rk1, rk2) = (r[(K, 0)], r[(K, 1)], r[(K, 2)]);
+    for f in cols {
+        f[K] = rk0 * f[0] + rk1 * f[1] + rk2 * f[2];
     }
 }
 
@@ -384,6 +602,86 @@ mod tests {
         })
     }
 
+    /// A six-joint arm carrying a four-finger hand (four joints per finger), every joint
+    /// type mixed in, under `root_type` (none: fixed base).
+    fn hand_on_arm(root_type: Option<JointType>) -> Model {
+        let mut b = ModelBuilder::new("hand_on_arm");
+        let axis = Vector3::new(0.3, -1.0, 0.4).normalize();
+        let types = [
+            JointType::RevoluteZ,
+            JointType::RevoluteX,
+            JointType::RevoluteUnaligned { axis },
+            JointType::RevoluteY,
+            JointType::PrismaticUnaligned { axis },
+            JointType::PrismaticX,
+        ];
+        let mut k = 0usize;
+        let mut add = |b: &mut ModelBuilder, parent: JointIndex, jt: JointType| {
+            k += 1;
+            let x = SE3::from_xyz_rpy(
+                [0.05 * k as f64, -0.1, 0.2],
+                [0.2 * k as f64, 0.4, -0.1 * k as f64],
+            );
+            let j = b
+                .add_joint(parent, &format!("j{k:02}"), jt, x, JointLimits::unlimited())
+                .unwrap();
+            let c = Vector3::new(0.02, 0.03 * (k % 3) as f64, -0.05);
+            let ic = Matrix3::new(0.03, 0.002, 0.0, 0.002, 0.02, 0.001, 0.0, 0.001, 0.01);
+            b.append_body_inertia(
+                j,
+                &Inertia::new(0.5 + 0.05 * k as f64, c, ic),
+                &SE3::identity(),
+            )
+            .unwrap();
+            j
+        };
+        let mut parent = JointIndex(0);
+        if let Some(jt) = root_type {
+            b.set_root(match jt {
+                JointType::Planar => RootJoint::Planar,
+                JointType::FreeFlyer => RootJoint::FreeFlyer,
+                _ => RootJoint::Fixed,
+            });
+            parent = add(&mut b, parent, jt);
+        }
+        for t in 0..6 {
+            parent = add(&mut b, parent, types[t % types.len()]);
+        }
+        for finger in 0..4 {
+            let mut p = parent;
+            for t in 0..4 {
+                p = add(&mut b, p, types[(finger + t) % types.len()]);
+            }
+        }
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn finished_subtrees_match_inverse_dynamics() {
+        for root in [
+            None,
+            Some(JointType::RevoluteZ),
+            Some(JointType::PrismaticY),
+            Some(JointType::Planar),
+            Some(JointType::FreeFlyer),
+        ] {
+            let model = hand_on_arm(root);
+            let mut data = Data::new(&model);
+            let plan = data.crba_plan.as_ref().unwrap();
+            // the hand (16 dofs under a 6-joint arm) is finished at the arm's last joint
+            assert!(plan.finish_here.iter().any(|&f| f), "{root:?}");
+            let q0 = neutral(&model);
+            let dq = DVector::from_fn(model.nv, |i, _| 0.9 * ((i * 5 + 1) as f64).cos());
+            let mut q = q0.clone();
+            integrate(&model, &q0, &dq, &mut q);
+            let want = h_by_rnea(&model, &q);
+            let got = crba(&model, &mut data, &q).clone();
+            let scale = want.amax();
+            assert!((&got - &want).amax() < 1e-12 * scale, "{root:?}");
+            assert_eq!(got, got.transpose());
+        }
+    }
+
     #[test]
     fn both_backward_passes_match_inverse_dynamics() {
         for (interleaved, root) in [
@@ -394,7 +692,7 @@ mod tests {
         ] {
             let model = tree(interleaved, root);
             let mut data = Data::new(&model);
-            assert_eq!(data.nv_subtree.is_some(), !interleaved);
+            assert_eq!(data.crba_plan.is_some(), !interleaved);
             let q0 = neutral(&model);
             let dq = DVector::from_fn(model.nv, |i, _| 0.7 * ((i * 7 + 3) as f64).sin());
             let mut q = q0.clone();

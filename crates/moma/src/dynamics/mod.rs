@@ -15,7 +15,7 @@ mod aba;
 pub(crate) use aba::aba_forward_pass;
 mod centroidal;
 mod coriolis;
-mod crba;
+pub(crate) mod crba;
 mod rnea;
 
 pub use aba::aba;

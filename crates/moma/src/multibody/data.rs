@@ -84,9 +84,9 @@ pub struct Data {
     pub(crate) vworld: Vec<Motion>,
     /// Scratch: d/dt of world Jacobian columns (6 × nv).
     pub(crate) jdot: Matrix6xX<f64>,
-    /// CRBA: dofs in each joint's subtree when they form the contiguous range
-    /// `idx_v[i]..idx_v[i] + n` (depth-first joint order), else `None` for every joint.
-    pub(crate) nv_subtree: Option<Vec<usize>>,
+    /// CRBA: how the composite force columns are handled for a depth-first model, else
+    /// `None` (any other joint order takes the ancestor walk).
+    pub(crate) crba_plan: Option<crate::dynamics::crba::CrbaPlan>,
     /// Scratch: CRBA composite-force columns F = I^c S, stored by component (6 rows of nv).
     pub(crate) fcrb: Vec<f64>,
 }
@@ -137,7 +137,7 @@ impl Data {
             mat6b: vec![Matrix6::zeros(); n],
             vworld: vec![Motion::zero(); n],
             jdot: Matrix6xX::zeros(nv),
-            nv_subtree: contiguous_subtrees(model),
+            crba_plan: crate::dynamics::crba::CrbaPlan::new(model),
             fcrb: vec![0.0; 6 * nv],
         }
     }
@@ -149,24 +149,4 @@ impl Data {
             && self.tau.len() == model.nv
             && self.world_from_frame.len() == model.frames.len()
     }
-}
-
-/// Per joint, the number of dofs of its subtree, if every subtree's dofs form the range
-/// starting at the joint's own `idx_v` (true for depth-first joint orders).
-fn contiguous_subtrees(model: &Model) -> Option<Vec<usize>> {
-    let n = model.njoints;
-    let mut count = model.nvs.clone();
-    let mut lo = model.idx_v.clone();
-    let mut hi: Vec<usize> = (0..n).map(|i| model.idx_v[i] + model.nvs[i]).collect();
-    for i in (1..n).rev() {
-        let p = model.parents[i].0;
-        if p > 0 {
-            count[p] += count[i];
-            lo[p] = lo[p].min(lo[i]);
-            hi[p] = hi[p].max(hi[i]);
-        }
-    }
-    (1..n)
-        .all(|i| lo[i] == model.idx_v[i] && hi[i] - lo[i] == count[i])
-        .then_some(count)
 }
