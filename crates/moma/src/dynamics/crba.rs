@@ -12,8 +12,11 @@ use nalgebra::{DMatrix, DVector, Vector3};
 /// Runs in local joint frames (Featherstone's CRBA): joint placements
 /// (`data.parent_from_joint`), composite inertias I^c_i summed in each joint's own frame
 /// (`data.composite_inertias`), then for every dof column F = I^c_i S_i is carried up the
-/// ancestor chain with the parent transforms and H[j, i] = S_jᵀ F. The upper triangle is
-/// computed and mirrored into the lower one. `data.world_from_joint` is not updated.
+/// ancestor chain with the parent transforms and H[j, i] = S_jᵀ F; each entry is written
+/// to both triangles as it is computed. For a large subtree under a long chain (a hand on
+/// an arm) the ancestors' motion subspaces are brought down to the subtree's frame
+/// instead, chosen once per model by a cost model in `Data::new`.
+/// `data.world_from_joint` is not updated.
 /// Entries coupling joints on different branches are structurally zero: they are zeroed
 /// by `Data::new` and never written (do not write into `data.mass_matrix` yourself).
 ///
@@ -91,9 +94,10 @@ fn subspace_dot(jt: &JointType, s: &Motion, f: &Force) -> f64 {
 }
 
 /// Backward pass for depth-first models (Pinocchio's local CRBA): when joint i is reached,
-/// the force columns of its whole subtree are in frame i; Sᵢᵀ F fills rows `idx_v[i]..` of
-/// those columns (written as the contiguous lower-triangle part of H's columns of joint
-/// i), then all of them move to the parent frame at once, component-wise.
+/// the live force columns of its subtree are in frame i; Sᵢᵀ F fills row(s) i of those
+/// columns, then all of them move to the parent frame at once (only the components a
+/// root joint needs when the parent is the root), or, at a joint the [`CrbaPlan`]
+/// finishes, the ancestors' rows are filled by [`finish_subtree`] and nothing moves.
 fn composite_columns(model: &Model, data: &mut Data) {
     let nv = model.nv;
     let Some(plan) = data.crba_plan.as_ref() else {
