@@ -12,138 +12,16 @@
 //! parents, types, limits, frames, total mass, default end-effector) and, per state, RNEA,
 //! CRBA, ABA, nonlinear effects, gravity, the Coriolis matrix, CoM, centroidal momentum
 //! matrix, energies, every frame placement and a few LOCAL_WORLD_ALIGNED frame Jacobians.
-//! Pinocchio's planar-base and continuous-joint coordinates are converted as in
-//! `rigid_body_pinocchio.rs`.
+//! Pinocchio's planar-base and continuous-joint coordinates are converted, and the
+//! comparisons shared with `rigid_body_pinocchio.rs` made, by `pinocchio_common`.
+
+mod pinocchio_common;
 
 use moma::dynamics;
-use moma::io::urdf::{model_from_urdf_file, model_from_urdf_str};
-use moma::kinematics::{self, ReferenceFrame};
-use moma::multibody::{Data, FrameIndex, Model, RootJoint};
-use nalgebra::{DMatrix, DVector, Matrix6xX};
-use serde_json::Value;
-use std::path::PathBuf;
-
-const REL_TOL: f64 = 1e-9;
-
-fn data_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/pinocchio")
-}
-
-fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
-fn matf(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = v.as_array().unwrap().iter().map(vecf).collect();
-    let (r, c) = (rows.len(), rows[0].len());
-    DMatrix::from_fn(r, c, |i, j| rows[i][j])
-}
-
-#[track_caller]
-fn check(what: &str, got: &[f64], want: &[f64]) -> f64 {
-    assert_eq!(got.len(), want.len(), "{what}: length");
-    let mut worst: f64 = 0.0;
-    for (k, (g, w)) in got.iter().zip(want).enumerate() {
-        let err = (g - w).abs() / w.abs().max(1.0);
-        assert!(
-            err <= REL_TOL,
-            "{what}[{k}]: got {g}, want {w} (rel err {err:e})"
-        );
-        worst = worst.max(err);
-    }
-    worst
-}
-
-#[derive(Clone, Copy, PartialEq)]
-enum Kind {
-    Same,
-    Planar,
-    Unbounded,
-}
-
-/// Pinocchio's coordinates → ours.
-struct Conv {
-    /// (pinocchio idx_q, our idx_q, idx_v, nq (pinocchio), kind) per joint.
-    joints: Vec<(usize, usize, usize, usize, Kind)>,
-}
-
-impl Conv {
-    fn new(j: &Value) -> Self {
-        let mut joints = Vec::new();
-        let mut oq = 0;
-        for jt in j["joints"].as_array().unwrap() {
-            let ty = jt["type"].as_str().unwrap();
-            let u = |k: &str| jt[k].as_u64().unwrap() as usize;
-            let kind = if ty.contains("Planar") {
-                Kind::Planar
-            } else if ty.contains("RUB") || ty.contains("Unbounded") {
-                Kind::Unbounded
-            } else {
-                Kind::Same
-            };
-            joints.push((u("idx_q"), oq, u("idx_v"), u("nq"), kind));
-            oq += match kind {
-                Kind::Planar => 3,
-                Kind::Unbounded => 1,
-                Kind::Same => u("nq"),
-            };
-        }
-        Self { joints }
-    }
-
-    fn q(&self, qp: &[f64], nq: usize) -> DVector<f64> {
-        let mut q = DVector::zeros(nq);
-        for &(iq, oq, _, pnq, kind) in &self.joints {
-            match kind {
-                Kind::Planar => {
-                    q[oq] = qp[iq];
-                    q[oq + 1] = qp[iq + 1];
-                    q[oq + 2] = qp[iq + 3].atan2(qp[iq + 2]);
-                }
-                Kind::Unbounded => q[oq] = qp[iq + 1].atan2(qp[iq]),
-                Kind::Same => q.rows_mut(oq, pnq).copy_from_slice(&qp[iq..iq + pnq]),
-            }
-        }
-        q
-    }
-
-    fn planar(&self, q: &DVector<f64>) -> Option<(f64, usize)> {
-        self.joints
-            .iter()
-            .find(|j| j.4 == Kind::Planar)
-            .map(|&(_, oq, iv, _, _)| (q[oq + 2], iv))
-    }
-
-    /// T (nv × nv) with v_P = T v.
-    fn t(&self, q: &DVector<f64>, nv: usize) -> DMatrix<f64> {
-        let mut t = DMatrix::identity(nv, nv);
-        if let Some((th, iv)) = self.planar(q) {
-            let (s, c) = th.sin_cos();
-            t[(iv, iv)] = c;
-            t[(iv, iv + 1)] = s;
-            t[(iv + 1, iv)] = -s;
-            t[(iv + 1, iv + 1)] = c;
-        }
-        t
-    }
-
-    /// Our acceleration from Pinocchio's (a = T⁻¹ a_P + Ṫ⁻¹ v_P).
-    fn acc(&self, q: &DVector<f64>, v_p: &DVector<f64>, a_p: &DVector<f64>) -> DVector<f64> {
-        let t = self.t(q, v_p.len());
-        let mut a = t.transpose() * a_p;
-        if let Some((_, iv)) = self.planar(q) {
-            let v_w = t.transpose() * v_p;
-            let w = v_p[iv + 2];
-            a[iv] += -w * v_w[iv + 1];
-            a[iv + 1] += w * v_w[iv];
-        }
-        a
-    }
-}
+use moma::io::urdf::model_from_urdf_str;
+use moma::kinematics;
+use moma::multibody::{FrameIndex, RootJoint};
+use pinocchio_common::{Case, Kind, REL_TOL, check, matf, vecf};
 
 /// moma's joint type name for a Pinocchio shortname, up to the axis specialisation.
 fn family(pin_type: &str) -> &'static str {
@@ -160,35 +38,14 @@ fn family(pin_type: &str) -> &'static str {
     }
 }
 
-fn check_structure(model: &Model, j: &Value, conv: &Conv) {
-    let u = |k: &str| j[k].as_u64().unwrap() as usize;
-    assert_eq!(model.nv, u("nv"), "nv");
-    assert_eq!(model.njoints, u("njoints"), "njoints");
-    assert_eq!(model.nframes(), u("nframes"), "nframes");
-    check(
-        "total_mass",
-        &[model.total_mass()],
-        &[j["total_mass"].as_f64().unwrap()],
-    );
-    let (lo, hi) = (
-        vecf(&j["lower_position_limit"]),
-        vecf(&j["upper_position_limit"]),
-    );
+/// What these files have beyond the common structure: joint types, the limits of
+/// continuous joints, velocity and effort limits, every frame, the default end-effector.
+fn check_more_structure(case: &Case) {
+    let (model, j) = (&case.model, &case.j);
     let (vel, eff) = (vecf(&j["velocity_limit"]), vecf(&j["effort_limit"]));
     for (k, jt) in j["joints"].as_array().unwrap().iter().enumerate() {
         let id = k + 1;
         let name = jt["name"].as_str().unwrap();
-        assert_eq!(model.names[id], name, "joint order");
-        assert_eq!(
-            model.names[model.parents[id].0],
-            jt["parent"].as_str().unwrap(),
-            "parent of {name}"
-        );
-        assert_eq!(
-            model.idx_v[id],
-            jt["idx_v"].as_u64().unwrap() as usize,
-            "idx_v {name}"
-        );
         let ty = model.joint_types[id].name();
         assert!(
             ty.starts_with(family(jt["type"].as_str().unwrap())),
@@ -196,17 +53,8 @@ fn check_structure(model: &Model, j: &Value, conv: &Conv) {
             jt["type"]
         );
         if model.nvs[id] == 1 {
-            let (iq, oq, iv) = (conv.joints[k].0, model.idx_q[id], model.idx_v[id]);
-            if conv.joints[k].4 == Kind::Same {
-                check(
-                    &format!("position limits of {name}"),
-                    &[
-                        model.lower_position_limit[oq],
-                        model.upper_position_limit[oq],
-                    ],
-                    &[lo[iq], hi[iq]],
-                );
-            } else {
+            let (oq, iv) = (model.idx_q[id], model.idx_v[id]);
+            if case.conv.joints[k].4 != Kind::Same {
                 // continuous: no position limits (Pinocchio's [cos, sin] are unbounded too)
                 assert!(model.lower_position_limit[oq] == f64::NEG_INFINITY);
                 assert!(model.upper_position_limit[oq] == f64::INFINITY);
@@ -249,81 +97,25 @@ fn check_structure(model: &Model, j: &Value, conv: &Conv) {
 }
 
 fn run(file: &str, root: RootJoint) {
-    let text = std::fs::read_to_string(data_dir().join(file)).unwrap();
-    let j: Value = serde_json::from_str(&text).unwrap();
-    let urdf = data_dir().join(j["urdf"].as_str().unwrap());
-    let mut model = model_from_urdf_file(&urdf, root).unwrap();
-    model.gravity = nalgebra::Vector3::from_vec(vecf(&j["gravity"]));
-    let conv = Conv::new(&j);
-    check_structure(&model, &j, &conv);
-    let (nq, nv) = (model.nq, model.nv);
-    let mut data = Data::new(&model);
-    let mut worst: f64 = 0.0;
-    for (si, s) in j["states"].as_array().unwrap().iter().enumerate() {
-        let tag = |f: &str| format!("{file} state {si} {f}");
-        let q = conv.q(&vecf(&s["q"]), nq);
-        let v_p = DVector::from_vec(vecf(&s["v"]));
-        let a_p = DVector::from_vec(vecf(&s["a"]));
-        let tau_p = DVector::from_vec(vecf(&s["tau_in"]));
-        let t = conv.t(&q, nv);
-        let v = t.transpose() * &v_p;
-        let a = conv.acc(&q, &v_p, &a_p);
-        let tau_in = t.transpose() * &tau_p;
-        let mut cmp = |what: &str, got: &[f64], want: &[f64]| {
-            worst = worst.max(check(&tag(what), got, want));
-        };
-
-        let want = t.transpose() * DVector::from_vec(vecf(&s["rnea_tau"]));
-        let got = dynamics::rnea(&model, &mut data, &q, &v, &a);
-        cmp("rnea_tau", got.as_slice(), want.as_slice());
-
-        let m_p = matf(&s["crba_M"]);
-        let want = t.transpose() * &m_p * &t;
-        let got = dynamics::crba(&model, &mut data, &q);
-        cmp("crba_M", got.as_slice(), want.as_slice());
-
-        let want = conv.acc(&q, &v_p, &DVector::from_vec(vecf(&s["aba_ddq"])));
-        let got = dynamics::aba(&model, &mut data, &q, &v, &tau_in);
-        cmp("aba_ddq", got.as_slice(), want.as_slice());
-
-        // nle: our a = 0 is Pinocchio's a_P = −T Ṫ⁻¹ v_P
-        let zero = DVector::zeros(nv);
-        let a0_p = &t * (&zero - conv.acc(&q, &v_p, &zero));
-        let want = t.transpose() * (&m_p * a0_p + DVector::from_vec(vecf(&s["nle"])));
-        let got = dynamics::nonlinear_effects(&model, &mut data, &q, &v);
-        cmp("nle", got.as_slice(), want.as_slice());
-
-        let want = t.transpose() * DVector::from_vec(vecf(&s["gravity_torque"]));
-        let got = dynamics::gravity_torque(&model, &mut data, &q);
-        cmp("gravity_torque", got.as_slice(), want.as_slice());
-
+    let case = Case::load(file, root);
+    case.check_structure();
+    check_more_structure(&case);
+    let model = &case.model;
+    case.compare_states(|data, st, tally| {
+        let (s, q, v) = (st.s, &st.q, &st.v);
         if !s["coriolis_C"].is_null() {
             let want = matf(&s["coriolis_C"]);
-            let got = dynamics::coriolis_matrix(&model, &mut data, &q, &v);
-            cmp("coriolis_C", got.as_slice(), want.as_slice());
+            let got = dynamics::coriolis_matrix(model, data, q, v);
+            tally.cmp("coriolis_C", got.as_slice(), want.as_slice());
         }
 
-        let got = dynamics::center_of_mass(&model, &mut data, &q);
-        cmp("com", got.as_slice(), &vecf(&s["com"]));
+        let ke = dynamics::kinetic_energy(model, data, q, v);
+        let pe = dynamics::potential_energy(model, data, q);
+        for (what, got) in [("kinetic_energy", ke), ("potential_energy", pe)] {
+            tally.cmp(what, &[got], &[s[what].as_f64().unwrap()]);
+        }
 
-        let want = matf(&s["centroidal_map_Ag"]) * &t;
-        let got = dynamics::centroidal_momentum_matrix(&model, &mut data, &q);
-        cmp("centroidal_map_Ag", got.as_slice(), want.as_slice());
-
-        let ke = dynamics::kinetic_energy(&model, &mut data, &q, &v);
-        cmp(
-            "kinetic_energy",
-            &[ke],
-            &[s["kinetic_energy"].as_f64().unwrap()],
-        );
-        let pe = dynamics::potential_energy(&model, &mut data, &q);
-        cmp(
-            "potential_energy",
-            &[pe],
-            &[s["potential_energy"].as_f64().unwrap()],
-        );
-
-        kinematics::frames_forward_kinematics(&model, &mut data, &q);
+        kinematics::frames_forward_kinematics(model, data, q);
         for (k, row) in s["frame_placements"].as_array().unwrap().iter().enumerate() {
             let m = data.world_from_frame[k];
             let r = m.rotation;
@@ -331,7 +123,7 @@ fn run(file: &str, root: RootJoint) {
             for i in 0..3 {
                 got.extend((0..3).map(|c| r[(i, c)]));
             }
-            cmp(
+            tally.cmp(
                 &format!("placement of frame {k} ({})", model.frames[k].name),
                 &got,
                 &vecf(row),
@@ -341,24 +133,9 @@ fn run(file: &str, root: RootJoint) {
         for jf in s["jacobians"].as_array().unwrap() {
             let k = jf["frame"].as_u64().unwrap() as usize;
             assert_eq!(model.frames[k].name, jf["name"].as_str().unwrap());
-            let mut jac = Matrix6xX::zeros(nv);
-            kinematics::frame_jacobian(
-                &model,
-                &mut data,
-                &q,
-                FrameIndex(k),
-                ReferenceFrame::LocalWorldAligned,
-                &mut jac,
-            );
-            let want = matf(&jf["local_world_aligned"]) * &t;
-            cmp(
-                &format!("jacobian of frame {k} ({})", model.frames[k].name),
-                jac.as_slice(),
-                want.as_slice(),
-            );
+            case.compare_frame_jacobian(data, st, FrameIndex(k), &jf["local_world_aligned"], tally);
         }
-    }
-    eprintln!("{file}: worst relative error {worst:e}");
+    });
 }
 
 /// ANYmal C on a free-flyer: a quadruped whose hip and knee axes are unaligned.

@@ -31,6 +31,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pinocchio as pin
 
+from pin_reference import joint_table, random_state
+
 ERD_LICENSE = """example-robot-data is distributed under the BSD 3-Clause License:
 
 Copyright (C) 2018-2020 LAAS-CNRS, University of Edinburgh, INRIA
@@ -130,34 +132,14 @@ def generate(name, urdf, root, nstates):
     data = model.createData()
     nv = model.nv
     rng = np.random.default_rng(20261122)
-    joints = []
-    for j in range(1, model.njoints):
-        jm = model.joints[j]
-        joints.append({"name": model.names[j], "type": jm.shortname(), "idx_q": jm.idx_q,
-                       "idx_v": jm.idx_v, "nq": jm.nq, "nv": jm.nv,
-                       "parent": model.names[model.parents[j]]})
+    joints = joint_table(model)
     frames = [{"name": f.name, "type": FRAME_TYPES.get(f.type, "universe") if i else "universe",
                "parent_joint": model.names[f.parentJoint]}
               for i, f in enumerate(model.frames)]
     jac_frames = frame_pick(model)
     states = []
     for _ in range(nstates):
-        q = pin.integrate(model, pin.neutral(model), rng.uniform(-np.pi, np.pi, nv))
-        v = rng.uniform(-1, 1, nv)
-        a = rng.uniform(-1, 1, nv)
-        tau_in = rng.uniform(-1, 1, nv)
-        s = {"q": q.tolist(), "v": v.tolist(), "a": a.tolist(), "tau_in": tau_in.tolist()}
-        s["rnea_tau"] = pin.rnea(model, data, q, v, a).tolist()
-        M = np.asarray(pin.crba(model, data, q)).reshape(nv, nv)
-        s["crba_M"] = (np.triu(M) + np.triu(M, 1).T).tolist()
-        s["aba_ddq"] = pin.aba(model, data, q, v, tau_in).tolist()
-        s["nle"] = pin.nonLinearEffects(model, data, q, v).tolist()
-        s["gravity_torque"] = pin.computeGeneralizedGravity(model, data, q).tolist()
-        if root != "planar":
-            s["coriolis_C"] = np.asarray(
-                pin.computeCoriolisMatrix(model, data, q, v)).reshape(nv, nv).tolist()
-        s["com"] = pin.centerOfMass(model, data, q).tolist()
-        s["centroidal_map_Ag"] = np.asarray(pin.ccrba(model, data, q, v)).reshape(6, nv).tolist()
+        s, q, v = random_state(model, data, rng, coriolis=root != "planar")
         s["kinetic_energy"] = pin.computeKineticEnergy(model, data, q, v)
         s["potential_energy"] = pin.computePotentialEnergy(model, data, q)
         pin.framesForwardKinematics(model, data, q)

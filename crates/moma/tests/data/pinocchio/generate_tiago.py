@@ -8,6 +8,8 @@ import sys
 import numpy as np
 import pinocchio as pin
 
+from pin_reference import joint_table, random_state
+
 robots = sys.argv[1]
 urdf = robots + "/tiago_description/robots/tiago.urdf"
 for root, name in [("planar", "tiago_planar"), ("freeflyer", "tiago_freeflyer")]:
@@ -15,29 +17,10 @@ for root, name in [("planar", "tiago_planar"), ("freeflyer", "tiago_freeflyer")]
     model = pin.buildModelFromUrdf(urdf, rj)
     data = model.createData()
     rng = np.random.default_rng(20240601)
-    joints = []
-    for j in range(1, model.njoints):
-        jm = model.joints[j]
-        joints.append({"name": model.names[j], "type": jm.shortname(), "idx_q": jm.idx_q,
-                       "idx_v": jm.idx_v, "nq": jm.nq, "nv": jm.nv,
-                       "parent": model.names[model.parents[j]]})
+    joints = joint_table(model)
     states = []
     for _ in range(3):
-        dq = rng.uniform(-np.pi, np.pi, model.nv)
-        q = pin.integrate(model, pin.neutral(model), dq)
-        v = rng.uniform(-1, 1, model.nv)
-        a = rng.uniform(-1, 1, model.nv)
-        tau_in = rng.uniform(-1, 1, model.nv)
-        s = {"q": q.tolist(), "v": v.tolist(), "a": a.tolist(), "tau_in": tau_in.tolist()}
-        s["rnea_tau"] = pin.rnea(model, data, q, v, a).tolist()
-        M = pin.crba(model, data, q)
-        M = np.triu(M) + np.triu(M, 1).T
-        s["crba_M"] = M.tolist()
-        s["aba_ddq"] = pin.aba(model, data, q, v, tau_in).tolist()
-        s["nle"] = pin.nonLinearEffects(model, data, q, v).tolist()
-        s["gravity_torque"] = pin.computeGeneralizedGravity(model, data, q).tolist()
-        s["com"] = pin.centerOfMass(model, data, q).tolist()
-        s["centroidal_map_Ag"] = pin.ccrba(model, data, q, v).tolist()
+        s, q, _ = random_state(model, data, rng)
         for key, fname in [("last_frame", "hand_grasping_frame"), ("ee_frame", "arm_tool_link")]:
             fid = model.getFrameId(fname)
             pin.framesForwardKinematics(model, data, q)
