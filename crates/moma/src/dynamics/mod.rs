@@ -15,7 +15,7 @@ mod aba;
 pub(crate) use aba::aba_forward_pass;
 mod centroidal;
 mod coriolis;
-pub(crate) mod crba;
+mod crba;
 mod rnea;
 
 pub use aba::aba;

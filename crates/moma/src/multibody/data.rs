@@ -86,7 +86,7 @@ pub struct Data {
     pub(crate) jdot: Matrix6xX<f64>,
     /// CRBA: how the composite force columns are handled for a depth-first model, else
     /// `None` (any other joint order takes the ancestor walk).
-    pub(crate) crba_plan: Option<crate::dynamics::crba::CrbaPlan>,
+    pub(crate) crba_plan: Option<super::crba_plan::CrbaPlan>,
     /// Scratch: CRBA composite-force columns F = I^c S, stored by component (6 rows of nv).
     pub(crate) fcrb: Vec<f64>,
 }
@@ -137,7 +137,7 @@ impl Data {
             mat6b: vec![Matrix6::zeros(); n],
             vworld: vec![Motion::zero(); n],
             jdot: Matrix6xX::zeros(nv),
-            crba_plan: crate::dynamics::crba::CrbaPlan::new(model),
+            crba_plan: super::crba_plan::CrbaPlan::new(model),
             fcrb: vec![0.0; 6 * nv],
         }
     }

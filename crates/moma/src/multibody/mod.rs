@@ -42,6 +42,7 @@
 //! ```
 
 mod builder;
+mod crba_plan;
 mod data;
 mod joint;
 mod model;
