@@ -17,9 +17,8 @@ use moma::dynamics::aba;
 use moma::io::urdf::model_from_urdf_file;
 use moma::mobile::DiffDrive;
 use moma::mobile::chapter_robots::m5_model;
-use moma::mobile::wheeled::{
-    WheeledBase, WheeledData, WheeledModel, lagrange_multipliers, reduced_forward_dynamics,
-};
+use moma::mobile::reduced_forward_dynamics;
+use moma::mobile::wheeled::{WheeledBase, WheeledData, WheeledModel, lagrange_multipliers};
 use moma::multibody::{Data, RootJoint};
 use moma::sim::Rk4;
 use moma::sim::chapter_models::m5;

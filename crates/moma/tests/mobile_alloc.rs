@@ -7,9 +7,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use moma::io::urdf::model_from_urdf_file;
 use moma::mobile::DiffDrive;
-use moma::mobile::wheeled::{
-    WheeledBase, WheeledData, WheeledModel, lagrange_multipliers, reduced_forward_dynamics,
-};
+use moma::mobile::reduced_forward_dynamics;
+use moma::mobile::wheeled::{WheeledBase, WheeledData, WheeledModel, lagrange_multipliers};
 use moma::multibody::RootJoint;
 use moma::sim::OdeSystem;
 use moma::sim::scenario::InputProfile;

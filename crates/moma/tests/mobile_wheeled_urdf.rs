@@ -6,10 +6,11 @@
 use moma::dynamics::{center_of_mass, crba, gravity_torque, nonlinear_effects};
 use moma::io::urdf::model_from_urdf_file;
 use moma::mobile::reduced::{JointSpaceTerms, lagrange_multipliers_dae};
+use moma::mobile::reduced_forward_dynamics;
 use moma::mobile::wheeled::{
     WheeledBase, WheeledData, WheeledModel, actuation_matrix, admissible_velocity_basis,
     admissible_velocity_basis_dot, center_of_mass_velocity, constraint_matrix,
-    lagrange_multipliers, platform_point_velocity, reduced_forward_dynamics,
+    lagrange_multipliers, platform_point_velocity,
 };
 use moma::mobile::{Caster, DiffDrive};
 use moma::multibody::RootJoint;

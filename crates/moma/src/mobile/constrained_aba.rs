@@ -1,5 +1,6 @@
-//! Reduced forward dynamics by the articulated-body algorithm with the no-side-slip
-//! constraint applied at the root.
+//! Reduced forward dynamics of a wheeled model ([`reduced_forward_dynamics`]): the
+//! articulated-body algorithm with the no-side-slip constraint applied at the root, or the
+//! joint-space route when wheel joints are tracked.
 //!
 //! When the wheels are massless traction actuators (no tracked wheel joints), the only
 //! constraint `C = [C_b, 0]` acts on the planar root's three velocities. The ABA's
@@ -23,15 +24,45 @@ use nalgebra::{DVector, Matrix3, Matrix3x2, Vector2, Vector3};
 
 use crate::error::{Error, Result};
 use crate::mobile::wheeled::{
-    WheeledData, WheeledModel, admissible_velocity_basis, generalized_force,
+    WheeledData, WheeledModel, admissible_velocity_basis, check_state, generalized_force,
+    reduced_forward_dynamics_crba,
 };
 use crate::spatial::{Force, Motion};
+
+/// Reduced forward dynamics v̇_r (nr) of `Mr v̇ + Cr v + Gr = Qr` for wheel and joint
+/// torques `u`, stored in `wd.reduced.vdot` (q̈ in `wd.reduced.qddot`, q̇ in `wd.qdot`).
+///
+/// Without tracked wheel joints the constraint acts on the root only and the
+/// root-constrained articulated-body algorithm is used (one ABA and a 2×2 solve; see
+/// the module docs); with tracked wheels,
+/// [`reduced_forward_dynamics_crba`]. Only v̇, q̈ and q̇ are guaranteed afterwards; call
+/// [`reduced_dynamics`](crate::mobile::wheeled::reduced_dynamics) for Mr, Cr, Gr, Qr. Reports [`Error::Singular`] if Mr is not
+/// positive definite. Does not allocate.
+///
+/// # Panics
+/// On wrong vector lengths.
+#[doc(alias = "forward_dynamics")]
+pub fn reduced_forward_dynamics<'d>(
+    wm: &WheeledModel,
+    wd: &'d mut WheeledData,
+    q: &DVector<f64>,
+    v_r: &DVector<f64>,
+    u: &[f64],
+) -> Result<&'d DVector<f64>> {
+    check_state(wm, q, v_r, u);
+    if wm.wheel_dofs().is_none() {
+        root_constrained_aba(wm, wd, q, v_r, u)?;
+        Ok(&wd.reduced.vdot)
+    } else {
+        reduced_forward_dynamics_crba(wm, wd, q, v_r, u)
+    }
+}
 
 /// Reduced forward dynamics for a wheeled model without tracked wheel joints, by the
 /// root-constrained ABA (see the module docs). Fills `wd.reduced.vdot`,
 /// `wd.reduced.qddot`, `wd.qdot`, `wd.force`. Reports [`Error::Singular`] if a joint's
 /// articulated inertia or the platform's 2×2 reduced inertia is not positive.
-pub(crate) fn root_constrained_aba(
+fn root_constrained_aba(
     wm: &WheeledModel,
     wd: &mut WheeledData,
     q: &DVector<f64>,

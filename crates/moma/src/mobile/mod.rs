@@ -9,12 +9,12 @@ pub mod reduced;
 pub mod wheeled;
 pub mod whole_body;
 
+pub use constrained_aba::reduced_forward_dynamics;
 pub use diff_drive::DiffDrive;
 pub use nullspace::NullSpaceBasis;
 pub use reduced::{JointSpaceTerms, ReducedDynamics, lagrange_multipliers_dae};
 pub use wheeled::{
     Caster, WheeledBase, WheeledData, WheeledModel, actuation_matrix, admissible_velocity_basis,
     admissible_velocity_basis_dot, constraint_matrix, lagrange_multipliers,
-    reduced_forward_dynamics,
 };
 pub use whole_body::whole_body_jacobian;

@@ -412,39 +412,10 @@ fn project(wm: &WheeledModel, basis: &DMatrix<f64>, x: &DVector<f64>, out: &mut 
     }
 }
 
-fn check_state(wm: &WheeledModel, q: &DVector<f64>, v_r: &DVector<f64>, u: &[f64]) {
+pub(crate) fn check_state(wm: &WheeledModel, q: &DVector<f64>, v_r: &DVector<f64>, u: &[f64]) {
     assert_eq!(q.len(), wm.model.nq, "q length");
     assert_eq!(v_r.len(), wm.nr(), "v_r length");
     assert_eq!(u.len(), wm.nu(), "u length");
-}
-
-/// Reduced forward dynamics v̇_r (nr) of `Mr v̇ + Cr v + Gr = Qr` for wheel and joint
-/// torques `u`, stored in `wd.reduced.vdot` (q̈ in `wd.reduced.qddot`, q̇ in `wd.qdot`).
-///
-/// Without tracked wheel joints the constraint acts on the root only and the
-/// root-constrained articulated-body algorithm is used (one ABA and a 2×2 solve; see
-/// [`crate::mobile::constrained_aba`]); with tracked wheels,
-/// [`reduced_forward_dynamics_crba`]. Only v̇, q̈ and q̇ are guaranteed afterwards; call
-/// [`reduced_dynamics`] for Mr, Cr, Gr, Qr. Reports [`Error::Singular`] if Mr is not
-/// positive definite. Does not allocate.
-///
-/// # Panics
-/// On wrong vector lengths.
-#[doc(alias = "forward_dynamics")]
-pub fn reduced_forward_dynamics<'d>(
-    wm: &WheeledModel,
-    wd: &'d mut WheeledData,
-    q: &DVector<f64>,
-    v_r: &DVector<f64>,
-    u: &[f64],
-) -> Result<&'d DVector<f64>> {
-    check_state(wm, q, v_r, u);
-    if wm.wheel_dofs.is_none() {
-        crate::mobile::constrained_aba::root_constrained_aba(wm, wd, q, v_r, u)?;
-        Ok(&wd.reduced.vdot)
-    } else {
-        reduced_forward_dynamics_crba(wm, wd, q, v_r, u)
-    }
 }
 
 /// Reduced forward dynamics by the joint-space route, for any wheel set-up: v̇_r in
@@ -578,7 +549,7 @@ pub fn reduced_dynamics(
 }
 
 /// Lagrange multipliers λ (k) for the state and input of the last
-/// [`reduced_forward_dynamics`] call: `λ = (C Cᵀ)⁻¹ C (Q − RNEA(q, q̇, q̈))`, and the
+/// [`reduced_forward_dynamics`](crate::mobile::reduced_forward_dynamics) call: `λ = (C Cᵀ)⁻¹ C (Q − RNEA(q, q̇, q̈))`, and the
 /// constraint generalised force −Cᵀλ in `wd.reduced.constraint_force`. One extra RNEA.
 #[doc(alias = "lambda")]
 pub fn lagrange_multipliers<'d>(

@@ -63,13 +63,7 @@ impl ReducedSystem for WheeledSystem {
         vdot: &mut [f64],
     ) -> Result<()> {
         self.load(q, v);
-        crate::mobile::wheeled::reduced_forward_dynamics(
-            &self.robot,
-            &mut self.data,
-            &self.q,
-            &self.v,
-            u,
-        )?;
+        crate::mobile::reduced_forward_dynamics(&self.robot, &mut self.data, &self.q, &self.v, u)?;
         qdot.copy_from_slice(self.data.qdot.as_slice());
         vdot.copy_from_slice(self.data.reduced.vdot.as_slice());
         Ok(())
@@ -122,13 +116,7 @@ impl ReducedSystem for WheeledSystem {
     }
     fn multipliers(&mut self, q: &[f64], v: &[f64], u: &[f64], out: &mut [f64]) -> Result<()> {
         self.load(q, v);
-        crate::mobile::wheeled::reduced_forward_dynamics(
-            &self.robot,
-            &mut self.data,
-            &self.q,
-            &self.v,
-            u,
-        )?;
+        crate::mobile::reduced_forward_dynamics(&self.robot, &mut self.data, &self.q, &self.v, u)?;
         let lam =
             crate::mobile::wheeled::lagrange_multipliers(&self.robot, &mut self.data, &self.q)?;
         out.copy_from_slice(lam.as_slice());
