@@ -14,40 +14,45 @@
 
 use super::astar::{SQRT2, SearchGrid, fixed_point_length, fixed_point_steps};
 use crate::{Error, Result};
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
+/// "Infinite" cost-to-goal.
+const INF: u64 = u64::MAX;
+
+/// Heap slot of a cell that is not in the queue.
+const NOT_QUEUED: u32 = u32::MAX;
+
+/// Queue key `[k1, k2]`, compared lexicographically (exact integers).
+type Key = (u64, u64);
+
+/// Key of a cell that is not in the queue (an inconsistent cell always has a finite key).
+const NONE_KEY: Key = (INF, INF);
+
+/// Children per node of the queue's heap: four 24-byte entries side by side, so one
+/// sift-down step compares entries that share one or two cache lines, and the heap is half
+/// as deep as a binary one.
+const ARITY: usize = 4;
+
+/// An entry of the indexed priority queue.
 #[derive(Clone, Copy, Debug)]
 struct QEntry {
     k1: u64,
     k2: u64,
     idx: u32,
 }
-impl PartialEq for QEntry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for QEntry {}
-impl Ord for QEntry {
-    fn cmp(&self, o: &Self) -> Ordering {
-        // Max-heap → reverse: the smallest key is the greatest entry.
-        o.k1.cmp(&self.k1).then(o.k2.cmp(&self.k2))
-    }
-}
-impl PartialOrd for QEntry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
+
+impl QEntry {
+    #[inline(always)]
+    fn key(&self) -> Key {
+        (self.k1, self.k2)
     }
 }
 
-#[inline]
-fn key_less(a: (u64, u64), b: (u64, u64)) -> bool {
-    a < b
+/// g and rhs of a cell, side by side (16 bytes: four cells per cache line).
+#[derive(Clone, Copy, Debug)]
+struct CellState {
+    g: u64,
+    rhs: u64,
 }
-
-/// "Infinite" cost-to-goal.
-const INF: u64 = u64::MAX;
 
 /// An incremental planner from a moving robot (`start`) to a fixed goal.
 #[derive(Debug)]
@@ -55,10 +60,19 @@ const INF: u64 = u64::MAX;
 #[doc(alias = "d_star_lite")]
 pub struct DStarLite {
     grid: SearchGrid,
-    /// Per-cell g, rhs and queue key, side by side so one cache line serves all three.
+    /// Per-cell g and rhs.
     cells: Vec<CellState>,
-    heap: BinaryHeap<QEntry>,
+    /// Per-cell slot in `heap` ([`NOT_QUEUED`] if absent); 4 bytes a cell, so the heap's
+    /// bookkeeping touches few cache lines.
+    slots: Vec<u32>,
+    /// The open list U: an indexed 4-ary min-heap on the keys, holding every locally
+    /// inconsistent cell exactly once (keys are updated and entries removed in place, so
+    /// there are no stale duplicates).
+    heap: Vec<QEntry>,
     km: u64,
+    /// `true` while every queued key is exact for the current robot cell and `km` (the
+    /// robot has not moved since the queue was last re-keyed).
+    keys_exact: bool,
     /// Fixed-point step costs (see the module documentation).
     one: u64,
     diag: u64,
@@ -68,33 +82,27 @@ pub struct DStarLite {
     last: usize,
     goal: usize,
     expanded: usize,
-    offsets: [(isize, bool); 8],
-}
-
-/// Queue key of a cell that is not in the queue (an inconsistent cell always has a finite
-/// key).
-const NONE_KEY: (u64, u64) = (INF, INF);
-
-/// g, rhs and the key under which the cell is queued ([`NONE_KEY`] = not queued).
-#[derive(Clone, Copy, Debug)]
-struct CellState {
-    g: u64,
-    rhs: u64,
-    key: (u64, u64),
+    /// Padded row length and its reciprocal (row of an index without an integer division).
+    pw: usize,
+    inv_pw: f64,
+    /// Padded-index offset and (dx, dy) of the eight moves: E, W, N, S, then the diagonals
+    /// NE, NW, SE, SW (diagonal k passes between cardinals k & 1 and 2 + (k − 4) / 2).
+    offsets: [(isize, i64, i64); 8],
 }
 
 impl Clone for DStarLite {
     /// A copy that keeps the queue's spare capacity, so re-planning on the copy does not
-    /// start by reallocating (and copying) a queue of the map's size.
+    /// start by reallocating (and copying) the queue.
     fn clone(&self) -> Self {
-        let mut queue = Vec::with_capacity(self.heap.capacity());
-        queue.extend_from_slice(self.heap.as_slice());
+        let mut heap = Vec::with_capacity(self.heap.capacity());
+        heap.extend_from_slice(&self.heap);
         Self {
             grid: self.grid.clone(),
             cells: self.cells.clone(),
-            // Already a valid heap: rebuilding it moves nothing.
-            heap: BinaryHeap::from(queue),
+            slots: self.slots.clone(),
+            heap,
             km: self.km,
+            keys_exact: self.keys_exact,
             one: self.one,
             diag: self.diag,
             start: self.start,
@@ -102,6 +110,8 @@ impl Clone for DStarLite {
             last: self.last,
             goal: self.goal,
             expanded: self.expanded,
+            pw: self.pw,
+            inv_pw: self.inv_pw,
             offsets: self.offsets,
         }
     }
@@ -111,8 +121,10 @@ impl Clone for DStarLite {
     fn clone_from(&mut self, source: &Self) {
         self.grid.clone_from(&source.grid);
         self.cells.clone_from(&source.cells);
+        self.slots.clone_from(&source.slots);
         self.heap.clone_from(&source.heap);
         self.km = source.km;
+        self.keys_exact = source.keys_exact;
         self.one = source.one;
         self.diag = source.diag;
         self.start = source.start;
@@ -120,6 +132,8 @@ impl Clone for DStarLite {
         self.last = source.last;
         self.goal = source.goal;
         self.expanded = source.expanded;
+        self.pw = source.pw;
+        self.inv_pw = source.inv_pw;
         self.offsets = source.offsets;
     }
 }
@@ -141,16 +155,11 @@ impl DStarLite {
         let (one, diag) = fixed_point_steps(n);
         let mut s = Self {
             grid: grid.clone(),
-            cells: vec![
-                CellState {
-                    g: INF,
-                    rhs: INF,
-                    key: NONE_KEY
-                };
-                n
-            ],
-            heap: BinaryHeap::new(),
+            cells: vec![CellState { g: INF, rhs: INF }; n],
+            slots: vec![NOT_QUEUED; n],
+            heap: Vec::new(),
             km: 0,
+            keys_exact: true,
             one,
             diag,
             start: grid.pidx(start.0, start.1),
@@ -158,79 +167,210 @@ impl DStarLite {
             last: grid.pidx(start.0, start.1),
             goal: grid.pidx(goal.0, goal.1),
             expanded: 0,
+            pw: grid.pw,
+            inv_pw: 1.0 / grid.pw as f64,
             offsets: [
-                (1, false),
-                (-1, false),
-                (pw, false),
-                (-pw, false),
-                (pw + 1, true),
-                (pw - 1, true),
-                (-pw + 1, true),
-                (-pw - 1, true),
+                (1, 1, 0),
+                (-1, -1, 0),
+                (pw, 0, 1),
+                (-pw, 0, -1),
+                (pw + 1, 1, 1),
+                (pw - 1, -1, 1),
+                (-pw + 1, 1, -1),
+                (-pw - 1, -1, -1),
             ],
         };
-        s.cells[s.goal].rhs = 0;
-        let k = s.key(s.goal);
-        s.push(s.goal, k);
+        let goal = s.goal;
+        s.cells[goal].rhs = 0;
+        let (gx, gy) = s.xy(goal);
+        let k = s.key_at(goal, gx, gy);
+        s.heap_set(goal, k);
         Ok(s)
     }
 
+    /// Padded coordinates of index `i` (the row from a float estimate, corrected: no
+    /// integer division).
     #[inline]
     fn xy(&self, i: usize) -> (i64, i64) {
-        let y = i / self.grid.pw;
-        ((i - y * self.grid.pw) as i64, y as i64)
+        let mut y = (i as f64 * self.inv_pw) as usize;
+        if y * self.pw > i {
+            y -= 1;
+        } else if (y + 1) * self.pw <= i {
+            y += 1;
+        }
+        ((i - y * self.pw) as i64, y as i64)
     }
 
+    /// Octile heuristic in fixed point between padded coordinates.
     #[inline]
-    fn h(&self, a: usize, b: usize) -> u64 {
-        let (ax, ay) = self.xy(a);
-        let (bx, by) = self.xy(b);
-        let (dx, dy) = ((ax - bx).unsigned_abs(), (ay - by).unsigned_abs());
+    fn h_xy(&self, a: (i64, i64), b: (i64, i64)) -> u64 {
+        let (dx, dy) = ((a.0 - b.0).unsigned_abs(), (a.1 - b.1).unsigned_abs());
         let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
         hi * self.one + lo * (self.diag - self.one)
     }
 
+    /// The key `[min(g, rhs) + h(start, s) + k_m, min(g, rhs)]` of cell `s` at padded
+    /// coordinates `(x, y)`.
     #[inline]
-    fn key(&self, s: usize) -> (u64, u64) {
-        let m = self.cells[s].g.min(self.cells[s].rhs);
+    fn key_at(&self, s: usize, x: i64, y: i64) -> Key {
+        let c = &self.cells[s];
+        let m = c.g.min(c.rhs);
         if m == INF {
             return NONE_KEY;
         }
-        let (x, y) = self.xy(s);
-        let (dx, dy) = (
-            (x - self.start_xy.0).unsigned_abs(),
-            (y - self.start_xy.1).unsigned_abs(),
-        );
-        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
-        (m + hi * self.one + lo * (self.diag - self.one) + self.km, m)
+        (m + self.h_xy((x, y), self.start_xy) + self.km, m)
     }
 
-    fn push(&mut self, s: usize, k: (u64, u64)) {
-        self.cells[s].key = k;
-        self.heap.push(QEntry {
+    // ---- Indexed 4-ary min-heap --------------------------------------------------------
+
+    #[inline(always)]
+    fn heap_place(&mut self, slot: usize, e: QEntry) {
+        self.slots[e.idx as usize] = slot as u32;
+        self.heap[slot] = e;
+    }
+
+    #[inline]
+    fn sift_up(&mut self, mut slot: usize, e: QEntry) {
+        let k = e.key();
+        while slot > 0 {
+            let parent = (slot - 1) / ARITY;
+            let p = self.heap[parent];
+            if p.key() <= k {
+                break;
+            }
+            self.heap_place(slot, p);
+            slot = parent;
+        }
+        self.heap_place(slot, e);
+    }
+
+    #[inline]
+    fn sift_down(&mut self, slot: usize, e: QEntry) {
+        self.sift_down_impl::<true>(slot, e);
+    }
+
+    /// Sift-down; `TRACK` = keep `slots` up to date (off while re-heapifying, which
+    /// rewrites every slot afterwards).
+    #[inline]
+    fn sift_down_impl<const TRACK: bool>(&mut self, mut slot: usize, e: QEntry) {
+        let k = e.key();
+        let n = self.heap.len();
+        loop {
+            let first = slot * ARITY + 1;
+            if first >= n {
+                break;
+            }
+            let last = (first + ARITY).min(n);
+            let mut best = first;
+            let mut bk = self.heap[first].key();
+            for c in first + 1..last {
+                let ck = self.heap[c].key();
+                if ck < bk {
+                    best = c;
+                    bk = ck;
+                }
+            }
+            if bk >= k {
+                break;
+            }
+            let b = self.heap[best];
+            if TRACK {
+                self.heap_place(slot, b);
+            } else {
+                self.heap[slot] = b;
+            }
+            slot = best;
+        }
+        if TRACK {
+            self.heap_place(slot, e);
+        } else {
+            self.heap[slot] = e;
+        }
+    }
+
+    /// Recomputes every queued key for the current robot cell and `km` (k2 = min(g, rhs)
+    /// is stored in the entry, so no cell state is read), then rebuilds the heap in
+    /// O(n) (Floyd) and rewrites the slots.
+    fn rekey_all(&mut self) {
+        let (start_xy, km) = (self.start_xy, self.km);
+        for i in 0..self.heap.len() {
+            let e = self.heap[i];
+            let h = self.h_xy(self.xy(e.idx as usize), start_xy);
+            self.heap[i].k1 = e.k2 + h + km;
+        }
+        let n = self.heap.len();
+        if n > 1 {
+            for i in (0..=(n - 2) / ARITY).rev() {
+                let e = self.heap[i];
+                self.sift_down_impl::<false>(i, e);
+            }
+        }
+        for (i, e) in self.heap.iter().enumerate() {
+            self.slots[e.idx as usize] = i as u32;
+        }
+        self.keys_exact = true;
+    }
+
+    /// Inserts `u` with key `k`, or moves it to `k` if it is queued already.
+    #[inline]
+    fn heap_set(&mut self, u: usize, k: Key) {
+        let e = QEntry {
             k1: k.0,
             k2: k.1,
-            idx: s as u32,
-        });
+            idx: u as u32,
+        };
+        let slot = self.slots[u];
+        if slot == NOT_QUEUED {
+            self.heap.push(e);
+            let last = self.heap.len() - 1;
+            self.sift_up(last, e);
+        } else {
+            let slot = slot as usize;
+            let old = self.heap[slot].key();
+            if k < old {
+                self.sift_up(slot, e);
+            } else if k > old {
+                self.sift_down(slot, e);
+            }
+        }
     }
+
+    /// Takes `u` out of the queue (if queued).
+    #[inline]
+    fn heap_remove(&mut self, u: usize) {
+        let slot = self.slots[u];
+        if slot == NOT_QUEUED {
+            return;
+        }
+        self.slots[u] = NOT_QUEUED;
+        let slot = slot as usize;
+        let last = self.heap.pop().expect("a queued cell is in the heap");
+        if slot < self.heap.len() {
+            // The last entry fills the hole, moving up or down from there.
+            let removed = self.heap[slot].key();
+            if last.key() < removed {
+                self.sift_up(slot, last);
+            } else {
+                self.sift_down(slot, last);
+            }
+        }
+    }
+
+    // ---- D* Lite -------------------------------------------------------------------------
 
     /// Cost of the step from `u` by offset `k`, infinite if illegal.
     #[inline]
-    fn step_cost(&self, u: usize, off: isize, diag: bool) -> u64 {
+    fn step_cost(&self, u: usize, k: usize) -> u64 {
         let pass = &self.grid.pass;
-        let v = (u as isize + off) as usize;
+        let v = (u as isize + self.offsets[k].0) as usize;
         if !pass[u] || !pass[v] {
             return INF;
         }
-        if diag {
-            let pw = self.grid.pw as isize;
-            let dx = if off == pw + 1 || off == -pw + 1 {
-                1
-            } else {
-                -1
-            };
-            let dy_off = off - dx;
-            if !pass[(u as isize + dx) as usize] || !pass[(u as isize + dy_off) as usize] {
+        if k >= 4 {
+            let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
+            if !pass[(u as isize + self.offsets[a].0) as usize]
+                || !pass[(u as isize + self.offsets[b].0) as usize]
+            {
                 return INF;
             }
             self.diag
@@ -286,87 +426,107 @@ impl DStarLite {
         self.cells[u].rhs = best;
     }
 
-    /// Puts `u` in the queue with its current key if it is inconsistent (unless it is
-    /// already there with that key), takes it out otherwise.
+    /// Queues `u` (at padded `(x, y)`) with its current key if it is inconsistent, takes
+    /// it out of the queue otherwise.
     #[inline]
-    fn update_queue(&mut self, u: usize) {
+    fn update_queue_at(&mut self, u: usize, x: i64, y: i64) {
         if self.cells[u].g != self.cells[u].rhs {
-            let k = self.key(u);
-            if self.cells[u].key != k {
-                self.push(u, k);
-            }
+            let k = self.key_at(u, x, y);
+            self.heap_set(u, k);
         } else {
-            self.cells[u].key = NONE_KEY;
+            self.heap_remove(u);
         }
     }
 
     fn update_vertex(&mut self, u: usize) {
         self.recompute_rhs(u);
-        self.update_queue(u);
-    }
-
-    fn top(&mut self) -> Option<((u64, u64), usize)> {
-        while let Some(e) = self.heap.peek() {
-            let i = e.idx as usize;
-            if self.cells[i].key == (e.k1, e.k2) {
-                return Some(((e.k1, e.k2), i));
-            }
-            self.heap.pop();
-        }
-        None
+        let (x, y) = self.xy(u);
+        self.update_queue_at(u, x, y);
     }
 
     /// (Re-)plans: brings the cells that matter for the robot's position up to date.
     /// Returns the cost from the robot to the goal, `None` if unreachable.
     pub fn compute(&mut self) -> Option<f64> {
         self.expanded = 0;
-        while let Some((k_old, u)) = self.top() {
+        // Stale keys re-keyed one by one so far in this call.
+        let mut stale = 0usize;
+        while let Some(&top) = self.heap.first() {
+            let k_old = top.key();
+            let u = top.idx as usize;
             let st = self.start;
-            let ms = self.cells[st].g.min(self.cells[st].rhs);
+            let (gs, rs) = (self.cells[st].g, self.cells[st].rhs);
+            let ms = gs.min(rs);
             let ks = if ms == INF {
                 NONE_KEY
             } else {
                 (ms + self.km, ms)
             };
-            if !(key_less(k_old, ks) || self.cells[st].rhs != self.cells[st].g) {
+            if k_old >= ks && rs == gs {
                 break;
             }
-            self.heap.pop();
-            self.cells[u].key = NONE_KEY;
+            let (x, y) = self.xy(u);
+            let k_new = self.key_at(u, x, y);
+            if k_old < k_new {
+                // A stale lower-bound key (the robot moved since it was queued). Re-keying
+                // one entry is a sift-down with cache misses on the way; once they add up
+                // to a fair fraction of the queue, re-key the whole queue in one linear
+                // pass instead (its cost is then at most a small multiple of what was
+                // already spent, and no stale key is left until the robot moves again).
+                stale += 1;
+                if !self.keys_exact && stale >= 16 && stale * 16 >= self.heap.len() {
+                    self.rekey_all();
+                    continue;
+                }
+                let e = QEntry {
+                    k1: k_new.0,
+                    k2: k_new.1,
+                    idx: u as u32,
+                };
+                self.sift_down(0, e);
+                continue;
+            }
             self.expanded += 1;
-            let k_new = self.key(u);
-            if key_less(k_old, k_new) {
-                self.push(u, k_new);
-            } else if self.cells[u].g > self.cells[u].rhs {
+            let CellState { g, rhs } = self.cells[u];
+            if g > rhs {
                 // Overconsistent: g(u) drops to rhs(u); a neighbour's rhs can only fall
                 // to the cost through u (Koenig & Likhachev's optimized D* Lite).
-                let gu = self.cells[u].rhs;
-                self.cells[u].g = gu;
+                self.heap_remove(u);
+                self.cells[u].g = rhs;
                 let c = self.step_costs(u);
                 for (k, &ck) in c.iter().enumerate() {
                     if ck != INF {
-                        let v = (u as isize + self.offsets[k].0) as usize;
-                        if v != self.goal && ck + gu < self.cells[v].rhs {
-                            self.cells[v].rhs = ck + gu;
-                            self.update_queue(v);
+                        let (off, dx, dy) = self.offsets[k];
+                        let v = (u as isize + off) as usize;
+                        let through = ck + rhs;
+                        let cv = self.cells[v];
+                        if v != self.goal && through < cv.rhs {
+                            self.cells[v].rhs = through;
+                            if cv.g != through {
+                                let kv = self.key_at(v, x + dx, y + dy);
+                                self.heap_set(v, kv);
+                            } else {
+                                self.heap_remove(v);
+                            }
                         }
                     }
                 }
             } else {
                 // Underconsistent: g(u) becomes infinite; only the neighbours whose rhs
-                // came through u (and u itself) need their rhs recomputed.
-                let g_old = self.cells[u].g;
+                // came through u need their rhs recomputed (rhs(u) itself does not depend
+                // on g(u)).
                 self.cells[u].g = INF;
                 let c = self.step_costs(u);
                 for (k, &ck) in c.iter().enumerate() {
                     if ck != INF {
-                        let v = (u as isize + self.offsets[k].0) as usize;
-                        if v != self.goal && self.cells[v].rhs == ck.saturating_add(g_old) {
-                            self.update_vertex(v);
+                        let (off, dx, dy) = self.offsets[k];
+                        let v = (u as isize + off) as usize;
+                        if v != self.goal && self.cells[v].rhs == ck.saturating_add(g) {
+                            self.recompute_rhs(v);
+                            self.update_queue_at(v, x + dx, y + dy);
                         }
                     }
                 }
-                self.update_vertex(u);
+                self.update_queue_at(u, x, y);
             }
         }
         let c = self.cells[self.start].g.min(self.cells[self.start].rhs);
@@ -393,7 +553,8 @@ impl DStarLite {
         )
     }
 
-    /// Number of cells expanded by the last [`DStarLite::compute`].
+    /// Number of cells expanded by the last [`DStarLite::compute`] (made consistent or
+    /// raised; re-keying a stale queue entry is not counted).
     pub fn expanded(&self) -> usize {
         self.expanded
     }
@@ -413,7 +574,11 @@ impl DStarLite {
     pub fn move_start(&mut self, cell: (usize, usize)) -> Result<()> {
         self.grid.check_cell("robot", cell)?;
         let s = self.grid.pidx(cell.0, cell.1);
-        self.km += self.h(self.last, s);
+        let dk = self.h_xy(self.xy(self.last), self.xy(s));
+        self.km += dk;
+        if dk != 0 {
+            self.keys_exact = false;
+        }
         self.last = s;
         self.start = s;
         self.start_xy = self.xy(s);
@@ -449,9 +614,9 @@ impl DStarLite {
                 if self.inside(u) {
                     if !self.grid.pass[u] {
                         // A blocked cell has no steps: its cost-to-goal is infinite.
+                        self.heap_remove(u);
                         self.cells[u].rhs = INF;
                         self.cells[u].g = INF;
-                        self.cells[u].key = NONE_KEY;
                     } else {
                         self.update_vertex(u);
                     }
@@ -472,8 +637,8 @@ impl DStarLite {
         let limit = self.grid.pass.len();
         while u != self.goal {
             let mut best = (INF, usize::MAX);
-            for &(off, diag) in &self.offsets {
-                let c = self.step_cost(u, off, diag);
+            for (k, &(off, _, _)) in self.offsets.iter().enumerate() {
+                let c = self.step_cost(u, k);
                 if c != INF {
                     let v = (u as isize + off) as usize;
                     let val = c.saturating_add(self.cells[v].g);
