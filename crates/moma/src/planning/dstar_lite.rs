@@ -45,6 +45,13 @@ impl QEntry {
     fn key(&self) -> Key {
         (self.k1, self.k2)
     }
+
+    /// The key as one 128-bit integer (k1 in the high half): the same order as
+    /// [`QEntry::key`] in a single wide compare.
+    #[inline(always)]
+    fn rank(&self) -> u128 {
+        ((self.k1 as u128) << 64) | self.k2 as u128
+    }
 }
 
 /// g and rhs of a cell, side by side (16 bytes: four cells per cache line).
@@ -82,6 +89,12 @@ pub struct DStarLite {
     last: usize,
     goal: usize,
     expanded: usize,
+    /// Scratch of the connectivity check (see [`DStarLite::compute`]): a visit stamp per
+    /// cell, the stamp of the current check, and the flood's stack. Not part of the
+    /// planner's state: copies start with their own.
+    visit: Vec<u32>,
+    visit_stamp: u32,
+    flood: Vec<u32>,
     /// Padded row length and its reciprocal (row of an index without an integer division).
     pw: usize,
     inv_pw: f64,
@@ -110,6 +123,9 @@ impl Clone for DStarLite {
             last: self.last,
             goal: self.goal,
             expanded: self.expanded,
+            visit: Vec::new(),
+            visit_stamp: 0,
+            flood: Vec::new(),
             pw: self.pw,
             inv_pw: self.inv_pw,
             offsets: self.offsets,
@@ -167,6 +183,9 @@ impl DStarLite {
             last: grid.pidx(start.0, start.1),
             goal: grid.pidx(goal.0, goal.1),
             expanded: 0,
+            visit: Vec::new(),
+            visit_stamp: 0,
+            flood: Vec::new(),
             pw: grid.pw,
             inv_pw: 1.0 / grid.pw as f64,
             offsets: [
@@ -231,11 +250,11 @@ impl DStarLite {
 
     #[inline]
     fn sift_up(&mut self, mut slot: usize, e: QEntry) {
-        let k = e.key();
+        let k = e.rank();
         while slot > 0 {
             let parent = (slot - 1) / ARITY;
             let p = self.heap[parent];
-            if p.key() <= k {
+            if p.rank() <= k {
                 break;
             }
             self.heap_place(slot, p);
@@ -253,7 +272,7 @@ impl DStarLite {
     /// rewrites every slot afterwards).
     #[inline]
     fn sift_down_impl<const TRACK: bool>(&mut self, mut slot: usize, e: QEntry) {
-        let k = e.key();
+        let k = e.rank();
         let n = self.heap.len();
         loop {
             let first = slot * ARITY + 1;
@@ -262,9 +281,9 @@ impl DStarLite {
             }
             let last = (first + ARITY).min(n);
             let mut best = first;
-            let mut bk = self.heap[first].key();
+            let mut bk = self.heap[first].rank();
             for c in first + 1..last {
-                let ck = self.heap[c].key();
+                let ck = self.heap[c].rank();
                 if ck < bk {
                     best = c;
                     bk = ck;
@@ -450,6 +469,10 @@ impl DStarLite {
         self.expanded = 0;
         // Stale keys re-keyed one by one so far in this call.
         let mut stale = 0usize;
+        // Connectivity check schedule (see below): expansion count of the next check and
+        // the flood budget in cells.
+        let mut next_check = 0usize;
+        let mut budget = 16_384usize;
         while let Some(&top) = self.heap.first() {
             let k_old = top.key();
             let u = top.idx as usize;
@@ -463,6 +486,26 @@ impl DStarLite {
             };
             if k_old >= ks && rs == gs {
                 break;
+            }
+            if ms == INF && rs == gs && self.expanded >= next_check {
+                // The robot's cell is consistent at an infinite cost: either a lowering
+                // wave has yet to reach it or the goal is cut off, in which case D* Lite
+                // would expand every queued cell before giving up. A flood over the free
+                // cells from the robot (4-connectivity = connectivity under the move
+                // model) tells the two apart. A flood step costs a few ns, an expansion
+                // some 100 ns: the checks come after 0, 512, 1024, 2048, … expansions with
+                // budgets of 16 Ki, 64 Ki, 256 Ki, … cells (a flood never visits more than
+                // the robot's component), so a cut-off goal is found after a few checks
+                // and a check that gives up costs about as much as a few hundred
+                // expansions.
+                match self.goal_connected(budget) {
+                    Some(false) => return None,
+                    Some(true) => next_check = usize::MAX,
+                    None => {
+                        next_check = 2 * self.expanded.max(256);
+                        budget *= 4;
+                    }
+                }
             }
             let (x, y) = self.xy(u);
             let k_new = self.key_at(u, x, y);
@@ -534,6 +577,45 @@ impl DStarLite {
             return None;
         }
         fixed_point_length(c, self.one, self.diag).or_else(|| self.path_length())
+    }
+
+    /// Whether the goal is reachable from the robot's cell on the current grid: a flood
+    /// over free cells that gives up (`None`) after `budget` cells.
+    fn goal_connected(&mut self, budget: usize) -> Option<bool> {
+        let n = self.grid.pass.len();
+        if self.visit.len() != n || self.visit_stamp == u32::MAX {
+            self.visit = vec![0; n];
+            self.visit_stamp = 0;
+        }
+        self.visit_stamp += 1;
+        let stamp = self.visit_stamp;
+        let pw = self.pw as isize;
+        let mut stack = std::mem::take(&mut self.flood);
+        stack.clear();
+        stack.push(self.start as u32);
+        self.visit[self.start] = stamp;
+        let mut seen = 1usize;
+        let mut result = Some(false);
+        'flood: while let Some(u) = stack.pop() {
+            for off in [1, -1, pw, -pw] {
+                let v = (u as isize + off) as usize;
+                if self.grid.pass[v] && self.visit[v] != stamp {
+                    if v == self.goal {
+                        result = Some(true);
+                        break 'flood;
+                    }
+                    self.visit[v] = stamp;
+                    seen += 1;
+                    if seen > budget {
+                        result = None;
+                        break 'flood;
+                    }
+                    stack.push(v as u32);
+                }
+            }
+        }
+        self.flood = stack;
+        result
     }
 
     /// n_straight + n_diag · √2 along [`DStarLite::path`] (huge maps only; see
