@@ -11,6 +11,15 @@
 //! straight step 2^k, a diagonal ≈ √2 · 2^k), so cells on the equal-cost plateaus of open
 //! maps tie exactly instead of being ordered by floating-point rounding noise, and the
 //! reported cost n_straight + n_diag · √2 is recovered exactly from the integer g.
+//!
+//! Queue: an indexed 4-ary min-heap with each inconsistent cell exactly once (keys are
+//! raised, lowered and removed in place). After the robot moves, queued keys are lower
+//! bounds (the `k_m` scheme); a popped stale key is re-keyed in place, and once stale keys
+//! add up to 1/16 of the queue the whole queue is re-keyed in one linear pass (the k2 =
+//! min(g, rhs) part is stored in the entry, so no cell state is read) and rebuilt.
+//! Unreachable goal: when the robot's cell becomes consistent at infinite cost, a
+//! budgeted flood fill from the robot decides whether the goal is cut off, instead of
+//! letting the search expand every remaining queued cell.
 
 use super::astar::{SQRT2, SearchGrid, fixed_point_length, fixed_point_steps};
 use crate::{Error, Result};
@@ -377,24 +386,15 @@ impl DStarLite {
 
     // ---- D* Lite -------------------------------------------------------------------------
 
-    /// Cost of the step from `u` by offset `k`, infinite if illegal.
+    /// Cost of the step from `u` by move `k`, infinite if illegal.
     #[inline]
     fn step_cost(&self, u: usize, k: usize) -> u64 {
-        let pass = &self.grid.pass;
-        let v = (u as isize + self.offsets[k].0) as usize;
-        if !pass[u] || !pass[v] {
-            return INF;
-        }
-        if k >= 4 {
-            let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
-            if !pass[(u as isize + self.offsets[a].0) as usize]
-                || !pass[(u as isize + self.offsets[b].0) as usize]
-            {
-                return INF;
-            }
-            self.diag
-        } else {
+        if self.grid.moves[u] & (1 << k) == 0 {
+            INF
+        } else if k < 4 {
             self.one
+        } else {
+            self.diag
         }
     }
 
@@ -403,26 +403,15 @@ impl DStarLite {
         x >= 1 && y >= 1 && (x as usize) <= self.grid.width && (y as usize) <= self.grid.height
     }
 
-    /// The costs of the eight steps from `u` (offsets as `self.offsets`), `INF` if illegal.
+    /// The costs of the eight steps from `u` (offsets as `self.offsets`), `INF` if illegal
+    /// (from the grid's legal-move mask: one byte read).
     #[inline]
     fn step_costs(&self, u: usize) -> [u64; 8] {
-        let pass = &self.grid.pass;
+        let m = self.grid.moves[u];
         let mut c = [INF; 8];
-        if !pass[u] {
-            return c;
-        }
-        let mut open = [false; 4];
-        for k in 0..4 {
-            open[k] = pass[(u as isize + self.offsets[k].0) as usize];
-            if open[k] {
-                c[k] = self.one;
-            }
-        }
-        // Diagonals 4..8 pass between cardinals (0 | 1) and (2 | 3), as in the A* search.
-        for k in 4..8 {
-            let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
-            if open[a] && open[b] && pass[(u as isize + self.offsets[k].0) as usize] {
-                c[k] = self.diag;
+        for (k, ck) in c.iter_mut().enumerate() {
+            if m & (1 << k) != 0 {
+                *ck = if k < 4 { self.one } else { self.diag };
             }
         }
         c
@@ -596,8 +585,23 @@ impl DStarLite {
         self.visit[self.start] = stamp;
         let mut seen = 1usize;
         let mut result = Some(false);
+        let goal_xy = self.xy(self.goal);
         'flood: while let Some(u) = stack.pop() {
-            for off in [1, -1, pw, -pw] {
+            // Depth first, the neighbour nearest the goal on top of the stack: in open
+            // space the flood runs straight to the goal, in a maze it still covers the
+            // robot's component.
+            let (ux, uy) = self.xy(u as usize);
+            let (ddx, ddy) = (goal_xy.0 - ux, goal_xy.1 - uy);
+            let (xt, yt) = (
+                if ddx >= 0 { 1 } else { -1 },
+                if ddy >= 0 { pw } else { -pw },
+            );
+            let order = if ddx.abs() >= ddy.abs() {
+                [-xt, -yt, yt, xt]
+            } else {
+                [-xt, -yt, xt, yt]
+            };
+            for off in order {
                 let v = (u as isize + off) as usize;
                 if self.grid.pass[v] && self.visit[v] != stamp {
                     if v == self.goal {
