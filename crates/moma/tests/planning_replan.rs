@@ -216,10 +216,11 @@ fn dstar_lite_matches_astar_on_random_maps_and_changes() {
         check_against_astar(&d, c, goal, &format!("map {map}, first plan"));
         for step in 0..40 {
             // Move one cell along the path when there is one.
-            if let Some(p) = d.path() {
-                if p.len() >= 2 && rng.random_bool(0.8) {
-                    d.move_start(p[1]).unwrap();
-                }
+            if let Some(p) = d.path()
+                && p.len() >= 2
+                && rng.random_bool(0.8)
+            {
+                d.move_start(p[1]).unwrap();
             }
             let (rx, ry) = d.start();
             let n_changes = rng.random_range(0..4);
