@@ -246,3 +246,24 @@ fn dstar_lite_matches_astar_on_random_maps_and_changes() {
     }
     assert!(replans > 10_000, "only {replans} re-plans checked");
 }
+
+#[test]
+fn dstar_lite_robot_cell_blocked_then_freed() {
+    // A sensed obstacle on the robot's own cell leaves it without a legal step: no path,
+    // reported without expanding the map; freeing the cell restores A*'s cost.
+    let sg = SearchGrid::from_obstacles(&[false; 40 * 30], 40, 30).unwrap();
+    let (start, goal) = ((2, 2), (37, 27));
+    let mut d = DStarLite::new(&sg, start, goal).unwrap();
+    let first = d.compute().unwrap();
+    d.set_blocked(start, true).unwrap();
+    assert_eq!(d.compute(), None);
+    assert!(d.expanded() < 50, "{} expansions", d.expanded());
+    assert!(d.path().is_none());
+    d.set_blocked(start, false).unwrap();
+    assert_eq!(d.compute(), Some(first));
+    let a = planning::astar(d.grid(), start, goal)
+        .unwrap()
+        .unwrap()
+        .cost;
+    assert_eq!(first, a);
+}

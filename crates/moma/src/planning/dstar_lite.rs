@@ -571,6 +571,10 @@ impl DStarLite {
     /// Whether the goal is reachable from the robot's cell on the current grid: a flood
     /// over free cells that gives up (`None`) after `budget` cells.
     fn goal_connected(&mut self, budget: usize) -> Option<bool> {
+        if !self.grid.pass[self.start] {
+            // A blocked robot cell has no legal step (its cost-to-goal is infinite).
+            return Some(false);
+        }
         let n = self.grid.pass.len();
         if self.visit.len() != n || self.visit_stamp == u32::MAX {
             self.visit = vec![0; n];
