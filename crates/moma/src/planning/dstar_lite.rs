@@ -288,16 +288,29 @@ impl DStarLite {
             if first >= n {
                 break;
             }
-            let last = (first + ARITY).min(n);
-            let mut best = first;
-            let mut bk = self.heap[first].rank();
-            for c in first + 1..last {
-                let ck = self.heap[c].rank();
-                if ck < bk {
-                    best = c;
-                    bk = ck;
+            let (best, bk) = if first + ARITY <= n {
+                // A full node: a branch-free tournament over the four children.
+                let q = &self.heap[first..first + ARITY];
+                let (r0, r1, r2, r3) = (q[0].rank(), q[1].rank(), q[2].rank(), q[3].rank());
+                let (a, ra) = if r1 < r0 { (1, r1) } else { (0, r0) };
+                let (b, rb) = if r3 < r2 { (3, r3) } else { (2, r2) };
+                if rb < ra {
+                    (first + b, rb)
+                } else {
+                    (first + a, ra)
                 }
-            }
+            } else {
+                let mut best = first;
+                let mut bk = self.heap[first].rank();
+                for c in first + 1..n {
+                    let ck = self.heap[c].rank();
+                    if ck < bk {
+                        best = c;
+                        bk = ck;
+                    }
+                }
+                (best, bk)
+            };
             if bk >= k {
                 break;
             }
