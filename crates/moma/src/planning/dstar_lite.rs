@@ -40,6 +40,8 @@ const NONE_KEY: Key = (INF, INF);
 /// sift-down step compares entries that share one or two cache lines, and the heap is half
 /// as deep as a binary one.
 const ARITY: usize = 4;
+// The sift-down's tournament is written for four children.
+const _: () = assert!(ARITY == 4);
 
 /// An entry of the indexed priority queue.
 #[derive(Clone, Copy, Debug)]
