@@ -5,9 +5,9 @@
 //!   printed table of per-query medians (queries interleaved moma / pathfinding), then
 //!   criterion groups over a fixed problem subset;
 //! * the exact Euclidean distance transform on nav2's `100by100_20` map (4 M cells);
-//! * D* Lite re-planning after a change near the robot vs A* from scratch (same change on
-//!   every map: the robot drives 10 cells along the longest problem's path, then the cell
-//!   3 cells ahead on its path becomes blocked).
+//! * D* Lite re-planning after a local change near the robot vs A* from scratch on the
+//!   changed map, over a set of changes per map (see [`replan_positions`]): a printed table
+//!   of per-change medians, then criterion groups over the whole set.
 //!
 //! Run: `cargo bench -p moma --bench planning` (add `RUSTFLAGS="-C target-cpu=native"`
 //! for a native build).
@@ -248,68 +248,303 @@ fn bench_edt(cr: &mut Criterion) {
     grp.finish();
 }
 
-fn bench_dstar(cr: &mut Criterion) {
-    let mut grp = cr.benchmark_group("replan");
-    grp.sample_size(20);
-    for name in ["den520d", "Berlin_0_256", "random512-10-0"] {
-        let g = load_map(&data(&format!("movingai/{name}.map")), None)
-            .unwrap()
-            .grid;
-        let sg = SearchGrid::from_grid(&g, true);
-        let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
-        // The longest problem of the file.
-        let p = scen
-            .problems
-            .iter()
-            .max_by(|a, b| a.optimal.total_cmp(&b.optimal))
-            .unwrap();
+/// Kind of a local change near the robot.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum ChangeKind {
+    /// A cell of the robot's current path, k cells ahead, becomes blocked.
+    BlockOnPath(usize),
+    /// The free cell beside the path (not on it) nearest to the robot becomes blocked.
+    BlockBeside,
+    /// The blocked cell nearest to the robot within 2 cells of its next 6 path cells
+    /// becomes free.
+    Free,
+}
+
+/// One robot position: the planner snapshot (after driving and re-planning) and the
+/// changes tried from it, each on a fresh copy of the snapshot.
+struct ReplanPosition {
+    planner: DStarLite,
+    goal: (usize, usize),
+    changes: Vec<(ChangeKind, (usize, usize), bool)>,
+    /// The changed grid for each change (A* from scratch runs on it).
+    changed: Vec<SearchGrid>,
+    /// Whether the goal stays reachable after each change.
+    reachable: Vec<bool>,
+}
+
+/// The change set of a map: `problems` problems of the scenario file spread over the
+/// lengths ≥ 64 (always including the longest); from each, two robot positions (after
+/// driving 10 cells and after driving a third of the path); at each position five local
+/// changes: block the path cell 2, 5 and 9 ahead, block the free cell beside the path
+/// nearest to the robot, free the nearest blocked cell next to the path ahead.
+fn replan_positions(name: &str, problems: usize) -> Vec<ReplanPosition> {
+    let g = load_map(&data(&format!("movingai/{name}.map")), None)
+        .unwrap()
+        .grid;
+    let sg = SearchGrid::from_grid(&g, true);
+    let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
+    let mut long: Vec<_> = scen.problems.iter().filter(|p| p.optimal >= 64.0).collect();
+    long.sort_by(|a, b| a.optimal.total_cmp(&b.optimal));
+    let m = long.len();
+    let picked: Vec<_> = (0..problems)
+        .map(|i| long[(i * (m - 1)) / (problems - 1).max(1)])
+        .collect();
+    let mut out = Vec::new();
+    for p in picked {
         let mut d = DStarLite::new(&sg, p.start, p.goal).unwrap();
         d.compute().unwrap();
-        // The robot drives 10 cells, then senses a blocked cell 3 cells ahead on its path.
-        for _ in 0..10 {
-            let next = d.path().unwrap()[1];
-            d.move_start(next).unwrap();
-            d.compute().unwrap();
+        let n_path = d.path().unwrap().len();
+        let mut driven = 0;
+        for target in [10, n_path / 3] {
+            while driven < target {
+                let next = d.path().unwrap()[1];
+                d.move_start(next).unwrap();
+                d.compute().unwrap();
+                driven += 1;
+            }
+            let path = d.path().unwrap();
+            if path.len() < 12 {
+                continue;
+            }
+            let grid = d.grid();
+            let mut changes = Vec::new();
+            for k in [2, 5, 9] {
+                changes.push((ChangeKind::BlockOnPath(k), path[k], true));
+            }
+            let near = |c: (usize, usize)| {
+                let (rx, ry) = (path[0].0 as i64, path[0].1 as i64);
+                (c.0 as i64 - rx).abs().max((c.1 as i64 - ry).abs())
+            };
+            // Cells around the next path cells, nearest to the robot first.
+            let mut around = Vec::new();
+            for &c in &path[1..=6] {
+                for dy in -2i64..=2 {
+                    for dx in -2i64..=2 {
+                        let (x, y) = (c.0 as i64 + dx, c.1 as i64 + dy);
+                        if x >= 0
+                            && y >= 0
+                            && (x as usize) < grid.width()
+                            && (y as usize) < grid.height()
+                        {
+                            around.push(((x as usize, y as usize), dx.abs().max(dy.abs())));
+                        }
+                    }
+                }
+            }
+            around.sort_by_key(|&(c, r)| (near(c), r, c));
+            if let Some(&(c, _)) = around.iter().find(|&&(c, r)| {
+                r == 1 && grid.is_free(c.0 as i64, c.1 as i64) && !path.contains(&c) && c != p.goal
+            }) {
+                changes.push((ChangeKind::BlockBeside, c, true));
+            }
+            if let Some(&(c, _)) = around
+                .iter()
+                .find(|&&(c, _)| !grid.is_free(c.0 as i64, c.1 as i64))
+            {
+                changes.push((ChangeKind::Free, c, false));
+            }
+            let changed: Vec<SearchGrid> = changes
+                .iter()
+                .map(|&(_, c, blocked)| {
+                    let mut g2 = grid.clone();
+                    g2.set_free(c.0, c.1, !blocked);
+                    g2
+                })
+                .collect();
+            let reachable = changed
+                .iter()
+                .map(|g2| planning::astar(g2, path[0], p.goal).unwrap().is_some())
+                .collect();
+            out.push(ReplanPosition {
+                planner: d.clone(),
+                goal: p.goal,
+                changes,
+                changed,
+                reachable,
+            });
         }
-        let ahead = d.path().unwrap()[3];
-        let mut changed = d.grid().clone();
-        changed.set_free(ahead.0, ahead.1, false);
-        let robot = d.start();
-        // Same answer both ways.
-        let mut check = d.clone();
-        check.set_blocked(ahead, true).unwrap();
-        let c1 = check.compute().unwrap();
-        let c2 = planning::astar(&changed, robot, p.goal)
-            .unwrap()
-            .unwrap()
-            .cost;
-        assert!((c1 - c2).abs() < 1e-9, "{name}: D* Lite {c1} vs A* {c2}");
-        // Each iteration restores the planner's state before the change (an untimed copy
-        // into reused buffers, so no allocation or page faults), then times the re-plan:
-        // `set_blocked` + `compute`.
-        let mut dd = d.clone();
-        grp.bench_function(format!("{name}/dstar_lite_replan"), |b| {
+    }
+    out
+}
+
+/// Per-change timings on one map: D* Lite re-plan (`set_blocked` + `compute` on a fresh
+/// copy of the snapshot, the copy untimed) and A* from scratch on the changed map, each
+/// the fastest of `reps` runs, interleaved change by change; the costs are asserted equal.
+/// Returns (kind, D* Lite s, A* s, D* Lite expansions, goal reachable) per change.
+fn replan_timings(
+    positions: &[ReplanPosition],
+    reps: usize,
+) -> Vec<(ChangeKind, f64, f64, usize, bool, usize)> {
+    let mut out = Vec::new();
+    let mut ws = AstarWorkspace::new();
+    let mut dd = positions[0].planner.clone();
+    for pos in positions {
+        let robot = pos.planner.start();
+        for (&(kind, cell, blocked), changed) in pos.changes.iter().zip(&pos.changed) {
+            let (mut td, mut ta) = (f64::INFINITY, f64::INFINITY);
+            let mut exp = 0;
+            let mut exp_a = 0;
+            let mut reach = false;
+            for _ in 0..reps {
+                dd.clone_from(&pos.planner);
+                let t0 = Instant::now();
+                dd.set_blocked(cell, blocked).unwrap();
+                let cd = black_box(dd.compute());
+                td = td.min(t0.elapsed().as_secs_f64());
+                exp = dd.expanded();
+                let t0 = Instant::now();
+                let (ca, ea) = black_box(
+                    planning::astar::astar_cost(changed, &mut ws, robot, pos.goal).unwrap(),
+                );
+                exp_a = ea;
+                ta = ta.min(t0.elapsed().as_secs_f64());
+                match (cd, ca) {
+                    (Some(a), Some(b)) => assert!(
+                        (a - b).abs() <= 1e-9 * b.max(1.0),
+                        "{kind:?} at {cell:?}: D* Lite {a} vs A* {b}"
+                    ),
+                    (None, None) => {}
+                    other => panic!("{kind:?} at {cell:?}: reachability differs {other:?}"),
+                }
+                reach = ca.is_some();
+            }
+            out.push((kind, td, ta, exp, reach, exp_a));
+        }
+    }
+    out
+}
+
+/// The printed re-planning table (medians over the change set).
+fn replan_table(sets: &[(&str, Vec<ReplanPosition>)]) {
+    println!("\nD* Lite re-plan vs A* from scratch, per change (fastest of 5 runs each)");
+    println!(
+        "| map | changes (reachable / cut off) | D* Lite median | A* median | ratio of medians | median per-change ratio | min ratio | on-path blocks: median ratio | D* Lite median expansions |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for (name, positions) in sets {
+        let t = replan_timings(positions, 5);
+        if std::env::var_os("MOMA_BENCH_REPLAN_VERBOSE").is_some() {
+            for r in &t {
+                println!(
+                    "  {name} {:?}: D* Lite {:.1} µs ({} expansions, {:.0} ns each), A* {:.1} µs ({} expansions, {:.0} ns each), {:.1}x",
+                    r.0,
+                    r.1 * 1e6,
+                    r.3,
+                    r.1 * 1e9 / r.3.max(1) as f64,
+                    r.2 * 1e6,
+                    r.5,
+                    r.2 * 1e9 / r.5.max(1) as f64,
+                    r.2 / r.1
+                );
+            }
+        }
+        let reach: Vec<_> = t.iter().filter(|r| r.4).collect();
+        let cut = t.len() - reach.len();
+        let mut d: Vec<f64> = reach.iter().map(|r| r.1).collect();
+        let mut a: Vec<f64> = reach.iter().map(|r| r.2).collect();
+        let mut ratio: Vec<f64> = reach.iter().map(|r| r.2 / r.1).collect();
+        let mut on_path: Vec<f64> = reach
+            .iter()
+            .filter(|r| matches!(r.0, ChangeKind::BlockOnPath(_)))
+            .map(|r| r.2 / r.1)
+            .collect();
+        let mut exp: Vec<f64> = reach.iter().map(|r| r.3 as f64).collect();
+        let min_ratio = ratio.iter().copied().fold(f64::INFINITY, f64::min);
+        let fmt = |s: f64| {
+            if s < 1e-3 {
+                format!("{:.1} µs", s * 1e6)
+            } else {
+                format!("{:.3} ms", s * 1e3)
+            }
+        };
+        let on_path_med = if on_path.is_empty() {
+            "–".to_string()
+        } else {
+            format!("{:.1}x ({})", median(&mut on_path), on_path.len())
+        };
+        if reach.is_empty() {
+            println!("| {name} | 0 / {cut} | – | – | – | – | – | – | – |");
+        } else {
+            let (md, ma) = (median(&mut d), median(&mut a));
+            println!(
+                "| {name} | {} / {cut} | {} | {} | {:.1}x | {:.1}x | {:.2}x | {on_path_med} | {:.0} |",
+                reach.len(),
+                fmt(md),
+                fmt(ma),
+                ma / md,
+                median(&mut ratio),
+                min_ratio,
+                median(&mut exp)
+            );
+        }
+        if cut > 0 {
+            let cut_rows: Vec<_> = t.iter().filter(|r| !r.4).collect();
+            let mut d: Vec<f64> = cut_rows.iter().map(|r| r.1).collect();
+            let mut a: Vec<f64> = cut_rows.iter().map(|r| r.2).collect();
+            let (md, ma) = (median(&mut d), median(&mut a));
+            println!(
+                "|   {name}, goal cut off | {cut} | {} | {} | {:.2}x | | | | |",
+                fmt(md),
+                fmt(ma),
+                ma / md
+            );
+        }
+    }
+    println!();
+}
+
+fn bench_dstar(cr: &mut Criterion, sets: &[(&str, Vec<ReplanPosition>)]) {
+    let mut grp = cr.benchmark_group("replan");
+    grp.sample_size(10)
+        .measurement_time(std::time::Duration::from_secs(4));
+    for (name, positions) in sets {
+        // One iteration = every change of the set whose goal stays reachable (the copy of
+        // the snapshot before each change untimed).
+        let mut dd = positions[0].planner.clone();
+        grp.bench_function(format!("{name}/dstar_lite_all_changes"), |b| {
             b.iter_custom(|iters| {
                 let mut total = std::time::Duration::ZERO;
                 for _ in 0..iters {
-                    dd.clone_from(&d);
-                    let t0 = Instant::now();
-                    dd.set_blocked(ahead, true).unwrap();
-                    black_box(dd.compute());
-                    total += t0.elapsed();
+                    for pos in positions {
+                        for (&(_, cell, blocked), &ok) in pos.changes.iter().zip(&pos.reachable) {
+                            if !ok {
+                                continue;
+                            }
+                            dd.clone_from(&pos.planner);
+                            let t0 = Instant::now();
+                            dd.set_blocked(cell, blocked).unwrap();
+                            black_box(dd.compute());
+                            total += t0.elapsed();
+                        }
+                    }
                 }
                 total
             })
         });
         let mut ws = AstarWorkspace::new();
-        grp.bench_function(format!("{name}/astar_from_scratch"), |b| {
-            b.iter(|| black_box(astar_with(&changed, &mut ws, robot, p.goal).unwrap()))
+        grp.bench_function(format!("{name}/astar_all_changes"), |b| {
+            b.iter(|| {
+                for pos in positions {
+                    let robot = pos.planner.start();
+                    for (changed, _) in pos.changed.iter().zip(&pos.reachable).filter(|c| *c.1) {
+                        black_box(
+                            planning::astar::astar_cost(changed, &mut ws, robot, pos.goal).unwrap(),
+                        );
+                    }
+                }
+            })
         });
     }
     grp.finish();
 }
 
 fn all(c: &mut Criterion) {
+    let replan_sets: Vec<(&str, Vec<ReplanPosition>)> =
+        MAPS.iter().map(|&m| (m, replan_positions(m, 6))).collect();
+    replan_table(&replan_sets);
+    if std::env::var_os("MOMA_BENCH_REPLAN_ONLY").is_some() {
+        return;
+    }
     let cases: Vec<MapCase> = MAPS.iter().map(|&m| load_case(m)).collect();
     per_query_table(&cases);
     if std::env::var_os("MOMA_BENCH_TABLE_ONLY").is_some() {
@@ -317,7 +552,7 @@ fn all(c: &mut Criterion) {
     }
     bench_astar(c, &cases);
     bench_edt(c);
-    bench_dstar(c);
+    bench_dstar(c, &replan_sets);
 }
 
 criterion_group!(benches, all);

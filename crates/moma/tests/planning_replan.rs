@@ -154,3 +154,116 @@ fn dstar_lite_snapshot_replans_like_the_original() {
     assert!(d.grid().is_free(ahead.0 as i64, ahead.1 as i64));
     assert_eq!(d.compute().unwrap(), before);
 }
+
+/// Checks the planner's cost, reachability and path against A* from scratch on its grid.
+fn check_against_astar(d: &DStarLite, c: Option<f64>, goal: (usize, usize), ctx: &str) {
+    let a = planning::astar(d.grid(), d.start(), goal)
+        .unwrap()
+        .map(|p| p.cost);
+    match (c, a) {
+        // Same integer costs, same decoding: the lengths agree to the last bit.
+        (Some(c), Some(a)) => assert_eq!(c, a, "{ctx}: D* Lite {c} vs A* {a}"),
+        (None, None) => {}
+        other => panic!("{ctx}: D* Lite and A* disagree on reachability: {other:?}"),
+    }
+    if let (Some(c), Some(p)) = (c, d.path()) {
+        assert_eq!(p[0], d.start(), "{ctx}");
+        assert_eq!(*p.last().unwrap(), goal, "{ctx}");
+        let mut len = 0.0;
+        for w in p.windows(2) {
+            let (dx, dy) = (w[1].0 as i64 - w[0].0 as i64, w[1].1 as i64 - w[0].1 as i64);
+            assert!(
+                d.grid().can_step(w[0].0 as i64, w[0].1 as i64, dx, dy),
+                "{ctx}: illegal step {w:?}"
+            );
+            len += if dx != 0 && dy != 0 {
+                std::f64::consts::SQRT_2
+            } else {
+                1.0
+            };
+        }
+        assert!(
+            (len - c).abs() < 1e-9,
+            "{ctx}: path length {len} vs cost {c}"
+        );
+    }
+}
+
+#[test]
+fn dstar_lite_matches_astar_on_random_maps_and_changes() {
+    // Seeded random maps (sizes 6..48, obstacle densities 0..40 %), random start and goal,
+    // then a robot that walks its path while cells near it (and now and then anywhere)
+    // become blocked or free, several changes per step, sometimes none; after every
+    // re-plan the cost must equal A* from scratch on the changed map exactly.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5eed_d57a);
+    let mut replans = 0;
+    for map in 0..300 {
+        let (w, h) = (rng.random_range(6..48), rng.random_range(6..48));
+        let density = rng.random_range(0.0..0.4);
+        let obst: Vec<bool> = (0..w * h).map(|_| rng.random_bool(density)).collect();
+        let sg = SearchGrid::from_obstacles(&obst, w, h).unwrap();
+        let free: Vec<(usize, usize)> = (0..w * h)
+            .filter(|&i| !obst[i])
+            .map(|i| (i % w, i / w))
+            .collect();
+        if free.len() < 2 {
+            continue;
+        }
+        let start = free[rng.random_range(0..free.len())];
+        let goal = free[rng.random_range(0..free.len())];
+        let mut d = DStarLite::new(&sg, start, goal).unwrap();
+        let c = d.compute();
+        check_against_astar(&d, c, goal, &format!("map {map}, first plan"));
+        for step in 0..40 {
+            // Move one cell along the path when there is one.
+            if let Some(p) = d.path()
+                && p.len() >= 2
+                && rng.random_bool(0.8)
+            {
+                d.move_start(p[1]).unwrap();
+            }
+            let (rx, ry) = d.start();
+            let n_changes = rng.random_range(0..4);
+            for _ in 0..n_changes {
+                let (x, y) = if rng.random_bool(0.8) {
+                    let r = rng.random_range(1..=4i64);
+                    (
+                        (rx as i64 + rng.random_range(-r..=r)).clamp(0, w as i64 - 1) as usize,
+                        (ry as i64 + rng.random_range(-r..=r)).clamp(0, h as i64 - 1) as usize,
+                    )
+                } else {
+                    (rng.random_range(0..w), rng.random_range(0..h))
+                };
+                if (x, y) == (rx, ry) || (x, y) == goal {
+                    continue;
+                }
+                d.set_blocked((x, y), rng.random_bool(0.6)).unwrap();
+            }
+            let c = d.compute();
+            check_against_astar(&d, c, goal, &format!("map {map}, step {step}"));
+            replans += 1;
+        }
+    }
+    assert!(replans > 10_000, "only {replans} re-plans checked");
+}
+
+#[test]
+fn dstar_lite_robot_cell_blocked_then_freed() {
+    // A sensed obstacle on the robot's own cell leaves it without a legal step: no path,
+    // reported without expanding the map; freeing the cell restores A*'s cost.
+    let sg = SearchGrid::from_obstacles(&[false; 40 * 30], 40, 30).unwrap();
+    let (start, goal) = ((2, 2), (37, 27));
+    let mut d = DStarLite::new(&sg, start, goal).unwrap();
+    let first = d.compute().unwrap();
+    d.set_blocked(start, true).unwrap();
+    assert_eq!(d.compute(), None);
+    assert!(d.expanded() < 50, "{} expansions", d.expanded());
+    assert!(d.path().is_none());
+    d.set_blocked(start, false).unwrap();
+    assert_eq!(d.compute(), Some(first));
+    let a = planning::astar(d.grid(), start, goal)
+        .unwrap()
+        .unwrap()
+        .cost;
+    assert_eq!(first, a);
+}

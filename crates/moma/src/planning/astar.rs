@@ -29,7 +29,34 @@ pub struct SearchGrid {
     pub(super) height: usize,
     pub(super) pw: usize,
     pub(super) pass: Vec<bool>,
+    /// Per cell, bit k set ⇔ move k (order of [`move_offsets`]) from it is legal: both
+    /// cells free and, for a diagonal, both cells it passes between free. Kept up to date
+    /// by [`SearchGrid::set_free`]; lets a search visit the legal moves only.
+    pub(super) moves: Vec<u8>,
     pub(super) weight: Option<Vec<f32>>,
+}
+
+/// The legal-move mask of padded cell `u` (see [`SearchGrid::moves`]).
+#[inline]
+fn move_mask(pass: &[bool], pw: usize, u: usize) -> u8 {
+    if !pass[u] {
+        return 0;
+    }
+    let off = move_offsets(pw);
+    let mut m = 0u8;
+    for k in 0..4 {
+        if pass[(u as isize + off[k]) as usize] {
+            m |= 1 << k;
+        }
+    }
+    // Diagonals 4..8 pass between cardinals (0 | 1) and (2 | 3).
+    for k in 4..8 {
+        let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
+        if m & (1 << a) != 0 && m & (1 << b) != 0 && pass[(u as isize + off[k]) as usize] {
+            m |= 1 << k;
+        }
+    }
+    m
 }
 
 /// A found path.
@@ -74,11 +101,18 @@ impl SearchGrid {
                 *d = !o;
             }
         }
+        let mut moves = vec![0u8; pass.len()];
+        for y in 1..=height {
+            for u in y * pw + 1..y * pw + 1 + width {
+                moves[u] = move_mask(&pass, pw, u);
+            }
+        }
         Ok(Self {
             width,
             height,
             pw,
             pass,
+            moves,
             weight: None,
         })
     }
@@ -166,7 +200,18 @@ impl SearchGrid {
     pub fn set_free(&mut self, x: usize, y: usize, free: bool) {
         assert!(x < self.width && y < self.height, "cell outside the grid");
         let i = self.pidx(x, y);
+        if self.pass[i] == free {
+            return;
+        }
         self.pass[i] = free;
+        // The moves of the cell and of its eight neighbours depend on it (border cells
+        // are blocked and keep an empty mask).
+        let pw = self.pw;
+        for r in [i - pw, i, i + pw] {
+            for u in r - 1..=r + 1 {
+                self.moves[u] = move_mask(&self.pass, pw, u);
+            }
+        }
     }
 
     /// `true` if the step from `(x, y)` by `(dx, dy)` (each in −1..=1) is legal under the
@@ -517,7 +562,7 @@ fn search_octile(
     let extra = diag_cost - one;
     let pw = grid.pw;
     let inv_pw = 1.0 / pw as f64;
-    let pass = &grid.pass[..];
+    let moves = &grid.moves[..];
     let st = &mut ws.packed[..];
     let mut heap = std::mem::take(&mut ws.heap);
     heap.clear();
@@ -567,21 +612,12 @@ fn search_octile(
         }
         let (x, y) = ((u - yy * pw) as i64, yy as i64);
         let gu = su & G_MASK;
-        let mut open_card = [false; 4];
-        for k in 0..8 {
-            if k >= 4 {
-                let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
-                if !(open_card[a] && open_card[b]) {
-                    continue;
-                }
-            }
+        // The legal moves only, in the fixed order E, W, N, S, NE, NW, SE, SW.
+        let mut legal = moves[u];
+        while legal != 0 {
+            let k = legal.trailing_zeros() as usize;
+            legal &= legal - 1;
             let v = (u as isize + off[k]) as usize;
-            if !pass[v] {
-                continue;
-            }
-            if k < 4 {
-                open_card[k] = true;
-            }
             let ng = gu + if k < 4 { one } else { diag_cost };
             let sv = st[v];
             // A closed cell already has its optimal g (integer costs, consistent

@@ -11,43 +11,66 @@
 //! straight step 2^k, a diagonal ≈ √2 · 2^k), so cells on the equal-cost plateaus of open
 //! maps tie exactly instead of being ordered by floating-point rounding noise, and the
 //! reported cost n_straight + n_diag · √2 is recovered exactly from the integer g.
+//!
+//! Queue: an indexed 4-ary min-heap with each inconsistent cell exactly once (keys are
+//! raised, lowered and removed in place). After the robot moves, queued keys are lower
+//! bounds (the `k_m` scheme); a popped stale key is re-keyed in place, and once stale keys
+//! add up to 1/16 of the queue the whole queue is re-keyed in one linear pass (the k2 =
+//! min(g, rhs) part is stored in the entry, so no cell state is read) and rebuilt.
+//! Unreachable goal: when the robot's cell becomes consistent at infinite cost, a
+//! budgeted flood fill from the robot decides whether the goal is cut off, instead of
+//! letting the search expand every remaining queued cell.
 
 use super::astar::{SQRT2, SearchGrid, fixed_point_length, fixed_point_steps};
 use crate::{Error, Result};
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
+/// "Infinite" cost-to-goal.
+const INF: u64 = u64::MAX;
+
+/// Heap slot of a cell that is not in the queue.
+const NOT_QUEUED: u32 = u32::MAX;
+
+/// Queue key `[k1, k2]`, compared lexicographically (exact integers).
+type Key = (u64, u64);
+
+/// Key of a cell that is not in the queue (an inconsistent cell always has a finite key).
+const NONE_KEY: Key = (INF, INF);
+
+/// Children per node of the queue's heap: four 24-byte entries side by side, so one
+/// sift-down step compares entries that share one or two cache lines, and the heap is half
+/// as deep as a binary one.
+const ARITY: usize = 4;
+// The sift-down's tournament is written for four children.
+const _: () = assert!(ARITY == 4);
+
+/// An entry of the indexed priority queue.
 #[derive(Clone, Copy, Debug)]
 struct QEntry {
     k1: u64,
     k2: u64,
     idx: u32,
 }
-impl PartialEq for QEntry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
+
+impl QEntry {
+    #[inline(always)]
+    fn key(&self) -> Key {
+        (self.k1, self.k2)
     }
-}
-impl Eq for QEntry {}
-impl Ord for QEntry {
-    fn cmp(&self, o: &Self) -> Ordering {
-        // Max-heap → reverse: the smallest key is the greatest entry.
-        o.k1.cmp(&self.k1).then(o.k2.cmp(&self.k2))
-    }
-}
-impl PartialOrd for QEntry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
+
+    /// The key as one 128-bit integer (k1 in the high half): the same order as
+    /// [`QEntry::key`] in a single wide compare.
+    #[inline(always)]
+    fn rank(&self) -> u128 {
+        ((self.k1 as u128) << 64) | self.k2 as u128
     }
 }
 
-#[inline]
-fn key_less(a: (u64, u64), b: (u64, u64)) -> bool {
-    a < b
+/// g and rhs of a cell, side by side (16 bytes: four cells per cache line).
+#[derive(Clone, Copy, Debug)]
+struct CellState {
+    g: u64,
+    rhs: u64,
 }
-
-/// "Infinite" cost-to-goal.
-const INF: u64 = u64::MAX;
 
 /// An incremental planner from a moving robot (`start`) to a fixed goal.
 #[derive(Debug)]
@@ -55,10 +78,19 @@ const INF: u64 = u64::MAX;
 #[doc(alias = "d_star_lite")]
 pub struct DStarLite {
     grid: SearchGrid,
-    /// Per-cell g, rhs and queue key, side by side so one cache line serves all three.
+    /// Per-cell g and rhs.
     cells: Vec<CellState>,
-    heap: BinaryHeap<QEntry>,
+    /// Per-cell slot in `heap` ([`NOT_QUEUED`] if absent); 4 bytes a cell, so the heap's
+    /// bookkeeping touches few cache lines.
+    slots: Vec<u32>,
+    /// The open list U: an indexed 4-ary min-heap on the keys, holding every locally
+    /// inconsistent cell exactly once (keys are updated and entries removed in place, so
+    /// there are no stale duplicates).
+    heap: Vec<QEntry>,
     km: u64,
+    /// `true` while every queued key is exact for the current robot cell and `km` (the
+    /// robot has not moved since the queue was last re-keyed).
+    keys_exact: bool,
     /// Fixed-point step costs (see the module documentation).
     one: u64,
     diag: u64,
@@ -68,33 +100,33 @@ pub struct DStarLite {
     last: usize,
     goal: usize,
     expanded: usize,
-    offsets: [(isize, bool); 8],
-}
-
-/// Queue key of a cell that is not in the queue (an inconsistent cell always has a finite
-/// key).
-const NONE_KEY: (u64, u64) = (INF, INF);
-
-/// g, rhs and the key under which the cell is queued ([`NONE_KEY`] = not queued).
-#[derive(Clone, Copy, Debug)]
-struct CellState {
-    g: u64,
-    rhs: u64,
-    key: (u64, u64),
+    /// Scratch of the connectivity check (see [`DStarLite::compute`]): a visit stamp per
+    /// cell, the stamp of the current check, and the flood's stack. Not part of the
+    /// planner's state: copies start with their own.
+    visit: Vec<u32>,
+    visit_stamp: u32,
+    flood: Vec<u32>,
+    /// Padded row length and its reciprocal (row of an index without an integer division).
+    pw: usize,
+    inv_pw: f64,
+    /// Padded-index offset and (dx, dy) of the eight moves: E, W, N, S, then the diagonals
+    /// NE, NW, SE, SW (diagonal k passes between cardinals k & 1 and 2 + (k − 4) / 2).
+    offsets: [(isize, i64, i64); 8],
 }
 
 impl Clone for DStarLite {
     /// A copy that keeps the queue's spare capacity, so re-planning on the copy does not
-    /// start by reallocating (and copying) a queue of the map's size.
+    /// start by reallocating (and copying) the queue.
     fn clone(&self) -> Self {
-        let mut queue = Vec::with_capacity(self.heap.capacity());
-        queue.extend_from_slice(self.heap.as_slice());
+        let mut heap = Vec::with_capacity(self.heap.capacity());
+        heap.extend_from_slice(&self.heap);
         Self {
             grid: self.grid.clone(),
             cells: self.cells.clone(),
-            // Already a valid heap: rebuilding it moves nothing.
-            heap: BinaryHeap::from(queue),
+            slots: self.slots.clone(),
+            heap,
             km: self.km,
+            keys_exact: self.keys_exact,
             one: self.one,
             diag: self.diag,
             start: self.start,
@@ -102,6 +134,11 @@ impl Clone for DStarLite {
             last: self.last,
             goal: self.goal,
             expanded: self.expanded,
+            visit: Vec::new(),
+            visit_stamp: 0,
+            flood: Vec::new(),
+            pw: self.pw,
+            inv_pw: self.inv_pw,
             offsets: self.offsets,
         }
     }
@@ -111,8 +148,10 @@ impl Clone for DStarLite {
     fn clone_from(&mut self, source: &Self) {
         self.grid.clone_from(&source.grid);
         self.cells.clone_from(&source.cells);
+        self.slots.clone_from(&source.slots);
         self.heap.clone_from(&source.heap);
         self.km = source.km;
+        self.keys_exact = source.keys_exact;
         self.one = source.one;
         self.diag = source.diag;
         self.start = source.start;
@@ -120,6 +159,8 @@ impl Clone for DStarLite {
         self.last = source.last;
         self.goal = source.goal;
         self.expanded = source.expanded;
+        self.pw = source.pw;
+        self.inv_pw = source.inv_pw;
         self.offsets = source.offsets;
     }
 }
@@ -141,16 +182,11 @@ impl DStarLite {
         let (one, diag) = fixed_point_steps(n);
         let mut s = Self {
             grid: grid.clone(),
-            cells: vec![
-                CellState {
-                    g: INF,
-                    rhs: INF,
-                    key: NONE_KEY
-                };
-                n
-            ],
-            heap: BinaryHeap::new(),
+            cells: vec![CellState { g: INF, rhs: INF }; n],
+            slots: vec![NOT_QUEUED; n],
+            heap: Vec::new(),
             km: 0,
+            keys_exact: true,
             one,
             diag,
             start: grid.pidx(start.0, start.1),
@@ -158,84 +194,222 @@ impl DStarLite {
             last: grid.pidx(start.0, start.1),
             goal: grid.pidx(goal.0, goal.1),
             expanded: 0,
+            visit: Vec::new(),
+            visit_stamp: 0,
+            flood: Vec::new(),
+            pw: grid.pw,
+            inv_pw: 1.0 / grid.pw as f64,
             offsets: [
-                (1, false),
-                (-1, false),
-                (pw, false),
-                (-pw, false),
-                (pw + 1, true),
-                (pw - 1, true),
-                (-pw + 1, true),
-                (-pw - 1, true),
+                (1, 1, 0),
+                (-1, -1, 0),
+                (pw, 0, 1),
+                (-pw, 0, -1),
+                (pw + 1, 1, 1),
+                (pw - 1, -1, 1),
+                (-pw + 1, 1, -1),
+                (-pw - 1, -1, -1),
             ],
         };
-        s.cells[s.goal].rhs = 0;
-        let k = s.key(s.goal);
-        s.push(s.goal, k);
+        let goal = s.goal;
+        s.cells[goal].rhs = 0;
+        let (gx, gy) = s.xy(goal);
+        let k = s.key_at(goal, gx, gy);
+        s.heap_set(goal, k);
         Ok(s)
     }
 
+    /// Padded coordinates of index `i` (the row from a float estimate, corrected: no
+    /// integer division).
     #[inline]
     fn xy(&self, i: usize) -> (i64, i64) {
-        let y = i / self.grid.pw;
-        ((i - y * self.grid.pw) as i64, y as i64)
+        let mut y = (i as f64 * self.inv_pw) as usize;
+        if y * self.pw > i {
+            y -= 1;
+        } else if (y + 1) * self.pw <= i {
+            y += 1;
+        }
+        ((i - y * self.pw) as i64, y as i64)
     }
 
+    /// Octile heuristic in fixed point between padded coordinates.
     #[inline]
-    fn h(&self, a: usize, b: usize) -> u64 {
-        let (ax, ay) = self.xy(a);
-        let (bx, by) = self.xy(b);
-        let (dx, dy) = ((ax - bx).unsigned_abs(), (ay - by).unsigned_abs());
+    fn h_xy(&self, a: (i64, i64), b: (i64, i64)) -> u64 {
+        let (dx, dy) = ((a.0 - b.0).unsigned_abs(), (a.1 - b.1).unsigned_abs());
         let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
         hi * self.one + lo * (self.diag - self.one)
     }
 
+    /// The key `[min(g, rhs) + h(start, s) + k_m, min(g, rhs)]` of cell `s` at padded
+    /// coordinates `(x, y)`.
     #[inline]
-    fn key(&self, s: usize) -> (u64, u64) {
-        let m = self.cells[s].g.min(self.cells[s].rhs);
+    fn key_at(&self, s: usize, x: i64, y: i64) -> Key {
+        let c = &self.cells[s];
+        let m = c.g.min(c.rhs);
         if m == INF {
             return NONE_KEY;
         }
-        let (x, y) = self.xy(s);
-        let (dx, dy) = (
-            (x - self.start_xy.0).unsigned_abs(),
-            (y - self.start_xy.1).unsigned_abs(),
-        );
-        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
-        (m + hi * self.one + lo * (self.diag - self.one) + self.km, m)
+        (m + self.h_xy((x, y), self.start_xy) + self.km, m)
     }
 
-    fn push(&mut self, s: usize, k: (u64, u64)) {
-        self.cells[s].key = k;
-        self.heap.push(QEntry {
+    // ---- Indexed 4-ary min-heap --------------------------------------------------------
+
+    #[inline(always)]
+    fn heap_place(&mut self, slot: usize, e: QEntry) {
+        self.slots[e.idx as usize] = slot as u32;
+        self.heap[slot] = e;
+    }
+
+    #[inline]
+    fn sift_up(&mut self, mut slot: usize, e: QEntry) {
+        let k = e.rank();
+        while slot > 0 {
+            let parent = (slot - 1) / ARITY;
+            let p = self.heap[parent];
+            if p.rank() <= k {
+                break;
+            }
+            self.heap_place(slot, p);
+            slot = parent;
+        }
+        self.heap_place(slot, e);
+    }
+
+    #[inline]
+    fn sift_down(&mut self, slot: usize, e: QEntry) {
+        self.sift_down_impl::<true>(slot, e);
+    }
+
+    /// Sift-down; `TRACK` = keep `slots` up to date (off while re-heapifying, which
+    /// rewrites every slot afterwards).
+    #[inline]
+    fn sift_down_impl<const TRACK: bool>(&mut self, mut slot: usize, e: QEntry) {
+        let k = e.rank();
+        let n = self.heap.len();
+        loop {
+            let first = slot * ARITY + 1;
+            if first >= n {
+                break;
+            }
+            let (best, bk) = if first + ARITY <= n {
+                // A full node: a branch-free tournament over the four children.
+                let q = &self.heap[first..first + ARITY];
+                let (r0, r1, r2, r3) = (q[0].rank(), q[1].rank(), q[2].rank(), q[3].rank());
+                let (a, ra) = if r1 < r0 { (1, r1) } else { (0, r0) };
+                let (b, rb) = if r3 < r2 { (3, r3) } else { (2, r2) };
+                if rb < ra {
+                    (first + b, rb)
+                } else {
+                    (first + a, ra)
+                }
+            } else {
+                let mut best = first;
+                let mut bk = self.heap[first].rank();
+                for c in first + 1..n {
+                    let ck = self.heap[c].rank();
+                    if ck < bk {
+                        best = c;
+                        bk = ck;
+                    }
+                }
+                (best, bk)
+            };
+            if bk >= k {
+                break;
+            }
+            let b = self.heap[best];
+            if TRACK {
+                self.heap_place(slot, b);
+            } else {
+                self.heap[slot] = b;
+            }
+            slot = best;
+        }
+        if TRACK {
+            self.heap_place(slot, e);
+        } else {
+            self.heap[slot] = e;
+        }
+    }
+
+    /// Recomputes every queued key for the current robot cell and `km` (k2 = min(g, rhs)
+    /// is stored in the entry, so no cell state is read), then rebuilds the heap in
+    /// O(n) (Floyd) and rewrites the slots.
+    fn rekey_all(&mut self) {
+        let (start_xy, km) = (self.start_xy, self.km);
+        for i in 0..self.heap.len() {
+            let e = self.heap[i];
+            let h = self.h_xy(self.xy(e.idx as usize), start_xy);
+            self.heap[i].k1 = e.k2 + h + km;
+        }
+        let n = self.heap.len();
+        if n > 1 {
+            for i in (0..=(n - 2) / ARITY).rev() {
+                let e = self.heap[i];
+                self.sift_down_impl::<false>(i, e);
+            }
+        }
+        for (i, e) in self.heap.iter().enumerate() {
+            self.slots[e.idx as usize] = i as u32;
+        }
+        self.keys_exact = true;
+    }
+
+    /// Inserts `u` with key `k`, or moves it to `k` if it is queued already.
+    #[inline]
+    fn heap_set(&mut self, u: usize, k: Key) {
+        let e = QEntry {
             k1: k.0,
             k2: k.1,
-            idx: s as u32,
-        });
+            idx: u as u32,
+        };
+        let slot = self.slots[u];
+        if slot == NOT_QUEUED {
+            self.heap.push(e);
+            let last = self.heap.len() - 1;
+            self.sift_up(last, e);
+        } else {
+            let slot = slot as usize;
+            let old = self.heap[slot].key();
+            if k < old {
+                self.sift_up(slot, e);
+            } else if k > old {
+                self.sift_down(slot, e);
+            }
+        }
     }
 
-    /// Cost of the step from `u` by offset `k`, infinite if illegal.
+    /// Takes `u` out of the queue (if queued).
     #[inline]
-    fn step_cost(&self, u: usize, off: isize, diag: bool) -> u64 {
-        let pass = &self.grid.pass;
-        let v = (u as isize + off) as usize;
-        if !pass[u] || !pass[v] {
-            return INF;
+    fn heap_remove(&mut self, u: usize) {
+        let slot = self.slots[u];
+        if slot == NOT_QUEUED {
+            return;
         }
-        if diag {
-            let pw = self.grid.pw as isize;
-            let dx = if off == pw + 1 || off == -pw + 1 {
-                1
+        self.slots[u] = NOT_QUEUED;
+        let slot = slot as usize;
+        let last = self.heap.pop().expect("a queued cell is in the heap");
+        if slot < self.heap.len() {
+            // The last entry fills the hole, moving up or down from there.
+            let removed = self.heap[slot].key();
+            if last.key() < removed {
+                self.sift_up(slot, last);
             } else {
-                -1
-            };
-            let dy_off = off - dx;
-            if !pass[(u as isize + dx) as usize] || !pass[(u as isize + dy_off) as usize] {
-                return INF;
+                self.sift_down(slot, last);
             }
-            self.diag
-        } else {
+        }
+    }
+
+    // ---- D* Lite -------------------------------------------------------------------------
+
+    /// Cost of the step from `u` by move `k`, infinite if illegal.
+    #[inline]
+    fn step_cost(&self, u: usize, k: usize) -> u64 {
+        if self.grid.moves[u] & (1 << k) == 0 {
+            INF
+        } else if k < 4 {
             self.one
+        } else {
+            self.diag
         }
     }
 
@@ -244,26 +418,15 @@ impl DStarLite {
         x >= 1 && y >= 1 && (x as usize) <= self.grid.width && (y as usize) <= self.grid.height
     }
 
-    /// The costs of the eight steps from `u` (offsets as `self.offsets`), `INF` if illegal.
+    /// The costs of the eight steps from `u` (offsets as `self.offsets`), `INF` if illegal
+    /// (from the grid's legal-move mask: one byte read).
     #[inline]
     fn step_costs(&self, u: usize) -> [u64; 8] {
-        let pass = &self.grid.pass;
+        let m = self.grid.moves[u];
         let mut c = [INF; 8];
-        if !pass[u] {
-            return c;
-        }
-        let mut open = [false; 4];
-        for k in 0..4 {
-            open[k] = pass[(u as isize + self.offsets[k].0) as usize];
-            if open[k] {
-                c[k] = self.one;
-            }
-        }
-        // Diagonals 4..8 pass between cardinals (0 | 1) and (2 | 3), as in the A* search.
-        for k in 4..8 {
-            let (a, b) = (k & 1, 2 + ((k - 4) >> 1));
-            if open[a] && open[b] && pass[(u as isize + self.offsets[k].0) as usize] {
-                c[k] = self.diag;
+        for (k, ck) in c.iter_mut().enumerate() {
+            if m & (1 << k) != 0 {
+                *ck = if k < 4 { self.one } else { self.diag };
             }
         }
         c
@@ -286,87 +449,131 @@ impl DStarLite {
         self.cells[u].rhs = best;
     }
 
-    /// Puts `u` in the queue with its current key if it is inconsistent (unless it is
-    /// already there with that key), takes it out otherwise.
+    /// Queues `u` (at padded `(x, y)`) with its current key if it is inconsistent, takes
+    /// it out of the queue otherwise.
     #[inline]
-    fn update_queue(&mut self, u: usize) {
+    fn update_queue_at(&mut self, u: usize, x: i64, y: i64) {
         if self.cells[u].g != self.cells[u].rhs {
-            let k = self.key(u);
-            if self.cells[u].key != k {
-                self.push(u, k);
-            }
+            let k = self.key_at(u, x, y);
+            self.heap_set(u, k);
         } else {
-            self.cells[u].key = NONE_KEY;
+            self.heap_remove(u);
         }
     }
 
     fn update_vertex(&mut self, u: usize) {
         self.recompute_rhs(u);
-        self.update_queue(u);
-    }
-
-    fn top(&mut self) -> Option<((u64, u64), usize)> {
-        while let Some(e) = self.heap.peek() {
-            let i = e.idx as usize;
-            if self.cells[i].key == (e.k1, e.k2) {
-                return Some(((e.k1, e.k2), i));
-            }
-            self.heap.pop();
-        }
-        None
+        let (x, y) = self.xy(u);
+        self.update_queue_at(u, x, y);
     }
 
     /// (Re-)plans: brings the cells that matter for the robot's position up to date.
     /// Returns the cost from the robot to the goal, `None` if unreachable.
     pub fn compute(&mut self) -> Option<f64> {
         self.expanded = 0;
-        while let Some((k_old, u)) = self.top() {
+        // Stale keys re-keyed one by one so far in this call.
+        let mut stale = 0usize;
+        // Connectivity check schedule (see below): expansion count of the next check and
+        // the flood budget in cells.
+        let mut next_check = 0usize;
+        let mut budget = 16_384usize;
+        while let Some(&top) = self.heap.first() {
+            let k_old = top.key();
+            let u = top.idx as usize;
             let st = self.start;
-            let ms = self.cells[st].g.min(self.cells[st].rhs);
+            let (gs, rs) = (self.cells[st].g, self.cells[st].rhs);
+            let ms = gs.min(rs);
             let ks = if ms == INF {
                 NONE_KEY
             } else {
                 (ms + self.km, ms)
             };
-            if !(key_less(k_old, ks) || self.cells[st].rhs != self.cells[st].g) {
+            if k_old >= ks && rs == gs {
                 break;
             }
-            self.heap.pop();
-            self.cells[u].key = NONE_KEY;
+            if ms == INF && rs == gs && self.expanded >= next_check {
+                // The robot's cell is consistent at an infinite cost: either a lowering
+                // wave has yet to reach it or the goal is cut off, in which case D* Lite
+                // would expand every queued cell before giving up. A flood over the free
+                // cells from the robot (4-connectivity = connectivity under the move
+                // model) tells the two apart. A flood step costs a few ns, an expansion
+                // some 100 ns: the checks come after 0, 512, 1024, 2048, … expansions with
+                // budgets of 16 Ki, 64 Ki, 256 Ki, … cells (a flood never visits more than
+                // the robot's component), so a cut-off goal is found after a few checks
+                // and a check that gives up costs about as much as a few hundred
+                // expansions.
+                match self.goal_connected(budget) {
+                    Some(false) => return None,
+                    Some(true) => next_check = usize::MAX,
+                    None => {
+                        next_check = 2 * self.expanded.max(256);
+                        budget *= 4;
+                    }
+                }
+            }
+            let (x, y) = self.xy(u);
+            let k_new = self.key_at(u, x, y);
+            if k_old < k_new {
+                // A stale lower-bound key (the robot moved since it was queued). Re-keying
+                // one entry is a sift-down with cache misses on the way; once they add up
+                // to a fair fraction of the queue, re-key the whole queue in one linear
+                // pass instead (its cost is then at most a small multiple of what was
+                // already spent, and no stale key is left until the robot moves again).
+                stale += 1;
+                if !self.keys_exact && stale >= 16 && stale * 16 >= self.heap.len() {
+                    self.rekey_all();
+                    continue;
+                }
+                let e = QEntry {
+                    k1: k_new.0,
+                    k2: k_new.1,
+                    idx: u as u32,
+                };
+                self.sift_down(0, e);
+                continue;
+            }
             self.expanded += 1;
-            let k_new = self.key(u);
-            if key_less(k_old, k_new) {
-                self.push(u, k_new);
-            } else if self.cells[u].g > self.cells[u].rhs {
+            let CellState { g, rhs } = self.cells[u];
+            if g > rhs {
                 // Overconsistent: g(u) drops to rhs(u); a neighbour's rhs can only fall
                 // to the cost through u (Koenig & Likhachev's optimized D* Lite).
-                let gu = self.cells[u].rhs;
-                self.cells[u].g = gu;
+                self.heap_remove(u);
+                self.cells[u].g = rhs;
                 let c = self.step_costs(u);
                 for (k, &ck) in c.iter().enumerate() {
                     if ck != INF {
-                        let v = (u as isize + self.offsets[k].0) as usize;
-                        if v != self.goal && ck + gu < self.cells[v].rhs {
-                            self.cells[v].rhs = ck + gu;
-                            self.update_queue(v);
+                        let (off, dx, dy) = self.offsets[k];
+                        let v = (u as isize + off) as usize;
+                        let through = ck + rhs;
+                        let cv = self.cells[v];
+                        if v != self.goal && through < cv.rhs {
+                            self.cells[v].rhs = through;
+                            if cv.g != through {
+                                let kv = self.key_at(v, x + dx, y + dy);
+                                self.heap_set(v, kv);
+                            } else {
+                                self.heap_remove(v);
+                            }
                         }
                     }
                 }
             } else {
                 // Underconsistent: g(u) becomes infinite; only the neighbours whose rhs
-                // came through u (and u itself) need their rhs recomputed.
-                let g_old = self.cells[u].g;
+                // came through u need their rhs recomputed (rhs(u) itself does not depend
+                // on g(u)).
                 self.cells[u].g = INF;
                 let c = self.step_costs(u);
                 for (k, &ck) in c.iter().enumerate() {
                     if ck != INF {
-                        let v = (u as isize + self.offsets[k].0) as usize;
-                        if v != self.goal && self.cells[v].rhs == ck.saturating_add(g_old) {
-                            self.update_vertex(v);
+                        let (off, dx, dy) = self.offsets[k];
+                        let v = (u as isize + off) as usize;
+                        if v != self.goal && self.cells[v].rhs == ck.saturating_add(g) {
+                            self.recompute_rhs(v);
+                            self.update_queue_at(v, x + dx, y + dy);
                         }
                     }
                 }
-                self.update_vertex(u);
+                self.update_queue_at(u, x, y);
             }
         }
         let c = self.cells[self.start].g.min(self.cells[self.start].rhs);
@@ -374,6 +581,64 @@ impl DStarLite {
             return None;
         }
         fixed_point_length(c, self.one, self.diag).or_else(|| self.path_length())
+    }
+
+    /// Whether the goal is reachable from the robot's cell on the current grid: a flood
+    /// over free cells that gives up (`None`) after `budget` cells.
+    fn goal_connected(&mut self, budget: usize) -> Option<bool> {
+        if !self.grid.pass[self.start] {
+            // A blocked robot cell has no legal step (its cost-to-goal is infinite).
+            return Some(false);
+        }
+        let n = self.grid.pass.len();
+        if self.visit.len() != n || self.visit_stamp == u32::MAX {
+            self.visit = vec![0; n];
+            self.visit_stamp = 0;
+        }
+        self.visit_stamp += 1;
+        let stamp = self.visit_stamp;
+        let pw = self.pw as isize;
+        let mut stack = std::mem::take(&mut self.flood);
+        stack.clear();
+        stack.push(self.start as u32);
+        self.visit[self.start] = stamp;
+        let mut seen = 1usize;
+        let mut result = Some(false);
+        let goal_xy = self.xy(self.goal);
+        'flood: while let Some(u) = stack.pop() {
+            // Depth first, the neighbour nearest the goal on top of the stack: in open
+            // space the flood runs straight to the goal, in a maze it still covers the
+            // robot's component.
+            let (ux, uy) = self.xy(u as usize);
+            let (ddx, ddy) = (goal_xy.0 - ux, goal_xy.1 - uy);
+            let (xt, yt) = (
+                if ddx >= 0 { 1 } else { -1 },
+                if ddy >= 0 { pw } else { -pw },
+            );
+            let order = if ddx.abs() >= ddy.abs() {
+                [-xt, -yt, yt, xt]
+            } else {
+                [-xt, -yt, xt, yt]
+            };
+            for off in order {
+                let v = (u as isize + off) as usize;
+                if self.grid.pass[v] && self.visit[v] != stamp {
+                    if v == self.goal {
+                        result = Some(true);
+                        break 'flood;
+                    }
+                    self.visit[v] = stamp;
+                    seen += 1;
+                    if seen > budget {
+                        result = None;
+                        break 'flood;
+                    }
+                    stack.push(v as u32);
+                }
+            }
+        }
+        self.flood = stack;
+        result
     }
 
     /// n_straight + n_diag · √2 along [`DStarLite::path`] (huge maps only; see
@@ -393,7 +658,8 @@ impl DStarLite {
         )
     }
 
-    /// Number of cells expanded by the last [`DStarLite::compute`].
+    /// Number of cells expanded by the last [`DStarLite::compute`] (made consistent or
+    /// raised; re-keying a stale queue entry is not counted).
     pub fn expanded(&self) -> usize {
         self.expanded
     }
@@ -413,7 +679,11 @@ impl DStarLite {
     pub fn move_start(&mut self, cell: (usize, usize)) -> Result<()> {
         self.grid.check_cell("robot", cell)?;
         let s = self.grid.pidx(cell.0, cell.1);
-        self.km += self.h(self.last, s);
+        let dk = self.h_xy(self.xy(self.last), self.xy(s));
+        self.km += dk;
+        if dk != 0 {
+            self.keys_exact = false;
+        }
         self.last = s;
         self.start = s;
         self.start_xy = self.xy(s);
@@ -449,9 +719,9 @@ impl DStarLite {
                 if self.inside(u) {
                     if !self.grid.pass[u] {
                         // A blocked cell has no steps: its cost-to-goal is infinite.
+                        self.heap_remove(u);
                         self.cells[u].rhs = INF;
                         self.cells[u].g = INF;
-                        self.cells[u].key = NONE_KEY;
                     } else {
                         self.update_vertex(u);
                     }
@@ -472,8 +742,8 @@ impl DStarLite {
         let limit = self.grid.pass.len();
         while u != self.goal {
             let mut best = (INF, usize::MAX);
-            for &(off, diag) in &self.offsets {
-                let c = self.step_cost(u, off, diag);
+            for (k, &(off, _, _)) in self.offsets.iter().enumerate() {
+                let c = self.step_cost(u, k);
                 if c != INF {
                     let v = (u as isize + off) as usize;
                     let val = c.saturating_add(self.cells[v].g);
