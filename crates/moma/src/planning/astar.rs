@@ -261,8 +261,10 @@ impl SearchGrid {
 #[derive(Debug, Clone)]
 struct OpenList {
     last: u64,
-    /// Bit b set ⇔ bucket b may be non-empty (bucket 0's bit is not maintained).
-    mask: u128,
+    /// Bit b set ⇔ bucket b may be non-empty (bucket 0's bit is not maintained). Keys are
+    /// below 2^63 (fixed-point costs, or the bits of a non-negative f64), so the highest
+    /// differing bit is at most 62 and buckets 0..=63 suffice.
+    mask: u64,
     buckets: Vec<Vec<(u64, u32)>>,
 }
 
@@ -271,7 +273,7 @@ impl Default for OpenList {
         Self {
             last: 0,
             mask: 0,
-            buckets: vec![Vec::new(); 65],
+            buckets: vec![Vec::new(); 64],
         }
     }
 }
@@ -293,8 +295,9 @@ impl OpenList {
     #[inline]
     fn push(&mut self, key: u64, idx: u32) {
         let key = key.max(self.last);
+        debug_assert!(key < 1 << 63);
         let b = Self::bucket(self.last, key);
-        self.mask |= 1u128 << b;
+        self.mask |= 1u64 << b;
         self.buckets[b].push((key, idx));
     }
 
@@ -314,8 +317,16 @@ impl OpenList {
             return None;
         }
         let b = rest.trailing_zeros() as usize;
-        self.mask &= !(1u128 << b);
-        let mut moved = std::mem::take(&mut self.buckets[b]);
+        self.mask &= !(1u64 << b);
+        let (lower, upper) = self.buckets.split_at_mut(b);
+        let moved = &mut upper[0];
+        if moved.len() == 1 {
+            // a lone entry is the minimum itself (the common case on narrow frontiers)
+            let e = moved[0];
+            moved.clear();
+            self.last = e.0;
+            return Some(e);
+        }
         let min = moved
             .iter()
             .map(|e| e.0)
@@ -324,14 +335,13 @@ impl OpenList {
         self.last = min;
         // Every key of bucket b shares the bits above b − 1 with the new minimum and so
         // lands in a bucket below b.
-        for &(k, i) in &moved {
+        for &(k, i) in moved.iter() {
             let nb = Self::bucket(min, k);
-            self.mask |= 1u128 << nb;
-            self.buckets[nb].push((k, i));
+            self.mask |= 1u64 << nb;
+            lower[nb].push((k, i));
         }
         moved.clear();
-        self.buckets[b] = moved;
-        self.buckets[0].pop()
+        lower[0].pop()
     }
 }
 
@@ -502,6 +512,32 @@ const G_MASK: u64 = (1 << G_BITS) - 1;
 const DIR_SHIFT: u32 = G_BITS;
 const STAMP_SHIFT: u32 = 48;
 
+/// Division of a padded cell index by the padded row width without a `div` instruction:
+/// `i / pw = ⌊i · m / 2^64⌋` with `m = ⌊2^64 / pw⌋ + 1`, exact for `i · pw < 2^64`
+/// (always: indices and widths are below 2^32).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct RowDivider {
+    pw: usize,
+    m: u128,
+}
+
+impl RowDivider {
+    /// For rows of `pw` cells.
+    pub(super) fn new(pw: usize) -> Self {
+        Self {
+            pw,
+            m: u128::from(u64::MAX) / pw.max(1) as u128 + 1,
+        }
+    }
+
+    /// Column and row of index `i`.
+    #[inline(always)]
+    pub(super) fn xy(&self, i: usize) -> (i64, i64) {
+        let y = ((i as u128 * self.m) >> 64) as usize;
+        ((i - y * self.pw) as i64, y as i64)
+    }
+}
+
 /// Padded-index offsets of the eight moves: E, W, N(+y), S(−y), NE, NW, SE, SW.
 #[inline]
 fn move_offsets(pw: usize) -> [isize; 8] {
@@ -561,7 +597,7 @@ fn search_octile(
     let (one, diag_cost) = fixed_point_steps(n);
     let extra = diag_cost - one;
     let pw = grid.pw;
-    let inv_pw = 1.0 / pw as f64;
+    let rows = RowDivider::new(pw);
     let moves = &grid.moves[..];
     let st = &mut ws.packed[..];
     let mut heap = std::mem::take(&mut ws.heap);
@@ -603,14 +639,7 @@ fn search_octile(
             found = true;
             break;
         }
-        // Row and column without an integer division: a float estimate, corrected.
-        let mut yy = (u as f64 * inv_pw) as usize;
-        if yy * pw > u {
-            yy -= 1;
-        } else if (yy + 1) * pw <= u {
-            yy += 1;
-        }
-        let (x, y) = ((u - yy * pw) as i64, yy as i64);
+        let (x, y) = rows.xy(u);
         let gu = su & G_MASK;
         // The legal moves only, in the fixed order E, W, N, S, NE, NW, SE, SW.
         let mut legal = moves[u];
@@ -668,7 +697,7 @@ fn search_weighted(
     let closed_stamp = open_stamp + 1;
     let pw = grid.pw;
     let pwi = pw as isize;
-    let inv_pw = 1.0 / pw as f64;
+    let rows = RowDivider::new(pw);
     let pass = &grid.pass[..];
     let st = &mut ws.state[..];
     let mut heap = std::mem::take(&mut ws.heap);
@@ -710,14 +739,7 @@ fn search_weighted(
             result = Some(f64::from_bits(su.g));
             break;
         }
-        // Row and column without an integer division: a float estimate, corrected.
-        let mut yy = (u as f64 * inv_pw) as usize;
-        if yy * pw > u {
-            yy -= 1;
-        } else if (yy + 1) * pw <= u {
-            yy += 1;
-        }
-        let (x, y) = ((u - yy * pw) as i64, yy as i64);
+        let (x, y) = rows.xy(u);
         let gu = f64::from_bits(su.g);
         let mut open_card = [false; 4];
         for (k, &(off, dx, dy)) in card.iter().enumerate() {
@@ -868,6 +890,25 @@ mod tests {
         // Too many diagonals for the modular decoding: the caller must count moves.
         let (one, diag) = fixed_point_steps(1 << 30);
         assert!(fixed_point_length(one * diag, one, diag).is_none());
+    }
+
+    #[test]
+    fn row_divider_is_exact() {
+        for pw in [1usize, 2, 3, 7, 258, 514, 1026, 4099, 65_537, (1 << 31) - 1] {
+            let d = RowDivider::new(pw);
+            let mut check = |i: usize| assert_eq!(d.xy(i), ((i % pw) as i64, (i / pw) as i64));
+            for i in 0..3000 {
+                check(i);
+            }
+            for k in 1..3000usize {
+                let i = k.wrapping_mul(2_654_435_761) % (u32::MAX as usize);
+                check(i);
+                check((i / pw) * pw);
+                if i > 0 {
+                    check((i / pw) * pw - 1);
+                }
+            }
+        }
     }
 
     #[test]

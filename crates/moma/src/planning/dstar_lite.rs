@@ -21,7 +21,7 @@
 //! budgeted flood fill from the robot decides whether the goal is cut off, instead of
 //! letting the search expand every remaining queued cell.
 
-use super::astar::{SQRT2, SearchGrid, fixed_point_length, fixed_point_steps};
+use super::astar::{RowDivider, SQRT2, SearchGrid, fixed_point_length, fixed_point_steps};
 use crate::{Error, Result};
 
 /// "Infinite" cost-to-goal.
@@ -106,9 +106,9 @@ pub struct DStarLite {
     visit: Vec<u32>,
     visit_stamp: u32,
     flood: Vec<u32>,
-    /// Padded row length and its reciprocal (row of an index without an integer division).
+    /// Padded row length, and division by it (row of an index without a `div`).
     pw: usize,
-    inv_pw: f64,
+    rows: RowDivider,
     /// Padded-index offset and (dx, dy) of the eight moves: E, W, N, S, then the diagonals
     /// NE, NW, SE, SW (diagonal k passes between cardinals k & 1 and 2 + (k − 4) / 2).
     offsets: [(isize, i64, i64); 8],
@@ -138,7 +138,7 @@ impl Clone for DStarLite {
             visit_stamp: 0,
             flood: Vec::new(),
             pw: self.pw,
-            inv_pw: self.inv_pw,
+            rows: self.rows,
             offsets: self.offsets,
         }
     }
@@ -160,7 +160,7 @@ impl Clone for DStarLite {
         self.goal = source.goal;
         self.expanded = source.expanded;
         self.pw = source.pw;
-        self.inv_pw = source.inv_pw;
+        self.rows = source.rows;
         self.offsets = source.offsets;
     }
 }
@@ -198,7 +198,7 @@ impl DStarLite {
             visit_stamp: 0,
             flood: Vec::new(),
             pw: grid.pw,
-            inv_pw: 1.0 / grid.pw as f64,
+            rows: RowDivider::new(grid.pw),
             offsets: [
                 (1, 1, 0),
                 (-1, -1, 0),
@@ -218,17 +218,10 @@ impl DStarLite {
         Ok(s)
     }
 
-    /// Padded coordinates of index `i` (the row from a float estimate, corrected: no
-    /// integer division).
+    /// Padded coordinates of index `i` (no integer division).
     #[inline]
     fn xy(&self, i: usize) -> (i64, i64) {
-        let mut y = (i as f64 * self.inv_pw) as usize;
-        if y * self.pw > i {
-            y -= 1;
-        } else if (y + 1) * self.pw <= i {
-            y += 1;
-        }
-        ((i - y * self.pw) as i64, y as i64)
+        self.rows.xy(i)
     }
 
     /// Octile heuristic in fixed point between padded coordinates.
