@@ -896,7 +896,7 @@ mod tests {
     fn row_divider_is_exact() {
         for pw in [1usize, 2, 3, 7, 258, 514, 1026, 4099, 65_537, (1 << 31) - 1] {
             let d = RowDivider::new(pw);
-            let mut check = |i: usize| assert_eq!(d.xy(i), ((i % pw) as i64, (i / pw) as i64));
+            let check = |i: usize| assert_eq!(d.xy(i), ((i % pw) as i64, (i / pw) as i64));
             for i in 0..3000 {
                 check(i);
             }
