@@ -8,11 +8,13 @@
 //! eight neighbours are fixed index offsets with no bounds checks; search state lives in
 //! flat arrays reused across queries and invalidated by a generation counter. The
 //! unweighted search orders by exact fixed-point integer f (straight = 2^k, diagonal =
-//! round(√2·2^k)) and packs each cell's state (g, parent direction, stamp) into 8 bytes,
-//! so the state of a 512 × 512 map fits in the L2 cache; the open list is a radix heap
-//! on those monotone integer keys whose equal-key bucket is a stack (f ties broken toward
-//! the deepest, larger-g cells). The reported cost is n_straight + n_diag · √2 of the
-//! path found, recovered exactly from its integer cost.
+//! the odd integer nearest √2·2^k). Its state is one `u32` g per cell (k = 18; 1 MB for a
+//! 512 × 512 map, so a search stays in the L2 cache even right after other work has
+//! evicted it), reset through a list of the cells reached; a query whose costs outgrow 32
+//! bits reruns with 8-byte states (g, parent direction, stamp; k = 20). The open list is a
+//! radix heap on the monotone integer keys whose equal-key bucket is a stack (f ties
+//! broken toward the deepest, larger-g cells). The reported cost is
+//! n_straight + n_diag · √2 of the path found, recovered exactly from its integer cost.
 
 use super::grid::OccupancyGrid;
 use crate::{Error, Result};
@@ -385,6 +387,12 @@ pub struct AstarWorkspace {
     /// Packed 8-byte states of the unweighted search (see [`search_octile`]).
     packed: Vec<u64>,
     packed_generation: u64,
+    /// g of the compact unweighted search (see [`search_octile_compact`]), `u32::MAX` =
+    /// not reached; the cells it set, reset at the start of the next query.
+    g32: Vec<u32>,
+    touched: Vec<u32>,
+    /// Which unweighted search produced the last result (for path reconstruction).
+    last_compact: bool,
     heap: OpenList,
 }
 
@@ -405,6 +413,17 @@ impl AstarWorkspace {
             self.generation = 0;
         }
         self.generation += 1;
+    }
+
+    fn prepare_compact(&mut self, n: usize) {
+        if self.g32.len() != n {
+            self.g32 = vec![u32::MAX; n];
+        } else {
+            for &c in &self.touched {
+                self.g32[c as usize] = u32::MAX;
+            }
+        }
+        self.touched.clear();
     }
 
     fn prepare_packed(&mut self, n: usize) {
@@ -454,7 +473,7 @@ pub fn astar_with(
     grid.check_cell("goal", goal)?;
     let mut expanded = 0;
     let found = match &grid.weight {
-        None => search_octile(grid, ws, start, goal, &mut expanded),
+        None => search_unweighted(grid, ws, start, goal, &mut expanded),
         Some(w) => search_weighted(grid, w, ws, start, goal, &mut expanded),
     };
     Ok(found.map(|cost| {
@@ -466,6 +485,30 @@ pub fn astar_with(
             while cur != u32::MAX {
                 cells.push(xy(cur as usize));
                 cur = ws.state[cur as usize].parent;
+            }
+        } else if ws.last_compact {
+            // No parent is stored: step to a neighbour whose g plus the move's cost is this
+            // cell's g. Such a neighbour's g is optimal (it is at most optimal + 0), so the
+            // walk follows an optimal path and reaches the start (g strictly decreases).
+            let s = grid.pidx(start.0, start.1);
+            let off = move_offsets(grid.pw);
+            let (one, diag) = COMPACT_STEPS;
+            let mut cur = t;
+            cells.push(xy(cur));
+            while cur != s {
+                let gc = ws.g32[cur];
+                let prev = (0..8)
+                    .map(|k| (k, (cur as isize - off[k]) as usize))
+                    .find(|&(k, p)| {
+                        let c = if k < 4 { one } else { diag } as u32;
+                        grid.moves[p] & (1 << k) != 0
+                            && ws.g32[p] != u32::MAX
+                            && ws.g32[p] + c == gc
+                    })
+                    .map(|(_, p)| p)
+                    .expect("a predecessor on an optimal path");
+                cur = prev;
+                cells.push(xy(cur));
             }
         } else {
             let s = grid.pidx(start.0, start.1);
@@ -499,7 +542,7 @@ pub fn astar_cost(
     grid.check_cell("goal", goal)?;
     let mut expanded_out = 0;
     let r = match &grid.weight {
-        None => search_octile(grid, ws, start, goal, &mut expanded_out),
+        None => search_unweighted(grid, ws, start, goal, &mut expanded_out),
         Some(w) => search_weighted(grid, w, ws, start, goal, &mut expanded_out),
     };
     Ok((r, expanded_out))
@@ -578,6 +621,136 @@ pub(super) fn fixed_point_length(g: u64, one: u64, diag: u64) -> Option<f64> {
     let rest = g.checked_sub(n_diag * diag)?;
     debug_assert_eq!(rest % one, 0);
     Some((rest / one) as f64 + n_diag as f64 * SQRT2)
+}
+
+/// Fixed-point steps of the compact search: a straight step 2^18, a diagonal the odd
+/// integer nearest to √2 · 2^18, so the rounding of √2 is 1.6e-6 relative (a path the
+/// search returns is at most that much longer than the shortest) and a path cost below
+/// 2^32 (about 16,000 straight steps) fits in a `u32`.
+const COMPACT_STEPS: (u64, u64) = (1 << 18, 370_727);
+
+/// The unweighted search: the compact search, or the packed one when a cost outgrows 32
+/// bits.
+fn search_unweighted(
+    grid: &SearchGrid,
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+    expanded_out: &mut usize,
+) -> Option<f64> {
+    match search_octile_compact(grid, ws, start, goal, expanded_out) {
+        Ok(found) => {
+            ws.last_compact = true;
+            found
+        }
+        Err(Overflow) => {
+            ws.last_compact = false;
+            search_octile(grid, ws, start, goal, expanded_out)
+        }
+    }
+}
+
+/// A compact search met a path cost that does not fit its 32-bit g.
+struct Overflow;
+
+/// The unweighted (octile) search with a 4-byte state per cell: g in fixed point
+/// ([`COMPACT_STEPS`]) and nothing else. No closed flag is needed: with integer costs and
+/// a consistent integer heuristic each push strictly lowers g, so an open-list entry is
+/// current exactly when its key equals g + h of its cell, and a cell's one current entry
+/// is popped once; no parent is needed either (see the path walk in [`astar_with`]). The
+/// smaller state (1 MB on a 512 × 512 map instead of 2 MB) keeps the search in the
+/// cache; cells reached are listed and reset at the next query.
+fn search_octile_compact(
+    grid: &SearchGrid,
+    ws: &mut AstarWorkspace,
+    start: (usize, usize),
+    goal: (usize, usize),
+    expanded_out: &mut usize,
+) -> Result<Option<f64>, Overflow> {
+    let n = grid.pass.len();
+    ws.prepare_compact(n);
+    let (one, diag_cost) = COMPACT_STEPS;
+    let (one32, diag32) = (one as u32, diag_cost as u32);
+    let extra = diag_cost - one;
+    let pw = grid.pw;
+    let rows = RowDivider::new(pw);
+    let moves = &grid.moves[..];
+    let g = &mut ws.g32[..];
+    let touched = &mut ws.touched;
+    let mut heap = std::mem::take(&mut ws.heap);
+    heap.clear();
+    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
+    let h = |x: i64, y: i64| {
+        let (a, b) = ((gx - x).unsigned_abs(), (gy - y).unsigned_abs());
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        hi * one + lo * extra
+    };
+    let s = grid.pidx(start.0, start.1);
+    let t = grid.pidx(goal.0, goal.1);
+    g[s] = 0;
+    touched.push(s as u32);
+    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1), s as u32);
+    let off = move_offsets(pw);
+    const DXY: [(i64, i64); 8] = [
+        (1, 0),
+        (-1, 0),
+        (0, 1),
+        (0, -1),
+        (1, 1),
+        (-1, 1),
+        (1, -1),
+        (-1, -1),
+    ];
+    let mut expanded = 0usize;
+    let mut found = false;
+    let mut overflow = false;
+    while let Some((key, ui)) = heap.pop() {
+        let u = ui as usize;
+        let gu = g[u];
+        let (x, y) = rows.xy(u);
+        if key != u64::from(gu) + h(x, y) {
+            continue; // superseded by a cheaper entry of the same cell
+        }
+        expanded += 1;
+        if u == t {
+            found = true;
+            break;
+        }
+        let mut legal = moves[u];
+        while legal != 0 {
+            let k = legal.trailing_zeros() as usize;
+            legal &= legal - 1;
+            let v = (u as isize + off[k]) as usize;
+            let Some(ng) = gu.checked_add(if k < 4 { one32 } else { diag32 }) else {
+                overflow = true;
+                break;
+            };
+            let gv = g[v];
+            if ng < gv {
+                if gv == u32::MAX {
+                    touched.push(v as u32);
+                }
+                g[v] = ng;
+                let (dx, dy) = DXY[k];
+                heap.push(u64::from(ng) + h(x + dx, y + dy), v as u32);
+            }
+        }
+        if overflow {
+            break;
+        }
+    }
+    ws.heap = heap;
+    if overflow {
+        return Err(Overflow);
+    }
+    *expanded_out = expanded;
+    if !found {
+        return Ok(None);
+    }
+    Ok(Some(
+        fixed_point_length(u64::from(g[t]), one, diag_cost)
+            .expect("a 32-bit cost decodes with a 2^18 straight step"),
+    ))
 }
 
 /// The unweighted (octile) search on fixed-point costs with 8-byte packed cell states;
@@ -890,6 +1063,42 @@ mod tests {
         // Too many diagonals for the modular decoding: the caller must count moves.
         let (one, diag) = fixed_point_steps(1 << 30);
         assert!(fixed_point_length(one * diag, one, diag).is_none());
+    }
+
+    #[test]
+    fn long_paths_fall_back_to_the_wide_search() {
+        // a corridor of 20,000 cells: 19,999 straight steps overflow the 32-bit g
+        // (2^32 / 2^18 = 16,384 steps), so the packed 64-bit search answers
+        let w = 20_000;
+        let grid = SearchGrid::from_obstacles(&vec![false; w], w, 1).unwrap();
+        let mut ws = AstarWorkspace::new();
+        let p = astar_with(&grid, &mut ws, (0, 0), (w - 1, 0))
+            .unwrap()
+            .unwrap();
+        assert!(!ws.last_compact);
+        assert_eq!(p.cost, (w - 1) as f64);
+        assert_eq!(p.cells.len(), w);
+        assert!(
+            p.cells
+                .windows(2)
+                .all(|c| c[1].0 == c[0].0 + 1 && c[1].1 == 0)
+        );
+        // a short query on the same workspace takes the compact search again
+        let q = astar_with(&grid, &mut ws, (10, 0), (5, 0))
+            .unwrap()
+            .unwrap();
+        assert!(ws.last_compact);
+        assert_eq!(q.cost, 5.0);
+        assert_eq!(q.cells, (5..=10).rev().map(|x| (x, 0)).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn compact_steps_are_the_rounded_odd_sqrt2() {
+        let (one, diag) = COMPACT_STEPS;
+        let exact = SQRT2 * one as f64;
+        assert_eq!(diag % 2, 1);
+        assert!((diag as f64 - exact).abs() < 1.0, "the nearest odd integer");
+        assert!((diag as f64 / exact - 1.0).abs() < 2e-6);
     }
 
     #[test]
