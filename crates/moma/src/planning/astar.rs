@@ -11,10 +11,12 @@
 //! the odd integer nearest √2·2^k). Its state is one `u32` g per cell (k = 18; 1 MB for a
 //! 512 × 512 map, so a search stays in the L2 cache even right after other work has
 //! evicted it), reset through a list of the cells reached; a query whose costs outgrow 32
-//! bits reruns with 8-byte states (g, parent direction, stamp; k = 20). The open list is a
-//! radix heap on the monotone integer keys whose equal-key bucket is a stack (f ties
-//! broken toward the deepest, larger-g cells). The reported cost is
-//! n_straight + n_diag · √2 of the path found, recovered exactly from its integer cost.
+//! bits reruns with 8-byte states (g, parent direction, stamp; k = 20). The compact
+//! search's open list is a calendar queue over the bounded window of keys an A* open list
+//! holds ([`BandQueue`]); the other searches use a radix heap ([`OpenList`]); both pop
+//! the same order: increasing f, ties toward the most recently generated (deepest,
+//! larger-g) cells. The reported cost is n_straight + n_diag · √2 of the path found,
+//! recovered exactly from its integer cost.
 
 use super::grid::OccupancyGrid;
 use crate::{Error, Result};
@@ -347,6 +349,178 @@ impl OpenList {
     }
 }
 
+/// The compact search's open list: a calendar queue over the window of keys an A* open
+/// list can hold. With a consistent heuristic every key pushed lies in
+/// `[last, last + 2·diagonal]` (`last` = the last key popped), less than
+/// `(CAL_BUCKETS − 1)·2^CAL_SHIFT` wide, so the coarse index `(key >> CAL_SHIFT) mod
+/// CAL_BUCKETS` names one band of keys without collisions. Keys equal to `last` go on a
+/// last-in first-out stack (f ties toward the deepest cells, as in [`OpenList`]), keys of
+/// `last`'s band to a small binary heap (ties newest first), and any other key to its
+/// band's unsorted vector, moved into the heap once when the band is reached: each entry
+/// moves at most once, where a radix heap moves it down bucket after bucket (on a maze,
+/// whose f rises at almost every step, that was the search's largest cost).
+#[derive(Debug, Clone)]
+struct BandQueue {
+    last: u64,
+    /// Bit c set ⇔ band vector c is non-empty.
+    mask: u64,
+    /// Coarse index of `last`'s band.
+    cur: u32,
+    bands: Vec<Vec<(u64, u32)>>,
+    equal: Vec<(u64, u32)>,
+    /// Min-heap of `key << 64 | (u32::MAX − seq) << 32 | idx`.
+    heap: Vec<u128>,
+    seq: u32,
+}
+
+const CAL_SHIFT: u32 = 14;
+const CAL_BUCKETS: u32 = 64;
+
+impl Default for BandQueue {
+    fn default() -> Self {
+        Self {
+            last: 0,
+            mask: 0,
+            cur: 0,
+            bands: vec![Vec::new(); CAL_BUCKETS as usize],
+            equal: Vec::new(),
+            heap: Vec::new(),
+            seq: 0,
+        }
+    }
+}
+
+impl BandQueue {
+    /// Empties the queue; keys pushed must be at least `first` and within the window.
+    fn clear(&mut self, first: u64) {
+        self.last = first;
+        self.mask = 0;
+        self.cur = ((first >> CAL_SHIFT) % u64::from(CAL_BUCKETS)) as u32;
+        self.bands.iter_mut().for_each(Vec::clear);
+        self.equal.clear();
+        self.heap.clear();
+        self.seq = 0;
+    }
+
+    #[inline(always)]
+    fn heap_entry(&mut self, key: u64, idx: u32) -> u128 {
+        self.seq = self.seq.wrapping_add(1);
+        (u128::from(key) << 64) | (u128::from(u32::MAX - self.seq) << 32) | u128::from(idx)
+    }
+
+    #[inline(always)]
+    fn push(&mut self, key: u64, idx: u32) {
+        debug_assert!(key >= self.last);
+        debug_assert!(key - self.last < u64::from(CAL_BUCKETS - 1) << CAL_SHIFT);
+        if key == self.last {
+            self.equal.push((key, idx));
+        } else if key >> CAL_SHIFT == self.last >> CAL_SHIFT {
+            let e = self.heap_entry(key, idx);
+            band_push(&mut self.heap, e);
+        } else {
+            let c = ((key >> CAL_SHIFT) % u64::from(CAL_BUCKETS)) as usize;
+            self.mask |= 1u64 << c;
+            self.bands[c].push((key, idx));
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u64, u32)> {
+        if let Some(e) = self.equal.pop() {
+            return Some(e);
+        }
+        if let Some(e) = band_pop(&mut self.heap) {
+            self.last = (e >> 64) as u64;
+            return Some((self.last, e as u32));
+        }
+        self.advance()
+    }
+
+    /// Stack and heap are empty: move the next non-empty band into the heap.
+    #[inline(never)]
+    fn advance(&mut self) -> Option<(u64, u32)> {
+        if self.mask == 0 {
+            return None;
+        }
+        let r = self.mask.rotate_right(self.cur);
+        let c = (self.cur + r.trailing_zeros()) % CAL_BUCKETS;
+        self.cur = c;
+        self.mask &= !(1u64 << c);
+        let mut band = std::mem::take(&mut self.bands[c as usize]);
+        if band.len() == 1 {
+            let e = band[0];
+            band.clear();
+            self.bands[c as usize] = band;
+            self.last = e.0;
+            return Some(e);
+        }
+        // the band's minimum becomes `last`: its entries go on the stack in push order
+        // (so the newest pops first), the band's larger keys into the heap
+        let min = band
+            .iter()
+            .map(|e| e.0)
+            .min()
+            .expect("the band is non-empty");
+        self.last = min;
+        for &(k, i) in &band {
+            if k == min {
+                self.equal.push((k, i));
+            } else {
+                let e = self.heap_entry(k, i);
+                band_push(&mut self.heap, e);
+            }
+        }
+        band.clear();
+        self.bands[c as usize] = band;
+        self.equal.pop()
+    }
+}
+
+/// Binary min-heap push.
+#[inline(always)]
+fn band_push(h: &mut Vec<u128>, e: u128) {
+    let mut i = h.len();
+    h.push(e);
+    while i > 0 {
+        let p = (i - 1) / 2;
+        if h[p] <= e {
+            break;
+        }
+        h[i] = h[p];
+        i = p;
+    }
+    h[i] = e;
+}
+
+/// Binary min-heap pop.
+#[inline(always)]
+fn band_pop(h: &mut Vec<u128>) -> Option<u128> {
+    let top = *h.first()?;
+    let last = h.pop().expect("non-empty");
+    let n = h.len();
+    if n > 0 {
+        let mut i = 0;
+        loop {
+            let l = 2 * i + 1;
+            if l >= n {
+                break;
+            }
+            let c = if l + 1 < n && h[l + 1] < h[l] {
+                l + 1
+            } else {
+                l
+            };
+            if h[c] >= last {
+                break;
+            }
+            h[i] = h[c];
+            i = c;
+        }
+        h[i] = last;
+    }
+    Some(top)
+}
+
 /// Per-cell search state, 16 bytes so one cache line access serves a neighbour. `g` is
 /// the fixed-point cost (unweighted search) or the IEEE bits of the f64 cost (weighted).
 #[derive(Clone, Copy, Debug, Default)]
@@ -393,6 +567,7 @@ pub struct AstarWorkspace {
     touched: Vec<u32>,
     /// Which unweighted search produced the last result (for path reconstruction).
     last_compact: bool,
+    band_queue: BandQueue,
     heap: OpenList,
 }
 
@@ -677,8 +852,7 @@ fn search_octile_compact(
     let moves = &grid.moves[..];
     let g = &mut ws.g32[..];
     let touched = &mut ws.touched;
-    let mut heap = std::mem::take(&mut ws.heap);
-    heap.clear();
+    let mut heap = std::mem::take(&mut ws.band_queue);
     let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
     let h = |x: i64, y: i64| {
         let (a, b) = ((gx - x).unsigned_abs(), (gy - y).unsigned_abs());
@@ -689,7 +863,9 @@ fn search_octile_compact(
     let t = grid.pidx(goal.0, goal.1);
     g[s] = 0;
     touched.push(s as u32);
-    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1), s as u32);
+    let h0 = h(start.0 as i64 + 1, start.1 as i64 + 1);
+    heap.clear(h0);
+    heap.push(h0, s as u32);
     let off = move_offsets(pw);
     const DXY: [(i64, i64); 8] = [
         (1, 0),
@@ -739,7 +915,7 @@ fn search_octile_compact(
             break;
         }
     }
-    ws.heap = heap;
+    ws.band_queue = heap;
     if overflow {
         return Err(Overflow);
     }
@@ -1112,11 +1288,56 @@ mod tests {
             for k in 1..3000usize {
                 let i = k.wrapping_mul(2_654_435_761) % (u32::MAX as usize);
                 check(i);
-                check((i / pw) * pw);
-                if i > 0 {
-                    check((i / pw) * pw - 1);
+                let row_start = (i / pw) * pw;
+                check(row_start);
+                if row_start > 0 {
+                    check(row_start - 1);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn band_queue_pops_like_the_radix_heap() {
+        // A*-like use: every key pushed lies in [last, last + 2 · diagonal]; both queues
+        // must pop the same (key, idx) sequence, ties newest first
+        let (one, diag) = COMPACT_STEPS;
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            seed >> 33
+        };
+        for round in 0..200 {
+            let mut radix = OpenList::default();
+            let mut band = BandQueue::default();
+            let first = next() % (1 << 30);
+            band.clear(first);
+            radix.push(first, 0);
+            band.push(first, 0);
+            let mut idx = 1u32;
+            let mut pops = 0;
+            while let Some(a) = radix.pop() {
+                let b = band.pop();
+                assert_eq!(Some(a), b, "round {round}, pop {pops}");
+                pops += 1;
+                if pops > 3000 {
+                    continue;
+                }
+                for _ in 0..next() % 4 {
+                    // exact ties, small steps and the window's far end
+                    let key = a.0
+                        + match next() % 4 {
+                            0 => 0,
+                            1 => next() % (1 << 13),
+                            2 => (next() % 3) * one + (next() % 2) * diag,
+                            _ => 2 * diag - next() % 3,
+                        };
+                    radix.push(key, idx);
+                    band.push(key, idx);
+                    idx += 1;
+                }
+            }
+            assert_eq!(band.pop(), None);
         }
     }
 
