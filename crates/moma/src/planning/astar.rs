@@ -13,7 +13,7 @@
 //! evicted it), reset through a list of the cells reached; a query whose costs outgrow 32
 //! bits reruns with 8-byte states (g, parent direction, stamp; k = 20). The compact
 //! search's open list is a calendar queue over the bounded window of keys an A* open list
-//! holds ([`BandQueue`]); the other searches use a radix heap ([`OpenList`]); both pop
+//! holds (`BandQueue`); the other searches use a radix heap (`OpenList`); both pop
 //! the same order: increasing f, ties toward the most recently generated (deepest,
 //! larger-g) cells. The reported cost is n_straight + n_diag · √2 of the path found,
 //! recovered exactly from its integer cost.
