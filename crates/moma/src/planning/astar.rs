@@ -763,6 +763,31 @@ fn move_offsets(pw: usize) -> [isize; 8] {
     [1, -1, p, -p, p + 1, p - 1, -p + 1, -p - 1]
 }
 
+/// (dx, dy) of the eight moves, in the order of [`move_offsets`]; diagonals 4..8 pass
+/// between cardinals (0|1) and (2|3).
+const MOVE_DXY: [(i64, i64); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (-1, 1),
+    (1, -1),
+    (-1, -1),
+];
+
+/// The integer octile heuristic toward `goal` (padded coordinates) for fixed-point steps
+/// `one` and `diag`: `max · one + min · (diag − one)`, consistent with those step costs.
+#[inline(always)]
+fn fixed_point_octile(goal: (i64, i64), one: u64, diag: u64) -> impl Fn(i64, i64) -> u64 {
+    let extra = diag - one;
+    move |x: i64, y: i64| {
+        let (a, b) = ((goal.0 - x).unsigned_abs(), (goal.1 - y).unsigned_abs());
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        hi * one + lo * extra
+    }
+}
+
 /// Fixed-point scale of the unweighted search for a grid of `n` padded cells: a straight
 /// step costs `one` = 2^shift, a diagonal `diag` ≈ √2 · 2^shift (rounded to the nearest odd
 /// integer), with shift ≤ 20 chosen so that any path cost fits in [`G_BITS`] bits. Keys
@@ -846,19 +871,13 @@ fn search_octile_compact(
     ws.prepare_compact(n);
     let (one, diag_cost) = COMPACT_STEPS;
     let (one32, diag32) = (one as u32, diag_cost as u32);
-    let extra = diag_cost - one;
     let pw = grid.pw;
     let rows = RowDivider::new(pw);
     let moves = &grid.moves[..];
     let g = &mut ws.g32[..];
     let touched = &mut ws.touched;
     let mut heap = std::mem::take(&mut ws.band_queue);
-    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
-    let h = |x: i64, y: i64| {
-        let (a, b) = ((gx - x).unsigned_abs(), (gy - y).unsigned_abs());
-        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-        hi * one + lo * extra
-    };
+    let h = fixed_point_octile((goal.0 as i64 + 1, goal.1 as i64 + 1), one, diag_cost);
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
     g[s] = 0;
@@ -867,16 +886,6 @@ fn search_octile_compact(
     heap.clear(h0);
     heap.push(h0, s as u32);
     let off = move_offsets(pw);
-    const DXY: [(i64, i64); 8] = [
-        (1, 0),
-        (-1, 0),
-        (0, 1),
-        (0, -1),
-        (1, 1),
-        (-1, 1),
-        (1, -1),
-        (-1, -1),
-    ];
     let mut expanded = 0usize;
     let mut found = false;
     let mut overflow = false;
@@ -907,7 +916,7 @@ fn search_octile_compact(
                     touched.push(v as u32);
                 }
                 g[v] = ng;
-                let (dx, dy) = DXY[k];
+                let (dx, dy) = MOVE_DXY[k];
                 heap.push(u64::from(ng) + h(x + dx, y + dy), v as u32);
             }
         }
@@ -944,7 +953,6 @@ fn search_octile(
     let closed_bit = 1u64 << STAMP_SHIFT;
     let stamp_mask = !0u64 << STAMP_SHIFT;
     let (one, diag_cost) = fixed_point_steps(n);
-    let extra = diag_cost - one;
     let pw = grid.pw;
     let rows = RowDivider::new(pw);
     let moves = &grid.moves[..];
@@ -952,28 +960,12 @@ fn search_octile(
     let mut heap = std::mem::take(&mut ws.heap);
     heap.clear();
     // Heuristic in padded coordinates (the offset cancels).
-    let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
-    let h = |x: i64, y: i64| {
-        let (a, b) = ((gx - x).unsigned_abs(), (gy - y).unsigned_abs());
-        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-        hi * one + lo * extra
-    };
+    let h = fixed_point_octile((goal.0 as i64 + 1, goal.1 as i64 + 1), one, diag_cost);
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
     st[s] = open_stamp;
     heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1), s as u32);
     let off = move_offsets(pw);
-    // (dx, dy) of each move; diagonals 4..8 pass between cardinals (0|1) and (2|3).
-    const DXY: [(i64, i64); 8] = [
-        (1, 0),
-        (-1, 0),
-        (0, 1),
-        (0, -1),
-        (1, 1),
-        (-1, 1),
-        (1, -1),
-        (-1, -1),
-    ];
     let mut expanded = 0usize;
     let mut found = false;
     while let Some((_, ui)) = heap.pop() {
@@ -1002,7 +994,7 @@ fn search_octile(
             // heuristic), so `ng < g` also rejects it.
             if (sv & stamp_mask) | closed_bit != open_stamp | closed_bit || ng < sv & G_MASK {
                 st[v] = open_stamp | ((k as u64) << DIR_SHIFT) | ng;
-                let (dx, dy) = DXY[k];
+                let (dx, dy) = MOVE_DXY[k];
                 heap.push(ng + h(x + dx, y + dy), v as u32);
             }
         }
