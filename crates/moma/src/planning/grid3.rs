@@ -102,19 +102,27 @@ pub struct Path3 {
     pub expanded: usize,
 }
 
-/// Search state of one voxel.
+/// Search state of one voxel; `g` in the fixed-point units of [`STEPS3`].
 #[derive(Clone, Copy)]
 struct VoxelState {
-    g: f64,
+    g: u64,
     parent: u32,
     closed: bool,
 }
 
 const UNSEEN: VoxelState = VoxelState {
-    g: f64::INFINITY,
+    g: u64::MAX,
     parent: u32::MAX,
     closed: false,
 };
+
+/// Fixed-point costs of the three move kinds: 2^20, round(√2 · 2^20), round(√3 · 2^20).
+/// Keys are exact integers, so f ties are exact and the tie-break toward larger g works
+/// (with float sums, ties differ in their last bits and a plateau of equal f is expanded
+/// in arbitrary order); the rounding (below 5e-7 relative) can only prefer a path longer
+/// than the shortest by less than that. The reported length counts the moves of the path
+/// found: n₁ + n₂√2 + n₃√3.
+const STEPS3: [u64; 3] = [1 << 20, 1_482_910, 1_816_187];
 
 /// Search state stored in lazily allocated 8 x 8 x 8 blocks: dense-array speed without
 /// allocating state for the whole (possibly 10^8-voxel) grid.
@@ -152,8 +160,8 @@ impl BlockStates {
 
 #[derive(Clone, Copy, PartialEq)]
 struct Entry3 {
-    f: f64,
-    g: f64,
+    f: u64,
+    g: u64,
     x: u16,
     y: u16,
     z: u16,
@@ -162,7 +170,7 @@ impl Eq for Entry3 {}
 impl Ord for Entry3 {
     fn cmp(&self, o: &Self) -> std::cmp::Ordering {
         // Max-heap: smallest f first, ties to the larger g.
-        o.f.total_cmp(&self.f).then(self.g.total_cmp(&o.g))
+        o.f.cmp(&self.f).then(self.g.cmp(&o.g))
     }
 }
 impl PartialOrd for Entry3 {
@@ -173,6 +181,16 @@ impl PartialOrd for Entry3 {
 
 const SQRT2: f64 = std::f64::consts::SQRT_2;
 const SQRT3: f64 = 1.732_050_807_568_877_2;
+
+/// The 3-D octile distance in the fixed-point units of [`STEPS3`]: the exact cost of an
+/// unobstructed path, hence consistent with those step costs.
+#[inline]
+fn octile3_fixed(dx: i64, dy: i64, dz: i64) -> u64 {
+    let mut a = [dx.unsigned_abs(), dy.unsigned_abs(), dz.unsigned_abs()];
+    a.sort_unstable();
+    let (lo, mid, hi) = (a[0], a[1], a[2]);
+    STEPS3[2] * lo + STEPS3[1] * (mid - lo) + STEPS3[0] * (hi - mid)
+}
 
 /// Admissible, consistent 3-D octile heuristic for costs 1 / √2 / √3.
 #[inline]
@@ -209,7 +227,7 @@ pub fn astar3d(
     }
     // The 26 moves and, for each, the bit mask of the 3x3x3 neighbourhood voxels that
     // must be free (its bounding box minus the centre).
-    let mut moves: Vec<(i64, i64, i64, f64, u32)> = Vec::with_capacity(26);
+    let mut moves: Vec<(i64, i64, i64, u64, u32)> = Vec::with_capacity(26);
     let nb = |dx: i64, dy: i64, dz: i64| ((dz + 1) * 9 + (dy + 1) * 3 + (dx + 1)) as u32;
     for dz in -1..=1i64 {
         for dy in -1..=1i64 {
@@ -228,11 +246,7 @@ pub fn astar3d(
                         }
                     }
                 }
-                let cost = match k {
-                    1 => 1.0,
-                    2 => SQRT2,
-                    _ => SQRT3,
-                };
+                let cost = STEPS3[k as usize - 1];
                 moves.push((dx, dy, dz, cost, need));
             }
         }
@@ -246,18 +260,18 @@ pub fn astar3d(
         )
     };
     let (gx, gy, gz) = (goal.0 as i64, goal.1 as i64, goal.2 as i64);
-    let h = |x: i64, y: i64, z: i64| octile3(gx - x, gy - y, gz - z);
+    let h = |x: i64, y: i64, z: i64| octile3_fixed(gx - x, gy - y, gz - z);
     let mut state = BlockStates::new(grid);
     let mut open = BinaryHeap::new();
     let (sx, sy, sz) = (start.0 as i64, start.1 as i64, start.2 as i64);
     *state.get_mut(sx, sy, sz) = VoxelState {
-        g: 0.0,
+        g: 0,
         parent: u32::MAX,
         closed: false,
     };
     open.push(Entry3 {
         f: h(sx, sy, sz),
-        g: 0.0,
+        g: 0,
         x: sx as u16,
         y: sy as u16,
         z: sz as u16,
@@ -280,9 +294,18 @@ pub fn astar3d(
                 cur = state.get_mut(cx, cy, cz).parent;
             }
             voxels.reverse();
+            // the length n₁ + n₂√2 + n₃√3 of the moves taken
+            let mut n = [0u32; 3];
+            for w in voxels.windows(2) {
+                let k = (w[0].0 != w[1].0) as usize
+                    + (w[0].1 != w[1].1) as usize
+                    + (w[0].2 != w[1].2) as usize;
+                n[k - 1] += 1;
+            }
+            let cost = f64::from(n[0]) + f64::from(n[1]) * SQRT2 + f64::from(n[2]) * SQRT3;
             return Ok(Some(Path3 {
                 voxels,
-                cost: g,
+                cost,
                 expanded,
             }));
         }
@@ -322,4 +345,26 @@ pub fn astar3d(
         }
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_steps_round_the_true_costs_and_keep_the_octile_formula_exact() {
+        let one = STEPS3[0] as f64;
+        assert_eq!(STEPS3[1], (SQRT2 * one).round() as u64);
+        assert_eq!(STEPS3[2], (SQRT3 * one).round() as u64);
+        // the relations that make lo·d3 + (mid − lo)·d2 + (hi − mid)·d1 the free-space
+        // shortest cost (hence a consistent heuristic): d3 − d2 ≤ d2 − d1 ≤ d1
+        assert!(STEPS3[2] - STEPS3[1] <= STEPS3[1] - STEPS3[0]);
+        assert!(STEPS3[1] - STEPS3[0] <= STEPS3[0]);
+        // and it agrees with the float heuristic to the rounding
+        for (dx, dy, dz) in [(3, -7, 2), (0, 0, 5), (10, 10, 10), (-4, 1, 0)] {
+            let f = octile3(dx, dy, dz);
+            let i = octile3_fixed(dx, dy, dz) as f64 / one;
+            assert!((f - i).abs() < 1e-6 * f.max(1.0), "{dx} {dy} {dz}");
+        }
+    }
 }
