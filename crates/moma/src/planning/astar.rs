@@ -11,9 +11,9 @@
 //! the odd integer nearest √2·2^k). Its state is one `u32` g per cell (k = 18; 1 MB for a
 //! 512 × 512 map, so a search stays in the L2 cache even right after other work has
 //! evicted it), reset through a list of the cells reached; a query whose costs outgrow 32
-//! bits reruns with 8-byte states (g, parent direction, stamp; k = 20). The compact
-//! search's open list is a calendar queue over the bounded window of keys an A* open list
-//! holds (`BandQueue`); the other searches use a radix heap (`OpenList`); both pop
+//! bits reruns the same search on a `u64` g. Its open list is a calendar queue over the
+//! bounded window of keys an A* open list holds (`BandQueue`); the cost-aware search uses
+//! a radix heap (`OpenList`); both pop
 //! the same order: increasing f, ties toward the most recently generated (deepest,
 //! larger-g) cells. The reported cost is n_straight + n_diag · √2 of the path found,
 //! recovered exactly from its integer cost.
@@ -558,14 +558,13 @@ impl PartialOrd for Node {
 pub struct AstarWorkspace {
     state: Vec<CellState>,
     generation: u32,
-    /// Packed 8-byte states of the unweighted search (see [`search_octile`]).
-    packed: Vec<u64>,
-    packed_generation: u64,
-    /// g of the compact unweighted search (see [`search_octile_compact`]), `u32::MAX` =
-    /// not reached; the cells it set, reset at the start of the next query.
+    /// g of the unweighted search (see [`search_octile`]): 32-bit, or 64-bit for a query
+    /// whose costs outgrow 32 bits; `MAX` = not reached.
     g32: Vec<u32>,
+    g64: Vec<u64>,
+    /// The cells the last unweighted query reached, reset at the start of the next one.
     touched: Vec<u32>,
-    /// Which unweighted search produced the last result (for path reconstruction).
+    /// Whether the last unweighted query ran on `g32` (else `g64`).
     last_compact: bool,
     band_queue: BandQueue,
     heap: OpenList,
@@ -590,28 +589,67 @@ impl AstarWorkspace {
         self.generation += 1;
     }
 
-    fn prepare_compact(&mut self, n: usize) {
-        if self.g32.len() != n {
-            self.g32 = vec![u32::MAX; n];
+    /// Resets the cells the last unweighted query reached and sizes `G`'s array to `n`.
+    fn prepare_g<G: GValue>(&mut self, n: usize) {
+        if self.last_compact {
+            reset_touched(&mut self.g32, &self.touched);
         } else {
-            for &c in &self.touched {
-                self.g32[c as usize] = u32::MAX;
-            }
+            reset_touched(&mut self.g64, &self.touched);
         }
         self.touched.clear();
+        let g = G::array(self);
+        if g.len() != n {
+            *g = vec![G::MAX; n];
+        }
     }
+}
 
-    fn prepare_packed(&mut self, n: usize) {
-        if self.packed.len() != n {
-            self.packed = vec![0; n];
-            self.packed_generation = 0;
-        }
-        // Stamps (top 16 bits): 2·gen = generated this query, 2·gen + 1 = closed.
-        if self.packed_generation >= (1 << 15) - 1 {
-            self.packed.iter_mut().for_each(|c| *c = 0);
-            self.packed_generation = 0;
-        }
-        self.packed_generation += 1;
+/// Sets the listed cells of `g` back to "not reached".
+fn reset_touched<G: GValue>(g: &mut [G], touched: &[u32]) {
+    if g.is_empty() {
+        return;
+    }
+    for &c in touched {
+        g[c as usize] = G::MAX;
+    }
+}
+
+/// The integer type of the unweighted search's g: `u32` (1 MB for a 512 × 512 map) or
+/// `u64` when a query's costs outgrow 32 bits.
+trait GValue: Copy + Ord + std::fmt::Debug {
+    const MAX: Self;
+    fn from_u64(v: u64) -> Option<Self>;
+    fn to_u64(self) -> u64;
+    fn array(ws: &mut AstarWorkspace) -> &mut Vec<Self>;
+}
+
+impl GValue for u32 {
+    const MAX: Self = u32::MAX;
+    #[inline(always)]
+    fn from_u64(v: u64) -> Option<Self> {
+        u32::try_from(v).ok().filter(|&v| v != u32::MAX)
+    }
+    #[inline(always)]
+    fn to_u64(self) -> u64 {
+        u64::from(self)
+    }
+    fn array(ws: &mut AstarWorkspace) -> &mut Vec<Self> {
+        &mut ws.g32
+    }
+}
+
+impl GValue for u64 {
+    const MAX: Self = u64::MAX;
+    #[inline(always)]
+    fn from_u64(v: u64) -> Option<Self> {
+        Some(v)
+    }
+    #[inline(always)]
+    fn to_u64(self) -> u64 {
+        self
+    }
+    fn array(ws: &mut AstarWorkspace) -> &mut Vec<Self> {
+        &mut ws.g64
     }
 }
 
@@ -661,40 +699,14 @@ pub fn astar_with(
                 cells.push(xy(cur as usize));
                 cur = ws.state[cur as usize].parent;
             }
-        } else if ws.last_compact {
-            // No parent is stored: step to a neighbour whose g plus the move's cost is this
-            // cell's g. Such a neighbour's g is optimal (it is at most optimal + 0), so the
-            // walk follows an optimal path and reaches the start (g strictly decreases).
-            let s = grid.pidx(start.0, start.1);
-            let off = move_offsets(grid.pw);
-            let (one, diag) = COMPACT_STEPS;
-            let mut cur = t;
-            cells.push(xy(cur));
-            while cur != s {
-                let gc = ws.g32[cur];
-                let prev = (0..8)
-                    .map(|k| (k, (cur as isize - off[k]) as usize))
-                    .find(|&(k, p)| {
-                        let c = if k < 4 { one } else { diag } as u32;
-                        grid.moves[p] & (1 << k) != 0
-                            && ws.g32[p] != u32::MAX
-                            && ws.g32[p] + c == gc
-                    })
-                    .map(|(_, p)| p)
-                    .expect("a predecessor on an optimal path");
-                cur = prev;
-                cells.push(xy(cur));
-            }
         } else {
             let s = grid.pidx(start.0, start.1);
-            let off = move_offsets(grid.pw);
-            let mut cur = t;
-            cells.push(xy(cur));
-            while cur != s {
-                let k = ((ws.packed[cur] >> DIR_SHIFT) & 7) as usize;
-                cur = (cur as isize - off[k]) as usize;
-                cells.push(xy(cur));
-            }
+            let walk = if ws.last_compact {
+                walk_back(grid, &ws.g32, s, t)
+            } else {
+                walk_back(grid, &ws.g64, s, t)
+            };
+            cells.extend(walk.into_iter().map(xy));
         }
         cells.reverse();
         GridPath {
@@ -723,12 +735,8 @@ pub fn astar_cost(
     Ok((r, expanded_out))
 }
 
-/// Bits of the packed state word holding g (fixed point), then 3 bits of parent direction,
-/// then a 16-bit stamp (2·generation = generated, 2·generation + 1 = closed).
+/// Bits available for a fixed-point path cost of [`fixed_point_steps`] (D* Lite's g).
 pub(super) const G_BITS: u32 = 45;
-const G_MASK: u64 = (1 << G_BITS) - 1;
-const DIR_SHIFT: u32 = G_BITS;
-const STAMP_SHIFT: u32 = 48;
 
 /// Division of a padded cell index by the padded row width without a `div` instruction:
 /// `i / pw = ⌊i · m / 2^64⌋` with `m = ⌊2^64 / pw⌋ + 1`, exact for `i · pw < 2^64`
@@ -829,8 +837,7 @@ pub(super) fn fixed_point_length(g: u64, one: u64, diag: u64) -> Option<f64> {
 /// 2^32 (about 16,000 straight steps) fits in a `u32`.
 const COMPACT_STEPS: (u64, u64) = (1 << 18, 370_727);
 
-/// The unweighted search: the compact search, or the packed one when a cost outgrows 32
-/// bits.
+/// The unweighted search on a 32-bit g, rerun on a 64-bit g when a cost outgrows 32 bits.
 fn search_unweighted(
     grid: &SearchGrid,
     ws: &mut AstarWorkspace,
@@ -838,29 +845,51 @@ fn search_unweighted(
     goal: (usize, usize),
     expanded_out: &mut usize,
 ) -> Option<f64> {
-    match search_octile_compact(grid, ws, start, goal, expanded_out) {
-        Ok(found) => {
-            ws.last_compact = true;
-            found
-        }
-        Err(Overflow) => {
-            ws.last_compact = false;
-            search_octile(grid, ws, start, goal, expanded_out)
-        }
+    let found = search_octile::<u32>(grid, ws, start, goal, expanded_out);
+    ws.last_compact = true;
+    found.unwrap_or_else(|Overflow| {
+        let wide = search_octile::<u64>(grid, ws, start, goal, expanded_out);
+        ws.last_compact = false;
+        wide.unwrap_or_else(|Overflow| unreachable!("64-bit costs of a grid below 2^32 cells"))
+    })
+}
+
+/// Padded indices of the path from `t` back to `s`. No parent is stored: each step goes
+/// to a neighbour whose g plus the move's cost is this cell's g. Such a neighbour's g is
+/// optimal (it is at most optimal + 0), so the walk follows an optimal path and reaches
+/// the start (g strictly decreases).
+fn walk_back<G: GValue>(grid: &SearchGrid, g: &[G], s: usize, t: usize) -> Vec<usize> {
+    let off = move_offsets(grid.pw);
+    let (one, diag) = COMPACT_STEPS;
+    let mut cur = t;
+    let mut cells = vec![cur];
+    while cur != s {
+        let gc = g[cur].to_u64();
+        cur = (0..8)
+            .map(|k| (k, (cur as isize - off[k]) as usize))
+            .find(|&(k, p)| {
+                let c = if k < 4 { one } else { diag };
+                grid.moves[p] & (1 << k) != 0 && g[p] != G::MAX && g[p].to_u64() + c == gc
+            })
+            .map(|(_, p)| p)
+            .expect("a predecessor on an optimal path");
+        cells.push(cur);
     }
+    cells
 }
 
 /// A compact search met a path cost that does not fit its 32-bit g.
 struct Overflow;
 
-/// The unweighted (octile) search with a 4-byte state per cell: g in fixed point
-/// ([`COMPACT_STEPS`]) and nothing else. No closed flag is needed: with integer costs and
-/// a consistent integer heuristic each push strictly lowers g, so an open-list entry is
-/// current exactly when its key equals g + h of its cell, and a cell's one current entry
-/// is popped once; no parent is needed either (see the path walk in [`astar_with`]). The
-/// smaller state (1 MB on a 512 × 512 map instead of 2 MB) keeps the search in the
-/// cache; cells reached are listed and reset at the next query.
-fn search_octile_compact(
+/// The unweighted (octile) search with one integer g per cell (`u32`: 4 bytes, or `u64`)
+/// in the fixed point of [`COMPACT_STEPS`], and nothing else. No closed flag is needed:
+/// with integer costs and a consistent integer heuristic each push strictly lowers g, so
+/// an open-list entry is current exactly when its key equals g + h of its cell, and a
+/// cell's one current entry is popped once; no parent is needed either ([`walk_back`]).
+/// The small state (1 MB on a 512 × 512 map with `u32`) keeps the search in the cache;
+/// cells reached are listed and reset at the next query. Reports [`Overflow`] when a cost
+/// does not fit `G`.
+fn search_octile<G: GValue>(
     grid: &SearchGrid,
     ws: &mut AstarWorkspace,
     start: (usize, usize),
@@ -868,19 +897,20 @@ fn search_octile_compact(
     expanded_out: &mut usize,
 ) -> Result<Option<f64>, Overflow> {
     let n = grid.pass.len();
-    ws.prepare_compact(n);
+    ws.prepare_g::<G>(n);
     let (one, diag_cost) = COMPACT_STEPS;
-    let (one32, diag32) = (one as u32, diag_cost as u32);
     let pw = grid.pw;
     let rows = RowDivider::new(pw);
     let moves = &grid.moves[..];
-    let g = &mut ws.g32[..];
-    let touched = &mut ws.touched;
+    // taken out of the workspace for the search, put back before returning
+    let mut g_cells = std::mem::take(G::array(ws));
+    let mut touched = std::mem::take(&mut ws.touched);
     let mut heap = std::mem::take(&mut ws.band_queue);
+    let g = &mut g_cells[..];
     let h = fixed_point_octile((goal.0 as i64 + 1, goal.1 as i64 + 1), one, diag_cost);
     let s = grid.pidx(start.0, start.1);
     let t = grid.pidx(goal.0, goal.1);
-    g[s] = 0;
+    g[s] = G::from_u64(0).expect("zero fits");
     touched.push(s as u32);
     let h0 = h(start.0 as i64 + 1, start.1 as i64 + 1);
     heap.clear(h0);
@@ -891,9 +921,9 @@ fn search_octile_compact(
     let mut overflow = false;
     while let Some((key, ui)) = heap.pop() {
         let u = ui as usize;
-        let gu = g[u];
+        let gu = g[u].to_u64();
         let (x, y) = rows.xy(u);
-        if key != u64::from(gu) + h(x, y) {
+        if key != gu + h(x, y) {
             continue; // superseded by a cheaper entry of the same cell
         }
         expanded += 1;
@@ -906,121 +936,45 @@ fn search_octile_compact(
             let k = legal.trailing_zeros() as usize;
             legal &= legal - 1;
             let v = (u as isize + off[k]) as usize;
-            let Some(ng) = gu.checked_add(if k < 4 { one32 } else { diag32 }) else {
+            let ng = gu + if k < 4 { one } else { diag_cost };
+            let Some(ngv) = G::from_u64(ng) else {
                 overflow = true;
                 break;
             };
             let gv = g[v];
-            if ng < gv {
-                if gv == u32::MAX {
+            if ngv < gv {
+                if gv == G::MAX {
                     touched.push(v as u32);
                 }
-                g[v] = ng;
+                g[v] = ngv;
                 let (dx, dy) = MOVE_DXY[k];
-                heap.push(u64::from(ng) + h(x + dx, y + dy), v as u32);
+                heap.push(ng + h(x + dx, y + dy), v as u32);
             }
         }
         if overflow {
             break;
         }
     }
+    // The length n_straight + n_diag · √2, decoded from the integer cost (or, beyond
+    // 2^18 diagonal moves, counted along the path).
+    let length = (found && !overflow).then(|| {
+        fixed_point_length(g[t].to_u64(), one, diag_cost).unwrap_or_else(|| {
+            let cells = walk_back(grid, g, s, t);
+            let diagonal = cells
+                .windows(2)
+                .filter(|w| w[0].abs_diff(w[1]) != 1 && w[0].abs_diff(w[1]) != pw)
+                .count();
+            (cells.len() - 1 - diagonal) as f64 + diagonal as f64 * SQRT2
+        })
+    });
+    *G::array(ws) = g_cells;
+    ws.touched = touched;
     ws.band_queue = heap;
     if overflow {
         return Err(Overflow);
     }
     *expanded_out = expanded;
-    if !found {
-        return Ok(None);
-    }
-    Ok(Some(
-        fixed_point_length(u64::from(g[t]), one, diag_cost)
-            .expect("a 32-bit cost decodes with a 2^18 straight step"),
-    ))
-}
-
-/// The unweighted (octile) search on fixed-point costs with 8-byte packed cell states;
-/// returns the exact length.
-fn search_octile(
-    grid: &SearchGrid,
-    ws: &mut AstarWorkspace,
-    start: (usize, usize),
-    goal: (usize, usize),
-    expanded_out: &mut usize,
-) -> Option<f64> {
-    let n = grid.pass.len();
-    ws.prepare_packed(n);
-    let open_stamp = (ws.packed_generation * 2) << STAMP_SHIFT;
-    let closed_bit = 1u64 << STAMP_SHIFT;
-    let stamp_mask = !0u64 << STAMP_SHIFT;
-    let (one, diag_cost) = fixed_point_steps(n);
-    let pw = grid.pw;
-    let rows = RowDivider::new(pw);
-    let moves = &grid.moves[..];
-    let st = &mut ws.packed[..];
-    let mut heap = std::mem::take(&mut ws.heap);
-    heap.clear();
-    // Heuristic in padded coordinates (the offset cancels).
-    let h = fixed_point_octile((goal.0 as i64 + 1, goal.1 as i64 + 1), one, diag_cost);
-    let s = grid.pidx(start.0, start.1);
-    let t = grid.pidx(goal.0, goal.1);
-    st[s] = open_stamp;
-    heap.push(h(start.0 as i64 + 1, start.1 as i64 + 1), s as u32);
-    let off = move_offsets(pw);
-    let mut expanded = 0usize;
-    let mut found = false;
-    while let Some((_, ui)) = heap.pop() {
-        let u = ui as usize;
-        let su = st[u];
-        if su & stamp_mask != open_stamp {
-            continue; // closed already (a stale duplicate entry)
-        }
-        st[u] = su | closed_bit;
-        expanded += 1;
-        if u == t {
-            found = true;
-            break;
-        }
-        let (x, y) = rows.xy(u);
-        let gu = su & G_MASK;
-        // The legal moves only, in the fixed order E, W, N, S, NE, NW, SE, SW.
-        let mut legal = moves[u];
-        while legal != 0 {
-            let k = legal.trailing_zeros() as usize;
-            legal &= legal - 1;
-            let v = (u as isize + off[k]) as usize;
-            let ng = gu + if k < 4 { one } else { diag_cost };
-            let sv = st[v];
-            // A closed cell already has its optimal g (integer costs, consistent
-            // heuristic), so `ng < g` also rejects it.
-            if (sv & stamp_mask) | closed_bit != open_stamp | closed_bit || ng < sv & G_MASK {
-                st[v] = open_stamp | ((k as u64) << DIR_SHIFT) | ng;
-                let (dx, dy) = MOVE_DXY[k];
-                heap.push(ng + h(x + dx, y + dy), v as u32);
-            }
-        }
-    }
-    *expanded_out = expanded;
-    ws.heap = heap;
-    if !found {
-        return None;
-    }
-    // The length n_straight + n_diag · √2 of the path found, from its exact integer cost
-    // (or, on huge maps, from its moves).
-    if let Some(length) = fixed_point_length(st[t] & G_MASK, one, diag_cost) {
-        return Some(length);
-    }
-    let (mut straight, mut diagonal) = (0u64, 0u64);
-    let mut cur = t;
-    while cur != s {
-        let k = ((st[cur] >> DIR_SHIFT) & 7) as usize;
-        if k < 4 {
-            straight += 1;
-        } else {
-            diagonal += 1;
-        }
-        cur = (cur as isize - off[k]) as usize;
-    }
-    Some(straight as f64 + diagonal as f64 * SQRT2)
+    Ok(length)
 }
 
 /// The cost-aware search: f64 costs, keys = IEEE bits of f (monotone for f ≥ 0).
@@ -1236,7 +1190,7 @@ mod tests {
     #[test]
     fn long_paths_fall_back_to_the_wide_search() {
         // a corridor of 20,000 cells: 19,999 straight steps overflow the 32-bit g
-        // (2^32 / 2^18 = 16,384 steps), so the packed 64-bit search answers
+        // (2^32 / 2^18 = 16,384 steps), so the search reruns on a 64-bit g
         let w = 20_000;
         let grid = SearchGrid::from_obstacles(&vec![false; w], w, 1).unwrap();
         let mut ws = AstarWorkspace::new();
