@@ -1,11 +1,13 @@
 //! `moma ik`: inverse kinematics of an arm frame, or whole-body resolved-rate motion of
 //! a manipulator on a differential-drive base.
 
-use super::manipulability::{frame_name, frame_of, load_model, parse_base, parse_list};
+use super::manipulability::{
+    check_ik_budget, frame_name, frame_of, load_model, parse_base, parse_list, parse_task_rows,
+};
 use crate::output::{print_json, write_json};
 use anyhow::{Result, anyhow, bail};
 use moma::ik::model::ModelFrame;
-use moma::ik::tasks::{PoseTask, TaskRows, WholeBodyTask, pose_error, target_from_slice};
+use moma::ik::tasks::{PoseTask, WholeBodyTask, pose_error, target_from_slice};
 use moma::ik::{
     IkOptions, IkResult, IkWorkspace, KinematicTask, NullSpaceObjective, solve_with_restarts,
 };
@@ -105,20 +107,8 @@ fn pose_vec(p: &Isometry3<f64>) -> Vec<f64> {
 pub fn run(args: Args) -> Result<()> {
     let tvals = parse_list("--target", &args.target)?;
     let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
-    let rows: TaskRows = match &args.rows {
-        Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
-        None if tvals.len() == 3 => TaskRows::Position,
-        None => TaskRows::Full,
-    };
-    if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
-        bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
-    }
-    if !(args.tol.is_finite() && args.tol > 0.0) {
-        bail!("--tol: must be > 0, got {}", args.tol);
-    }
-    if args.max_iters == 0 {
-        bail!("--max-iters: must be at least 1");
-    }
+    let rows = parse_task_rows(args.rows.as_deref(), &tvals)?;
+    check_ik_budget(args.tol, args.max_iters)?;
     if !(args.base_weight.is_finite() && args.base_weight > 0.0) {
         bail!("--base-weight: must be > 0, got {}", args.base_weight);
     }

@@ -102,6 +102,31 @@ pub(crate) fn parse_base(spec: &str) -> Result<DiffDrive> {
         .map_err(|e| anyhow!("--base: {e}"))
 }
 
+/// Parses `--rows` (default: position for a 3-value target, full for a 7-value one) and
+/// checks that orientation rows come with an orientation in the target `tvals`.
+pub(crate) fn parse_task_rows(rows: Option<&str>, tvals: &[f64]) -> Result<TaskRows> {
+    let rows: TaskRows = match rows {
+        Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
+        None if tvals.len() == 3 => TaskRows::Position,
+        None => TaskRows::Full,
+    };
+    if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
+        bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
+    }
+    Ok(rows)
+}
+
+/// Checks the IK budget options `--tol` (> 0) and `--max-iters` (>= 1).
+pub(crate) fn check_ik_budget(tol: f64, max_iters: usize) -> Result<()> {
+    if !(tol.is_finite() && tol > 0.0) {
+        bail!("--tol: must be > 0, got {tol}");
+    }
+    if max_iters == 0 {
+        bail!("--max-iters: must be at least 1");
+    }
+    Ok(())
+}
+
 /// A frame name for output.
 pub(crate) fn frame_name(kin: &ModelFrame) -> String {
     kin.model().frames[kin.frame().0].name.clone()

@@ -1,12 +1,14 @@
 //! `moma reach-map`: reachability and manipulability of a fixed end-effector target over
 //! a grid of base placements, best placement, SVG heat map.
 
-use super::manipulability::{frame_name, frame_of, load_model, parse_base, parse_list};
+use super::manipulability::{
+    check_ik_budget, frame_name, frame_of, load_model, parse_base, parse_list, parse_task_rows,
+};
 use crate::output::{print_json, write_all_atomic};
 use crate::svg_heatmap::{HeatMap, render};
 use anyhow::{Result, anyhow, bail};
 use moma::ik::IkOptions;
-use moma::ik::tasks::{FrameKinematics, TaskRows, target_from_slice};
+use moma::ik::tasks::{FrameKinematics, target_from_slice};
 use moma::manipulability::Measure;
 use moma::manipulability::placement::{
     ArmReachEvaluator, MeasureScope, PlacementEvaluator, PlacementGrid, PlacementSample,
@@ -112,14 +114,7 @@ pub fn run(args: Args) -> Result<()> {
         args.headings,
     )
     .map_err(|e| anyhow!("--area/--step/--headings: {e}"))?;
-    let rows: TaskRows = match &args.rows {
-        Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
-        None if tvals.len() == 3 => TaskRows::Position,
-        None => TaskRows::Full,
-    };
-    if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
-        bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
-    }
+    let rows = parse_task_rows(args.rows.as_deref(), &tvals)?;
     let measure: Measure = args
         .measure
         .parse()
@@ -154,12 +149,7 @@ pub fn run(args: Args) -> Result<()> {
             )
         }
     };
-    if !(args.tol.is_finite() && args.tol > 0.0) {
-        bail!("--tol: must be > 0, got {}", args.tol);
-    }
-    if args.max_iters == 0 {
-        bail!("--max-iters: must be at least 1");
-    }
+    check_ik_budget(args.tol, args.max_iters)?;
     let model = load_model(&args.robot, RootJoint::Fixed)?;
     let arm = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let seed = match &args.q0 {

@@ -99,6 +99,17 @@ pub enum NullSpaceObjective {
     },
 }
 
+impl NullSpaceObjective {
+    /// Gain k_N of the objective (0 for [`NullSpaceObjective::None`]).
+    fn gain(&self) -> f64 {
+        match *self {
+            NullSpaceObjective::Manipulability { gain, .. }
+            | NullSpaceObjective::Posture { gain } => gain,
+            NullSpaceObjective::None => 0.0,
+        }
+    }
+}
+
 /// Options of [`solve`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct IkOptions {
@@ -197,6 +208,7 @@ pub struct IkWorkspace {
     q_probe: DVector<f64>,
     e_probe: DVector<f64>,
     j_probe: DMatrix<f64>,
+    unit: DVector<f64>,
 }
 
 impl IkWorkspace {
@@ -219,6 +231,7 @@ impl IkWorkspace {
             q_probe: DVector::zeros(nq),
             e_probe: DVector::zeros(m),
             j_probe: DMatrix::zeros(m, nv),
+            unit: DVector::zeros(nv),
         }
     }
 
@@ -267,12 +280,7 @@ pub fn solve<T: KinematicTask + ?Sized>(
     let mut slow = 0;
     // With a secondary objective the solver keeps improving it after the task is met,
     // as long as the residual stays within the tolerance and the step is not negligible.
-    let secondary = match options.null_space {
-        NullSpaceObjective::None => false,
-        NullSpaceObjective::Manipulability { gain, .. } | NullSpaceObjective::Posture { gain } => {
-            gain > 0.0
-        }
-    };
+    let secondary = options.null_space.gain() > 0.0;
     // Share of the null-space term in the step: halved after a rejected step before the
     // damping grows, so the secondary objective never prevents convergence.
     let mut ns_scale = 1.0;
@@ -429,30 +437,21 @@ fn validate_options(o: &IkOptions, nv: usize) -> Result<()> {
             }
         }
     }
-    match &o.null_space {
-        NullSpaceObjective::Manipulability { measure, gain } => {
-            if !measure.larger_is_better() {
-                return Err(Error::invalid(
-                    "ik null-space measure",
-                    format!("'{measure}' is smaller-is-better; choose one to maximise"),
-                ));
-            }
-            if !gain.is_finite() || *gain < 0.0 {
-                return Err(Error::invalid(
-                    "ik null-space gain",
-                    "must be finite and >= 0",
-                ));
-            }
-        }
-        NullSpaceObjective::Posture { gain } => {
-            if !gain.is_finite() || *gain < 0.0 {
-                return Err(Error::invalid(
-                    "ik null-space gain",
-                    "must be finite and >= 0",
-                ));
-            }
-        }
-        NullSpaceObjective::None => {}
+    if let NullSpaceObjective::Manipulability { measure, .. } = &o.null_space
+        && !measure.larger_is_better()
+    {
+        return Err(Error::invalid(
+            "ik null-space measure",
+            format!("'{measure}' is smaller-is-better; choose one to maximise"),
+        ));
+    }
+    // `None` has gain 0, which passes.
+    let gain = o.null_space.gain();
+    if !gain.is_finite() || gain < 0.0 {
+        return Err(Error::invalid(
+            "ik null-space gain",
+            "must be finite and >= 0",
+        ));
     }
     Ok(())
 }
@@ -491,12 +490,7 @@ fn damped_step(
         ws.a[(r, r)] += lambda;
     }
     // Right-hand side: −e (+ J ∇φ projected out below).
-    let gain = match options.null_space {
-        NullSpaceObjective::Manipulability { gain, .. } | NullSpaceObjective::Posture { gain } => {
-            gain
-        }
-        NullSpaceObjective::None => 0.0,
-    } * ns_scale;
+    let gain = options.null_space.gain() * ns_scale;
     let use_grad = have_grad && gain > 0.0;
     // y = A⁻¹ (−e − k J W⁻¹ g)   so that δ = W⁻¹ Jᵀ y + k W⁻¹ g
     for r in 0..m {
@@ -592,11 +586,13 @@ fn secondary_gradient<T: KinematicTask + ?Sized>(
             let w0 = value(&ws.j);
             let h = 1e-6;
             let nv = task.nv();
-            let mut unit = DVector::zeros(nv);
+            // Finite-difference direction, from the workspace (no allocation per
+            // iteration); it is all zeros between probes.
+            ws.unit.fill(0.0);
             for k in 0..nv {
-                unit[k] = h;
-                task.integrate(q, &unit, &mut ws.q_probe);
-                unit[k] = 0.0;
+                ws.unit[k] = h;
+                task.integrate(q, &ws.unit, &mut ws.q_probe);
+                ws.unit[k] = 0.0;
                 task.residual_and_jacobian(&ws.q_probe, &mut ws.e_probe, &mut ws.j_probe)?;
                 let g = (value(&ws.j_probe) - w0) / h;
                 ws.grad[k] = if g.is_finite() { g } else { 0.0 };

@@ -176,6 +176,23 @@ pub fn target_from_slice(values: &[f64]) -> Result<Isometry3<f64>> {
     }
 }
 
+/// Copies the task rows `rows` of the 6-D pose error and of the 6-row Jacobian `j6`
+/// into the task residual and Jacobian (one row per selected index).
+fn select_rows(
+    rows: &[usize],
+    e6: &[f64; 6],
+    j6: &DMatrix<f64>,
+    residual: &mut DVector<f64>,
+    jacobian: &mut DMatrix<f64>,
+) {
+    for (i, &r) in rows.iter().enumerate() {
+        residual[i] = e6[r];
+        for k in 0..j6.ncols() {
+            jacobian[(i, k)] = j6[(r, k)];
+        }
+    }
+}
+
 /// An arm frame reaching a target pose (selected rows): [`KinematicTask`] for
 /// [`super::solve`].
 pub struct PoseTask<K: FrameKinematics> {
@@ -236,13 +253,13 @@ impl<K: FrameKinematics> KinematicTask for PoseTask<K> {
     ) -> Result<()> {
         self.kinematics
             .pose_and_jacobian(q, &mut self.pose, &mut self.j6)?;
-        let e6 = pose_error(&self.pose, &self.target);
-        for (i, &r) in self.rows.iter().enumerate() {
-            residual[i] = e6[r];
-            for k in 0..self.j6.ncols() {
-                jacobian[(i, k)] = self.j6[(r, k)];
-            }
-        }
+        select_rows(
+            &self.rows,
+            &pose_error(&self.pose, &self.target),
+            &self.j6,
+            residual,
+            jacobian,
+        );
         Ok(())
     }
     fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>) {
@@ -349,6 +366,17 @@ impl<K: FrameKinematics> WholeBodyTask<K> {
         &self.jbar
     }
 
+    /// The model velocity of an increment with the base part zeroed: the arm inputs
+    /// `delta[2..]` land at `v[3..]` (written into the reused `v_model` buffer).
+    fn arm_velocity(&self, delta: &DVector<f64>) -> std::cell::RefMut<'_, DVector<f64>> {
+        let mut v = self.v_model.borrow_mut();
+        v.fill(0.0);
+        for k in 2..delta.len() {
+            v[k + 1] = delta[k];
+        }
+        v
+    }
+
     /// Forward displacement and heading change of the axle midpoint for base increments.
     fn base_displacement(&self, u0: f64, u1: f64) -> (f64, f64) {
         match self.inputs {
@@ -383,21 +411,17 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
         self.kinematics
             .pose_and_jacobian(q, &mut self.pose, &mut self.j6)?;
         compose_jacobian(&self.drive, self.inputs, q[2], &self.j6, &mut self.jbar)?;
-        let e6 = pose_error(&self.pose, &self.target);
-        for (i, &r) in self.rows.iter().enumerate() {
-            residual[i] = e6[r];
-            for k in 0..self.jbar.ncols() {
-                jacobian[(i, k)] = self.jbar[(r, k)];
-            }
-        }
+        select_rows(
+            &self.rows,
+            &pose_error(&self.pose, &self.target),
+            &self.jbar,
+            residual,
+            jacobian,
+        );
         Ok(())
     }
     fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>) {
-        let mut v = self.v_model.borrow_mut();
-        v.fill(0.0);
-        for k in 2..delta.len() {
-            v[k + 1] = delta[k];
-        }
+        let v = self.arm_velocity(delta);
         self.kinematics.integrate(q, &v, out);
         let (s, alpha) = self.base_displacement(delta[0], delta[1]);
         let base = integrate_base(&self.drive, [q[0], q[1], q[2]], s, alpha);
@@ -406,11 +430,7 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
         out[2] = base[2];
     }
     fn blocked_inputs(&self, q: &DVector<f64>, delta: &DVector<f64>, blocked: &mut [bool]) {
-        let mut v = self.v_model.borrow_mut();
-        v.fill(0.0);
-        for k in 2..delta.len() {
-            v[k + 1] = delta[k];
-        }
+        let v = self.arm_velocity(delta);
         let mut b = self.blocked_model.borrow_mut();
         b.iter_mut().for_each(|x| *x = false);
         self.kinematics.blocked_velocities(q, &v, &mut b);
