@@ -106,6 +106,18 @@ impl Error {
             message: message.into(),
         }
     }
+
+    /// Adds the simulation time to an [`Error::Singular`] raised inside an ODE
+    /// right-hand side (`"<what> at t = <t>"`); other errors pass through unchanged.
+    pub(crate) fn singular_at_time(self, t: f64) -> Self {
+        match self {
+            Error::Singular { what, detail } => Error::Singular {
+                what: format!("{what} at t = {t}"),
+                detail,
+            },
+            other => other,
+        }
+    }
 }
 
 /// Returns `Err(Error::NonFinite)` unless every value is finite.

@@ -238,13 +238,7 @@ where
         let q = SVector::<f64, N>::from_column_slice(&x[..N]);
         let v = SVector::<f64, NV>::from_column_slice(&x[N..N + NV]);
         let (qd, vd) = lagrange::reduced_forward_dynamics(self.system, &q, &v, &self.input)
-            .map_err(|e| match e {
-                Error::Singular { what, detail } => Error::Singular {
-                    what: format!("{what} at t = {t}"),
-                    detail,
-                },
-                other => other,
-            })?;
+            .map_err(|e| e.singular_at_time(t))?;
         dx[..N].copy_from_slice(qd.as_slice());
         dx[N..N + NV].copy_from_slice(vd.as_slice());
         Ok(())

@@ -95,13 +95,7 @@ impl<S: ReducedSystem + ?Sized> OdeSystem for ReducedOde<'_, S> {
         let (vd, wd) = rest_d.split_at_mut(nv);
         self.system
             .dynamics(q, v, &self.u, qd, vd)
-            .map_err(|e| match e {
-                Error::Singular { what, detail } => Error::Singular {
-                    what: format!("{what} at t = {t}"),
-                    detail,
-                },
-                other => other,
-            })?;
+            .map_err(|e| e.singular_at_time(t))?;
         wd[0] = self.system.input_power(q, v, &self.u)?;
         Ok(())
     }
@@ -236,6 +230,9 @@ pub fn simulate(
         &mut u,
         &mut lam,
     )?;
+    // One right-hand side for the whole run: building it per step would allocate its
+    // input buffer inside the step loop. `record` reaches the system through it.
+    let mut ode = ReducedOde::new(system, input)?;
     let stats;
     match options.integrator {
         IntegratorSettings::Rk4 { dt } => {
@@ -246,14 +243,11 @@ pub fn simulate(
             rk.blowup = options.limits.blowup;
             for s in 0..steps {
                 let t = s as f64 * h;
-                {
-                    let mut ode = ReducedOde::new(&mut *system, input)?;
-                    rk.step(&mut ode, t, &mut x, h)?;
-                }
+                rk.step(&mut ode, t, &mut x, h)?;
                 if (s + 1) % every == 0 || s + 1 == steps {
                     let t1 = (s + 1) as f64 * h;
                     record(
-                        system,
+                        &mut *ode.system,
                         &mut recorder,
                         &mut monitor,
                         t1,
@@ -271,23 +265,22 @@ pub fn simulate(
             atol,
             max_step,
         } => {
-            let mut opts = AdaptiveOptions::with_tolerance(rtol);
-            opts.rtol = rtol;
-            opts.atol = atol;
-            opts.blowup = options.limits.blowup;
-            opts.max_step = max_step.unwrap_or(f64::INFINITY).min(options.duration);
-            opts.max_steps = 50_000_000;
+            let opts = AdaptiveOptions {
+                rtol,
+                atol,
+                blowup: options.limits.blowup,
+                max_step: max_step.unwrap_or(f64::INFINITY).min(options.duration),
+                max_steps: 50_000_000,
+                ..AdaptiveOptions::default()
+            };
             let mut dp = DormandPrince45::new(nq + nv + 1, opts)?;
             let mut t = 0.0;
             let mut k = 1usize;
             loop {
                 let te = (k as f64 * options.record_interval).min(options.duration);
-                {
-                    let mut ode = ReducedOde::new(&mut *system, input)?;
-                    dp.integrate_to(&mut ode, &mut t, &mut x, te)?;
-                }
+                dp.integrate_to(&mut ode, &mut t, &mut x, te)?;
                 record(
-                    system,
+                    &mut *ode.system,
                     &mut recorder,
                     &mut monitor,
                     te,
