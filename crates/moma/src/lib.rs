@@ -40,6 +40,7 @@ pub mod kinematics;
 pub mod manipulability;
 pub mod mobile;
 pub mod multibody;
+pub mod ode;
 pub mod planning;
 pub mod sim;
 pub mod spatial;

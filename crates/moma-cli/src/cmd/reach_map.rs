@@ -8,12 +8,12 @@ use crate::output::{print_json, write_all_atomic};
 use crate::svg_heatmap::{HeatMap, render};
 use anyhow::{Result, anyhow, bail};
 use moma::ik::IkOptions;
-use moma::ik::tasks::{FrameKinematics, target_from_slice};
-use moma::manipulability::Measure;
-use moma::manipulability::placement::{
+use moma::ik::placement::{
     ArmReachEvaluator, MeasureScope, PlacementEvaluator, PlacementGrid, PlacementSample,
     placement_map,
 };
+use moma::ik::tasks::{FrameKinematics, target_from_slice};
+use moma::manipulability::Measure;
 use moma::mobile::whole_body::BaseInputs;
 use moma::multibody::RootJoint;
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};

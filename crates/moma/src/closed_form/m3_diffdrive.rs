@@ -15,7 +15,7 @@
 use super::ad::{Real, seed_all};
 use super::{Manipulability, check_finite, finite, manipulability, positive, ser, to_dmatrix};
 use crate::error::{Error, Result};
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 

@@ -717,7 +717,7 @@ impl TaskController {
         let mut x0 = [0.0; 12];
         x0[..6].copy_from_slice(q0.as_slice());
         x0[6..11].copy_from_slice(v0.as_slice());
-        let mut dp = crate::sim::Dop853::new(12, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = crate::ode::Dop853::new(12, crate::ode::AdaptiveOptions::with_tolerance(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
         rows.iter()
             .zip(times)
@@ -738,7 +738,7 @@ impl TaskController {
     }
 }
 
-/// The m5 closed loop as an [`crate::sim::OdeSystem`] on `[q; v; ∫ ėᵀKdė]`.
+/// The m5 closed loop as an [`crate::ode::OdeSystem`] on `[q; v; ∫ ėᵀKdė]`.
 pub struct ClosedLoopOde<'a> {
     /// The model.
     pub model: &'a MobileManipulator,
@@ -746,7 +746,7 @@ pub struct ClosedLoopOde<'a> {
     pub controller: &'a TaskController,
 }
 
-impl crate::sim::OdeSystem for ClosedLoopOde<'_> {
+impl crate::ode::OdeSystem for ClosedLoopOde<'_> {
     fn dim(&self) -> usize {
         12
     }

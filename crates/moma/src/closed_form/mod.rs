@@ -15,6 +15,9 @@
 //! Christoffel `C_cor`, `G = ∂V/∂q` including gravity. The mass matrix and potential of
 //! each model are written once in closed form; their derivatives (Christoffel symbols,
 //! G, Ṅ_C, J̇) are exact (forward-mode dual numbers, see [`ad`]).
+//!
+//! [`multibody_models`] rebuilds m1, m2 and m5 as general multibody models (a planar-rooted
+//! [`crate::mobile::WheeledModel`]) for the cross-checks; [`cases`] evaluates case files.
 
 pub mod ad;
 pub mod cases;
@@ -24,9 +27,10 @@ pub mod m2_platform_arm;
 pub mod m3_diffdrive;
 pub mod m4_cart_two_link;
 pub mod m5_mobile_manipulator;
+pub mod multibody_models;
 
 use crate::error::{Error, Result};
-use crate::sim::OdeSystem;
+use crate::ode::OdeSystem;
 use ad::Real;
 use lagrange::PfaffianSystem;
 use nalgebra::{DMatrix, SMatrix, SVector};
@@ -263,7 +267,7 @@ where
     let mut x0 = vec![0.0; N + NV];
     x0[..N].copy_from_slice(q0.as_slice());
     x0[N..].copy_from_slice(v0.as_slice());
-    let mut dp = crate::sim::Dop853::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+    let mut dp = crate::ode::Dop853::new(N + NV, crate::ode::AdaptiveOptions::with_tolerance(tol))?;
     let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
     Ok(rows
         .iter()

@@ -24,9 +24,11 @@
 //! never as an error or NaN.
 //!
 //! Tasks on real models (frame pose of a URDF arm, whole-body pose of a mobile
-//! manipulator) live in [`tasks`].
+//! manipulator) live in [`tasks`]; base-placement maps (IK and a manipulability measure
+//! over a grid of base poses) in [`placement`].
 
 pub mod model;
+pub mod placement;
 pub mod tasks;
 
 use crate::error::{Error, Result, ensure_finite};
