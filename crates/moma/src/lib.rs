@@ -37,6 +37,7 @@ pub mod error;
 pub mod ik;
 pub mod io;
 pub mod kinematics;
+pub(crate) mod linalg;
 pub mod manipulability;
 pub mod mobile;
 pub mod multibody;

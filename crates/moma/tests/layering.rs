@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 /// `planning` stands apart: it sits right above `error` and so may use nothing else.
 const LAYERS: &[&[&str]] = &[
     &["error"],
-    &["spatial", "ode", "planning"],
+    &["spatial", "ode", "linalg", "planning"],
     &["multibody"],
     &["io", "kinematics"],
     &["dynamics"],

@@ -194,9 +194,9 @@ impl DiffDrive {
             det_J: j.determinant(),
             J_chapter_5_31: jc,
             J_mV: j_mv,
-            manipulability_J: manipulability(&jd),
-            manipulability_J_endeffector: manipulability(&jd.rows(2, 3).into_owned()),
-            manipulability_J_mV: manipulability(&to_dmatrix(&j_mv)),
+            manipulability_J: manipulability(&jd)?,
+            manipulability_J_endeffector: manipulability(&jd.rows(2, 3).into_owned())?,
+            manipulability_J_mV: manipulability(&to_dmatrix(&j_mv))?,
         })
     }
 

@@ -411,7 +411,7 @@ impl MobileManipulator {
             BV: c.b * c.vm,
             BgG: c.b * e.terms.gravity,
             BQ: c.b * e.q_force,
-            manipulability_A: manipulability(&to_dmatrix(&c.a)),
+            manipulability_A: manipulability(&to_dmatrix(&c.a))?,
         })
     }
 
