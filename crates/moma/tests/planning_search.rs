@@ -29,7 +29,7 @@ fn run_scen(name: &str, every: usize) -> (usize, usize) {
     let grid = load_map(&data(&format!("movingai/{name}.map")), None)
         .unwrap()
         .grid;
-    let sg = SearchGrid::from_grid(&grid, true);
+    let sg = SearchGrid::from_grid(&grid, true).unwrap();
     let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
     let mut ws = AstarWorkspace::new();
     let (mut n, mut bad) = (0, 0);
@@ -72,7 +72,7 @@ fn astar_matches_all_scen_problems() {
 #[test]
 fn astar_path_is_valid_and_costs_its_length() {
     let grid = load_map(&data("movingai/den520d.map"), None).unwrap().grid;
-    let sg = SearchGrid::from_grid(&grid, true);
+    let sg = SearchGrid::from_grid(&grid, true).unwrap();
     let scen = MovingAiScenario::load(&data("movingai/den520d.map.scen")).unwrap();
     let p = &scen.problems[800];
     let path = planning::astar(&sg, p.start, p.goal).unwrap().unwrap();

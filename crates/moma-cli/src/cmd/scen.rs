@@ -118,7 +118,7 @@ pub fn run(args: Args) -> Result<()> {
 fn run2(args: &Args) -> Result<Vec<Row>> {
     let grid = planning::load_movingai_map(&args.map)?;
     let scen = MovingAiScenario::load(&args.scen)?;
-    let sg = SearchGrid::from_grid(&grid, true);
+    let sg = SearchGrid::from_grid(&grid, true)?;
     let mut ws = AstarWorkspace::new();
     let mut rows = Vec::new();
     for p in scen.problems.iter().step_by(args.every) {

@@ -404,7 +404,7 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
         if let Some(w) = warm_start {
             let r = solve(&mut ws.task, w, &self.options, &mut ws.ik)?;
             iterations += r.iterations;
-            if r.converged {
+            if r.task_met {
                 result = Some(r);
             }
         }
@@ -427,19 +427,19 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
                 r
             }
         };
-        let measure = if r.converged {
+        let measure = if r.task_met {
             self.measure_at(ws, base, &r.q)?
         } else {
             None
         };
         let sample = PlacementSample {
             base,
-            reachable: r.converged,
+            reachable: r.task_met,
             measure,
             residual: r.residual_norm,
             iterations,
         };
-        Ok((sample, if r.converged { Some(r.q) } else { None }))
+        Ok((sample, if r.task_met { Some(r.q) } else { None }))
     }
 
     fn larger_is_better(&self) -> bool {

@@ -123,9 +123,19 @@ impl SearchGrid {
 
     /// Builds the search grid from an occupancy grid: cells ≥ 100 are obstacles, unknown
     /// cells too when `unknown_is_obstacle`.
-    pub fn from_grid(grid: &OccupancyGrid, unknown_is_obstacle: bool) -> Self {
+    ///
+    /// # Errors
+    /// An inconsistent grid (its fields are public): a size out of range, or a cell
+    /// vector whose length is not `width · height`.
+    pub fn from_grid(grid: &OccupancyGrid, unknown_is_obstacle: bool) -> Result<Self> {
+        super::grid::check_size(grid.width, grid.height)?;
+        crate::error::ensure_len(
+            "occupancy grid cells",
+            grid.width * grid.height,
+            grid.cells.len(),
+        )?;
         let obst = grid.obstacle_mask(super::grid::OCCUPIED, unknown_is_obstacle);
-        Self::from_obstacles(&obst, grid.width, grid.height).expect("grid sizes are valid")
+        Self::from_obstacles(&obst, grid.width, grid.height)
     }
 
     /// A cost-aware grid from nav2-style costs (see [`super::costmap`]): cells with cost
