@@ -1,6 +1,10 @@
 //! `moma scen`: run every problem of a Moving AI scenario file (2-D `.map` + `.scen` or
 //! 3-D `.3dmap` + `.3dscen`) and compare the found lengths with the optimal ones.
+//!
+//! Mismatches are the diagnostics this command exists for: the CSV (`--output`) and the
+//! summary are written in full, then the run ends in `GoalNotReached` (exit status 3).
 
+use super::common::goal_not_reached;
 use crate::output::write_atomic;
 use anyhow::{Context, Result, bail};
 use moma::planning::{self, AstarWorkspace, MovingAiScenario, SearchGrid, astar::astar_cost};
@@ -106,11 +110,11 @@ pub fn run(args: Args) -> Result<()> {
         total * 1e-6
     );
     if !mismatches.is_empty() {
-        bail!(
+        return goal_not_reached(format!(
             "{} of {} problems do not match the optimal length",
             mismatches.len(),
             rows.len()
-        );
+        ));
     }
     Ok(())
 }

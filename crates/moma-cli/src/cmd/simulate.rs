@@ -16,7 +16,7 @@ use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate};
 use serde::{Deserialize, Serialize};
 
-use crate::output::write_all_atomic;
+use crate::output::write_dir;
 use crate::svg_plots::{Series, line_chart, path_chart};
 
 /// Arguments of `moma simulate`.
@@ -302,13 +302,12 @@ fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
 
 /// Builds every output file in memory.
 fn render(
-    dir: &Path,
     result: &SimulationResult,
     summary: &mut Summary,
     plots: bool,
-) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+) -> Result<Vec<(String, Vec<u8>)>> {
     let rec = &result.recorder;
-    let mut files = vec![(dir.join("trajectory.csv"), rec.to_csv().into_bytes())];
+    let mut files = vec![("trajectory.csv".to_string(), rec.to_csv().into_bytes())];
     if plots {
         let t = &rec.times;
         let n = rec.len();
@@ -316,7 +315,7 @@ fn render(
         let x = col(&|i| rec.q_row(i)[0]);
         let y = col(&|i| rec.q_row(i)[1]);
         files.push((
-            dir.join("path.svg"),
+            "path.svg".to_string(),
             path_chart("Platform path", &x, &y).into_bytes(),
         ));
         let joint_names: Vec<&str> = rec.q_names.iter().skip(2).map(String::as_str).collect();
@@ -326,7 +325,7 @@ fn render(
             .map(|(k, name)| series(t, name, col(&|i| rec.q_row(i)[2 + k])))
             .collect();
         files.push((
-            dir.join("joints.svg"),
+            "joints.svg".to_string(),
             line_chart("Heading and joint angles", "t (s)", "angle (rad)", &joints).into_bytes(),
         ));
         let energy = vec![
@@ -340,7 +339,7 @@ fn render(
             ),
         ];
         files.push((
-            dir.join("energy.svg"),
+            "energy.svg".to_string(),
             line_chart("Energy balance", "t (s)", "energy (J)", &energy).into_bytes(),
         ));
         let drift = vec![series(
@@ -349,7 +348,7 @@ fn render(
             col(&|i| rec.energy_error(i)),
         )];
         files.push((
-            dir.join("energy_error.svg"),
+            "energy_error.svg".to_string(),
             line_chart("Energy balance error", "t (s)", "J", &drift).into_bytes(),
         ));
         if !rec.lambda_names.is_empty() {
@@ -361,7 +360,7 @@ fn render(
                 .map(|(j, name)| series(t, name, col(&|i| rec.lambda[i * k + j])))
                 .collect();
             files.push((
-                dir.join("multipliers.svg"),
+                "multipliers.svg".to_string(),
                 line_chart(
                     "Constraint multipliers (−λ₀: lateral ground force on the axle)",
                     "t (s)",
@@ -377,23 +376,18 @@ fn render(
             col(&|i| rec.residual[i].max(1e-20).log10()),
         )];
         files.push((
-            dir.join("residual.svg"),
+            "residual.svg".to_string(),
             line_chart("Constraint residual", "t (s)", "log10 |C q̇|", &res).into_bytes(),
         ));
     }
     summary.files = files
         .iter()
-        .map(|(p, _)| {
-            p.file_name()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned()
-        })
+        .map(|(name, _)| name.clone())
         .chain(std::iter::once("summary.json".to_string()))
         .collect();
     let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
     json.push('\n');
-    files.push((dir.join("summary.json"), json.into_bytes()));
+    files.push(("summary.json".to_string(), json.into_bytes()));
     Ok(files)
 }
 
@@ -529,10 +523,8 @@ pub fn run(args: Args) -> Result<()> {
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
     };
-    let files = render(&dir, &result, &mut summary, sc.output.plots)?;
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("{}: cannot create output directory", dir.display()))?;
-    write_all_atomic(&files)?;
+    let files = render(&result, &mut summary, sc.output.plots)?;
+    write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&summary)?;
     }
