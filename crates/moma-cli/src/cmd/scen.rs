@@ -22,13 +22,17 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub every: usize,
     /// Write one CSV row per problem here
-    /// (`index,start,goal,cost,optimal,expanded,micros`).
+    /// (`index,start [cell],goal [cell],cost [cell],optimal [cell],expanded,time [us]`).
     #[arg(long)]
     pub output: Option<PathBuf>,
     /// Relative tolerance when comparing with the optimal length.
     #[arg(long, default_value_t = 1e-5)]
     pub tolerance: f64,
 }
+
+/// The CSV header: units in brackets (`docs/cli.md`); lengths are in cell edges.
+const CSV_HEADER: &str =
+    "index,start [cell],goal [cell],cost [cell],optimal [cell],expanded,time [us]\n";
 
 struct Row {
     index: usize,
@@ -58,7 +62,7 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let mut mismatches = Vec::new();
-    let mut csv = String::from("index,start,goal,cost,optimal,expanded,micros\n");
+    let mut csv = String::from(CSV_HEADER);
     for r in &rows {
         let cost = r.cost.map(|c| format!("{c:.8}")).unwrap_or_default();
         csv.push_str(&format!(
