@@ -30,7 +30,7 @@ fn escape(s: &str) -> String {
 }
 
 /// "Nice" tick positions covering `[lo, hi]`.
-fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+pub(crate) fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     let span = (hi - lo).max(1e-300);
     let raw = span / 6.0;
     let mag = 10f64.powf(raw.log10().floor());
@@ -48,7 +48,7 @@ fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     out
 }
 
-fn fmt_tick(x: f64) -> String {
+pub(crate) fn fmt_tick(x: f64) -> String {
     if x == 0.0 {
         "0".into()
     } else if x.abs() >= 1e4 || x.abs() < 1e-3 {

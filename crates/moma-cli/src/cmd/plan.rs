@@ -624,7 +624,7 @@ fn write_outputs(
             start: ends.start,
             goal: ends.goal,
             title: format!(
-                "{:?} on {}: {}",
+                "{:?} on {}\n{}",
                 args.algo,
                 args.map.display(),
                 found.report
