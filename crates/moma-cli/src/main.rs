@@ -1,8 +1,10 @@
 //! `moma`: the command-line front end of the moma library.
 //!
-//! Every subcommand lives in its own file under `cmd/`; this file only dispatches.
-//! Errors are reported as one clear message (file, field, what was expected) with a
-//! non-zero exit; output files are written atomically, so a failed run leaves none.
+//! Every subcommand lives in its own file under `cmd/`; this file only dispatches and
+//! applies the one exit-status rule of `docs/cli.md`: 0 success, 1 error (one message
+//! naming the file and field), 2 malformed command line (clap), 3 the command ran but
+//! did not reach its goal ([`cmd::common::GoalNotReached`]). Outputs are written
+//! atomically (`output.rs`), so a failed run leaves none behind.
 
 mod cmd;
 mod output;
@@ -12,7 +14,7 @@ mod svg_plots;
 
 use clap::{Parser, Subcommand};
 
-/// Kinematics, dynamics, control and motion planning of mobile manipulators.
+/// Kinematics, dynamics, simulation and motion planning of wheeled mobile manipulators.
 #[derive(Parser)]
 #[command(name = "moma", version, about, long_about = None)]
 struct Cli {
@@ -62,6 +64,10 @@ fn main() {
         Command::ReachMap(a) => cmd::reach_map::run(a),
     };
     if let Err(e) = result {
+        if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {
+            eprintln!("goal not reached: {g}");
+            std::process::exit(3);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

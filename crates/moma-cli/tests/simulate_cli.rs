@@ -56,12 +56,28 @@ fn default_scenario_runs_without_an_argument() {
     assert!(s["relative_energy_error"].as_f64().unwrap() < 1e-6);
     assert_eq!(s["samples"].as_u64().unwrap(), 501);
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
-    assert!(csv.starts_with("t,x,y,theta,left_wheel_joint"));
+    assert!(
+        csv.starts_with("t [s],x [m],y [m],theta [rad],left_wheel_joint [rad]"),
+        "{}",
+        csv.lines().next().unwrap()
+    );
     assert!(
         csv.lines()
             .next()
             .unwrap()
-            .ends_with("residual,lambda_0,lambda_1,lambda_2")
+            .contains(",v [m/s],omega [rad/s],")
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains(",tau_left [N m],tau_right [N m],")
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with("residual [m/s],lambda_0 [N],lambda_1 [N],lambda_2 [N]")
     );
     assert_eq!(csv.lines().count(), 502);
     // The platform moved along a curve.

@@ -5,7 +5,7 @@
 //! WARMUP batches are discarded, then the median per-call time over NBATCH batches is
 //! reported (env `NBATCH`, default 300; `WARMUP`, default 30).
 
-use super::inspect::{load_model, parse_root};
+use super::common::{load_model, parse_root};
 use anyhow::{Context, Result};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};

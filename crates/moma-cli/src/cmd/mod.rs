@@ -1,6 +1,8 @@
-//! One module per subcommand: each defines its clap `Args` and a `run` function.
+//! One module per subcommand: each defines its clap `Args` and a `run` function;
+//! `common` holds what several of them share (model and states loading, option parsing).
 
 pub mod bench;
+pub mod common;
 pub mod dynamics;
 pub mod eval;
 pub mod ik;
