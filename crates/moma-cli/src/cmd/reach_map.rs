@@ -11,8 +11,7 @@ use anyhow::{Result, anyhow, bail};
 use moma::ik::IkOptions;
 use moma::ik::model::ModelFrame;
 use moma::ik::placement::{
-    ArmReachEvaluator, MeasureScope, PlacementGrid, PlacementSample,
-    placement_map,
+    ArmReachEvaluator, MeasureScope, PlacementGrid, PlacementSample, placement_map,
 };
 use moma::ik::tasks::{FrameKinematics, TaskRows, target_from_slice};
 use moma::manipulability::Measure;
