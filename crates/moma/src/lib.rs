@@ -43,5 +43,6 @@ pub mod multibody;
 pub mod planning;
 pub mod sim;
 pub mod spatial;
+pub mod stability;
 
 pub use error::{Error, Result};
