@@ -93,14 +93,11 @@ impl GravitoInertialWrench {
 /// pass gives every body's spatial momentum rate `I_k a_k + v_k ×* I_k v_k`, their world
 /// sum is `ḣ_O = (ṗ, L̇_O)`, and `f_gi = M g − ṗ`, `M_gi(p_c) = −(L̇_O − p_c × ṗ)`.
 ///
-/// When `set_inertia` is given it also receives the world-frame spatial inertia of the
-/// bodies whose joint index has `body_set[i] == true` (for the Moment-Height measure).
 /// Fills `data.world_from_joint`, `data.v`, `data.a` (no gravity) and `data.com`; does not
 /// allocate.
 ///
 /// # Panics
-/// On wrong vector lengths, or if `body_set` is given with a length other than
-/// `model.njoints`.
+/// On wrong vector lengths.
 pub fn gravito_inertial_wrench(
     model: &Model,
     data: &mut Data,
@@ -113,10 +110,12 @@ pub fn gravito_inertial_wrench(
     gravito_inertial_wrench_with_set(model, data, q, v, a, gravity, external, None)
 }
 
-/// [`gravito_inertial_wrench`] that also sums the world inertia of a body set (see there).
+/// [`gravito_inertial_wrench`] that also sums, when `set = Some((mask, out))`, the
+/// world-frame spatial inertia of the bodies of the joints with `mask[i] == true` into
+/// `out` (for the Moment-Height measure), in the same pass.
 ///
 /// # Panics
-/// As [`gravito_inertial_wrench`].
+/// As [`gravito_inertial_wrench`], or if `mask.len() != model.njoints`.
 #[allow(clippy::too_many_arguments)]
 pub fn gravito_inertial_wrench_with_set(
     model: &Model,
