@@ -111,6 +111,9 @@ impl CartTwoLinkParams {
     }
 }
 
+/// One body of the cart in its plane: `(mass, [x, z], [ẍ, z̈], m k², angular acceleration)`.
+type CartBody = (f64, Vector2<f64>, Vector2<f64>, f64, f64);
+
 /// Where the cart touches the ground (the model itself has no wheels).
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 pub struct CartSupport {
@@ -258,7 +261,7 @@ impl CartTwoLink {
         q: &Vector3<f64>,
         qdot: &Vector3<f64>,
         qddot: &Vector3<f64>,
-    ) -> [(f64, Vector2<f64>, Vector2<f64>, f64, f64); 5] {
+    ) -> [CartBody; 5] {
         let p = &self.params;
         let (th1, th12) = (q[1], q[1] - q[2]);
         let (w1, w12) = (qdot[1], qdot[1] - qdot[2]);
