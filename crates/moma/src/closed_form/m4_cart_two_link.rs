@@ -256,12 +256,7 @@ impl CartTwoLink {
 
     /// The five bodies (cart, link 1, M1, link 2, M2) at `(q, q̇, q̈)`, each as
     /// `(mass, [x, z], [ẍ, z̈], m k², angular acceleration)` in the cart's plane.
-    fn bodies(
-        &self,
-        q: &Vector3<f64>,
-        qdot: &Vector3<f64>,
-        qddot: &Vector3<f64>,
-    ) -> [CartBody; 5] {
+    fn bodies(&self, q: &Vector3<f64>, qdot: &Vector3<f64>, qddot: &Vector3<f64>) -> [CartBody; 5] {
         let p = &self.params;
         let (th1, th12) = (q[1], q[1] - q[2]);
         let (w1, w12) = (qdot[1], qdot[1] - qdot[2]);
