@@ -46,6 +46,8 @@ enum Command {
     Ik(cmd::ik::Args),
     /// Evaluate reachability and manipulability over a grid of base placements.
     ReachMap(cmd::reach_map::Args),
+    /// Tip-over stability (ZMP, Force-Angle, Moment-Height) on a list of states.
+    Stability(cmd::stability::Args),
 }
 
 fn main() {
@@ -62,6 +64,7 @@ fn main() {
         Command::Manipulability(a) => cmd::manipulability::run(a),
         Command::Ik(a) => cmd::ik::run(a),
         Command::ReachMap(a) => cmd::reach_map::run(a),
+        Command::Stability(a) => cmd::stability::run(a),
     };
     if let Err(e) = result {
         if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {

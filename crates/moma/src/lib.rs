@@ -48,5 +48,6 @@ pub mod ode;
 pub mod planning;
 pub mod sim;
 pub mod spatial;
+pub mod stability;
 
 pub use error::{Error, Result};

@@ -13,3 +13,4 @@ pub mod plan;
 pub mod reach_map;
 pub mod scen;
 pub mod simulate;
+pub mod stability;
