@@ -144,6 +144,42 @@ fn cholesky_in_place(a: &mut DMatrix<f64>) -> bool {
     true
 }
 
+/// `out = β out + α A B` (or `Aᵀ B` with `a_transposed`) by plain loops: nalgebra's
+/// dynamic `gemm`/`mul_to` allocate a packing buffer, and these sizes are small.
+fn matmul(
+    out: &mut DMatrix<f64>,
+    alpha: f64,
+    a: &DMatrix<f64>,
+    a_transposed: bool,
+    b: &DMatrix<f64>,
+    beta: f64,
+) {
+    let (r, k) = if a_transposed {
+        (a.ncols(), a.nrows())
+    } else {
+        (a.nrows(), a.ncols())
+    };
+    assert_eq!(b.nrows(), k, "inner dimensions");
+    assert_eq!(out.shape(), (r, b.ncols()), "output shape");
+    for j in 0..b.ncols() {
+        let bj = b.column(j);
+        for i in 0..r {
+            let mut s = 0.0;
+            if a_transposed {
+                let ai = a.column(i);
+                for l in 0..k {
+                    s += ai[l] * bj[l];
+                }
+            } else {
+                for l in 0..k {
+                    s += a[(i, l)] * bj[l];
+                }
+            }
+            out[(i, j)] = beta * out[(i, j)] + alpha * s;
+        }
+    }
+}
+
 /// Solves `L Lᵀ x = b` in place on each column of `b` (L the lower factor).
 fn cholesky_solve_columns(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
     let n = l.nrows();
@@ -198,7 +234,7 @@ pub fn osc_from_terms(
     od.jacobian.transpose_to(&mut od.hinv_jt);
     cholesky_solve_columns(&od.chol_h, &mut od.hinv_jt);
     // Λ⁻¹ = J H⁻¹ Jᵀ, factorised; Λ by solving against the identity.
-    od.jacobian.mul_to(&od.hinv_jt, &mut od.chol_l);
+    matmul(&mut od.chol_l, 1.0, &od.jacobian, false, &od.hinv_jt, 0.0);
     if !cholesky_in_place(&mut od.chol_l) {
         return Err(Error::Singular {
             what: "task Jacobian".into(),
@@ -216,12 +252,24 @@ pub fn osc_from_terms(
         }
     }
     // J̄ = H⁻¹ Jᵀ Λ
-    od.hinv_jt
-        .mul_to(&od.task_inertia, &mut od.dynamically_consistent_inverse);
+    matmul(
+        &mut od.dynamically_consistent_inverse,
+        1.0,
+        &od.hinv_jt,
+        false,
+        &od.task_inertia,
+        0.0,
+    );
     // N = I − J̄ J
     od.nullspace_projector.fill_with_identity();
-    od.nullspace_projector
-        .gemm(-1.0, &od.dynamically_consistent_inverse, &od.jacobian, 1.0);
+    matmul(
+        &mut od.nullspace_projector,
+        -1.0,
+        &od.dynamically_consistent_inverse,
+        false,
+        &od.jacobian,
+        1.0,
+    );
     // F = Λ (a − J̇v + J H⁻¹ h)
     od.tmp_m.copy_from(a_des);
     od.tmp_m -= &od.acceleration_bias;
@@ -367,15 +415,23 @@ pub fn osc_reduced(
     );
     let h = &wd.data.mass_matrix;
     // Mr = Nᵀ H N
-    h.mul_to(&wd.basis, &mut rod.hn);
-    wd.basis.tr_mul_to(&rod.hn, &mut rod.reduced_inertia);
+    matmul(&mut rod.hn, 1.0, h, false, &wd.basis, 0.0);
+    matmul(&mut rod.reduced_inertia, 1.0, &wd.basis, true, &rod.hn, 0.0);
     // hr = Nᵀ (h + H Ṅ v)
     wd.basis_dot.mul_to(v_r, &mut rod.tmp_n);
     rod.tmp_n2.copy_from(&wd.data.nle);
     rod.tmp_n2.gemv(1.0, h, &rod.tmp_n, 1.0);
     wd.basis.tr_mul_to(&rod.tmp_n2, &mut rod.reduced_bias);
     // J N and the task bias J̇q̇ + J Ṅ v
-    wd.jacobian.mul_to(&wd.basis, &mut rod.jn);
+    for j in 0..rod.jn.ncols() {
+        for i in 0..6 {
+            let mut acc = 0.0;
+            for l in 0..model.nv {
+                acc += wd.jacobian[(i, l)] * wd.basis[(l, j)];
+            }
+            rod.jn[(i, j)] = acc;
+        }
+    }
     let acc6 = acc.to_vector();
     let od = &mut rod.osc;
     for (k, &r) in od.rows.iter().enumerate() {
