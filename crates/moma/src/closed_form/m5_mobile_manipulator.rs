@@ -673,8 +673,17 @@ impl TaskController {
         let e = core.x - x_d;
         let edot = core.xdot - xdot_d;
         let bv = core.b * core.vm;
-        let tau_x =
-            core.hx * xddot_d + bv * xdot_d + core.b * terms.gravity - self.kd * edot - self.kp * e;
+        let (tau_x, w) = crate::control::task::pd_plus(
+            &core.hx,
+            &bv,
+            &(core.b * terms.gravity),
+            &e,
+            &edot,
+            &xdot_d,
+            &xddot_d,
+            &self.kp,
+            &self.kd,
+        );
         let ns = ct.basis.transpose() * model.input_matrix(q);
         let u = ns
             .lu()
@@ -683,7 +692,6 @@ impl TaskController {
                 what: "actuator map N_Cᵀ S".into(),
                 detail: None,
             })?;
-        let w = 0.5 * edot.dot(&(core.hx * edot)) + 0.5 * e.dot(&(self.kp * e));
         Ok(ControlOutput {
             x_d,
             xdot_d,

@@ -21,6 +21,7 @@
 
 pub mod ad;
 pub mod cases;
+pub mod control_cases;
 pub mod lagrange;
 pub mod m1_unicycle;
 pub mod m2_platform_arm;
