@@ -42,6 +42,7 @@ pub mod mobile;
 pub mod multibody;
 pub mod planning;
 pub mod sim;
+pub mod space;
 pub mod spatial;
 
 pub use error::{Error, Result};
