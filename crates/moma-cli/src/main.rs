@@ -44,6 +44,8 @@ enum Command {
     Ik(cmd::ik::Args),
     /// Evaluate reachability and manipulability over a grid of base placements.
     ReachMap(cmd::reach_map::Args),
+    /// Free-floating (space) robot: base motion from joint rates, generalized Jacobian and inertia.
+    Space(cmd::space::Args),
 }
 
 fn main() {
@@ -60,6 +62,7 @@ fn main() {
         Command::Manipulability(a) => cmd::manipulability::run(a),
         Command::Ik(a) => cmd::ik::run(a),
         Command::ReachMap(a) => cmd::reach_map::run(a),
+        Command::Space(a) => cmd::space::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

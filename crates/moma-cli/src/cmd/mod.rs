@@ -11,3 +11,4 @@ pub mod plan;
 pub mod reach_map;
 pub mod scen;
 pub mod simulate;
+pub mod space;
