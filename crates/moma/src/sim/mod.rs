@@ -7,6 +7,7 @@
 //! and a step-count guard.
 
 pub mod chapter_models;
+pub mod free_floating;
 pub mod integrators;
 pub mod monitor;
 pub mod recorder;
