@@ -2,7 +2,7 @@
 //! [--output OUT.json]`: Khatib's operational-space quantities of one frame for each
 //! state (Λ, J̄, N, J̇q̇, F, τ). Schema: `docs/cli.md`.
 
-use super::inspect::{load_model, parse_root};
+use super::common::{load_model, parse_root};
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow, bail};
 use moma::control::osc::{MIN_TASK_CONDITIONING, OscData, osc_fixed_base, task_conditioning};
