@@ -27,7 +27,7 @@ use std::collections::BinaryHeap;
 pub const SQRT2: f64 = std::f64::consts::SQRT_2;
 
 /// A padded passability grid for the searches (`true` = traversable).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct SearchGrid {
     pub(super) width: usize,
     pub(super) height: usize,
@@ -38,6 +38,30 @@ pub struct SearchGrid {
     /// by [`SearchGrid::set_free`]; lets a search visit the legal moves only.
     pub(super) moves: Vec<u8>,
     pub(super) weight: Option<Vec<f32>>,
+}
+
+impl Clone for SearchGrid {
+    fn clone(&self) -> Self {
+        Self {
+            width: self.width,
+            height: self.height,
+            pw: self.pw,
+            pass: self.pass.clone(),
+            moves: self.moves.clone(),
+            weight: self.weight.clone(),
+        }
+    }
+
+    /// Copies `source` into `self` reusing `self`'s buffers (no allocation for grids of
+    /// the same size; `D* Lite`'s snapshots rely on it).
+    fn clone_from(&mut self, source: &Self) {
+        self.width = source.width;
+        self.height = source.height;
+        self.pw = source.pw;
+        self.pass.clone_from(&source.pass);
+        self.moves.clone_from(&source.moves);
+        self.weight.clone_from(&source.weight);
+    }
 }
 
 /// The legal-move mask of padded cell `u` (see [`SearchGrid::moves`]).
@@ -293,6 +317,16 @@ impl Default for OpenList {
 }
 
 impl OpenList {
+    /// A queue without buckets (allocates nothing): only a stand-in while the
+    /// workspace's own queue is taken out for a search.
+    fn unallocated() -> Self {
+        Self {
+            last: 0,
+            mask: 0,
+            buckets: Vec::new(),
+        }
+    }
+
     fn clear(&mut self) {
         self.last = 0;
         self.mask = 0;
@@ -418,6 +452,21 @@ impl BandQueue {
         self.bands.iter().map(Vec::capacity).sum::<usize>()
             + self.equal.capacity()
             + self.heap.capacity()
+    }
+
+    /// A queue without bands (allocates nothing): only a stand-in while the workspace's
+    /// own queue is taken out for a search.
+    fn unallocated() -> Self {
+        Self {
+            shift: CAL_SHIFT,
+            last: 0,
+            mask: 0,
+            cur: 0,
+            bands: Vec::new(),
+            equal: Vec::new(),
+            heap: Vec::new(),
+            seq: 0,
+        }
     }
 
     /// Empties the queue; keys pushed must be at least `first` and within the window.
@@ -934,7 +983,9 @@ fn search_octile<G: GValue>(
     // taken out of the workspace for the search, put back before returning
     let mut g_cells = std::mem::take(G::array(ws));
     let mut touched = std::mem::take(&mut ws.touched);
-    let mut heap = std::mem::take(&mut ws.band_queue);
+    // (an unallocated stand-in: `take` would build a default queue, one allocation per
+    // query)
+    let mut heap = std::mem::replace(&mut ws.band_queue, BandQueue::unallocated());
     let g = &mut g_cells[..];
     let h = fixed_point_octile((goal.0 as i64 + 1, goal.1 as i64 + 1), one, diag_cost);
     let s = grid.pidx(start.0, start.1);
@@ -1024,7 +1075,7 @@ fn search_weighted(
     let rows = RowDivider::new(pw);
     let pass = &grid.pass[..];
     let st = &mut ws.state[..];
-    let mut heap = std::mem::take(&mut ws.heap);
+    let mut heap = std::mem::replace(&mut ws.heap, OpenList::unallocated());
     heap.clear();
     // Heuristic in padded coordinates (the offset cancels).
     let (gx, gy) = (goal.0 as i64 + 1, goal.1 as i64 + 1);
