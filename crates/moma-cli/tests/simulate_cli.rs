@@ -270,3 +270,40 @@ dt = 0.01
         &["numerical failure"],
     );
 }
+
+#[test]
+fn chapter_models_take_the_names_of_moma_eval() {
+    // The canonical name of the one model registry runs exactly as the short alias.
+    let mut finals = Vec::new();
+    for name in ["m1", "m1_unicycle"] {
+        let dir = temp_dir(&format!("name-{name}"));
+        let file = dir.join("s.toml");
+        std::fs::write(&file, M1.replace("\"m1\"", &format!("\"{name}\""))).unwrap();
+        let out = dir.join("out");
+        let run = moma()
+            .args(["simulate", "--quiet"])
+            .arg(&file)
+            .arg("--output")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        finals.push(summary(&out)["final_q"].clone());
+    }
+    assert!(finals[0].is_array());
+    assert_eq!(finals[0], finals[1]);
+    // A model `moma eval` knows but the simulator cannot run is refused by name.
+    fails_with(
+        "kinematic-model",
+        &M1.replace("\"m1\"", "\"m3\""),
+        &[
+            "bad.toml",
+            "m3_diffdrive_kinematics",
+            "simulable models: m1_unicycle (m1)",
+        ],
+    );
+}

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
+use moma::closed_form::ChapterModel;
 use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
 use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
@@ -82,7 +83,8 @@ pub enum RobotSpec {
     },
     /// One of the chapter's closed-form models.
     Chapter {
-        /// `m1`, `m2` or `m5`.
+        /// `m1`, `m2` or `m5` (or a canonical name such as `m1_unicycle`; the names of
+        /// `moma eval`).
         model: String,
         /// Its parameters (names as in docs/simulate.md).
         params: toml::Table,
@@ -247,7 +249,8 @@ fn build_robot(
                 );
             }
             let mut json = serde_json::to_value(params).context("robot.params")?;
-            if let (Some(g), "m5") = (gravity, model.as_str())
+            if let (Some(g), Ok(ChapterModel::M5MobileManipulator)) =
+                (gravity, ChapterModel::from_name(model))
                 && let Some(obj) = json.as_object_mut()
             {
                 if obj.contains_key("g") {

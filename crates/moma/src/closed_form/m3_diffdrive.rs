@@ -26,7 +26,7 @@ pub type Configuration = SVector<f64, 6>;
 /// Parameters of m3 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
-pub struct DiffDriveParams {
+pub struct DiffDriveKinematicsParams {
     /// Wheel radius.
     pub r_w: f64,
     /// Half track (wheels 2b apart).
@@ -41,7 +41,7 @@ pub struct DiffDriveParams {
     pub L2: f64,
 }
 
-impl DiffDriveParams {
+impl DiffDriveKinematicsParams {
     /// Checks signs and finiteness.
     pub fn validate(&self) -> Result<()> {
         positive("r_w", self.r_w)?;
@@ -55,9 +55,9 @@ impl DiffDriveParams {
 
 /// The m3 kinematic model.
 #[derive(Clone, Debug)]
-pub struct DiffDrive {
+pub struct DiffDriveKinematics {
     /// Parameters.
-    pub params: DiffDriveParams,
+    pub params: DiffDriveKinematicsParams,
 }
 
 /// Every output of m3 at `(q, v)` (names as in the reference vectors).
@@ -98,11 +98,11 @@ pub struct DiffDriveOutputs {
     pub manipulability_J_mV: Manipulability,
 }
 
-impl DiffDrive {
+impl DiffDriveKinematics {
     /// Validates the parameters.
-    pub fn new(params: DiffDriveParams) -> Result<Self> {
+    pub fn new(params: DiffDriveKinematicsParams) -> Result<Self> {
         params.validate()?;
-        Ok(DiffDrive { params })
+        Ok(DiffDriveKinematics { params })
     }
 
     /// The task vector `X(q)`, generic for differentiation.
@@ -229,7 +229,7 @@ impl DiffDrive {
 /// `q̇ = N_C(q) v` with constant wheel and joint rates, as an [`OdeSystem`].
 pub struct KinematicOde<'a> {
     /// The model.
-    pub model: &'a DiffDrive,
+    pub model: &'a DiffDriveKinematics,
     /// Constant rates `v`.
     pub v: SVector<f64, 5>,
 }

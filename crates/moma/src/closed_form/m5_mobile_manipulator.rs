@@ -420,7 +420,7 @@ impl MobileManipulator {
         check_finite("state.q", &state.q)?;
         check_finite("state.v", &state.v)?;
         check_finite("inputs.u", u)?;
-        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        let (q, v) = lagrange::state_derivative(self, &state.q, &state.v, u)?;
         Ok(State { q, v })
     }
 
@@ -762,7 +762,7 @@ impl crate::ode::OdeSystem for ClosedLoopOde<'_> {
         let q = SVector::<f64, 6>::from_column_slice(&x[..6]);
         let v = SVector::<f64, 5>::from_column_slice(&x[6..11]);
         let c = self.controller.control(self.model, t, &q, &v)?;
-        let (qd, vd) = lagrange::reduced_forward_dynamics(self.model, &q, &v, &c.u)?;
+        let (qd, vd) = lagrange::state_derivative(self.model, &q, &v, &c.u)?;
         dx[..6].copy_from_slice(qd.as_slice());
         dx[6..11].copy_from_slice(vd.as_slice());
         dx[11] = c.dissipation;

@@ -18,7 +18,8 @@
 //! G, Ṅ_C, J̇) are exact (forward-mode dual numbers, see [`ad`]).
 //!
 //! [`multibody_models`] rebuilds m1, m2 and m5 as general multibody models (a planar-rooted
-//! [`crate::mobile::WheeledModel`]) for the cross-checks; [`cases`] evaluates case files.
+//! [`crate::mobile::WheeledModel`]) for the cross-checks; [`cases`] evaluates case files;
+//! [`registry`] holds the models' names and aliases.
 
 pub mod ad;
 pub mod cases;
@@ -31,6 +32,9 @@ pub mod m4_cart_two_link;
 pub mod m5_mobile_manipulator;
 pub mod m6_space_manipulator;
 pub mod multibody_models;
+pub mod registry;
+
+pub use registry::ChapterModel;
 
 use crate::error::{Error, Result};
 use crate::manipulability::JacobianSvd;
@@ -223,14 +227,15 @@ impl<const N: usize, const NV: usize> ModelState<N, NV> {
 
 /// The reduced dynamics of a constrained model under a constant input `u`, as an
 /// [`OdeSystem`] on the state `x = [q; v]` (`q̇ = N_C(q) v`, `v̇ = Mr⁻¹(Qr − Cr v − Gr)`).
-pub struct ReducedOde<'a, S, const N: usize, const NV: usize, const NU: usize> {
+pub struct ConstantInputOde<'a, S, const N: usize, const NV: usize, const NU: usize> {
     /// The model.
     pub system: &'a S,
     /// The constant input.
     pub input: SVector<f64, NU>,
 }
 
-impl<S, const N: usize, const NV: usize, const NU: usize> OdeSystem for ReducedOde<'_, S, N, NV, NU>
+impl<S, const N: usize, const NV: usize, const NU: usize> OdeSystem
+    for ConstantInputOde<'_, S, N, NV, NU>
 where
     S: PfaffianSystem<N, NV, NU>,
 {
@@ -240,7 +245,7 @@ where
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
         let q = SVector::<f64, N>::from_column_slice(&x[..N]);
         let v = SVector::<f64, NV>::from_column_slice(&x[N..N + NV]);
-        let (qd, vd) = lagrange::reduced_forward_dynamics(self.system, &q, &v, &self.input)
+        let (qd, vd) = lagrange::state_derivative(self.system, &q, &v, &self.input)
             .map_err(|e| e.singular_at_time(t))?;
         dx[..N].copy_from_slice(qd.as_slice());
         dx[N..N + NV].copy_from_slice(vd.as_slice());
@@ -248,7 +253,7 @@ where
     }
 }
 
-/// Integrates a [`ReducedOde`] with DOP853 at `rtol = atol = tol` and returns
+/// Integrates a [`ConstantInputOde`] with DOP853 at `rtol = atol = tol` and returns
 /// `(q, v)` at each requested time.
 #[allow(clippy::type_complexity)]
 pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
@@ -262,7 +267,7 @@ pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
 where
     S: PfaffianSystem<N, NV, NU>,
 {
-    let mut ode = ReducedOde { system, input: *u };
+    let mut ode = ConstantInputOde { system, input: *u };
     let mut x0 = vec![0.0; N + NV];
     x0[..N].copy_from_slice(q0.as_slice());
     x0[N..].copy_from_slice(v0.as_slice());
