@@ -299,3 +299,68 @@ fn brockett_smooth_time_invariant_law_does_not_stabilise() {
     let s = run(|t, x| sm.inputs(t, x, &[0.0; 3]), x0, &[50.0]);
     assert!(sm.lyapunov(50.0, &s[0], &[0.0; 3]).unwrap() < 0.25 * 0.5);
 }
+
+struct CoordLoop(moma::control::coordinated::Coordinated);
+
+fn path(t: f64) -> moma::control::coordinated::PointReference {
+    moma::control::coordinated::PointReference {
+        p: [1.0 + 0.2 * t, 0.5 + 0.1 * (0.3 * t).sin()],
+        v: [0.2, 0.03 * (0.3 * t).cos()],
+    }
+}
+
+impl OdeSystem for CoordLoop {
+    fn dim(&self) -> usize {
+        5
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> moma::Result<()> {
+        let s = [x[0], x[1], x[2], x[3], x[4]];
+        let u = self.0.rates(&s, &path(t))?;
+        dx.copy_from_slice(&moma::control::coordinated::Coordinated::state_rate(&s, &u));
+        Ok(())
+    }
+}
+
+/// theory.md 2.6: both errors decay as exact exponentials, the samples of the reference
+/// run, V monotone, and the singularity guard.
+#[test]
+fn coordinated_base_arm_control_reference_run() {
+    use moma::control::coordinated::Coordinated;
+    let d = load("coordinated_and_osf.json");
+    let law = Coordinated {
+        l: 0.3,
+        l1: 0.6,
+        l2: 0.5,
+        q_star: [-0.6, std::f64::consts::FRAC_PI_2],
+        k_e: 2.0,
+        k_y: 1.0,
+    };
+    let samples = d["coordinated"]["samples"].as_array().unwrap();
+    let t: Vec<f64> = samples.iter().map(|s| s["t"].as_f64().unwrap()).collect();
+    let x0 = [0.0, 0.0, 0.2, 0.0, 1.2];
+    let mut dp = Dop853::new(5, AdaptiveOptions::with_tolerance(1e-12)).unwrap();
+    let rows = dp.solve_at(&mut CoordLoop(law), 0.0, &x0, &t).unwrap();
+    let (ee0, ey0) = law.errors(&x0, &path(0.0));
+    let (n_e0, n_y0) = (ee0[0].hypot(ee0[1]), ey0[0].hypot(ey0[1]));
+    let mut mon = LyapunovMonitor::with_capacity(t.len(), 1e-12);
+    for ((r, s), &ti) in rows.iter().zip(samples).zip(&t) {
+        let x = [r[0], r[1], r[2], r[3], r[4]];
+        let (ee, ey) = law.errors(&x, &path(ti));
+        let (ne, ny) = (ee[0].hypot(ee[1]), ey[0].hypot(ey[1]));
+        assert!((ne - n_e0 * (-2.0 * ti).exp()).abs() < 1e-9, "t {ti}");
+        assert!((ny - n_y0 * (-ti).exp()).abs() < 1e-9, "t {ti}");
+        assert!((ne - s["ee_error"].as_f64().unwrap()).abs() < 1e-8);
+        assert!((ny - s["rel_error"].as_f64().unwrap()).abs() < 1e-8);
+        for (a, b) in x.iter().zip(flat(&s["state_x_y_phi_q1_q2"])) {
+            assert!((a - b).abs() < 1e-7, "t {ti}: {a} vs {b}");
+        }
+        let u = law.rates(&x, &path(ti)).unwrap();
+        assert!((u[0] - s["v"].as_f64().unwrap()).abs() < 1e-8);
+        assert!((u[1] - s["w"].as_f64().unwrap()).abs() < 1e-8);
+        assert!((law.manipulability(&x) - s["arm_manipulability"].as_f64().unwrap()).abs() < 1e-8);
+        mon.record(ti, law.lyapunov(ti, &x, &path(ti)).unwrap(), None);
+    }
+    assert!(mon.report().monotone());
+    // singular arm (q2 = 0) is refused
+    assert!(law.rates(&[0.0, 0.0, 0.0, 0.3, 0.0], &path(0.0)).is_err());
+}
