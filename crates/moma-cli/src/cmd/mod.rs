@@ -11,4 +11,5 @@ pub mod plan;
 pub mod reach_map;
 pub mod scen;
 pub mod simulate;
+pub mod simulate_space;
 pub mod space;
