@@ -265,6 +265,9 @@ pub fn run(
     Ok(())
 }
 
+/// Output files in memory: (path, bytes).
+type OutputFiles = Vec<(std::path::PathBuf, Vec<u8>)>;
+
 fn v6(f: &Force) -> [f64; 6] {
     f.to_vector().into()
 }
@@ -279,7 +282,7 @@ fn render(
     run: &free_floating::FloatingRun,
     wall: f64,
     plots: bool,
-) -> Result<(Vec<(std::path::PathBuf, Vec<u8>)>, serde_json::Value)> {
+) -> Result<(OutputFiles, serde_json::Value)> {
     let s = &run.samples;
     let nq = s[0].q.len();
     let nv = s[0].v.len();
