@@ -30,7 +30,7 @@ enum Command {
     Dynamics(cmd::dynamics::Args),
     /// Time the rigid-body algorithms (median ns per call) on seeded random states.
     Bench(cmd::bench::Args),
-    /// Evaluate the chapter's closed-form models (m1–m5) on a case file.
+    /// Evaluate the chapter's closed-form models (m1–m6) on a case file.
     Eval(cmd::eval::Args),
     /// Run a simulation scenario (TOML) and write CSV, JSON and SVG outputs.
     Simulate(cmd::simulate::Args),

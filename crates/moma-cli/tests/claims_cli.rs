@@ -79,6 +79,7 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         "map-info",
         "plan",
         "scen",
+        "space",
     ] {
         assert!(
             cmds.iter()

@@ -159,3 +159,91 @@ fn bad_input_is_one_clear_error_and_no_file() {
     let out = moma().arg("space").arg(&panda).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn free_floating_scenarios_run_and_keep_the_momentum() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    for name in [
+        "space_zero_momentum",
+        "space_nonzero_momentum",
+        "space_resolved_rate",
+        "space_decoupled",
+        "space_reaction_null_space",
+        "space_capture",
+    ] {
+        let dir = tmp(name);
+        let out = moma()
+            .arg("simulate")
+            .arg(root.join(format!("{name}.toml")))
+            .arg("--output")
+            .arg(&dir)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let s: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        for d in s["momentum_drift"].as_array().unwrap() {
+            for k in ["linear", "angular"] {
+                assert!(d[k].as_f64().unwrap() < 1e-10, "{name}: {k} drift {}", d[k]);
+            }
+        }
+        for f in [
+            "trajectory.csv",
+            "base_attitude.svg",
+            "momentum.svg",
+            "momentum_drift.svg",
+            "ee_path.svg",
+        ] {
+            assert!(dir.join(f).is_file(), "{name}: {f}");
+        }
+        if name == "space_capture" {
+            assert!(s["capture"]["max_difference"].as_f64().unwrap() < 1e-12);
+        }
+        if name.contains("rate") || name.contains("decoupled") || name.contains("null") {
+            let p = nums(&s["final_frame_position"]);
+            let goal = [0.45, 0.25, 0.45];
+            let e: f64 = p
+                .iter()
+                .zip(goal)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(e < 1e-3, "{name}: hand {e} m from the goal");
+        }
+    }
+}
+
+#[test]
+fn free_floating_scenario_errors() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    let text = std::fs::read_to_string(root.join("space_resolved_rate.toml")).unwrap();
+    let bad = [
+        (
+            text.replace("frame = \"panda_hand_tcp\"", "frame = \"nope\""),
+            "robot.frame",
+        ),
+        (text.replace("gain = 1.5", "gain = -1.0"), "control"),
+        (format!("gravity = 9.81\n{text}"), "zero gravity"),
+    ];
+    for (i, (t, needle)) in bad.iter().enumerate() {
+        let p = root.join(format!("space_bad_{}_{i}.toml", std::process::id()));
+        std::fs::write(&p, t).unwrap();
+        let dir = tmp(&format!("bad_scenario{i}"));
+        let out = moma()
+            .arg("simulate")
+            .arg(&p)
+            .arg("--output")
+            .arg(&dir)
+            .output()
+            .unwrap();
+        std::fs::remove_file(&p).unwrap();
+        fails(&out, &[needle]);
+        assert!(!dir.join("summary.json").exists());
+    }
+}

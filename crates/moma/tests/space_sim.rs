@@ -237,3 +237,135 @@ fn resolved_rate_through_the_generalized_jacobian() {
         }
     }
 }
+
+fn settings(
+    model: &Model,
+    control: Option<free_floating::ResolvedRateControl>,
+) -> free_floating::FloatingSettings {
+    free_floating::FloatingSettings {
+        frame: model.frame_id("panda_hand_tcp").unwrap(),
+        duration: 6.0,
+        record_interval: 0.05,
+        integrator: moma::sim::scenario::IntegratorSettings::Adaptive {
+            rtol: 1e-10,
+            atol: 1e-10,
+            max_step: None,
+        },
+        torque: Vec::new(),
+        joint_damping: 0.0,
+        control,
+        capture: None,
+    }
+}
+
+fn start(model: &Model, h: &Force) -> (DVector<f64>, DVector<f64>) {
+    let mut q = kinematics::neutral(model);
+    for (k, x) in [0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8, 0.02, 0.02]
+        .iter()
+        .enumerate()
+    {
+        q[7 + k] = *x;
+    }
+    let mut data = Data::new(model);
+    let mut sd = SpaceData::new(model).unwrap();
+    space::base_velocity(model, &mut data, &mut sd, &q, &[0.0; 9], h).unwrap();
+    (q, sd.v.clone())
+}
+
+fn base_rotation(run: &free_floating::FloatingRun) -> f64 {
+    let a = free_floating::base_attitude(&run.samples[0].q);
+    let b = free_floating::base_attitude(&run.samples.last().unwrap().q);
+    a.angle_to(&b)
+}
+
+#[test]
+fn controlled_runs_reach_the_goal_and_keep_the_momentum() {
+    let model = load_model("pinocchio/urdf/panda.urdf");
+    let goal = Vector3::new(0.45, 0.25, 0.45);
+    let ctl = |dc: bool, rns: bool| free_floating::ResolvedRateControl {
+        target: goal,
+        gain: 1.5,
+        damping: 0.0,
+        drift_compensation: dc,
+        reaction_null_space: rns,
+    };
+    // zero momentum: plain resolved rate through J* converges while the base turns
+    let (q, v) = start(&model, &Force::zero());
+    let rr =
+        free_floating::run(&model, &q, &v, &settings(&model, Some(ctl(false, false)))).unwrap();
+    let err0 = (rr.frame_positions[0] - goal).norm();
+    let err = (rr.frame_positions.last().unwrap() - goal).norm();
+    assert!(err < 1e-3 * err0, "resolved rate: {err0} → {err}");
+    assert!(rr.drift[0].linear < 1e-12 && rr.drift[0].angular < 1e-12 && rr.drift[0].com < 1e-9);
+    let rot_rr = base_rotation(&rr);
+    assert!(rot_rr > 1e-3, "the base does turn: {rot_rr}");
+    // reaction null space: same goal, less base rotation
+    let rns =
+        free_floating::run(&model, &q, &v, &settings(&model, Some(ctl(false, true)))).unwrap();
+    let err = (rns.frame_positions.last().unwrap() - goal).norm();
+    assert!(err < 1e-3 * err0, "RNS: {err0} → {err}");
+    let rot_rns = base_rotation(&rns);
+    assert!(rot_rns < 0.5 * rot_rr, "RNS {rot_rns} vs plain {rot_rr}");
+    // non-zero momentum: the drift is a disturbance unless cancelled (5.145)
+    let h = Force::new(Vector3::zeros(), Vector3::new(0.0, 0.0, 0.8));
+    let (q, v) = start(&model, &h);
+    let with =
+        free_floating::run(&model, &q, &v, &settings(&model, Some(ctl(true, false)))).unwrap();
+    let without =
+        free_floating::run(&model, &q, &v, &settings(&model, Some(ctl(false, false)))).unwrap();
+    let e_with = (with.frame_positions.last().unwrap() - goal).norm();
+    let e_without = (without.frame_positions.last().unwrap() - goal).norm();
+    assert!(e_with < 1e-3 * err0, "decoupled: {e_with}");
+    assert!(
+        e_without > 100.0 * e_with,
+        "uncompensated {e_without} vs {e_with}"
+    );
+    assert!(with.drift[0].angular < 1e-12);
+}
+
+#[test]
+fn approach_capture_post_capture() {
+    let model = load_model("pinocchio/urdf/panda.urdf");
+    let (q, mut v) = start(&model, &Force::zero());
+    for (k, x) in [0.2, 0.1, 0.0, 0.15, 0.0, -0.1, 0.0].iter().enumerate() {
+        v[6 + k] = *x;
+    }
+    let mut s = settings(&model, None);
+    s.duration = 4.0;
+    s.integrator = moma::sim::scenario::IntegratorSettings::Adaptive {
+        rtol: 1e-12,
+        atol: 1e-12,
+        max_step: None,
+    };
+    s.joint_damping = 0.5;
+    s.capture = Some(free_floating::CaptureEvent {
+        time: 1.5,
+        target: TargetBody {
+            mass: 4.0,
+            com_in_frame: Vector3::new(0.0, 0.0, 0.08),
+            inertia_com: Matrix3::from_diagonal(&Vector3::new(0.03, 0.03, 0.02)),
+            linear_velocity: Vector3::new(-0.1, 0.05, 0.0),
+            angular_velocity: Vector3::new(0.0, 0.2, 0.4),
+        },
+    });
+    let run = free_floating::run(&model, &q, &v, &s).unwrap();
+    let c = run.capture.as_ref().unwrap();
+    assert!((c.momentum_before.to_vector() - c.momentum_after.to_vector()).norm() < 1e-12);
+    assert_eq!(run.drift.len(), 2);
+    for d in &run.drift {
+        assert!(
+            d.linear < 1e-10 && d.angular < 1e-10 && d.com < 1e-9,
+            "{d:?}"
+        );
+    }
+    // after the capture the combined system carries the target's momentum
+    let last = run.samples.last().unwrap();
+    assert!((last.momentum.linear - c.momentum_after.linear).norm() < 1e-10);
+    assert!(last.momentum.linear.norm() > 0.1);
+    // joint damping brought the arm to rest relative to the base
+    assert!(
+        last.v.rows(6, 9).norm() < 0.15 * v.rows(6, 9).norm(),
+        "{}",
+        last.v.rows(6, 9).norm()
+    );
+}

@@ -1,5 +1,5 @@
 //! `moma eval CASES.json [--output OUT.json]`: evaluates the chapter's closed-form models
-//! (m1–m5) on a case file in the schema of the reference vectors and writes the same
+//! (m1–m6) on a case file in the schema of the reference vectors and writes the same
 //! document with every case's `outputs` and `trajectory` filled in. The
 //! `unicycle_control` schema runs the non-holonomic feedback laws in closed loop and fills
 //! `trajectory.state`, `v`, `w` and `V`.

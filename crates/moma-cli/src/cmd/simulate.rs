@@ -62,6 +62,9 @@ pub struct Scenario {
     /// Monitor limits.
     #[serde(default)]
     pub limits: Option<MonitorLimits>,
+    /// Free-floating settings (robot kind `free_floating`; schema in docs/space.md).
+    #[serde(default)]
+    pub space: Option<super::simulate_space::SpaceSpec>,
 }
 
 /// The robot of a scenario.
@@ -80,6 +83,13 @@ pub enum RobotSpec {
         /// Passive casters (optional).
         #[serde(default)]
         casters: Vec<CasterSpec>,
+    },
+    /// A URDF model as a free-floating (space) robot in zero gravity.
+    FreeFloating {
+        /// URDF file, relative to the scenario file.
+        urdf: PathBuf,
+        /// Frame recorded, controlled and used for a capture.
+        frame: String,
     },
     /// One of the chapter's closed-form models.
     Chapter {
@@ -271,6 +281,9 @@ fn build_robot(
             let sys = build_urdf_robot(&path, drive, wheel_joints.clone(), casters, gravity)?;
             Ok((sys, format!("URDF {}", urdf.display())))
         }
+        RobotSpec::FreeFloating { .. } => {
+            bail!("a free-floating robot is run by the space simulation")
+        }
     }
 }
 
@@ -454,7 +467,7 @@ fn render(
 
 /// Runs `moma simulate`.
 pub fn run(args: Args) -> Result<()> {
-    let path = resolve_scenario(args.scenario)?;
+    let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
     let ctx = |what: &str| format!("{}: {what}", path.display());
     if !(sc.duration.is_finite() && sc.duration > 0.0) {
@@ -472,6 +485,15 @@ pub fn run(args: Args) -> Result<()> {
         bail!("{}", ctx("gravity is not a finite number"));
     }
     let base_dir = path.parent().unwrap_or(Path::new("."));
+    if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
+        return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
+    }
+    if sc.space.is_some() {
+        bail!(
+            "{}",
+            ctx("[space] is only for robot.kind = \"free_floating\"")
+        );
+    }
     let (mut system, robot_name) =
         build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
     let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());

@@ -14,6 +14,7 @@ use crate::dynamics::aba;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_jacobian};
 use crate::multibody::{Data, FrameIndex, Model};
+use crate::sim::scenario::{ChannelProfile, IntegratorSettings};
 use crate::sim::{AdaptiveOptions, Dop853, OdeSystem, Rk4};
 use crate::space::{self, SpaceData, check_free_flyer};
 use crate::spatial::{Force, Inertia, Motion, SE3};
@@ -26,8 +27,12 @@ pub struct FreeFloatingOde<'m> {
     q: DVector<f64>,
     v: DVector<f64>,
     tau: DVector<f64>,
-    /// Joint torques τ (nv − 6), held constant between changes.
+    /// Constant joint torques τ (nv − 6).
     pub torque: DVector<f64>,
+    /// Time-varying joint torques added to `torque`, one profile per joint (or none).
+    pub profiles: Vec<ChannelProfile>,
+    /// Viscous joint damping D (N·m·s/rad): adds `−D q̇_m` (internal, keeps the momentum).
+    pub joint_damping: f64,
 }
 
 /// Projects the base quaternion of `q` (entries 3..7) onto the unit sphere.
@@ -62,6 +67,8 @@ impl<'m> FreeFloatingOde<'m> {
             v: DVector::zeros(model.nv),
             tau: DVector::zeros(model.nv),
             torque: DVector::zeros(model.nv - 6),
+            profiles: Vec::new(),
+            joint_damping: 0.0,
         })
     }
 
@@ -86,30 +93,45 @@ impl OdeSystem for FreeFloatingOde<'_> {
         self.model.nq + self.model.nv
     }
 
-    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
         let (nq, nv) = (self.model.nq, self.model.nv);
         self.q.as_mut_slice().copy_from_slice(&x[..nq]);
         normalize_base_quaternion(self.q.as_mut_slice());
         self.v.as_mut_slice().copy_from_slice(&x[nq..]);
         self.tau.as_mut_slice()[6..].copy_from_slice(self.torque.as_slice());
+        for (k, p) in self.profiles.iter().enumerate() {
+            self.tau[6 + k] += p.eval(t);
+        }
+        if self.joint_damping != 0.0 {
+            for k in 6..nv {
+                self.tau[k] -= self.joint_damping * x[nq + k];
+            }
+        }
         let ddq = aba(self.model, &mut self.data, &self.q, &self.v, &self.tau);
         dx[nq..].copy_from_slice(ddq.as_slice());
-        let rot = base_attitude(&self.q).to_rotation_matrix().into_inner();
-        let vl = Vector3::new(x[nq], x[nq + 1], x[nq + 2]);
-        let w = Vector3::new(x[nq + 3], x[nq + 4], x[nq + 5]);
-        let pd = rot * vl;
-        dx[0] = pd.x;
-        dx[1] = pd.y;
-        dx[2] = pd.z;
-        // ½ quat ⊗ (ω, 0) on the state's own quaternion (keeps its norm)
-        let (ax, ay, az, aw) = (x[3], x[4], x[5], x[6]);
-        dx[3] = 0.5 * (aw * w.x + ay * w.z - az * w.y);
-        dx[4] = 0.5 * (aw * w.y + az * w.x - ax * w.z);
-        dx[5] = 0.5 * (aw * w.z + ax * w.y - ay * w.x);
-        dx[6] = -0.5 * (ax * w.x + ay * w.y + az * w.z);
-        dx[7..nq].copy_from_slice(&x[nq + 6..nq + nv]);
+        configuration_rate(&self.q, x, &x[nq..], &mut dx[..nq]);
         Ok(())
     }
+}
+
+/// `q̇` of a free-floating configuration from `v`: `ṗ = R v_b`, `quaṫ = ½ quat ⊗ (ω_b, 0)`
+/// (on the quaternion `x[3..7]` itself, which keeps its norm; R from the normalised `qn`),
+/// `q̇_m = v_m`.
+fn configuration_rate(qn: &DVector<f64>, x: &[f64], v: &[f64], dq: &mut [f64]) {
+    let rot = base_attitude(qn).to_rotation_matrix().into_inner();
+    let vl = Vector3::new(v[0], v[1], v[2]);
+    let w = Vector3::new(v[3], v[4], v[5]);
+    let pd = rot * vl;
+    dq[0] = pd.x;
+    dq[1] = pd.y;
+    dq[2] = pd.z;
+    let (ax, ay, az, aw) = (x[3], x[4], x[5], x[6]);
+    dq[3] = 0.5 * (aw * w.x + ay * w.z - az * w.y);
+    dq[4] = 0.5 * (aw * w.y + az * w.x - ax * w.z);
+    dq[5] = 0.5 * (aw * w.z + ax * w.y - ay * w.x);
+    dq[6] = -0.5 * (ax * w.x + ay * w.y + az * w.z);
+    let nq = dq.len();
+    dq[7..nq].copy_from_slice(&v[6..]);
 }
 
 /// One recorded sample of a free-floating run.
@@ -371,4 +393,468 @@ pub fn resolved_rate(
         detail: None,
     })?;
     Ok(j.transpose() * y.solve(&e))
+}
+
+/// End-effector control of a free-floating arm at the velocity level (joint-rate servos,
+/// the base floating): `ẋ_d = K (p_target − p_f)` on the frame position, joint rates
+/// `q̇_m = J*⁺ (ẋ_d − d)` through the generalized Jacobian.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedRateControl {
+    /// Frame position goal (world, m).
+    pub target: Vector3<f64>,
+    /// Gain K (1/s).
+    pub gain: f64,
+    /// Damped-least-squares λ (0: plain pseudo-inverse).
+    pub damping: f64,
+    /// Cancel the momentum drift d with the measured attitude (the chapter's
+    /// decoupling 5.145): the closed loop then behaves as a fixed-base arm's. Without it
+    /// the drift of a non-zero momentum is an unmodelled disturbance.
+    pub drift_compensation: bool,
+    /// For a redundant arm, choose the null-space motion that makes the base angular
+    /// velocity as small as possible (reaction null space):
+    /// `q̇ = J*⁺ ẋ + N z`, `z = −(W N)⁺ W J*⁺ ẋ` with W the joint-rate → base-ω map
+    /// (the pseudo-inverse damped with μ = 1e-3 so that it stays smooth). Use with
+    /// `damping = 0`, so that N is an exact null-space projector.
+    pub reaction_null_space: bool,
+}
+
+/// The capture of a target body during a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CaptureEvent {
+    /// Capture time (s).
+    pub time: f64,
+    /// The target (its CoM and inertia in the grasp frame at that time).
+    pub target: TargetBody,
+}
+
+/// Settings of a free-floating run ([`run`]).
+#[derive(Clone, Debug)]
+pub struct FloatingSettings {
+    /// Frame recorded (and controlled / used for the capture).
+    pub frame: FrameIndex,
+    /// Simulated time (s).
+    pub duration: f64,
+    /// Recording interval (s).
+    pub record_interval: f64,
+    /// RK4 with step dt (quaternion projected after each step) or adaptive DOP853
+    /// (`rtol`, `atol`).
+    pub integrator: IntegratorSettings,
+    /// Joint-torque profiles (torque-driven runs; empty: zero torque).
+    pub torque: Vec<ChannelProfile>,
+    /// Viscous joint damping (N·m·s/rad), e.g. to stabilise after a capture.
+    pub joint_damping: f64,
+    /// Velocity-level control (a kinematic run: joint rates commanded, the base from
+    /// momentum conservation). Excludes torques and capture.
+    pub control: Option<ResolvedRateControl>,
+    /// A capture during a torque-driven run.
+    pub capture: Option<CaptureEvent>,
+}
+
+/// Report of a capture in a run.
+#[derive(Clone, Debug)]
+pub struct CaptureReport {
+    /// Capture time (s).
+    pub time: f64,
+    /// Total momentum at the world origin before (robot + target) and after.
+    pub momentum_before: Force,
+    /// After.
+    pub momentum_after: Force,
+    /// The combined model.
+    pub model: Model,
+}
+
+/// A recorded free-floating run.
+#[derive(Clone, Debug)]
+pub struct FloatingRun {
+    /// Samples (state, momentum, CoM).
+    pub samples: Vec<FloatingSample>,
+    /// Position of the recorded frame (world) at each sample.
+    pub frame_positions: Vec<Vector3<f64>>,
+    /// Momentum monitor of each phase (one phase; two with a capture).
+    pub drift: Vec<MomentumDrift>,
+    /// The capture, if any.
+    pub capture: Option<CaptureReport>,
+    /// Accepted integration steps.
+    pub steps: usize,
+    /// Right-hand-side evaluations.
+    pub rhs_evals: usize,
+}
+
+/// Joint rates of the resolved-rate law at q (see [`ResolvedRateControl`]).
+///
+/// # Errors
+/// As [`space::generalized_jacobian`]; a singular least-squares system.
+pub fn control_rates(
+    model: &Model,
+    data: &mut Data,
+    sd: &mut SpaceData,
+    q: &DVector<f64>,
+    frame: FrameIndex,
+    ctl: &ResolvedRateControl,
+    h: &Force,
+) -> Result<DVector<f64>> {
+    space::generalized_jacobian(model, data, sd, q, frame)?;
+    // only the joints that move the frame are commanded (e.g. not a gripper's fingers);
+    // the others keep a zero rate
+    let mut cols = Vec::with_capacity(sd.n);
+    let mut j = model.frames[frame.0].parent_joint.0;
+    while j > 1 {
+        for k in 0..model.nvs[j] {
+            cols.push(model.idx_v[j] + k - 6);
+        }
+        j = model.parents[j].0;
+    }
+    cols.sort_unstable();
+    let n = cols.len();
+    let d = if ctl.drift_compensation {
+        space::momentum_drift(sd, h)
+    } else {
+        nalgebra::Vector6::zeros()
+    };
+    let xd = (ctl.target - sd.frame_position) * ctl.gain;
+    let jm = DMatrix::from_fn(3, n, |i, k| sd.generalized_jacobian[(i, cols[k])]);
+    let e = nalgebra::DVector::from_fn(3, |i, _| xd[i] - d[i]);
+    let pinv = |m: &DMatrix<f64>, lambda: f64| -> Result<DMatrix<f64>> {
+        if lambda > 0.0 {
+            let r = m.nrows();
+            let a = m * m.transpose() + DMatrix::identity(r, r) * (lambda * lambda);
+            let c = a.cholesky().ok_or_else(|| Error::Singular {
+                what: "damped J* J*ᵀ".into(),
+                detail: None,
+            })?;
+            Ok(m.transpose() * c.inverse())
+        } else {
+            m.clone()
+                .pseudo_inverse(1e-12)
+                .map_err(|e| Error::Singular {
+                    what: "J* pseudo-inverse".into(),
+                    detail: Some(e.to_string()),
+                })
+        }
+    };
+    let jp = pinv(&jm, ctl.damping)?;
+    let mut qc = &jp * &e;
+    if ctl.reaction_null_space && n > 3 {
+        // W: base angular velocity per joint rate at zero momentum, −G_ang
+        let w = DMatrix::from_fn(3, n, |i, k| -sd.centroidal_map[(3 + i, cols[k])]);
+        let nmat = DMatrix::identity(n, n) - &jp * &jm;
+        let wn = &w * &nmat;
+        // damped (μ = 1e-3) so the term stays smooth where W N loses rank
+        let a = &wn * wn.transpose() + DMatrix::identity(3, 3) * 1e-6;
+        let c = a.cholesky().ok_or_else(|| Error::Singular {
+            what: "reaction null space".into(),
+            detail: None,
+        })?;
+        let z = -(wn.transpose() * c.solve(&(&w * &qc)));
+        qc += nmat * z;
+    }
+    let mut qd = DVector::zeros(sd.n);
+    for (k, &c) in cols.iter().enumerate() {
+        qd[c] = qc[k];
+    }
+    Ok(qd)
+}
+
+/// The kinematic free-floating system under a resolved-rate law: state q, joint rates
+/// from the law, base twist from the (constant) momentum.
+struct KinematicOde<'a> {
+    model: &'a Model,
+    data: Data,
+    sd: SpaceData,
+    q: DVector<f64>,
+    frame: FrameIndex,
+    ctl: ResolvedRateControl,
+    h: Force,
+}
+
+impl OdeSystem for KinematicOde<'_> {
+    fn dim(&self) -> usize {
+        self.model.nq
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
+        self.q.as_mut_slice().copy_from_slice(x);
+        normalize_base_quaternion(self.q.as_mut_slice());
+        let qd = control_rates(
+            self.model,
+            &mut self.data,
+            &mut self.sd,
+            &self.q,
+            self.frame,
+            &self.ctl,
+            &self.h,
+        )
+        .map_err(|e| e.singular_at_time(t))?;
+        space::base_velocity(
+            self.model,
+            &mut self.data,
+            &mut self.sd,
+            &self.q,
+            qd.as_slice(),
+            &self.h,
+        )?;
+        configuration_rate(&self.q, x, self.sd.v.as_slice(), dx);
+        Ok(())
+    }
+}
+
+/// Integrates `sys` from `(t, x)` to `te`: RK4 in equal steps no longer than dt (then
+/// the quaternion projection), or DOP853.
+fn advance<S: OdeSystem>(
+    sys: &mut S,
+    integ: &mut Integrator,
+    t: &mut f64,
+    x: &mut [f64],
+    te: f64,
+) -> Result<()> {
+    match integ {
+        Integrator::Rk4(rk, dt) => {
+            let span = te - *t;
+            if span <= 0.0 {
+                return Ok(());
+            }
+            let steps = (span / *dt - 1e-9).ceil().max(1.0) as usize;
+            let h = span / steps as f64;
+            for k in 0..steps {
+                rk.step(sys, *t + k as f64 * h, x, h)?;
+                normalize_base_quaternion(x);
+            }
+            *t = te;
+            Ok(())
+        }
+        Integrator::Adaptive(dp) => dp.integrate_to(sys, t, x, te),
+    }
+}
+
+enum Integrator {
+    Rk4(Rk4, f64),
+    Adaptive(Box<Dop853>),
+}
+
+impl Integrator {
+    fn new(settings: &IntegratorSettings, n: usize) -> Result<Self> {
+        settings.validate()?;
+        Ok(match *settings {
+            IntegratorSettings::Rk4 { dt } => Integrator::Rk4(Rk4::new(n), dt),
+            IntegratorSettings::Adaptive {
+                rtol,
+                atol,
+                max_step,
+            } => {
+                let mut o = AdaptiveOptions::with_tolerance(rtol);
+                o.atol = atol;
+                if let Some(m) = max_step {
+                    o.max_step = m;
+                }
+                Integrator::Adaptive(Box::new(Dop853::new(n, o)?))
+            }
+        })
+    }
+    fn stats(&self) -> (usize, usize) {
+        match self {
+            Integrator::Rk4(rk, _) => (rk.stats.accepted, rk.stats.rhs_evals),
+            Integrator::Adaptive(dp) => (dp.stats.accepted, dp.stats.rhs_evals),
+        }
+    }
+}
+
+fn record(
+    model: &Model,
+    data: &mut Data,
+    frame: FrameIndex,
+    t: f64,
+    x: &[f64],
+    run: &mut FloatingRun,
+) {
+    let s = sample(model, data, t, x);
+    crate::kinematics::frames_forward_kinematics(model, data, &s.q);
+    run.frame_positions
+        .push(data.world_from_frame[frame.0].translation);
+    run.samples.push(s);
+}
+
+/// Runs a free-floating simulation from `(q0, v0)` (v0: the whole generalized velocity,
+/// e.g. from [`space::base_velocity`]).
+///
+/// # Errors
+/// Bad settings (non-positive duration or interval, too many samples, a capture outside
+/// the run or together with control), and everything the integration can raise.
+pub fn run(
+    model: &Model,
+    q0: &DVector<f64>,
+    v0: &DVector<f64>,
+    settings: &FloatingSettings,
+) -> Result<FloatingRun> {
+    check_free_flyer(model)?;
+    crate::error::ensure_len("initial.q", model.nq, q0.len())?;
+    crate::error::ensure_len("initial.v", model.nv, v0.len())?;
+    crate::error::ensure_finite("initial.q", q0.iter())?;
+    crate::error::ensure_finite("initial.v", v0.iter())?;
+    let (dur, dt_rec) = (settings.duration, settings.record_interval);
+    if !(dur.is_finite() && dur > 0.0) {
+        return Err(Error::invalid("duration", "must be positive and finite"));
+    }
+    if !(dt_rec.is_finite() && dt_rec > 0.0) {
+        return Err(Error::invalid(
+            "output.record_interval",
+            "must be positive and finite",
+        ));
+    }
+    let nrec = (dur / dt_rec).ceil();
+    if nrec > 1e7 {
+        return Err(Error::invalid(
+            "output.record_interval",
+            format!("{nrec} samples exceed 1e7"),
+        ));
+    }
+    if let IntegratorSettings::Rk4 { dt } = settings.integrator
+        && dt > 0.0
+        && dur / dt > 1e8
+    {
+        return Err(Error::invalid("integrator.dt", "more than 1e8 RK4 steps"));
+    }
+    if !settings.torque.is_empty() {
+        crate::error::ensure_len("inputs", model.nv - 6, settings.torque.len())?;
+        for (k, p) in settings.torque.iter().enumerate() {
+            p.validate(&format!("inputs[{k}]"))?;
+        }
+    }
+    if !(settings.joint_damping.is_finite() && settings.joint_damping >= 0.0) {
+        return Err(Error::invalid(
+            "joint_damping",
+            "must be finite and not negative",
+        ));
+    }
+    if let Some(c) = &settings.capture {
+        if settings.control.is_some() {
+            return Err(Error::invalid(
+                "capture",
+                "a capture runs with torque-driven dynamics, not with control",
+            ));
+        }
+        if !(c.time.is_finite() && c.time > 0.0 && c.time < dur) {
+            return Err(Error::invalid(
+                "capture.time",
+                format!("must lie inside (0, {dur})"),
+            ));
+        }
+    }
+    if let Some(c) = &settings.control
+        && !(c.gain.is_finite() && c.gain > 0.0 && c.damping.is_finite() && c.damping >= 0.0)
+    {
+        return Err(Error::invalid(
+            "control",
+            "gain must be positive, damping not negative",
+        ));
+    }
+    let times: Vec<f64> = (0..=nrec as usize)
+        .map(|k| (k as f64 * dt_rec).min(dur))
+        .collect();
+    let mut run = FloatingRun {
+        samples: Vec::with_capacity(times.len()),
+        frame_positions: Vec::with_capacity(times.len()),
+        drift: Vec::new(),
+        capture: None,
+        steps: 0,
+        rhs_evals: 0,
+    };
+    let mut data = Data::new(model);
+    let mut q = q0.clone();
+    normalize_base_quaternion(q.as_mut_slice());
+    if let Some(ctl) = &settings.control {
+        let h = space::momentum(model, &mut data, &q, v0);
+        let mut ode = KinematicOde {
+            model,
+            data: Data::new(model),
+            sd: SpaceData::new(model)?,
+            q: q.clone(),
+            frame: settings.frame,
+            ctl: ctl.clone(),
+            h,
+        };
+        let mut integ = Integrator::new(&settings.integrator, model.nq)?;
+        let mut x: Vec<f64> = q.iter().copied().collect();
+        let mut t = 0.0;
+        let mut sd = SpaceData::new(model)?;
+        for &te in &times {
+            advance(&mut ode, &mut integ, &mut t, &mut x, te)?;
+            // the recorded velocity is the commanded one
+            let mut qn = DVector::from_column_slice(&x);
+            normalize_base_quaternion(qn.as_mut_slice());
+            let qd = control_rates(model, &mut data, &mut sd, &qn, settings.frame, ctl, &h)?;
+            space::base_velocity(model, &mut data, &mut sd, &qn, qd.as_slice(), &h)?;
+            let xs: Vec<f64> = x.iter().chain(sd.v.iter()).copied().collect();
+            record(model, &mut data, settings.frame, te, &xs, &mut run);
+        }
+        run.drift
+            .push(momentum_drift(&run.samples, model.total_mass()));
+        (run.steps, run.rhs_evals) = integ.stats();
+        return Ok(run);
+    }
+    let mut x: Vec<f64> = q.iter().chain(v0.iter()).copied().collect();
+    let mut t = 0.0;
+    let split = settings.capture.as_ref().map(|c| c.time);
+    let mut phase_model: Model = model.clone();
+    let mut phase_start = 0usize;
+    let mut k = 0usize;
+    loop {
+        let mut ode = FreeFloatingOde::new(&phase_model)?;
+        ode.profiles = settings.torque.clone();
+        ode.joint_damping = settings.joint_damping;
+        let mut integ = Integrator::new(&settings.integrator, x.len())?;
+        let mut pdata = Data::new(&phase_model);
+        let end = match (split, run.capture.is_none()) {
+            (Some(tc), true) => tc,
+            _ => dur,
+        };
+        while k < times.len() && times[k] <= end {
+            advance(&mut ode, &mut integ, &mut t, &mut x, times[k])?;
+            record(
+                &phase_model,
+                &mut pdata,
+                settings.frame,
+                times[k],
+                &x,
+                &mut run,
+            );
+            k += 1;
+        }
+        advance(&mut ode, &mut integ, &mut t, &mut x, end)?;
+        let (s, r) = integ.stats();
+        run.steps += s;
+        run.rhs_evals += r;
+        run.drift.push(momentum_drift(
+            &run.samples[phase_start..],
+            phase_model.total_mass(),
+        ));
+        match (&settings.capture, run.capture.is_none()) {
+            (Some(c), true) => {
+                let nq = phase_model.nq;
+                let mut qc = DVector::from_column_slice(&x[..nq]);
+                normalize_base_quaternion(qc.as_mut_slice());
+                let vc = DVector::from_column_slice(&x[nq..]);
+                let cap = capture(&phase_model, &qc, &vc, settings.frame, &c.target)?;
+                x[..nq].copy_from_slice(qc.as_slice());
+                x[nq..].copy_from_slice(cap.v.as_slice());
+                phase_model = cap.model.clone();
+                phase_start = run.samples.len();
+                // the state just after the capture starts the second phase's record
+                record(
+                    &phase_model,
+                    &mut Data::new(&phase_model),
+                    settings.frame,
+                    t,
+                    &x,
+                    &mut run,
+                );
+                run.capture = Some(CaptureReport {
+                    time: c.time,
+                    momentum_before: cap.momentum_before,
+                    momentum_after: cap.momentum_after,
+                    model: cap.model,
+                });
+            }
+            _ => break,
+        }
+    }
+    Ok(run)
 }
