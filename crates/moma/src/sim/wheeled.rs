@@ -141,10 +141,55 @@ pub fn simulate(
     options: &SimulationOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimulationResult> {
-    let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
-    crate::error::ensure_len("inputs", nu, input.channels.len())?;
-    crate::error::ensure_len("initial q", nq, q0.len())?;
-    crate::error::ensure_len("initial v", nv, v0.len())?;
+    let n_samples = validate_run(system, input, q0, v0, options)?;
+    let (nq, nv) = (system.nq(), system.nv());
+    let mut x = vec![0.0; nq + nv + 1];
+    x[..nq].copy_from_slice(q0);
+    x[nq..nq + nv].copy_from_slice(v0);
+    let mut rec = RunRecorder::new(system, input, q0, v0, options, n_samples)?;
+    rec.record(system, 0.0, &x)?;
+    // One right-hand side for the whole run: building it per step would allocate its
+    // input buffer inside the step loop. `record` reaches the system through it.
+    let mut ode = ReducedOde::new(system, input)?;
+    let stats = match options.integrator {
+        IntegratorSettings::Rk4 { dt } => {
+            run_rk4(&mut ode, &mut x, dt, options, &mut rec, progress)?
+        }
+        IntegratorSettings::Adaptive {
+            rtol,
+            atol,
+            max_step,
+        } => {
+            let opts = AdaptiveOptions {
+                rtol,
+                atol,
+                blowup: options.limits.blowup,
+                max_step: max_step.unwrap_or(f64::INFINITY).min(options.duration),
+                max_steps: 50_000_000,
+                ..AdaptiveOptions::default()
+            };
+            run_adaptive(&mut ode, &mut x, opts, options, &mut rec, progress)?
+        }
+    };
+    Ok(SimulationResult {
+        recorder: rec.recorder,
+        monitor: rec.monitor,
+        stats,
+    })
+}
+
+/// Checks the inputs of a run and its size bounds; returns the number of samples to
+/// record (including t = 0).
+fn validate_run(
+    system: &dyn ReducedSystem,
+    input: &InputProfile,
+    q0: &[f64],
+    v0: &[f64],
+    options: &SimulationOptions,
+) -> Result<usize> {
+    crate::error::ensure_len("inputs", system.nu(), input.channels.len())?;
+    crate::error::ensure_len("initial q", system.nq(), q0.len())?;
+    crate::error::ensure_len("initial v", system.nv(), v0.len())?;
     crate::error::ensure_finite("initial q", q0)?;
     crate::error::ensure_finite("initial v", v0)?;
     options.integrator.validate()?;
@@ -184,129 +229,122 @@ pub fn simulate(
             ));
         }
     }
-    let n_samples = n_samples_f as usize + 1;
-    let mut recorder = Recorder::new(
-        system.q_names(),
-        system.v_names(),
-        system.u_names(),
-        n_samples,
-    );
-    recorder.set_units(system.q_units(), system.v_units(), system.u_units());
-    let nk = system.nk();
-    recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
-    let mut lam = vec![0.0; nk];
-    let mut x = vec![0.0; nq + nv + 1];
-    x[..nq].copy_from_slice(q0);
-    x[nq..nq + nv].copy_from_slice(v0);
-    let mut u = vec![0.0; nu];
-    let (t0, p0) = system.energy(q0, v0)?;
-    let mut monitor = Monitor::new(options.limits, t0, p0);
-    let record = |system: &mut dyn ReducedSystem,
-                  recorder: &mut Recorder,
-                  monitor: &mut Monitor,
-                  t: f64,
-                  x: &[f64],
-                  u: &mut [f64],
-                  lam: &mut [f64]|
-     -> Result<()> {
+    Ok(n_samples_f as usize + 1)
+}
+
+/// The recorder and monitor of a run, with the buffers one sample needs.
+struct RunRecorder<'a> {
+    recorder: Recorder,
+    monitor: Monitor,
+    input: &'a InputProfile,
+    u: Vec<f64>,
+    lam: Vec<f64>,
+    nq: usize,
+    nv: usize,
+}
+
+impl<'a> RunRecorder<'a> {
+    fn new(
+        system: &mut dyn ReducedSystem,
+        input: &'a InputProfile,
+        q0: &[f64],
+        v0: &[f64],
+        options: &SimulationOptions,
+        n_samples: usize,
+    ) -> Result<Self> {
+        let mut recorder = Recorder::new(
+            system.q_names(),
+            system.v_names(),
+            system.u_names(),
+            n_samples,
+        );
+        recorder.set_units(system.q_units(), system.v_units(), system.u_units());
+        let nk = system.nk();
+        recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
+        let (t0, p0) = system.energy(q0, v0)?;
+        Ok(Self {
+            recorder,
+            monitor: Monitor::new(options.limits, t0, p0),
+            input,
+            u: vec![0.0; system.nu()],
+            lam: vec![0.0; nk],
+            nq: system.nq(),
+            nv: system.nv(),
+        })
+    }
+
+    /// Monitors and records the state `x = [q, v, W]` at time `t`.
+    fn record(&mut self, system: &mut dyn ReducedSystem, t: f64, x: &[f64]) -> Result<()> {
+        let (nq, nv) = (self.nq, self.nv);
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
-        input.eval(t, u);
+        self.input.eval(t, &mut self.u);
         let (kin, pot) = system.energy(q, v)?;
         let res = system.constraint_residual(q, v)?;
-        monitor.check(t, x, kin, pot, x[nq + nv], res)?;
-        system.multipliers(q, v, u, lam)?;
-        recorder.lambda.extend_from_slice(lam);
-        recorder.push(Sample {
+        self.monitor.check(t, x, kin, pot, x[nq + nv], res)?;
+        system.multipliers(q, v, &self.u, &mut self.lam)?;
+        self.recorder.lambda.extend_from_slice(&self.lam);
+        self.recorder.push(Sample {
             t,
             q,
             v,
-            u,
+            u: &self.u,
             kinetic: kin,
             potential: pot,
             work: x[nq + nv],
             residual: res,
         });
         Ok(())
-    };
-    record(
-        system,
-        &mut recorder,
-        &mut monitor,
-        0.0,
-        &x,
-        &mut u,
-        &mut lam,
-    )?;
-    // One right-hand side for the whole run: building it per step would allocate its
-    // input buffer inside the step loop. `record` reaches the system through it.
-    let mut ode = ReducedOde::new(system, input)?;
-    let stats;
-    match options.integrator {
-        IntegratorSettings::Rk4 { dt } => {
-            let steps = (options.duration / dt).round().max(1.0) as usize;
-            let h = options.duration / steps as f64;
-            let every = ((options.record_interval / h).round() as usize).max(1);
-            let mut rk = Rk4::new(nq + nv + 1);
-            rk.blowup = options.limits.blowup;
-            for s in 0..steps {
-                let t = s as f64 * h;
-                rk.step(&mut ode, t, &mut x, h)?;
-                if (s + 1) % every == 0 || s + 1 == steps {
-                    let t1 = (s + 1) as f64 * h;
-                    record(
-                        &mut *ode.system,
-                        &mut recorder,
-                        &mut monitor,
-                        t1,
-                        &x,
-                        &mut u,
-                        &mut lam,
-                    )?;
-                    progress(t1);
-                }
-            }
-            stats = rk.stats;
-        }
-        IntegratorSettings::Adaptive {
-            rtol,
-            atol,
-            max_step,
-        } => {
-            let opts = AdaptiveOptions {
-                rtol,
-                atol,
-                blowup: options.limits.blowup,
-                max_step: max_step.unwrap_or(f64::INFINITY).min(options.duration),
-                max_steps: 50_000_000,
-                ..AdaptiveOptions::default()
-            };
-            let mut dp = DormandPrince45::new(nq + nv + 1, opts)?;
-            let mut t = 0.0;
-            let mut k = 1usize;
-            loop {
-                let te = (k as f64 * options.record_interval).min(options.duration);
-                dp.integrate_to(&mut ode, &mut t, &mut x, te)?;
-                record(
-                    &mut *ode.system,
-                    &mut recorder,
-                    &mut monitor,
-                    te,
-                    &x,
-                    &mut u,
-                    &mut lam,
-                )?;
-                progress(te);
-                if te >= options.duration {
-                    break;
-                }
-                k += 1;
-            }
-            stats = dp.stats;
+    }
+}
+
+/// Fixed-step RK4 over the whole duration (the step rounded to divide it), recording
+/// every `record_interval` and at the end.
+fn run_rk4(
+    ode: &mut ReducedOde<'_, dyn ReducedSystem + '_>,
+    x: &mut [f64],
+    dt: f64,
+    options: &SimulationOptions,
+    rec: &mut RunRecorder<'_>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<StepStats> {
+    let steps = (options.duration / dt).round().max(1.0) as usize;
+    let h = options.duration / steps as f64;
+    let every = ((options.record_interval / h).round() as usize).max(1);
+    let mut rk = Rk4::new(x.len());
+    rk.blowup = options.limits.blowup;
+    for s in 0..steps {
+        let t = s as f64 * h;
+        rk.step(ode, t, x, h)?;
+        if (s + 1) % every == 0 || s + 1 == steps {
+            let t1 = (s + 1) as f64 * h;
+            rec.record(&mut *ode.system, t1, x)?;
+            progress(t1);
         }
     }
-    Ok(SimulationResult {
-        recorder,
-        monitor,
-        stats,
-    })
+    Ok(rk.stats)
+}
+
+/// Adaptive Dormand–Prince 5(4), stopping exactly at every recording time.
+fn run_adaptive(
+    ode: &mut ReducedOde<'_, dyn ReducedSystem + '_>,
+    x: &mut [f64],
+    opts: AdaptiveOptions,
+    options: &SimulationOptions,
+    rec: &mut RunRecorder<'_>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<StepStats> {
+    let mut dp = DormandPrince45::new(x.len(), opts)?;
+    let mut t = 0.0;
+    let mut k = 1usize;
+    loop {
+        let te = (k as f64 * options.record_interval).min(options.duration);
+        dp.integrate_to(ode, &mut t, x, te)?;
+        rec.record(&mut *ode.system, te, x)?;
+        progress(te);
+        if te >= options.duration {
+            break;
+        }
+        k += 1;
+    }
+    Ok(dp.stats)
 }
