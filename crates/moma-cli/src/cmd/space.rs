@@ -4,7 +4,7 @@
 //! generalized velocity, the generalized Jacobian J* of the frame, the generalized inertia
 //! H* and the frame's velocity (with the momentum drift). Schema: `docs/cli.md`.
 
-use super::inspect::load_model;
+use super::common::load_model;
 use anyhow::{Context, Result, bail};
 use moma::multibody::{Data, RootJoint};
 use moma::space::{self, SpaceData};

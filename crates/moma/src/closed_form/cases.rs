@@ -8,7 +8,7 @@
 use super::fixed_vector;
 use super::m1_unicycle::{Unicycle, UnicycleParams};
 use super::m2_platform_arm::{PlatformArm, PlatformArmParams};
-use super::m3_diffdrive::{DiffDrive, DiffDriveParams};
+use super::m3_diffdrive::{DiffDriveKinematics, DiffDriveKinematicsParams};
 use super::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
 use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams, TaskController};
 use super::m6_space_manipulator::{SpaceManipulator, SpaceManipulatorParams};
@@ -18,64 +18,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value, json};
 
-/// The chapter models `moma eval` knows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ChapterModel {
-    /// m1, the unicycle platform.
-    M1Unicycle,
-    /// m2, platform + horizontal two-link arm.
-    M2PlatformArm,
-    /// m3, wheel-rate kinematics and whole-body Jacobian.
-    M3DiffDrive,
-    /// m4, cart + vertical two-link arm.
-    M4CartTwoLink,
-    /// m5, 3-D mobile manipulator.
-    M5MobileManipulator,
-    /// m6, planar free-floating space manipulator.
-    M6SpaceManipulator,
-}
-
-/// Canonical model names (as in the reference files) with accepted aliases.
-pub const MODEL_NAMES: [(&str, &[&str], ChapterModel); 6] = [
-    ("m1_unicycle", &["m1"], ChapterModel::M1Unicycle),
-    (
-        "m2_platform_planar_arm",
-        &["m2", "m2_platform_arm"],
-        ChapterModel::M2PlatformArm,
-    ),
-    (
-        "m3_diffdrive_kinematics",
-        &["m3", "m3_diffdrive"],
-        ChapterModel::M3DiffDrive,
-    ),
-    ("m4_cart_two_link", &["m4"], ChapterModel::M4CartTwoLink),
-    (
-        "m5_mobile_manipulator_3d",
-        &["m5", "m5_mobile_manipulator"],
-        ChapterModel::M5MobileManipulator,
-    ),
-    (
-        "m6_space_manipulator",
-        &["m6", "m6_space"],
-        ChapterModel::M6SpaceManipulator,
-    ),
-];
-
-impl ChapterModel {
-    /// Looks a model up by its canonical name or alias.
-    pub fn from_name(name: &str) -> Result<Self> {
-        for (canon, aliases, m) in MODEL_NAMES {
-            if name == canon || aliases.contains(&name) {
-                return Ok(m);
-            }
-        }
-        let known: Vec<&str> = MODEL_NAMES.iter().map(|(c, _, _)| *c).collect();
-        Err(Error::invalid(
-            "model",
-            format!("unknown model '{name}'; known models: {}", known.join(", ")),
-        ))
-    }
-}
+pub use super::registry::{ChapterModel, MODEL_NAMES};
 
 fn field<'a>(case: &'a Value, path: &[&str]) -> Result<&'a Value> {
     let mut v = case;
@@ -217,7 +160,7 @@ fn evaluate_inner(
             Ok((out, tr, None))
         }
         ChapterModel::M3DiffDrive => {
-            let sys = DiffDrive::new(params::<DiffDriveParams>(case)?)?;
+            let sys = DiffDriveKinematics::new(params::<DiffDriveKinematicsParams>(case)?)?;
             let q = vector::<6>(case, &["state", "q"])?;
             let v = vector::<5>(case, &["inputs", "v"])?;
             let out = to_value(&sys.evaluate(&q, &v)?)?;
@@ -353,30 +296,7 @@ fn m6_case(case: &Value, tol: f64) -> Result<(Value, Value)> {
 /// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
 /// Errors name the case id and the field.
 pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) -> Result<Value> {
-    let id = match case.get("id") {
-        Some(Value::String(s)) => s.clone(),
-        Some(v) => v.to_string(),
-        None => format!("#{index}"),
-    };
-    let wrap = |e: Error| match e {
-        Error::InvalidInput { field, message } => Error::InvalidInput {
-            field: format!("case {id}: {field}"),
-            message,
-        },
-        Error::NonFinite { field } => Error::NonFinite {
-            field: format!("case {id}: {field}"),
-        },
-        Error::WrongLength {
-            field,
-            expected,
-            got,
-        } => Error::WrongLength {
-            field: format!("case {id}: {field}"),
-            expected,
-            got,
-        },
-        other => Error::invalid(format!("case {id}"), other.to_string()),
-    };
+    let wrap = |e: Error| name_case(case, index, e);
     if !case.is_object() {
         return Err(wrap(Error::invalid("case", "expected an object")));
     }
@@ -416,6 +336,38 @@ pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) 
     Ok(out)
 }
 
+/// Prefixes the field of an error with the case id (or its index).
+fn name_case(case: &Value, index: usize, e: Error) -> Error {
+    let id = match case.get("id") {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => format!("#{index}"),
+    };
+    match e {
+        Error::InvalidInput { field, message } => Error::InvalidInput {
+            field: format!("case {id}: {field}"),
+            message,
+        },
+        Error::NonFinite { field } => Error::NonFinite {
+            field: format!("case {id}: {field}"),
+        },
+        Error::WrongLength {
+            field,
+            expected,
+            got,
+        } => Error::WrongLength {
+            field: format!("case {id}: {field}"),
+            expected,
+            got,
+        },
+        other => Error::invalid(format!("case {id}"), other.to_string()),
+    }
+}
+
+/// The model name of the closed-loop unicycle case schema
+/// ([`super::control_cases`]).
+pub const UNICYCLE_CONTROL: &str = "unicycle_control";
+
 /// Default integration tolerance (`rtol = atol`) for trajectories.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
 
@@ -427,17 +379,39 @@ pub fn evaluate_document(doc: &Value, tol: f64) -> Result<Value> {
         .ok_or_else(|| Error::invalid("model", "missing (expected e.g. \"m1_unicycle\")"))?
         .as_str()
         .ok_or_else(|| Error::invalid("model", "expected a string"))?;
-    let model = ChapterModel::from_name(name)?;
     let cases = doc
         .get("cases")
         .ok_or_else(|| Error::invalid("cases", "missing"))?
         .as_array()
         .ok_or_else(|| Error::invalid("cases", "expected a list"))?;
-    let filled = cases
-        .iter()
-        .enumerate()
-        .map(|(i, c)| evaluate_case(model, c, i, tol))
-        .collect::<Result<Vec<_>>>()?;
+    let filled = if name == UNICYCLE_CONTROL {
+        cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let out = super::control_cases::evaluate_unicycle_case(c, tol)
+                    .map_err(|e| name_case(c, i, e))?;
+                if !out.get("trajectory").is_none_or(all_finite) {
+                    return Err(name_case(
+                        c,
+                        i,
+                        Error::Numerical {
+                            t: 0.0,
+                            message: "non-finite output".into(),
+                        },
+                    ));
+                }
+                Ok(out)
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        let model = ChapterModel::from_name(name)?;
+        cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| evaluate_case(model, c, i, tol))
+            .collect::<Result<Vec<_>>>()?
+    };
     let mut out = doc.clone();
     out.as_object_mut()
         .ok_or_else(|| Error::invalid("document", "expected a JSON object"))?

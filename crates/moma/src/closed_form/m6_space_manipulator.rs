@@ -17,7 +17,7 @@ use super::ad::Real;
 use super::lagrange::{self, LagrangianSystem};
 use super::{check_finite, finite, positive, ser};
 use crate::error::{Error, Result};
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
