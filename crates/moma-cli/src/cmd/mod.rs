@@ -12,3 +12,4 @@ pub mod reach_map;
 pub mod scen;
 pub mod simulate;
 pub mod stability;
+pub mod stability_map;
