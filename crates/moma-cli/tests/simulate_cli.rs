@@ -56,12 +56,28 @@ fn default_scenario_runs_without_an_argument() {
     assert!(s["relative_energy_error"].as_f64().unwrap() < 1e-6);
     assert_eq!(s["samples"].as_u64().unwrap(), 501);
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
-    assert!(csv.starts_with("t,x,y,theta,left_wheel_joint"));
+    assert!(
+        csv.starts_with("t [s],x [m],y [m],theta [rad],left_wheel_joint [rad]"),
+        "{}",
+        csv.lines().next().unwrap()
+    );
     assert!(
         csv.lines()
             .next()
             .unwrap()
-            .ends_with("residual,lambda_0,lambda_1,lambda_2")
+            .contains(",v [m/s],omega [rad/s],")
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains(",tau_left [N m],tau_right [N m],")
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with("residual [m/s],lambda_0 [N],lambda_1 [N],lambda_2 [N]")
     );
     assert_eq!(csv.lines().count(), 502);
     // The platform moved along a curve.
@@ -197,6 +213,54 @@ dt = 0.01
         &["nowhere.urdf"],
     );
     fails_with("syntax", "duration = = 1", &["bad.toml", "line 1"]);
+    // No silently ignored input: gravity for a horizontal chapter model, casters that
+    // cannot be support points, casters on a chapter model.
+    fails_with(
+        "gravity-m1",
+        &M1.replace(
+            "duration = 1.0",
+            "duration = 1.0
+gravity = 9.81",
+        ),
+        &["bad.toml", "gravity", "m1", "no gravity term"],
+    );
+    let urdf = scenarios().join("robots/diffdrive_arm.urdf");
+    let urdf_robot = |casters: &str| {
+        format!(
+            "duration = 0.1
+[robot]
+kind = \"urdf\"
+urdf = {:?}
+             drive = {{ r_w = 0.08, b = 0.25, d = 0.1 }}
+casters = {casters}
+             [integrator]
+method = \"rk4\"
+dt = 0.01
+",
+            urdf.display().to_string()
+        )
+    };
+    fails_with(
+        "caster-twice",
+        &urdf_robot(
+            r#"[{ name = "rear", position = [0.2, 0.0] }, { name = "rear", position = [0.3, 0.0] }]"#,
+        ),
+        &["bad.toml", "caster 'rear'", "two casters"],
+    );
+    fails_with(
+        "caster-unnamed",
+        &urdf_robot(r#"[{ name = " ", position = [0.2, 0.0] }]"#),
+        &["bad.toml", "casters[0] name"],
+    );
+    fails_with(
+        "caster-on-chapter-model",
+        &M1.replace(
+            "[robot.params]",
+            "casters = []
+[robot.params]",
+        ),
+        &["bad.toml", "casters"],
+    );
     // A run that blows up writes nothing.
     fails_with(
         "blow-up",

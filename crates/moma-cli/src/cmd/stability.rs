@@ -70,7 +70,7 @@ fn parse_point_list(field: &str, text: &str) -> Result<Vec<Vector2<f64>>> {
         if pts.len() >= MAX_POINTS {
             bail!("{field}: more than {MAX_POINTS} points");
         }
-        let xy = super::manipulability::parse_list(&format!("{field} point {i}"), item)?;
+        let xy = super::common::parse_list(&format!("{field} point {i}"), item)?;
         if xy.len() != 2 {
             bail!(
                 "{field}: point {i} '{item}' must be X,Y (2 numbers), got {}",
@@ -91,7 +91,7 @@ pub(crate) fn support_from_args(a: &SupportArgs) -> Result<SupportPolygon> {
                 Some(k) => (&b[..k], Some(&b[k + ",casters=".len()..])),
                 None => (b.as_str(), None),
             };
-            let dd = super::manipulability::parse_base(drive)?;
+            let dd = super::common::parse_base(drive)?;
             let mut base = WheeledBase::new(dd);
             if let Some(c) = casters {
                 for (i, p) in parse_point_list("--base casters", c)?.iter().enumerate() {
@@ -118,7 +118,7 @@ pub(crate) fn parse_gravity(text: Option<&str>, model: &Model) -> Result<Vector3
     match text {
         None => Ok(model.gravity),
         Some(t) => {
-            let g = super::manipulability::parse_list("--gravity", t)?;
+            let g = super::common::parse_list("--gravity", t)?;
             if g.len() != 3 {
                 bail!("--gravity: expected GX,GY,GZ (3 numbers), got {}", g.len());
             }

@@ -99,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let q0 = match &args.q {
-        Some(t) => DVector::from_vec(super::manipulability::parse_list("--q", t)?),
+        Some(t) => DVector::from_vec(super::common::parse_list("--q", t)?),
         None => moma::kinematics::neutral(&model),
     };
     check_state(&model, "--q", Some(q0.as_slice()), None, None, None)?;
@@ -123,7 +123,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             let mut r = [[0.0; 2]; 2];
             for (k, p) in parts.iter().enumerate() {
-                let v = super::manipulability::parse_list("--ranges", p)?;
+                let v = super::common::parse_list("--ranges", p)?;
                 if v.len() != 2 || v[0] >= v[1] {
                     bail!("--ranges: range {k} must be LO,HI with LO < HI");
                 }
@@ -149,8 +149,7 @@ pub fn run(args: Args) -> Result<()> {
             r
         }
     };
-    let pa =
-        super::manipulability::parse_list("--platform-acceleration", &args.platform_acceleration)?;
+    let pa = super::common::parse_list("--platform-acceleration", &args.platform_acceleration)?;
     if pa.len() != 2 {
         bail!("--platform-acceleration: expected AX,AY (2 numbers)");
     }

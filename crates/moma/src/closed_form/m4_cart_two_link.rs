@@ -21,7 +21,7 @@ use super::ad::Real;
 use super::lagrange::{self, LagrangianSystem};
 use super::{check_finite, finite, nonnegative, positive, ser};
 use crate::error::Result;
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
 use crate::spatial::Inertia;
 use crate::stability::{GravitoInertialWrench, StabilityReport, SupportPolygon, evaluate_measures};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};

@@ -133,9 +133,19 @@ fn wrap(a: f64) -> f64 {
     a
 }
 
+/// Most samples [`time_parameterize`] returns (48 bytes each: 480 MB). The count follows
+/// from the path length, the limits and `dt`, all user input, so it is checked before
+/// anything is allocated.
+pub const MAX_TRAJECTORY_SAMPLES: usize = 10_000_000;
+
 /// Time-parameterises the polyline `waypoints` (world coordinates, metres) for a
 /// differential drive starting at rest with heading `initial_heading` (defaults to the
 /// first segment's direction). Samples every `dt` seconds plus every segment end.
+///
+/// # Errors
+/// Non-positive or non-finite limits or `dt`, an empty or non-finite path, and a
+/// trajectory that would need more than [`MAX_TRAJECTORY_SAMPLES`] samples (a tiny `dt`
+/// or tiny limits for the path's length).
 #[doc(alias = "time_parameterization")]
 pub fn time_parameterize(
     waypoints: &[[f64; 2]],
@@ -199,6 +209,17 @@ pub fn time_parameterize_directional(
         0.0
     };
     let mut theta = wrap(initial_heading.unwrap_or(first_dir));
+    let (samples, duration) = sample_count(&pts, theta, limits, (a_up, a_down), dt);
+    if samples.is_nan() || samples > MAX_TRAJECTORY_SAMPLES as f64 {
+        return Err(Error::invalid(
+            "trajectory samples",
+            format!(
+                "a {duration:.3e} s trajectory sampled every dt = {dt:e} s needs {samples:.3e} \
+                 samples, more than the limit of {MAX_TRAJECTORY_SAMPLES}; use a larger dt or \
+                 larger velocity and acceleration limits"
+            ),
+        ));
+    }
     let mut t0 = 0.0;
     let mut out = vec![TrajectoryPoint {
         t: 0.0,
@@ -257,6 +278,35 @@ pub fn time_parameterize_directional(
         t0 += prof.duration();
     }
     Ok(out)
+}
+
+/// The number of samples and the duration [`time_parameterize`] produces for the
+/// deduplicated polyline `pts` from heading `theta` (as floats: they may be huge).
+fn sample_count(
+    pts: &[[f64; 2]],
+    mut theta: f64,
+    limits: &DiffDriveLimits,
+    (a_up, a_down): (f64, f64),
+    dt: f64,
+) -> (f64, f64) {
+    let mut samples = 1.0;
+    let mut duration = 0.0;
+    let mut phase = |dur: f64| {
+        samples += (dur / dt).floor() + 1.0;
+        duration += dur;
+    };
+    for seg in pts.windows(2) {
+        let (a, b) = (seg[0], seg[1]);
+        let heading = (b[1] - a[1]).atan2(b[0] - a[0]);
+        let turn = wrap(heading - theta);
+        if turn.abs() > 1e-12 {
+            phase(Trapezoid::new(turn.abs(), limits.omega_max, limits.alpha_max).duration());
+        }
+        theta = heading;
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        phase(Trapezoid::asymmetric(len, limits.v_max, a_up, a_down).duration());
+    }
+    (samples, duration)
 }
 
 impl TrajectoryPoint {

@@ -28,6 +28,22 @@ fn platform_v_names(velocity: PlatformVelocity) -> [&'static str; 2] {
     }
 }
 
+/// The SI unit of a channel of the chapter models: positions in m, speeds `v_F`, `v_T`
+/// in m/s, angles in rad, angle rates (`…_dot`) in rad/s, torques (`tau_…`) in N m.
+///
+/// # Panics
+/// On a name that none of m1, m2, m5 uses (a test covers all of them).
+fn chapter_unit(name: &str) -> &'static str {
+    match name {
+        "x" | "y" => "m",
+        "v_F" | "v_T" => "m/s",
+        "phi" | "phit" | "theta1" | "theta2" | "theta12" => "rad",
+        n if n.ends_with("_dot") => "rad/s",
+        n if n.starts_with("tau_") => "N m",
+        other => panic!("no unit for chapter channel '{other}'"),
+    }
+}
+
 /// The chapter's model m1 (unicycle platform), `q = [x, y, φ]`, `u = [τ_L, τ_R]`.
 pub fn m1(params: UnicycleParams) -> Result<ClosedFormSystem<Unicycle, 3, 2, 2>> {
     let model = Unicycle::new(params)?;
@@ -126,6 +142,15 @@ where
     }
     fn u_names(&self) -> Vec<String> {
         self.u_names.iter().map(|s| s.to_string()).collect()
+    }
+    fn q_units(&self) -> Vec<&'static str> {
+        self.q_names.iter().map(|n| chapter_unit(n)).collect()
+    }
+    fn v_units(&self) -> Vec<&'static str> {
+        self.v_names.iter().map(|n| chapter_unit(n)).collect()
+    }
+    fn u_units(&self) -> Vec<&'static str> {
+        self.u_names.iter().map(|n| chapter_unit(n)).collect()
     }
     fn dynamics(
         &mut self,
