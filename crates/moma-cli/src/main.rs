@@ -11,6 +11,7 @@ mod output;
 mod svg_heatmap;
 mod svg_map;
 mod svg_plots;
+mod svg_stability;
 
 use clap::{Parser, Subcommand};
 
@@ -48,6 +49,8 @@ enum Command {
     ReachMap(cmd::reach_map::Args),
     /// Tip-over stability (ZMP, Force-Angle, Moment-Height) on a list of states.
     Stability(cmd::stability::Args),
+    /// Polar plot of the tip-over acceleration limits and a ZMP-margin map over two joints.
+    StabilityMap(cmd::stability_map::Args),
     /// Operational-space control quantities (Λ, J̄, N, J̇q̇, F, τ) of a frame on a list of states.
     Osc(cmd::osc::Args),
     /// Free-floating (space) robot: base motion from joint rates, generalized Jacobian and inertia.
@@ -70,6 +73,7 @@ fn main() {
         Command::Ik(a) => cmd::ik::run(a),
         Command::ReachMap(a) => cmd::reach_map::run(a),
         Command::Stability(a) => cmd::stability::run(a),
+        Command::StabilityMap(a) => cmd::stability_map::run(a),
         Command::Space(a) => cmd::space::run(a),
     };
     if let Err(e) = result {

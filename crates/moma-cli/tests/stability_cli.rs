@@ -225,3 +225,63 @@ fn errors_are_clear_and_leave_no_output() {
     let o2 = moma(&["stability", &p, "--states", g]);
     assert_eq!(o2.status.code(), Some(2));
 }
+
+#[test]
+fn stability_map_writes_polar_plot_heat_map_and_json() {
+    let dir = tmp("map");
+    let _ = std::fs::remove_dir_all(&dir);
+    let p = panda();
+    let o = moma(&[
+        "stability-map",
+        &p,
+        "--support",
+        "0.45,0.3;0.45,-0.3;-0.35,-0.3;-0.35,0.3",
+        "--q",
+        "0,0,0,0,1.2,0,-0.3,0,1.0,0,0,0",
+        "--joints",
+        "panda_joint2,panda_joint4",
+        "--resolution",
+        "9",
+        "--directions",
+        "36",
+        "--platform-acceleration=-6,0",
+        "--output-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("stability_map.json")).unwrap())
+            .unwrap();
+    let lim = j["acceleration_limits"]["limit"].as_array().unwrap();
+    assert_eq!(lim.len(), 36);
+    // direction 0 is forward, 18 backward: with the arm ahead, braking is tighter
+    assert!(lim[18].as_f64().unwrap() < lim[0].as_f64().unwrap());
+    let rows = j["margin"]["zmp_margin"].as_array().unwrap();
+    assert_eq!(rows.len(), 9);
+    let all: Vec<f64> = rows
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+        .collect();
+    // a hard brake tips some arm postures and not others
+    assert!(all.iter().any(|&m| m < 0.0) && all.iter().any(|&m| m > 0.0));
+    for f in ["acceleration_limits.svg", "margin_map.svg"] {
+        let s = std::fs::read_to_string(dir.join(f)).unwrap();
+        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+    }
+    // a bad joint name leaves nothing behind
+    let dir2 = tmp("map_bad");
+    let _ = std::fs::remove_dir_all(&dir2);
+    let o = moma(&[
+        "stability-map",
+        &p,
+        "--support",
+        "0.45,0.3;0.45,-0.3;-0.35,-0.3",
+        "--joints",
+        "panda_joint2,nope",
+        "--output-dir",
+        dir2.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown joint 'nope'"));
+    assert!(!dir2.join("stability_map.json").exists());
+}

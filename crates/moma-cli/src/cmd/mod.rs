@@ -17,3 +17,4 @@ pub mod simulate;
 pub mod simulate_space;
 pub mod space;
 pub mod stability;
+pub mod stability_map;

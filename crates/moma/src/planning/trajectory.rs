@@ -209,7 +209,7 @@ pub fn time_parameterize_directional(
         0.0
     };
     let mut theta = wrap(initial_heading.unwrap_or(first_dir));
-    let (samples, duration) = sample_count(&pts, theta, limits, dt);
+    let (samples, duration) = sample_count(&pts, theta, limits, (a_up, a_down), dt);
     if samples.is_nan() || samples > MAX_TRAJECTORY_SAMPLES as f64 {
         return Err(Error::invalid(
             "trajectory samples",
@@ -282,7 +282,13 @@ pub fn time_parameterize_directional(
 
 /// The number of samples and the duration [`time_parameterize`] produces for the
 /// deduplicated polyline `pts` from heading `theta` (as floats: they may be huge).
-fn sample_count(pts: &[[f64; 2]], mut theta: f64, limits: &DiffDriveLimits, dt: f64) -> (f64, f64) {
+fn sample_count(
+    pts: &[[f64; 2]],
+    mut theta: f64,
+    limits: &DiffDriveLimits,
+    (a_up, a_down): (f64, f64),
+    dt: f64,
+) -> (f64, f64) {
     let mut samples = 1.0;
     let mut duration = 0.0;
     let mut phase = |dur: f64| {
@@ -298,7 +304,7 @@ fn sample_count(pts: &[[f64; 2]], mut theta: f64, limits: &DiffDriveLimits, dt: 
         }
         theta = heading;
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        phase(Trapezoid::new(len, limits.v_max, limits.a_max).duration());
+        phase(Trapezoid::asymmetric(len, limits.v_max, a_up, a_down).duration());
     }
     (samples, duration)
 }
