@@ -222,11 +222,11 @@ fn print_report(args: &Args, report: &Report) -> Result<()> {
     if args.json {
         return crate::output::print_json(report);
     }
-    println!(
+    outln!(
         "# moma bench {} (root {}, frame {}, nq {nq}, nv {nv}; {NSTATES} states, {nbatch} batches after {warmup} warm-up)",
         report.robot, report.root, report.frame
     );
-    println!("# robot algorithm nq nv median_ns min_ns");
+    outln!("# robot algorithm nq nv median_ns min_ns");
     let med = &report.median_ns;
     let min = &report.min_ns;
     for (name, a, b) in [
@@ -240,7 +240,7 @@ fn print_report(args: &Args, report: &Report) -> Result<()> {
         ("frame_jacobian", med.frame_jacobian, min.frame_jacobian),
         ("joint_jacobians", med.joint_jacobians, min.joint_jacobians),
     ] {
-        println!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
+        outln!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
     }
     Ok(())
 }

@@ -253,7 +253,7 @@ fn report(args: &Args, out: &Output) -> Result<()> {
     if args.json {
         print_json(out)?;
     } else {
-        println!(
+        outln!(
             "{}: frame '{}' {} after {} iterations: residual {:.3e} (position {:.3e} m, orientation {:.3e} rad), σ_min {:.3e}",
             out.robot,
             out.frame,
@@ -269,7 +269,7 @@ fn report(args: &Args, out: &Output) -> Result<()> {
             out.sigma_min
         );
         let qs: Vec<String> = out.q.iter().map(|x| format!("{x:.6}")).collect();
-        println!("q = [{}]", qs.join(", "));
+        outln!("q = [{}]", qs.join(", "));
     }
     if !out.converged {
         return goal_not_reached(format!(

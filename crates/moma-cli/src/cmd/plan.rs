@@ -526,8 +526,8 @@ pub fn run(args: Args) -> Result<()> {
     };
     let out = plan_output(&args, &mf, &ends, robot, &found)?;
     write_outputs(&args, &mf, &ends, &found, &out)?;
-    println!("{}", out.report);
-    println!(
+    outln!("{}", out.report);
+    outln!(
         "path: {} cells, {} waypoints, length {:.3} {}, duration {:.2} s",
         out.cells.len(),
         out.waypoints.len(),
