@@ -320,7 +320,7 @@ fn planner_errors_name_world_coordinates_on_ros_maps() {
     ]);
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains(" m, cell ("), "{e}");
+    assert!(e.contains(" m (cell ("), "{e}");
     assert!(e.contains("(-2.0") || e.contains("(-1.9"), "{e}");
 }
 

@@ -224,7 +224,9 @@ fn print_report(args: &Args, report: &Report) -> Result<()> {
     }
     outln!(
         "# moma bench {} (root {}, frame {}, nq {nq}, nv {nv}; {NSTATES} states, {nbatch} batches after {warmup} warm-up)",
-        report.robot, report.root, report.frame
+        report.robot,
+        report.root,
+        report.frame
     );
     outln!("# robot algorithm nq nv median_ns min_ns");
     let med = &report.median_ns;

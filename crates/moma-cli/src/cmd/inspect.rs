@@ -140,7 +140,13 @@ pub fn run(args: Args) -> Result<()> {
     outln!("joints ({}):", info.joints.len());
     outln!(
         "  {:<28} {:<20} {:>5} {:>3} {:>5} {:>3}  {:<24} lower / upper",
-        "name", "type", "idx_q", "nq", "idx_v", "nv", "parent"
+        "name",
+        "type",
+        "idx_q",
+        "nq",
+        "idx_v",
+        "nv",
+        "parent"
     );
     for j in &info.joints {
         outln!(
@@ -160,7 +166,9 @@ pub fn run(args: Args) -> Result<()> {
     for f in &info.frames {
         outln!(
             "  {:<32} {:<12} on joint {}",
-            f.name, f.kind, f.parent_joint
+            f.name,
+            f.kind,
+            f.parent_joint
         );
     }
     Ok(())

@@ -266,7 +266,10 @@ fn print_table(out: &Output) {
     let fmt = |v: Option<f64>| v.map_or("undefined".to_string(), |x| format!("{x:.6e}"));
     outln!(
         "{} frame '{}', rows {:?}, measure {}",
-        out.robot, out.frame, out.rows, out.measure
+        out.robot,
+        out.frame,
+        out.rows,
+        out.measure
     );
     for s in &out.states {
         match s.whole_body_value {

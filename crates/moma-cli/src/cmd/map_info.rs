@@ -69,12 +69,17 @@ pub fn run(args: Args) -> Result<()> {
     outln!("resolution: {} m/cell", info.resolution);
     outln!(
         "origin:     [{}, {}, {}]",
-        info.origin[0], info.origin[1], info.origin[2]
+        info.origin[0],
+        info.origin[1],
+        info.origin[2]
     );
     if let Some(r) = &info.ros {
         outln!(
             "thresholds: occupied > {}, free < {}, negate {}, mode {:?}",
-            r.occupied_thresh, r.free_thresh, r.negate as u8, r.mode
+            r.occupied_thresh,
+            r.free_thresh,
+            r.negate as u8,
+            r.mode
         );
     }
     outln!("occupied:   {}", info.occupied);

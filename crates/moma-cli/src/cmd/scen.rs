@@ -102,7 +102,10 @@ pub fn run(args: Args) -> Result<()> {
             .unwrap_or_else(|| "no path".into());
         outln!(
             "  #{} {} -> {}: found {c}, optimal {}",
-            r.index, r.start, r.goal, r.optimal
+            r.index,
+            r.start,
+            r.goal,
+            r.optimal
         );
     }
     outln!(
