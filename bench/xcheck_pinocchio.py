@@ -97,11 +97,6 @@ EXPECTED = {
         "moma refuses",
         "lower position limit above the upper one: an empty range, rejected naming the joint; "
         "Pinocchio loads it unchecked"),
-    "edge_no_limit.urdf": (
-        "pinocchio refuses",
-        "urdfdom requires <limit> on revolute/prismatic joints; urdf-rs reads a missing "
-        "<limit> as all zeros, indistinguishable from the all-zero limits some exporters "
-        "write (which urdfdom accepts), so moma loads it with a [0, 0] position range"),
 }
 SEED = 20261122
 

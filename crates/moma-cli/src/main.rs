@@ -47,6 +47,10 @@ enum Command {
     Ik(cmd::ik::Args),
     /// Evaluate reachability and manipulability over a grid of base placements.
     ReachMap(cmd::reach_map::Args),
+    /// Tip-over stability (ZMP, Force-Angle, Moment-Height) on a list of states.
+    Stability(cmd::stability::Args),
+    /// Operational-space control quantities (Λ, J̄, N, J̇q̇, F, τ) of a frame on a list of states.
+    Osc(cmd::osc::Args),
 }
 
 fn main() {
@@ -61,8 +65,10 @@ fn main() {
         Command::Plan(a) => cmd::plan::run(a),
         Command::Scen(a) => cmd::scen::run(a),
         Command::Manipulability(a) => cmd::manipulability::run(a),
+        Command::Osc(a) => cmd::osc::run(a),
         Command::Ik(a) => cmd::ik::run(a),
         Command::ReachMap(a) => cmd::reach_map::run(a),
+        Command::Stability(a) => cmd::stability::run(a),
     };
     if let Err(e) = result {
         if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {

@@ -188,8 +188,14 @@ fn ik_converges_reports_and_fails_clearly() {
     assert_eq!(out.status.code(), Some(3));
     let v = json(&out);
     assert_eq!(v["converged"], false);
+    assert_eq!(v["task_met"], false);
     let r = v["residual_norm"].as_f64().unwrap();
     assert!(r.is_finite() && r > 1.5, "{r}");
+    // A position task reports the rows it solved: a position error equal to the residual
+    // norm, and no orientation error.
+    assert_eq!(v["residual"].as_array().unwrap().len(), 3);
+    assert_eq!(v["position_error"].as_f64().unwrap(), r);
+    assert!(v["orientation_error"].is_null(), "{v}");
     assert!(String::from_utf8_lossy(&out.stderr).contains("did not converge"));
 
     // Whole body: the base drives there.

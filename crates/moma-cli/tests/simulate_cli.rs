@@ -213,6 +213,54 @@ dt = 0.01
         &["nowhere.urdf"],
     );
     fails_with("syntax", "duration = = 1", &["bad.toml", "line 1"]);
+    // No silently ignored input: gravity for a horizontal chapter model, casters that
+    // cannot be support points, casters on a chapter model.
+    fails_with(
+        "gravity-m1",
+        &M1.replace(
+            "duration = 1.0",
+            "duration = 1.0
+gravity = 9.81",
+        ),
+        &["bad.toml", "gravity", "m1", "no gravity term"],
+    );
+    let urdf = scenarios().join("robots/diffdrive_arm.urdf");
+    let urdf_robot = |casters: &str| {
+        format!(
+            "duration = 0.1
+[robot]
+kind = \"urdf\"
+urdf = {:?}
+             drive = {{ r_w = 0.08, b = 0.25, d = 0.1 }}
+casters = {casters}
+             [integrator]
+method = \"rk4\"
+dt = 0.01
+",
+            urdf.display().to_string()
+        )
+    };
+    fails_with(
+        "caster-twice",
+        &urdf_robot(
+            r#"[{ name = "rear", position = [0.2, 0.0] }, { name = "rear", position = [0.3, 0.0] }]"#,
+        ),
+        &["bad.toml", "caster 'rear'", "two casters"],
+    );
+    fails_with(
+        "caster-unnamed",
+        &urdf_robot(r#"[{ name = " ", position = [0.2, 0.0] }]"#),
+        &["bad.toml", "casters[0] name"],
+    );
+    fails_with(
+        "caster-on-chapter-model",
+        &M1.replace(
+            "[robot.params]",
+            "casters = []
+[robot.params]",
+        ),
+        &["bad.toml", "casters"],
+    );
     // A run that blows up writes nothing.
     fails_with(
         "blow-up",

@@ -6,7 +6,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use moma::closed_form::ReducedOde;
 use moma::closed_form::lagrange;
 use moma::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
-use moma::sim::{AdaptiveOptions, Dop853, DormandPrince45, OdeSystem, Rk4};
+use moma::ode::{AdaptiveOptions, Dop853, DormandPrince45, OdeSystem, Rk4};
 use nalgebra::SVector;
 use std::hint::black_box;
 

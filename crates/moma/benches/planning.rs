@@ -79,7 +79,7 @@ fn load_case(name: &'static str) -> MapCase {
     let step = (scen.problems.len() / 100).max(1);
     MapCase {
         name,
-        grid: SearchGrid::from_grid(&g, true),
+        grid: SearchGrid::from_grid(&g, true).unwrap(),
         free: g.cells.iter().map(|&v| v == 0).collect(),
         w: g.width as i32,
         h: g.height as i32,
@@ -281,7 +281,7 @@ fn replan_positions(name: &str, problems: usize) -> Vec<ReplanPosition> {
     let g = load_map(&data(&format!("movingai/{name}.map")), None)
         .unwrap()
         .grid;
-    let sg = SearchGrid::from_grid(&g, true);
+    let sg = SearchGrid::from_grid(&g, true).unwrap();
     let scen = MovingAiScenario::load(&data(&format!("movingai/{name}.map.scen"))).unwrap();
     let mut long: Vec<_> = scen.problems.iter().filter(|p| p.optimal >= 64.0).collect();
     long.sort_by(|a, b| a.optimal.total_cmp(&b.optimal));

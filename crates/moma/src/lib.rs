@@ -35,16 +35,20 @@
 //! | J·N_C | whole-body Jacobian | `mobile::whole_body_jacobian` |
 
 pub mod closed_form;
+pub mod control;
 pub mod dynamics;
 pub mod error;
 pub mod ik;
 pub mod io;
 pub mod kinematics;
+pub(crate) mod linalg;
 pub mod manipulability;
 pub mod mobile;
 pub mod multibody;
+pub mod ode;
 pub mod planning;
 pub mod sim;
 pub mod spatial;
+pub mod stability;
 
 pub use error::{Error, Result};

@@ -170,7 +170,7 @@ fn footprint_cspace_matches_brute_force_and_bounds() {
 fn smoothing_is_collision_free_and_shorter() {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planning/movingai/den520d.map");
     let grid = load_map(&p, None).unwrap().grid;
-    let sg = SearchGrid::from_grid(&grid, true);
+    let sg = SearchGrid::from_grid(&grid, true).unwrap();
     let path = planning::astar(&sg, (100, 163), (200, 200))
         .unwrap()
         .unwrap();

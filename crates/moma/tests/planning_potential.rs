@@ -9,7 +9,7 @@ use std::path::Path;
 fn trap() -> SearchGrid {
     // The same map is shipped as scenarios/maps/potential_trap.map.
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/maps/potential_trap.map");
-    SearchGrid::from_grid(&load_map(&p, None).unwrap().grid, true)
+    SearchGrid::from_grid(&load_map(&p, None).unwrap().grid, true).unwrap()
 }
 
 #[test]

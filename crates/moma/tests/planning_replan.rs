@@ -10,7 +10,7 @@ fn walk_and_check(map: &str, start: (usize, usize), goal: (usize, usize), seed: 
         .join("tests/data/planning/movingai")
         .join(map);
     let grid = load_map(&path, None).unwrap().grid;
-    let sg = SearchGrid::from_grid(&grid, true);
+    let sg = SearchGrid::from_grid(&grid, true).unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut d = DStarLite::new(&sg, start, goal).unwrap();
     let first = d.compute().unwrap();
@@ -122,7 +122,7 @@ fn dstar_lite_snapshot_replans_like_the_original() {
     // planner it was copied from, and the original is unaffected by the copy's changes.
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data/planning/movingai/random512-10-0.map");
-    let sg = SearchGrid::from_grid(&load_map(&path, None).unwrap().grid, true);
+    let sg = SearchGrid::from_grid(&load_map(&path, None).unwrap().grid, true).unwrap();
     let (start, goal) = ((20, 20), (300, 200));
     let (start, goal) = (
         (0..60)

@@ -7,7 +7,11 @@ use moma::planning::costmap::{Footprint, footprint_cspace};
 fn zero_area_footprint_is_rejected() {
     assert!(Footprint::new(vec![[0.0, 0.0]; 3]).is_err());
     assert!(Footprint::new(vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]).is_err());
-    assert!(Footprint::new(vec![[-1.0, -1.0], [1.0, -1.0], [0.0, 1.0]]).is_ok());
+    let t = Footprint::new(vec![[-1.0, -1.0], [1.0, -1.0], [0.0, 1.0]]).unwrap();
+    // circumscribed: the farthest vertex; inscribed: the nearest edge, 2x + y = 1
+    assert!((t.circumscribed_radius() - 2f64.sqrt()).abs() < 1e-12);
+    assert!((t.inscribed_radius() - 1.0 / 5f64.sqrt()).abs() < 1e-12);
+    assert!(t.contains(0.0, 0.0) && t.contains(0.0, 0.9) && !t.contains(0.9, 0.9));
 }
 
 #[test]
@@ -19,8 +23,49 @@ fn footprint_wider_than_the_map_is_an_error() {
     // So large that its area overflows: refused when built.
     let err = Footprint::new(vec![[0.0, 0.0], [1e300, 0.0], [0.0, 1e300]]).unwrap_err();
     assert!(err.to_string().contains("footprint"), "{err}");
-    let f = Footprint::new(vec![[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]).unwrap();
-    assert!(footprint_cspace(&obstacles, 20, 10, 0.05, &f, 8).is_ok());
+    // A normal footprint: every heading's mask equals a brute-force check of which
+    // poses put the obstacle cell's centre inside the rotated square.
+    let h = 0.11;
+    let f = Footprint::new(vec![[-h, -h], [h, -h], [h, h], [-h, h]]).unwrap();
+    let empty = footprint_cspace(&obstacles, 20, 10, 0.05, &f, 8).unwrap();
+    assert!(
+        empty
+            .slices
+            .iter()
+            .chain(&empty.sweeps)
+            .flatten()
+            .all(|b| !b)
+    );
+    let mut one = obstacles.clone();
+    let (ox, oy) = (10usize, 5usize);
+    one[oy * 20 + ox] = true;
+    let cs = footprint_cspace(&one, 20, 10, 0.05, &f, 8).unwrap();
+    for k in 0..8 {
+        let th = k as f64 * std::f64::consts::FRAC_PI_4;
+        let mut blocked = 0;
+        for y in 0..10 {
+            for x in 0..20 {
+                let (wx, wy) = ((ox as f64 - x as f64) * 0.05, (oy as f64 - y as f64) * 0.05);
+                let (bx, by) = (
+                    th.cos() * wx + th.sin() * wy,
+                    -th.sin() * wx + th.cos() * wy,
+                );
+                let want = bx.abs() <= h && by.abs() <= h;
+                assert_eq!(
+                    cs.slices[k][y * 20 + x],
+                    want,
+                    "heading {k}, cell ({x}, {y})"
+                );
+                blocked += want as usize;
+                // the turn from θ_k sweeps at least both end poses
+                if want || cs.slices[(k + 1) % 8][y * 20 + x] {
+                    assert!(cs.sweeps[k][y * 20 + x], "sweep {k}, cell ({x}, {y})");
+                }
+            }
+        }
+        // 5 x 5 cell centres axis-aligned; the 45° square (side 0.22 m) covers 25 too
+        assert_eq!(blocked, 25, "heading {k}");
+    }
 }
 
 #[test]

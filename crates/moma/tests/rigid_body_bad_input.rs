@@ -89,14 +89,30 @@ fn bad_inertials() {
         r#"<inertial><mass value="1"/><inertia ixx="1" ixy="2" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ));
     assert!(m.contains("positive definite"), "{m}");
-    // a point mass (zero rotational inertia) and round-off-level negative eigenvalues load
-    for ok in [
-        r#"<inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#,
-        r#"<inertial><mass value="1e-6"/><inertia ixx="5e-8" ixy="6e-8" ixz="0" iyy="5e-8" iyz="0" izz="5e-8"/></inertial>"#,
-    ] {
-        let model = model_from_urdf_str(&with_inertial(ok), RootJoint::Fixed, "ok.urdf").unwrap();
-        assert!(model.total_mass() > 0.0);
-    }
+    // a point mass (zero rotational inertia) loads
+    let point = r#"<inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#;
+    let model = model_from_urdf_str(&with_inertial(point), RootJoint::Fixed, "ok.urdf").unwrap();
+    assert!(model.total_mass() > 0.0);
+    // A link with a round-off-level negative eigenvalue (−1e-8 kg·m², like TIAGo's 1 µg
+    // antenna links) passes the link check; it loads when a fixed joint merges it into a
+    // real body (the merged body is positive semidefinite) ...
+    let tiny = r#"<inertial><mass value="1e-6"/><inertia ixx="5e-8" ixy="6e-8" ixz="0" iyy="5e-8" iyz="0" izz="5e-8"/></inertial>"#;
+    let merged = robot(&format!(
+        r#"<link name="a"/><link name="b"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+        <link name="antenna">{tiny}</link>
+        <joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>
+        <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+        <joint name="fix" type="fixed"><parent link="b"/><child link="antenna"/></joint>"#
+    ));
+    let model = model_from_urdf_str(&merged, RootJoint::Fixed, "ok.urdf").unwrap();
+    assert!((model.total_mass() - (1.0 + 1e-6)).abs() < 1e-15);
+    // ... but is refused as a body of its own, since the joint-space inertia matrix would
+    // not be positive definite.
+    let m = err(&with_inertial(tiny));
+    assert!(
+        m.contains("body inertia of joint 'j'") && m.contains("not positive semidefinite"),
+        "{m}"
+    );
     let m = err(&with_inertial(
         r#"<inertial><mass value="-2"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ));
@@ -136,6 +152,32 @@ fn unsupported_joints_and_bad_values() {
         r#"{LINKS_AB}<joint name="j" type="revolute"><parent link="a"/><child link="b"/><limit lower="1" upper="-1" effort="1" velocity="1"/></joint>"#
     )));
     assert!(m.contains("lower limit"), "{m}");
+    // A revolute or prismatic joint without <limit> is refused naming it (urdfdom
+    // refuses it too); a continuous joint needs none, and all-zero limits are accepted.
+    for kind in ["revolute", "prismatic"] {
+        let m = err(&robot(&format!(
+            r#"{LINKS_AB}<joint name="elbow" type="{kind}"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>"#
+        )));
+        assert!(
+            m.contains("joint 'elbow'") && m.contains("<limit>") && m.contains(kind),
+            "{m}"
+        );
+        // a <limit> of a joint inside another element does not count
+        let m = err(&robot(&format!(
+            r#"{LINKS_AB}<joint name="elbow" type="{kind}"><parent link="a"/><child link="b"/></joint>
+            <transmission name="t"><joint name="elbow"><limit/></joint></transmission>"#
+        )));
+        assert!(m.contains("joint 'elbow'"), "{m}");
+        let zero = robot(&format!(
+            r#"{LINKS_AB}<joint name="elbow" type="{kind}"><parent link="a"/><child link="b"/><limit lower="0" upper="0" effort="0" velocity="0"/></joint>"#
+        ));
+        assert!(model_from_urdf_str(&zero, RootJoint::Fixed, "zero.urdf").is_ok());
+    }
+    let cont = robot(&format!(
+        r#"{LINKS_AB}<joint name="wheel" type="continuous"><parent link="a"/><child link="b"/></joint>"#
+    ));
+    let m = model_from_urdf_str(&cont, RootJoint::Fixed, "cont.urdf").unwrap();
+    assert!(m.lower_position_limit[0].is_infinite() && m.upper_position_limit[0].is_infinite());
     let e = model_from_urdf_str("<robot name=\"t\"/>", RootJoint::Fixed, "empty.urdf").unwrap_err();
     assert!(e.to_string().contains("no <link>"), "{e}");
 }

@@ -345,10 +345,12 @@ fn panda_whole_body_null_space_raises_arm_manipulability() {
         let mut ws = IkWorkspace::new(&task);
         let opts = IkOptions {
             null_space: ns,
+            max_iterations: 3000,
             ..IkOptions::default()
         };
         let r = solve(&mut task, &q0, &opts, &mut ws).unwrap();
-        assert!(r.converged, "{r:?}");
+        // converged: the task is met and the objective settled before the budget ran out
+        assert!(r.converged && r.task_met, "{r:?}");
         let mut e = DVector::zeros(6);
         let mut j = DMatrix::zeros(6, 11);
         task.residual_and_jacobian(&r.q, &mut e, &mut j).unwrap();

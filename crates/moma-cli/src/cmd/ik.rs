@@ -87,11 +87,16 @@ struct Output {
     target: Vec<f64>,
     rows: Vec<usize>,
     converged: bool,
+    /// The task residual is within the tolerance (true also when a null-space objective
+    /// was still improving at the iteration limit).
+    task_met: bool,
     status: moma::ik::IkStatus,
     residual_norm: f64,
     residual: Vec<f64>,
-    position_error: f64,
-    orientation_error: f64,
+    /// Norm of the solved position rows (m); null when the task has none.
+    position_error: Option<f64>,
+    /// Norm of the solved orientation rows (rad); null when the task has none.
+    orientation_error: Option<f64>,
     iterations: usize,
     sigma_min: f64,
     q: Vec<f64>,
@@ -224,6 +229,12 @@ pub fn run(args: Args) -> Result<()> {
     };
     let time_ms = start.elapsed().as_secs_f64() * 1e3;
     let e = pose_error(&pose, &target);
+    // Errors of the rows the task solved only (no orientation error for a position task).
+    let solved = rows.indices();
+    let part = |range: std::ops::Range<usize>| {
+        let sel: Vec<f64> = range.filter(|r| solved.contains(r)).map(|r| e[r]).collect();
+        (!sel.is_empty()).then(|| sel.iter().map(|x| x * x).sum::<f64>().sqrt())
+    };
     let out = Output {
         robot: args.robot.display().to_string(),
         frame: name,
@@ -231,11 +242,12 @@ pub fn run(args: Args) -> Result<()> {
         target: tvals,
         rows: rows.indices(),
         converged: result.converged,
+        task_met: result.task_met,
         status: result.status,
         residual_norm: result.residual_norm,
         residual: result.residual.iter().copied().collect(),
-        position_error: (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt(),
-        orientation_error: (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt(),
+        position_error: part(0..3),
+        orientation_error: part(3..6),
         iterations: result.iterations,
         sigma_min: result.sigma_min,
         q: result.q.iter().copied().collect(),
@@ -253,25 +265,35 @@ fn report(args: &Args, out: &Output) -> Result<()> {
     if args.json {
         print_json(out)?;
     } else {
+        let mut parts = Vec::new();
+        if let Some(p) = out.position_error {
+            parts.push(format!("position {p:.3e} m"));
+        }
+        if let Some(o) = out.orientation_error {
+            parts.push(format!("orientation {o:.3e} rad"));
+        }
         outln!(
-            "{}: frame '{}' {} after {} iterations: residual {:.3e} (position {:.3e} m, orientation {:.3e} rad), σ_min {:.3e}",
+            "{}: frame '{}' {} after {} iterations: residual {:.3e} ({}), σ_min {:.3e}",
             out.robot,
             out.frame,
             if out.converged {
                 "converged".to_string()
+            } else if out.task_met {
+                "reached the target; null-space objective still improving at the iteration \
+                 limit"
+                    .to_string()
             } else {
                 format!("NOT converged ({:?})", out.status)
             },
             out.iterations,
             out.residual_norm,
-            out.position_error,
-            out.orientation_error,
+            parts.join(", "),
             out.sigma_min
         );
         let qs: Vec<String> = out.q.iter().map(|x| format!("{x:.6}")).collect();
         outln!("q = [{}]", qs.join(", "));
     }
-    if !out.converged {
+    if !out.task_met {
         return goal_not_reached(format!(
             "inverse kinematics did not converge ({:?}, residual {:.3e} > tol {:.1e}); \
              the target may be out of reach or blocked by joint limits (try --restarts)",

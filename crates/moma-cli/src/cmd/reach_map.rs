@@ -10,11 +10,11 @@ use crate::svg_heatmap::{HeatMap, render};
 use anyhow::{Result, anyhow, bail};
 use moma::ik::IkOptions;
 use moma::ik::model::ModelFrame;
-use moma::ik::tasks::{FrameKinematics, TaskRows, target_from_slice};
-use moma::manipulability::Measure;
-use moma::manipulability::placement::{
+use moma::ik::placement::{
     ArmReachEvaluator, MeasureScope, PlacementGrid, PlacementSample, placement_map,
 };
+use moma::ik::tasks::{FrameKinematics, TaskRows, target_from_slice};
+use moma::manipulability::Measure;
 use moma::mobile::whole_body::BaseInputs;
 use moma::multibody::RootJoint;
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};

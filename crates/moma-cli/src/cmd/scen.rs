@@ -129,7 +129,7 @@ pub fn run(args: Args) -> Result<()> {
 fn run2(args: &Args) -> Result<Vec<Row>> {
     let grid = planning::load_movingai_map(&args.map)?;
     let scen = MovingAiScenario::load(&args.scen)?;
-    let sg = SearchGrid::from_grid(&grid, true);
+    let sg = SearchGrid::from_grid(&grid, true)?;
     let mut ws = AstarWorkspace::new();
     let mut rows = Vec::new();
     for p in scen.problems.iter().step_by(args.every) {
@@ -166,9 +166,10 @@ fn run3(args: &Args) -> Result<Vec<Row>> {
     let grid = planning::load_3dmap(&args.map)?;
     let probs = planning::load_3dscen(&args.scen)?;
     let mut rows = Vec::new();
+    let mut ws = planning::Astar3Workspace::new();
     for p in probs.iter().step_by(args.every) {
         let t0 = Instant::now();
-        let r = planning::astar3d(&grid, p.start, p.goal)
+        let r = planning::astar3d_with(&grid, &mut ws, p.start, p.goal)
             .with_context(|| format!("{}: problem {}", args.scen.display(), p.index))?;
         let micros = t0.elapsed().as_secs_f64() * 1e6;
         rows.push(Row {

@@ -239,6 +239,14 @@ fn build_robot(
                     ),
                 }
             }
+            if let Some(g) = gravity
+                && model != "m5"
+            {
+                bail!(
+                    "gravity = {g}: chapter model {model} moves in the horizontal plane and \
+                     has no gravity term; remove the top-level `gravity` (only m5 uses it)"
+                );
+            }
             let mut json = serde_json::to_value(params).context("robot.params")?;
             if let (Some(g), "m5") = (gravity, model.as_str())
                 && let Some(obj) = json.as_object_mut()

@@ -278,30 +278,7 @@ fn evaluate_inner(
 /// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
 /// Errors name the case id and the field.
 pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) -> Result<Value> {
-    let id = match case.get("id") {
-        Some(Value::String(s)) => s.clone(),
-        Some(v) => v.to_string(),
-        None => format!("#{index}"),
-    };
-    let wrap = |e: Error| match e {
-        Error::InvalidInput { field, message } => Error::InvalidInput {
-            field: format!("case {id}: {field}"),
-            message,
-        },
-        Error::NonFinite { field } => Error::NonFinite {
-            field: format!("case {id}: {field}"),
-        },
-        Error::WrongLength {
-            field,
-            expected,
-            got,
-        } => Error::WrongLength {
-            field: format!("case {id}: {field}"),
-            expected,
-            got,
-        },
-        other => Error::invalid(format!("case {id}"), other.to_string()),
-    };
+    let wrap = |e: Error| name_case(case, index, e);
     if !case.is_object() {
         return Err(wrap(Error::invalid("case", "expected an object")));
     }
@@ -335,6 +312,38 @@ pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) 
     Ok(out)
 }
 
+/// Prefixes the field of an error with the case id (or its index).
+fn name_case(case: &Value, index: usize, e: Error) -> Error {
+    let id = match case.get("id") {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => format!("#{index}"),
+    };
+    match e {
+        Error::InvalidInput { field, message } => Error::InvalidInput {
+            field: format!("case {id}: {field}"),
+            message,
+        },
+        Error::NonFinite { field } => Error::NonFinite {
+            field: format!("case {id}: {field}"),
+        },
+        Error::WrongLength {
+            field,
+            expected,
+            got,
+        } => Error::WrongLength {
+            field: format!("case {id}: {field}"),
+            expected,
+            got,
+        },
+        other => Error::invalid(format!("case {id}"), other.to_string()),
+    }
+}
+
+/// The model name of the closed-loop unicycle case schema
+/// ([`super::control_cases`]).
+pub const UNICYCLE_CONTROL: &str = "unicycle_control";
+
 /// Default integration tolerance (`rtol = atol`) for trajectories.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
 
@@ -346,17 +355,39 @@ pub fn evaluate_document(doc: &Value, tol: f64) -> Result<Value> {
         .ok_or_else(|| Error::invalid("model", "missing (expected e.g. \"m1_unicycle\")"))?
         .as_str()
         .ok_or_else(|| Error::invalid("model", "expected a string"))?;
-    let model = ChapterModel::from_name(name)?;
     let cases = doc
         .get("cases")
         .ok_or_else(|| Error::invalid("cases", "missing"))?
         .as_array()
         .ok_or_else(|| Error::invalid("cases", "expected a list"))?;
-    let filled = cases
-        .iter()
-        .enumerate()
-        .map(|(i, c)| evaluate_case(model, c, i, tol))
-        .collect::<Result<Vec<_>>>()?;
+    let filled = if name == UNICYCLE_CONTROL {
+        cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let out = super::control_cases::evaluate_unicycle_case(c, tol)
+                    .map_err(|e| name_case(c, i, e))?;
+                if !out.get("trajectory").is_none_or(all_finite) {
+                    return Err(name_case(
+                        c,
+                        i,
+                        Error::Numerical {
+                            t: 0.0,
+                            message: "non-finite output".into(),
+                        },
+                    ));
+                }
+                Ok(out)
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        let model = ChapterModel::from_name(name)?;
+        cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| evaluate_case(model, c, i, tol))
+            .collect::<Result<Vec<_>>>()?
+    };
     let mut out = doc.clone();
     out.as_object_mut()
         .ok_or_else(|| Error::invalid("document", "expected a JSON object"))?

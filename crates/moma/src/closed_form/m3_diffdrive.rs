@@ -15,7 +15,7 @@
 use super::ad::{Real, seed_all};
 use super::{Manipulability, check_finite, finite, manipulability, positive, ser, to_dmatrix};
 use crate::error::{Error, Result};
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
@@ -194,9 +194,9 @@ impl DiffDrive {
             det_J: j.determinant(),
             J_chapter_5_31: jc,
             J_mV: j_mv,
-            manipulability_J: manipulability(&jd),
-            manipulability_J_endeffector: manipulability(&jd.rows(2, 3).into_owned()),
-            manipulability_J_mV: manipulability(&to_dmatrix(&j_mv)),
+            manipulability_J: manipulability(&jd)?,
+            manipulability_J_endeffector: manipulability(&jd.rows(2, 3).into_owned())?,
+            manipulability_J_mV: manipulability(&to_dmatrix(&j_mv))?,
         })
     }
 

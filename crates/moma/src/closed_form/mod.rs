@@ -15,18 +15,24 @@
 //! Christoffel `C_cor`, `G = ∂V/∂q` including gravity. The mass matrix and potential of
 //! each model are written once in closed form; their derivatives (Christoffel symbols,
 //! G, Ṅ_C, J̇) are exact (forward-mode dual numbers, see [`ad`]).
+//!
+//! [`multibody_models`] rebuilds m1, m2 and m5 as general multibody models (a planar-rooted
+//! [`crate::mobile::WheeledModel`]) for the cross-checks; [`cases`] evaluates case files.
 
 pub mod ad;
 pub mod cases;
+pub mod control_cases;
 pub mod lagrange;
 pub mod m1_unicycle;
 pub mod m2_platform_arm;
 pub mod m3_diffdrive;
 pub mod m4_cart_two_link;
 pub mod m5_mobile_manipulator;
+pub mod multibody_models;
 
 use crate::error::{Error, Result};
-use crate::sim::OdeSystem;
+use crate::manipulability::JacobianSvd;
+use crate::ode::OdeSystem;
 use ad::Real;
 use lagrange::PfaffianSystem;
 use nalgebra::{DMatrix, SMatrix, SVector};
@@ -133,17 +139,18 @@ pub fn fixed_vector<const K: usize>(field: &str, x: &[f64]) -> Result<SVector<f6
     Ok(SVector::from_column_slice(x))
 }
 
-/// Manipulability measures of a Jacobian `J` (m×n) with singular values `σ`.
+/// Manipulability measures of a Jacobian `J` (m×n) with singular values `σ`, in the
+/// schema of the chapter's reference vectors (computed by [`crate::manipulability`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct Manipulability {
     /// `[m, n]`.
     pub shape: [usize; 2],
     /// Singular values of J, descending.
     pub singular_values: Vec<f64>,
-    /// The chapter's measure `det(JᵀJ)` (≈ 0 for a wide J).
+    /// The chapter's measure `det(JᵀJ)` (0 for a wide J, where it vanishes identically).
     #[serde(rename = "det_JtJ")]
     pub det_jtj: f64,
-    /// Yoshikawa's measure `sqrt(det(J Jᵀ))` (0 for a tall J).
+    /// Yoshikawa's measure `sqrt(det(J Jᵀ))` (0 for a tall J, where it vanishes identically).
     #[serde(rename = "yoshikawa_sqrt_det_JJt")]
     pub yoshikawa: f64,
     /// `σ_min / σ_max`.
@@ -152,35 +159,29 @@ pub struct Manipulability {
     pub w5_bayle_eccentricity: f64,
 }
 
-/// Computes the [`Manipulability`] measures of `j`.
+/// Computes the [`Manipulability`] measures of `j` from one SVD
+/// ([`crate::manipulability::JacobianSvd`]). Errors for an empty or non-finite `j`.
 #[doc(alias = "Yoshikawa")]
-pub fn manipulability(j: &DMatrix<f64>) -> Manipulability {
-    let (m, n) = j.shape();
-    let mut sv: Vec<f64> = j
-        .clone()
-        .svd(false, false)
-        .singular_values
-        .iter()
-        .copied()
-        .collect();
-    sv.sort_by(|a, b| b.total_cmp(a));
-    let det_jtj = (j.transpose() * j).determinant();
-    let yoshikawa = if m <= n {
-        (j * j.transpose()).determinant().max(0.0).sqrt()
-    } else {
-        0.0
-    };
-    let smax = sv.first().copied().unwrap_or(0.0);
-    let smin = sv.last().copied().unwrap_or(0.0);
-    let w2 = if smax > 0.0 { smin / smax } else { 0.0 };
-    Manipulability {
-        shape: [m, n],
-        singular_values: sv,
-        det_jtj,
-        yoshikawa,
-        w2_sigma_ratio: w2,
-        w5_bayle_eccentricity: (1.0 - w2 * w2).max(0.0).sqrt(),
-    }
+pub fn manipulability(j: &DMatrix<f64>) -> Result<Manipulability> {
+    let svd = JacobianSvd::new(j)?;
+    Ok(Manipulability {
+        shape: [svd.rows, svd.cols],
+        singular_values: svd.singular_values.iter().copied().collect(),
+        // Both measures are defined for every shape; each is identically zero on the
+        // shapes the module refuses (a wide J for det(JᵀJ), a tall J for Yoshikawa).
+        det_jtj: if svd.rows < svd.cols {
+            0.0
+        } else {
+            svd.det_jtj()?
+        },
+        yoshikawa: if svd.rows > svd.cols {
+            0.0
+        } else {
+            svd.yoshikawa()?
+        },
+        w2_sigma_ratio: svd.inverse_condition(),
+        w5_bayle_eccentricity: svd.eccentricity(),
+    })
 }
 
 /// A state `(q, v)` of a closed-form model: configuration `q` (N) and velocities `v` (NV;
@@ -263,7 +264,7 @@ where
     let mut x0 = vec![0.0; N + NV];
     x0[..N].copy_from_slice(q0.as_slice());
     x0[N..].copy_from_slice(v0.as_slice());
-    let mut dp = crate::sim::Dop853::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+    let mut dp = crate::ode::Dop853::new(N + NV, crate::ode::AdaptiveOptions::with_tolerance(tol))?;
     let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
     Ok(rows
         .iter()

@@ -18,18 +18,24 @@
 //! the step would push further out are frozen (their `W⁻¹` entry set to zero) and the step
 //! re-solved, so iterates stay within the limits without losing the task.
 //!
-//! The result ([`IkResult`]) says whether the residual fell below the tolerance, with the
-//! final residual, the iteration count and why the solver stopped; an unreachable target
-//! ends as [`IkStatus::Stalled`] (a local minimum of `‖e‖`) or [`IkStatus::MaxIterations`],
-//! never as an error or NaN.
+//! The result ([`IkResult`]) says whether the residual of the task rows fell below the
+//! tolerance (`task_met`) and whether the solver converged (`converged`: the task is met
+//! and, with a null-space objective, that objective settled too), with the final residual
+//! of the rows it solved, the iteration count and why the solver stopped. An unreachable
+//! target ends as [`IkStatus::Stalled`] (a local minimum of `‖e‖`) or
+//! [`IkStatus::MaxIterations`]; a met task whose null-space objective was still moving at
+//! the iteration limit ends as [`IkStatus::ObjectiveUnsettled`]; never an error or NaN.
 //!
 //! Tasks on real models (frame pose of a URDF arm, whole-body pose of a mobile
-//! manipulator) live in [`tasks`].
+//! manipulator) live in [`tasks`]; base-placement maps (IK and a manipulability measure
+//! over a grid of base poses) in [`placement`].
 
 pub mod model;
+pub mod placement;
 pub mod tasks;
 
 use crate::error::{Error, Result, ensure_finite};
+use crate::linalg::{cholesky_in_place, cholesky_solve};
 use crate::manipulability::{JacobianSvd, Measure, evaluate_svd};
 use nalgebra::{DMatrix, DVector};
 
@@ -159,8 +165,12 @@ impl Default for IkOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum IkStatus {
-    /// `‖e‖ ≤ tolerance`.
+    /// `‖e‖ ≤ tolerance`, and the null-space objective (if any) settled: its step fell
+    /// below 1e-7 or no step improves it while keeping the task met.
     Converged,
+    /// `‖e‖ ≤ tolerance`, but the iteration budget ran out while the null-space objective
+    /// was still improving (the task is met; the secondary objective is not optimal).
+    ObjectiveUnsettled,
     /// The iteration budget ran out.
     MaxIterations,
     /// No step reduces `‖e‖` any more (a local minimum: typically an unreachable target
@@ -173,13 +183,16 @@ pub enum IkStatus {
 pub struct IkResult {
     /// The final configuration (the best one found).
     pub q: DVector<f64>,
-    /// True when `‖e‖ ≤ tolerance`.
+    /// True when the solver converged ([`IkStatus::Converged`]).
     pub converged: bool,
+    /// True when the task residual is within the tolerance, `‖e‖ ≤ tolerance`
+    /// ([`IkStatus::Converged`] or [`IkStatus::ObjectiveUnsettled`]).
+    pub task_met: bool,
     /// Why the solver stopped.
     pub status: IkStatus,
-    /// Final residual norm `‖e‖`.
+    /// Final residual norm `‖e‖` over the task rows (only the rows the task solves).
     pub residual_norm: f64,
-    /// Final residual vector.
+    /// Final residual vector, one entry per task row.
     pub residual: DVector<f64>,
     /// Iterations used (accepted and rejected steps).
     pub iterations: usize,
@@ -290,8 +303,11 @@ pub fn solve<T: KinematicTask + ?Sized>(
             break IkStatus::Converged;
         }
         if iterations >= options.max_iterations || lambda > options.max_damping {
-            break if met {
+            break if met && lambda > options.max_damping {
+                // no step improves the objective while keeping the task met: settled
                 IkStatus::Converged
+            } else if met {
+                IkStatus::ObjectiveUnsettled
             } else if iterations >= options.max_iterations {
                 IkStatus::MaxIterations
             } else {
@@ -360,6 +376,7 @@ pub fn solve<T: KinematicTask + ?Sized>(
         .unwrap_or(0.0);
     Ok(IkResult {
         converged: status == IkStatus::Converged,
+        task_met: matches!(status, IkStatus::Converged | IkStatus::ObjectiveUnsettled),
         q,
         status,
         residual_norm: err,
@@ -372,8 +389,8 @@ pub fn solve<T: KinematicTask + ?Sized>(
 
 /// [`solve`] from `q0`, then, while not converged, from up to `restarts` random
 /// configurations ([`KinematicTask::random_configuration`], seeded by `seed`); returns the
-/// first converged result or the one with the smallest residual. `iterations` counts all
-/// attempts.
+/// first result that meets the task ([`IkResult::task_met`]) or the one with the smallest
+/// residual. `iterations` counts all attempts.
 pub fn solve_with_restarts<T: KinematicTask + ?Sized>(
     task: &mut T,
     q0: &DVector<f64>,
@@ -388,7 +405,7 @@ pub fn solve_with_restarts<T: KinematicTask + ?Sized>(
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut seed_q = q0.clone();
     for _ in 0..restarts {
-        if best.converged {
+        if best.task_met {
             break;
         }
         if !task.random_configuration(q0, &mut rng, &mut seed_q) {
@@ -396,7 +413,7 @@ pub fn solve_with_restarts<T: KinematicTask + ?Sized>(
         }
         let r = solve(task, &seed_q, options, ws)?;
         total += r.iterations;
-        if r.converged || r.residual_norm < best.residual_norm {
+        if r.task_met || r.residual_norm < best.residual_norm {
             best = r;
         }
     }
@@ -504,12 +521,13 @@ fn damped_step(
         }
         ws.y[r] = s;
     }
-    if !cholesky_solve_in_place(&mut ws.a, &mut ws.y) {
+    if cholesky_in_place(&mut ws.a, 0.0).is_err() {
         return Err(Error::Numerical {
             t: 0.0,
             message: "inverse kinematics: damped normal matrix not positive definite".into(),
         });
     }
+    cholesky_solve(&ws.a, &mut ws.y);
     for k in 0..nv {
         let mut s = 0.0;
         for r in 0..m {
@@ -522,47 +540,6 @@ fn damped_step(
         ws.delta[k] = d;
     }
     Ok(())
-}
-
-/// Solves `A y = b` for symmetric positive-definite `A` by an in-place Cholesky
-/// factorisation (A is overwritten by its factor; no allocation). False if A is not
-/// positive definite.
-fn cholesky_solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> bool {
-    let n = a.nrows();
-    for j in 0..n {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
-        }
-        if !d.is_finite() || d <= 0.0 {
-            return false;
-        }
-        let l = d.sqrt();
-        a[(j, j)] = l;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / l;
-        }
-    }
-    // L z = b, then Lᵀ y = z.
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[(i, k)] * b[k];
-        }
-        b[i] = s / a[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= a[(k, i)] * b[k];
-        }
-        b[i] = s / a[(i, i)];
-    }
-    true
 }
 
 /// Fills `ws.grad` with the gradient of the secondary objective; false if none.

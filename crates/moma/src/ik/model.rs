@@ -190,6 +190,9 @@ impl FrameKinematics for ModelFrame {
             };
         }
     }
+    fn difference(&self, q0: &DVector<f64>, q1: &DVector<f64>, out: &mut DVector<f64>) {
+        kinematics::difference(&self.model, q0, q1, out);
+    }
     fn random_configuration(
         &self,
         current: &DVector<f64>,

@@ -9,8 +9,21 @@
 //! e = [ p(q) − p* ;  log(R(q) R*ᵀ) ]      (world axes; a chosen subset of the 6 rows)
 //! ```
 //!
-//! whose Jacobian with respect to the model velocity is the frame Jacobian (exactly for
-//! the position rows, to first order in the orientation error for the angular rows).
+//! whose Jacobian with respect to the model velocity is exact: the frame Jacobian for the
+//! position rows, and for the angular rows the frame's angular Jacobian `J_ω` (world
+//! axes) times the inverse left Jacobian of SO(3) at the error `φ = log(R R*ᵀ)`:
+//! a world-axes rotation `δ` changes `R R*ᵀ` into `exp(δ) R R*ᵀ`, whose log is
+//! `φ + J_l⁻¹(φ) δ + O(δ²)` with
+//!
+//! ```text
+//! J_l⁻¹(φ) = I − ½ [φ]× + (1/θ² − cot(θ/2) / (2θ)) [φ]×²,   θ = ‖φ‖ < π
+//! ```
+//!
+//! (the inverse of the left Jacobian of SO(3), e.g. Barfoot, *State Estimation for
+//! Robotics*, section 7.1). The first-order form `J_ω` alone is wrong for large errors:
+//! at θ → π, `J_l⁻¹` scales the components perpendicular to `φ` by π/2 and turns them by
+//! 90°, so the plain step points the wrong way there; with `J_l⁻¹` it is the true
+//! Gauss–Newton step.
 
 use super::KinematicTask;
 use crate::error::{Error, Result, ensure_finite, ensure_len};
@@ -38,6 +51,14 @@ pub trait FrameKinematics {
     fn integrate(&self, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>);
     /// Marks the velocity coordinates at a limit that `v` pushes further out.
     fn blocked_velocities(&self, q: &DVector<f64>, v: &DVector<f64>, blocked: &mut [bool]);
+    /// `out = q1 ⊖ q0` (nv), the velocity that [`FrameKinematics::integrate`] (without
+    /// the limit projection) follows for unit time from `q0` to `q1`; angles that wrap
+    /// take the shortest way. The default subtracts coordinates (nq = nv, no wrapping).
+    fn difference(&self, q0: &DVector<f64>, q1: &DVector<f64>, out: &mut DVector<f64>) {
+        for k in 0..out.len() {
+            out[k] = q1[k] - q0[k];
+        }
+    }
     /// A sphere (centre in the model's world frame, radius) that contains every position
     /// the frame can reach, if the model allows a cheap bound (fixed root, revolute and
     /// bounded prismatic joints); used to skip hopeless IK problems.
@@ -137,6 +158,33 @@ impl FromStr for TaskRows {
         };
         rows.validate()?;
         Ok(rows)
+    }
+}
+
+/// Multiplies the angular rows 3..6 of the 6-row Jacobian `j6` by `J_l⁻¹(φ)`, the inverse
+/// left Jacobian of SO(3) at the orientation error `φ = e6[3..6]` (module docs), so that
+/// they are the exact derivative of the orientation error.
+pub fn apply_log_jacobian(e6: &[f64; 6], j6: &mut DMatrix<f64>) {
+    let phi = nalgebra::Vector3::new(e6[3], e6[4], e6[5]);
+    let theta = phi.norm();
+    if theta == 0.0 {
+        return;
+    }
+    // c(θ) = 1/θ² − cot(θ/2)/(2θ); its series 1/12 + θ²/720 + θ⁴/30240 near 0.
+    let c = if theta < 1e-3 {
+        let t2 = theta * theta;
+        1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
+    } else {
+        let half = 0.5 * theta;
+        1.0 / (theta * theta) - half.cos() / (half.sin() * 2.0 * theta)
+    };
+    for k in 0..j6.ncols() {
+        let w = nalgebra::Vector3::new(j6[(3, k)], j6[(4, k)], j6[(5, k)]);
+        let pw = phi.cross(&w);
+        let out = w - 0.5 * pw + c * phi.cross(&pw);
+        j6[(3, k)] = out.x;
+        j6[(4, k)] = out.y;
+        j6[(5, k)] = out.z;
     }
 }
 
@@ -253,13 +301,9 @@ impl<K: FrameKinematics> KinematicTask for PoseTask<K> {
     ) -> Result<()> {
         self.kinematics
             .pose_and_jacobian(q, &mut self.pose, &mut self.j6)?;
-        select_rows(
-            &self.rows,
-            &pose_error(&self.pose, &self.target),
-            &self.j6,
-            residual,
-            jacobian,
-        );
+        let e6 = pose_error(&self.pose, &self.target);
+        apply_log_jacobian(&e6, &mut self.j6);
+        select_rows(&self.rows, &e6, &self.j6, residual, jacobian);
         Ok(())
     }
     fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>) {
@@ -278,14 +322,13 @@ impl<K: FrameKinematics> KinematicTask for PoseTask<K> {
     }
     fn posture_gradient(&self, q: &DVector<f64>, gradient: &mut DVector<f64>) -> bool {
         match &self.preferred {
-            // For revolute/prismatic joints (nq = nv) the increment is q̇ itself.
-            Some(p) if p.len() == gradient.len() => {
-                for k in 0..gradient.len() {
-                    gradient[k] = p[k] - q[k];
-                }
+            // q_pref ⊖ q: the shortest way for wrapping angles, a base twist for a
+            // free-flyer root.
+            Some(p) => {
+                self.kinematics.difference(q, p, gradient);
                 true
             }
-            _ => false,
+            None => false,
         }
     }
 }
@@ -314,6 +357,7 @@ pub struct WholeBodyTask<K: FrameKinematics> {
     jbar: DMatrix<f64>,
     v_model: std::cell::RefCell<DVector<f64>>,
     blocked_model: std::cell::RefCell<Vec<bool>>,
+    q_pref_full: std::cell::RefCell<DVector<f64>>,
 }
 
 impl<K: FrameKinematics> WholeBodyTask<K> {
@@ -326,8 +370,8 @@ impl<K: FrameKinematics> WholeBodyTask<K> {
         rows: &TaskRows,
     ) -> Result<Self> {
         rows.validate()?;
-        let nv = kinematics.nv();
-        if nv < 3 || kinematics.nq() < 3 {
+        let (nq, nv) = (kinematics.nq(), kinematics.nv());
+        if nv < 3 || nq < 3 {
             return Err(Error::invalid(
                 "whole-body model",
                 "the model needs a planar root [x, y, θ] (nq, nv >= 3)",
@@ -345,6 +389,7 @@ impl<K: FrameKinematics> WholeBodyTask<K> {
             jbar: DMatrix::zeros(6, nv - 1),
             v_model: std::cell::RefCell::new(DVector::zeros(nv)),
             blocked_model: std::cell::RefCell::new(vec![false; nv]),
+            q_pref_full: std::cell::RefCell::new(DVector::zeros(nq)),
         })
     }
 
@@ -411,13 +456,9 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
         self.kinematics
             .pose_and_jacobian(q, &mut self.pose, &mut self.j6)?;
         compose_jacobian(&self.drive, self.inputs, q[2], &self.j6, &mut self.jbar)?;
-        select_rows(
-            &self.rows,
-            &pose_error(&self.pose, &self.target),
-            &self.jbar,
-            residual,
-            jacobian,
-        );
+        let e6 = pose_error(&self.pose, &self.target);
+        apply_log_jacobian(&e6, &mut self.jbar);
+        select_rows(&self.rows, &e6, &self.jbar, residual, jacobian);
         Ok(())
     }
     fn integrate(&self, q: &DVector<f64>, delta: &DVector<f64>, out: &mut DVector<f64>) {
@@ -456,16 +497,21 @@ impl<K: FrameKinematics> KinematicTask for WholeBodyTask<K> {
         true
     }
     fn posture_gradient(&self, q: &DVector<f64>, gradient: &mut DVector<f64>) -> bool {
-        match &self.preferred {
-            Some(p) if p.len() + 2 == gradient.len() => {
-                gradient[0] = 0.0;
-                gradient[1] = 0.0;
-                for k in 0..p.len() {
-                    gradient[k + 2] = p[k] - q[k + 3];
-                }
-                true
-            }
-            _ => false,
+        let Some(p) = &self.preferred else {
+            return false;
+        };
+        // (q_base, q_arm_pref) ⊖ q, through the model's difference (continuous arm
+        // joints take the shortest way); the base inputs get no posture term.
+        let mut q_pref = self.q_pref_full.borrow_mut();
+        let mut v = self.v_model.borrow_mut();
+        q_pref.copy_from(q);
+        q_pref.rows_mut(3, p.len()).copy_from(p);
+        self.kinematics.difference(q, &q_pref, &mut v);
+        gradient[0] = 0.0;
+        gradient[1] = 0.0;
+        for k in 2..gradient.len() {
+            gradient[k] = v[k + 1];
         }
+        true
     }
 }

@@ -6,6 +6,8 @@
 //! * Revolute, continuous and prismatic joints become model joints (a continuous joint is
 //!   a revolute joint with one angle and no position limits); fixed joints merge their
 //!   child link's inertia into the parent body and add a `fixed_joint` frame.
+//! * A revolute or prismatic joint must have a `<limit>` element (urdfdom refuses it
+//!   too); the error names the joint. A velocity or effort limit ≤ 0 means none.
 //! * Every link gets a `body` frame and every moving joint a `joint` frame; frame 0 is
 //!   `universe`. With a planar or free-flyer root, the root joint is named `root_joint`
 //!   ([`ROOT_JOINT_NAME`]; a URDF joint of that name is then an error).
@@ -13,7 +15,14 @@
 //!   ≥ 0 and a positive (semi-)definite rotational inertia: an eigenvalue below
 //!   −[`INERTIA_TOLERANCE`] is an error; zero eigenvalues are accepted (point masses and
 //!   thin rods exist in real robot descriptions, e.g. TIAGo's tool links, and Pinocchio
-//!   loads them).
+//!   loads them). The small negative tolerance exists because published files round
+//!   tiny inertias badly: TIAGo's two antenna links weigh 1 mg and their printed
+//!   inertia tensors have an eigenvalue of −3.5·10⁻⁸ kg·m².
+//! * What the algorithms use is the merged body of each joint (all links rigidly attached
+//!   to it); [`ModelBuilder::build`] checks every merged body positive semidefinite (to
+//!   round-off), so the joint-space inertia matrix stays positive definite. TIAGo's
+//!   antennas merge into its 28 kg base and pass; a slightly indefinite link that forms a
+//!   body of its own is refused, naming the joint.
 //! * `floating`, `planar` and `spherical` joints inside the URDF are rejected with a clear
 //!   error (choose the robot's base with [`RootJoint`] instead).
 //! * Mimic joints are loaded as independent joints (the `<mimic>` tag is ignored).
@@ -56,8 +65,10 @@ fn finite_pose(p: &urdf_rs::Pose) -> bool {
 /// that name is an error with those roots.
 pub const ROOT_JOINT_NAME: &str = "root_joint";
 
-/// Most negative eigenvalue (kg·m²) tolerated in a link's rotational inertia: round-off in
-/// published URDFs (e.g. TIAGo's 1 mg antenna links have eigenvalues of −3.5e-8).
+/// Most negative eigenvalue (kg·m²) tolerated in one link's rotational inertia: round-off
+/// in published URDFs (TIAGo's 1 mg antenna links have eigenvalues of −3.5e-8 kg·m², from
+/// tensors printed with four significant digits). The merged body that the link becomes
+/// part of must still be positive semidefinite ([`ModelBuilder::build`]).
 pub const INERTIA_TOLERANCE: f64 = 1e-6;
 
 /// Validates a link's inertial; `None` for a massless link.
@@ -101,13 +112,47 @@ fn link_inertia(link: &urdf_rs::Link, src: &str) -> Result<Option<(Inertia, SE3)
 
 /// Loads a robot model from URDF text; `source_name` names the input in error messages.
 ///
+/// The steps: strip the ignored elements and parse ([`parse_robot`]); index the links and
+/// joints into a tree ([`UrdfTree::new`]); add the root joint; walk the tree depth-first,
+/// adding one model joint per moving URDF joint and merging fixed joints
+/// ([`TreeWalk`]); build and validate the model.
+///
 /// # Errors
 /// As [`model_from_urdf_file`].
 pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Result<Model> {
     let src = source_name;
     let text = strip_ignored_elements(text);
-    let robot = urdf_rs::read_from_string(&text).map_err(|e| {
-        let msg = match locate_parse_error(&text) {
+    let robot = parse_robot(&text, src)?;
+    let tree = UrdfTree::new(&robot, &text, src)?;
+    let mut b = ModelBuilder::new(robot.name.clone());
+    b.set_root(root);
+    let (root_joint, root_frame) = add_root_joint(&mut b, root, &tree)?;
+    let mut walk = TreeWalk {
+        tree: &tree,
+        b,
+        visited: vec![false; robot.links.len()],
+        stack: Vec::new(),
+    };
+    walk.visit_link(tree.root_link, root_joint, SE3::identity(), root_frame)?;
+    while let Some(entry) = walk.stack.pop() {
+        walk.add_urdf_joint(entry)?;
+    }
+    if let Some(l) = walk.visited.iter().position(|v| !v) {
+        return Err(Error::parse(
+            src,
+            format!(
+                "link '{}' is not connected to the root link '{}' (cyclic or disconnected kinematic graph)",
+                robot.links[l].name, robot.links[tree.root_link].name
+            ),
+        ));
+    }
+    walk.b.build().map_err(|e| in_source(src, e))
+}
+
+/// Parses the (stripped) URDF text, naming the first refused link or joint.
+fn parse_robot(text: &str, src: &str) -> Result<urdf_rs::Robot> {
+    let robot = urdf_rs::read_from_string(text).map_err(|e| {
+        let msg = match locate_parse_error(text) {
             Some((kind, name, err)) => format!("{kind} '{name}': {err}"),
             None => e.to_string(),
         };
@@ -116,92 +161,12 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
     if robot.links.is_empty() {
         return Err(Error::parse(src, "the robot has no <link>"));
     }
-    let mut link_ix: HashMap<&str, usize> = HashMap::new();
-    for (k, l) in robot.links.iter().enumerate() {
-        if l.name.is_empty() {
-            return Err(Error::parse(src, format!("link #{k} has no name")));
-        }
-        if link_ix.insert(&l.name, k).is_some() {
-            return Err(Error::parse(
-                src,
-                format!("duplicate link name '{}'", l.name),
-            ));
-        }
-    }
-    let mut joint_names: HashSet<&str> = HashSet::new();
-    let mut parent_joint_of: Vec<Option<usize>> = vec![None; robot.links.len()];
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
-    for (k, j) in robot.joints.iter().enumerate() {
-        if j.name.is_empty() {
-            return Err(Error::parse(src, format!("joint #{k} has no name")));
-        }
-        if !joint_names.insert(&j.name) {
-            return Err(Error::parse(
-                src,
-                format!("duplicate joint name '{}'", j.name),
-            ));
-        }
-        let Some(&p) = link_ix.get(j.parent.link.as_str()) else {
-            return Err(Error::parse(
-                src,
-                format!(
-                    "joint '{}': parent link '{}' does not exist",
-                    j.name, j.parent.link
-                ),
-            ));
-        };
-        let Some(&c) = link_ix.get(j.child.link.as_str()) else {
-            return Err(Error::parse(
-                src,
-                format!(
-                    "joint '{}': child link '{}' does not exist",
-                    j.name, j.child.link
-                ),
-            ));
-        };
-        if let Some(other) = parent_joint_of[c] {
-            return Err(Error::parse(
-                src,
-                format!(
-                    "link '{}' is the child of two joints ('{}' and '{}'): not a tree",
-                    j.child.link, robot.joints[other].name, j.name
-                ),
-            ));
-        }
-        parent_joint_of[c] = Some(k);
-        children[p].push(k);
-    }
-    // Children in the order Pinocchio (urdfdom) visits them: sorted by joint name. This
-    // makes the joint order, hence the layout of q and v, identical to Pinocchio's.
-    for c in &mut children {
-        c.sort_by(|&x, &y| robot.joints[x].name.cmp(&robot.joints[y].name));
-    }
-    let roots: Vec<usize> = (0..robot.links.len())
-        .filter(|&l| parent_joint_of[l].is_none())
-        .collect();
-    let root_link = match roots.as_slice() {
-        [r] => *r,
-        [] => {
-            return Err(Error::parse(
-                src,
-                "the kinematic graph is cyclic: every link has a parent joint",
-            ));
-        }
-        many => {
-            let names: Vec<&str> = many.iter().map(|&l| robot.links[l].name.as_str()).collect();
-            return Err(Error::parse(
-                src,
-                format!(
-                    "several root links (links without a parent joint): {}",
-                    names.join(", ")
-                ),
-            ));
-        }
-    };
+    Ok(robot)
+}
 
-    let mut b = ModelBuilder::new(robot.name.clone());
-    b.set_root(root);
-    let ctx = |e: Error| match e {
+/// Builder errors rephrased as parse errors of the source `src`.
+fn in_source(src: &str, e: Error) -> Error {
+    match e {
         Error::InvalidInput { field, message } => Error::parse(src, format!("{field}: {message}")),
         Error::NonFinite { field } => Error::parse(src, format!("{field}: non-finite value")),
         Error::WrongLength {
@@ -213,52 +178,186 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
             format!("{field}: expected {expected} values, got {got}"),
         ),
         other => other,
-    };
-    if root != RootJoint::Fixed && joint_names.contains(ROOT_JOINT_NAME) {
-        return Err(Error::parse(
+    }
+}
+
+/// The URDF's links and joints indexed as a tree, checked for unique names, existing
+/// links, one parent per link and a single root link.
+struct UrdfTree<'a> {
+    robot: &'a urdf_rs::Robot,
+    src: &'a str,
+    link_ix: HashMap<&'a str, usize>,
+    /// Child joints of each link, in urdfdom's visiting order (byte order of names).
+    children: Vec<Vec<usize>>,
+    /// Names of the top-level joints that have a `<limit>` element.
+    limited: HashSet<String>,
+    joint_names: HashSet<&'a str>,
+    root_link: usize,
+}
+
+impl<'a> UrdfTree<'a> {
+    fn new(robot: &'a urdf_rs::Robot, text: &str, src: &'a str) -> Result<Self> {
+        let link_ix = index_links(robot, src)?;
+        let mut joint_names: HashSet<&str> = HashSet::new();
+        let mut parent_joint_of: Vec<Option<usize>> = vec![None; robot.links.len()];
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+        for (k, j) in robot.joints.iter().enumerate() {
+            if j.name.is_empty() {
+                return Err(Error::parse(src, format!("joint #{k} has no name")));
+            }
+            if !joint_names.insert(&j.name) {
+                return Err(Error::parse(
+                    src,
+                    format!("duplicate joint name '{}'", j.name),
+                ));
+            }
+            let link = |role: &str, name: &str| {
+                link_ix.get(name).copied().ok_or_else(|| {
+                    Error::parse(
+                        src,
+                        format!("joint '{}': {role} link '{name}' does not exist", j.name),
+                    )
+                })
+            };
+            let p = link("parent", &j.parent.link)?;
+            let c = link("child", &j.child.link)?;
+            if let Some(other) = parent_joint_of[c] {
+                return Err(Error::parse(
+                    src,
+                    format!(
+                        "link '{}' is the child of two joints ('{}' and '{}'): not a tree",
+                        j.child.link, robot.joints[other].name, j.name
+                    ),
+                ));
+            }
+            parent_joint_of[c] = Some(k);
+            children[p].push(k);
+        }
+        // Children in the order Pinocchio (urdfdom) visits them: sorted by joint name.
+        // This makes the joint order, hence the layout of q and v, identical to
+        // Pinocchio's.
+        for c in &mut children {
+            c.sort_by(|&x, &y| robot.joints[x].name.cmp(&robot.joints[y].name));
+        }
+        let root_link = single_root_link(robot, &parent_joint_of, src)?;
+        Ok(Self {
+            robot,
             src,
+            link_ix,
+            children,
+            limited: joints_with_limit(text),
+            joint_names,
+            root_link,
+        })
+    }
+}
+
+/// Link name → index, refusing unnamed and duplicate links.
+fn index_links<'a>(robot: &'a urdf_rs::Robot, src: &str) -> Result<HashMap<&'a str, usize>> {
+    let mut link_ix = HashMap::new();
+    for (k, l) in robot.links.iter().enumerate() {
+        if l.name.is_empty() {
+            return Err(Error::parse(src, format!("link #{k} has no name")));
+        }
+        if link_ix.insert(l.name.as_str(), k).is_some() {
+            return Err(Error::parse(
+                src,
+                format!("duplicate link name '{}'", l.name),
+            ));
+        }
+    }
+    Ok(link_ix)
+}
+
+/// The one link without a parent joint.
+fn single_root_link(
+    robot: &urdf_rs::Robot,
+    parent_joint_of: &[Option<usize>],
+    src: &str,
+) -> Result<usize> {
+    let roots: Vec<usize> = (0..robot.links.len())
+        .filter(|&l| parent_joint_of[l].is_none())
+        .collect();
+    match roots.as_slice() {
+        [r] => Ok(*r),
+        [] => Err(Error::parse(
+            src,
+            "the kinematic graph is cyclic: every link has a parent joint",
+        )),
+        many => {
+            let names: Vec<&str> = many.iter().map(|&l| robot.links[l].name.as_str()).collect();
+            Err(Error::parse(
+                src,
+                format!(
+                    "several root links (links without a parent joint): {}",
+                    names.join(", ")
+                ),
+            ))
+        }
+    }
+}
+
+/// Adds the planar or free-flyer root joint (none for a fixed root); returns the joint
+/// that carries the root link and the frame it hangs from.
+fn add_root_joint(
+    b: &mut ModelBuilder,
+    root: RootJoint,
+    tree: &UrdfTree<'_>,
+) -> Result<(JointIndex, FrameIndex)> {
+    let jt = match root {
+        RootJoint::Fixed => return Ok((JointIndex(0), FrameIndex(0))),
+        RootJoint::Planar => JointType::Planar,
+        RootJoint::FreeFlyer => JointType::FreeFlyer,
+    };
+    if tree.joint_names.contains(ROOT_JOINT_NAME) {
+        return Err(Error::parse(
+            tree.src,
             format!(
                 "joint '{ROOT_JOINT_NAME}': this name is reserved for the {root} root joint \
                  (rename the URDF joint, or use the fixed root)"
             ),
         ));
     }
-    let (root_joint, root_frame) = match root {
-        RootJoint::Fixed => (JointIndex(0), FrameIndex(0)),
-        RootJoint::Planar | RootJoint::FreeFlyer => {
-            let jt = if root == RootJoint::Planar {
-                JointType::Planar
-            } else {
-                JointType::FreeFlyer
-            };
-            let j = b
-                .add_joint(
-                    JointIndex(0),
-                    ROOT_JOINT_NAME,
-                    jt,
-                    SE3::identity(),
-                    JointLimits::unlimited(),
-                )
-                .map_err(ctx)?;
-            (j, FrameIndex(b.nframes() - 1))
-        }
-    };
+    let j = b
+        .add_joint(
+            JointIndex(0),
+            ROOT_JOINT_NAME,
+            jt,
+            SE3::identity(),
+            JointLimits::unlimited(),
+        )
+        .map_err(|e| in_source(tree.src, e))?;
+    Ok((j, FrameIndex(b.nframes() - 1)))
+}
 
-    // Depth-first traversal in document order, as a recursive descent would do it.
-    // A stack entry is a URDF joint to process, with the model joint carrying its parent
-    // link, `joint_from_parent_link` and the parent link's body frame.
-    let mut visited = vec![false; robot.links.len()];
-    let mut stack: Vec<(usize, JointIndex, SE3, FrameIndex)> = Vec::new();
-    let mut visit_link = |b: &mut ModelBuilder,
-                          stack: &mut Vec<(usize, JointIndex, SE3, FrameIndex)>,
-                          l: usize,
-                          joint: JointIndex,
-                          joint_from_link: SE3,
-                          parent_frame: FrameIndex|
-     -> Result<()> {
-        visited[l] = true;
-        let link = &robot.links[l];
-        let body_frame = b
+/// A URDF joint waiting to be added: its index, the model joint carrying its parent link,
+/// `joint_from_parent_link` and the parent link's body frame.
+type Pending = (usize, JointIndex, SE3, FrameIndex);
+
+/// The depth-first walk over the URDF tree that fills the model builder (a recursive
+/// descent in document order, with an explicit stack).
+struct TreeWalk<'t, 'a> {
+    tree: &'t UrdfTree<'a>,
+    b: ModelBuilder,
+    visited: Vec<bool>,
+    stack: Vec<Pending>,
+}
+
+impl TreeWalk<'_, '_> {
+    /// Adds link `l` (its body frame and inertia) to model joint `joint` and queues its
+    /// child joints.
+    fn visit_link(
+        &mut self,
+        l: usize,
+        joint: JointIndex,
+        joint_from_link: SE3,
+        parent_frame: FrameIndex,
+    ) -> Result<()> {
+        let src = self.tree.src;
+        self.visited[l] = true;
+        let link = &self.tree.robot.links[l];
+        let body_frame = self
+            .b
             .add_frame(
                 &link.name,
                 joint,
@@ -266,26 +365,23 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
                 joint_from_link,
                 FrameKind::Body,
             )
-            .map_err(ctx)?;
+            .map_err(|e| in_source(src, e))?;
         if let Some((inertia, origin)) = link_inertia(link, src)? {
-            b.append_body_inertia(joint, &inertia, &joint_from_link.compose(&origin))
-                .map_err(ctx)?;
+            self.b
+                .append_body_inertia(joint, &inertia, &joint_from_link.compose(&origin))
+                .map_err(|e| in_source(src, e))?;
         }
-        for &jk in children[l].iter().rev() {
-            stack.push((jk, joint, joint_from_link, body_frame));
+        for &jk in self.tree.children[l].iter().rev() {
+            self.stack.push((jk, joint, joint_from_link, body_frame));
         }
         Ok(())
-    };
-    visit_link(
-        &mut b,
-        &mut stack,
-        root_link,
-        root_joint,
-        SE3::identity(),
-        root_frame,
-    )?;
-    while let Some((jk, joint, joint_from_link, body_frame)) = stack.pop() {
-        let uj = &robot.joints[jk];
+    }
+
+    /// Adds URDF joint `jk`: a frame for a fixed joint (its child merges into the same
+    /// body), a model joint for a moving one; then visits its child link.
+    fn add_urdf_joint(&mut self, (jk, joint, joint_from_link, body_frame): Pending) -> Result<()> {
+        let src = self.tree.src;
+        let uj = &self.tree.robot.joints[jk];
         if !finite_pose(&uj.origin) {
             return Err(Error::parse(
                 src,
@@ -293,85 +389,126 @@ pub fn model_from_urdf_str(text: &str, root: RootJoint, source_name: &str) -> Re
             ));
         }
         let placement = joint_from_link.compose(&pose(&uj.origin));
-        let child = link_ix[uj.child.link.as_str()];
-        let axis = Vector3::from(uj.axis.xyz.0);
-        let limit = &uj.limit;
-        let err_axis = |e: Error| match e {
-            Error::InvalidInput { message, .. } => {
-                Error::parse(src, format!("joint '{}' axis: {message}", uj.name))
-            }
-            other => other,
-        };
-        match uj.joint_type {
-            urdf_rs::JointType::Fixed => {
-                let f = b
-                    .add_frame(
-                        &uj.name,
-                        joint,
-                        body_frame,
-                        placement,
-                        FrameKind::FixedJoint,
-                    )
-                    .map_err(ctx)?;
-                visit_link(&mut b, &mut stack, child, joint, placement, f)?;
-            }
-            urdf_rs::JointType::Revolute
-            | urdf_rs::JointType::Continuous
-            | urdf_rs::JointType::Prismatic => {
-                let jt = if uj.joint_type == urdf_rs::JointType::Prismatic {
-                    JointType::prismatic(axis).map_err(err_axis)?
-                } else {
-                    JointType::revolute(axis).map_err(err_axis)?
-                };
-                let vel = if limit.velocity > 0.0 {
-                    limit.velocity
-                } else {
-                    f64::INFINITY
-                };
-                let eff = if limit.effort > 0.0 {
-                    limit.effort
-                } else {
-                    f64::INFINITY
-                };
-                let limits = if uj.joint_type == urdf_rs::JointType::Continuous {
-                    JointLimits::scalar(f64::NEG_INFINITY, f64::INFINITY, vel, eff)
-                } else {
-                    JointLimits::scalar(limit.lower, limit.upper, vel, eff)
-                };
-                let j = b
-                    .add_joint(joint, &uj.name, jt, placement, limits)
-                    .map_err(ctx)?;
-                let jf = FrameIndex(b.nframes() - 1);
-                visit_link(&mut b, &mut stack, child, j, SE3::identity(), jf)?;
-            }
-            ref other => {
-                let kind = match other {
-                    urdf_rs::JointType::Floating => "floating",
-                    urdf_rs::JointType::Planar => "planar",
-                    _ => "spherical",
-                };
-                return Err(Error::parse(
-                    src,
-                    format!(
-                        "joint '{}': unsupported joint type '{kind}' (supported: revolute, \
-                         continuous, prismatic, fixed; choose a planar or free-flyer base with \
-                         the root option instead)",
-                        uj.name
-                    ),
-                ));
-            }
+        let child = self.tree.link_ix[uj.child.link.as_str()];
+        if uj.joint_type == urdf_rs::JointType::Fixed {
+            let f = self
+                .b
+                .add_frame(
+                    &uj.name,
+                    joint,
+                    body_frame,
+                    placement,
+                    FrameKind::FixedJoint,
+                )
+                .map_err(|e| in_source(src, e))?;
+            return self.visit_link(child, joint, placement, f);
         }
+        let (jt, limits) = moving_joint(uj, self.tree.limited.contains(&uj.name), src)?;
+        let j = self
+            .b
+            .add_joint(joint, &uj.name, jt, placement, limits)
+            .map_err(|e| in_source(src, e))?;
+        let jf = FrameIndex(self.b.nframes() - 1);
+        self.visit_link(child, j, SE3::identity(), jf)
     }
-    if let Some(l) = visited.iter().position(|v| !v) {
+}
+
+/// The model joint type and limits of a moving URDF joint. A revolute or prismatic joint
+/// needs a `<limit>` element (`has_limit`), as urdfdom requires; a continuous one has no
+/// position limits. A velocity or effort limit ≤ 0 means none.
+fn moving_joint(
+    uj: &urdf_rs::Joint,
+    has_limit: bool,
+    src: &str,
+) -> Result<(JointType, JointLimits)> {
+    use urdf_rs::JointType as U;
+    let err_axis = |e: Error| match e {
+        Error::InvalidInput { message, .. } => {
+            Error::parse(src, format!("joint '{}' axis: {message}", uj.name))
+        }
+        other => other,
+    };
+    let axis = Vector3::from(uj.axis.xyz.0);
+    let jt = match uj.joint_type {
+        U::Prismatic => JointType::prismatic(axis).map_err(err_axis)?,
+        U::Revolute | U::Continuous => JointType::revolute(axis).map_err(err_axis)?,
+        ref other => {
+            let kind = match other {
+                U::Floating => "floating",
+                U::Planar => "planar",
+                _ => "spherical",
+            };
+            return Err(Error::parse(
+                src,
+                format!(
+                    "joint '{}': unsupported joint type '{kind}' (supported: revolute, \
+                     continuous, prismatic, fixed; choose a planar or free-flyer base with \
+                     the root option instead)",
+                    uj.name
+                ),
+            ));
+        }
+    };
+    let continuous = uj.joint_type == U::Continuous;
+    if !continuous && !has_limit {
+        let kind = if jt.is_prismatic() {
+            "prismatic"
+        } else {
+            "revolute"
+        };
         return Err(Error::parse(
             src,
             format!(
-                "link '{}' is not connected to the root link '{}' (cyclic or disconnected kinematic graph)",
-                robot.links[l].name, robot.links[root_link].name
+                "joint '{}': a {kind} joint needs a <limit> element (lower, upper, effort, \
+                 velocity), as urdfdom requires; use type=\"continuous\" for an unbounded \
+                 revolute joint",
+                uj.name
             ),
         ));
     }
-    b.build().map_err(ctx)
+    let limit = &uj.limit;
+    let positive_or_inf = |x: f64| if x > 0.0 { x } else { f64::INFINITY };
+    let (vel, eff) = (
+        positive_or_inf(limit.velocity),
+        positive_or_inf(limit.effort),
+    );
+    let limits = if continuous {
+        JointLimits::scalar(f64::NEG_INFINITY, f64::INFINITY, vel, eff)
+    } else {
+        JointLimits::scalar(limit.lower, limit.upper, vel, eff)
+    };
+    Ok((jt, limits))
+}
+
+/// Names of the joints (children of `<robot>`) that contain a `<limit>` element. The
+/// parser cannot tell: it reads a missing `<limit>` as all zeros.
+fn joints_with_limit(text: &str) -> HashSet<String> {
+    let mut out = HashSet::new();
+    let mut pos = 0;
+    let mut depth = 0usize;
+    let mut joint: Option<String> = None; // the open top-level joint
+    while let Some((start, end, tag)) = next_tag(text, pos) {
+        pos = end;
+        match tag {
+            Tag::Start(n) => {
+                if depth == 1 && n == "joint" {
+                    joint = attribute(&text[start..end], "name").map(str::to_string);
+                } else if depth == 2 && n == "limit" {
+                    out.extend(joint.clone());
+                }
+                depth += 1;
+            }
+            Tag::Empty(n) if depth == 2 && n == "limit" => out.extend(joint.clone()),
+            Tag::End => {
+                depth = depth.saturating_sub(1);
+                if depth == 1 {
+                    joint = None;
+                }
+            }
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Elements the loader ignores and removes before parsing.

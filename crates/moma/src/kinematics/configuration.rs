@@ -6,18 +6,10 @@ use nalgebra::{DVector, Quaternion, UnitQuaternion, Vector3};
 use rand::Rng;
 use std::f64::consts::PI;
 
-/// The neutral configuration q₀ (nq): zeros, identity quaternion for a free-flyer.
-/// Allocates.
-#[must_use]
-pub fn neutral(model: &Model) -> DVector<f64> {
-    let mut q = DVector::zeros(model.nq);
-    for i in 1..model.njoints {
-        if matches!(model.joint_types[i], JointType::FreeFlyer) {
-            q[model.idx_q[i] + 6] = 1.0;
-        }
-    }
-    q
-}
+/// The neutral configuration is defined with the model (`Data::new` needs it, and
+/// `multibody` sits below `kinematics`); it is re-exported here beside its siblings.
+#[doc(no_inline)]
+pub use crate::multibody::neutral;
 
 fn ff_parts(q: &[f64]) -> (Vector3<f64>, UnitQuaternion<f64>) {
     (
@@ -75,6 +67,13 @@ pub fn integrate(model: &Model, q: &DVector<f64>, v: &DVector<f64>, out: &mut DV
 
 /// `q1 ⊖ q0`: the velocity v (nv) with `integrate(q0, v) = q1`, written into `out`.
 ///
+/// Angles that wrap take the shortest way, in `[−π, π)`: a continuous joint (a revolute
+/// joint whose position range is unbounded on both sides, as the URDF loader makes
+/// `continuous` joints) and the heading θ of a planar root. Only the angle wraps for a
+/// planar root: its velocity is in world axes, so `x` and `y` subtract (Pinocchio's planar
+/// difference is an SE(2) log in the local frame instead). Bounded revolute and prismatic
+/// coordinates subtract; a free-flyer takes `log6(M₀⁻¹ M₁)` (base-frame twist).
+///
 /// # Panics
 /// On wrong vector lengths.
 pub fn difference(model: &Model, q0: &DVector<f64>, q1: &DVector<f64>, out: &mut DVector<f64>) {
@@ -93,6 +92,14 @@ pub fn difference(model: &Model, q0: &DVector<f64>, q1: &DVector<f64>, out: &mut
                     out[iv + 3 + k] = d.angular[k];
                 }
             }
+            JointType::Planar => {
+                out[iv] = q1[iq] - q0[iq];
+                out[iv + 1] = q1[iq + 1] - q0[iq + 1];
+                out[iv + 2] = wrap_angle(q1[iq + 2] - q0[iq + 2]);
+            }
+            jt if jt.is_revolute() && is_continuous(model, iq) => {
+                out[iv] = wrap_angle(q1[iq] - q0[iq]);
+            }
             _ => {
                 for k in 0..model.nvs[i] {
                     out[iv + k] = q1[iq + k] - q0[iq + k];
@@ -100,6 +107,21 @@ pub fn difference(model: &Model, q0: &DVector<f64>, q1: &DVector<f64>, out: &mut
             }
         }
     }
+}
+
+/// True when the revolute coordinate `iq` has no position limit on either side (a
+/// continuous joint: its angle wraps).
+fn is_continuous(model: &Model, iq: usize) -> bool {
+    model.lower_position_limit[iq] == f64::NEG_INFINITY
+        && model.upper_position_limit[iq] == f64::INFINITY
+}
+
+/// `a` moved by a multiple of 2π into `[−π, π)`.
+#[must_use]
+pub fn wrap_angle(a: f64) -> f64 {
+    let w = (a + PI).rem_euclid(2.0 * PI) - PI;
+    // rem_euclid can round up to exactly 2π for tiny negative inputs
+    if w >= PI { w - 2.0 * PI } else { w }
 }
 
 /// Normalises the free-flyer quaternions of q in place.

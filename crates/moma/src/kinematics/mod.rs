@@ -9,7 +9,9 @@
 mod configuration;
 mod jacobian;
 
-pub use configuration::{difference, integrate, neutral, normalize, random_configuration};
+pub use configuration::{
+    difference, integrate, neutral, normalize, random_configuration, wrap_angle,
+};
 pub use jacobian::{
     ReferenceFrame, compute_joint_jacobians, frame_acceleration_bias, frame_jacobian,
     frame_jacobian_from_kinematics, frame_velocity,

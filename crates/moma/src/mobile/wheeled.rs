@@ -31,12 +31,14 @@ use serde::{Deserialize, Serialize};
 use crate::dynamics::{centroidal_momentum, crba, kinetic_energy, potential_energy, rnea};
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_jacobian};
+use crate::linalg::{cholesky_in_place, cholesky_solve};
 use crate::mobile::diff_drive::DiffDrive;
-use crate::mobile::reduced::{ReducedDynamics, cholesky_in_place, cholesky_solve};
+use crate::mobile::reduced::{PIVOT_TOL, ReducedDynamics};
 use crate::multibody::{Data, FrameIndex, JointType, Model, RootJoint};
 
-/// A passive caster: a support contact point, kept for tip-over analysis (it adds no
-/// kinematic constraint).
+/// A passive caster: a support contact point of the base. It adds no kinematic
+/// constraint (a caster swivels freely) but belongs to the support polygon
+/// ([`WheeledBase::support_points`]) that tip-over and stability analyses read.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Caster {
     /// A name for reports.
@@ -86,6 +88,28 @@ impl WheeledBase {
     }
 }
 
+/// Casters take part in the model as support points ([`WheeledBase::support_points`],
+/// read by stability analyses): each needs a unique, non-empty name and a finite contact
+/// point.
+fn check_casters(casters: &[Caster]) -> Result<()> {
+    for (k, c) in casters.iter().enumerate() {
+        if c.name.trim().is_empty() {
+            return Err(Error::invalid(
+                format!("casters[{k}] name"),
+                "a caster needs a name",
+            ));
+        }
+        if casters[..k].iter().any(|o| o.name == c.name) {
+            return Err(Error::invalid(
+                format!("caster '{}'", c.name),
+                "two casters have this name",
+            ));
+        }
+        crate::error::ensure_finite(&format!("caster '{}' position", c.name), &c.position)?;
+    }
+    Ok(())
+}
+
 /// A planar-rooted [`Model`] on a [`WheeledBase`]: the constrained mobile manipulator.
 #[derive(Debug, Clone)]
 pub struct WheeledModel {
@@ -131,6 +155,7 @@ impl WheeledModel {
                 "the planar root must own velocities 0..3".into(),
             ));
         }
+        check_casters(&base.casters)?;
         let mut wheel_dofs = None;
         let mut wheel_signs = [1.0, 1.0];
         if let Some(names) = &base.wheel_joints {
@@ -683,7 +708,7 @@ pub fn frame_velocity_world(
 /// Mr⁻¹ explicitly). Reports [`Error::Singular`] if Mr is not positive definite.
 pub fn solve_reduced_mass(mr: &DMatrix<f64>, b: &mut DVector<f64>) -> Result<()> {
     let mut l = mr.clone();
-    cholesky_in_place(&mut l).map_err(|p| Error::Singular {
+    cholesky_in_place(&mut l, PIVOT_TOL).map_err(|p| Error::Singular {
         what: "reduced mass matrix Mr".into(),
         detail: Some(format!("pivot {p}")),
     })?;

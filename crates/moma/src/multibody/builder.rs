@@ -308,9 +308,17 @@ impl ModelBuilder {
     /// Validates and returns the model.
     ///
     /// # Errors
-    /// Non-finite gravity.
+    /// Non-finite gravity; a body (the merged inertia of everything rigidly attached to
+    /// one joint) whose spatial inertia is not positive semidefinite: its rotational
+    /// inertia about its centre of mass has an eigenvalue below
+    /// −[`MERGED_INERTIA_REL_TOL`] · trace (round-off only). The algorithms need every
+    /// body inertia positive semidefinite for the joint-space inertia matrix to be
+    /// positive definite.
     pub fn build(self) -> Result<Model> {
         crate::error::ensure_finite("gravity", self.gravity.iter())?;
+        for j in self.joints.iter().skip(1) {
+            check_body_inertia(&j.name, &j.inertia)?;
+        }
         let njoints = self.joints.len();
         let mut idx_q = vec![0; njoints];
         let mut idx_v = vec![0; njoints];
@@ -375,6 +383,30 @@ impl ModelBuilder {
             root: self.root,
         })
     }
+}
+
+/// Relative round-off tolerated in a merged body's rotational inertia about its centre
+/// of mass (relative to the trace of its inertia about the joint origin).
+pub const MERGED_INERTIA_REL_TOL: f64 = 1e-9;
+
+/// The body of joint `name` has a positive semidefinite spatial inertia (mass ≥ 0 is
+/// checked where inertias are added).
+fn check_body_inertia(name: &str, inertia: &Inertia) -> Result<()> {
+    let ic = inertia.inertia_about_com();
+    let scale = inertia.inertia_about_origin().trace().abs();
+    let e = ic.symmetric_eigenvalues();
+    if e.min() < -MERGED_INERTIA_REL_TOL * scale || (scale == 0.0 && e.min() < 0.0) {
+        return Err(Error::invalid(
+            format!("body inertia of joint '{name}'"),
+            format!(
+                "the merged rigid body is not positive semidefinite (eigenvalues about its \
+                 centre of mass {:.3e}, {:.3e}, {:.3e} kg·m²): the joint-space inertia \
+                 matrix would not be positive definite",
+                e[0], e[1], e[2]
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn last_body_frame(frames: &[Frame]) -> FrameIndex {

@@ -285,6 +285,13 @@ pub struct FootprintCSpace {
     pub sweeps: Vec<Vec<bool>>,
 }
 
+/// Most cells (one byte each) that [`footprint_cspace`] allocates: one mask per heading
+/// and one per turn, `2 · headings · width · height` (1 GiB).
+pub const MAX_FOOTPRINT_CSPACE_CELLS: usize = 1 << 30;
+
+/// Most (x, y, heading) states [`astar_footprint`] allocates (13 bytes each: 1.7 GB).
+pub const MAX_FOOTPRINT_STATES: usize = 1 << 27;
+
 /// Builds the per-heading C-space of `footprint` (`resolution` m/cell). A robot pose
 /// collides when an obstacle cell centre lies inside the footprint (cells outside the
 /// map are not obstacles, as for the disk dilation). Cells closer to an obstacle than the
@@ -302,6 +309,20 @@ pub fn footprint_cspace(
         return Err(Error::invalid(
             "headings",
             format!("must be in 4..=360, got {headings}"),
+        ));
+    }
+    let cells = width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(2 * headings))
+        .filter(|&n| n <= MAX_FOOTPRINT_CSPACE_CELLS);
+    if cells.is_none() {
+        return Err(Error::invalid(
+            "footprint C-space",
+            format!(
+                "{width} x {height} cells x {headings} headings x 2 (poses and turns) exceeds \
+                 the limit of {MAX_FOOTPRINT_CSPACE_CELLS} cells; use a coarser map or fewer \
+                 headings"
+            ),
         ));
     }
     crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
@@ -404,6 +425,17 @@ pub fn astar_footprint(
         ));
     }
     let (w, h) = (cs.width, cs.height);
+    if w.checked_mul(h)
+        .is_none_or(|n| n > MAX_FOOTPRINT_STATES / 8)
+    {
+        return Err(Error::invalid(
+            "footprint search",
+            format!(
+                "{w} x {h} cells x 8 headings exceeds the limit of {MAX_FOOTPRINT_STATES} \
+                 search states; use a coarser map"
+            ),
+        ));
+    }
     for (what, (x, y)) in [("start", (start.0, start.1)), ("goal", goal)] {
         if x >= w || y >= h {
             return Err(Error::Planning(format!(

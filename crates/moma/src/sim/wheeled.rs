@@ -10,7 +10,7 @@
 //! model ([`crate::mobile::WheeledModel`]) and the chapter's closed-form models.
 
 use crate::error::{Error, Result};
-use crate::sim::integrators::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::{Recorder, Sample};
 use crate::sim::scenario::{InputProfile, IntegratorSettings};
