@@ -51,6 +51,8 @@ enum Command {
     Stability(cmd::stability::Args),
     /// Operational-space control quantities (Λ, J̄, N, J̇q̇, F, τ) of a frame on a list of states.
     Osc(cmd::osc::Args),
+    /// Free-floating (space) robot: base motion from joint rates, generalized Jacobian and inertia.
+    Space(cmd::space::Args),
 }
 
 fn main() {
@@ -69,6 +71,7 @@ fn main() {
         Command::Ik(a) => cmd::ik::run(a),
         Command::ReachMap(a) => cmd::reach_map::run(a),
         Command::Stability(a) => cmd::stability::run(a),
+        Command::Space(a) => cmd::space::run(a),
     };
     if let Err(e) = result {
         if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {

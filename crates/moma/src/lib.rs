@@ -48,6 +48,7 @@ pub mod multibody;
 pub mod ode;
 pub mod planning;
 pub mod sim;
+pub mod space;
 pub mod spatial;
 pub mod stability;
 

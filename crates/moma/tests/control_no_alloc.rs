@@ -59,7 +59,7 @@ fn osc_updates_do_not_allocate() {
     )
     .unwrap();
     let params = serde_json::from_value(doc["cases"][0]["params"].clone()).unwrap();
-    let wm = moma::mobile::chapter_robots::m5_model(&params).unwrap();
+    let wm = moma::closed_form::multibody_models::m5_model(&params).unwrap();
     let mut rod = ReducedOscData::new(&wm, &[0, 1, 2]);
     let tip = wm.model.frame_id("tip").unwrap();
     let qm = DVector::from_fn(wm.model.nq, |i, _| 0.2 * i as f64 + 0.1);

@@ -360,7 +360,7 @@ fn reduced_osc_on_the_mobile_manipulator() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(5);
     for case in doc["cases"].as_array().unwrap().iter().take(3) {
         let params = serde_json::from_value(case["params"].clone()).unwrap();
-        let wm = moma::mobile::chapter_robots::m5_model(&params).unwrap();
+        let wm = moma::closed_form::multibody_models::m5_model(&params).unwrap();
         let frame = wm.model.frame_id("tip").unwrap();
         let q = DVector::from_vec(vecf(&case["state"]["q_joint"]));
         let nr = wm.nr();

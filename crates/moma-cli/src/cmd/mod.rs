@@ -14,4 +14,5 @@ pub mod plan;
 pub mod reach_map;
 pub mod scen;
 pub mod simulate;
+pub mod space;
 pub mod stability;

@@ -11,6 +11,7 @@ use super::m2_platform_arm::{PlatformArm, PlatformArmParams};
 use super::m3_diffdrive::{DiffDrive, DiffDriveParams};
 use super::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
 use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams, TaskController};
+use super::m6_space_manipulator::{SpaceManipulator, SpaceManipulatorParams};
 use crate::error::{Error, Result};
 use nalgebra::{SMatrix, SVector};
 use serde::Serialize;
@@ -30,10 +31,12 @@ pub enum ChapterModel {
     M4CartTwoLink,
     /// m5, 3-D mobile manipulator.
     M5MobileManipulator,
+    /// m6, planar free-floating space manipulator.
+    M6SpaceManipulator,
 }
 
 /// Canonical model names (as in the reference files) with accepted aliases.
-pub const MODEL_NAMES: [(&str, &[&str], ChapterModel); 5] = [
+pub const MODEL_NAMES: [(&str, &[&str], ChapterModel); 6] = [
     ("m1_unicycle", &["m1"], ChapterModel::M1Unicycle),
     (
         "m2_platform_planar_arm",
@@ -50,6 +53,11 @@ pub const MODEL_NAMES: [(&str, &[&str], ChapterModel); 5] = [
         "m5_mobile_manipulator_3d",
         &["m5", "m5_mobile_manipulator"],
         ChapterModel::M5MobileManipulator,
+    ),
+    (
+        "m6_space_manipulator",
+        &["m6", "m6_space"],
+        ChapterModel::M6SpaceManipulator,
     ),
 ];
 
@@ -272,7 +280,74 @@ fn evaluate_inner(
             };
             Ok((out, tr, control))
         }
+        ChapterModel::M6SpaceManipulator => {
+            let (out, extras) = m6_case(case, tol)?;
+            Ok((out, None, Some(extras)))
+        }
     }
+}
+
+/// m6: outputs, plus the `trajectories` runs and the `joint_loop` (returned as one object
+/// of top-level keys to set).
+fn m6_case(case: &Value, tol: f64) -> Result<(Value, Value)> {
+    let sys = SpaceManipulator::new(params::<SpaceManipulatorParams>(case)?)?;
+    let q = vector::<5>(case, &["state", "q"])?;
+    let th = vector::<2>(case, &["state", "theta_dot"])?;
+    let qz = vector::<5>(case, &["state", "qdot_zero_momentum"])?;
+    let qn = vector::<5>(case, &["state", "qdot_nonzero_momentum"])?;
+    let tau = vector::<2>(case, &["inputs", "torque"])?;
+    let out = to_value(&sys.evaluate(&q, &th, &qz, &qn, &tau)?)?;
+    let mut extras = Map::new();
+    if let Some(runs) = case.get("trajectories") {
+        let runs = runs
+            .as_object()
+            .ok_or_else(|| Error::invalid("trajectories", "expected an object of runs"))?;
+        let mut filled = Map::new();
+        for (name, run) in runs {
+            let path = ["trajectories", name.as_str()];
+            let t = numbers(case, &[path[0], path[1], "t"])?;
+            crate::error::ensure_finite(&format!("trajectories.{name}.t"), &t)?;
+            if t.first().is_some_and(|&t0| t0 < 0.0) || t.windows(2).any(|w| w[1] < w[0]) {
+                return Err(Error::invalid(
+                    format!("trajectories.{name}.t"),
+                    "times must be non-negative and non-decreasing",
+                ));
+            }
+            let torque = vector::<2>(case, &[path[0], path[1], "torque"])?;
+            let qdot0 = vector::<5>(case, &[path[0], path[1], "qdot0"])?;
+            let samples = sys.simulate(&q, &qdot0, &torque, &t, tol)?;
+            let mut r = run.as_object().cloned().unwrap_or_default();
+            r.insert("q".into(), rows(samples.iter().map(|s| s.q)));
+            r.insert("qdot".into(), rows(samples.iter().map(|s| s.qdot)));
+            r.insert("P".into(), rows(samples.iter().map(|s| s.p)));
+            r.insert(
+                "L_O".into(),
+                json!(samples.iter().map(|s| s.l_o).collect::<Vec<_>>()),
+            );
+            r.insert(
+                "psi_from_omega_exact".into(),
+                json!(samples.iter().map(|s| s.psi_exact).collect::<Vec<_>>()),
+            );
+            r.insert(
+                "psi_from_omega_chapter".into(),
+                json!(samples.iter().map(|s| s.psi_chapter).collect::<Vec<_>>()),
+            );
+            filled.insert(name.clone(), Value::Object(r));
+        }
+        extras.insert("trajectories".into(), Value::Object(filled));
+    }
+    if let Some(jl) = case.get("joint_loop") {
+        let a = vector::<2>(case, &["joint_loop", "amplitude"])?;
+        let period = field(case, &["joint_loop", "period"])?
+            .as_f64()
+            .ok_or_else(|| Error::invalid("joint_loop.period", "expected a number"))?;
+        let theta0 = nalgebra::Vector2::new(q[3], q[4]);
+        let d = sys.joint_loop_rotation(&theta0, &a, period, tol)?;
+        let mut m = jl.as_object().cloned().unwrap_or_default();
+        m.insert("delta_psi".into(), json!(d));
+        extras.insert("joint_loop".into(), Value::Object(m));
+    }
+    Ok((out, Value::Object(extras)))
 }
 
 /// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
@@ -307,7 +382,13 @@ pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) 
         obj.insert("trajectory".into(), Value::Object(merged));
     }
     if let Some(c) = control {
-        obj.insert("control".into(), c);
+        if model == ChapterModel::M6SpaceManipulator {
+            for (k, v) in c.as_object().expect("object").clone() {
+                obj.insert(k, v);
+            }
+        } else {
+            obj.insert("control".into(), c);
+        }
     }
     Ok(out)
 }

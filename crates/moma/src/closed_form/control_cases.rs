@@ -16,7 +16,7 @@ use crate::control::unicycle::{
     Aicardi, Astolfi, ConstantInputReference, Kanayama, Pose, Samson, unicycle_rhs,
 };
 use crate::error::{Error, Result};
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
 use serde_json::{Map, Value, json};
 
 /// Largest number of output samples per case.

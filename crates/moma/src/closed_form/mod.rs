@@ -1,4 +1,4 @@
-//! The chapter's robots (m1–m5) in their own coordinates, closed form.
+//! The chapter's robots (m1–m6) in their own coordinates, closed form.
 //!
 //! Each model follows the project's clean specification of the chapter (the printed
 //! equations have lost signs and contain several errors; see `docs/chapter.md`):
@@ -10,6 +10,7 @@
 //! | [`m3_diffdrive`] | wheel-rate kinematics, whole-body Jacobian | `q = [x, y, φ, φ1, θ1, θ2]` |
 //! | [`m4_cart_two_link`] | cart + two-link arm in a vertical plane | `q = [d0, θ1, θ2]` |
 //! | [`m5_mobile_manipulator`] | 3-D platform + capstan + two-link arm | `q = [x, y, φ, φt, θ1, θ12]` |
+//! | [`m6_space_manipulator`] | planar free-floating base + two-link arm | `q = [x0, y0, ψ, θ1, θ2]` |
 //!
 //! Conventions: `H q̈ + h + G = Q − Cᵀλ`, `C q̇ = 0`, `q̇ = N_C v`, `h = C_cor q̇` with the
 //! Christoffel `C_cor`, `G = ∂V/∂q` including gravity. The mass matrix and potential of
@@ -28,6 +29,7 @@ pub mod m2_platform_arm;
 pub mod m3_diffdrive;
 pub mod m4_cart_two_link;
 pub mod m5_mobile_manipulator;
+pub mod m6_space_manipulator;
 pub mod multibody_models;
 
 use crate::error::{Error, Result};

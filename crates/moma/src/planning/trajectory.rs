@@ -210,7 +210,7 @@ pub fn time_parameterize_directional(
     };
     let mut theta = wrap(initial_heading.unwrap_or(first_dir));
     let (samples, duration) = sample_count(&pts, theta, limits, dt);
-    if !(samples <= MAX_TRAJECTORY_SAMPLES as f64) {
+    if samples.is_nan() || samples > MAX_TRAJECTORY_SAMPLES as f64 {
         return Err(Error::invalid(
             "trajectory samples",
             format!(

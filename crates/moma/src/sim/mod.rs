@@ -5,6 +5,7 @@
 //! working.
 
 pub mod chapter_models;
+pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
 pub mod scenario;
