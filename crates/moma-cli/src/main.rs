@@ -6,8 +6,9 @@
 //! did not reach its goal ([`cmd::common::GoalNotReached`]). Outputs are written
 //! atomically (`output.rs`), so a failed run leaves none behind.
 
-mod cmd;
+#[macro_use]
 mod output;
+mod cmd;
 mod svg_heatmap;
 mod svg_map;
 mod svg_plots;

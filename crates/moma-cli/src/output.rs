@@ -31,6 +31,29 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
     write_atomic(path, text.as_bytes())
 }
 
+/// `println!` for command output: a reader that went away (`moma … | head`) is the
+/// reader's choice, so a closed pipe is ignored (the command still ends with its own
+/// exit status) instead of panicking as `println!` does; any other write failure is
+/// reported and ends the run with status 1.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::output::write_line(format_args!($($arg)*))
+    };
+}
+
+/// The line writer behind `outln!`.
+pub fn write_line(args: std::fmt::Arguments<'_>) {
+    let mut stdout = std::io::stdout().lock();
+    match writeln!(stdout, "{args}") {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+        Err(e) => {
+            eprintln!("error: cannot write to standard output: {e}");
+            std::process::exit(1);
+        }
+        Ok(()) => {}
+    }
+}
+
 /// Prints `value` as pretty JSON on standard output.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).context("serialising JSON output")?;

@@ -321,6 +321,25 @@ fn planner_errors_name_world_coordinates_on_ros_maps() {
     ]);
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains(" m, cell ("), "{e}");
+    assert!(e.contains(" m (cell ("), "{e}");
     assert!(e.contains("(-2.0") || e.contains("(-1.9"), "{e}");
+}
+
+#[test]
+fn a_closed_standard_output_is_not_a_panic() {
+    // `moma inspect … | head -0`: the reader is gone before the table is printed
+    let mut child = Command::new(env!("CARGO_BIN_EXE_moma"))
+        .args([
+            "inspect",
+            &data("crates/moma/tests/data/pinocchio/urdf/tiago.urdf"),
+            "--root",
+            "planar",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    assert_status(&o, 0, "");
 }

@@ -9,7 +9,7 @@ use super::common::{load_model, parse_root};
 use anyhow::{Context, Result};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
-use moma::multibody::{Data, RootJoint};
+use moma::multibody::{Data, Model, RootJoint};
 use nalgebra::{DVector, Matrix6xX};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -120,21 +120,7 @@ pub fn run(args: Args) -> Result<()> {
             args.urdf.display()
         );
     }
-    let mut rng = ChaCha8Rng::seed_from_u64(42);
-    let q0 = kinematics::neutral(&model);
-    let mut qs = Vec::new();
-    let (mut vs, mut as_, mut ts) = (Vec::new(), Vec::new(), Vec::new());
-    for _ in 0..NSTATES {
-        let dq = DVector::from_fn(nv, |_, _| {
-            std::f64::consts::PI * rng.random_range(-1.0..1.0)
-        });
-        let mut q = q0.clone();
-        kinematics::integrate(&model, &q0, &dq, &mut q);
-        qs.push(q);
-        vs.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
-        as_.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
-        ts.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
-    }
+    let [qs, vs, as_, ts] = random_states(&model);
     let nbatch = env_usize("NBATCH", 300).max(1);
     // at least one timed batch
     let warmup = env_usize("WARMUP", 30).min(nbatch - 1);
@@ -222,19 +208,49 @@ pub fn run(args: Args) -> Result<()> {
         median_ns: pick(|x| x.0),
         min_ns: pick(|x| x.1),
     };
+    print_report(&args, &report)
+}
+
+/// The seeded random states of the Pinocchio benchmark: q = neutral ⊕ π·U(−1,1)^nv and
+/// v, a, τ ~ U(−1,1).
+fn random_states(model: &Model) -> [Vec<DVector<f64>>; 4] {
+    let nv = model.nv;
+    let mut rng = ChaCha8Rng::seed_from_u64(42);
+    let q0 = kinematics::neutral(model);
+    let mut qs = Vec::new();
+    let (mut vs, mut as_, mut ts) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..NSTATES {
+        let dq = DVector::from_fn(nv, |_, _| {
+            std::f64::consts::PI * rng.random_range(-1.0..1.0)
+        });
+        let mut q = q0.clone();
+        kinematics::integrate(model, &q0, &dq, &mut q);
+        qs.push(q);
+        vs.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
+        as_.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
+        ts.push(DVector::from_fn(nv, |_, _| rng.random_range(-1.0..1.0)));
+    }
+    [qs, vs, as_, ts]
+}
+
+/// Writes `--output`, then prints JSON or the Pinocchio benchmark's line format.
+fn print_report(args: &Args, report: &Report) -> Result<()> {
+    let (nq, nv, nbatch, warmup) = (report.nq, report.nv, report.nbatch, report.warmup);
     if let Some(p) = &args.output {
-        let mut text = serde_json::to_string_pretty(&report).context("serialising JSON output")?;
+        let mut text = serde_json::to_string_pretty(report).context("serialising JSON output")?;
         text.push('\n');
         crate::output::write_all_atomic(&[(p.clone(), text.into_bytes())])?;
     }
     if args.json {
-        return crate::output::print_json(&report);
+        return crate::output::print_json(report);
     }
-    println!(
+    outln!(
         "# moma bench {} (root {}, frame {}, nq {nq}, nv {nv}; {NSTATES} states, {nbatch} batches after {warmup} warm-up)",
-        report.robot, report.root, report.frame
+        report.robot,
+        report.root,
+        report.frame
     );
-    println!("# robot algorithm nq nv median_ns min_ns");
+    outln!("# robot algorithm nq nv median_ns min_ns");
     let med = &report.median_ns;
     let min = &report.min_ns;
     for (name, a, b) in [
@@ -249,7 +265,7 @@ pub fn run(args: Args) -> Result<()> {
         ("joint_jacobians", med.joint_jacobians, min.joint_jacobians),
         ("osc", med.osc, min.osc),
     ] {
-        println!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
+        outln!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
     }
     Ok(())
 }

@@ -56,9 +56,14 @@ pub struct State {
     pub tau: Option<Vec<f64>>,
     /// Whole-body inputs, if given.
     pub u: Option<Vec<f64>>,
+    /// The other fields the command allowed (e.g. `stability`'s `external`), as given.
+    pub extra: serde_json::Map<String, Value>,
 }
 
-const STATE_FIELDS: [&str; 5] = ["q", "v", "a", "tau", "u"];
+const NUMBER_FIELDS: [&str; 5] = ["q", "v", "a", "tau", "u"];
+
+/// Largest number of states a states file may hold (checked before they are parsed).
+pub const MAX_STATES: usize = 1_000_000;
 
 fn number_array(v: &Value, field: &str, path: &Path) -> Result<Vec<f64>> {
     let arr = v
@@ -107,27 +112,33 @@ fn parse_state(s: &Value, i: usize, path: &Path, allowed: &[&str]) -> Result<Sta
     };
     let q =
         get("q")?.ok_or_else(|| anyhow!("{}: states[{i}]: missing field \"q\"", path.display()))?;
+    let extra = o
+        .iter()
+        .filter(|(k, _)| !NUMBER_FIELDS.contains(&k.as_str()))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
     Ok(State {
         q,
         v: get("v")?,
         a: get("a")?,
         tau: get("tau")?,
         u: get("u")?,
+        extra,
     })
 }
 
 /// Reads a states file: `{"states": [STATE, ...]}` or a bare `[STATE, ...]`, where a STATE
 /// is an object `{"q": [..], ...}` or a bare q array. `allowed` lists the fields the
-/// command reads (a subset of `q, v, a, tau, u`); any other field is an error naming it,
-/// so no input is silently ignored. The list must not be empty. Lengths and finiteness
-/// are checked by the caller against its model.
+/// command reads: number arrays among `q, v, a, tau, u`, any other name is handed over
+/// raw in [`State::extra`]; a field not allowed is an error naming it, so no input is
+/// silently ignored. The list must hold 1 to [`MAX_STATES`] states. Lengths and
+/// finiteness are checked by the caller against its model.
 pub fn read_states(path: &Path, allowed: &[&str]) -> Result<Vec<State>> {
-    debug_assert!(allowed.iter().all(|f| STATE_FIELDS.contains(f)));
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read states file", path.display()))?;
     let doc: Value = serde_json::from_str(&text).map_err(|e| {
         anyhow!(
-            "{}: invalid states file (expected JSON {{\"states\": [{{\"q\": [..], ...}}]}}): {e}",
+            "{}: invalid states file: invalid JSON (expected {{\"states\": [{{\"q\": [..], ...}}]}}): {e}",
             path.display()
         )
     })?;
@@ -148,6 +159,9 @@ pub fn read_states(path: &Path, allowed: &[&str]) -> Result<Vec<State>> {
     };
     if list.is_empty() {
         bail!("{}: 'states' is empty", path.display());
+    }
+    if list.len() > MAX_STATES {
+        bail!("{}: states: more than {MAX_STATES} states", path.display());
     }
     list.iter()
         .enumerate()

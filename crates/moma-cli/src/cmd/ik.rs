@@ -272,7 +272,7 @@ fn report(args: &Args, out: &Output) -> Result<()> {
         if let Some(o) = out.orientation_error {
             parts.push(format!("orientation {o:.3e} rad"));
         }
-        println!(
+        outln!(
             "{}: frame '{}' {} after {} iterations: residual {:.3e} ({}), σ_min {:.3e}",
             out.robot,
             out.frame,
@@ -291,7 +291,7 @@ fn report(args: &Args, out: &Output) -> Result<()> {
             out.sigma_min
         );
         let qs: Vec<String> = out.q.iter().map(|x| format!("{x:.6}")).collect();
-        println!("q = [{}]", qs.join(", "));
+        outln!("q = [{}]", qs.join(", "));
     }
     if !out.task_met {
         return goal_not_reached(format!(

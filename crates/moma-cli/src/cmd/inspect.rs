@@ -132,18 +132,24 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         return crate::output::print_json(&info);
     }
-    println!("robot      {} ({})", info.robot, info.source);
-    println!("root       {}", info.root);
-    println!("nq, nv     {}, {}", info.nq, info.nv);
-    println!("total mass {:.6} kg (moving bodies)", info.total_mass);
-    println!("last link  {}", info.last_link);
-    println!("joints ({}):", info.joints.len());
-    println!(
+    outln!("robot      {} ({})", info.robot, info.source);
+    outln!("root       {}", info.root);
+    outln!("nq, nv     {}, {}", info.nq, info.nv);
+    outln!("total mass {:.6} kg (moving bodies)", info.total_mass);
+    outln!("last link  {}", info.last_link);
+    outln!("joints ({}):", info.joints.len());
+    outln!(
         "  {:<28} {:<20} {:>5} {:>3} {:>5} {:>3}  {:<24} lower / upper",
-        "name", "type", "idx_q", "nq", "idx_v", "nv", "parent"
+        "name",
+        "type",
+        "idx_q",
+        "nq",
+        "idx_v",
+        "nv",
+        "parent"
     );
     for j in &info.joints {
-        println!(
+        outln!(
             "  {:<28} {:<20} {:>5} {:>3} {:>5} {:>3}  {:<24} {} / {}",
             j.name,
             j.jtype,
@@ -156,11 +162,13 @@ pub fn run(args: Args) -> Result<()> {
             fmt_lim(&j.upper)
         );
     }
-    println!("frames ({}):", info.frames.len());
+    outln!("frames ({}):", info.frames.len());
     for f in &info.frames {
-        println!(
+        outln!(
             "  {:<32} {:<12} on joint {}",
-            f.name, f.kind, f.parent_joint
+            f.name,
+            f.kind,
+            f.parent_joint
         );
     }
     Ok(())

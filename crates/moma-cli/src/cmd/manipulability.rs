@@ -264,13 +264,16 @@ pub fn run(args: Args) -> Result<()> {
 
 fn print_table(out: &Output) {
     let fmt = |v: Option<f64>| v.map_or("undefined".to_string(), |x| format!("{x:.6e}"));
-    println!(
+    outln!(
         "{} frame '{}', rows {:?}, measure {}",
-        out.robot, out.frame, out.rows, out.measure
+        out.robot,
+        out.frame,
+        out.rows,
+        out.measure
     );
     for s in &out.states {
         match s.whole_body_value {
-            Some(w) => println!(
+            Some(w) => outln!(
                 "state {:>3}: arm {}  whole-body {}  (σ_min arm {:.4e}, whole-body {:.4e})",
                 s.index,
                 fmt(s.arm_value),
@@ -278,7 +281,7 @@ fn print_table(out: &Output) {
                 s.arm.min_singular_value,
                 s.whole_body.as_ref().map_or(0.0, |r| r.min_singular_value)
             ),
-            None => println!(
+            None => outln!(
                 "state {:>3}: arm {}  (σ_min {:.4e})",
                 s.index,
                 fmt(s.arm_value),
@@ -286,7 +289,7 @@ fn print_table(out: &Output) {
             ),
         }
         for n in &s.notes {
-            println!("           note: {n}");
+            outln!("           note: {n}");
         }
     }
 }

@@ -64,24 +64,29 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         return print_json(&info);
     }
-    println!("map:        {} ({})", info.file, info.format);
-    println!("size:       {} x {} cells", info.width, info.height);
-    println!("resolution: {} m/cell", info.resolution);
-    println!(
+    outln!("map:        {} ({})", info.file, info.format);
+    outln!("size:       {} x {} cells", info.width, info.height);
+    outln!("resolution: {} m/cell", info.resolution);
+    outln!(
         "origin:     [{}, {}, {}]",
-        info.origin[0], info.origin[1], info.origin[2]
+        info.origin[0],
+        info.origin[1],
+        info.origin[2]
     );
     if let Some(r) = &info.ros {
-        println!(
+        outln!(
             "thresholds: occupied > {}, free < {}, negate {}, mode {:?}",
-            r.occupied_thresh, r.free_thresh, r.negate as u8, r.mode
+            r.occupied_thresh,
+            r.free_thresh,
+            r.negate as u8,
+            r.mode
         );
     }
-    println!("occupied:   {}", info.occupied);
-    println!("free:       {}", info.free);
-    println!("unknown:    {}", info.unknown);
+    outln!("occupied:   {}", info.occupied);
+    outln!("free:       {}", info.free);
+    outln!("unknown:    {}", info.unknown);
     if info.intermediate > 0 {
-        println!("intermediate: {}", info.intermediate);
+        outln!("intermediate: {}", info.intermediate);
     }
     Ok(())
 }

@@ -200,12 +200,12 @@ impl MapFrame {
         if self.world { "m" } else { "cells" }
     }
 
-    /// A cell named in the user's frame: `(x, y) m, cell (i, j)` on a ROS map (world
+    /// A cell named in the user's frame: `(x, y) m (cell (i, j))` on a ROS map (world
     /// coordinates of the cell centre), `cell (i, j)` on a Moving AI map.
     fn describe(&self, c: (usize, usize)) -> String {
         if self.world {
             let [x, y] = self.grid.cell_to_world(c.0 as f64, c.1 as f64);
-            format!("({x:.3}, {y:.3}) m, cell ({}, {})", c.0, c.1)
+            format!("({x:.3}, {y:.3}) m (cell ({}, {}))", c.0, c.1)
         } else {
             format!("cell ({}, {})", c.0, c.1)
         }
@@ -256,7 +256,7 @@ fn endpoints(args: &PlanArgs, mf: &MapFrame, obst: &[bool]) -> Result<Endpoints>
             } else {
                 "an obstacle"
             };
-            bail!("{what} {} lies in {kind}", mf.describe(c));
+            bail!("{what} at {} lies in {kind}", mf.describe(c));
         }
     }
     Ok(Endpoints {
@@ -305,7 +305,7 @@ fn disk_cspace(
     for (what, c) in [("start", ends.start), ("goal", ends.goal)] {
         if !sg.is_free(c.0 as i64, c.1 as i64) {
             bail!(
-                "{what} {} is closer than the robot radius {} {} to an obstacle (inside the configuration-space obstacle)",
+                "{what} at {} is closer than the robot radius {} {} to an obstacle (inside the configuration-space obstacle)",
                 mf.describe(c),
                 args.radius.unwrap_or(0.0),
                 mf.units()
@@ -342,7 +342,7 @@ fn search_footprint(
     let start = (ends.start.0, ends.start.1, k);
     let Some(p) = costmap::astar_footprint(&cs, start, ends.goal, args.turn_cost)? else {
         bail!(
-            "no path from start {} to goal {}: the footprint cannot reach the goal at any sequence of headings (explored the whole reachable (x, y, heading) space); the robot may be larger than the passages",
+            "no path from the start at {} to the goal at {}: the footprint cannot reach the goal at any sequence of headings (explored the whole reachable (x, y, heading) space); the robot may be larger than the passages",
             mf.describe(ends.start),
             mf.describe(ends.goal)
         );
@@ -426,7 +426,7 @@ fn search_graph(args: &PlanArgs, mf: &MapFrame, ends: &Endpoints, sg: SearchGrid
             None => "(they lie in disconnected free regions)".into(),
         };
         bail!(
-            "no path: the goal {} is not reachable from the start {} {why}",
+            "no path: the goal at {} is not reachable from the start at {} {why}",
             mf.describe(goal),
             mf.describe(start)
         );
@@ -474,7 +474,7 @@ fn search_potential(
             "local_minimum"
         }
         DescentEnd::Unreachable => bail!(
-            "no path from start {} to goal {}: {report}",
+            "no path from the start at {} to the goal at {}: {report}",
             mf.describe(ends.start),
             mf.describe(ends.goal)
         ),
@@ -526,8 +526,8 @@ pub fn run(args: Args) -> Result<()> {
     };
     let out = plan_output(&args, &mf, &ends, robot, &found)?;
     write_outputs(&args, &mf, &ends, &found, &out)?;
-    println!("{}", out.report);
-    println!(
+    outln!("{}", out.report);
+    outln!(
         "path: {} cells, {} waypoints, length {:.3} {}, duration {:.2} s",
         out.cells.len(),
         out.waypoints.len(),

@@ -270,7 +270,7 @@ fn print_result(args: &Args, out: &Output, grid: &PlacementGrid) -> Result<()> {
     if args.json {
         return print_json(out);
     }
-    println!(
+    outln!(
         "{}: frame '{}', {} base poses ({} x {} x {} headings) in {:.3} s; reachable from {}",
         out.robot,
         out.frame,
@@ -282,7 +282,7 @@ fn print_result(args: &Args, out: &Output, grid: &PlacementGrid) -> Result<()> {
         out.reachable
     );
     match &out.best {
-        Some(b) => println!(
+        Some(b) => outln!(
             "best placement: x = {:.4} m, y = {:.4} m, θ = {:.4} rad, {} = {:.6e}",
             b.base[0],
             b.base[1],
@@ -290,7 +290,7 @@ fn print_result(args: &Args, out: &Output, grid: &PlacementGrid) -> Result<()> {
             out.measure,
             b.measure.unwrap_or(0.0)
         ),
-        None => println!("the target is unreachable from every base pose of the grid"),
+        None => outln!("the target is unreachable from every base pose of the grid"),
     }
     Ok(())
 }

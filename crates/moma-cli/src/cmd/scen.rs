@@ -89,8 +89,8 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     let total: f64 = t.iter().sum();
-    println!("{} problems from {}", rows.len(), args.scen.display());
-    println!(
+    outln!("{} problems from {}", rows.len(), args.scen.display());
+    outln!(
         "mismatches (relative tolerance {:e}): {}",
         args.tolerance,
         mismatches.len()
@@ -100,12 +100,15 @@ pub fn run(args: Args) -> Result<()> {
             .cost
             .map(|c| format!("{c:.8}"))
             .unwrap_or_else(|| "no path".into());
-        println!(
+        outln!(
             "  #{} {} -> {}: found {c}, optimal {}",
-            r.index, r.start, r.goal, r.optimal
+            r.index,
+            r.start,
+            r.goal,
+            r.optimal
         );
     }
-    println!(
+    outln!(
         "time per problem (us): median {:.1}, p90 {:.1}, p99 {:.1}, max {:.1}; total {:.3} s",
         pct(0.5),
         pct(0.9),

@@ -13,6 +13,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use moma::closed_form::ChapterModel;
 use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
+use moma::sim::recorder::Recorder;
 use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate};
 use serde::{Deserialize, Serialize};
@@ -250,8 +251,12 @@ fn build_robot(
                     ),
                 }
             }
+            let is_m5 = matches!(
+                ChapterModel::from_name(model),
+                Ok(ChapterModel::M5MobileManipulator)
+            );
             if let Some(g) = gravity
-                && model != "m5"
+                && !is_m5
             {
                 bail!(
                     "gravity = {g}: chapter model {model} moves in the horizontal plane and \
@@ -259,8 +264,7 @@ fn build_robot(
                 );
             }
             let mut json = serde_json::to_value(params).context("robot.params")?;
-            if let (Some(g), Ok(ChapterModel::M5MobileManipulator)) =
-                (gravity, ChapterModel::from_name(model))
+            if let (Some(g), true) = (gravity, is_m5)
                 && let Some(obj) = json.as_object_mut()
             {
                 if obj.contains_key("g") {
@@ -334,125 +338,8 @@ fn render(
     let rec = &result.recorder;
     let mut files = vec![("trajectory.csv".to_string(), rec.to_csv().into_bytes())];
     if plots {
-        let t = &rec.times;
-        let n = rec.len();
-        let col = |row: &dyn Fn(usize) -> f64| (0..n).map(row).collect::<Vec<f64>>();
-        let x = col(&|i| rec.q_row(i)[0]);
-        let y = col(&|i| rec.q_row(i)[1]);
-        files.push((
-            "path.svg".to_string(),
-            path_chart("Platform path", &x, &y).into_bytes(),
-        ));
-        let angle_series = |keep: &dyn Fn(&str) -> bool| -> Vec<Series> {
-            rec.q_names
-                .iter()
-                .enumerate()
-                .skip(2)
-                .filter(|(_, n)| keep(n))
-                .map(|(k, n)| series(t, n, col(&|i| rec.q_row(i)[k])))
-                .collect()
-        };
-        let is_wheel = |n: &str| wheels.iter().any(|w| w == n);
-        files.push((
-            "joints.svg".to_string(),
-            line_chart(
-                "Heading and arm joints",
-                "t [s]",
-                if rec.units[0].iter().skip(3).any(|u| *u == "m") {
-                    "angle [rad] (prismatic joints: [m])"
-                } else {
-                    "angle [rad]"
-                },
-                &angle_series(&|n| !is_wheel(n)),
-            )
-            .into_bytes(),
-        ));
-        if !wheels.is_empty() {
-            files.push((
-                "wheels.svg".to_string(),
-                line_chart(
-                    "Wheel angles",
-                    "t [s]",
-                    "angle [rad]",
-                    &angle_series(&is_wheel),
-                )
-                .into_bytes(),
-            ));
-        }
-        let inputs: Vec<Series> = rec
-            .u_names
-            .iter()
-            .enumerate()
-            .map(|(k, n)| series(t, n, col(&|i| rec.u_row(i)[k])))
-            .collect();
-        files.push((
-            "inputs.svg".to_string(),
-            line_chart(
-                "Inputs (wheel and joint torques)",
-                "t [s]",
-                if rec.units[2].iter().any(|u| *u == "N") {
-                    "torque [N m] (prismatic joints: force [N])"
-                } else {
-                    "torque [N m]"
-                },
-                &inputs,
-            )
-            .into_bytes(),
-        ));
-        let energy = vec![
-            series(t, "kinetic T", rec.kinetic.clone()),
-            series(t, "potential V", rec.potential.clone()),
-            series(t, "input work W", rec.work.clone()),
-            series(
-                t,
-                "T + V − W",
-                col(&|i| rec.kinetic[i] + rec.potential[i] - rec.work[i]),
-            ),
-        ];
-        files.push((
-            "energy.svg".to_string(),
-            line_chart("Energy balance", "t [s]", "energy [J]", &energy).into_bytes(),
-        ));
-        let drift = vec![series(
-            t,
-            "(T+V) − (T₀+V₀) − W",
-            col(&|i| rec.energy_error(i)),
-        )];
-        files.push((
-            "energy_error.svg".to_string(),
-            line_chart("Energy balance error", "t [s]", "energy [J]", &drift).into_bytes(),
-        ));
-        if !rec.lambda_names.is_empty() {
-            let k = rec.lambda_names.len();
-            const LABELS: [&str; 3] = ["λ0 no side slip", "λ1 left rolling", "λ2 right rolling"];
-            let forces: Vec<Series> = rec
-                .lambda_names
-                .iter()
-                .enumerate()
-                .map(|(j, name)| {
-                    let label = LABELS.get(j).copied().unwrap_or(name.as_str());
-                    series(t, label, col(&|i| rec.lambda[i * k + j]))
-                })
-                .collect();
-            let title = if k == 3 {
-                "Constraint multipliers: λ0 no side slip (−λ0 = lateral ground force on the axle),\nλ1, λ2 rolling of the left and right wheel"
-            } else {
-                "Multiplier λ0 of the no-side-slip constraint (−λ0 = lateral ground force on the axle)"
-            };
-            files.push((
-                "multipliers.svg".to_string(),
-                line_chart(title, "t [s]", "λ [N]", &forces).into_bytes(),
-            ));
-        }
-        let res = vec![series(
-            t,
-            "log10 |C q̇|",
-            col(&|i| rec.residual[i].max(1e-20).log10()),
-        )];
-        files.push((
-            "residual.svg".to_string(),
-            line_chart("Constraint residual", "t [s]", "log10 (|C q̇| [m/s])", &res).into_bytes(),
-        ));
+        motion_plots(wheels, rec, &mut files);
+        balance_plots(rec, &mut files);
     }
     summary.files = files
         .iter()
@@ -465,37 +352,146 @@ fn render(
     Ok(files)
 }
 
-/// Runs `moma simulate`.
-pub fn run(args: Args) -> Result<()> {
-    let path = resolve_scenario(args.scenario.clone())?;
-    let sc = load_scenario(&path)?;
-    let ctx = |what: &str| format!("{}: {what}", path.display());
-    if !(sc.duration.is_finite() && sc.duration > 0.0) {
-        bail!(
-            "{}",
-            ctx(&format!(
-                "duration must be a positive finite number, got {}",
-                sc.duration
-            ))
-        );
+/// The column `row(i)` of every recorded sample.
+fn column(rec: &Recorder, row: &dyn Fn(usize) -> f64) -> Vec<f64> {
+    (0..rec.len()).map(row).collect()
+}
+
+/// Platform path, heading and arm joints, wheel angles (when tracked) and inputs.
+fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+    let t = &rec.times;
+    let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
+    let x = col(&|i| rec.q_row(i)[0]);
+    let y = col(&|i| rec.q_row(i)[1]);
+    files.push((
+        "path.svg".to_string(),
+        path_chart("Platform path", &x, &y).into_bytes(),
+    ));
+    let angle_series = |keep: &dyn Fn(&str) -> bool| -> Vec<Series> {
+        rec.q_names
+            .iter()
+            .enumerate()
+            .skip(2)
+            .filter(|(_, n)| keep(n))
+            .map(|(k, n)| series(t, n, col(&|i| rec.q_row(i)[k])))
+            .collect()
+    };
+    let is_wheel = |n: &str| wheels.iter().any(|w| w == n);
+    files.push((
+        "joints.svg".to_string(),
+        line_chart(
+            "Heading and arm joints",
+            "t [s]",
+            if rec.units[0].iter().skip(3).any(|u| *u == "m") {
+                "angle [rad] (prismatic joints: [m])"
+            } else {
+                "angle [rad]"
+            },
+            &angle_series(&|n| !is_wheel(n)),
+        )
+        .into_bytes(),
+    ));
+    if !wheels.is_empty() {
+        files.push((
+            "wheels.svg".to_string(),
+            line_chart(
+                "Wheel angles",
+                "t [s]",
+                "angle [rad]",
+                &angle_series(&is_wheel),
+            )
+            .into_bytes(),
+        ));
     }
-    if let Some(g) = sc.gravity
-        && !g.is_finite()
-    {
-        bail!("{}", ctx("gravity is not a finite number"));
+    let inputs: Vec<Series> = rec
+        .u_names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| series(t, n, col(&|i| rec.u_row(i)[k])))
+        .collect();
+    files.push((
+        "inputs.svg".to_string(),
+        line_chart(
+            "Inputs (wheel and joint torques)",
+            "t [s]",
+            if rec.units[2].iter().any(|u| *u == "N") {
+                "torque [N m] (prismatic joints: force [N])"
+            } else {
+                "torque [N m]"
+            },
+            &inputs,
+        )
+        .into_bytes(),
+    ));
+}
+
+/// Energy balance and its error, the constraint multipliers and the residual.
+fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+    let t = &rec.times;
+    let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
+    let energy = vec![
+        series(t, "kinetic T", rec.kinetic.clone()),
+        series(t, "potential V", rec.potential.clone()),
+        series(t, "input work W", rec.work.clone()),
+        series(
+            t,
+            "T + V − W",
+            col(&|i| rec.kinetic[i] + rec.potential[i] - rec.work[i]),
+        ),
+    ];
+    files.push((
+        "energy.svg".to_string(),
+        line_chart("Energy balance", "t [s]", "energy [J]", &energy).into_bytes(),
+    ));
+    let drift = vec![series(
+        t,
+        "(T+V) − (T₀+V₀) − W",
+        col(&|i| rec.energy_error(i)),
+    )];
+    files.push((
+        "energy_error.svg".to_string(),
+        line_chart("Energy balance error", "t [s]", "energy [J]", &drift).into_bytes(),
+    ));
+    if !rec.lambda_names.is_empty() {
+        let k = rec.lambda_names.len();
+        const LABELS: [&str; 3] = ["λ0 no side slip", "λ1 left rolling", "λ2 right rolling"];
+        let forces: Vec<Series> = rec
+            .lambda_names
+            .iter()
+            .enumerate()
+            .map(|(j, name)| {
+                let label = LABELS.get(j).copied().unwrap_or(name.as_str());
+                series(t, label, col(&|i| rec.lambda[i * k + j]))
+            })
+            .collect();
+        let title = if k == 3 {
+            "Constraint multipliers: λ0 no side slip (−λ0 = lateral ground force on the axle),\nλ1, λ2 rolling of the left and right wheel"
+        } else {
+            "Multiplier λ0 of the no-side-slip constraint (−λ0 = lateral ground force on the axle)"
+        };
+        files.push((
+            "multipliers.svg".to_string(),
+            line_chart(title, "t [s]", "λ [N]", &forces).into_bytes(),
+        ));
     }
-    let base_dir = path.parent().unwrap_or(Path::new("."));
-    if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
-        return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
-    }
-    if sc.space.is_some() {
-        bail!(
-            "{}",
-            ctx("[space] is only for robot.kind = \"free_floating\"")
-        );
-    }
-    let (mut system, robot_name) =
-        build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
+    let res = vec![series(
+        t,
+        "log10 |C q̇|",
+        col(&|i| rec.residual[i].max(1e-20).log10()),
+    )];
+    files.push((
+        "residual.svg".to_string(),
+        line_chart("Constraint residual", "t [s]", "log10 (|C q̇| [m/s])", &res).into_bytes(),
+    ));
+}
+
+/// The initial configuration, reduced velocity and input profile of a scenario, checked
+/// against the system's sizes (errors name the field and the expected channels).
+fn initial_state(
+    sc: &Scenario,
+    system: &dyn ReducedSystem,
+    ctx: &dyn Fn(&str) -> String,
+) -> Result<(Vec<f64>, Vec<f64>, InputProfile)> {
     let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
     let q0 = sc.initial.q.clone().unwrap_or_else(|| vec![0.0; nq]);
     let v0 = sc.initial.v.clone().unwrap_or_else(|| vec![0.0; nv]);
@@ -543,18 +539,13 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     };
-    sc.integrator
-        .validate()
-        .with_context(|| ctx("integrator"))?;
-    let options = SimulationOptions {
-        duration: sc.duration,
-        integrator: sc.integrator,
-        record_interval: sc.output.record_interval,
-        limits: sc.limits.unwrap_or_default(),
-    };
-    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
-    let bar = if std::io::stderr().is_terminal() {
-        let pb = indicatif::ProgressBar::new((sc.duration * 1000.0).round() as u64);
+    Ok((q0, v0, input))
+}
+
+/// A progress bar on standard error when it is a terminal.
+fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
+    if std::io::stderr().is_terminal() {
+        let pb = indicatif::ProgressBar::new((duration * 1000.0).round() as u64);
         pb.set_style(
             indicatif::ProgressStyle::with_template(
                 "{spinner} simulating [{bar:40}] {pos}/{len} ms  {elapsed_precise}",
@@ -565,7 +556,52 @@ pub fn run(args: Args) -> Result<()> {
         Some(pb)
     } else {
         None
+    }
+}
+
+/// Runs `moma simulate`.
+pub fn run(args: Args) -> Result<()> {
+    let path = resolve_scenario(args.scenario.clone())?;
+    let sc = load_scenario(&path)?;
+    let ctx = |what: &str| format!("{}: {what}", path.display());
+    if !(sc.duration.is_finite() && sc.duration > 0.0) {
+        bail!(
+            "{}",
+            ctx(&format!(
+                "duration must be a positive finite number, got {}",
+                sc.duration
+            ))
+        );
+    }
+    if let Some(g) = sc.gravity
+        && !g.is_finite()
+    {
+        bail!("{}", ctx("gravity is not a finite number"));
+    }
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
+        return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
+    }
+    if sc.space.is_some() {
+        bail!(
+            "{}",
+            ctx("[space] is only for robot.kind = \"free_floating\"")
+        );
+    }
+    let (mut system, robot_name) =
+        build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
+    let (q0, v0, input) = initial_state(&sc, system.as_ref(), &ctx)?;
+    sc.integrator
+        .validate()
+        .with_context(|| ctx("integrator"))?;
+    let options = SimulationOptions {
+        duration: sc.duration,
+        integrator: sc.integrator,
+        record_interval: sc.output.record_interval,
+        limits: sc.limits.unwrap_or_default(),
     };
+    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
+    let bar = progress_bar(sc.duration);
     let start = Instant::now();
     let result = simulate(system.as_mut(), &input, &q0, &v0, &options, &mut |t| {
         if let Some(pb) = &bar {

@@ -4,7 +4,7 @@
 //! Also holds the input parsing shared with `moma stability-map`.
 
 use crate::output::{print_json, write_json};
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use moma::kinematics::check_state;
 use moma::mobile::{Caster, WheeledBase};
 use moma::multibody::{Model, RootJoint};
@@ -18,7 +18,6 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Largest number of states, support points and external loads accepted.
-const MAX_STATES: usize = 1_000_000;
 const MAX_POINTS: usize = 10_000;
 const MAX_EXTERNAL: usize = 10_000;
 
@@ -136,8 +135,7 @@ pub(crate) fn setup(
     gravity: Option<&str>,
 ) -> Result<(Model, StabilityModel)> {
     let root: RootJoint = root.parse().map_err(|e| anyhow!("--root: {e}"))?;
-    let model = moma::io::urdf::model_from_urdf_file(robot, root)
-        .with_context(|| format!("loading robot model {}", robot.display()))?;
+    let model = super::common::load_model(robot, root)?;
     let poly = support_from_args(support)?;
     let set: BodySet = bodies.parse().map_err(|e| anyhow!("--mhs-bodies: {e}"))?;
     let g = parse_gravity(gravity, &model)?;
@@ -189,45 +187,20 @@ fn vec3(v: &Value, field: &str, path: &Path) -> Result<Vector3<f64>> {
     Ok(Vector3::new(x[0], x[1], x[2]))
 }
 
-/// Reads and validates STATES.json for `model`.
+/// Reads and validates STATES.json for `model` (the one states reader of
+/// `common::read_states`, with the `external` loads of this command).
 pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    let v: Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: invalid JSON", path.display()))?;
-    let list = v.get("states").and_then(Value::as_array).ok_or_else(|| {
-        anyhow!(
-            "{}: expected an object with a \"states\" array",
-            path.display()
-        )
-    })?;
-    if list.is_empty() {
-        bail!("{}: states: empty list", path.display());
-    }
-    if list.len() > MAX_STATES {
-        bail!("{}: states: more than {MAX_STATES} states", path.display());
-    }
-    let mut out = Vec::with_capacity(list.len());
-    for (i, s) in list.iter().enumerate() {
+    let states = super::common::read_states(path, &["q", "v", "a", "external"])?;
+    let mut out = Vec::with_capacity(states.len());
+    for (i, st) in states.into_iter().enumerate() {
         let field = format!("states[{i}]");
-        let o = s
-            .as_object()
-            .ok_or_else(|| anyhow!("{}: {field}: expected an object", path.display()))?;
-        let q = o
-            .get("q")
-            .ok_or_else(|| anyhow!("{}: {field}: missing field \"q\"", path.display()))?;
-        let q = numbers(q, &format!("{field}.q"), path)?;
-        let get = |k: &str| -> Result<Vec<f64>> {
-            match o.get(k) {
-                Some(x) => numbers(x, &format!("{field}.{k}"), path),
-                None => Ok(vec![0.0; model.nv]),
-            }
-        };
-        let (vv, aa) = (get("v")?, get("a")?);
+        let q = st.q;
+        let vv = st.v.unwrap_or_else(|| vec![0.0; model.nv]);
+        let aa = st.a.unwrap_or_else(|| vec![0.0; model.nv]);
         check_state(model, &field, Some(&q), Some(&vv), Some(&aa), None)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         let mut external = Vec::new();
-        if let Some(ext) = o.get("external") {
+        if let Some(ext) = st.extra.get("external") {
             let list = ext.as_array().ok_or_else(|| {
                 anyhow!("{}: {field}.external: expected an array", path.display())
             })?;
