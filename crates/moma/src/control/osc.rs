@@ -119,33 +119,41 @@ impl OscData {
     }
 }
 
-/// In-place Cholesky `A = L Lᵀ` of the lower triangle of `a`; `false` on a non-positive
-/// pivot. The strict upper triangle is left untouched.
+/// In-place Cholesky `A = L Lᵀ` of the lower triangle of `a` (column-major, left-looking,
+/// contiguous column updates); `false` on a non-positive pivot. The strict upper triangle
+/// is left untouched.
 fn cholesky_in_place(a: &mut DMatrix<f64>) -> bool {
     let n = a.nrows();
+    let s = a.as_mut_slice();
     for j in 0..n {
-        let mut d = a[(j, j)];
+        // column j, rows j..n: A[j.., j] − Σ_k L[j, k] L[j.., k]
         for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
+            let ljk = s[k * n + j];
+            if ljk != 0.0 {
+                let (left, right) = s.split_at_mut(j * n);
+                let src = &left[k * n + j..k * n + n];
+                for (d, x) in right[j..n].iter_mut().zip(src) {
+                    *d -= ljk * x;
+                }
+            }
         }
+        let d = s[j * n + j];
         if !(d > 0.0 && d.is_finite()) {
             return false;
         }
         let d = d.sqrt();
-        a[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / d;
+        s[j * n + j] = d;
+        let inv = 1.0 / d;
+        for x in &mut s[j * n + j + 1..j * n + n] {
+            *x *= inv;
         }
     }
     true
 }
 
-/// `out = β out + α A B` (or `Aᵀ B` with `a_transposed`) by plain loops: nalgebra's
-/// dynamic `gemm`/`mul_to` allocate a packing buffer, and these sizes are small.
+/// `out = β out + α A B` (or `Aᵀ B` with `a_transposed`) by loops over contiguous
+/// columns: nalgebra's dynamic `gemm`/`mul_to` allocate a packing buffer, and these
+/// sizes are small.
 fn matmul(
     out: &mut DMatrix<f64>,
     alpha: f64,
@@ -161,42 +169,59 @@ fn matmul(
     };
     assert_eq!(b.nrows(), k, "inner dimensions");
     assert_eq!(out.shape(), (r, b.ncols()), "output shape");
+    let (ad, bd) = (a.as_slice(), b.as_slice());
+    let od = out.as_mut_slice();
     for j in 0..b.ncols() {
-        let bj = b.column(j);
-        for i in 0..r {
-            let mut s = 0.0;
-            if a_transposed {
-                let ai = a.column(i);
-                for l in 0..k {
-                    s += ai[l] * bj[l];
-                }
-            } else {
-                for l in 0..k {
-                    s += a[(i, l)] * bj[l];
+        let bj = &bd[j * k..(j + 1) * k];
+        let oj = &mut od[j * r..(j + 1) * r];
+        if a_transposed {
+            for (i, o) in oj.iter_mut().enumerate() {
+                let ai = &ad[i * k..(i + 1) * k];
+                let dot: f64 = ai.iter().zip(bj).map(|(x, y)| x * y).sum();
+                *o = beta * *o + alpha * dot;
+            }
+        } else {
+            if beta == 0.0 {
+                oj.fill(0.0);
+            } else if beta != 1.0 {
+                for o in oj.iter_mut() {
+                    *o *= beta;
                 }
             }
-            out[(i, j)] = beta * out[(i, j)] + alpha * s;
+            for (l, &blj) in bj.iter().enumerate() {
+                let c = alpha * blj;
+                if c != 0.0 {
+                    for (o, x) in oj.iter_mut().zip(&ad[l * r..(l + 1) * r]) {
+                        *o += c * x;
+                    }
+                }
+            }
         }
     }
 }
 
-/// Solves `L Lᵀ x = b` in place on each column of `b` (L the lower factor).
+/// Solves `L Lᵀ x = b` in place on each column of `b` (L the lower factor, column-major).
 fn cholesky_solve_columns(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
     let n = l.nrows();
+    let ls = l.as_slice();
     for c in 0..b.ncols() {
+        let x = &mut b.as_mut_slice()[c * n..(c + 1) * n];
+        // L y = b: column-oriented forward substitution
         for i in 0..n {
-            let mut s = b[(i, c)];
-            for k in 0..i {
-                s -= l[(i, k)] * b[(k, c)];
+            let xi = x[i] / ls[i * n + i];
+            x[i] = xi;
+            for (d, lv) in x[i + 1..].iter_mut().zip(&ls[i * n + i + 1..(i + 1) * n]) {
+                *d -= xi * lv;
             }
-            b[(i, c)] = s / l[(i, i)];
         }
+        // Lᵀ x = y: dot products with contiguous columns of L
         for i in (0..n).rev() {
-            let mut s = b[(i, c)];
-            for k in i + 1..n {
-                s -= l[(k, i)] * b[(k, c)];
-            }
-            b[(i, c)] = s / l[(i, i)];
+            let dot: f64 = ls[i * n + i + 1..(i + 1) * n]
+                .iter()
+                .zip(&x[i + 1..])
+                .map(|(a, b)| a * b)
+                .sum();
+            x[i] = (x[i] - dot) / ls[i * n + i];
         }
     }
 }
