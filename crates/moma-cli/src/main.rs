@@ -1,8 +1,10 @@
 //! `moma`: the command-line front end of the moma library.
 //!
-//! Every subcommand lives in its own file under `cmd/`; this file only dispatches.
-//! Errors are reported as one clear message (file, field, what was expected) with a
-//! non-zero exit; output files are written atomically, so a failed run leaves none.
+//! Every subcommand lives in its own file under `cmd/`; this file only dispatches and
+//! applies the one exit-status rule of `docs/cli.md`: 0 success, 1 error (one message
+//! naming the file and field), 2 malformed command line (clap), 3 the command ran but
+//! did not reach its goal ([`cmd::common::GoalNotReached`]). Outputs are written
+//! atomically (`output.rs`), so a failed run leaves none behind.
 
 mod cmd;
 mod output;
@@ -12,7 +14,7 @@ mod svg_plots;
 
 use clap::{Parser, Subcommand};
 
-/// Kinematics, dynamics, control and motion planning of mobile manipulators.
+/// Kinematics, dynamics, simulation and motion planning of wheeled mobile manipulators.
 #[derive(Parser)]
 #[command(name = "moma", version, about, long_about = None)]
 struct Cli {
@@ -28,7 +30,7 @@ enum Command {
     Dynamics(cmd::dynamics::Args),
     /// Time the rigid-body algorithms (median ns per call) on seeded random states.
     Bench(cmd::bench::Args),
-    /// Evaluate the chapter's closed-form models (m1–m5) on a case file.
+    /// Evaluate the chapter's closed-form models (m1–m6) on a case file.
     Eval(cmd::eval::Args),
     /// Run a simulation scenario (TOML) and write CSV, JSON and SVG outputs.
     Simulate(cmd::simulate::Args),
@@ -44,6 +46,12 @@ enum Command {
     Ik(cmd::ik::Args),
     /// Evaluate reachability and manipulability over a grid of base placements.
     ReachMap(cmd::reach_map::Args),
+    /// Tip-over stability (ZMP, Force-Angle, Moment-Height) on a list of states.
+    Stability(cmd::stability::Args),
+    /// Operational-space control quantities (Λ, J̄, N, J̇q̇, F, τ) of a frame on a list of states.
+    Osc(cmd::osc::Args),
+    /// Free-floating (space) robot: base motion from joint rates, generalized Jacobian and inertia.
+    Space(cmd::space::Args),
 }
 
 fn main() {
@@ -58,10 +66,17 @@ fn main() {
         Command::Plan(a) => cmd::plan::run(a),
         Command::Scen(a) => cmd::scen::run(a),
         Command::Manipulability(a) => cmd::manipulability::run(a),
+        Command::Osc(a) => cmd::osc::run(a),
         Command::Ik(a) => cmd::ik::run(a),
         Command::ReachMap(a) => cmd::reach_map::run(a),
+        Command::Stability(a) => cmd::stability::run(a),
+        Command::Space(a) => cmd::space::run(a),
     };
     if let Err(e) = result {
+        if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {
+            eprintln!("goal not reached: {g}");
+            std::process::exit(3);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

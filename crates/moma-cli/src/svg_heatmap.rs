@@ -1,6 +1,6 @@
-//! A small, dependency-free SVG heat map for base-placement maps: one rectangle per grid
-//! cell coloured by value (viridis-like ramp), grey where the target is unreachable, the
-//! target and the best placement marked, a colour bar with the value range.
+//! A small SVG heat map for base-placement maps: the grid cells as one embedded picture
+//! coloured by value (viridis-like ramp), grey where the target is unreachable, axes in
+//! metres, the target and the best placement marked, a colour bar with value ticks.
 
 use std::fmt::Write;
 
@@ -53,7 +53,38 @@ fn esc(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
-/// Renders the heat map as an SVG document.
+fn b64(data: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::with_capacity(data.len().div_ceil(3) * 4);
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        s.push(T[(n >> 18) as usize & 63] as char);
+        s.push(T[(n >> 12) as usize & 63] as char);
+        s.push(if c.len() > 1 {
+            T[(n >> 6) as usize & 63] as char
+        } else {
+            '='
+        });
+        s.push(if c.len() > 2 {
+            T[n as usize & 63] as char
+        } else {
+            '='
+        });
+    }
+    s
+}
+
+const ML: f64 = 76.0;
+const MT: f64 = 44.0;
+const MB: f64 = 56.0;
+const MR: f64 = 170.0;
+const UNREACHABLE: [u8; 3] = [208, 208, 208];
+
+/// Renders the heat map as an SVG document: the cells as one embedded picture (no seams
+/// between cells), axes in metres, a colour bar drawn as a gradient with its value
+/// ticks, the unreachable swatch, the target and the best placement.
 pub fn render(h: &HeatMap<'_>) -> String {
     let (lo, hi) = h
         .cells
@@ -64,83 +95,107 @@ pub fn render(h: &HeatMap<'_>) -> String {
         });
     let have = lo.is_finite() && hi.is_finite();
     let span = if have && hi > lo { hi - lo } else { 1.0 };
-    // Pixel size per cell: fit the map in about 600 px.
+    let colour = |v: Option<f64>| match v {
+        Some(v) => {
+            let t = (v - lo) / span;
+            let (r, g, b) = ramp(if h.larger_is_better { t } else { 1.0 - t });
+            [r, g, b]
+        }
+        None => UNREACHABLE,
+    };
+    // Pixel size per cell: fit the map in about 600 px; whole pixels per cell in the PNG.
     let px = (600.0 / h.nx.max(h.ny) as f64).clamp(1.0, 60.0);
+    let f = (px.floor() as usize).clamp(1, 16);
     let (w, hgt) = (h.nx as f64 * px, h.ny as f64 * px);
-    let (ml, mt, mr, mb) = (60.0, 40.0, 110.0, 50.0);
-    let (tw, th) = (ml + w + mr, mt + hgt + mb);
+    let title_w = ML + 7.0 * h.title.chars().count() as f64;
+    let (tw, th) = ((ML + w + MR).max(title_w), MT + hgt + MB);
+    let png = moma::planning::render::grid_png(h.nx * f, h.ny * f, true, |x, y| {
+        colour(h.cells[(y / f) * h.nx + x / f])
+    });
     let mut s = String::new();
     let _ = writeln!(
         s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{tw:.0}" height="{th:.0}" viewBox="0 0 {tw:.0} {th:.0}" font-family="sans-serif" font-size="12">"#
+        r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" width="{tw:.0}" height="{th:.0}" viewBox="0 0 {tw:.0} {th:.0}" font-family="sans-serif" font-size="12">"#
     );
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(
         s,
-        r#"<text x="{ml}" y="24" font-size="14">{}</text>"#,
+        r#"<text x="{ML}" y="24" font-size="13">{}</text>"#,
         esc(h.title)
     );
-    // World (x, y) → pixel; cell (ix, iy) centred at x0 + ix·step.
-    let to_px = |x: f64, y: f64| {
-        (
-            ml + ((x - h.x0) / h.step + 0.5) * px,
-            mt + hgt - ((y - h.y0) / h.step + 0.5) * px,
-        )
-    };
-    let _ = writeln!(s, r#"<g shape-rendering="crispEdges">"#);
-    for iy in 0..h.ny {
-        for ix in 0..h.nx {
-            let fill = match h.cells[iy * h.nx + ix] {
-                Some(v) => {
-                    let mut t = (v - lo) / span;
-                    if !h.larger_is_better {
-                        t = 1.0 - t;
-                    }
-                    let (r, g, b) = ramp(t);
-                    format!("#{r:02x}{g:02x}{b:02x}")
-                }
-                None => "#d0d0d0".to_string(),
-            };
-            let x = ml + ix as f64 * px;
-            let y = mt + hgt - (iy + 1) as f64 * px;
+    match png {
+        Ok(png) => {
             let _ = writeln!(
                 s,
-                r#"<rect x="{x:.2}" y="{y:.2}" width="{px:.2}" height="{px:.2}" fill="{fill}"/>"#
+                r#"<image x="{ML}" y="{MT}" width="{w:.2}" height="{hgt:.2}" style="image-rendering:pixelated" preserveAspectRatio="none" xlink:href="data:image/png;base64,{}"/>"#,
+                b64(&png)
             );
         }
+        Err(_) => {
+            // cannot happen for a grid of the sizes PlacementGrid allows; draw nothing
+        }
     }
-    let _ = writeln!(s, "</g>");
     let _ = writeln!(
         s,
-        r#"<rect x="{ml}" y="{mt}" width="{w:.2}" height="{hgt:.2}" fill="none" stroke="black"/>"#
+        r##"<rect x="{ML}" y="{MT}" width="{w:.2}" height="{hgt:.2}" fill="none" stroke="#333"/>"##
     );
-    // Axes labels (corner coordinates).
-    let x_last = h.x0 + (h.nx - 1) as f64 * h.step;
-    let y_last = h.y0 + (h.ny - 1) as f64 * h.step;
-    let _ = writeln!(
-        s,
-        r#"<text x="{ml}" y="{:.0}">x = {:.3} m</text><text x="{:.0}" y="{:.0}" text-anchor="end">x = {:.3} m</text>"#,
-        mt + hgt + 18.0,
-        h.x0,
-        ml + w,
-        mt + hgt + 18.0,
-        x_last
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{:.0}" y="{:.0}" text-anchor="end">y = {:.3}</text><text x="{:.0}" y="{:.0}" text-anchor="end">y = {:.3}</text>"#,
-        ml - 4.0,
-        mt + hgt,
-        h.y0,
-        ml - 4.0,
-        mt + 10.0,
-        y_last
-    );
-    if let Some((tx, ty)) = h.target {
-        let (x, y) = to_px(tx, ty);
+    axes(&mut s, h, px, w, hgt);
+    markers(&mut s, h, px, hgt);
+    colour_bar(&mut s, h, (lo, hi, have), ML + w + 24.0, hgt);
+    s.push_str("</svg>\n");
+    s
+}
+
+/// World (x, y) → picture; cell (ix, iy) is centred at (x0 + ix·step, y0 + iy·step).
+fn to_px(h: &HeatMap<'_>, px: f64, hgt: f64, x: f64, y: f64) -> (f64, f64) {
+    (
+        ML + ((x - h.x0) / h.step + 0.5) * px,
+        MT + hgt - ((y - h.y0) / h.step + 0.5) * px,
+    )
+}
+
+fn axes(s: &mut String, h: &HeatMap<'_>, px: f64, w: f64, hgt: f64) {
+    let half = 0.5 * h.step;
+    let (xa, xb) = (h.x0 - half, h.x0 + (h.nx as f64 - 0.5) * h.step);
+    let (ya, yb) = (h.y0 - half, h.y0 + (h.ny as f64 - 0.5) * h.step);
+    for t in crate::svg_plots::ticks(xa, xb) {
+        let (x, _) = to_px(h, px, hgt, t, h.y0);
         let _ = writeln!(
             s,
-            r#"<g stroke="red" stroke-width="2"><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/></g><text x="{:.1}" y="{:.1}" fill="red">target</text>"#,
+            r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#333"/><text x="{x:.1}" y="{:.1}" text-anchor="middle">{}</text>"##,
+            MT + hgt,
+            MT + hgt + 5.0,
+            MT + hgt + 18.0,
+            crate::svg_plots::fmt_tick(t)
+        );
+    }
+    for t in crate::svg_plots::ticks(ya, yb) {
+        let (_, y) = to_px(h, px, hgt, h.x0, t);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{:.1}" y1="{y:.1}" x2="{ML}" y2="{y:.1}" stroke="#333"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
+            ML - 5.0,
+            ML - 8.0,
+            y + 4.0,
+            crate::svg_plots::fmt_tick(t)
+        );
+    }
+    let _ = writeln!(
+        s,
+        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">base x [m]</text><text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">base y [m]</text>"#,
+        ML + w / 2.0,
+        MT + hgt + 40.0,
+        MT + hgt / 2.0,
+        MT + hgt / 2.0
+    );
+}
+
+fn markers(s: &mut String, h: &HeatMap<'_>, px: f64, hgt: f64) {
+    if let Some((tx, ty)) = h.target {
+        let (x, y) = to_px(h, px, hgt, tx, ty);
+        let _ = writeln!(
+            s,
+            r#"<g stroke="red" stroke-width="2"><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/></g><text x="{:.1}" y="{:.1}" fill="red" stroke="white" stroke-width="3" paint-order="stroke">target</text>"#,
             x - 7.0,
             y - 7.0,
             x + 7.0,
@@ -154,56 +209,127 @@ pub fn render(h: &HeatMap<'_>) -> String {
         );
     }
     if let Some((bx, by, bth)) = h.best {
-        let (x, y) = to_px(bx, by);
+        let (x, y) = to_px(h, px, hgt, bx, by);
         let len = (px * 1.5).max(14.0);
         let (x2, y2) = (x + len * bth.cos(), y - len * bth.sin());
         let _ = writeln!(
             s,
-            r#"<circle cx="{x:.1}" cy="{y:.1}" r="5" fill="white" stroke="black" stroke-width="2"/><line x1="{x:.1}" y1="{y:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="black" stroke-width="2"/><text x="{:.1}" y="{:.1}">best</text>"#,
+            r#"<circle cx="{x:.1}" cy="{y:.1}" r="5" fill="white" stroke="black" stroke-width="2"/><line x1="{x:.1}" y1="{y:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="black" stroke-width="2"/><text x="{:.1}" y="{:.1}" stroke="white" stroke-width="3" paint-order="stroke">best</text>"#,
             x + 8.0,
-            y + 14.0
+            y + 16.0
         );
     }
-    // Colour bar.
-    let (cx, cy, cw, ch) = (ml + w + 25.0, mt, 18.0, hgt.min(300.0));
-    for k in 0..50 {
-        let t = 1.0 - k as f64 / 49.0;
+}
+
+/// The colour bar (a gradient: no seams), its value ticks, the measure's name and the
+/// unreachable swatch.
+fn colour_bar(
+    s: &mut String,
+    h: &HeatMap<'_>,
+    (lo, hi, have): (f64, f64, bool),
+    cx: f64,
+    hgt: f64,
+) {
+    let (cy, cw, ch) = (MT, 18.0, hgt.min(300.0));
+    let _ = writeln!(
+        s,
+        r#"<defs><linearGradient id="ramp" x1="0" y1="1" x2="0" y2="0">"#
+    );
+    for k in 0..=8 {
+        let t = k as f64 / 8.0;
         let (r, g, b) = ramp(if h.larger_is_better { t } else { 1.0 - t });
         let _ = writeln!(
             s,
-            r##"<rect x="{cx:.1}" y="{:.2}" width="{cw}" height="{:.2}" fill="#{r:02x}{g:02x}{b:02x}"/>"##,
-            cy + k as f64 * ch / 50.0,
-            ch / 50.0 + 0.5
+            r##"<stop offset="{t:.3}" stop-color="#{r:02x}{g:02x}{b:02x}"/>"##
         );
     }
-    let (top, bottom) = if have { (hi, lo) } else { (f64::NAN, f64::NAN) };
-    let fmt = |v: f64| {
-        if v.is_finite() {
-            format!("{v:.4}")
+    let _ = writeln!(s, "</linearGradient></defs>");
+    let _ = writeln!(
+        s,
+        r##"<rect x="{cx:.1}" y="{cy:.1}" width="{cw}" height="{ch:.1}" fill="url(#ramp)" stroke="#333"/>"##
+    );
+    if have {
+        let ticks: Vec<f64> = if hi > lo {
+            crate::svg_plots::ticks(lo, hi)
         } else {
-            "n/a".to_string()
+            vec![lo]
+        };
+        for t in ticks {
+            let y = if hi > lo {
+                cy + ch * (1.0 - (t - lo) / (hi - lo))
+            } else {
+                cy + ch / 2.0
+            };
+            let _ = writeln!(
+                s,
+                r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#333"/><text x="{:.1}" y="{:.1}">{}</text>"##,
+                cx + cw,
+                cx + cw + 4.0,
+                cx + cw + 7.0,
+                y + 4.0,
+                crate::svg_plots::fmt_tick(t)
+            );
         }
-    };
+    } else {
+        let _ = writeln!(
+            s,
+            r#"<text x="{:.1}" y="{:.1}">no reachable pose</text>"#,
+            cx + cw + 6.0,
+            cy + ch / 2.0
+        );
+    }
+    let [r, g, b] = UNREACHABLE;
     let _ = writeln!(
         s,
-        r#"<text x="{:.1}" y="{:.1}">{}</text><text x="{:.1}" y="{:.1}">{}</text><text x="{:.1}" y="{:.1}">{}</text>"#,
-        cx + cw + 4.0,
-        cy + 10.0,
-        fmt(top),
-        cx + cw + 4.0,
-        cy + ch,
-        fmt(bottom),
-        cx,
-        cy + ch + 18.0,
-        esc(h.value_label)
+        r##"<text x="{cx:.1}" y="{:.1}">{}{}</text><rect x="{cx:.1}" y="{:.1}" width="{cw}" height="12" fill="#{r:02x}{g:02x}{b:02x}" stroke="#333"/><text x="{:.1}" y="{:.1}">unreachable</text>"##,
+        cy + ch + 20.0,
+        esc(h.value_label),
+        if h.larger_is_better {
+            ""
+        } else {
+            " (lower is better)"
+        },
+        cy + ch + 30.0,
+        cx + cw + 6.0,
+        cy + ch + 40.0
     );
-    let _ = writeln!(
-        s,
-        r##"<rect x="{cx:.1}" y="{:.1}" width="{cw}" height="12" fill="#d0d0d0"/><text x="{:.1}" y="{:.1}">unreachable</text>"##,
-        cy + ch + 26.0,
-        cx + cw + 4.0,
-        cy + ch + 36.0
-    );
-    s.push_str("</svg>\n");
-    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axes_colour_bar_and_labels_fit_the_picture() {
+        let cells = [Some(0.1), None, Some(0.3), Some(0.2)];
+        let h = HeatMap {
+            title: "t",
+            value_label: "yoshikawa",
+            cells: &cells,
+            nx: 2,
+            ny: 2,
+            x0: 0.0,
+            y0: -0.5,
+            step: 0.5,
+            target: Some((0.25, 0.0)),
+            best: Some((0.0, 0.0, 0.5)),
+            larger_is_better: true,
+        };
+        let svg = render(&h);
+        assert!(svg.contains("base x [m]") && svg.contains("base y [m]"));
+        assert!(svg.contains("unreachable") && svg.contains("url(#ramp)"));
+        // one picture for the cells, not one rectangle per cell
+        assert_eq!(svg.matches("<image").count(), 1);
+        // every text starts inside the picture's width
+        let width: f64 = svg
+            .split("width=\"")
+            .nth(1)
+            .and_then(|r| r.split('"').next())
+            .and_then(|w| w.parse().ok())
+            .unwrap();
+        for part in svg.split("<text x=\"").skip(1) {
+            let x: f64 = part.split('"').next().unwrap().parse().unwrap();
+            assert!(x >= 0.0 && x < width - 60.0, "text at {x} in {width}");
+        }
+    }
 }

@@ -30,7 +30,7 @@ fn escape(s: &str) -> String {
 }
 
 /// "Nice" tick positions covering `[lo, hi]`.
-fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+pub(crate) fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     let span = (hi - lo).max(1e-300);
     let raw = span / 6.0;
     let mag = 10f64.powf(raw.log10().floor());
@@ -48,7 +48,7 @@ fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     out
 }
 
-fn fmt_tick(x: f64) -> String {
+pub(crate) fn fmt_tick(x: f64) -> String {
     if x == 0.0 {
         "0".into()
     } else if x.abs() >= 1e4 || x.abs() < 1e-3 {
@@ -121,11 +121,25 @@ fn axes(svg: &mut String, f: &Frame, title: &str, xlabel: &str, ylabel: &str) {
             fmt_tick(t)
         );
     }
+    // A title with a newline takes two smaller lines above the plot.
+    let lines: Vec<&str> = title.lines().collect();
+    let (size, y0) = if lines.len() > 1 {
+        (13, 16.0)
+    } else {
+        (15, 24.0)
+    };
+    for (i, line) in lines.iter().enumerate() {
+        let _ = write!(
+            svg,
+            r#"<text x="{}" y="{}" font-size="{size}" text-anchor="middle">{}</text>"#,
+            W / 2.0,
+            y0 + 16.0 * i as f64,
+            escape(line)
+        );
+    }
     let _ = write!(
         svg,
-        r#"<text x="{}" y="24" font-size="15" text-anchor="middle">{}</text><text x="{}" y="{}" font-size="12" text-anchor="middle">{}</text><text x="18" y="{}" font-size="12" text-anchor="middle" transform="rotate(-90 18 {})">{}</text>"#,
-        ML + f.pw / 2.0,
-        escape(title),
+        r#"<text x="{}" y="{}" font-size="12" text-anchor="middle">{}</text><text x="18" y="{}" font-size="12" text-anchor="middle" transform="rotate(-90 18 {})">{}</text>"#,
         ML + f.pw / 2.0,
         H - 12.0,
         escape(xlabel),
@@ -219,7 +233,7 @@ pub fn path_chart(title: &str, x: &[f64], y: &[f64]) -> String {
     let mut svg = format!(
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif">"#
     );
-    axes(&mut svg, &f, title, "x (m)", "y (m)");
+    axes(&mut svg, &f, title, "x [m]", "y [m]");
     polyline(&mut svg, &f, x, y, COLORS[0]);
     if let (Some(&xs), Some(&ys), Some(&xe), Some(&ye)) = (x.first(), y.first(), x.last(), y.last())
     {
@@ -258,7 +272,7 @@ mod tests {
         let t = [0.0, 0.5, 1.0];
         let svg = line_chart(
             "energy",
-            "t (s)",
+            "t [s]",
             "J",
             &[Series {
                 name: "a<b",

@@ -252,3 +252,54 @@ fn eval_rejects_a_bad_tolerance_and_a_missing_file() {
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("cannot read case file"));
 }
+
+#[test]
+fn eval_unicycle_control_public_cases() {
+    let input = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../moma/tests/data/control/unicycle_control.json");
+    let want: Value = serde_json::from_str(&std::fs::read_to_string(&input).unwrap()).unwrap();
+    let dir = tmpdir("unicycle");
+    // strip the expected values so nothing can be echoed back
+    let mut stripped = want.clone();
+    for c in stripped["cases"].as_array_mut().unwrap() {
+        c["trajectory"]
+            .as_object_mut()
+            .unwrap()
+            .retain(|k, _| k == "t");
+    }
+    let input = dir.join("in.json");
+    std::fs::write(&input, stripped.to_string()).unwrap();
+    let out = dir.join("out.json");
+    let o = moma(&["eval", input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    for (g, w) in got["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(want["cases"].as_array().unwrap())
+    {
+        compare(
+            "trajectory",
+            &g["trajectory"],
+            &w["trajectory"],
+            1e-7,
+            false,
+        );
+    }
+    // an invalid Astolfi gain is an error naming the condition, and no output is written
+    let mut bad = want.clone();
+    bad["cases"][2]["gains"]["k_alpha"] = serde_json::json!(1.0);
+    let bad_path = dir.join("bad.json");
+    std::fs::write(&bad_path, bad.to_string()).unwrap();
+    let out2 = dir.join("out2.json");
+    let o = moma(&[
+        "eval",
+        bad_path.to_str().unwrap(),
+        "-o",
+        out2.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("k_alpha > k_rho"));
+    assert!(!out2.exists());
+}

@@ -173,7 +173,7 @@ fn plan_algorithms_agree_and_potential_trap_is_reported() {
     let a = cost("astar");
     assert!((a - cost("dstar-lite")).abs() < 1e-9);
     assert!(cost("potential-geodesic") >= a - 1e-9);
-    // The literal field is stuck in the shipped trap map: exit code 2, report, status.
+    // The literal field is stuck in the shipped trap map: exit status 3, report, status.
     let out = tmp("trap.json");
     let o = moma(&[
         "plan",
@@ -287,7 +287,7 @@ fn scen_csv_and_summary() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("index,start,goal,cost,optimal,expanded,micros")
+        Some("index,start [cell],goal [cell],cost [cell],optimal [cell],expanded,time [us]")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 40);

@@ -56,12 +56,28 @@ fn default_scenario_runs_without_an_argument() {
     assert!(s["relative_energy_error"].as_f64().unwrap() < 1e-6);
     assert_eq!(s["samples"].as_u64().unwrap(), 501);
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
-    assert!(csv.starts_with("t,x,y,theta,left_wheel_joint"));
+    assert!(
+        csv.starts_with("t [s],x [m],y [m],theta [rad],left_wheel_joint [rad]"),
+        "{}",
+        csv.lines().next().unwrap()
+    );
     assert!(
         csv.lines()
             .next()
             .unwrap()
-            .ends_with("residual,lambda_0,lambda_1,lambda_2")
+            .contains(",v [m/s],omega [rad/s],")
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains(",tau_left [N m],tau_right [N m],")
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with("residual [m/s],lambda_0 [N],lambda_1 [N],lambda_2 [N]")
     );
     assert_eq!(csv.lines().count(), 502);
     // The platform moved along a curve.
@@ -252,5 +268,42 @@ dt = 0.01
             "{M1}\n[limits]\nblowup = 1.0\nmax_residual = 1.0\n[initial]\nq = [0.0, 0.0, 0.0]\nv = [5.0, 0.0]\n"
         ),
         &["numerical failure"],
+    );
+}
+
+#[test]
+fn chapter_models_take_the_names_of_moma_eval() {
+    // The canonical name of the one model registry runs exactly as the short alias.
+    let mut finals = Vec::new();
+    for name in ["m1", "m1_unicycle"] {
+        let dir = temp_dir(&format!("name-{name}"));
+        let file = dir.join("s.toml");
+        std::fs::write(&file, M1.replace("\"m1\"", &format!("\"{name}\""))).unwrap();
+        let out = dir.join("out");
+        let run = moma()
+            .args(["simulate", "--quiet"])
+            .arg(&file)
+            .arg("--output")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        finals.push(summary(&out)["final_q"].clone());
+    }
+    assert!(finals[0].is_array());
+    assert_eq!(finals[0], finals[1]);
+    // A model `moma eval` knows but the simulator cannot run is refused by name.
+    fails_with(
+        "kinematic-model",
+        &M1.replace("\"m1\"", "\"m3\""),
+        &[
+            "bad.toml",
+            "m3_diffdrive_kinematics",
+            "simulable models: m1_unicycle (m1)",
+        ],
     );
 }

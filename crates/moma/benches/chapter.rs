@@ -3,10 +3,10 @@
 //! Run: `cargo bench -p moma --bench chapter --locked`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use moma::closed_form::ReducedOde;
+use moma::closed_form::ConstantInputOde;
 use moma::closed_form::lagrange;
 use moma::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
-use moma::sim::{AdaptiveOptions, Dop853, DormandPrince45, OdeSystem, Rk4};
+use moma::ode::{AdaptiveOptions, Dop853, DormandPrince45, OdeSystem, Rk4};
 use nalgebra::SVector;
 use std::hint::black_box;
 
@@ -62,8 +62,7 @@ fn bench(c: &mut Criterion) {
     let (m, q, v, u) = model();
     c.bench_function("m5_reduced_forward_dynamics", |b| {
         b.iter(|| {
-            lagrange::reduced_forward_dynamics(&m, black_box(&q), black_box(&v), black_box(&u))
-                .unwrap()
+            lagrange::state_derivative(&m, black_box(&q), black_box(&v), black_box(&u)).unwrap()
         })
     });
     c.bench_function("m5_evaluate_all_outputs", |b| {
@@ -74,7 +73,7 @@ fn bench(c: &mut Criterion) {
     });
     let x0: Vec<f64> = q.iter().chain(v.iter()).copied().collect();
     c.bench_function("m5_rk4_step_h1ms", |b| {
-        let mut ode = ReducedOde {
+        let mut ode = ConstantInputOde {
             system: &m,
             input: u,
         };
@@ -86,7 +85,7 @@ fn bench(c: &mut Criterion) {
         })
     });
     for tol in [1e-9, 1e-12] {
-        let mut ode = ReducedOde {
+        let mut ode = ConstantInputOde {
             system: &m,
             input: u,
         };
@@ -101,7 +100,7 @@ fn bench(c: &mut Criterion) {
         });
     }
     for tol in [1e-9, 1e-12] {
-        let mut ode = ReducedOde {
+        let mut ode = ConstantInputOde {
             system: &m,
             input: u,
         };

@@ -10,12 +10,10 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use moma::ik::model::ModelFrame;
+use moma::ik::placement::{ArmReachEvaluator, MeasureScope, PlacementGrid, placement_map};
 use moma::ik::tasks::{FrameKinematics, PoseTask, TaskRows};
 use moma::ik::{IkOptions, IkWorkspace, solve_with_restarts};
 use moma::io::urdf::model_from_urdf_file;
-use moma::manipulability::placement::{
-    ArmReachEvaluator, MeasureScope, PlacementGrid, placement_map,
-};
 use moma::manipulability::{Measure, report};
 use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::{BaseInputs, compose_jacobian};

@@ -13,10 +13,10 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use moma::closed_form::m5_mobile_manipulator::MobileManipulatorParams;
+use moma::closed_form::multibody_models::m5_model;
 use moma::dynamics::aba;
 use moma::io::urdf::model_from_urdf_file;
 use moma::mobile::DiffDrive;
-use moma::mobile::chapter_robots::m5_model;
 use moma::mobile::reduced_forward_dynamics;
 use moma::mobile::wheeled::{WheeledBase, WheeledData, WheeledModel, lagrange_multipliers};
 use moma::multibody::{Data, RootJoint};

@@ -1,8 +1,11 @@
 //! # moma — mobile manipulation in Rust
 //!
-//! Kinematics, dynamics, control and motion planning of wheeled mobile robot
-//! manipulators (a non-holonomic differential-drive platform carrying a serial arm)
-//! and of free-floating space manipulators.
+//! Kinematics, dynamics, simulation and motion planning of wheeled mobile robot
+//! manipulators (a non-holonomic differential-drive platform carrying a serial arm),
+//! after the chapter "Kinematics, Dynamics, and Control of Mobile Robot Manipulators":
+//! rigid-body algorithms on fixed, planar and free-flyer roots, wheel constraints and
+//! reduced dynamics, the chapter's closed-form models, whole-body kinematics,
+//! manipulability, inverse kinematics and grid motion planning.
 //!
 //! ## Conventions
 //!
@@ -32,16 +35,21 @@
 //! | J·N_C | whole-body Jacobian | `mobile::whole_body_jacobian` |
 
 pub mod closed_form;
+pub mod control;
 pub mod dynamics;
 pub mod error;
 pub mod ik;
 pub mod io;
 pub mod kinematics;
+pub(crate) mod linalg;
 pub mod manipulability;
 pub mod mobile;
 pub mod multibody;
+pub mod ode;
 pub mod planning;
 pub mod sim;
+pub mod space;
 pub mod spatial;
+pub mod stability;
 
 pub use error::{Error, Result};

@@ -3,12 +3,12 @@
 //! trajectories, task-space identities, the balanced cart, d = 0 and singular cases.
 
 use moma::Error;
+use moma::closed_form::ConstantInputOde;
 use moma::closed_form::PlatformVelocity;
-use moma::closed_form::ReducedOde;
 use moma::closed_form::lagrange::{self, LagrangianSystem, PfaffianSystem};
 use moma::closed_form::m1_unicycle::{Unicycle, UnicycleParams};
 use moma::closed_form::m2_platform_arm::{PlatformArm, PlatformArmParams};
-use moma::closed_form::m3_diffdrive::{DiffDrive, DiffDriveParams};
+use moma::closed_form::m3_diffdrive::{DiffDriveKinematics, DiffDriveKinematicsParams};
 use moma::closed_form::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
 use moma::closed_form::m5_mobile_manipulator::{
     MobileManipulator, MobileManipulatorParams, joint_to_absolute,
@@ -151,8 +151,8 @@ fn m5_task_space_identity_reduced_skew_and_joint_coordinates() {
 #[test]
 fn m3_det_formula_and_consistency_with_m5() {
     for c in cases("m3_diffdrive_kinematics") {
-        let p: DiffDriveParams = serde_json::from_value(c["params"].clone()).unwrap();
-        let sys = DiffDrive::new(p.clone()).unwrap();
+        let p: DiffDriveKinematicsParams = serde_json::from_value(c["params"].clone()).unwrap();
+        let sys = DiffDriveKinematics::new(p.clone()).unwrap();
         let q = vec_of::<6>(&c["state"]["q"]);
         let v = vec_of::<5>(&c["inputs"]["v"]);
         let o = sys.evaluate(&q, &v).unwrap();
@@ -208,7 +208,7 @@ fn energy_conserved_with_zero_input_and_no_gravity_over_10s() {
         let m5 = m5_case(c, Some(0.0));
         let (q, v) = (vec_of::<6>(&c["state"]["q"]), vec_of::<5>(&c["state"]["v"]));
         let e0 = m5.energy(&q, &v);
-        let mut ode = ReducedOde {
+        let mut ode = ConstantInputOde {
             system: &m5,
             input: SVector::<f64, 5>::zeros(),
         };
@@ -399,7 +399,7 @@ fn dormand_prince_45_also_reproduces_the_m5_reference_trajectories() {
             vec_of::<5>(&c["state"]["v"]),
             vec_of::<5>(&c["inputs"]["u"]),
         );
-        let mut ode = ReducedOde {
+        let mut ode = ConstantInputOde {
             system: &m5,
             input: u,
         };

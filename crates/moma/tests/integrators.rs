@@ -3,7 +3,7 @@
 //! propagation from the right-hand side.
 
 use moma::Error;
-use moma::sim::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4};
+use moma::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4};
 
 /// Harmonic oscillator ẍ = −ω² x; x(t) = cos ωt, ẋ = −ω sin ωt.
 struct Oscillator {
@@ -197,7 +197,7 @@ fn invalid_options_and_times_are_rejected() {
 
 #[test]
 fn dop853_meets_tolerance_with_fewer_steps_than_dp45() {
-    use moma::sim::Dop853;
+    use moma::ode::Dop853;
     let times: Vec<f64> = (1..=10).map(|k| k as f64).collect();
     let omega = 3.0;
     for tol in [1e-6, 1e-9, 1e-12] {
@@ -241,7 +241,7 @@ fn dop853_meets_tolerance_with_fewer_steps_than_dp45() {
 /// Local error of one DOP853 step scales like h⁹ (8th-order method).
 #[test]
 fn dop853_is_eighth_order() {
-    use moma::sim::Dop853;
+    use moma::ode::Dop853;
     let err = |h: f64| {
         // a single forced step of size h: max_step = h, loose tolerance so it is accepted
         let opts = AdaptiveOptions {

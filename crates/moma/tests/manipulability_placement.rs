@@ -6,11 +6,9 @@ mod ik_common;
 
 use ik_common::PlanarChain;
 use moma::ik::IkOptions;
+use moma::ik::placement::{ArmReachEvaluator, MeasureScope, PlacementGrid, placement_map};
 use moma::ik::tasks::TaskRows;
 use moma::manipulability::Measure;
-use moma::manipulability::placement::{
-    ArmReachEvaluator, MeasureScope, PlacementGrid, placement_map,
-};
 use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::BaseInputs;
 use nalgebra::{DVector, Isometry3};

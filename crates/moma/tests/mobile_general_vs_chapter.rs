@@ -10,8 +10,8 @@
 use moma::closed_form::m1_unicycle::UnicycleParams;
 use moma::closed_form::m2_platform_arm::PlatformArmParams;
 use moma::closed_form::m5_mobile_manipulator::{MobileManipulatorParams, joint_to_absolute};
+use moma::closed_form::multibody_models::{m1_model, m2_model, m5_model};
 use moma::dynamics::coriolis_matrix;
-use moma::mobile::chapter_robots::{m1_model, m2_model, m5_model};
 use moma::mobile::reduced_forward_dynamics;
 use moma::mobile::wheeled::{WheeledData, WheeledModel, lagrange_multipliers, reduced_dynamics};
 use nalgebra::{DMatrix, DVector};

@@ -3,7 +3,7 @@
 //! machine (each test runs in milliseconds).
 
 use moma::Error;
-use moma::manipulability::placement::{MAX_SAMPLES, PlacementGrid};
+use moma::ik::placement::{MAX_SAMPLES, PlacementGrid};
 use moma::planning::costmap::{
     Footprint, FootprintCSpace, MAX_FOOTPRINT_CSPACE_CELLS, astar_footprint, footprint_cspace,
 };

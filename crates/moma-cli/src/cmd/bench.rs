@@ -5,7 +5,7 @@
 //! WARMUP batches are discarded, then the median per-call time over NBATCH batches is
 //! reported (env `NBATCH`, default 300; `WARMUP`, default 30).
 
-use super::inspect::{load_model, parse_root};
+use super::common::{load_model, parse_root};
 use anyhow::{Context, Result};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
@@ -56,6 +56,9 @@ struct Times {
     gravity: f64,
     fk_frames: f64,
     joint_jacobians: f64,
+    /// One operational-space update (Λ, J̄, N, F, τ) of the frame, 6 task rows; NaN when
+    /// nv < 6.
+    osc: f64,
 }
 
 #[derive(Serialize)]
@@ -177,6 +180,24 @@ pub fn run(args: Args) -> Result<()> {
         kinematics::compute_joint_jacobians(m, &mut data, &qs[i]);
         data.joint_jacobians[(0, nv - 1)]
     });
+    // One OSC update per state: the same computation as Pinocchio's side of the benchmark
+    // (crba, nonLinearEffects, classical acceleration, frame Jacobian, two Cholesky).
+    let osc = if nv >= 6 {
+        let mut od = moma::control::osc::OscData::new(nv, &[0, 1, 2, 3, 4, 5]);
+        let a6 = DVector::from_fn(6, |k, _| 0.1 * (k as f64 + 1.0));
+        time(
+            nbatch,
+            warmup,
+            |i| match moma::control::osc::osc_fixed_base(
+                m, &mut data, &mut od, fid, &qs[i], &vs[i], &a6, &ts[i],
+            ) {
+                Ok(()) => od.torque[0],
+                Err(_) => f64::NAN,
+            },
+        )
+    } else {
+        (f64::NAN, f64::NAN)
+    };
     let pick = |f: fn(&(f64, f64)) -> f64| Times {
         rnea: f(&rnea),
         crba: f(&crba),
@@ -187,6 +208,7 @@ pub fn run(args: Args) -> Result<()> {
         gravity: f(&gravity),
         fk_frames: f(&fk_frames),
         joint_jacobians: f(&joint_jacobians),
+        osc: f(&osc),
     };
     let report = Report {
         robot: args.label.clone().unwrap_or_else(|| model.name.clone()),
@@ -225,6 +247,7 @@ pub fn run(args: Args) -> Result<()> {
         ("fk_frames", med.fk_frames, min.fk_frames),
         ("frame_jacobian", med.frame_jacobian, min.frame_jacobian),
         ("joint_jacobians", med.joint_jacobians, min.joint_jacobians),
+        ("osc", med.osc, min.osc),
     ] {
         println!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
     }

@@ -3,14 +3,14 @@
 //! CoM, centroidal map and one frame's placement and Jacobian for each state. Schema:
 //! `docs/cli.md`.
 
-use super::inspect::{load_model, parse_root};
+use super::common::{State, load_model, parse_root, read_states};
 use anyhow::{Context, Result, bail};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
-use moma::multibody::{Data, RootJoint};
+use moma::multibody::{Data, FrameIndex, Model, RootJoint};
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
-use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use serde::Serialize;
+use std::path::PathBuf;
 
 /// Arguments of `moma dynamics`.
 #[derive(clap::Args)]
@@ -55,24 +55,6 @@ fn parse_gravity(s: &str) -> Result<Vector3<f64>, String> {
     Ok(Vector3::from(g))
 }
 
-/// One input state.
-#[derive(Deserialize)]
-pub(crate) struct StateIn {
-    q: Vec<f64>,
-    #[serde(default)]
-    v: Option<Vec<f64>>,
-    #[serde(default)]
-    a: Option<Vec<f64>>,
-    #[serde(default)]
-    tau: Option<Vec<f64>>,
-}
-
-/// The states file.
-#[derive(Deserialize)]
-pub(crate) struct StatesIn {
-    states: Vec<StateIn>,
-}
-
 #[derive(Serialize)]
 struct StateOut {
     rnea_tau: Vec<f64>,
@@ -112,18 +94,6 @@ fn rows6(m: &Matrix6xX<f64>) -> Vec<Vec<f64>> {
     m.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
-/// Reads and validates a states file against the model sizes.
-pub(crate) fn read_states(path: &Path) -> Result<StatesIn> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: invalid states file (expected {{\"states\": [{{\"q\": [..], \"v\": [..], \"a\": [..], \"tau\": [..]}}]}}): {e}",
-            path.display()
-        )
-    })
-}
-
 /// Runs `moma dynamics`.
 pub fn run(args: Args) -> Result<()> {
     let mut model = load_model(&args.urdf, args.root)?;
@@ -136,85 +106,16 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("{}: --frame", args.urdf.display()))?,
         None => model.last_link_frame(),
     };
-    let states = read_states(&args.states)?;
-    if states.states.is_empty() {
-        bail!("{}: 'states' is empty", args.states.display());
-    }
-    let nv = model.nv;
+    let states = read_states(&args.states, &["q", "v", "a", "tau"])?;
     let mut data = Data::new(&model);
-    let mut out_states = Vec::with_capacity(states.states.len());
-    for (k, s) in states.states.iter().enumerate() {
-        let src = format!("{}: states[{k}]", args.states.display());
-        kinematics::check_state(
-            &model,
-            &src,
-            Some(&s.q),
-            s.v.as_deref(),
-            s.a.as_deref(),
-            s.tau.as_deref(),
-        )?;
-        let q = DVector::from_column_slice(&s.q);
-        let get = |x: &Option<Vec<f64>>| {
-            x.as_ref()
-                .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x))
-        };
-        let (v, a, tau) = (get(&s.v), get(&s.a), get(&s.tau));
-        let rnea_tau = dynamics::rnea(&model, &mut data, &q, &v, &a)
-            .as_slice()
-            .to_vec();
-        let crba_m = rows(dynamics::crba(&model, &mut data, &q));
-        let aba_ddq = dynamics::aba(&model, &mut data, &q, &v, &tau)
-            .as_slice()
-            .to_vec();
-        if let Some(i) = aba_ddq.iter().position(|x| !x.is_finite()) {
-            bail!(
-                "{src}: forward dynamics gave a non-finite acceleration at v[{i}] (singular mass matrix: massless subtree?)"
-            );
-        }
-        let nle = dynamics::nonlinear_effects(&model, &mut data, &q, &v)
-            .as_slice()
-            .to_vec();
-        let gravity_torque = dynamics::gravity_torque(&model, &mut data, &q)
-            .as_slice()
-            .to_vec();
-        let ag = rows6(dynamics::centroidal_momentum_matrix(&model, &mut data, &q));
-        let com = data.com;
-        let kinetic_energy = dynamics::kinetic_energy(&model, &mut data, &q, &v);
-        let potential_energy = dynamics::potential_energy(&model, &mut data, &q);
-        let mut jac = Matrix6xX::zeros(nv);
-        kinematics::frame_jacobian(
-            &model,
-            &mut data,
-            &q,
-            fid,
-            ReferenceFrame::LocalWorldAligned,
-            &mut jac,
-        );
-        let m = data.world_from_frame[fid.0];
-        let r = m.rotation;
-        let quat = m.quaternion();
-        let c = quat.as_ref().coords;
-        let st = StateOut {
-            rnea_tau,
-            crba_m,
-            aba_ddq,
-            nle,
-            gravity_torque,
-            com: [com.x, com.y, com.z],
-            centroidal_map_ag: ag,
-            kinetic_energy,
-            potential_energy,
-            position: [m.translation.x, m.translation.y, m.translation.z],
-            rotation: [
-                [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
-                [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
-                [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
-            ],
-            quaternion_xyzw: [c[0], c[1], c[2], c[3]],
-            jacobian_local_world_aligned: rows6(&jac),
-        };
-        out_states.push(st);
-    }
+    let out_states = states
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let src = format!("{}: states[{k}]", args.states.display());
+            evaluate_state(&model, &mut data, fid, s, &src)
+        })
+        .collect::<Result<Vec<_>>>()?;
     let out = Output {
         robot: model.name.clone(),
         source: args.urdf.display().to_string(),
@@ -229,4 +130,78 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => crate::output::write_json(p, &out),
         None => crate::output::print_json(&out),
     }
+}
+
+/// Every output of one state; `src` names the state in errors.
+fn evaluate_state(
+    model: &Model,
+    data: &mut Data,
+    fid: FrameIndex,
+    s: &State,
+    src: &str,
+) -> Result<StateOut> {
+    let nv = model.nv;
+    kinematics::check_state(
+        model,
+        src,
+        Some(&s.q),
+        s.v.as_deref(),
+        s.a.as_deref(),
+        s.tau.as_deref(),
+    )?;
+    let q = DVector::from_column_slice(&s.q);
+    let get = |x: &Option<Vec<f64>>| {
+        x.as_ref()
+            .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x))
+    };
+    let (v, a, tau) = (get(&s.v), get(&s.a), get(&s.tau));
+    let rnea_tau = dynamics::rnea(model, data, &q, &v, &a).as_slice().to_vec();
+    let crba_m = rows(dynamics::crba(model, data, &q));
+    let aba_ddq = dynamics::aba(model, data, &q, &v, &tau).as_slice().to_vec();
+    if let Some(i) = aba_ddq.iter().position(|x| !x.is_finite()) {
+        bail!(
+            "{src}: forward dynamics gave a non-finite acceleration at v[{i}] (singular mass matrix: massless subtree?)"
+        );
+    }
+    let nle = dynamics::nonlinear_effects(model, data, &q, &v)
+        .as_slice()
+        .to_vec();
+    let gravity_torque = dynamics::gravity_torque(model, data, &q)
+        .as_slice()
+        .to_vec();
+    let ag = rows6(dynamics::centroidal_momentum_matrix(model, data, &q));
+    let com = data.com;
+    let kinetic_energy = dynamics::kinetic_energy(model, data, &q, &v);
+    let potential_energy = dynamics::potential_energy(model, data, &q);
+    let mut jac = Matrix6xX::zeros(nv);
+    kinematics::frame_jacobian(
+        model,
+        data,
+        &q,
+        fid,
+        ReferenceFrame::LocalWorldAligned,
+        &mut jac,
+    );
+    let m = data.world_from_frame[fid.0];
+    let r = m.rotation;
+    let c = m.quaternion().as_ref().coords;
+    Ok(StateOut {
+        rnea_tau,
+        crba_m,
+        aba_ddq,
+        nle,
+        gravity_torque,
+        com: [com.x, com.y, com.z],
+        centroidal_map_ag: ag,
+        kinetic_energy,
+        potential_energy,
+        position: [m.translation.x, m.translation.y, m.translation.z],
+        rotation: [
+            [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+            [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+            [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+        ],
+        quaternion_xyzw: [c[0], c[1], c[2], c[3]],
+        jacobian_local_world_aligned: rows6(&jac),
+    })
 }

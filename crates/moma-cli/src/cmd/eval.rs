@@ -1,6 +1,8 @@
 //! `moma eval CASES.json [--output OUT.json]`: evaluates the chapter's closed-form models
-//! (m1–m5) on a case file in the schema of the reference vectors and writes the same
-//! document with every case's `outputs` and `trajectory` filled in.
+//! (m1–m6) on a case file in the schema of the reference vectors and writes the same
+//! document with every case's `outputs` and `trajectory` filled in. The
+//! `unicycle_control` schema runs the non-holonomic feedback laws in closed loop and fills
+//! `trajectory.state`, `v`, `w` and `V`.
 
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow};
@@ -12,7 +14,9 @@ use std::path::PathBuf;
 pub struct Args {
     /// Case file (JSON): `model` (m1_unicycle, m2_platform_planar_arm,
     /// m3_diffdrive_kinematics, m4_cart_two_link, m5_mobile_manipulator_3d) and `cases`
-    /// with `params`, `state`, `inputs` and optionally `trajectory.t`.
+    /// with `params`, `state`, `inputs` and optionally `trajectory.t`; or `model`
+    /// unicycle_control with cases `law`, `gains`, `reference`, `initial_state`,
+    /// `trajectory.t`.
     pub cases: PathBuf,
     /// Output file (JSON); standard output if omitted. Written only if every case succeeds.
     #[arg(long, short)]
@@ -36,6 +40,20 @@ pub fn run(args: Args) -> Result<()> {
     let doc: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| anyhow!("{}: malformed JSON: {e}", path.display()))?;
     let out = evaluate_document(&doc, args.tol).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    if let Some(cases) = out.get("cases").and_then(|c| c.as_array()) {
+        for c in cases {
+            if let Some(ws) = c.get("warnings").and_then(|w| w.as_array()) {
+                let id = c.get("id").map_or_else(String::new, ToString::to_string);
+                for w in ws {
+                    eprintln!(
+                        "warning: {}: case {id}: {}",
+                        path.display(),
+                        w.as_str().unwrap_or_default()
+                    );
+                }
+            }
+        }
+    }
     match &args.output {
         Some(o) => write_json(o, &out),
         None => print_json(&out),

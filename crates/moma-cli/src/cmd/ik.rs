@@ -1,8 +1,9 @@
 //! `moma ik`: inverse kinematics of an arm frame, or whole-body resolved-rate motion of
 //! a manipulator on a differential-drive base.
 
-use super::manipulability::{
-    check_ik_budget, frame_name, frame_of, load_model, parse_base, parse_list, parse_task_rows,
+use super::common::{
+    check_ik_budget, frame_name, frame_of, goal_not_reached, load_model, parse_base, parse_list,
+    parse_task_rows,
 };
 use crate::output::{print_json, write_json};
 use anyhow::{Result, anyhow, bail};
@@ -12,12 +13,14 @@ use moma::ik::{
     IkOptions, IkResult, IkWorkspace, KinematicTask, NullSpaceObjective, solve_with_restarts,
 };
 use moma::manipulability::Measure;
+use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::BaseInputs;
-use moma::multibody::RootJoint;
+use moma::multibody::{Model, RootJoint};
 use nalgebra::{DVector, Isometry3};
 use rand::SeedableRng;
 use serde::Serialize;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Arguments of `moma ik`.
 #[derive(clap::Args)]
@@ -108,38 +111,27 @@ fn pose_vec(p: &Isometry3<f64>) -> Vec<f64> {
     vec![t.x, t.y, t.z, q.x, q.y, q.z, q.w]
 }
 
-/// Runs `moma ik`. Exits with status 3 (after printing the result) when not converged.
-pub fn run(args: Args) -> Result<()> {
-    let tvals = parse_list("--target", &args.target)?;
-    let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
-    let rows = parse_task_rows(args.rows.as_deref(), &tvals)?;
-    check_ik_budget(args.tol, args.max_iters)?;
-    if !(args.base_weight.is_finite() && args.base_weight > 0.0) {
-        bail!("--base-weight: must be > 0, got {}", args.base_weight);
-    }
-    let drive = match (&args.base, args.whole_body) {
-        (Some(b), true) => Some(parse_base(b)?),
+/// The platform for `--whole-body`, if any.
+fn parse_drive(args: &Args) -> Result<Option<DiffDrive>> {
+    match (&args.base, args.whole_body) {
+        (Some(b), true) => Ok(Some(parse_base(b)?)),
         (None, true) => bail!("--whole-body needs --base diff-drive:r_w=R,b=B,d=D"),
         (Some(_), false) => bail!("--base is only used with --whole-body"),
-        (None, false) => None,
-    };
-    let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;
-    let root = if drive.is_some() {
-        RootJoint::Planar
-    } else {
-        RootJoint::Fixed
-    };
-    let model = load_model(&args.robot, root)?;
-    let kin = frame_of(&model, args.frame.as_deref(), &args.robot)?;
-    let name = frame_name(&kin);
+        (None, false) => Ok(None),
+    }
+}
+
+/// The initial configuration: `--q0`, a seeded random one (base at the origin), or the
+/// neutral one.
+fn initial_q(args: &Args, model: &Model, whole_body: bool) -> Result<DVector<f64>> {
     let nq = model.nq;
-    let q0 = match (&args.q0, args.seed) {
+    match (&args.q0, args.seed) {
         (Some(s), _) => {
             let v = parse_list("--q0", s)?;
             if v.len() != nq {
                 bail!(
                     "--q0: expected {nq} values ({}), got {}",
-                    if drive.is_some() {
+                    if whole_body {
                         "x, y, θ and the joints"
                     } else {
                         "one per configuration coordinate"
@@ -147,20 +139,22 @@ pub fn run(args: Args) -> Result<()> {
                     v.len()
                 );
             }
-            DVector::from_vec(v)
+            Ok(DVector::from_vec(v))
         }
         (None, Some(seed)) => {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-            let mut q = moma::kinematics::random_configuration(&model, &mut rng);
-            if drive.is_some() {
-                q[0] = 0.0;
-                q[1] = 0.0;
-                q[2] = 0.0;
+            let mut q = moma::kinematics::random_configuration(model, &mut rng);
+            if whole_body {
+                q.rows_mut(0, 3).fill(0.0);
             }
-            q
+            Ok(q)
         }
-        (None, None) => moma::kinematics::neutral(&model),
-    };
+        (None, None) => Ok(moma::kinematics::neutral(model)),
+    }
+}
+
+/// The solver options: tolerance, budget, base weights, null-space objective.
+fn solver_options(args: &Args, nv_task: usize, whole_body: bool) -> Result<IkOptions> {
     let null_space = match args.null_space.as_str() {
         "none" => NullSpaceObjective::None,
         "manipulability" => NullSpaceObjective::Manipulability {
@@ -172,38 +166,62 @@ pub fn run(args: Args) -> Result<()> {
         },
         other => bail!("--null-space: unknown '{other}'; expected none, manipulability, posture"),
     };
-    let nv_task = if drive.is_some() {
-        model.nv - 1
-    } else {
-        model.nv
-    };
-    let weights = drive.map(|_| {
+    let weights = whole_body.then(|| {
         let mut w = vec![1.0; nv_task];
         w[0] = args.base_weight;
         w[1] = args.base_weight;
         w
     });
-    let options = IkOptions {
+    Ok(IkOptions {
         tolerance: args.tol,
         max_iterations: args.max_iters,
         weights,
         null_space,
         ..IkOptions::default()
+    })
+}
+
+/// Runs `moma ik`. When the solver does not converge the result is still printed and
+/// written (`-o`), then `GoalNotReached` gives exit status 3.
+pub fn run(args: Args) -> Result<()> {
+    let tvals = parse_list("--target", &args.target)?;
+    let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
+    let rows = parse_task_rows(args.rows.as_deref(), &tvals)?;
+    check_ik_budget(args.tol, args.max_iters)?;
+    if !(args.base_weight.is_finite() && args.base_weight > 0.0) {
+        bail!("--base-weight: must be > 0, got {}", args.base_weight);
+    }
+    let drive = parse_drive(&args)?;
+    let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;
+    let root = if drive.is_some() {
+        RootJoint::Planar
+    } else {
+        RootJoint::Fixed
     };
+    let model = Arc::new(load_model(&args.robot, root)?);
+    let kin = frame_of(&model, args.frame.as_deref(), &args.robot)?;
+    let name = frame_name(&kin);
+    let q0 = initial_q(&args, &model, drive.is_some())?;
+    let nv_task = if drive.is_some() {
+        model.nv - 1
+    } else {
+        model.nv
+    };
+    let options = solver_options(&args, nv_task, drive.is_some())?;
+    let posture = matches!(options.null_space, NullSpaceObjective::Posture { .. });
     let seed = args.seed.unwrap_or(0);
     let start = std::time::Instant::now();
     let (result, pose): (IkResult, Isometry3<f64>) = match drive {
         Some(drive) => {
             let mut task = WholeBodyTask::new(kin, drive, inputs, target, &rows)?;
-            if matches!(options.null_space, NullSpaceObjective::Posture { .. }) {
-                let pref = q0.rows(3, nq - 3).into_owned();
-                task = task.with_preferred_posture(pref)?;
+            if posture {
+                task = task.with_preferred_posture(q0.rows(3, model.nq - 3).into_owned())?;
             }
             run_task(&mut task, &q0, &options, args.restarts, seed)?
         }
         None => {
             let mut task = PoseTask::new(kin, target, &rows)?;
-            if matches!(options.null_space, NullSpaceObjective::Posture { .. }) {
+            if posture {
                 task = task.with_preferred_posture(q0.clone())?;
             }
             run_task(&mut task, &q0, &options, args.restarts, seed)?
@@ -236,11 +254,16 @@ pub fn run(args: Args) -> Result<()> {
         pose: pose_vec(&pose),
         time_ms,
     };
+    report(&args, &out)
+}
+
+/// Writes and prints the result; an unconverged one ends in `GoalNotReached`.
+fn report(args: &Args, out: &Output) -> Result<()> {
     if let Some(path) = &args.output {
-        write_json(path, &out)?;
+        write_json(path, out)?;
     }
     if args.json {
-        print_json(&out)?;
+        print_json(out)?;
     } else {
         let mut parts = Vec::new();
         if let Some(p) = out.position_error {
@@ -271,12 +294,11 @@ pub fn run(args: Args) -> Result<()> {
         println!("q = [{}]", qs.join(", "));
     }
     if !out.task_met {
-        eprintln!(
-            "error: inverse kinematics did not converge ({:?}, residual {:.3e} > tol {:.1e}); \
+        return goal_not_reached(format!(
+            "inverse kinematics did not converge ({:?}, residual {:.3e} > tol {:.1e}); \
              the target may be out of reach or blocked by joint limits (try --restarts)",
             out.status, out.residual_norm, args.tol
-        );
-        std::process::exit(3);
+        ));
     }
     Ok(())
 }

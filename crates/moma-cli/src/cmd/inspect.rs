@@ -1,6 +1,7 @@
 //! `moma inspect ROBOT.urdf [--root fixed|planar|free-flyer] [--json]`: a robot model's
 //! structure (nq, nv, total mass, joints, frames). Schema: `docs/cli.md`.
 
+use super::common::{load_model, parse_root};
 use anyhow::Result;
 use moma::multibody::{Model, RootJoint};
 use serde::Serialize;
@@ -17,18 +18,6 @@ pub struct Args {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Parses a `--root` value.
-pub(crate) fn parse_root(s: &str) -> Result<RootJoint, String> {
-    s.parse::<RootJoint>().map_err(|e| e.to_string())
-}
-
-/// Loads a URDF model, with the file named in any error.
-pub(crate) fn load_model(path: &Path, root: RootJoint) -> Result<Model> {
-    // moma's URDF errors already name the file and the element at fault; keep the error
-    // itself (not its text) so the cause of an I/O error is printed too
-    Ok(moma::io::urdf::model_from_urdf_file(path, root)?)
 }
 
 /// One joint in the `inspect` output.

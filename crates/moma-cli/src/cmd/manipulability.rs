@@ -1,24 +1,20 @@
 //! `moma manipulability`: manipulability measures of an arm, or of the whole mobile
 //! manipulator on a differential-drive base, on a list of states.
-//!
-//! Also holds the small helpers shared by `ik` and `reach-map` (model loading, number
-//! lists, targets).
 
+use super::common::{frame_name, frame_of, load_model, parse_base, parse_list, read_states};
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow, bail};
 use moma::ik::model::ModelFrame;
 use moma::ik::tasks::{FrameKinematics, TaskRows};
-use moma::io::urdf::model_from_urdf_file;
 use moma::manipulability::{ManipulabilityReport, Measure, evaluate, report};
 use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::{
     BaseInputs, bias_acceleration, inputs_to_velocity, whole_body_jacobian,
 };
-use moma::multibody::{Model, RootJoint};
+use moma::multibody::RootJoint;
 use nalgebra::{DMatrix, DVector, Isometry3};
 use serde::Serialize;
-use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// Arguments of `moma manipulability`.
@@ -57,147 +53,6 @@ pub struct Args {
     /// Also write the JSON result to this file.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-}
-
-/// Parses a comma-separated list of numbers for option `field`.
-pub(crate) fn parse_list(field: &str, text: &str) -> Result<Vec<f64>> {
-    let mut out = Vec::new();
-    for (i, part) in text.split(',').enumerate() {
-        let p = part.trim();
-        let x: f64 = p
-            .parse()
-            .map_err(|_| anyhow!("{field}: element {i} '{p}' is not a number"))?;
-        if !x.is_finite() {
-            bail!("{field}: element {i} is not finite");
-        }
-        out.push(x);
-    }
-    Ok(out)
-}
-
-/// Loads a URDF with the given root.
-pub(crate) fn load_model(path: &Path, root: RootJoint) -> Result<Arc<Model>> {
-    let model = model_from_urdf_file(path, root)
-        .with_context(|| format!("loading robot model {}", path.display()))?;
-    Ok(Arc::new(model))
-}
-
-/// The end-effector frame (by name, or the model's deepest link).
-pub(crate) fn frame_of(model: &Arc<Model>, name: Option<&str>, path: &Path) -> Result<ModelFrame> {
-    let frame = match name {
-        Some(n) => model
-            .frame_id(n)
-            .map_err(|e| anyhow!("{}: --frame: {e}", path.display()))?,
-        None => model.last_link_frame(),
-    };
-    Ok(ModelFrame::new(model.clone(), frame)?)
-}
-
-/// Parses `--base`.
-pub(crate) fn parse_base(spec: &str) -> Result<DiffDrive> {
-    if !spec.trim_start().starts_with("diff-drive") {
-        bail!("--base: unknown platform '{spec}'; expected diff-drive:r_w=R,b=B,d=D");
-    }
-    spec.parse::<DiffDrive>()
-        .map_err(|e| anyhow!("--base: {e}"))
-}
-
-/// Parses `--rows` (default: position for a 3-value target, full for a 7-value one) and
-/// checks that orientation rows come with an orientation in the target `tvals`.
-pub(crate) fn parse_task_rows(rows: Option<&str>, tvals: &[f64]) -> Result<TaskRows> {
-    let rows: TaskRows = match rows {
-        Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
-        None if tvals.len() == 3 => TaskRows::Position,
-        None => TaskRows::Full,
-    };
-    if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
-        bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
-    }
-    Ok(rows)
-}
-
-/// Checks the IK budget options `--tol` (> 0) and `--max-iters` (>= 1).
-pub(crate) fn check_ik_budget(tol: f64, max_iters: usize) -> Result<()> {
-    if !(tol.is_finite() && tol > 0.0) {
-        bail!("--tol: must be > 0, got {tol}");
-    }
-    if max_iters == 0 {
-        bail!("--max-iters: must be at least 1");
-    }
-    Ok(())
-}
-
-/// A frame name for output.
-pub(crate) fn frame_name(kin: &ModelFrame) -> String {
-    kin.model().frames[kin.frame().0].name.clone()
-}
-
-struct State {
-    q: DVector<f64>,
-    u: Option<DVector<f64>>,
-}
-
-fn number_array(v: &Value, field: &str, path: &Path) -> Result<DVector<f64>> {
-    let arr = v
-        .as_array()
-        .ok_or_else(|| anyhow!("{}: {field}: expected an array of numbers", path.display()))?;
-    let mut out = Vec::with_capacity(arr.len());
-    for (i, x) in arr.iter().enumerate() {
-        let f = x.as_f64().ok_or_else(|| {
-            anyhow!(
-                "{}: {field}[{i}]: expected a number, got {x}",
-                path.display()
-            )
-        })?;
-        out.push(f);
-    }
-    Ok(DVector::from_vec(out))
-}
-
-fn read_states(path: &Path) -> Result<Vec<State>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    let v: Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: invalid JSON", path.display()))?;
-    let list = match &v {
-        Value::Array(a) => a.clone(),
-        Value::Object(o) => o
-            .get("states")
-            .and_then(|s| s.as_array())
-            .cloned()
-            .ok_or_else(|| anyhow!("{}: expected a \"states\" array", path.display()))?,
-        _ => bail!("{}: expected a JSON object or array", path.display()),
-    };
-    if list.is_empty() {
-        bail!("{}: states: empty list", path.display());
-    }
-    let mut out = Vec::with_capacity(list.len());
-    for (i, s) in list.iter().enumerate() {
-        let st = match s {
-            Value::Array(_) => State {
-                q: number_array(s, &format!("states[{i}]"), path)?,
-                u: None,
-            },
-            Value::Object(o) => {
-                let q = o.get("q").ok_or_else(|| {
-                    anyhow!("{}: states[{i}]: missing field \"q\"", path.display())
-                })?;
-                State {
-                    q: number_array(q, &format!("states[{i}].q"), path)?,
-                    u: match o.get("u") {
-                        Some(u) => Some(number_array(u, &format!("states[{i}].u"), path)?),
-                        None => None,
-                    },
-                }
-            }
-            _ => bail!(
-                "{}: states[{i}]: expected an object with \"q\" or an array",
-                path.display()
-            ),
-        };
-        out.push(st);
-    }
-    Ok(out)
 }
 
 #[derive(Serialize)]
@@ -242,8 +97,16 @@ fn rows_of(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Runs `moma manipulability`.
-pub fn run(args: Args) -> Result<()> {
+/// The parsed options that every state shares.
+struct Setup {
+    measure: Measure,
+    idx: Vec<usize>,
+    inputs: BaseInputs,
+    drive: Option<DiffDrive>,
+    direction: Option<Vec<f64>>,
+}
+
+fn parse_setup(args: &Args) -> Result<Setup> {
     let measure: Measure = args
         .measure
         .parse()
@@ -275,125 +138,155 @@ pub fn run(args: Args) -> Result<()> {
             u.len()
         );
     }
-    let root = if drive.is_some() {
+    Ok(Setup {
+        measure,
+        idx,
+        inputs,
+        drive,
+        direction,
+    })
+}
+
+/// The measure's value, or `None` with a note saying why it is undefined.
+fn value_or_note(
+    measure: &Measure,
+    j: &DMatrix<f64>,
+    who: &str,
+    notes: &mut Vec<String>,
+) -> Option<f64> {
+    match evaluate(measure, j) {
+        Ok(v) => Some(v),
+        Err(e) => {
+            notes.push(format!("{who}: {e}"));
+            None
+        }
+    }
+}
+
+/// Evaluates one state; `src` names it in errors (`FILE: states[i]`).
+fn evaluate_state(
+    setup: &Setup,
+    kin: &mut ModelFrame,
+    index: usize,
+    q: DVector<f64>,
+    u: Option<DVector<f64>>,
+    src: &str,
+) -> Result<StateOut> {
+    let nv = kin.nv();
+    let arm_start = if setup.drive.is_some() { 3 } else { 0 };
+    let mut j6 = DMatrix::zeros(6, nv);
+    let mut pose = Isometry3::identity();
+    kin.check_q(&format!("{src}.q"), &q)?;
+    kin.pose_and_jacobian(&q, &mut pose, &mut j6)?;
+    let j_rows = j6.select_rows(&setup.idx);
+    let j_arm = j_rows.columns(arm_start, nv - arm_start).into_owned();
+    let mut notes = Vec::new();
+    let direction = setup.direction.as_deref();
+    let arm = report(&j_arm, direction).with_context(|| format!("state {index}: arm Jacobian"))?;
+    let arm_value = value_or_note(&setup.measure, &j_arm, "arm", &mut notes);
+    let mut out = StateOut {
+        index,
+        q: q.iter().copied().collect(),
+        arm_value,
+        whole_body_value: None,
+        arm,
+        whole_body: None,
+        whole_body_jacobian: None,
+        jdot_u: None,
+        notes,
+    };
+    let Some(drive) = &setup.drive else {
+        if u.is_some() {
+            bail!("{src}.u: whole-body inputs need --base");
+        }
+        return Ok(out);
+    };
+    let jbar = whole_body_jacobian(drive, setup.inputs, q[2], &j6)?.select_rows(&setup.idx);
+    out.whole_body_value = Some(value_or_note(
+        &setup.measure,
+        &jbar,
+        "whole body",
+        &mut out.notes,
+    ));
+    out.whole_body = Some(
+        report(&jbar, direction).with_context(|| format!("state {index}: whole-body Jacobian"))?,
+    );
+    out.whole_body_jacobian = Some(rows_of(&jbar));
+    if let Some(u) = &u {
+        let field = format!("{src}.u");
+        moma::error::ensure_len(&field, nv - 1, u.len())?;
+        moma::error::ensure_finite(&field, u.iter())?;
+        let v = inputs_to_velocity(drive, setup.inputs, q[2], u);
+        let jdqd = kin.jdot_qdot(&q, &v);
+        let b = bias_acceleration(drive, setup.inputs, q[2], &j6, &jdqd, u)?;
+        out.jdot_u = Some(setup.idx.iter().map(|&r| b[r]).collect());
+    }
+    Ok(out)
+}
+
+/// Runs `moma manipulability`.
+pub fn run(args: Args) -> Result<()> {
+    let setup = parse_setup(&args)?;
+    let root = if setup.drive.is_some() {
         RootJoint::Planar
     } else {
         RootJoint::Fixed
     };
-    let model = load_model(&args.robot, root)?;
+    let model = Arc::new(load_model(&args.robot, root)?);
     let mut kin = frame_of(&model, args.frame.as_deref(), &args.robot)?;
-    let states = read_states(&args.states)?;
-    let nv = kin.nv();
-    let arm_start = if drive.is_some() { 3 } else { 0 };
-    let mut j6 = DMatrix::zeros(6, nv);
-    let mut pose = Isometry3::identity();
+    let states = read_states(&args.states, &["q", "u"])?;
     let mut out_states = Vec::with_capacity(states.len());
-    for (i, st) in states.iter().enumerate() {
-        let field = format!("{}: states[{i}].q", args.states.display());
-        kin.check_q(&field, &st.q)?;
-        kin.pose_and_jacobian(&st.q, &mut pose, &mut j6)?;
-        let j_rows = j6.select_rows(&idx);
-        let j_arm = j_rows.columns(arm_start, nv - arm_start).into_owned();
-        let mut notes = Vec::new();
-        let arm_report = report(&j_arm, direction.as_deref())
-            .with_context(|| format!("state {i}: arm Jacobian"))?;
-        let arm_value = match evaluate(&measure, &j_arm) {
-            Ok(v) => Some(v),
-            Err(e) => {
-                notes.push(format!("arm: {e}"));
-                None
-            }
-        };
-        let (mut wb_value, mut wb_report, mut wb_j, mut jdot_u) = (None, None, None, None);
-        if let Some(drive) = &drive {
-            let jbar_full = whole_body_jacobian(drive, inputs, st.q[2], &j6)?;
-            let jbar = jbar_full.select_rows(&idx);
-            wb_value = Some(match evaluate(&measure, &jbar) {
-                Ok(v) => Some(v),
-                Err(e) => {
-                    notes.push(format!("whole body: {e}"));
-                    None
-                }
-            });
-            wb_report = Some(
-                report(&jbar, direction.as_deref())
-                    .with_context(|| format!("state {i}: whole-body Jacobian"))?,
-            );
-            wb_j = Some(rows_of(&jbar));
-            if let Some(u) = &st.u {
-                moma::error::ensure_len(
-                    &format!("{}: states[{i}].u", args.states.display()),
-                    nv - 1,
-                    u.len(),
-                )?;
-                moma::error::ensure_finite(
-                    &format!("{}: states[{i}].u", args.states.display()),
-                    u.iter(),
-                )?;
-                let v = inputs_to_velocity(drive, inputs, st.q[2], u);
-                let jdqd = kin.jdot_qdot(&st.q, &v);
-                let b = bias_acceleration(drive, inputs, st.q[2], &j6, &jdqd, u)?;
-                jdot_u = Some(idx.iter().map(|&r| b[r]).collect());
-            }
-        } else if st.u.is_some() {
-            bail!(
-                "{}: states[{i}].u: whole-body inputs need --base",
-                args.states.display()
-            );
-        }
-        out_states.push(StateOut {
-            index: i,
-            q: st.q.iter().copied().collect(),
-            arm_value,
-            whole_body_value: wb_value,
-            arm: arm_report,
-            whole_body: wb_report,
-            whole_body_jacobian: wb_j,
-            jdot_u,
-            notes,
-        });
+    for (i, st) in states.into_iter().enumerate() {
+        let src = format!("{}: states[{i}]", args.states.display());
+        let q = DVector::from_vec(st.q);
+        let u = st.u.map(DVector::from_vec);
+        out_states.push(evaluate_state(&setup, &mut kin, i, q, u, &src)?);
     }
     let out = Output {
         robot: args.robot.display().to_string(),
         frame: frame_name(&kin),
-        rows: idx.clone(),
-        measure: measure.to_string(),
-        base: drive,
-        inputs: drive.map(|_| inputs),
+        rows: setup.idx.clone(),
+        measure: setup.measure.to_string(),
+        base: setup.drive,
+        inputs: setup.drive.map(|_| setup.inputs),
         states: out_states,
     };
     if let Some(path) = &args.output {
         write_json(path, &out)?;
     }
     if args.json {
-        print_json(&out)?;
+        print_json(&out)
     } else {
-        let fmt = |v: Option<f64>| v.map_or("undefined".to_string(), |x| format!("{x:.6e}"));
-        println!(
-            "{} frame '{}', rows {:?}, measure {}",
-            out.robot, out.frame, out.rows, out.measure
-        );
-        for s in &out.states {
-            match s.whole_body_value {
-                Some(w) => println!(
-                    "state {:>3}: arm {}  whole-body {}  (σ_min arm {:.4e}, whole-body {:.4e})",
-                    s.index,
-                    fmt(s.arm_value),
-                    fmt(w),
-                    s.arm.min_singular_value,
-                    s.whole_body.as_ref().map_or(0.0, |r| r.min_singular_value)
-                ),
-                None => println!(
-                    "state {:>3}: arm {}  (σ_min {:.4e})",
-                    s.index,
-                    fmt(s.arm_value),
-                    s.arm.min_singular_value
-                ),
-            }
-            for n in &s.notes {
-                println!("           note: {n}");
-            }
+        print_table(&out);
+        Ok(())
+    }
+}
+
+fn print_table(out: &Output) {
+    let fmt = |v: Option<f64>| v.map_or("undefined".to_string(), |x| format!("{x:.6e}"));
+    println!(
+        "{} frame '{}', rows {:?}, measure {}",
+        out.robot, out.frame, out.rows, out.measure
+    );
+    for s in &out.states {
+        match s.whole_body_value {
+            Some(w) => println!(
+                "state {:>3}: arm {}  whole-body {}  (σ_min arm {:.4e}, whole-body {:.4e})",
+                s.index,
+                fmt(s.arm_value),
+                fmt(w),
+                s.arm.min_singular_value,
+                s.whole_body.as_ref().map_or(0.0, |r| r.min_singular_value)
+            ),
+            None => println!(
+                "state {:>3}: arm {}  (σ_min {:.4e})",
+                s.index,
+                fmt(s.arm_value),
+                s.arm.min_singular_value
+            ),
+        }
+        for n in &s.notes {
+            println!("           note: {n}");
         }
     }
-    Ok(())
 }

@@ -1,13 +1,19 @@
-//! One module per subcommand: each defines its clap `Args` and a `run` function.
+//! One module per subcommand: each defines its clap `Args` and a `run` function;
+//! `common` holds what several of them share (model and states loading, option parsing).
 
 pub mod bench;
+pub mod common;
 pub mod dynamics;
 pub mod eval;
 pub mod ik;
 pub mod inspect;
 pub mod manipulability;
 pub mod map_info;
+pub mod osc;
 pub mod plan;
 pub mod reach_map;
 pub mod scen;
 pub mod simulate;
+pub mod simulate_space;
+pub mod space;
+pub mod stability;

@@ -1,24 +1,26 @@
 //! `moma reach-map`: reachability and manipulability of a fixed end-effector target over
 //! a grid of base placements, best placement, SVG heat map.
 
-use super::manipulability::{
-    check_ik_budget, frame_name, frame_of, load_model, parse_base, parse_list, parse_task_rows,
+use super::common::{
+    check_ik_budget, frame_name, frame_of, goal_not_reached, load_model, parse_base, parse_list,
+    parse_task_rows,
 };
 use crate::output::{print_json, write_all_atomic};
 use crate::svg_heatmap::{HeatMap, render};
 use anyhow::{Result, anyhow, bail};
 use moma::ik::IkOptions;
-use moma::ik::tasks::{FrameKinematics, target_from_slice};
-use moma::manipulability::Measure;
-use moma::manipulability::placement::{
-    ArmReachEvaluator, MeasureScope, PlacementEvaluator, PlacementGrid, PlacementSample,
-    placement_map,
+use moma::ik::model::ModelFrame;
+use moma::ik::placement::{
+    ArmReachEvaluator, MeasureScope, PlacementGrid, PlacementSample, placement_map,
 };
+use moma::ik::tasks::{FrameKinematics, TaskRows, target_from_slice};
+use moma::manipulability::Measure;
 use moma::mobile::whole_body::BaseInputs;
 use moma::multibody::RootJoint;
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Arguments of `moma reach-map`.
 #[derive(clap::Args)]
@@ -100,8 +102,41 @@ struct Output<'a> {
     cells: Vec<Vec<Option<f64>>>,
 }
 
-/// Runs `moma reach-map`.
-pub fn run(args: Args) -> Result<()> {
+/// Parses `--mount x,y,z[,yaw]` (default: the identity).
+fn parse_mount(mount: Option<&str>) -> Result<Isometry3<f64>> {
+    let Some(m) = mount else {
+        return Ok(Isometry3::identity());
+    };
+    let v = parse_list("--mount", m)?;
+    if v.len() != 3 && v.len() != 4 {
+        bail!(
+            "--mount: expected x,y,z or x,y,z,yaw, got {} values",
+            v.len()
+        );
+    }
+    Ok(Isometry3::from_parts(
+        Translation3::new(v[0], v[1], v[2]),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), *v.get(3).unwrap_or(&0.0)),
+    ))
+}
+
+/// Parses `--measure` and checks a directional measure against the task rows.
+fn parse_measure(text: &str, rows: &TaskRows) -> Result<Measure> {
+    let measure: Measure = text.parse().map_err(|e| anyhow!("--measure: {e}"))?;
+    if let Measure::Directional(u) = &measure
+        && u.len() != rows.indices().len()
+    {
+        bail!(
+            "--measure directional: expected {} components, got {}",
+            rows.indices().len(),
+            u.len()
+        );
+    }
+    Ok(measure)
+}
+
+/// Checks every option and builds the grid and the per-pose evaluator (robot loaded).
+fn setup(args: &Args) -> Result<(Vec<f64>, PlacementGrid, ArmReachEvaluator<ModelFrame>)> {
     let tvals = parse_list("--target", &args.target)?;
     let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
     let area = parse_list("--area", &args.area)?;
@@ -115,42 +150,15 @@ pub fn run(args: Args) -> Result<()> {
     )
     .map_err(|e| anyhow!("--area/--step/--headings: {e}"))?;
     let rows = parse_task_rows(args.rows.as_deref(), &tvals)?;
-    let measure: Measure = args
-        .measure
-        .parse()
-        .map_err(|e| anyhow!("--measure: {e}"))?;
-    if let Measure::Directional(u) = &measure
-        && u.len() != rows.indices().len()
-    {
-        bail!(
-            "--measure directional: expected {} components, got {}",
-            rows.indices().len(),
-            u.len()
-        );
-    }
+    let measure = parse_measure(&args.measure, &rows)?;
     let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;
     let scope = match &args.base {
         Some(b) => MeasureScope::WholeBody(parse_base(b)?, inputs),
         None => MeasureScope::Arm,
     };
-    let mount = match &args.mount {
-        None => Isometry3::identity(),
-        Some(m) => {
-            let v = parse_list("--mount", m)?;
-            if v.len() != 3 && v.len() != 4 {
-                bail!(
-                    "--mount: expected x,y,z or x,y,z,yaw, got {} values",
-                    v.len()
-                );
-            }
-            Isometry3::from_parts(
-                Translation3::new(v[0], v[1], v[2]),
-                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), *v.get(3).unwrap_or(&0.0)),
-            )
-        }
-    };
+    let mount = parse_mount(args.mount.as_deref())?;
     check_ik_budget(args.tol, args.max_iters)?;
-    let model = load_model(&args.robot, RootJoint::Fixed)?;
+    let model = Arc::new(load_model(&args.robot, RootJoint::Fixed)?);
     let arm = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let seed = match &args.q0 {
         Some(s) => {
@@ -162,8 +170,6 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => moma::kinematics::neutral(&model),
     };
-    let frame = frame_name(&arm);
-    let larger = measure.larger_is_better();
     let evaluator = ArmReachEvaluator {
         arm,
         mount,
@@ -176,22 +182,37 @@ pub fn run(args: Args) -> Result<()> {
         },
         seed,
         restarts: args.restarts,
-        measure: measure.clone(),
+        measure,
         scope,
     };
     evaluator.validate()?;
+    Ok((tvals, grid, evaluator))
+}
+
+/// Runs `moma reach-map`. A target reachable from no pose of the grid still writes its
+/// outputs (an all-grey map), then ends in `GoalNotReached` (exit status 3).
+pub fn run(args: Args) -> Result<()> {
+    let (tvals, grid, evaluator) = setup(&args)?;
+    let frame = frame_name(&evaluator.arm);
+    let measure = evaluator.measure.clone();
+    let larger = measure.larger_is_better();
     let start = std::time::Instant::now();
     let map = placement_map(&evaluator, &grid)?;
     let time_s = start.elapsed().as_secs_f64();
-    debug_assert_eq!(evaluator.larger_is_better(), larger);
     let cells_flat = map.cell_best(larger);
-    let cells: Vec<Vec<Option<f64>>> = cells_flat.chunks(grid.nx).map(|r| r.to_vec()).collect();
+    let sum_iters = |reachable: bool| -> usize {
+        map.samples
+            .iter()
+            .filter(|s| s.reachable == reachable)
+            .map(|s| s.iterations)
+            .sum()
+    };
     let out = Output {
         robot: args.robot.display().to_string(),
         frame: frame.clone(),
         target: tvals.clone(),
         measure: measure.to_string(),
-        scope: match scope {
+        scope: match evaluator.scope {
             MeasureScope::Arm => "arm",
             MeasureScope::WholeBody(..) => "whole-body",
         },
@@ -199,25 +220,14 @@ pub fn run(args: Args) -> Result<()> {
         samples: map.samples.len(),
         reachable: map.reachable,
         best: map.best,
-        ik_iterations: [
-            map.samples
-                .iter()
-                .filter(|s| s.reachable)
-                .map(|s| s.iterations)
-                .sum(),
-            map.samples
-                .iter()
-                .filter(|s| !s.reachable)
-                .map(|s| s.iterations)
-                .sum(),
-        ],
+        ik_iterations: [sum_iters(true), sum_iters(false)],
         pruned: map
             .samples
             .iter()
             .filter(|s| !s.reachable && s.iterations == 0)
             .count(),
         time_s,
-        cells,
+        cells: cells_flat.chunks(grid.nx).map(|r| r.to_vec()).collect(),
     };
     let mut files = Vec::new();
     if let Some(path) = &args.svg {
@@ -246,31 +256,41 @@ pub fn run(args: Args) -> Result<()> {
         files.push((path.clone(), text.into_bytes()));
     }
     write_all_atomic(&files)?;
+    print_result(&args, &out, &grid)?;
+    if out.reachable == 0 {
+        return goal_not_reached(format!(
+            "the target ({:.3}, {:.3}, {:.3}) is reachable from none of the {} base poses of the grid",
+            tvals[0], tvals[1], tvals[2], out.samples
+        ));
+    }
+    Ok(())
+}
+
+fn print_result(args: &Args, out: &Output, grid: &PlacementGrid) -> Result<()> {
     if args.json {
-        print_json(&out)?;
-    } else {
-        println!(
-            "{}: frame '{}', {} base poses ({} x {} x {} headings) in {:.3} s; reachable from {}",
-            out.robot,
-            out.frame,
-            out.samples,
-            grid.nx,
-            grid.ny,
-            grid.headings,
-            time_s,
-            out.reachable
-        );
-        match &out.best {
-            Some(b) => println!(
-                "best placement: x = {:.4} m, y = {:.4} m, θ = {:.4} rad, {} = {:.6e}",
-                b.base[0],
-                b.base[1],
-                b.base[2],
-                out.measure,
-                b.measure.unwrap_or(0.0)
-            ),
-            None => println!("the target is unreachable from every base pose of the grid"),
-        }
+        return print_json(out);
+    }
+    println!(
+        "{}: frame '{}', {} base poses ({} x {} x {} headings) in {:.3} s; reachable from {}",
+        out.robot,
+        out.frame,
+        out.samples,
+        grid.nx,
+        grid.ny,
+        grid.headings,
+        out.time_s,
+        out.reachable
+    );
+    match &out.best {
+        Some(b) => println!(
+            "best placement: x = {:.4} m, y = {:.4} m, θ = {:.4} rad, {} = {:.6e}",
+            b.base[0],
+            b.base[1],
+            b.base[2],
+            out.measure,
+            b.measure.unwrap_or(0.0)
+        ),
+        None => println!("the target is unreachable from every base pose of the grid"),
     }
     Ok(())
 }

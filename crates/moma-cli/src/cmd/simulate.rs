@@ -10,13 +10,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
+use moma::closed_form::ChapterModel;
 use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
 use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate};
 use serde::{Deserialize, Serialize};
 
-use crate::output::write_all_atomic;
+use crate::output::write_dir;
 use crate::svg_plots::{Series, line_chart, path_chart};
 
 /// Arguments of `moma simulate`.
@@ -61,6 +62,9 @@ pub struct Scenario {
     /// Monitor limits.
     #[serde(default)]
     pub limits: Option<MonitorLimits>,
+    /// Free-floating settings (robot kind `free_floating`; schema in docs/space.md).
+    #[serde(default)]
+    pub space: Option<super::simulate_space::SpaceSpec>,
 }
 
 /// The robot of a scenario.
@@ -80,9 +84,17 @@ pub enum RobotSpec {
         #[serde(default)]
         casters: Vec<CasterSpec>,
     },
+    /// A URDF model as a free-floating (space) robot in zero gravity.
+    FreeFloating {
+        /// URDF file, relative to the scenario file.
+        urdf: PathBuf,
+        /// Frame recorded, controlled and used for a capture.
+        frame: String,
+    },
     /// One of the chapter's closed-form models.
     Chapter {
-        /// `m1`, `m2` or `m5`.
+        /// `m1`, `m2` or `m5` (or a canonical name such as `m1_unicycle`; the names of
+        /// `moma eval`).
         model: String,
         /// Its parameters (names as in docs/simulate.md).
         params: toml::Table,
@@ -247,7 +259,8 @@ fn build_robot(
                 );
             }
             let mut json = serde_json::to_value(params).context("robot.params")?;
-            if let (Some(g), "m5") = (gravity, model.as_str())
+            if let (Some(g), Ok(ChapterModel::M5MobileManipulator)) =
+                (gravity, ChapterModel::from_name(model))
                 && let Some(obj) = json.as_object_mut()
             {
                 if obj.contains_key("g") {
@@ -267,6 +280,9 @@ fn build_robot(
             let path = base_dir.join(urdf);
             let sys = build_urdf_robot(&path, drive, wheel_joints.clone(), casters, gravity)?;
             Ok((sys, format!("URDF {}", urdf.display())))
+        }
+        RobotSpec::FreeFloating { .. } => {
+            bail!("a free-floating robot is run by the space simulation")
         }
     }
 }
@@ -310,13 +326,13 @@ fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
 
 /// Builds every output file in memory.
 fn render(
-    dir: &Path,
+    wheels: &[String],
     result: &SimulationResult,
     summary: &mut Summary,
     plots: bool,
-) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+) -> Result<Vec<(String, Vec<u8>)>> {
     let rec = &result.recorder;
-    let mut files = vec![(dir.join("trajectory.csv"), rec.to_csv().into_bytes())];
+    let mut files = vec![("trajectory.csv".to_string(), rec.to_csv().into_bytes())];
     if plots {
         let t = &rec.times;
         let n = rec.len();
@@ -324,18 +340,64 @@ fn render(
         let x = col(&|i| rec.q_row(i)[0]);
         let y = col(&|i| rec.q_row(i)[1]);
         files.push((
-            dir.join("path.svg"),
+            "path.svg".to_string(),
             path_chart("Platform path", &x, &y).into_bytes(),
         ));
-        let joint_names: Vec<&str> = rec.q_names.iter().skip(2).map(String::as_str).collect();
-        let joints: Vec<Series> = joint_names
+        let angle_series = |keep: &dyn Fn(&str) -> bool| -> Vec<Series> {
+            rec.q_names
+                .iter()
+                .enumerate()
+                .skip(2)
+                .filter(|(_, n)| keep(n))
+                .map(|(k, n)| series(t, n, col(&|i| rec.q_row(i)[k])))
+                .collect()
+        };
+        let is_wheel = |n: &str| wheels.iter().any(|w| w == n);
+        files.push((
+            "joints.svg".to_string(),
+            line_chart(
+                "Heading and arm joints",
+                "t [s]",
+                if rec.units[0].iter().skip(3).any(|u| *u == "m") {
+                    "angle [rad] (prismatic joints: [m])"
+                } else {
+                    "angle [rad]"
+                },
+                &angle_series(&|n| !is_wheel(n)),
+            )
+            .into_bytes(),
+        ));
+        if !wheels.is_empty() {
+            files.push((
+                "wheels.svg".to_string(),
+                line_chart(
+                    "Wheel angles",
+                    "t [s]",
+                    "angle [rad]",
+                    &angle_series(&is_wheel),
+                )
+                .into_bytes(),
+            ));
+        }
+        let inputs: Vec<Series> = rec
+            .u_names
             .iter()
             .enumerate()
-            .map(|(k, name)| series(t, name, col(&|i| rec.q_row(i)[2 + k])))
+            .map(|(k, n)| series(t, n, col(&|i| rec.u_row(i)[k])))
             .collect();
         files.push((
-            dir.join("joints.svg"),
-            line_chart("Heading and joint angles", "t (s)", "angle (rad)", &joints).into_bytes(),
+            "inputs.svg".to_string(),
+            line_chart(
+                "Inputs (wheel and joint torques)",
+                "t [s]",
+                if rec.units[2].iter().any(|u| *u == "N") {
+                    "torque [N m] (prismatic joints: force [N])"
+                } else {
+                    "torque [N m]"
+                },
+                &inputs,
+            )
+            .into_bytes(),
         ));
         let energy = vec![
             series(t, "kinetic T", rec.kinetic.clone()),
@@ -348,8 +410,8 @@ fn render(
             ),
         ];
         files.push((
-            dir.join("energy.svg"),
-            line_chart("Energy balance", "t (s)", "energy (J)", &energy).into_bytes(),
+            "energy.svg".to_string(),
+            line_chart("Energy balance", "t [s]", "energy [J]", &energy).into_bytes(),
         ));
         let drift = vec![series(
             t,
@@ -357,26 +419,29 @@ fn render(
             col(&|i| rec.energy_error(i)),
         )];
         files.push((
-            dir.join("energy_error.svg"),
-            line_chart("Energy balance error", "t (s)", "J", &drift).into_bytes(),
+            "energy_error.svg".to_string(),
+            line_chart("Energy balance error", "t [s]", "energy [J]", &drift).into_bytes(),
         ));
         if !rec.lambda_names.is_empty() {
             let k = rec.lambda_names.len();
+            const LABELS: [&str; 3] = ["λ0 no side slip", "λ1 left rolling", "λ2 right rolling"];
             let forces: Vec<Series> = rec
                 .lambda_names
                 .iter()
                 .enumerate()
-                .map(|(j, name)| series(t, name, col(&|i| rec.lambda[i * k + j])))
+                .map(|(j, name)| {
+                    let label = LABELS.get(j).copied().unwrap_or(name.as_str());
+                    series(t, label, col(&|i| rec.lambda[i * k + j]))
+                })
                 .collect();
+            let title = if k == 3 {
+                "Constraint multipliers: λ0 no side slip (−λ0 = lateral ground force on the axle),\nλ1, λ2 rolling of the left and right wheel"
+            } else {
+                "Multiplier λ0 of the no-side-slip constraint (−λ0 = lateral ground force on the axle)"
+            };
             files.push((
-                dir.join("multipliers.svg"),
-                line_chart(
-                    "Constraint multipliers (−λ₀: lateral ground force on the axle)",
-                    "t (s)",
-                    "λ (N)",
-                    &forces,
-                )
-                .into_bytes(),
+                "multipliers.svg".to_string(),
+                line_chart(title, "t [s]", "λ [N]", &forces).into_bytes(),
             ));
         }
         let res = vec![series(
@@ -385,29 +450,24 @@ fn render(
             col(&|i| rec.residual[i].max(1e-20).log10()),
         )];
         files.push((
-            dir.join("residual.svg"),
-            line_chart("Constraint residual", "t (s)", "log10 |C q̇|", &res).into_bytes(),
+            "residual.svg".to_string(),
+            line_chart("Constraint residual", "t [s]", "log10 (|C q̇| [m/s])", &res).into_bytes(),
         ));
     }
     summary.files = files
         .iter()
-        .map(|(p, _)| {
-            p.file_name()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned()
-        })
+        .map(|(name, _)| name.clone())
         .chain(std::iter::once("summary.json".to_string()))
         .collect();
     let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
     json.push('\n');
-    files.push((dir.join("summary.json"), json.into_bytes()));
+    files.push(("summary.json".to_string(), json.into_bytes()));
     Ok(files)
 }
 
 /// Runs `moma simulate`.
 pub fn run(args: Args) -> Result<()> {
-    let path = resolve_scenario(args.scenario)?;
+    let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
     let ctx = |what: &str| format!("{}: {what}", path.display());
     if !(sc.duration.is_finite() && sc.duration > 0.0) {
@@ -425,6 +485,15 @@ pub fn run(args: Args) -> Result<()> {
         bail!("{}", ctx("gravity is not a finite number"));
     }
     let base_dir = path.parent().unwrap_or(Path::new("."));
+    if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
+        return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
+    }
+    if sc.space.is_some() {
+        bail!(
+            "{}",
+            ctx("[space] is only for robot.kind = \"free_floating\"")
+        );
+    }
     let (mut system, robot_name) =
         build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
     let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
@@ -537,10 +606,15 @@ pub fn run(args: Args) -> Result<()> {
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
     };
-    let files = render(&dir, &result, &mut summary, sc.output.plots)?;
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("{}: cannot create output directory", dir.display()))?;
-    write_all_atomic(&files)?;
+    let wheels = match &sc.robot {
+        RobotSpec::Urdf {
+            wheel_joints: Some(w),
+            ..
+        } => w.to_vec(),
+        _ => Vec::new(),
+    };
+    let files = render(&wheels, &result, &mut summary, sc.output.plots)?;
+    write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&summary)?;
     }

@@ -8,66 +8,17 @@
 use super::fixed_vector;
 use super::m1_unicycle::{Unicycle, UnicycleParams};
 use super::m2_platform_arm::{PlatformArm, PlatformArmParams};
-use super::m3_diffdrive::{DiffDrive, DiffDriveParams};
+use super::m3_diffdrive::{DiffDriveKinematics, DiffDriveKinematicsParams};
 use super::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
 use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams, TaskController};
+use super::m6_space_manipulator::{SpaceManipulator, SpaceManipulatorParams};
 use crate::error::{Error, Result};
 use nalgebra::{SMatrix, SVector};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value, json};
 
-/// The chapter models `moma eval` knows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ChapterModel {
-    /// m1, the unicycle platform.
-    M1Unicycle,
-    /// m2, platform + horizontal two-link arm.
-    M2PlatformArm,
-    /// m3, wheel-rate kinematics and whole-body Jacobian.
-    M3DiffDrive,
-    /// m4, cart + vertical two-link arm.
-    M4CartTwoLink,
-    /// m5, 3-D mobile manipulator.
-    M5MobileManipulator,
-}
-
-/// Canonical model names (as in the reference files) with accepted aliases.
-pub const MODEL_NAMES: [(&str, &[&str], ChapterModel); 5] = [
-    ("m1_unicycle", &["m1"], ChapterModel::M1Unicycle),
-    (
-        "m2_platform_planar_arm",
-        &["m2", "m2_platform_arm"],
-        ChapterModel::M2PlatformArm,
-    ),
-    (
-        "m3_diffdrive_kinematics",
-        &["m3", "m3_diffdrive"],
-        ChapterModel::M3DiffDrive,
-    ),
-    ("m4_cart_two_link", &["m4"], ChapterModel::M4CartTwoLink),
-    (
-        "m5_mobile_manipulator_3d",
-        &["m5", "m5_mobile_manipulator"],
-        ChapterModel::M5MobileManipulator,
-    ),
-];
-
-impl ChapterModel {
-    /// Looks a model up by its canonical name or alias.
-    pub fn from_name(name: &str) -> Result<Self> {
-        for (canon, aliases, m) in MODEL_NAMES {
-            if name == canon || aliases.contains(&name) {
-                return Ok(m);
-            }
-        }
-        let known: Vec<&str> = MODEL_NAMES.iter().map(|(c, _, _)| *c).collect();
-        Err(Error::invalid(
-            "model",
-            format!("unknown model '{name}'; known models: {}", known.join(", ")),
-        ))
-    }
-}
+pub use super::registry::{ChapterModel, MODEL_NAMES};
 
 fn field<'a>(case: &'a Value, path: &[&str]) -> Result<&'a Value> {
     let mut v = case;
@@ -209,7 +160,7 @@ fn evaluate_inner(
             Ok((out, tr, None))
         }
         ChapterModel::M3DiffDrive => {
-            let sys = DiffDrive::new(params::<DiffDriveParams>(case)?)?;
+            let sys = DiffDriveKinematics::new(params::<DiffDriveKinematicsParams>(case)?)?;
             let q = vector::<6>(case, &["state", "q"])?;
             let v = vector::<5>(case, &["inputs", "v"])?;
             let out = to_value(&sys.evaluate(&q, &v)?)?;
@@ -272,36 +223,80 @@ fn evaluate_inner(
             };
             Ok((out, tr, control))
         }
+        ChapterModel::M6SpaceManipulator => {
+            let (out, extras) = m6_case(case, tol)?;
+            Ok((out, None, Some(extras)))
+        }
     }
+}
+
+/// m6: outputs, plus the `trajectories` runs and the `joint_loop` (returned as one object
+/// of top-level keys to set).
+fn m6_case(case: &Value, tol: f64) -> Result<(Value, Value)> {
+    let sys = SpaceManipulator::new(params::<SpaceManipulatorParams>(case)?)?;
+    let q = vector::<5>(case, &["state", "q"])?;
+    let th = vector::<2>(case, &["state", "theta_dot"])?;
+    let qz = vector::<5>(case, &["state", "qdot_zero_momentum"])?;
+    let qn = vector::<5>(case, &["state", "qdot_nonzero_momentum"])?;
+    let tau = vector::<2>(case, &["inputs", "torque"])?;
+    let out = to_value(&sys.evaluate(&q, &th, &qz, &qn, &tau)?)?;
+    let mut extras = Map::new();
+    if let Some(runs) = case.get("trajectories") {
+        let runs = runs
+            .as_object()
+            .ok_or_else(|| Error::invalid("trajectories", "expected an object of runs"))?;
+        let mut filled = Map::new();
+        for (name, run) in runs {
+            let path = ["trajectories", name.as_str()];
+            let t = numbers(case, &[path[0], path[1], "t"])?;
+            crate::error::ensure_finite(&format!("trajectories.{name}.t"), &t)?;
+            if t.first().is_some_and(|&t0| t0 < 0.0) || t.windows(2).any(|w| w[1] < w[0]) {
+                return Err(Error::invalid(
+                    format!("trajectories.{name}.t"),
+                    "times must be non-negative and non-decreasing",
+                ));
+            }
+            let torque = vector::<2>(case, &[path[0], path[1], "torque"])?;
+            let qdot0 = vector::<5>(case, &[path[0], path[1], "qdot0"])?;
+            let samples = sys.simulate(&q, &qdot0, &torque, &t, tol)?;
+            let mut r = run.as_object().cloned().unwrap_or_default();
+            r.insert("q".into(), rows(samples.iter().map(|s| s.q)));
+            r.insert("qdot".into(), rows(samples.iter().map(|s| s.qdot)));
+            r.insert("P".into(), rows(samples.iter().map(|s| s.p)));
+            r.insert(
+                "L_O".into(),
+                json!(samples.iter().map(|s| s.l_o).collect::<Vec<_>>()),
+            );
+            r.insert(
+                "psi_from_omega_exact".into(),
+                json!(samples.iter().map(|s| s.psi_exact).collect::<Vec<_>>()),
+            );
+            r.insert(
+                "psi_from_omega_chapter".into(),
+                json!(samples.iter().map(|s| s.psi_chapter).collect::<Vec<_>>()),
+            );
+            filled.insert(name.clone(), Value::Object(r));
+        }
+        extras.insert("trajectories".into(), Value::Object(filled));
+    }
+    if let Some(jl) = case.get("joint_loop") {
+        let a = vector::<2>(case, &["joint_loop", "amplitude"])?;
+        let period = field(case, &["joint_loop", "period"])?
+            .as_f64()
+            .ok_or_else(|| Error::invalid("joint_loop.period", "expected a number"))?;
+        let theta0 = nalgebra::Vector2::new(q[3], q[4]);
+        let d = sys.joint_loop_rotation(&theta0, &a, period, tol)?;
+        let mut m = jl.as_object().cloned().unwrap_or_default();
+        m.insert("delta_psi".into(), json!(d));
+        extras.insert("joint_loop".into(), Value::Object(m));
+    }
+    Ok((out, Value::Object(extras)))
 }
 
 /// Fills `outputs` (and `trajectory`, if the case has `trajectory.t`) of one case.
 /// Errors name the case id and the field.
 pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) -> Result<Value> {
-    let id = match case.get("id") {
-        Some(Value::String(s)) => s.clone(),
-        Some(v) => v.to_string(),
-        None => format!("#{index}"),
-    };
-    let wrap = |e: Error| match e {
-        Error::InvalidInput { field, message } => Error::InvalidInput {
-            field: format!("case {id}: {field}"),
-            message,
-        },
-        Error::NonFinite { field } => Error::NonFinite {
-            field: format!("case {id}: {field}"),
-        },
-        Error::WrongLength {
-            field,
-            expected,
-            got,
-        } => Error::WrongLength {
-            field: format!("case {id}: {field}"),
-            expected,
-            got,
-        },
-        other => Error::invalid(format!("case {id}"), other.to_string()),
-    };
+    let wrap = |e: Error| name_case(case, index, e);
     if !case.is_object() {
         return Err(wrap(Error::invalid("case", "expected an object")));
     }
@@ -330,10 +325,48 @@ pub fn evaluate_case(model: ChapterModel, case: &Value, index: usize, tol: f64) 
         obj.insert("trajectory".into(), Value::Object(merged));
     }
     if let Some(c) = control {
-        obj.insert("control".into(), c);
+        if model == ChapterModel::M6SpaceManipulator {
+            for (k, v) in c.as_object().expect("object").clone() {
+                obj.insert(k, v);
+            }
+        } else {
+            obj.insert("control".into(), c);
+        }
     }
     Ok(out)
 }
+
+/// Prefixes the field of an error with the case id (or its index).
+fn name_case(case: &Value, index: usize, e: Error) -> Error {
+    let id = match case.get("id") {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => format!("#{index}"),
+    };
+    match e {
+        Error::InvalidInput { field, message } => Error::InvalidInput {
+            field: format!("case {id}: {field}"),
+            message,
+        },
+        Error::NonFinite { field } => Error::NonFinite {
+            field: format!("case {id}: {field}"),
+        },
+        Error::WrongLength {
+            field,
+            expected,
+            got,
+        } => Error::WrongLength {
+            field: format!("case {id}: {field}"),
+            expected,
+            got,
+        },
+        other => Error::invalid(format!("case {id}"), other.to_string()),
+    }
+}
+
+/// The model name of the closed-loop unicycle case schema
+/// ([`super::control_cases`]).
+pub const UNICYCLE_CONTROL: &str = "unicycle_control";
 
 /// Default integration tolerance (`rtol = atol`) for trajectories.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -346,17 +379,39 @@ pub fn evaluate_document(doc: &Value, tol: f64) -> Result<Value> {
         .ok_or_else(|| Error::invalid("model", "missing (expected e.g. \"m1_unicycle\")"))?
         .as_str()
         .ok_or_else(|| Error::invalid("model", "expected a string"))?;
-    let model = ChapterModel::from_name(name)?;
     let cases = doc
         .get("cases")
         .ok_or_else(|| Error::invalid("cases", "missing"))?
         .as_array()
         .ok_or_else(|| Error::invalid("cases", "expected a list"))?;
-    let filled = cases
-        .iter()
-        .enumerate()
-        .map(|(i, c)| evaluate_case(model, c, i, tol))
-        .collect::<Result<Vec<_>>>()?;
+    let filled = if name == UNICYCLE_CONTROL {
+        cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let out = super::control_cases::evaluate_unicycle_case(c, tol)
+                    .map_err(|e| name_case(c, i, e))?;
+                if !out.get("trajectory").is_none_or(all_finite) {
+                    return Err(name_case(
+                        c,
+                        i,
+                        Error::Numerical {
+                            t: 0.0,
+                            message: "non-finite output".into(),
+                        },
+                    ));
+                }
+                Ok(out)
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        let model = ChapterModel::from_name(name)?;
+        cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| evaluate_case(model, c, i, tol))
+            .collect::<Result<Vec<_>>>()?
+    };
     let mut out = doc.clone();
     out.as_object_mut()
         .ok_or_else(|| Error::invalid("document", "expected a JSON object"))?

@@ -283,9 +283,12 @@ where
     })
 }
 
-/// Reduced forward dynamics `v̇ = Mr⁻¹(Qr − Cr v − Gr)` and `q̇ = N_C v` (the hot path of
-/// simulation: no allocation).
-pub fn reduced_forward_dynamics<S, const N: usize, const NV: usize, const NU: usize>(
+/// The state derivative `(q̇, v̇)` of a closed-form model: `q̇ = N_C v` and the reduced
+/// forward dynamics `v̇ = Mr⁻¹(Qr − Cr v − Gr)` (the hot path of simulation: no
+/// allocation). The general wheeled model's counterpart is
+/// [`crate::mobile::reduced_forward_dynamics`].
+#[doc(alias = "reduced_forward_dynamics")]
+pub fn state_derivative<S, const N: usize, const NV: usize, const NU: usize>(
     sys: &S,
     q: &SVector<f64, N>,
     v: &SVector<f64, NV>,

@@ -185,7 +185,7 @@ impl PlatformArm {
         check_finite("state.q", &state.q)?;
         check_finite("state.v", &state.v)?;
         check_finite("inputs.u", u)?;
-        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        let (q, v) = lagrange::state_derivative(self, &state.q, &state.v, u)?;
         Ok(State { q, v })
     }
 

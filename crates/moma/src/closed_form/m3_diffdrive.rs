@@ -15,7 +15,7 @@
 use super::ad::{Real, seed_all};
 use super::{Manipulability, check_finite, finite, manipulability, positive, ser, to_dmatrix};
 use crate::error::{Error, Result};
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
@@ -26,7 +26,7 @@ pub type Configuration = SVector<f64, 6>;
 /// Parameters of m3 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
-pub struct DiffDriveParams {
+pub struct DiffDriveKinematicsParams {
     /// Wheel radius.
     pub r_w: f64,
     /// Half track (wheels 2b apart).
@@ -41,7 +41,7 @@ pub struct DiffDriveParams {
     pub L2: f64,
 }
 
-impl DiffDriveParams {
+impl DiffDriveKinematicsParams {
     /// Checks signs and finiteness.
     pub fn validate(&self) -> Result<()> {
         positive("r_w", self.r_w)?;
@@ -55,9 +55,9 @@ impl DiffDriveParams {
 
 /// The m3 kinematic model.
 #[derive(Clone, Debug)]
-pub struct DiffDrive {
+pub struct DiffDriveKinematics {
     /// Parameters.
-    pub params: DiffDriveParams,
+    pub params: DiffDriveKinematicsParams,
 }
 
 /// Every output of m3 at `(q, v)` (names as in the reference vectors).
@@ -98,11 +98,11 @@ pub struct DiffDriveOutputs {
     pub manipulability_J_mV: Manipulability,
 }
 
-impl DiffDrive {
+impl DiffDriveKinematics {
     /// Validates the parameters.
-    pub fn new(params: DiffDriveParams) -> Result<Self> {
+    pub fn new(params: DiffDriveKinematicsParams) -> Result<Self> {
         params.validate()?;
-        Ok(DiffDrive { params })
+        Ok(DiffDriveKinematics { params })
     }
 
     /// The task vector `X(q)`, generic for differentiation.
@@ -194,9 +194,9 @@ impl DiffDrive {
             det_J: j.determinant(),
             J_chapter_5_31: jc,
             J_mV: j_mv,
-            manipulability_J: manipulability(&jd),
-            manipulability_J_endeffector: manipulability(&jd.rows(2, 3).into_owned()),
-            manipulability_J_mV: manipulability(&to_dmatrix(&j_mv)),
+            manipulability_J: manipulability(&jd)?,
+            manipulability_J_endeffector: manipulability(&jd.rows(2, 3).into_owned())?,
+            manipulability_J_mV: manipulability(&to_dmatrix(&j_mv))?,
         })
     }
 
@@ -229,7 +229,7 @@ impl DiffDrive {
 /// `q̇ = N_C(q) v` with constant wheel and joint rates, as an [`OdeSystem`].
 pub struct KinematicOde<'a> {
     /// The model.
-    pub model: &'a DiffDrive,
+    pub model: &'a DiffDriveKinematics,
     /// Constant rates `v`.
     pub v: SVector<f64, 5>,
 }

@@ -10,13 +10,21 @@
 //! `L1cm = −(m2+M1+M2) L1/m1`) gives `G = 0`, `h = 0` and a block-diagonal H; the force of
 //! the arm on the cart is then `(−m_arm d̈0, −m_arm g)`, but the motor reaction `−τ1` still
 //! acts on the cart.
+//!
+//! Tip-over ([`CartTwoLink::stability`]): the cart stands on two wheel contacts a
+//! [`CartSupport::wheelbase`] apart, centred under the shoulder, on the ground
+//! [`CartSupport::shoulder_height`] below it. In 3-D terms the plane of motion is x–z
+//! (y = 0, link rotations about +y), the support is the segment between the contacts and
+//! its two tip-over axes run along y through them (rear = edge 0, front = edge 1).
 
 use super::ad::Real;
 use super::lagrange::{self, LagrangianSystem};
 use super::{check_finite, finite, nonnegative, positive, ser};
 use crate::error::Result;
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem};
-use nalgebra::{SMatrix, SVector, Vector2, Vector3};
+use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::spatial::Inertia;
+use crate::stability::{GravitoInertialWrench, StabilityReport, SupportPolygon, evaluate_measures};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// State `(q, v)` of this model (`v = q̇`).
@@ -100,6 +108,27 @@ impl CartTwoLinkParams {
             -(self.m2 + self.M1 + self.M2) * self.L1 / self.m1,
             -self.M2 * self.L2 / self.m2,
         )
+    }
+}
+
+/// One body of the cart in its plane: `(mass, [x, z], [ẍ, z̈], m k², angular acceleration)`.
+type CartBody = (f64, Vector2<f64>, Vector2<f64>, f64, f64);
+
+/// Where the cart touches the ground (the model itself has no wheels).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+pub struct CartSupport {
+    /// Distance between the rear and front wheel contacts (m), > 0; the contacts are at
+    /// `d0 ∓ wheelbase / 2`.
+    pub wheelbase: f64,
+    /// Height of the shoulder (and the cart's mass) above the ground (m), ≥ 0.
+    pub shoulder_height: f64,
+}
+
+impl CartSupport {
+    /// Checks signs and finiteness.
+    pub fn validate(&self) -> Result<()> {
+        positive("wheelbase", self.wheelbase)?;
+        nonnegative("shoulder_height", self.shoulder_height)
     }
 }
 
@@ -223,6 +252,117 @@ impl CartTwoLink {
             kinetic_energy: t.kinetic_energy,
             potential_energy: t.potential_energy,
         })
+    }
+
+    /// The five bodies (cart, link 1, M1, link 2, M2) at `(q, q̇, q̈)`, each as
+    /// `(mass, [x, z], [ẍ, z̈], m k², angular acceleration)` in the cart's plane.
+    fn bodies(&self, q: &Vector3<f64>, qdot: &Vector3<f64>, qddot: &Vector3<f64>) -> [CartBody; 5] {
+        let p = &self.params;
+        let (th1, th12) = (q[1], q[1] - q[2]);
+        let (w1, w12) = (qdot[1], qdot[1] - qdot[2]);
+        let (a1, a12) = (qddot[1], qddot[1] - qddot[2]);
+        let (s1, c1, s12, c12) = (th1.sin(), th1.cos(), th12.sin(), th12.cos());
+        // a point at distance l along a link of angle θ from the vertical
+        let pos = |l: f64, s: f64, c: f64| Vector2::new(l * s, l * c);
+        let acc = |l: f64, s: f64, c: f64, w: f64, al: f64| {
+            Vector2::new(l * (c * al - s * w * w), -l * (s * al + c * w * w))
+        };
+        let cart = Vector2::new(q[0], 0.0);
+        let cart_a = Vector2::new(qddot[0], 0.0);
+        let elbow = cart + pos(p.L1, s1, c1);
+        let elbow_a = cart_a + acc(p.L1, s1, c1, w1, a1);
+        [
+            (p.M_cart, cart, cart_a, 0.0, 0.0),
+            (
+                p.m1,
+                cart + pos(p.L1cm, s1, c1),
+                cart_a + acc(p.L1cm, s1, c1, w1, a1),
+                p.m1 * p.k1 * p.k1,
+                a1,
+            ),
+            (p.M1, elbow, elbow_a, 0.0, 0.0),
+            (
+                p.m2,
+                elbow + pos(p.L2cm, s12, c12),
+                elbow_a + acc(p.L2cm, s12, c12, w12, a12),
+                p.m2 * p.k2 * p.k2,
+                a12,
+            ),
+            (
+                p.M2,
+                elbow + pos(p.L2, s12, c12),
+                elbow_a + acc(p.L2, s12, c12, w12, a12),
+                0.0,
+                0.0,
+            ),
+        ]
+    }
+
+    /// The gravito-inertial wrench of state `(q, q̇, q̈)` in 3-D (plane of motion x–z,
+    /// y = 0, the shoulder at height 0): `f = Σ m_k (g − a_k)`, moment about the CoM
+    /// `Σ (r_k − c) × m_k (g − a_k) − Σ m_k k_k² θ̈_k ŷ`.
+    pub fn gravito_inertial_wrench(
+        &self,
+        q: &Vector3<f64>,
+        qdot: &Vector3<f64>,
+        qddot: &Vector3<f64>,
+    ) -> GravitoInertialWrench {
+        let g = Vector3::new(0.0, 0.0, -self.params.g);
+        let bodies = self.bodies(q, qdot, qddot);
+        let to3 = |v: Vector2<f64>| Vector3::new(v.x, 0.0, v.y);
+        let mass: f64 = bodies.iter().map(|b| b.0).sum();
+        let com = bodies.iter().map(|b| to3(b.1) * b.0).sum::<Vector3<f64>>() / mass;
+        let mut force = Vector3::zeros();
+        let mut moment = Vector3::zeros();
+        for (m, r, a, mk2, alpha) in bodies {
+            let load = (g - to3(a)) * m;
+            force += load;
+            moment += (to3(r) - com).cross(&load) - Vector3::new(0.0, mk2 * alpha, 0.0);
+        }
+        GravitoInertialWrench {
+            mass,
+            com,
+            force,
+            moment_about_com: moment,
+        }
+    }
+
+    /// World spatial inertia of the arm (links and lumped masses, not the cart) at `q`,
+    /// for the Moment-Height measure; link inertia `m k²` about y.
+    pub fn arm_inertia(&self, q: &Vector3<f64>) -> Inertia {
+        let z = Vector3::zeros();
+        let mut total = Inertia::zero();
+        for (m, r, _, mk2, _) in self.bodies(q, &z, &z).into_iter().skip(1) {
+            let ic = Matrix3::from_diagonal(&Vector3::new(0.0, mk2, 0.0));
+            total += Inertia::new(m, Vector3::new(r.x, 0.0, r.y), ic);
+        }
+        total
+    }
+
+    /// ZMP, Force-Angle and Moment-Height of the cart on `support` at `(q, q̇, q̈)`: the
+    /// support is the segment between the wheel contacts (edge 0 the rear axis, edge 1
+    /// the front), the Moment-Height body set is the arm.
+    pub fn stability(
+        &self,
+        support: &CartSupport,
+        q: &Vector3<f64>,
+        qdot: &Vector3<f64>,
+        qddot: &Vector3<f64>,
+    ) -> Result<StabilityReport> {
+        support.validate()?;
+        check_finite("state.q", q)?;
+        check_finite("state.qdot", qdot)?;
+        check_finite("state.qddot", qddot)?;
+        let half = 0.5 * support.wheelbase;
+        let seg = SupportPolygon::segment(
+            Vector2::new(q[0] - half, 0.0),
+            Vector2::new(q[0] + half, 0.0),
+            -support.shoulder_height,
+        )?;
+        let w = self.gravito_inertial_wrench(q, qdot, qddot);
+        let mut out = StabilityReport::with_capacity(2);
+        evaluate_measures(&w, &seg, &self.arm_inertia(q), &mut out);
+        Ok(out)
     }
 
     /// Total energy `T + V`.

@@ -411,7 +411,7 @@ impl MobileManipulator {
             BV: c.b * c.vm,
             BgG: c.b * e.terms.gravity,
             BQ: c.b * e.q_force,
-            manipulability_A: manipulability(&to_dmatrix(&c.a)),
+            manipulability_A: manipulability(&to_dmatrix(&c.a))?,
         })
     }
 
@@ -420,7 +420,7 @@ impl MobileManipulator {
         check_finite("state.q", &state.q)?;
         check_finite("state.v", &state.v)?;
         check_finite("inputs.u", u)?;
-        let (q, v) = lagrange::reduced_forward_dynamics(self, &state.q, &state.v, u)?;
+        let (q, v) = lagrange::state_derivative(self, &state.q, &state.v, u)?;
         Ok(State { q, v })
     }
 
@@ -673,8 +673,17 @@ impl TaskController {
         let e = core.x - x_d;
         let edot = core.xdot - xdot_d;
         let bv = core.b * core.vm;
-        let tau_x =
-            core.hx * xddot_d + bv * xdot_d + core.b * terms.gravity - self.kd * edot - self.kp * e;
+        let (tau_x, w) = crate::control::task::pd_plus(
+            &core.hx,
+            &bv,
+            &(core.b * terms.gravity),
+            &e,
+            &edot,
+            &xdot_d,
+            &xddot_d,
+            &self.kp,
+            &self.kd,
+        );
         let ns = ct.basis.transpose() * model.input_matrix(q);
         let u = ns
             .lu()
@@ -683,7 +692,6 @@ impl TaskController {
                 what: "actuator map N_Cᵀ S".into(),
                 detail: None,
             })?;
-        let w = 0.5 * edot.dot(&(core.hx * edot)) + 0.5 * e.dot(&(self.kp * e));
         Ok(ControlOutput {
             x_d,
             xdot_d,
@@ -717,7 +725,7 @@ impl TaskController {
         let mut x0 = [0.0; 12];
         x0[..6].copy_from_slice(q0.as_slice());
         x0[6..11].copy_from_slice(v0.as_slice());
-        let mut dp = crate::sim::Dop853::new(12, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = crate::ode::Dop853::new(12, crate::ode::AdaptiveOptions::with_tolerance(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
         rows.iter()
             .zip(times)
@@ -738,7 +746,7 @@ impl TaskController {
     }
 }
 
-/// The m5 closed loop as an [`crate::sim::OdeSystem`] on `[q; v; ∫ ėᵀKdė]`.
+/// The m5 closed loop as an [`crate::ode::OdeSystem`] on `[q; v; ∫ ėᵀKdė]`.
 pub struct ClosedLoopOde<'a> {
     /// The model.
     pub model: &'a MobileManipulator,
@@ -746,7 +754,7 @@ pub struct ClosedLoopOde<'a> {
     pub controller: &'a TaskController,
 }
 
-impl crate::sim::OdeSystem for ClosedLoopOde<'_> {
+impl crate::ode::OdeSystem for ClosedLoopOde<'_> {
     fn dim(&self) -> usize {
         12
     }
@@ -754,7 +762,7 @@ impl crate::sim::OdeSystem for ClosedLoopOde<'_> {
         let q = SVector::<f64, 6>::from_column_slice(&x[..6]);
         let v = SVector::<f64, 5>::from_column_slice(&x[6..11]);
         let c = self.controller.control(self.model, t, &q, &v)?;
-        let (qd, vd) = lagrange::reduced_forward_dynamics(self.model, &q, &v, &c.u)?;
+        let (qd, vd) = lagrange::state_derivative(self.model, &q, &v, &c.u)?;
         dx[..6].copy_from_slice(qd.as_slice());
         dx[6..11].copy_from_slice(vd.as_slice());
         dx[11] = c.dissipation;

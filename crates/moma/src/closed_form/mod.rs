@@ -1,4 +1,4 @@
-//! The chapter's robots (m1–m5) in their own coordinates, closed form.
+//! The chapter's robots (m1–m6) in their own coordinates, closed form.
 //!
 //! Each model follows the project's clean specification of the chapter (the printed
 //! equations have lost signs and contain several errors; see `docs/chapter.md`):
@@ -10,23 +10,35 @@
 //! | [`m3_diffdrive`] | wheel-rate kinematics, whole-body Jacobian | `q = [x, y, φ, φ1, θ1, θ2]` |
 //! | [`m4_cart_two_link`] | cart + two-link arm in a vertical plane | `q = [d0, θ1, θ2]` |
 //! | [`m5_mobile_manipulator`] | 3-D platform + capstan + two-link arm | `q = [x, y, φ, φt, θ1, θ12]` |
+//! | [`m6_space_manipulator`] | planar free-floating base + two-link arm | `q = [x0, y0, ψ, θ1, θ2]` |
 //!
 //! Conventions: `H q̈ + h + G = Q − Cᵀλ`, `C q̇ = 0`, `q̇ = N_C v`, `h = C_cor q̇` with the
 //! Christoffel `C_cor`, `G = ∂V/∂q` including gravity. The mass matrix and potential of
 //! each model are written once in closed form; their derivatives (Christoffel symbols,
 //! G, Ṅ_C, J̇) are exact (forward-mode dual numbers, see [`ad`]).
+//!
+//! [`multibody_models`] rebuilds m1, m2 and m5 as general multibody models (a planar-rooted
+//! [`crate::mobile::WheeledModel`]) for the cross-checks; [`cases`] evaluates case files;
+//! [`registry`] holds the models' names and aliases.
 
 pub mod ad;
 pub mod cases;
+pub mod control_cases;
 pub mod lagrange;
 pub mod m1_unicycle;
 pub mod m2_platform_arm;
 pub mod m3_diffdrive;
 pub mod m4_cart_two_link;
 pub mod m5_mobile_manipulator;
+pub mod m6_space_manipulator;
+pub mod multibody_models;
+pub mod registry;
+
+pub use registry::ChapterModel;
 
 use crate::error::{Error, Result};
-use crate::sim::OdeSystem;
+use crate::manipulability::JacobianSvd;
+use crate::ode::OdeSystem;
 use ad::Real;
 use lagrange::PfaffianSystem;
 use nalgebra::{DMatrix, SMatrix, SVector};
@@ -133,17 +145,18 @@ pub fn fixed_vector<const K: usize>(field: &str, x: &[f64]) -> Result<SVector<f6
     Ok(SVector::from_column_slice(x))
 }
 
-/// Manipulability measures of a Jacobian `J` (m×n) with singular values `σ`.
+/// Manipulability measures of a Jacobian `J` (m×n) with singular values `σ`, in the
+/// schema of the chapter's reference vectors (computed by [`crate::manipulability`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct Manipulability {
     /// `[m, n]`.
     pub shape: [usize; 2],
     /// Singular values of J, descending.
     pub singular_values: Vec<f64>,
-    /// The chapter's measure `det(JᵀJ)` (≈ 0 for a wide J).
+    /// The chapter's measure `det(JᵀJ)` (0 for a wide J, where it vanishes identically).
     #[serde(rename = "det_JtJ")]
     pub det_jtj: f64,
-    /// Yoshikawa's measure `sqrt(det(J Jᵀ))` (0 for a tall J).
+    /// Yoshikawa's measure `sqrt(det(J Jᵀ))` (0 for a tall J, where it vanishes identically).
     #[serde(rename = "yoshikawa_sqrt_det_JJt")]
     pub yoshikawa: f64,
     /// `σ_min / σ_max`.
@@ -152,35 +165,29 @@ pub struct Manipulability {
     pub w5_bayle_eccentricity: f64,
 }
 
-/// Computes the [`Manipulability`] measures of `j`.
+/// Computes the [`Manipulability`] measures of `j` from one SVD
+/// ([`crate::manipulability::JacobianSvd`]). Errors for an empty or non-finite `j`.
 #[doc(alias = "Yoshikawa")]
-pub fn manipulability(j: &DMatrix<f64>) -> Manipulability {
-    let (m, n) = j.shape();
-    let mut sv: Vec<f64> = j
-        .clone()
-        .svd(false, false)
-        .singular_values
-        .iter()
-        .copied()
-        .collect();
-    sv.sort_by(|a, b| b.total_cmp(a));
-    let det_jtj = (j.transpose() * j).determinant();
-    let yoshikawa = if m <= n {
-        (j * j.transpose()).determinant().max(0.0).sqrt()
-    } else {
-        0.0
-    };
-    let smax = sv.first().copied().unwrap_or(0.0);
-    let smin = sv.last().copied().unwrap_or(0.0);
-    let w2 = if smax > 0.0 { smin / smax } else { 0.0 };
-    Manipulability {
-        shape: [m, n],
-        singular_values: sv,
-        det_jtj,
-        yoshikawa,
-        w2_sigma_ratio: w2,
-        w5_bayle_eccentricity: (1.0 - w2 * w2).max(0.0).sqrt(),
-    }
+pub fn manipulability(j: &DMatrix<f64>) -> Result<Manipulability> {
+    let svd = JacobianSvd::new(j)?;
+    Ok(Manipulability {
+        shape: [svd.rows, svd.cols],
+        singular_values: svd.singular_values.iter().copied().collect(),
+        // Both measures are defined for every shape; each is identically zero on the
+        // shapes the module refuses (a wide J for det(JᵀJ), a tall J for Yoshikawa).
+        det_jtj: if svd.rows < svd.cols {
+            0.0
+        } else {
+            svd.det_jtj()?
+        },
+        yoshikawa: if svd.rows > svd.cols {
+            0.0
+        } else {
+            svd.yoshikawa()?
+        },
+        w2_sigma_ratio: svd.inverse_condition(),
+        w5_bayle_eccentricity: svd.eccentricity(),
+    })
 }
 
 /// A state `(q, v)` of a closed-form model: configuration `q` (N) and velocities `v` (NV;
@@ -220,14 +227,15 @@ impl<const N: usize, const NV: usize> ModelState<N, NV> {
 
 /// The reduced dynamics of a constrained model under a constant input `u`, as an
 /// [`OdeSystem`] on the state `x = [q; v]` (`q̇ = N_C(q) v`, `v̇ = Mr⁻¹(Qr − Cr v − Gr)`).
-pub struct ReducedOde<'a, S, const N: usize, const NV: usize, const NU: usize> {
+pub struct ConstantInputOde<'a, S, const N: usize, const NV: usize, const NU: usize> {
     /// The model.
     pub system: &'a S,
     /// The constant input.
     pub input: SVector<f64, NU>,
 }
 
-impl<S, const N: usize, const NV: usize, const NU: usize> OdeSystem for ReducedOde<'_, S, N, NV, NU>
+impl<S, const N: usize, const NV: usize, const NU: usize> OdeSystem
+    for ConstantInputOde<'_, S, N, NV, NU>
 where
     S: PfaffianSystem<N, NV, NU>,
 {
@@ -237,7 +245,7 @@ where
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
         let q = SVector::<f64, N>::from_column_slice(&x[..N]);
         let v = SVector::<f64, NV>::from_column_slice(&x[N..N + NV]);
-        let (qd, vd) = lagrange::reduced_forward_dynamics(self.system, &q, &v, &self.input)
+        let (qd, vd) = lagrange::state_derivative(self.system, &q, &v, &self.input)
             .map_err(|e| e.singular_at_time(t))?;
         dx[..N].copy_from_slice(qd.as_slice());
         dx[N..N + NV].copy_from_slice(vd.as_slice());
@@ -245,7 +253,7 @@ where
     }
 }
 
-/// Integrates a [`ReducedOde`] with DOP853 at `rtol = atol = tol` and returns
+/// Integrates a [`ConstantInputOde`] with DOP853 at `rtol = atol = tol` and returns
 /// `(q, v)` at each requested time.
 #[allow(clippy::type_complexity)]
 pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
@@ -259,11 +267,11 @@ pub fn simulate_reduced<S, const N: usize, const NV: usize, const NU: usize>(
 where
     S: PfaffianSystem<N, NV, NU>,
 {
-    let mut ode = ReducedOde { system, input: *u };
+    let mut ode = ConstantInputOde { system, input: *u };
     let mut x0 = vec![0.0; N + NV];
     x0[..N].copy_from_slice(q0.as_slice());
     x0[N..].copy_from_slice(v0.as_slice());
-    let mut dp = crate::sim::Dop853::new(N + NV, crate::sim::AdaptiveOptions::with_tolerance(tol))?;
+    let mut dp = crate::ode::Dop853::new(N + NV, crate::ode::AdaptiveOptions::with_tolerance(tol))?;
     let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
     Ok(rows
         .iter()

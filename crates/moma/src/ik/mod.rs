@@ -27,12 +27,15 @@
 //! the iteration limit ends as [`IkStatus::ObjectiveUnsettled`]; never an error or NaN.
 //!
 //! Tasks on real models (frame pose of a URDF arm, whole-body pose of a mobile
-//! manipulator) live in [`tasks`].
+//! manipulator) live in [`tasks`]; base-placement maps (IK and a manipulability measure
+//! over a grid of base poses) in [`placement`].
 
 pub mod model;
+pub mod placement;
 pub mod tasks;
 
 use crate::error::{Error, Result, ensure_finite};
+use crate::linalg::{cholesky_in_place, cholesky_solve};
 use crate::manipulability::{JacobianSvd, Measure, evaluate_svd};
 use nalgebra::{DMatrix, DVector};
 
@@ -518,12 +521,13 @@ fn damped_step(
         }
         ws.y[r] = s;
     }
-    if !cholesky_solve_in_place(&mut ws.a, &mut ws.y) {
+    if cholesky_in_place(&mut ws.a, 0.0).is_err() {
         return Err(Error::Numerical {
             t: 0.0,
             message: "inverse kinematics: damped normal matrix not positive definite".into(),
         });
     }
+    cholesky_solve(&ws.a, &mut ws.y);
     for k in 0..nv {
         let mut s = 0.0;
         for r in 0..m {
@@ -536,47 +540,6 @@ fn damped_step(
         ws.delta[k] = d;
     }
     Ok(())
-}
-
-/// Solves `A y = b` for symmetric positive-definite `A` by an in-place Cholesky
-/// factorisation (A is overwritten by its factor; no allocation). False if A is not
-/// positive definite.
-fn cholesky_solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> bool {
-    let n = a.nrows();
-    for j in 0..n {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
-        }
-        if !d.is_finite() || d <= 0.0 {
-            return false;
-        }
-        let l = d.sqrt();
-        a[(j, j)] = l;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / l;
-        }
-    }
-    // L z = b, then Lᵀ y = z.
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[(i, k)] * b[k];
-        }
-        b[i] = s / a[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= a[(k, i)] * b[k];
-        }
-        b[i] = s / a[(i, i)];
-    }
-    true
 }
 
 /// Fills `ws.grad` with the gradient of the secondary objective; false if none.

@@ -6,18 +6,10 @@ use nalgebra::{DVector, Quaternion, UnitQuaternion, Vector3};
 use rand::Rng;
 use std::f64::consts::PI;
 
-/// The neutral configuration q₀ (nq): zeros, identity quaternion for a free-flyer.
-/// Allocates.
-#[must_use]
-pub fn neutral(model: &Model) -> DVector<f64> {
-    let mut q = DVector::zeros(model.nq);
-    for i in 1..model.njoints {
-        if matches!(model.joint_types[i], JointType::FreeFlyer) {
-            q[model.idx_q[i] + 6] = 1.0;
-        }
-    }
-    q
-}
+/// The neutral configuration is defined with the model (`Data::new` needs it, and
+/// `multibody` sits below `kinematics`); it is re-exported here beside its siblings.
+#[doc(no_inline)]
+pub use crate::multibody::neutral;
 
 fn ff_parts(q: &[f64]) -> (Vector3<f64>, UnitQuaternion<f64>) {
     (

@@ -25,8 +25,9 @@
 //! [`Error::NonFinite`], and the divisions that blow up at a singularity are reported
 //! as [`Error::Singular`] (condition number, force radius) or take their limit
 //! (inverse condition number 0, velocity radius 0, eccentricity 1).
-
-pub mod placement;
+//!
+//! Maps of these measures over base placements need IK at every sample and live in
+//! [`crate::ik::placement`].
 
 use crate::error::{Error, Result, ensure_finite};
 use nalgebra::{DMatrix, DVector};

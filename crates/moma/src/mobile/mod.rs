@@ -1,7 +1,6 @@
 //! Wheeled platforms: wheel contacts, Pfaffian constraints, admissible-velocity basis,
 //! reduced dynamics, whole-body Jacobian.
 
-pub mod chapter_robots;
 pub mod constrained_aba;
 pub mod diff_drive;
 pub mod nullspace;

@@ -24,6 +24,11 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
+use crate::linalg::{cholesky_in_place, cholesky_solve};
+
+/// Relative pivot tolerance of the Cholesky factorisations of Mr and C H⁻¹ Cᵀ: a pivot
+/// not above `PIVOT_TOL` times the largest diagonal entry counts as singular.
+pub(crate) const PIVOT_TOL: f64 = 1e-14;
 
 /// Joint-space terms of `H q̈ + h + G = Q − Cᵀλ` at one state, borrowed from wherever they
 /// were computed (the rigid-body core or a closed-form model).
@@ -148,7 +153,7 @@ impl ReducedDynamics {
     /// as the wheeled-model fast path) and solves for v̇; `qddot` is left to the caller.
     pub(crate) fn solve_reduced(&mut self) -> Result<()> {
         self.chol.copy_from(&self.mass_matrix);
-        cholesky_in_place(&mut self.chol).map_err(|pivot| Error::Singular {
+        cholesky_in_place(&mut self.chol, PIVOT_TOL).map_err(|pivot| Error::Singular {
             what: "reduced mass matrix Mr = N_Cᵀ H N_C".into(),
             detail: Some(format!("not positive definite (pivot {pivot})")),
         })?;
@@ -210,7 +215,7 @@ impl ReducedDynamics {
                 self.cct[(i, j)] = c.row(i).dot(&c.row(j));
             }
         }
-        cholesky_in_place(&mut self.cct).map_err(|_| Error::Singular {
+        cholesky_in_place(&mut self.cct, PIVOT_TOL).map_err(|_| Error::Singular {
             what: "constraint matrix C C^T".into(),
             detail: Some("constraint rows are linearly dependent".into()),
         })?;
@@ -259,68 +264,5 @@ fn symmetrize(m: &mut DMatrix<f64>) {
             m[(i, j)] = s;
             m[(j, i)] = s;
         }
-    }
-}
-
-/// In-place Cholesky `A = L Lᵀ` (lower triangle of `a` becomes L). Returns the failing
-/// pivot index if `a` is not (numerically) positive definite.
-pub(crate) fn cholesky_in_place(a: &mut DMatrix<f64>) -> std::result::Result<(), usize> {
-    let n = a.nrows();
-    let scale = (0..n).map(|i| a[(i, i)].abs()).fold(0.0, f64::max);
-    for j in 0..n {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
-        }
-        if !d.is_finite() || d <= 1e-14 * scale {
-            return Err(j);
-        }
-        let d = d.sqrt();
-        a[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / d;
-        }
-    }
-    Ok(())
-}
-
-/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`].
-pub(crate) fn cholesky_solve(l: &DMatrix<f64>, b: &mut DVector<f64>) {
-    let n = l.nrows();
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[(i, k)] * b[k];
-        }
-        b[i] = s / l[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= l[(k, i)] * b[k];
-        }
-        b[i] = s / l[(i, i)];
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cholesky_solves_and_reports_indefinite() {
-        let a = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
-        let mut l = a.clone();
-        cholesky_in_place(&mut l).unwrap();
-        let mut x = DVector::from_vec(vec![1.0, -2.0, 0.5]);
-        let b = x.clone();
-        cholesky_solve(&l, &mut x);
-        assert!((&a * x - b).norm() < 1e-14);
-        let mut bad = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-        assert_eq!(cholesky_in_place(&mut bad), Err(1));
     }
 }

@@ -31,8 +31,9 @@ use serde::{Deserialize, Serialize};
 use crate::dynamics::{centroidal_momentum, crba, kinetic_energy, potential_energy, rnea};
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_jacobian};
+use crate::linalg::{cholesky_in_place, cholesky_solve};
 use crate::mobile::diff_drive::DiffDrive;
-use crate::mobile::reduced::{ReducedDynamics, cholesky_in_place, cholesky_solve};
+use crate::mobile::reduced::{PIVOT_TOL, ReducedDynamics};
 use crate::multibody::{Data, FrameIndex, JointType, Model, RootJoint};
 
 /// A passive caster: a support contact point of the base. It adds no kinematic
@@ -707,7 +708,7 @@ pub fn frame_velocity_world(
 /// Mr⁻¹ explicitly). Reports [`Error::Singular`] if Mr is not positive definite.
 pub fn solve_reduced_mass(mr: &DMatrix<f64>, b: &mut DVector<f64>) -> Result<()> {
     let mut l = mr.clone();
-    cholesky_in_place(&mut l).map_err(|p| Error::Singular {
+    cholesky_in_place(&mut l, PIVOT_TOL).map_err(|p| Error::Singular {
         what: "reduced mass matrix Mr".into(),
         detail: Some(format!("pivot {p}")),
     })?;

@@ -98,7 +98,7 @@ impl Data {
         let n = model.njoints;
         let nv = model.nv;
         let mut s = vec![Motion::zero(); nv];
-        let q0 = crate::kinematics::neutral(model);
+        let q0 = super::neutral(model);
         for i in 1..n {
             let q = &q0.as_slice()[model.idx_q[i]..model.idx_q[i] + model.nqs[i]];
             for k in 0..model.nvs[i] {

@@ -50,4 +50,4 @@ mod model;
 pub use builder::{JointLimits, ModelBuilder};
 pub use data::{ArticulatedInertia, Data};
 pub use joint::{FrameIndex, JointIndex, JointType, axis_rotation, free_flyer_transform};
-pub use model::{Frame, FrameKind, Model, RootJoint};
+pub use model::{Frame, FrameKind, Model, RootJoint, neutral};

@@ -212,3 +212,16 @@ impl Model {
         }
     }
 }
+
+/// The neutral configuration q₀ (nq): zeros, identity quaternion for a free-flyer.
+/// Allocates. (Also reachable as `kinematics::neutral`.)
+#[must_use]
+pub fn neutral(model: &Model) -> DVector<f64> {
+    let mut q = DVector::zeros(model.nq);
+    for i in 1..model.njoints {
+        if matches!(model.joint_types[i], JointType::FreeFlyer) {
+            q[model.idx_q[i] + 6] = 1.0;
+        }
+    }
+    q
+}

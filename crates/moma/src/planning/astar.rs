@@ -403,8 +403,12 @@ impl OpenList {
 /// band's unsorted vector, moved into the heap once when the band is reached: each entry
 /// moves at most once, where a radix heap moves it down bucket after bucket (on a maze,
 /// whose f rises at almost every step, that was the search's largest cost).
+///
+/// The band width is `2^shift` (default [`CAL_SHIFT`]; [`BandQueue::with_shift`] for
+/// searches whose steps are larger, such as the 3-D one).
 #[derive(Debug, Clone)]
-struct BandQueue {
+pub(super) struct BandQueue {
+    shift: u32,
     last: u64,
     /// Bit c set ⇔ band vector c is non-empty.
     mask: u64,
@@ -418,11 +422,21 @@ struct BandQueue {
 }
 
 const CAL_SHIFT: u32 = 14;
-const CAL_BUCKETS: u32 = 64;
+pub(super) const CAL_BUCKETS: u32 = 64;
 
 impl Default for BandQueue {
     fn default() -> Self {
+        Self::with_shift(CAL_SHIFT)
+    }
+}
+
+impl BandQueue {
+    /// An empty queue of bands `2^shift` wide: it holds keys in `[last, last +
+    /// (CAL_BUCKETS − 1)·2^shift)`.
+    pub(super) fn with_shift(shift: u32) -> Self {
+        assert!(shift < 57, "band width beyond the key range");
         Self {
+            shift,
             last: 0,
             mask: 0,
             cur: 0,
@@ -432,13 +446,19 @@ impl Default for BandQueue {
             seq: 0,
         }
     }
-}
 
-impl BandQueue {
+    /// Entries the queue's buffers can hold without growing.
+    pub(super) fn capacity(&self) -> usize {
+        self.bands.iter().map(Vec::capacity).sum::<usize>()
+            + self.equal.capacity()
+            + self.heap.capacity()
+    }
+
     /// A queue without bands (allocates nothing): only a stand-in while the workspace's
     /// own queue is taken out for a search.
     fn unallocated() -> Self {
         Self {
+            shift: CAL_SHIFT,
             last: 0,
             mask: 0,
             cur: 0,
@@ -450,10 +470,10 @@ impl BandQueue {
     }
 
     /// Empties the queue; keys pushed must be at least `first` and within the window.
-    fn clear(&mut self, first: u64) {
+    pub(super) fn clear(&mut self, first: u64) {
         self.last = first;
         self.mask = 0;
-        self.cur = ((first >> CAL_SHIFT) % u64::from(CAL_BUCKETS)) as u32;
+        self.cur = ((first >> self.shift) % u64::from(CAL_BUCKETS)) as u32;
         self.bands.iter_mut().for_each(Vec::clear);
         self.equal.clear();
         self.heap.clear();
@@ -467,23 +487,23 @@ impl BandQueue {
     }
 
     #[inline(always)]
-    fn push(&mut self, key: u64, idx: u32) {
+    pub(super) fn push(&mut self, key: u64, idx: u32) {
         debug_assert!(key >= self.last);
-        debug_assert!(key - self.last < u64::from(CAL_BUCKETS - 1) << CAL_SHIFT);
+        debug_assert!(key - self.last < u64::from(CAL_BUCKETS - 1) << self.shift);
         if key == self.last {
             self.equal.push((key, idx));
-        } else if key >> CAL_SHIFT == self.last >> CAL_SHIFT {
+        } else if key >> self.shift == self.last >> self.shift {
             let e = self.heap_entry(key, idx);
             band_push(&mut self.heap, e);
         } else {
-            let c = ((key >> CAL_SHIFT) % u64::from(CAL_BUCKETS)) as usize;
+            let c = ((key >> self.shift) % u64::from(CAL_BUCKETS)) as usize;
             self.mask |= 1u64 << c;
             self.bands[c].push((key, idx));
         }
     }
 
     #[inline(always)]
-    fn pop(&mut self) -> Option<(u64, u32)> {
+    pub(super) fn pop(&mut self) -> Option<(u64, u32)> {
         if let Some(e) = self.equal.pop() {
             return Some(e);
         }

@@ -23,7 +23,7 @@ pub mod trajectory;
 pub use astar::{AstarWorkspace, GridPath, SearchGrid, astar, astar_with, octile, wavefront};
 pub use edt::{EdtWorkspace, distance_transform, distance_transform_into};
 pub use grid::{CellCounts, MapKind, OccupancyGrid};
-pub use grid3::{Grid3, Path3, astar3d};
+pub use grid3::{Astar3Workspace, Grid3, Path3, astar3d, astar3d_with};
 pub use movingai::{
     MovingAiScenario, Scen3Problem, ScenProblem, load_3dmap, load_3dscen, load_movingai_map,
 };

@@ -222,6 +222,13 @@ pub fn load_image_with_meta(meta: &RosMapMeta) -> Result<OccupancyGrid> {
         path: path.clone(),
         source,
     })?;
+    decode_image_map(&bytes, meta)
+}
+
+/// Decodes the bytes of a PGM/PNG map image (the file `meta` names, which only names it
+/// in errors) and converts it with `meta`'s thresholds and mode.
+pub fn decode_image_map(bytes: &[u8], meta: &RosMapMeta) -> Result<OccupancyGrid> {
+    let path = &meta.image;
     let img = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::parse(path, format!("cannot read image: {e}")))?

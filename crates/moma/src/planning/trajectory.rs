@@ -58,47 +58,67 @@ pub struct TrajectoryPoint {
     pub omega: f64,
 }
 
-/// Trapezoidal rest-to-rest profile over a distance `d ≥ 0`: returns (duration,
-/// position(t), velocity(t)).
+/// Direction-dependent linear acceleration limits (m/s²) of the platform along its
+/// heading, e.g. the tip-over limits of a loaded robot: `forward` bounds speeding up
+/// (acceleration along +heading), `backward` bounds braking (acceleration along
+/// −heading). Each applies on top of [`DiffDriveLimits::a_max`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DirectionalAcceleration {
+    /// Largest acceleration along the heading (m/s²), > 0.
+    pub forward: f64,
+    /// Largest deceleration, i.e. acceleration against the heading (m/s²), > 0.
+    pub backward: f64,
+}
+
+/// Trapezoidal rest-to-rest profile over a distance `d ≥ 0` accelerating at `a_up` and
+/// braking at `a_down`: returns (duration, position(t), velocity(t)).
 struct Trapezoid {
     d: f64,
     vp: f64,
-    a: f64,
+    a_up: f64,
+    a_down: f64,
     t_acc: f64,
     t_cruise: f64,
+    t_dec: f64,
 }
 
 impl Trapezoid {
     fn new(d: f64, vmax: f64, amax: f64) -> Self {
-        let (vp, t_acc, t_cruise) = if d * amax >= vmax * vmax {
-            (vmax, vmax / amax, (d - vmax * vmax / amax) / vmax)
+        Self::asymmetric(d, vmax, amax, amax)
+    }
+    fn asymmetric(d: f64, vmax: f64, a_up: f64, a_down: f64) -> Self {
+        // distance to reach v and stop again: v² (1/a_up + 1/a_down) / 2
+        let k = 0.5 * (1.0 / a_up + 1.0 / a_down);
+        let (vp, t_cruise) = if d >= vmax * vmax * k {
+            (vmax, (d - vmax * vmax * k) / vmax)
         } else {
-            let vp = (d * amax).sqrt();
-            (vp, vp / amax, 0.0)
+            ((d / k).sqrt(), 0.0)
         };
         Self {
             d,
             vp,
-            a: amax,
-            t_acc,
+            a_up,
+            a_down,
+            t_acc: vp / a_up,
             t_cruise,
+            t_dec: vp / a_down,
         }
     }
     fn duration(&self) -> f64 {
-        2.0 * self.t_acc + self.t_cruise
+        self.t_acc + self.t_cruise + self.t_dec
     }
     fn at(&self, t: f64) -> (f64, f64) {
         let t = t.clamp(0.0, self.duration());
         if t <= self.t_acc {
-            (0.5 * self.a * t * t, self.a * t)
+            (0.5 * self.a_up * t * t, self.a_up * t)
         } else if t <= self.t_acc + self.t_cruise {
             (
-                0.5 * self.a * self.t_acc * self.t_acc + self.vp * (t - self.t_acc),
+                0.5 * self.a_up * self.t_acc * self.t_acc + self.vp * (t - self.t_acc),
                 self.vp,
             )
         } else {
             let r = self.duration() - t;
-            (self.d - 0.5 * self.a * r * r, self.a * r)
+            (self.d - 0.5 * self.a_down * r * r, self.a_down * r)
         }
     }
 }
@@ -133,7 +153,39 @@ pub fn time_parameterize(
     limits: &DiffDriveLimits,
     dt: f64,
 ) -> Result<Vec<TrajectoryPoint>> {
+    time_parameterize_directional(waypoints, initial_heading, limits, None, dt)
+}
+
+/// [`time_parameterize`] with the straight segments' acceleration further bounded by
+/// direction: speeding up at most `accel.forward`, braking at most `accel.backward`
+/// (each also at most `a_max`). Pass the tip-over acceleration limits of the loaded robot
+/// (`moma::stability`) so that no straight segment of the motion tips it; the turns in
+/// place keep `α_max`.
+///
+/// # Errors
+/// As [`time_parameterize`], and for a non-positive or non-finite directional limit.
+pub fn time_parameterize_directional(
+    waypoints: &[[f64; 2]],
+    initial_heading: Option<f64>,
+    limits: &DiffDriveLimits,
+    accel: Option<&DirectionalAcceleration>,
+    dt: f64,
+) -> Result<Vec<TrajectoryPoint>> {
     limits.validate()?;
+    let (a_up, a_down) = match accel {
+        Some(d) => {
+            for (n, v) in [("forward", d.forward), ("backward", d.backward)] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(Error::invalid(
+                        format!("acceleration limit {n}"),
+                        format!("must be finite and > 0, got {v}"),
+                    ));
+                }
+            }
+            (d.forward.min(limits.a_max), d.backward.min(limits.a_max))
+        }
+        None => (limits.a_max, limits.a_max),
+    };
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::invalid(
             "dt",
@@ -210,7 +262,7 @@ pub fn time_parameterize(
         }
         theta = heading;
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        let prof = Trapezoid::new(len, limits.v_max, limits.a_max);
+        let prof = Trapezoid::asymmetric(len, limits.v_max, a_up, a_down);
         let (c, s) = (heading.cos(), heading.sin());
         push_phase(&mut out, t0, prof.duration(), &|tau| {
             let (d, v) = prof.at(tau);

@@ -3,11 +3,11 @@
 
 use nalgebra::SVector;
 
-use crate::closed_form::PlatformVelocity;
 use crate::closed_form::lagrange::{self, PfaffianSystem};
 use crate::closed_form::m1_unicycle::{Unicycle, UnicycleParams};
 use crate::closed_form::m2_platform_arm::{PlatformArm, PlatformArmParams};
 use crate::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
+use crate::closed_form::{ChapterModel, PlatformVelocity};
 use crate::error::{Error, Result};
 use crate::sim::wheeled::ReducedSystem;
 
@@ -25,6 +25,22 @@ fn platform_v_names(velocity: PlatformVelocity) -> [&'static str; 2] {
     match velocity {
         PlatformVelocity::LateralVelocity => ["v_F", "v_T"],
         PlatformVelocity::YawRate => ["v_F", "phi_dot"],
+    }
+}
+
+/// The SI unit of a channel of the chapter models: positions in m, speeds `v_F`, `v_T`
+/// in m/s, angles in rad, angle rates (`…_dot`) in rad/s, torques (`tau_…`) in N m.
+///
+/// # Panics
+/// On a name that none of m1, m2, m5 uses (a test covers all of them).
+fn chapter_unit(name: &str) -> &'static str {
+    match name {
+        "x" | "y" => "m",
+        "v_F" | "v_T" => "m/s",
+        "phi" | "phit" | "theta1" | "theta2" | "theta12" => "rad",
+        n if n.ends_with("_dot") => "rad/s",
+        n if n.starts_with("tau_") => "N m",
+        other => panic!("no unit for chapter channel '{other}'"),
     }
 }
 
@@ -64,9 +80,12 @@ pub fn m5(params: MobileManipulatorParams) -> Result<ClosedFormSystem<MobileMani
     })
 }
 
-/// Builds the chapter model `name` (`m1`, `m2` or `m5`) from a table of parameters
-/// (the field names of the reference vectors, e.g. `m`, `I`, `d`, `r_w`, `b` for m1).
-/// Unknown names and missing or malformed parameters are errors naming the field.
+/// Builds the chapter model `name` from a table of parameters (the field names of the
+/// reference vectors, e.g. `m`, `I`, `d`, `r_w`, `b` for m1). Names are those of the one
+/// registry, [`ChapterModel::from_name`] (canonical names such as `m1_unicycle` and
+/// aliases such as `m1`), the same that `moma eval` accepts; the dynamic constrained
+/// models m1, m2 and m5 can be simulated. Unknown names, the other models and missing or
+/// malformed parameters are errors naming the field.
 pub fn chapter_system(name: &str, params: &serde_json::Value) -> Result<Box<dyn ReducedSystem>> {
     fn parse<T: serde::de::DeserializeOwned>(name: &str, params: &serde_json::Value) -> Result<T> {
         if let Some(obj) = params.as_object() {
@@ -82,16 +101,36 @@ pub fn chapter_system(name: &str, params: &serde_json::Value) -> Result<Box<dyn 
         serde_json::from_value(params.clone())
             .map_err(|e| Error::invalid(format!("params of model {name}"), e.to_string()))
     }
-    match name {
-        "m1" => Ok(Box::new(m1(parse(name, params)?)?)),
-        "m2" => Ok(Box::new(m2(parse(name, params)?)?)),
-        "m5" => Ok(Box::new(m5(parse(name, params)?)?)),
-        other => Err(Error::Unknown {
-            kind: "chapter model (expected m1, m2 or m5)",
-            name: other.to_string(),
-        }),
+    match ChapterModel::from_name(name)? {
+        ChapterModel::M1Unicycle => Ok(Box::new(m1(parse(name, params)?)?)),
+        ChapterModel::M2PlatformArm => Ok(Box::new(m2(parse(name, params)?)?)),
+        ChapterModel::M5MobileManipulator => Ok(Box::new(m5(parse(name, params)?)?)),
+        other @ (ChapterModel::M3DiffDrive
+        | ChapterModel::M4CartTwoLink
+        | ChapterModel::M6SpaceManipulator) => {
+            let simulable: Vec<String> = SIMULABLE
+                .iter()
+                .map(|m| format!("{} ({})", m.canonical_name(), m.short_name()))
+                .collect();
+            Err(Error::invalid(
+                "model",
+                format!(
+                    "chapter model '{name}' ({}) is not a constrained dynamic model that the \
+                     simulator runs; simulable models: {}",
+                    other.canonical_name(),
+                    simulable.join(", ")
+                ),
+            ))
+        }
     }
 }
+
+/// The chapter models [`chapter_system`] builds.
+pub const SIMULABLE: [ChapterModel; 3] = [
+    ChapterModel::M1Unicycle,
+    ChapterModel::M2PlatformArm,
+    ChapterModel::M5MobileManipulator,
+];
 
 impl<S, const N: usize, const NV: usize, const NU: usize> ClosedFormSystem<S, N, NV, NU>
 where
@@ -127,6 +166,15 @@ where
     fn u_names(&self) -> Vec<String> {
         self.u_names.iter().map(|s| s.to_string()).collect()
     }
+    fn q_units(&self) -> Vec<&'static str> {
+        self.q_names.iter().map(|n| chapter_unit(n)).collect()
+    }
+    fn v_units(&self) -> Vec<&'static str> {
+        self.v_names.iter().map(|n| chapter_unit(n)).collect()
+    }
+    fn u_units(&self) -> Vec<&'static str> {
+        self.u_names.iter().map(|n| chapter_unit(n)).collect()
+    }
     fn dynamics(
         &mut self,
         q: &[f64],
@@ -135,7 +183,7 @@ where
         qdot: &mut [f64],
         vdot: &mut [f64],
     ) -> Result<()> {
-        let (qd, vd) = lagrange::reduced_forward_dynamics(
+        let (qd, vd) = lagrange::state_derivative(
             &self.model,
             &SVector::<f64, N>::from_column_slice(q),
             &SVector::<f64, NV>::from_column_slice(v),
@@ -178,5 +226,25 @@ where
         )?;
         out[0] = ev.lambda;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_names_build_the_same_system_and_kinematic_models_are_refused() {
+        let p = serde_json::json!({"m": 20.0, "I": 0.5, "d": 0.1, "r_w": 0.05, "b": 0.2});
+        for name in ["m1", "m1_unicycle"] {
+            let sys = chapter_system(name, &p).unwrap();
+            assert_eq!((sys.nq(), sys.nv(), sys.nu()), (3, 2, 2), "{name}");
+        }
+        for name in ["m3", "m4_cart_two_link"] {
+            let err = chapter_system(name, &p).err().unwrap().to_string();
+            assert!(err.contains("simulable models"), "{name}: {err}");
+        }
+        let err = chapter_system("m7", &p).err().unwrap().to_string();
+        assert!(err.contains("unknown model 'm7'"), "{err}");
     }
 }

@@ -1,19 +1,18 @@
-//! Integrators, the simulation loop and recorders.
+//! The simulation loop, monitors and recorders.
 //!
-//! [`integrators`] holds the generic ODE machinery: the [`OdeSystem`] trait, fixed-step
-//! classical Runge–Kutta ([`Rk4`]) and adaptive embedded pairs with error control
-//! ([`AdaptiveRk`]: Dormand–Prince 5(4) as [`DormandPrince45`], order-8 DOP853 as
-//! [`Dop853`]), exact output at requested times, step statistics, NaN / blow-up detection
-//! and a step-count guard.
+//! The ODE integrators live one layer down in [`crate::ode`] (the chapter's closed forms
+//! use them too); their types are re-exported here so `moma::sim::Rk4` and friends keep
+//! working.
 
 pub mod chapter_models;
-pub mod integrators;
+pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
 pub mod scenario;
 pub mod wheeled;
 pub mod wheeled_system;
 
-pub use integrators::{
+#[doc(no_inline)]
+pub use crate::ode::{
     AdaptiveOptions, AdaptiveRk, Dop853, DormandPrince45, EmbeddedMethod, OdeSystem, Rk4, StepStats,
 };

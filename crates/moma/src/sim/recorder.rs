@@ -11,6 +11,8 @@ pub struct Recorder {
     pub v_names: Vec<String>,
     /// Names of the inputs u.
     pub u_names: Vec<String>,
+    /// SI units of q, v and u (each empty, or one per name), for the CSV header.
+    pub units: [Vec<String>; 3],
     /// Sample times (s).
     pub times: Vec<f64>,
     /// Configurations, `times.len() × q_names.len()` row-major.
@@ -46,6 +48,7 @@ impl Recorder {
             q_names,
             v_names,
             u_names,
+            units: Default::default(),
             times: Vec::with_capacity(capacity),
             q: Vec::with_capacity(capacity * nq),
             v: Vec::with_capacity(capacity * nv),
@@ -120,26 +123,47 @@ impl Recorder {
         (self.kinetic[i] + self.potential[i]) - (self.kinetic[0] + self.potential[0]) - self.work[i]
     }
 
-    /// The trajectory as CSV text: a header
-    /// `t,q…,v…,u…,kinetic,potential,work,energy_error,residual[,lambda…]`
+    /// Sets the units of q, v and u (one per name each).
+    ///
+    /// # Panics
+    /// If a length does not match the channel names.
+    pub fn set_units(&mut self, q: Vec<&str>, v: Vec<&str>, u: Vec<&str>) {
+        assert_eq!(q.len(), self.q_names.len(), "q units");
+        assert_eq!(v.len(), self.v_names.len(), "v units");
+        assert_eq!(u.len(), self.u_names.len(), "u units");
+        let own = |x: Vec<&str>| x.into_iter().map(String::from).collect();
+        self.units = [own(q), own(v), own(u)];
+    }
+
+    /// The CSV header: every column `name [unit]` (`t [s]`, `x [m]`, `kinetic [J]`, the
+    /// residual ‖C q̇‖ in m/s, the multipliers in N); a q, v or u column without a set
+    /// unit is the bare name.
+    pub fn csv_header(&self) -> String {
+        let mut cols = vec!["t [s]".to_string()];
+        for (names, units) in [&self.q_names, &self.v_names, &self.u_names]
+            .into_iter()
+            .zip(&self.units)
+        {
+            for (i, n) in names.iter().enumerate() {
+                cols.push(match units.get(i) {
+                    Some(u) => format!("{n} [{u}]"),
+                    None => n.clone(),
+                });
+            }
+        }
+        for c in ["kinetic", "potential", "work", "energy_error"] {
+            cols.push(format!("{c} [J]"));
+        }
+        cols.push("residual [m/s]".into());
+        cols.extend(self.lambda_names.iter().map(|n| format!("{n} [N]")));
+        cols.join(",")
+    }
+
+    /// The trajectory as CSV text: the header of [`Recorder::csv_header`]
+    /// (`t,q…,v…,u…,kinetic,potential,work,energy_error,residual[,lambda…]`, with units)
     /// and one line per sample (full precision).
     pub fn to_csv(&self) -> String {
-        let mut out = String::new();
-        out.push('t');
-        for n in self
-            .q_names
-            .iter()
-            .chain(&self.v_names)
-            .chain(&self.u_names)
-        {
-            out.push(',');
-            out.push_str(n);
-        }
-        out.push_str(",kinetic,potential,work,energy_error,residual");
-        for n in &self.lambda_names {
-            out.push(',');
-            out.push_str(n);
-        }
+        let mut out = self.csv_header();
         out.push('\n');
         for i in 0..self.len() {
             let mut line = format!("{:e}", self.times[i]);
@@ -214,7 +238,14 @@ mod tests {
         assert_eq!(r.q_row(1), &[1.0]);
         assert_eq!(r.energy_error(1), 0.0);
         let csv = r.to_csv();
-        assert!(csv.starts_with("t,x,v,u,kinetic,potential,work,energy_error,residual\n"));
+        assert!(csv.starts_with(
+            "t [s],x,v,u,kinetic [J],potential [J],work [J],energy_error [J],residual [m/s]\n"
+        ));
+        r.set_units(vec!["m"], vec!["m/s"], vec!["N"]);
+        assert!(
+            r.to_csv()
+                .starts_with("t [s],x [m],v [m/s],u [N],kinetic [J]")
+        );
         assert_eq!(csv.lines().count(), 3);
     }
 }

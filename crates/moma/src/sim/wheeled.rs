@@ -10,7 +10,7 @@
 //! model ([`crate::mobile::WheeledModel`]) and the chapter's closed-form models.
 
 use crate::error::{Error, Result};
-use crate::sim::integrators::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::{Recorder, Sample};
 use crate::sim::scenario::{InputProfile, IntegratorSettings};
@@ -38,6 +38,12 @@ pub trait ReducedSystem {
     fn v_names(&self) -> Vec<String>;
     /// Names of the inputs.
     fn u_names(&self) -> Vec<String>;
+    /// SI units of the configuration coordinates (`"m"`, `"rad"`), one per q name.
+    fn q_units(&self) -> Vec<&'static str>;
+    /// SI units of the reduced velocities (`"m/s"`, `"rad/s"`).
+    fn v_units(&self) -> Vec<&'static str>;
+    /// SI units of the inputs (`"N m"` for torques, `"N"` for forces).
+    fn u_units(&self) -> Vec<&'static str>;
     /// Writes `q̇ = N_C(q) v` and the reduced acceleration `v̇` under input `u`.
     fn dynamics(
         &mut self,
@@ -185,6 +191,7 @@ pub fn simulate(
         system.u_names(),
         n_samples,
     );
+    recorder.set_units(system.q_units(), system.v_units(), system.u_units());
     let nk = system.nk();
     recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
     let mut lam = vec![0.0; nk];

@@ -29,6 +29,16 @@ impl WheeledSystem {
         }
     }
 
+    /// `linear` for a prismatic degree of freedom `i`, `angular` otherwise.
+    fn dof_unit(&self, i: usize, linear: &'static str, angular: &'static str) -> &'static str {
+        let m = &self.robot.model;
+        if m.joint_types[m.joint_of_dof[i].0].is_prismatic() {
+            linear
+        } else {
+            angular
+        }
+    }
+
     fn load(&mut self, q: &[f64], v: &[f64]) {
         self.q.copy_from_slice(q);
         self.v.copy_from_slice(v);
@@ -53,6 +63,31 @@ impl ReducedSystem for WheeledSystem {
     }
     fn u_names(&self) -> Vec<String> {
         self.robot.u_names()
+    }
+    fn q_units(&self) -> Vec<&'static str> {
+        let mut u = vec!["m", "m", "rad"];
+        u.extend((3..self.robot.model.nv).map(|i| self.dof_unit(i, "m", "rad")));
+        u
+    }
+    fn v_units(&self) -> Vec<&'static str> {
+        let mut u = vec!["m/s", "rad/s"];
+        u.extend(
+            self.robot
+                .arm_dofs()
+                .iter()
+                .map(|&i| self.dof_unit(i, "m/s", "rad/s")),
+        );
+        u
+    }
+    fn u_units(&self) -> Vec<&'static str> {
+        let mut u = vec!["N m", "N m"];
+        u.extend(
+            self.robot
+                .arm_dofs()
+                .iter()
+                .map(|&i| self.dof_unit(i, "N", "N m")),
+        );
+        u
     }
     fn dynamics(
         &mut self,

@@ -1,18 +1,22 @@
 //! The chapter's robots (m1, m2, m5) rebuilt as general multibody models on a planar
 //! root with a [`WheeledBase`], so the general reduced dynamics can be checked against
-//! the closed forms of [`crate::closed_form`] (and simulated on the general path).
+//! the closed forms of this module (and simulated on the general path).
+//!
+//! They live here rather than in [`crate::mobile`] because they are built from the
+//! closed forms' parameter types: `closed_form` sits above `mobile` and may use it, not
+//! the other way round.
 //!
 //! Coordinates are the multibody joint coordinates: `[x, y, φ]` for m1,
 //! `[x, y, φ, θ1, θ2]` for m2 (the same as the closed form), and
 //! `q_j = [x, y, φ, φ1, θ1, θ2]` for m5 (the closed form uses the absolute angles
-//! `q = P q_j`, see [`crate::closed_form::m5_mobile_manipulator::joint_to_absolute`]).
+//! `q = P q_j`, see [`super::m5_mobile_manipulator::joint_to_absolute`]).
 //! The base origin is the platform CM, `d` ahead of the driven axle.
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::closed_form::m1_unicycle::UnicycleParams;
-use crate::closed_form::m2_platform_arm::PlatformArmParams;
-use crate::closed_form::m5_mobile_manipulator::MobileManipulatorParams;
+use super::m1_unicycle::UnicycleParams;
+use super::m2_platform_arm::PlatformArmParams;
+use super::m5_mobile_manipulator::MobileManipulatorParams;
 use crate::error::Result;
 use crate::mobile::diff_drive::DiffDrive;
 use crate::mobile::wheeled::{WheeledBase, WheeledModel};

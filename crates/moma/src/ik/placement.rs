@@ -6,11 +6,15 @@
 //! the arm with the base fixed), and how good is the reaching configuration (a chosen
 //! [`Measure`] of the arm's or of the whole body's Jacobian)? The map reports every
 //! sample and the best placement.
+//!
+//! The maps live in `ik` (not in [`crate::manipulability`], which only measures a given
+//! Jacobian) because every sample is an IK solve: `manipulability` sits below `ik`, and
+//! the IK's manipulability objective already uses its measures.
 
-use super::{JacobianSvd, Measure, evaluate_svd};
+use super::tasks::{FrameKinematics, PoseTask, TaskRows};
+use super::{IkOptions, IkWorkspace, solve, solve_with_restarts};
 use crate::error::{Error, Result, ensure_finite};
-use crate::ik::tasks::{FrameKinematics, PoseTask, TaskRows};
-use crate::ik::{IkOptions, IkWorkspace, solve, solve_with_restarts};
+use crate::manipulability::{JacobianSvd, Measure, evaluate_svd};
 use crate::mobile::DiffDrive;
 use crate::mobile::whole_body::{BaseInputs, compose_jacobian};
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, UnitQuaternion, Vector3};

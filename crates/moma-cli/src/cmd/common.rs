@@ -1,0 +1,279 @@
+//! What several subcommands share: loading a robot model, reading a states file, parsing
+//! number lists and the other options of the kinematics commands, and the "ran but did
+//! not reach its goal" outcome (exit status 3, see `docs/cli.md`).
+
+use anyhow::{Context, Result, anyhow, bail};
+use moma::ik::model::ModelFrame;
+use moma::ik::tasks::TaskRows;
+use moma::mobile::DiffDrive;
+use moma::multibody::{Model, RootJoint};
+use serde_json::Value;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The command ran to the end but did not reach its goal (IK not converged, a potential
+/// field stuck in a local minimum, `scen` mismatches, a target reachable from no base
+/// pose). `main` prints the message and exits with status 3; whatever diagnostics the
+/// command wrote before returning it stay in place (documented per command).
+#[derive(Debug)]
+pub struct GoalNotReached(pub String);
+
+impl std::fmt::Display for GoalNotReached {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for GoalNotReached {}
+
+/// Returns the [`GoalNotReached`] error with `message`.
+pub fn goal_not_reached<T>(message: impl Into<String>) -> Result<T> {
+    Err(GoalNotReached(message.into()).into())
+}
+
+/// Parses a `--root` value.
+pub fn parse_root(s: &str) -> Result<RootJoint, String> {
+    s.parse::<RootJoint>().map_err(|e| e.to_string())
+}
+
+/// Loads a URDF model with the given root joint. moma's URDF errors name the file and the
+/// element at fault; the error itself (not its text) is kept so the cause of an I/O error
+/// is printed too.
+pub fn load_model(path: &Path, root: RootJoint) -> Result<Model> {
+    Ok(moma::io::urdf::model_from_urdf_file(path, root)?)
+}
+
+/// One state of a states file: `q` and whichever of `v`, `a`, `tau`, `u` it gives.
+#[derive(Debug, Clone, Default)]
+pub struct State {
+    /// Configuration (nq).
+    pub q: Vec<f64>,
+    /// Velocity (nv), if given.
+    pub v: Option<Vec<f64>>,
+    /// Acceleration (nv), if given.
+    pub a: Option<Vec<f64>>,
+    /// Generalised force (nv), if given.
+    pub tau: Option<Vec<f64>>,
+    /// Whole-body inputs, if given.
+    pub u: Option<Vec<f64>>,
+}
+
+const STATE_FIELDS: [&str; 5] = ["q", "v", "a", "tau", "u"];
+
+fn number_array(v: &Value, field: &str, path: &Path) -> Result<Vec<f64>> {
+    let arr = v
+        .as_array()
+        .ok_or_else(|| anyhow!("{}: {field}: expected an array of numbers", path.display()))?;
+    arr.iter()
+        .enumerate()
+        .map(|(i, x)| {
+            x.as_f64().ok_or_else(|| {
+                anyhow!(
+                    "{}: {field}[{i}]: expected a number, got {x}",
+                    path.display()
+                )
+            })
+        })
+        .collect()
+}
+
+fn parse_state(s: &Value, i: usize, path: &Path, allowed: &[&str]) -> Result<State> {
+    let o = match s {
+        Value::Array(_) => {
+            return Ok(State {
+                q: number_array(s, &format!("states[{i}]"), path)?,
+                ..State::default()
+            });
+        }
+        Value::Object(o) => o,
+        _ => bail!(
+            "{}: states[{i}]: expected an object with \"q\" or an array of numbers",
+            path.display()
+        ),
+    };
+    for key in o.keys() {
+        if !allowed.contains(&key.as_str()) {
+            bail!(
+                "{}: states[{i}].{key}: unknown field (this command reads {})",
+                path.display(),
+                allowed.join(", ")
+            );
+        }
+    }
+    let get = |name: &str| -> Result<Option<Vec<f64>>> {
+        o.get(name)
+            .map(|x| number_array(x, &format!("states[{i}].{name}"), path))
+            .transpose()
+    };
+    let q =
+        get("q")?.ok_or_else(|| anyhow!("{}: states[{i}]: missing field \"q\"", path.display()))?;
+    Ok(State {
+        q,
+        v: get("v")?,
+        a: get("a")?,
+        tau: get("tau")?,
+        u: get("u")?,
+    })
+}
+
+/// Reads a states file: `{"states": [STATE, ...]}` or a bare `[STATE, ...]`, where a STATE
+/// is an object `{"q": [..], ...}` or a bare q array. `allowed` lists the fields the
+/// command reads (a subset of `q, v, a, tau, u`); any other field is an error naming it,
+/// so no input is silently ignored. The list must not be empty. Lengths and finiteness
+/// are checked by the caller against its model.
+pub fn read_states(path: &Path, allowed: &[&str]) -> Result<Vec<State>> {
+    debug_assert!(allowed.iter().all(|f| STATE_FIELDS.contains(f)));
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read states file", path.display()))?;
+    let doc: Value = serde_json::from_str(&text).map_err(|e| {
+        anyhow!(
+            "{}: invalid states file (expected JSON {{\"states\": [{{\"q\": [..], ...}}]}}): {e}",
+            path.display()
+        )
+    })?;
+    let list = match &doc {
+        Value::Array(a) => a,
+        Value::Object(o) => {
+            if let Some(k) = o.keys().find(|k| *k != "states") {
+                bail!(
+                    "{}: {k}: unknown field (expected only \"states\")",
+                    path.display()
+                );
+            }
+            o.get("states")
+                .and_then(|s| s.as_array())
+                .ok_or_else(|| anyhow!("{}: expected a \"states\" array", path.display()))?
+        }
+        _ => bail!("{}: expected a JSON object or array", path.display()),
+    };
+    if list.is_empty() {
+        bail!("{}: 'states' is empty", path.display());
+    }
+    list.iter()
+        .enumerate()
+        .map(|(i, s)| parse_state(s, i, path, allowed))
+        .collect()
+}
+
+/// Parses a comma-separated list of finite numbers for option `field`.
+pub fn parse_list(field: &str, text: &str) -> Result<Vec<f64>> {
+    let mut out = Vec::new();
+    for (i, part) in text.split(',').enumerate() {
+        let p = part.trim();
+        let x: f64 = p
+            .parse()
+            .map_err(|_| anyhow!("{field}: element {i} '{p}' is not a number"))?;
+        if !x.is_finite() {
+            bail!("{field}: element {i} is not finite");
+        }
+        out.push(x);
+    }
+    Ok(out)
+}
+
+/// The end-effector frame (by name, or the model's deepest link).
+pub fn frame_of(model: &Arc<Model>, name: Option<&str>, path: &Path) -> Result<ModelFrame> {
+    let frame = match name {
+        Some(n) => model
+            .frame_id(n)
+            .map_err(|e| anyhow!("{}: --frame: {e}", path.display()))?,
+        None => model.last_link_frame(),
+    };
+    Ok(ModelFrame::new(model.clone(), frame)?)
+}
+
+/// A frame name for output.
+pub fn frame_name(kin: &ModelFrame) -> String {
+    kin.model().frames[kin.frame().0].name.clone()
+}
+
+/// Parses `--base`.
+pub fn parse_base(spec: &str) -> Result<DiffDrive> {
+    if !spec.trim_start().starts_with("diff-drive") {
+        bail!("--base: unknown platform '{spec}'; expected diff-drive:r_w=R,b=B,d=D");
+    }
+    spec.parse::<DiffDrive>()
+        .map_err(|e| anyhow!("--base: {e}"))
+}
+
+/// Parses `--rows` (default: position for a 3-value target, full for a 7-value one) and
+/// checks that orientation rows come with an orientation in the target `tvals`.
+pub fn parse_task_rows(rows: Option<&str>, tvals: &[f64]) -> Result<TaskRows> {
+    let rows: TaskRows = match rows {
+        Some(r) => r.parse().map_err(|e| anyhow!("--rows: {e}"))?,
+        None if tvals.len() == 3 => TaskRows::Position,
+        None => TaskRows::Full,
+    };
+    if tvals.len() == 3 && rows.indices().iter().any(|&r| r >= 3) {
+        bail!("--rows: orientation rows need a 7-value target x,y,z,qx,qy,qz,qw");
+    }
+    Ok(rows)
+}
+
+/// Checks the IK budget options `--tol` (> 0) and `--max-iters` (>= 1).
+pub fn check_ik_budget(tol: f64, max_iters: usize) -> Result<()> {
+    if !(tol.is_finite() && tol > 0.0) {
+        bail!("--tol: must be > 0, got {tol}");
+    }
+    if max_iters == 0 {
+        bail!("--max-iters: must be at least 1");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("moma-common-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn states_in_every_accepted_shape() {
+        let p = write(
+            "ok.json",
+            r#"{"states": [{"q": [1, 2], "v": [3, 4]}, [5, 6]]}"#,
+        );
+        let s = read_states(&p, &["q", "v"]).unwrap();
+        assert_eq!(s[0].q, [1.0, 2.0]);
+        assert_eq!(s[0].v.as_deref(), Some(&[3.0, 4.0][..]));
+        assert_eq!(s[1].q, [5.0, 6.0]);
+        assert!(s[1].v.is_none());
+        let p = write("bare.json", r#"[[0.5]]"#);
+        assert_eq!(read_states(&p, &["q"]).unwrap()[0].q, [0.5]);
+    }
+
+    #[test]
+    fn states_errors_name_the_field() {
+        let cases = [
+            (
+                r#"{"states": [{"q": [1], "u": [2]}]}"#,
+                "states[0].u: unknown field",
+            ),
+            (r#"{"states": [{"v": [1]}]}"#, "missing field \"q\""),
+            (r#"{"states": [{"q": [1, "x"]}]}"#, "states[0].q[1]"),
+            (r#"{"states": []}"#, "'states' is empty"),
+            (r#"{"state": []}"#, "state: unknown field"),
+            (r#"{"states": [1]}"#, "states[0]: expected an object"),
+            ("{", "invalid states file"),
+        ];
+        for (k, (text, needle)) in cases.iter().enumerate() {
+            let p = write(&format!("bad{k}.json"), text);
+            let e = format!("{:#}", read_states(&p, &["q", "v"]).unwrap_err());
+            assert!(e.contains(needle), "{text}: {e}");
+            assert!(e.contains(&p.display().to_string()), "{e}");
+        }
+    }
+
+    #[test]
+    fn goal_not_reached_is_recognisable() {
+        let e = goal_not_reached::<()>("stuck").unwrap_err();
+        assert!(e.downcast_ref::<GoalNotReached>().is_some());
+        assert_eq!(e.to_string(), "stuck");
+    }
+}
