@@ -76,7 +76,7 @@ fn reachability_matches_the_reach_annulus() {
     );
     // The best pose is the grid pose with the largest analytic w (w peaks at q2 = ±π/2,
     // dist = √(l1² + l2²) = 0.6403, w = 0.2; the grid only comes close).
-    let analytic = |s: &moma::manipulability::placement::PlacementSample| {
+    let analytic = |s: &moma::ik::placement::PlacementSample| {
         let [x, y, th] = s.base;
         let dist = (1.0 - x - 0.2 * th.cos()).hypot(0.5 - y - 0.2 * th.sin());
         let c2 = (dist * dist - 0.25 - 0.16) / 0.4;

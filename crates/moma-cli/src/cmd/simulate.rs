@@ -250,12 +250,13 @@ fn build_robot(
                     ),
                 }
             }
-            if let Some(g) = gravity
-                && model != "m5"
+            if let (Some(g), Ok(m)) = (gravity, ChapterModel::from_name(model))
+                && m != ChapterModel::M5MobileManipulator
             {
                 bail!(
-                    "gravity = {g}: chapter model {model} moves in the horizontal plane and \
-                     has no gravity term; remove the top-level `gravity` (only m5 uses it)"
+                    "gravity = {g}: chapter model {model} has no gravity term (it moves in \
+                     the horizontal plane or in free space); remove the top-level `gravity` \
+                     (only m5 uses it)"
                 );
             }
             let mut json = serde_json::to_value(params).context("robot.params")?;
