@@ -183,8 +183,20 @@ fn bench_reports_medians() {
         .args(["--root", "planar", "--json", "--label", "panda_planar"])));
     assert_eq!(j["robot"], "panda_planar");
     assert_eq!(j["nq"], 12);
+    // the batch counts asked for are the ones used
+    assert_eq!(j["nbatch"], 3);
+    assert_eq!(j["warmup"], 1);
     for algo in ["rnea", "crba", "aba", "fk", "frame_jacobian"] {
-        assert!(j["median_ns"][algo].as_f64().unwrap() > 0.0, "{algo}");
+        let med = j["median_ns"][algo].as_f64().unwrap();
+        let min = j["min_ns"][algo].as_f64().unwrap();
+        // a median of three batches is at least their minimum, and a real time
+        assert!(
+            med.is_finite() && min > 0.0 && min <= med,
+            "{algo}: {min} vs {med}"
+        );
+        // well below a second per call on a 9-dof arm: the unit is nanoseconds per call,
+        // not per batch or per run
+        assert!(med < 1e8, "{algo}: {med} ns per call");
     }
 }
 
@@ -206,7 +218,13 @@ fn bench_refuses_a_model_without_joints_and_keeps_one_batch() {
         .arg("bench")
         .arg(panda())
         .args(["--root", "fixed", "--json"])));
-    assert!(j["median_ns"]["crba"].as_f64().unwrap() > 0.0);
+    assert_eq!(j["nbatch"], 1);
+    // one timed batch: its median is its minimum
+    for algo in ["rnea", "crba", "aba", "fk", "frame_jacobian"] {
+        let med = j["median_ns"][algo].as_f64().unwrap();
+        assert!(med > 0.0, "{algo}");
+        assert_eq!(med, j["min_ns"][algo].as_f64().unwrap(), "{algo}");
+    }
 }
 
 fn write(name: &str, text: &str) -> PathBuf {

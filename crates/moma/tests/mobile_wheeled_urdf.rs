@@ -280,6 +280,44 @@ fn unforced_run(track: bool, d: f64) {
         res.monitor.max_residual
     );
     assert!(res.recorder.kinetic[0] > 0.1, "the run must actually move");
+    // The monitored ‖C q̇‖ holds by construction (q̇ = N_C v). An independent check on the
+    // integrated full coordinates: the axle midpoint P = (x − d cos θ, y − d sin θ) of the
+    // recorded configurations moves along the heading: the sideways component of its
+    // central difference is only the O(h²) truncation error, so halving the step divides
+    // it by about 4 (measured: 0.37; a slipping base would leave a sideways speed that
+    // does not shrink).
+    let rec = &res.recorder;
+    let nq = sys.robot.model.nq;
+    let h = opts.record_interval;
+    let p = |k: usize| {
+        let q = &rec.q[k * nq..k * nq + 3];
+        (q[0] - d * q[2].cos(), q[1] - d * q[2].sin(), q[2])
+    };
+    let sideways = |k: usize, m: usize| {
+        let ((x0, y0, _), (_, _, th), (x2, y2, _)) = (p(k - m), p(k), p(k + m));
+        let (vx, vy) = (
+            (x2 - x0) / (2.0 * h * m as f64),
+            (y2 - y0) / (2.0 * h * m as f64),
+        );
+        ((-vx * th.sin() + vy * th.cos()).abs(), vx.hypot(vy))
+    };
+    let (mut fine, mut coarse, mut fastest) = (0.0f64, 0.0f64, 0.0f64);
+    for k in 2..rec.times.len() - 2 {
+        let (s1, v) = sideways(k, 1);
+        let (s2, _) = sideways(k, 2);
+        fine = fine.max(s1);
+        coarse = coarse.max(s2);
+        fastest = fastest.max(v);
+    }
+    assert!(
+        fastest > 0.05,
+        "track={track} d={d}: the base must drive ({fastest})"
+    );
+    assert!(
+        fine < 0.5 * coarse && fine < 2e-2 * fastest,
+        "track={track} d={d}: sideways speed of the axle midpoint {fine:e} (step h), \
+         {coarse:e} (step 2h), speed {fastest}"
+    );
     // Independent of the potential's datum: the drift relative to the initial kinetic energy.
     let t0 = res.recorder.kinetic[0];
     let rel_t = res.monitor.max_energy_error / t0;

@@ -13,15 +13,19 @@ fn run(file: &str, root: RootJoint) {
     let case = Case::load(file, root);
     case.check_structure();
     let model = &case.model;
-    // the default end-effector ("last link") is the shared reference files' last_frame
-    if !file.starts_with("tiago") {
-        let last = case.j["states"][0]["last_frame"]["name"].as_str().unwrap();
-        assert_eq!(
-            model.frames[model.last_link_frame().0].name,
-            last,
-            "last link"
-        );
-    }
+    // the default end-effector ("last link") is Pinocchio's last BODY frame, for every
+    // reference file (TIAGo's files use another frame as their `last_frame`)
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pinocchio");
+    let text = std::fs::read_to_string(dir.join("last_body_frames.json")).unwrap();
+    let last_bodies: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let last = last_bodies[file]
+        .as_str()
+        .expect("file listed in last_body_frames.json");
+    assert_eq!(
+        model.frames[model.last_link_frame().0].name,
+        last,
+        "{file}: last link"
+    );
     case.compare_states(|data, st, tally| {
         for key in ["last_frame", "ee_frame"] {
             let fj = &st.s[key];

@@ -101,6 +101,17 @@ fn run(file: &str, root: RootJoint) {
     case.check_structure();
     check_more_structure(&case);
     let model = &case.model;
+    // the default end-effector ("last link") is Pinocchio's last BODY frame
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pinocchio");
+    let text = std::fs::read_to_string(dir.join("last_body_frames.json")).unwrap();
+    let last_bodies: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        model.frames[model.last_link_frame().0].name,
+        last_bodies[file]
+            .as_str()
+            .expect("file listed in last_body_frames.json"),
+        "{file}: last link"
+    );
     case.compare_states(|data, st, tally| {
         let (s, q, v) = (st.s, &st.q, &st.v);
         if !s["coriolis_C"].is_null() {

@@ -259,8 +259,9 @@ fn build_robot(
                 && !is_m5
             {
                 bail!(
-                    "gravity = {g}: chapter model {model} moves in the horizontal plane and \
-                     has no gravity term; remove the top-level `gravity` (only m5 uses it)"
+                    "gravity = {g}: chapter model {model} has no gravity term (it moves in \
+                     the horizontal plane or in free space); remove the top-level `gravity` \
+                     (only m5 uses it)"
                 );
             }
             let mut json = serde_json::to_value(params).context("robot.params")?;
