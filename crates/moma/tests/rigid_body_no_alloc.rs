@@ -2,7 +2,6 @@
 //! allocator wraps the system one and every algorithm is called with the counter armed,
 //! on Panda (fixed, planar and free-flyer root) and on a tree whose joints are not in
 //! depth-first order (the ancestor-walk variants), with each root.
-#![allow(unsafe_code)]
 
 use moma::dynamics;
 use moma::io::urdf::model_from_urdf_file;
@@ -13,38 +12,10 @@ use moma::multibody::{
 use moma::spatial::{Inertia, SE3};
 use nalgebra::{DVector, Matrix3, Matrix6xX, Vector3};
 use rand::SeedableRng;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
 
-struct Counting;
-
-static ARMED: AtomicBool = AtomicBool::new(false);
-static COUNT: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards every call to the system allocator unchanged; only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if ARMED.load(Ordering::Relaxed) {
-            COUNT.fetch_add(1, Ordering::Relaxed);
-        }
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if ARMED.load(Ordering::Relaxed) {
-            COUNT.fetch_add(1, Ordering::Relaxed);
-        }
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+mod counting_alloc;
+use counting_alloc::{ARMED, COUNT};
 
 /// Runs every rigid-body algorithm three times on `model` with the counter armed and
 /// returns the number of allocations.

@@ -8,7 +8,7 @@
 //! precomputed masks. The search state is one `u64` g per voxel in pages of 4,096
 //! consecutive voxels, allocated on first touch from a pool reused across queries
 //! ([`Astar3Workspace`]): dense-array access without state for the whole (up to
-//! 2^31-voxel) grid. Keys are exact fixed-point integers and the open list is the 2-D
+//! 2^28-voxel, border included) grid. Keys are exact fixed-point integers and the open list is the 2-D
 //! search's calendar queue (increasing f, equal-f ties to the newest, deepest voxel).
 
 use super::astar::{BandQueue, CAL_BUCKETS};
@@ -35,8 +35,11 @@ pub struct Grid3 {
 impl Grid3 {
     /// An all-free grid of `nx × ny × nz` voxels.
     ///
-    /// Errors unless every side is 1 to 65,535 voxels, there are fewer than 2^31 voxels,
-    /// and fewer than 2^32 with the one-voxel border.
+    /// Errors unless every side is 1 to 65,535 voxels and there are at most
+    /// [`MAX_PADDED_VOXELS`] (2^28) voxels counting the one-voxel border. The bound keeps a
+    /// declared size from costing unbounded time and memory before a single voxel is
+    /// read: the bits take at most 32 MiB, a search's 32-bit g at most 1 GiB, and writing
+    /// the border stays well under a second even on a grid one voxel thin.
     pub fn new(nx: usize, ny: usize, nz: usize) -> Result<Self> {
         let n = nx
             .checked_mul(ny)
@@ -51,12 +54,13 @@ impl Grid3 {
             || ny > side
             || nz > side
             || n >= u32::MAX as usize / 2
-            || padded >= u128::from(u32::MAX)
+            || padded > MAX_PADDED_VOXELS as u128
         {
             return Err(Error::invalid(
                 "voxel grid size",
                 format!(
-                    "{nx} x {ny} x {nz}: need 1 to 65,535 voxels per side, fewer than 2^31 in all and fewer than 2^32 with a one-voxel border"
+                    "{nx} x {ny} x {nz}: need 1 to 65,535 voxels per side and at most 2^28 \
+                     (268,435,456) voxels counting a one-voxel border"
                 ),
             ));
         }
@@ -188,6 +192,9 @@ pub struct Path3 {
 /// expanded in arbitrary order); the rounding (below 5e-7 relative) can only prefer a
 /// path longer than the shortest by less than that. The reported length counts the moves
 /// of the path found: n₁ + n₂√2 + n₃√3.
+/// The largest grid [`Grid3::new`] accepts, in voxels counting the one-voxel border.
+pub const MAX_PADDED_VOXELS: u64 = 1 << 28;
+
 const STEPS3: [u64; 3] = [1 << 20, 1_482_910, 1_816_187];
 
 /// Band width of the calendar queue: A* with a consistent heuristic only pushes keys
@@ -788,8 +795,14 @@ mod tests {
         assert_eq!((p.cost, p.expanded, p.voxels.len()), (0.0, 1, 1));
         assert!(astar3d(&g, (0, 0, 0), (2, 1, 1)).is_err());
         assert!(astar3d(&g, (3, 0, 0), (0, 0, 0)).is_err());
-        // a grid whose border would take it past 2^32 padded voxels
+        // a grid whose border would take it past 2^28 padded voxels
         assert!(Grid3::new(65_535, 32_767, 1).is_err());
+        // 645³ ≤ 2^28 < 646³
+        assert!(Grid3::new(643, 643, 643).is_ok());
+        assert!(Grid3::new(644, 644, 644).is_err());
+        // the declared size a fuzzer found (694 M voxels, one axis three voxels thin,
+        // 231 M border rows): refused at once instead of spending seconds on the border
+        assert!(Grid3::new(3, 21_014, 11_014).is_err());
     }
 
     #[test]
