@@ -80,6 +80,9 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         "plan",
         "scen",
         "space",
+        "stability",
+        "stability-map",
+        "osc",
     ] {
         assert!(
             cmds.iter()
@@ -99,7 +102,13 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         std::os::unix::fs::symlink(repo().join(d), root.join(d)).unwrap();
     }
     for cmd in &cmds {
-        let args: Vec<&str> = cmd.split_whitespace().skip(1).collect();
+        // the README quotes arguments that hold a `;` (support polygons): no argument
+        // has a space, so removing the quotes is what the shell does
+        let args: Vec<&str> = cmd
+            .split_whitespace()
+            .skip(1)
+            .map(|a| a.trim_matches('"'))
+            .collect();
         // `bench`'s timing loop is the example's point, not the test's: fewer batches
         let o = Command::new(env!("CARGO_BIN_EXE_moma"))
             .current_dir(&root)
@@ -120,6 +129,10 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         "path.svg",
         "trap.svg",
         "results.csv",
+        "stability.json",
+        "stability-map/margin_map.svg",
+        "unicycle.json",
+        "osc.json",
         "simulation-output/default/summary.json",
     ] {
         assert!(root.join(f).is_file(), "README example did not write {f}");

@@ -1,11 +1,13 @@
 //! # moma — mobile manipulation in Rust
 //!
-//! Kinematics, dynamics, simulation and motion planning of wheeled mobile robot
-//! manipulators (a non-holonomic differential-drive platform carrying a serial arm),
-//! after the chapter "Kinematics, Dynamics, and Control of Mobile Robot Manipulators":
-//! rigid-body algorithms on fixed, planar and free-flyer roots, wheel constraints and
-//! reduced dynamics, the chapter's closed-form models, whole-body kinematics,
-//! manipulability, inverse kinematics and grid motion planning.
+//! Kinematics, dynamics, stability, control, simulation and motion planning of wheeled
+//! mobile robot manipulators (a non-holonomic differential-drive platform carrying a
+//! serial arm) and of free-floating space manipulators, after the chapter "Kinematics,
+//! Dynamics, and Control of Mobile Robot Manipulators": rigid-body algorithms on fixed,
+//! planar and free-flyer roots, wheel constraints and reduced dynamics, the chapter's
+//! closed-form models (m1–m6), whole-body kinematics, manipulability, inverse kinematics,
+//! tip-over stability ([`stability`]), controllers with Lyapunov monitors ([`control`]),
+//! free-floating robots ([`space`]) and grid motion planning.
 //!
 //! ## Conventions
 //!
