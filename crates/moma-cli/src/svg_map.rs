@@ -25,7 +25,8 @@ pub struct Scene<'a> {
     pub title: String,
 }
 
-fn b64(data: &[u8]) -> String {
+/// Standard base64 (with padding), for images embedded as data URIs.
+pub(crate) fn b64(data: &[u8]) -> String {
     const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::with_capacity(data.len().div_ceil(3) * 4);
     for c in data.chunks(3) {

@@ -1,6 +1,6 @@
 //! Small dense linear algebra shared by the layers above: one in-place Cholesky
 //! factorisation and its solve, for the workspaces that must not allocate (the reduced
-//! dynamics of `mobile`, the damped least-squares step of `ik`).
+//! dynamics of `mobile`, the damped least-squares step of `ik`, operational-space control).
 
 use nalgebra::{DMatrix, DVector};
 
@@ -24,22 +24,28 @@ pub(crate) fn cholesky_in_place(
     } else {
         0.0
     };
+    // left-looking on contiguous columns (column-major storage): column j, rows j..n,
+    // becomes A[j.., j] − Σ_k L[j, k] L[j.., k], then is scaled by its pivot
+    let s = a.as_mut_slice();
     for j in 0..n {
-        let mut d = a[(j, j)];
         for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
+            let ljk = s[k * n + j];
+            if ljk != 0.0 {
+                let (left, right) = s.split_at_mut(j * n);
+                let src = &left[k * n + j..k * n + n];
+                for (d, x) in right[j..n].iter_mut().zip(src) {
+                    *d -= ljk * x;
+                }
+            }
         }
+        let d = s[j * n + j];
         if !d.is_finite() || d <= 0.0 || d <= floor {
             return Err(j);
         }
         let d = d.sqrt();
-        a[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / d;
+        s[j * n + j] = d;
+        for x in &mut s[j * n + j + 1..j * n + n] {
+            *x /= d;
         }
     }
     Ok(())

@@ -65,7 +65,8 @@ const NUMBER_FIELDS: [&str; 5] = ["q", "v", "a", "tau", "u"];
 /// Largest number of states a states file may hold (checked before they are parsed).
 pub const MAX_STATES: usize = 1_000_000;
 
-fn number_array(v: &Value, field: &str, path: &Path) -> Result<Vec<f64>> {
+/// The JSON array `v` as numbers; errors name the file and `field[i]`.
+pub fn number_array(v: &Value, field: &str, path: &Path) -> Result<Vec<f64>> {
     let arr = v
         .as_array()
         .ok_or_else(|| anyhow!("{}: {field}: expected an array of numbers", path.display()))?;

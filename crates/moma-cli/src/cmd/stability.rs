@@ -155,25 +155,8 @@ pub(crate) struct State {
     pub at_rest: bool,
 }
 
-fn numbers(v: &Value, field: &str, path: &Path) -> Result<Vec<f64>> {
-    let arr = v
-        .as_array()
-        .ok_or_else(|| anyhow!("{}: {field}: expected an array of numbers", path.display()))?;
-    arr.iter()
-        .enumerate()
-        .map(|(i, x)| {
-            x.as_f64().ok_or_else(|| {
-                anyhow!(
-                    "{}: {field}[{i}]: expected a number, got {x}",
-                    path.display()
-                )
-            })
-        })
-        .collect()
-}
-
 fn vec3(v: &Value, field: &str, path: &Path) -> Result<Vector3<f64>> {
-    let x = numbers(v, field, path)?;
+    let x = super::common::number_array(v, field, path)?;
     if x.len() != 3 {
         bail!(
             "{}: {field}: expected length 3, got {}",

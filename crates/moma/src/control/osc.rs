@@ -29,6 +29,7 @@
 use crate::dynamics::{crba, nonlinear_effects};
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
+use crate::linalg::cholesky_in_place;
 use crate::mobile::{
     WheeledData, WheeledModel, admissible_velocity_basis, admissible_velocity_basis_dot,
 };
@@ -117,38 +118,6 @@ impl OscData {
         // J H⁻¹ x = (H⁻¹ Jᵀ)ᵀ x
         self.hinv_jt.tr_mul_to(x, out);
     }
-}
-
-/// In-place Cholesky `A = L Lᵀ` of the lower triangle of `a` (column-major, left-looking,
-/// contiguous column updates); `false` on a non-positive pivot. The strict upper triangle
-/// is left untouched.
-fn cholesky_in_place(a: &mut DMatrix<f64>) -> bool {
-    let n = a.nrows();
-    let s = a.as_mut_slice();
-    for j in 0..n {
-        // column j, rows j..n: A[j.., j] − Σ_k L[j, k] L[j.., k]
-        for k in 0..j {
-            let ljk = s[k * n + j];
-            if ljk != 0.0 {
-                let (left, right) = s.split_at_mut(j * n);
-                let src = &left[k * n + j..k * n + n];
-                for (d, x) in right[j..n].iter_mut().zip(src) {
-                    *d -= ljk * x;
-                }
-            }
-        }
-        let d = s[j * n + j];
-        if !(d > 0.0 && d.is_finite()) {
-            return false;
-        }
-        let d = d.sqrt();
-        s[j * n + j] = d;
-        let inv = 1.0 / d;
-        for x in &mut s[j * n + j + 1..j * n + n] {
-            *x *= inv;
-        }
-    }
-    true
 }
 
 /// `out = β out + α A B` (or `Aᵀ B` with `a_transposed`) by loops over contiguous
@@ -249,7 +218,7 @@ pub fn osc_from_terms(
     assert_eq!(a_des.len(), m, "a_des must have m entries");
     assert_eq!(tau0.len(), n, "tau0 must have n entries");
     od.chol_h.copy_from(h_mat);
-    if !cholesky_in_place(&mut od.chol_h) {
+    if cholesky_in_place(&mut od.chol_h, 0.0).is_err() {
         return Err(Error::Singular {
             what: "joint-space inertia H".into(),
             detail: Some("not positive definite".into()),
@@ -260,7 +229,7 @@ pub fn osc_from_terms(
     cholesky_solve_columns(&od.chol_h, &mut od.hinv_jt);
     // Λ⁻¹ = J H⁻¹ Jᵀ, factorised; Λ by solving against the identity.
     matmul(&mut od.chol_l, 1.0, &od.jacobian, false, &od.hinv_jt, 0.0);
-    if !cholesky_in_place(&mut od.chol_l) {
+    if cholesky_in_place(&mut od.chol_l, 0.0).is_err() {
         return Err(Error::Singular {
             what: "task Jacobian".into(),
             detail: Some("J H⁻¹ Jᵀ is not positive definite (rank-deficient task)".into()),
@@ -480,12 +449,12 @@ mod tests {
     fn cholesky_helpers_solve() {
         let a = DMatrix::from_row_slice(3, 3, &[4.0, 2.0, 0.4, 2.0, 3.0, 0.5, 0.4, 0.5, 2.0]);
         let mut l = a.clone();
-        assert!(cholesky_in_place(&mut l));
+        assert!(cholesky_in_place(&mut l, 0.0).is_ok());
         let mut b = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 2.0, 1.0, 3.0, -1.0]);
         let b0 = b.clone();
         cholesky_solve_columns(&l, &mut b);
         assert!((&a * &b - b0).norm() < 1e-13);
         let mut bad = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-        assert!(!cholesky_in_place(&mut bad));
+        assert!(cholesky_in_place(&mut bad, 0.0).is_err());
     }
 }

@@ -4,7 +4,7 @@
 
 use nalgebra::{DVector, Vector3};
 
-use crate::kinematics::{assert_nv, assert_sizes, forward_kinematics_second_order_impl};
+use crate::kinematics::forward_kinematics_second_order;
 use crate::multibody::{Data, Model};
 use crate::spatial::{Force, Inertia};
 
@@ -127,16 +127,7 @@ pub fn gravito_inertial_wrench_with_set(
     external: &ExternalLoads<'_>,
     set: Option<(&[bool], &mut Inertia)>,
 ) -> GravitoInertialWrench {
-    assert_sizes(model, data, q);
-    assert_nv(model, v, "v");
-    assert_nv(model, a, "a");
-    forward_kinematics_second_order_impl(
-        model,
-        data,
-        q.as_slice(),
-        v.as_slice(),
-        Some(a.as_slice()),
-    );
+    forward_kinematics_second_order(model, data, q, v, a);
     let mut mass = 0.0;
     let mut first = Vector3::zeros();
     let mut hdot = Force::zero();
