@@ -5,11 +5,13 @@
 use super::common::{load_model, parse_root};
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow, bail};
-use moma::control::osc::{MIN_TASK_CONDITIONING, OscData, osc_fixed_base, task_conditioning};
+use moma::control::osc::{
+    MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, task_conditioning,
+};
 use moma::ik::tasks::TaskRows;
 use moma::kinematics;
 use moma::multibody::{Data, RootJoint};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -53,17 +55,6 @@ struct StatesIn {
 }
 
 #[derive(Serialize)]
-struct StateOut {
-    task_inertia: Vec<Vec<f64>>,
-    dynamically_consistent_inverse: Vec<Vec<f64>>,
-    nullspace_projector: Vec<Vec<f64>>,
-    acceleration_bias: Vec<f64>,
-    task_force: Vec<f64>,
-    torque: Vec<f64>,
-    task_conditioning: f64,
-}
-
-#[derive(Serialize)]
 struct Output {
     robot: String,
     source: String,
@@ -73,11 +64,7 @@ struct Output {
     frame: String,
     rows: Vec<usize>,
     min_task_conditioning: f64,
-    states: Vec<StateOut>,
-}
-
-fn rows_of(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    m.row_iter().map(|r| r.iter().copied().collect()).collect()
+    states: Vec<OscStateReport>,
 }
 
 /// Runs `moma osc`.
@@ -151,15 +138,7 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         res.map_err(|e| anyhow!("{src}: {e}"))?;
-        out.push(StateOut {
-            task_inertia: rows_of(&od.task_inertia),
-            dynamically_consistent_inverse: rows_of(&od.dynamically_consistent_inverse),
-            nullspace_projector: rows_of(&od.nullspace_projector),
-            acceleration_bias: od.acceleration_bias.as_slice().to_vec(),
-            task_force: od.task_force.as_slice().to_vec(),
-            torque: od.torque.as_slice().to_vec(),
-            task_conditioning: cond,
-        });
+        out.push(OscStateReport::new(&od, cond));
     }
     let output = Output {
         robot: model.name.clone(),

@@ -7,7 +7,7 @@
 use super::common::load_model;
 use anyhow::{Context, Result, bail};
 use moma::multibody::{Data, RootJoint};
-use moma::space::{self, SpaceData};
+use moma::space::{self, SpaceData, SpaceStateReport};
 use moma::spatial::Force;
 use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
@@ -53,17 +53,6 @@ struct StatesIn {
 }
 
 #[derive(Serialize)]
-struct StateOut {
-    total_mass: f64,
-    com: [f64; 3],
-    base_velocity: [f64; 6],
-    v: Vec<f64>,
-    generalized_jacobian: Vec<Vec<f64>>,
-    generalized_inertia: Vec<Vec<f64>>,
-    frame_velocity: [f64; 6],
-}
-
-#[derive(Serialize)]
 struct Output {
     robot: String,
     source: String,
@@ -71,7 +60,7 @@ struct Output {
     nq: usize,
     nv: usize,
     frame: String,
-    states: Vec<StateOut>,
+    states: Vec<SpaceStateReport>,
 }
 
 fn read_states(path: &Path) -> Result<StatesIn> {
@@ -131,36 +120,9 @@ pub fn run(args: Args) -> Result<()> {
             None => Force::zero(),
         };
         let q = DVector::from_column_slice(&s.q);
-        let vb = space::base_velocity(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h)
+        let st = space::state_report(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h, fid)
             .with_context(|| src.clone())?;
-        let v = sd.v.as_slice().to_vec();
-        space::generalized_jacobian(&model, &mut data, &mut sd, &q, fid)
-            .with_context(|| src.clone())?;
-        let xf = space::frame_velocity(&sd, &s.qdot_joints, &h);
-        let gj = sd
-            .generalized_jacobian
-            .row_iter()
-            .map(|r| r.iter().copied().collect())
-            .collect();
-        let hs = space::generalized_inertia(&model, &mut data, &mut sd, &q)
-            .with_context(|| src.clone())?
-            .row_iter()
-            .map(|r| r.iter().copied().collect())
-            .collect();
-        let st = StateOut {
-            total_mass: sd.total_mass,
-            com: [sd.com.x, sd.com.y, sd.com.z],
-            base_velocity: vb.to_vector().into(),
-            v,
-            generalized_jacobian: gj,
-            generalized_inertia: hs,
-            frame_velocity: xf.into(),
-        };
-        let finite =
-            st.v.iter()
-                .chain(st.frame_velocity.iter())
-                .all(|x| x.is_finite());
-        if !finite {
+        if !st.is_finite() {
             bail!("{src}: non-finite result (degenerate mass distribution?)");
         }
         out_states.push(st);

@@ -9,7 +9,7 @@ use moma::kinematics::check_state;
 use moma::mobile::{Caster, WheeledBase};
 use moma::multibody::{Model, RootJoint};
 use moma::stability::{
-    AccelerationLimits, BodySet, ExternalLoads, PointForce, StabilityData, StabilityModel,
+    BodySet, ExternalLoads, PointForce, StabilityData, StabilityModel, StateReport,
     SupportAttachment, SupportPolygon, evaluate,
 };
 use nalgebra::{DVector, Vector2, Vector3};
@@ -220,50 +220,8 @@ pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
 }
 
 #[derive(Serialize)]
-struct Giw {
-    force: [f64; 3],
-    moment_about_com: [f64; 3],
-}
-
-#[derive(Serialize)]
-struct EdgeOut {
-    from: [f64; 3],
-    to: [f64; 3],
-    zmp_distance: Option<f64>,
-    force_angle: Option<f64>,
-    force_angle_no_couple: Option<f64>,
-    force_angle_beta: Option<f64>,
-    moment: f64,
-    inertia: f64,
-    mhs: Option<f64>,
-}
-
-#[derive(Serialize)]
-struct StateOut {
-    total_mass: f64,
-    com: [f64; 3],
-    giw: Giw,
-    support: Vec<[f64; 3]>,
-    zmp: Option<[f64; 3]>,
-    zmp_margin: Option<f64>,
-    zmp_critical_edge: Option<usize>,
-    edges: Vec<EdgeOut>,
-    force_angle_min: Option<f64>,
-    force_angle_alpha: Option<f64>,
-    force_angle_beta_min: Option<f64>,
-    mhs_min: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    acceleration_limits: Option<AccelerationLimits>,
-    stable: bool,
-}
-
-#[derive(Serialize)]
 struct Output {
-    states: Vec<StateOut>,
-}
-
-fn arr(v: &Vector3<f64>) -> [f64; 3] {
-    [v.x, v.y, v.z]
+    states: Vec<StateReport>,
 }
 
 /// Runs `moma stability`.
@@ -285,44 +243,7 @@ pub fn run(args: Args) -> Result<()> {
             moments: &[],
         };
         evaluate(&model, &mut data, &sm, &mut sd, &s.q, &s.v, &s.a, &ext);
-        let (w, r, sup) = (&sd.wrench, &sd.report, &sd.support);
-        out.push(StateOut {
-            total_mass: w.mass,
-            com: arr(&w.com),
-            giw: Giw {
-                force: arr(&w.force),
-                moment_about_com: arr(&w.moment_about_com),
-            },
-            support: (0..sup.len()).map(|i| arr(&sup.vertex(i))).collect(),
-            zmp: r.zmp.as_ref().map(arr),
-            zmp_margin: r.zmp_margin,
-            zmp_critical_edge: r.zmp_critical_edge,
-            edges: r
-                .edges
-                .iter()
-                .enumerate()
-                .map(|(i, e)| {
-                    let ed = sup.edge(i);
-                    EdgeOut {
-                        from: arr(&ed.from),
-                        to: arr(&ed.to),
-                        zmp_distance: e.zmp_distance,
-                        force_angle: e.force_angle,
-                        force_angle_no_couple: e.force_angle_no_couple,
-                        force_angle_beta: e.force_angle_beta,
-                        moment: e.moment,
-                        inertia: e.inertia,
-                        mhs: e.mhs,
-                    }
-                })
-                .collect(),
-            force_angle_min: r.force_angle_min,
-            force_angle_alpha: r.force_angle_alpha,
-            force_angle_beta_min: r.force_angle_beta_min,
-            mhs_min: r.mhs_min,
-            acceleration_limits: s.at_rest.then(|| sd.acceleration_limits(&sm)),
-            stable: r.stable,
-        });
+        out.push(StateReport::new(&sm, &sd, s.at_rest));
     }
     let result = Output { states: out };
     match &args.output {
