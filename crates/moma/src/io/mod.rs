@@ -1,3 +1,4 @@
-//! Input and output: the URDF loader.
+//! Input and output: the URDF loader and the JSON states files of the command line.
 
+pub mod states;
 pub mod urdf;
