@@ -12,6 +12,7 @@ pub mod map_info;
 pub mod osc;
 pub mod plan;
 pub mod reach_map;
+pub mod render_report;
 pub mod scen;
 pub mod simulate;
 pub mod simulate_space;
