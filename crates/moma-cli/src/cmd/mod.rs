@@ -19,3 +19,4 @@ pub mod simulate_space;
 pub mod space;
 pub mod stability;
 pub mod stability_map;
+pub mod sweep;
