@@ -15,6 +15,7 @@ pub mod reach_map;
 pub mod scen;
 pub mod simulate;
 pub mod simulate_space;
+pub mod simulate_stability;
 pub mod space;
 pub mod stability;
 pub mod stability_map;
