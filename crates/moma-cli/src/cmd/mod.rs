@@ -16,6 +16,7 @@ pub mod render_report;
 pub mod scen;
 pub mod simulate;
 pub mod simulate_space;
+pub mod simulate_stability;
 pub mod space;
 pub mod stability;
 pub mod stability_map;

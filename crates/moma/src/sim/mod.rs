@@ -11,6 +11,7 @@ pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
 pub mod scenario;
+pub mod stability_monitor;
 pub mod wheeled;
 pub mod wheeled_system;
 
