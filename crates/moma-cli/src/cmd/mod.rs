@@ -14,6 +14,7 @@ pub mod plan;
 pub mod reach_map;
 pub mod scen;
 pub mod simulate;
+pub mod simulate_control;
 pub mod simulate_space;
 pub mod space;
 pub mod stability;

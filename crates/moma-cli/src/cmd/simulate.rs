@@ -66,6 +66,12 @@ pub struct Scenario {
     /// Free-floating settings (robot kind `free_floating`; schema in docs/space.md).
     #[serde(default)]
     pub space: Option<super::simulate_space::SpaceSpec>,
+    /// Closed-loop control: the law and its gains (schema in docs/simulate.md).
+    #[serde(default)]
+    pub controller: Option<super::simulate_control::ControllerSpec>,
+    /// What the closed-loop law tracks or stabilises to.
+    #[serde(default)]
+    pub reference: Option<super::simulate_control::ReferenceSpec>,
 }
 
 /// The robot of a scenario.
@@ -224,7 +230,7 @@ pub fn load_scenario(path: &Path) -> Result<Scenario> {
     toml::from_str(&text).map_err(|e| anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
 }
 
-fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
+pub(super) fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
     if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
         bail!("{field}[{i}] is not a finite number");
     }
@@ -232,7 +238,7 @@ fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
 }
 
 /// Builds the robot of a scenario; `base_dir` resolves relative URDF paths.
-fn build_robot(
+pub(super) fn build_robot(
     spec: &RobotSpec,
     gravity: Option<f64>,
     base_dir: &Path,
@@ -264,15 +270,7 @@ fn build_robot(
                      (only m5 uses it)"
                 );
             }
-            let mut json = serde_json::to_value(params).context("robot.params")?;
-            if let (Some(g), true) = (gravity, is_m5)
-                && let Some(obj) = json.as_object_mut()
-            {
-                if obj.contains_key("g") {
-                    bail!("gravity is given twice: top-level `gravity` and robot.params.g");
-                }
-                obj.insert("g".into(), serde_json::json!(g));
-            }
+            let json = chapter_params_json(params, gravity, is_m5)?;
             let sys = chapter_system(model, &json).context("robot")?;
             Ok((sys, format!("chapter model {model}")))
         }
@@ -292,6 +290,24 @@ fn build_robot(
     }
 }
 
+/// The chapter parameters as JSON, with the top-level gravity moved into `g` for m5.
+pub(super) fn chapter_params_json(
+    params: &toml::Table,
+    gravity: Option<f64>,
+    is_m5: bool,
+) -> Result<serde_json::Value> {
+    let mut json = serde_json::to_value(params).context("robot.params")?;
+    if let (Some(g), true) = (gravity, is_m5)
+        && let Some(obj) = json.as_object_mut()
+    {
+        if obj.contains_key("g") {
+            bail!("gravity is given twice: top-level `gravity` and robot.params.g");
+        }
+        obj.insert("g".into(), serde_json::json!(g));
+    }
+    Ok(json)
+}
+
 fn build_urdf_robot(
     path: &Path,
     drive: &DriveSpec,
@@ -299,6 +315,18 @@ fn build_urdf_robot(
     casters: &[CasterSpec],
     gravity: Option<f64>,
 ) -> Result<Box<dyn ReducedSystem>> {
+    let wm = build_wheeled_model(path, drive, wheel_joints, casters, gravity)?;
+    Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
+}
+
+/// The wheeled model of a URDF robot on a differential drive.
+pub(super) fn build_wheeled_model(
+    path: &Path,
+    drive: &DriveSpec,
+    wheel_joints: Option<[String; 2]>,
+    casters: &[CasterSpec],
+    gravity: Option<f64>,
+) -> Result<moma::mobile::WheeledModel> {
     use moma::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
     let dd = DiffDrive::new(drive.r_w, drive.b, drive.d).context("robot.drive")?;
     for c in casters {
@@ -321,11 +349,10 @@ fn build_urdf_robot(
         bail!("gravity is not a finite number");
     }
     model.gravity = nalgebra::Vector3::new(0.0, 0.0, -g);
-    let wm = WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))?;
-    Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
+    WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))
 }
 
-fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
+pub(super) fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
     Series { name, x: t, y }
 }
 
@@ -359,7 +386,7 @@ fn column(rec: &Recorder, row: &dyn Fn(usize) -> f64) -> Vec<f64> {
 }
 
 /// Platform path, heading and arm joints, wheel angles (when tracked) and inputs.
-fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+pub(super) fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
     let t = &rec.times;
     let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
     let x = col(&|i| rec.q_row(i)[0]);
@@ -427,7 +454,7 @@ fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<
 }
 
 /// Energy balance and its error, the constraint multipliers and the residual.
-fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+pub(super) fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
     let t = &rec.times;
     let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
     let energy = vec![
@@ -488,7 +515,7 @@ fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
 
 /// The initial configuration, reduced velocity and input profile of a scenario, checked
 /// against the system's sizes (errors name the field and the expected channels).
-fn initial_state(
+pub(super) fn initial_state(
     sc: &Scenario,
     system: &dyn ReducedSystem,
     ctx: &dyn Fn(&str) -> String,
@@ -544,7 +571,7 @@ fn initial_state(
 }
 
 /// A progress bar on standard error when it is a terminal.
-fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
+pub(super) fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
     if std::io::stderr().is_terminal() {
         let pb = indicatif::ProgressBar::new((duration * 1000.0).round() as u64);
         pb.set_style(
@@ -580,6 +607,9 @@ pub fn run(args: Args) -> Result<()> {
         bail!("{}", ctx("gravity is not a finite number"));
     }
     let base_dir = path.parent().unwrap_or(Path::new("."));
+    if sc.controller.is_some() || sc.reference.is_some() {
+        return super::simulate_control::run(&path, &sc, base_dir, &args);
+    }
     if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
         return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
     }
