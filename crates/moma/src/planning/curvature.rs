@@ -31,7 +31,12 @@
 //!    is too small to reach κ_c). Each corner tries the loosest blend of a ladder (κ_c =
 //!    κ_max/λ, σ = σ_max/λ², λ = 6, 4, 3, 2, 1.5, 1: the same shape scaled by λ) whose
 //!    tangent length fits its share of the two segments and whose curve crosses only free
-//!    cells, so corners shrink toward the tightest admissible turn only where space requires.
+//!    cells, so corners shrink toward the tightest admissible turn only where space
+//!    requires. Two corners turning the same way without room between them are merged
+//!    into one at the intersection of the outer segments (when the two new segments are
+//!    free); a corner whose every turn crosses an obstacle is moved outward along its
+//!    bisector, by up to three times the cut of its tightest turn, when the two new
+//!    segments are free.
 //! 4. **Check.** The assembled path is sampled every [`SmoothOptions::ds`] plus at every
 //!    piece boundary, and the cells crossed by the chords between samples are checked once
 //!    more against the C-space.
