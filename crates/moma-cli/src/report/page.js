@@ -396,7 +396,8 @@
     { title: 'Turn rate', unit: 'rad/s', series: [{ k: 'w', n: 'executed ω' }, { k: 'wr', n: 'reference', dash: true }] },
     { title: 'ZMP margin (tip-over at 0; gaps: undefined)', unit: 'm', zero: true, series: [{ k: 'zmp', n: 'ZMP margin' }] },
     { title: 'Force-Angle minimum (tip-over at 0)', unit: 'rad', zero: true, series: [{ k: 'fa', n: 'FA minimum' }] },
-    { title: 'Tracking error and clearance', unit: 'm', series: [{ k: 'err', n: 'tracking error' }, { k: 'clr', n: 'clearance' }] },
+    { title: 'Tracking error (distance from the reference)', unit: 'm', series: [{ k: 'err', n: 'tracking error' }] },
+    { title: 'Clearance (footprint edge to the nearest obstacle)', unit: 'm', zero: true, series: [{ k: 'clr', n: 'clearance' }] },
   ];
   if (D.torque_names.length) {
     PLOTS.push({ title: 'Joint torques', unit: 'N·m', series: D.torque_names.map((n, i) => ({ col: S.tq[i], n: n })) });
@@ -553,7 +554,15 @@
         tab.appendChild(tr);
       }
     }
-    if (D.summary && typeof D.summary === 'object') rows(D.summary, '');
+    if (D.summary && typeof D.summary === 'object' && !Array.isArray(D.summary)) {
+      // the headline fields first, in reading order, then the rest as they come
+      const first = ['reached', 'reason', 'time_to_goal', 'replans', 'min_zmp_margin', 'min_clearance',
+        'max_tracking_error', 'final_pose_error', 'end_effector_error', 'wall_time_s'];
+      const ordered = {};
+      for (const k of first) if (k in D.summary) ordered[k] = D.summary[k];
+      for (const k of Object.keys(D.summary)) if (!(k in ordered)) ordered[k] = D.summary[k];
+      rows(ordered, '');
+    }
     const st = document.getElementById('status');
     const sm = D.summary || {};
     if (sm.reached === true) { st.className = 'good'; st.textContent = 'goal reached' + (typeof sm.time_to_goal === 'number' ? ' in ' + fmt(sm.time_to_goal) + ' s' : ''); }
