@@ -688,6 +688,7 @@
   summaryTable();
   eventsTable();
   nowTable();
+  body.dataset.playing = '1';
   if (N < 2) setPlaying(false);
   draw();
   setInterval(tick, 40);
