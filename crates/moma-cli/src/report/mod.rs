@@ -407,6 +407,52 @@ mod tests {
     }
 
     #[test]
+    fn long_runs_are_decimated_in_the_page_and_the_figures() {
+        let mut r = empty();
+        let n = 50_000;
+        let s = &mut r.samples;
+        s.t = (0..n).map(|i| i as f64 * 1e-3).collect();
+        for c in [
+            &mut s.x,
+            &mut s.y,
+            &mut s.theta,
+            &mut s.v,
+            &mut s.omega,
+            &mut s.v_ref,
+            &mut s.omega_ref,
+            &mut s.clearance,
+            &mut s.tracking_error,
+        ] {
+            *c = s.t.iter().map(|t| (3.0 * t).sin()).collect();
+        }
+        // one sharp dip that uniform thinning would step over
+        s.clearance[31_337] = -1.0;
+        s.zmp_margin = vec![Some(0.1); n];
+        s.force_angle_min = vec![Some(0.5); n];
+        s.arm_side = vec![vec![[0.0, 0.3], [0.2, 0.6]]; n];
+        let html = render_html(&r);
+        let a = html.find(r#"id="mission-data">"#).unwrap() + r#"id="mission-data">"#.len();
+        let b = a + html[a..].find("</script>").unwrap();
+        let data: serde_json::Value = serde_json::from_str(&html[a..b]).unwrap();
+        let clr = data["samples"]["clr"].as_array().unwrap();
+        assert!(clr.len() <= embed::MAX_SAMPLES + 10, "{}", clr.len());
+        assert!(
+            clr.iter().any(|v| v.as_f64() == Some(-1.0)),
+            "the dip is kept"
+        );
+        assert!(html.len() < 400_000, "{} bytes", html.len());
+        for (name, svg) in render_svgs(&r) {
+            let points = svg
+                .split("<polyline points=\"")
+                .skip(1)
+                .map(|p| p[..p.find('"').unwrap()].split(' ').count())
+                .max()
+                .unwrap_or(0);
+            assert!(points <= embed::MAX_SAMPLES + 10, "{name}: {points} points");
+        }
+    }
+
+    #[test]
     #[should_panic(expected = "malformed MissionReport")]
     fn render_html_asserts_the_shape() {
         let mut r = empty();

@@ -233,6 +233,8 @@
       disk(g, x, y, r);
       g.fillStyle = 'rgba(255,140,26,0.75)'; g.fill();
       g.strokeStyle = '#b35300'; g.lineWidth = 1.5; g.stroke();
+      g.font = FONT; g.fillStyle = '#8a4000'; g.textAlign = 'center'; g.textBaseline = 'bottom';
+      g.fillText('t = ' + fmt(o.t) + ' s', x, y - r - 3);
       const age = time - o.t;
       if (age < 1.5) { // a ring that widens and fades: "this just appeared"
         disk(g, x, y, r + 6 + 30 * age);
@@ -547,7 +549,8 @@
         const name = prefix + k;
         if (v && typeof v === 'object' && !Array.isArray(v)) { rows(v, name + '.'); continue; }
         const tr = el('tr');
-        tr.appendChild(el('th', null, name.replace(/_/g, ' ') + (UNITS[k] ? ' [' + UNITS[k] + ']' : '')));
+        const label = name.replace(/_/g, ' ').replace(/\bzmp\b/g, 'ZMP');
+        tr.appendChild(el('th', null, label + (UNITS[k] ? ' [' + UNITS[k] + ']' : '')));
         const td = el('td', null, cellText(v));
         if (typeof v === 'boolean') td.className = v ? 'yes' : 'no';
         tr.appendChild(td);
