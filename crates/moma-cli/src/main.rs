@@ -60,6 +60,9 @@ enum Command {
     /// Render a mission's report.html and SVG figures from a saved MissionReport (JSON).
     #[command(hide = true)]
     RenderReport(cmd::render_report::Args),
+    /// Sweep a stability or placement study over a grid or a seeded random sample (or
+    /// one shard of it) into one CSV table; `moma sweep merge` joins shard tables.
+    Sweep(cmd::sweep::Args),
 }
 
 fn main() {
@@ -81,6 +84,7 @@ fn main() {
         Command::StabilityMap(a) => cmd::stability_map::run(a),
         Command::Space(a) => cmd::space::run(a),
         Command::RenderReport(a) => cmd::render_report::run(a),
+        Command::Sweep(a) => cmd::sweep::run(a),
     };
     if let Err(e) = result {
         if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {
