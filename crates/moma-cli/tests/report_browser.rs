@@ -37,14 +37,14 @@ fn temp_dir(tag: &str) -> PathBuf {
 
 const RES: f64 = 0.05;
 const ORIGIN: [f64; 2] = [-0.5, -0.5];
-const OBSTACLE: ([f64; 2], f64, f64) = ([3.1, 2.0], 0.25, 3.0); // centre, radius, time
+const OBSTACLE: ([f64; 2], f64, f64) = ([3.3, 2.0], 0.2, 3.0); // centre, radius, time
 const GOAL: [f64; 3] = [5.0, 3.0, 0.0];
 const TARGET: [f64; 3] = [5.5, 3.0, 0.8];
 const FOOTPRINT: f64 = 0.3;
 
-/// A 6 m × 4 m room (120 × 80 cells): walls, a pillar, an unknown corner.
+/// A 6 m × 4.5 m room (120 × 90 cells): walls, a pillar, an unknown corner.
 fn grid() -> (usize, usize, Vec<u8>) {
-    let (w, h) = (120, 80);
+    let (w, h) = (120, 90);
     let mut cells = vec![0u8; w * h];
     for y in 0..h {
         for x in 0..w {
@@ -81,7 +81,7 @@ fn detour(p0: [f64; 2], m0: [f64; 2], s: f64) -> [f64; 2] {
     );
     let (h01, h11) = (-2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
     let m1 = [3.0, 0.0];
-    let bump = 0.45 * (PI * s).sin().powi(2);
+    let bump = 0.6 * (PI * s).sin().powi(2);
     [
         h00 * p0[0] + h10 * m0[0] + h01 * GOAL[0] + h11 * m1[0],
         h00 * p0[1] + h10 * m0[1] + h01 * GOAL[1] + h11 * m1[1] + bump,
@@ -106,8 +106,7 @@ impl Polyline {
     fn len(&self) -> f64 {
         *self.cum.last().unwrap()
     }
-    /// Point and heading at arc length `s`.
-    fn at(&self, s: f64) -> ([f64; 2], f64) {
+    fn point(&self, s: f64) -> [f64; 2] {
         let s = s.clamp(0.0, self.len());
         let i = self
             .cum
@@ -115,10 +114,13 @@ impl Polyline {
             .clamp(1, self.p.len() - 1);
         let (a, b) = (self.p[i - 1], self.p[i]);
         let f = (s - self.cum[i - 1]) / (self.cum[i] - self.cum[i - 1]).max(1e-12);
-        (
-            [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])],
-            (b[1] - a[1]).atan2(b[0] - a[0]),
-        )
+        [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+    }
+    /// Point and heading (the chord over ±5 cm, smoother than the segments') at arc
+    /// length `s`.
+    fn at(&self, s: f64) -> ([f64; 2], f64) {
+        let (a, b) = (self.point(s - 0.05), self.point(s + 0.05));
+        (self.point(s), (b[1] - a[1]).atan2(b[0] - a[0]))
     }
 }
 
@@ -212,7 +214,7 @@ fn mission() -> Value {
         let d_wall = (p[0] + 0.35)
             .min(5.35 - p[0])
             .min(p[1] + 0.35)
-            .min(3.35 - p[1]);
+            .min(3.85 - p[1]);
         let clearance = d_obs.min(d_wall) - FOOTPRINT;
         min_clear = min_clear.min(clearance);
         let err = 0.003 + 0.004 * (1.3 * t).sin().abs() * v / v_max;
@@ -274,7 +276,7 @@ fn mission() -> Value {
             "arm_side": arm,
         },
         "events": [
-            { "t": OBSTACLE.2, "kind": "obstacle", "text": "a disk of radius 0.25 m appears at (3.1, 2.0) on the path" },
+            { "t": OBSTACLE.2, "kind": "obstacle", "text": "a disk of radius 0.2 m appears at (3.3, 2.0) on the path" },
             { "t": t_switch, "kind": "replan", "text": "D* Lite re-plan from the current pose; new path smoothed and timed without stopping" },
             { "t": 4.5, "kind": "stability", "text": "ZMP margin undefined for 50 ms <script>" },
             { "t": t_arrive, "kind": "goal", "text": "base at the goal pose; the arm reaches for the target" },
@@ -371,7 +373,7 @@ fn report_is_self_contained_and_complete() {
     // the view is zoomed to the mission's region, inside the map
     let view: Vec<f64> = serde_json::from_value(data["view"].clone()).unwrap();
     assert!(
-        view[0] >= -0.5 && view[2] <= 5.5 && view[1] >= -0.5 && view[3] <= 3.5,
+        view[0] >= -0.5 && view[2] <= 5.5 && view[1] >= -0.5 && view[3] <= 4.0,
         "{view:?}"
     );
     assert!(
@@ -448,47 +450,63 @@ fn find_browser() -> Option<PathBuf> {
 }
 
 /// Runs headless Chromium on `page` with `extra` arguments and a fresh profile folder
-/// (`profile`, so that no earlier instance's lock is in the way), at most 300 s (the
-/// budget of a loaded machine); returns its stdout.
+/// (`profile`, so that no earlier instance's lock is in the way); returns its stdout.
+/// Headless Chromium now and then stalls on a loaded machine before its virtual-time
+/// budget ends, so one attempt gets 90 s; a stalled attempt's whole process group is
+/// killed and the run is tried again, three times at most.
 fn chromium(browser: &Path, profile: &Path, page: &Path, extra: &[String]) -> String {
+    for attempt in 1..=3 {
+        if let Some(out) = chromium_once(browser, profile, page, extra) {
+            return out;
+        }
+        eprintln!("chromium {extra:?}: attempt {attempt} stalled for 90 s and was killed");
+    }
+    panic!("chromium {extra:?} stalled three times");
+}
+
+fn chromium_once(browser: &Path, profile: &Path, page: &Path, extra: &[String]) -> Option<String> {
     let _ = std::fs::remove_dir_all(profile);
-    let mut child = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--hide-scrollbars",
-            "--no-first-run",
-            "--disable-extensions",
-            "--disable-background-networking",
-            "--window-size=1280,1400",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .args(extra)
-        .arg(page)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("starting chromium");
+    let mut cmd = Command::new(browser);
+    cmd.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--hide-scrollbars",
+        "--no-first-run",
+        "--disable-extensions",
+        "--disable-background-networking",
+        "--run-all-compositor-stages-before-draw",
+        "--window-size=1280,1400",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()))
+    .args(extra)
+    .arg(page)
+    .stdin(Stdio::null())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::null());
+    #[cfg(unix)]
+    std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
+    let mut child = cmd.spawn().expect("starting chromium");
     let mut stdout = child.stdout.take().unwrap();
     let reader = std::thread::spawn(move || {
         let mut s = String::new();
-        std::io::Read::read_to_string(&mut stdout, &mut s).unwrap();
+        let _ = std::io::Read::read_to_string(&mut stdout, &mut s);
         s
     });
     let started = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            break;
-        }
-        if started.elapsed() > Duration::from_secs(300) {
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > Duration::from_secs(90) {
+            // the launcher may be a shell script: end the whole group it leads
+            let _ = Command::new("kill")
+                .args(["-KILL", "--", &format!("-{}", child.id())])
+                .status();
             let _ = child.kill();
             let _ = child.wait();
-            panic!("chromium did not finish within 300 s");
+            return None;
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    reader.join().unwrap()
+    Some(reader.join().unwrap())
 }
 
 /// The attributes of the dumped `<body>` tag.
@@ -537,7 +555,7 @@ fn report_plays_in_headless_chromium() {
             body_attr(dom, "data-plots"),
             "plots drawn at {when}"
         );
-        assert_eq!(body_attr(dom, "data-plots").as_deref(), Some("6"));
+        assert_eq!(body_attr(dom, "data-plots").as_deref(), Some("7"));
     }
     let frame = |dom: &str| -> usize { body_attr(dom, "data-frame").unwrap().parse().unwrap() };
     let time = |dom: &str| -> f64 { body_attr(dom, "data-time").unwrap().parse().unwrap() };

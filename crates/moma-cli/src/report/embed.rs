@@ -67,7 +67,7 @@ fn arg_extreme(v: impl Iterator<Item = Option<f64>>, sign: f64) -> Option<usize>
 
 /// The samples that decimation must keep: the monitors' extremes, the first undefined
 /// tip-over measure, and the sample nearest each event, plan and obstacle time.
-fn kept_samples(r: &MissionReport) -> Vec<usize> {
+pub(crate) fn kept_samples(r: &MissionReport) -> Vec<usize> {
     let s = &r.samples;
     let mut keep = Vec::new();
     keep.extend(arg_extreme(s.zmp_margin.iter().copied(), 1.0));

@@ -249,6 +249,57 @@ mod tests {
     }
 
     #[test]
+    fn the_view_is_the_missions_region_with_a_margin_inside_the_map() {
+        use crate::report::{ReportObstacle, ReportPlan, ReportSamples};
+        let mut r = MissionReport {
+            title: String::new(),
+            map: map(400, 300), // x in [-1, 39], y in [-2, 28]
+            footprint_radius: 0.5,
+            start: [2.0, 1.0, 0.0],
+            goal: [8.0, 4.0, 0.0],
+            end_effector_target: None,
+            plans: vec![ReportPlan {
+                t: 0.0,
+                points: vec![[2.0, 1.0], [5.0, 6.0], [8.0, 4.0]],
+            }],
+            obstacles: vec![ReportObstacle {
+                t: 1.0,
+                center: [9.0, 4.0],
+                radius: 1.5,
+            }],
+            samples: ReportSamples {
+                t: vec![0.0],
+                x: vec![2.0],
+                y: vec![1.0],
+                theta: vec![0.0],
+                v: vec![0.0],
+                omega: vec![0.0],
+                v_ref: vec![0.0],
+                omega_ref: vec![0.0],
+                zmp_margin: vec![None],
+                force_angle_min: vec![None],
+                clearance: vec![0.0],
+                tracking_error: vec![0.0],
+                torque_names: vec![],
+                torques: vec![],
+                arm_side: vec![vec![]],
+            },
+            events: vec![],
+            summary: serde_json::Value::Null,
+        };
+        // box x [2, 10.5], y [1, 6]; span 8.5; pad 0.5 + 0.85
+        let v = view_region(&r);
+        let want = [0.65, -0.35, 11.85, 7.35];
+        for (a, b) in v.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "{v:?}");
+        }
+        // clipped to the map where the region reaches past it
+        r.start = [-0.9, -1.9, 0.0];
+        let v = view_region(&r);
+        assert_eq!((v[0], v[1]), (-1.0, -2.0));
+    }
+
+    #[test]
     fn large_crops_are_drawn_in_blocks() {
         let m = map(4500, 10);
         let img = encode(&m, [-10.0, -10.0, 1e4, 1e4]);

@@ -307,3 +307,156 @@ pub fn render_svgs(report: &MissionReport) -> Vec<(String, String)> {
     }
     svgs::render(report)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A report with nothing but a map: no samples, plans, obstacles, torques or events.
+    fn empty() -> MissionReport {
+        MissionReport {
+            title: "empty".into(),
+            map: ReportMap {
+                width: 4,
+                height: 3,
+                resolution: 0.5,
+                origin: [0.0, 0.0],
+                cells: vec![0; 12],
+            },
+            footprint_radius: 0.2,
+            start: [0.5, 0.5, 0.0],
+            goal: [1.5, 1.0, 1.0],
+            end_effector_target: None,
+            plans: vec![],
+            obstacles: vec![],
+            samples: ReportSamples {
+                t: vec![],
+                x: vec![],
+                y: vec![],
+                theta: vec![],
+                v: vec![],
+                omega: vec![],
+                v_ref: vec![],
+                omega_ref: vec![],
+                zmp_margin: vec![],
+                force_angle_min: vec![],
+                clearance: vec![],
+                tracking_error: vec![],
+                torque_names: vec![],
+                torques: vec![],
+                arm_side: vec![],
+            },
+            events: vec![],
+            summary: serde_json::json!({"reached": false, "reason": "no motion"}),
+        }
+    }
+
+    #[test]
+    fn the_page_assets_cannot_end_a_script_or_reach_the_network() {
+        for (name, text) in [("page.js", JS), ("errors.js", ERRORS_JS), ("page.css", CSS)] {
+            let lower = text.to_ascii_lowercase();
+            for bad in ["</script", "<!--", "http:", "https:", "@import", "url("] {
+                assert!(!lower.contains(bad), "{name} contains {bad}");
+            }
+        }
+    }
+
+    #[test]
+    fn an_empty_run_still_renders_a_whole_page_and_the_figures() {
+        let r = empty();
+        let html = render_html(&r);
+        assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+        assert!(html.contains(r#""t":[]"#) && html.contains(r#""ee_target":null"#));
+        let names: Vec<String> = render_svgs(&r).into_iter().map(|(n, _)| n).collect();
+        assert_eq!(
+            names,
+            [
+                "top_view.svg",
+                "speed.svg",
+                "turn_rate.svg",
+                "zmp_margin.svg",
+                "force_angle.svg",
+                "tracking.svg"
+            ]
+        );
+    }
+
+    #[test]
+    fn malformed_data_is_named_by_check() {
+        let mut r = empty();
+        r.samples.torque_names.push("j1".into());
+        assert_eq!(
+            r.check().unwrap_err(),
+            "samples.torques: 0 channels for 1 names"
+        );
+        let mut r = empty();
+        r.map.cells.pop();
+        assert_eq!(
+            r.check().unwrap_err(),
+            "map.cells: 11 values for 4 × 3 cells"
+        );
+        let mut r = empty();
+        r.map.width = usize::MAX;
+        assert!(r.check().unwrap_err().contains("exceed the limit"));
+        let mut r = empty();
+        r.map.resolution = 0.0;
+        assert!(r.check().unwrap_err().starts_with("map.resolution"));
+        let mut r = empty();
+        r.samples.t.push(0.0);
+        assert_eq!(r.check().unwrap_err(), "samples.x: 0 values for 1 times");
+    }
+
+    #[test]
+    fn long_runs_are_decimated_in_the_page_and_the_figures() {
+        let mut r = empty();
+        let n = 50_000;
+        let s = &mut r.samples;
+        s.t = (0..n).map(|i| i as f64 * 1e-3).collect();
+        for c in [
+            &mut s.x,
+            &mut s.y,
+            &mut s.theta,
+            &mut s.v,
+            &mut s.omega,
+            &mut s.v_ref,
+            &mut s.omega_ref,
+            &mut s.clearance,
+            &mut s.tracking_error,
+        ] {
+            *c = s.t.iter().map(|t| (3.0 * t).sin()).collect();
+        }
+        // one sharp dip that uniform thinning would step over
+        s.clearance[31_337] = -1.0;
+        s.zmp_margin = vec![Some(0.1); n];
+        s.force_angle_min = vec![Some(0.5); n];
+        s.arm_side = vec![vec![[0.0, 0.3], [0.2, 0.6]]; n];
+        let html = render_html(&r);
+        let a = html.find(r#"id="mission-data">"#).unwrap() + r#"id="mission-data">"#.len();
+        let b = a + html[a..].find("</script>").unwrap();
+        let data: serde_json::Value = serde_json::from_str(&html[a..b]).unwrap();
+        let clr = data["samples"]["clr"].as_array().unwrap();
+        assert!(clr.len() <= embed::MAX_SAMPLES + 10, "{}", clr.len());
+        assert!(
+            clr.iter().any(|v| v.as_f64() == Some(-1.0)),
+            "the dip is kept"
+        );
+        assert!(html.len() < 400_000, "{} bytes", html.len());
+        for (name, svg) in render_svgs(&r) {
+            let points = svg
+                .split("<polyline points=\"")
+                .skip(1)
+                .map(|p| p[..p.find('"').unwrap()].split(' ').count())
+                .max()
+                .unwrap_or(0);
+            assert!(points <= embed::MAX_SAMPLES + 10, "{name}: {points} points");
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "malformed MissionReport")]
+    fn render_html_asserts_the_shape() {
+        let mut r = empty();
+        r.samples.t.push(0.0);
+        let _ = render_html(&r);
+    }
+}

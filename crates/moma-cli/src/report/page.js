@@ -233,6 +233,8 @@
       disk(g, x, y, r);
       g.fillStyle = 'rgba(255,140,26,0.75)'; g.fill();
       g.strokeStyle = '#b35300'; g.lineWidth = 1.5; g.stroke();
+      g.font = FONT; g.fillStyle = '#8a4000'; g.textAlign = 'center'; g.textBaseline = 'bottom';
+      g.fillText('t = ' + fmt(o.t) + ' s', x, y - r - 3);
       const age = time - o.t;
       if (age < 1.5) { // a ring that widens and fades: "this just appeared"
         disk(g, x, y, r + 6 + 30 * age);
@@ -396,7 +398,8 @@
     { title: 'Turn rate', unit: 'rad/s', series: [{ k: 'w', n: 'executed ω' }, { k: 'wr', n: 'reference', dash: true }] },
     { title: 'ZMP margin (tip-over at 0; gaps: undefined)', unit: 'm', zero: true, series: [{ k: 'zmp', n: 'ZMP margin' }] },
     { title: 'Force-Angle minimum (tip-over at 0)', unit: 'rad', zero: true, series: [{ k: 'fa', n: 'FA minimum' }] },
-    { title: 'Tracking error and clearance', unit: 'm', series: [{ k: 'err', n: 'tracking error' }, { k: 'clr', n: 'clearance' }] },
+    { title: 'Tracking error (distance from the reference)', unit: 'm', series: [{ k: 'err', n: 'tracking error' }] },
+    { title: 'Clearance (footprint edge to the nearest obstacle)', unit: 'm', zero: true, series: [{ k: 'clr', n: 'clearance' }] },
   ];
   if (D.torque_names.length) {
     PLOTS.push({ title: 'Joint torques', unit: 'N·m', series: D.torque_names.map((n, i) => ({ col: S.tq[i], n: n })) });
@@ -546,14 +549,23 @@
         const name = prefix + k;
         if (v && typeof v === 'object' && !Array.isArray(v)) { rows(v, name + '.'); continue; }
         const tr = el('tr');
-        tr.appendChild(el('th', null, name.replace(/_/g, ' ') + (UNITS[k] ? ' [' + UNITS[k] + ']' : '')));
+        const label = name.replace(/_/g, ' ').replace(/\bzmp\b/g, 'ZMP');
+        tr.appendChild(el('th', null, label + (UNITS[k] ? ' [' + UNITS[k] + ']' : '')));
         const td = el('td', null, cellText(v));
         if (typeof v === 'boolean') td.className = v ? 'yes' : 'no';
         tr.appendChild(td);
         tab.appendChild(tr);
       }
     }
-    if (D.summary && typeof D.summary === 'object') rows(D.summary, '');
+    if (D.summary && typeof D.summary === 'object' && !Array.isArray(D.summary)) {
+      // the headline fields first, in reading order, then the rest as they come
+      const first = ['reached', 'reason', 'time_to_goal', 'replans', 'min_zmp_margin', 'min_clearance',
+        'max_tracking_error', 'final_pose_error', 'end_effector_error', 'wall_time_s'];
+      const ordered = {};
+      for (const k of first) if (k in D.summary) ordered[k] = D.summary[k];
+      for (const k of Object.keys(D.summary)) if (!(k in ordered)) ordered[k] = D.summary[k];
+      rows(ordered, '');
+    }
     const st = document.getElementById('status');
     const sm = D.summary || {};
     if (sm.reached === true) { st.className = 'good'; st.textContent = 'goal reached' + (typeof sm.time_to_goal === 'number' ? ' in ' + fmt(sm.time_to_goal) + ' s' : ''); }
@@ -679,6 +691,7 @@
   summaryTable();
   eventsTable();
   nowTable();
+  body.dataset.playing = '1';
   if (N < 2) setPlaying(false);
   draw();
   setInterval(tick, 40);

@@ -1,7 +1,8 @@
 //! The static figures beside the report: the top view on the map and the time plots
 //! (through the CLI's line charts).
 
-use super::{MissionReport, embed::html_escape, map};
+use super::embed::{MAX_SAMPLES, decimate_indices, html_escape, kept_samples};
+use super::{MissionReport, map};
 use crate::svg_plots::{Series, fmt_tick, line_chart, ticks};
 use std::fmt::Write;
 
@@ -13,9 +14,13 @@ const MR: f64 = 230.0;
 /// Every figure, in a fixed order.
 pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
     let s = &r.samples;
-    let opt = |v: &[Option<f64>]| v.iter().map(|x| x.unwrap_or(f64::NAN)).collect();
-    let mut out = vec![("top_view.svg".to_string(), top_view(r))];
-    let t = &s.t;
+    // the same samples as the page: a few thousand, extremes kept
+    let idx = decimate_indices(s.t.len(), MAX_SAMPLES, &kept_samples(r));
+    let pick = |v: &[f64]| -> Vec<f64> { idx.iter().map(|&i| v[i]).collect() };
+    let opt =
+        |v: &[Option<f64>]| -> Vec<f64> { idx.iter().map(|&i| v[i].unwrap_or(f64::NAN)).collect() };
+    let mut out = vec![("top_view.svg".to_string(), top_view(r, &idx))];
+    let t = &pick(&s.t);
     let chart = |title: &str, ylabel: &str, series: Vec<Series<'_>>| -> String {
         line_chart(&format!("{}\n{title}", r.title), "t [s]", ylabel, &series)
     };
@@ -28,12 +33,12 @@ pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
                 Series {
                     name: "v",
                     x: t,
-                    y: s.v.clone(),
+                    y: pick(&s.v),
                 },
                 Series {
                     name: "v reference",
                     x: t,
-                    y: s.v_ref.clone(),
+                    y: pick(&s.v_ref),
                 },
             ],
         ),
@@ -47,12 +52,12 @@ pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
                 Series {
                     name: "ω",
                     x: t,
-                    y: s.omega.clone(),
+                    y: pick(&s.omega),
                 },
                 Series {
                     name: "ω reference",
                     x: t,
-                    y: s.omega_ref.clone(),
+                    y: pick(&s.omega_ref),
                 },
             ],
         ),
@@ -90,12 +95,12 @@ pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
                 Series {
                     name: "tracking error",
                     x: t,
-                    y: s.tracking_error.clone(),
+                    y: pick(&s.tracking_error),
                 },
                 Series {
                     name: "clearance",
                     x: t,
-                    y: s.clearance.clone(),
+                    y: pick(&s.clearance),
                 },
             ],
         ),
@@ -108,7 +113,7 @@ pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
             .map(|(n, c)| Series {
                 name: n,
                 x: t,
-                y: c.clone(),
+                y: pick(c),
             })
             .collect();
         out.push((
@@ -122,7 +127,7 @@ pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
 /// The map around the mission with every plan (the last one solid), the executed path,
 /// the obstacles with their times, start, goal and re-plan points, axes in metres and a
 /// legend.
-fn top_view(r: &MissionReport) -> String {
+fn top_view(r: &MissionReport, idx: &[usize]) -> String {
     let view = map::view_region(r);
     let img = map::encode(&r.map, view);
     let (vw, vh) = (view[2] - view[0], view[3] - view[1]);
@@ -197,7 +202,7 @@ fn top_view(r: &MissionReport) -> String {
         let _ = writeln!(
             o,
             r##"<polyline points="{}" fill="none" stroke="#d62728" stroke-width="2"/>"##,
-            poly(&mut s.x.iter().zip(&s.y).map(|(&x, &y)| (x, y)))
+            poly(&mut idx.iter().map(|&i| (s.x[i], s.y[i])))
         );
     }
     for p in r.plans.iter().skip(1) {
