@@ -29,6 +29,10 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long)]
     pub output: Option<PathBuf>,
+    /// Layout of the states' q (and v): moma or pinocchio (continuous joints as cos, sin;
+    /// the free-flyer is the same in both).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 #[derive(Deserialize)]
@@ -104,6 +108,7 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("{}: --frame", args.urdf.display()))?;
     let mut sd = SpaceData::new(&model).with_context(|| args.urdf.display().to_string())?;
     let states = read_states(&args.states)?;
+    let conv = super::common::LayoutConv::new(&model, args.layout);
     if states.states.is_empty() {
         bail!("{}: 'states' is empty", args.states.display());
     }
@@ -112,7 +117,8 @@ pub fn run(args: Args) -> Result<()> {
     let mut out_states = Vec::with_capacity(states.states.len());
     for (k, s) in states.states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
-        moma::kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
+        let q_in = conv.q_in(s.q.clone(), &format!("{src}.q"))?;
+        moma::kinematics::check_state(&model, &src, Some(&q_in), None, None, None)?;
         if s.qdot_joints.len() != n {
             bail!(
                 "{src} qdot_joints: expected {n} numbers (nv − 6 = {} − 6), got {}",
@@ -130,7 +136,7 @@ pub fn run(args: Args) -> Result<()> {
             ),
             None => Force::zero(),
         };
-        let q = DVector::from_column_slice(&s.q);
+        let q = DVector::from_column_slice(&q_in);
         let vb = space::base_velocity(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h)
             .with_context(|| src.clone())?;
         let v = sd.v.as_slice().to_vec();
