@@ -379,3 +379,70 @@ fn ik_takes_and_gives_pinocchio_q() {
     lf.q_from_pinocchio(&qa, &mut back).unwrap();
     close("ik q", &json!(back), &b["q"]);
 }
+
+#[test]
+fn stability_map_and_reach_map_read_a_pinocchio_q() {
+    // a wrong-length Pinocchio q is refused with the option named; a right one runs
+    let (pin, _) = planar_states(&["q"]);
+    let qp = nums(&pin[0]["q"]);
+    let join = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let dir = tmp("smap");
+    let base = "diff-drive:r_w=0.0985,b=0.2022,d=0,casters=0.1535,0.102;-0.1895,0.102";
+    let args = |q: &str| {
+        vec![
+            "stability-map".to_string(),
+            tiago_urdf(),
+            "--base".into(),
+            base.into(),
+            "--q".into(),
+            q.to_string(),
+            "--joints".into(),
+            "arm_1_joint,arm_2_joint".into(),
+            "--resolution".into(),
+            "3".into(),
+            "--layout".into(),
+            "pinocchio".into(),
+            "--output-dir".into(),
+            dir.to_str().unwrap().into(),
+        ]
+    };
+    let o = Command::new(env!("CARGO_BIN_EXE_moma"))
+        .args(args(&join(&qp)))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new(env!("CARGO_BIN_EXE_moma"))
+        .args(args(&join(&qp[1..])))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--q: expected length"));
+    let o = moma(&[
+        "reach-map",
+        &tiago_urdf(),
+        "--frame",
+        "arm_tool_link",
+        "--target",
+        "0.6,0.1,0.9",
+        "--area",
+        "-0.2,-0.2,0.2,0.2",
+        "--step",
+        "0.2",
+        "--headings",
+        "2",
+        "--q0",
+        &join(&qp[4..]),
+        "--layout",
+        "pinocchio",
+    ]);
+    assert!(
+        o.status.code() == Some(0) || o.status.code() == Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
