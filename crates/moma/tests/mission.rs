@@ -65,7 +65,7 @@ fn short_mission_reaches_its_goal_without_tipping() {
     assert_eq!(r.replans(), 0);
     let last = r.samples.q.last().unwrap();
     assert!((last[0] - 5.5).hypot(last[1] - 3.5) < 0.1);
-    assert!((last[2] - 1.5707963).abs() < 0.1);
+    assert!((last[2] - std::f64::consts::FRAC_PI_2).abs() < 0.1);
     // the ZMP stays inside the support all along, the footprint never touches
     let zmp = r.min_zmp_margin().unwrap();
     assert!(zmp > 0.05, "min ZMP margin {zmp}");
@@ -74,7 +74,7 @@ fn short_mission_reaches_its_goal_without_tipping() {
     assert!(r.min_force_angle().unwrap() > 0.0);
     // the motion really moved: the robot drove the ~4 m at up to v_max
     let vmax = r.samples.v.iter().copied().fold(0.0, f64::max);
-    assert!(vmax > 0.5 && vmax <= 1.0 + 1e-6, "peak speed {vmax}");
+    assert!(vmax > 0.5 && vmax <= 1.01, "peak speed {vmax}");
     // the arm held its transport posture while driving
     let arm: Vec<usize> = r
         .arm_names
@@ -85,7 +85,11 @@ fn short_mission_reaches_its_goal_without_tipping() {
     for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
         if *phase == "drive" {
             for (k, &j) in arm.iter().enumerate() {
-                assert!((q[j] - posture[k]).abs() < 0.02, "joint {k} drifted: {}", q[j]);
+                assert!(
+                    (q[j] - posture[k]).abs() < 0.02,
+                    "joint {k} drifted: {}",
+                    q[j]
+                );
             }
         }
     }
@@ -142,14 +146,15 @@ fn an_obstacle_that_seals_the_goal_ends_the_mission_with_a_reason() {
     assert!(!r.reached);
     let reason = r.reason.as_deref().unwrap();
     assert!(reason.contains("seals the goal"), "{reason}");
+    assert_eq!(r.replans(), 0);
     assert!(r.time_to_goal.is_none());
     assert!(!r.samples.t.is_empty());
 }
 
 #[test]
 fn a_goal_enclosed_by_walls_is_unreachable() {
-    // inside the first shelf block of the depot: free cells, walled in
-    let goal = "[goal]\npose = [15.4, 5.5, 0.0]";
+    // inside a shelf block of the depot: free cells (0.3 m from any occupied one), walled in
+    let goal = "[goal]\npose = [23.725, 3.175, 0.0]";
     let text = mission_text(goal, "").replace("footprint_radius = 0.38", "footprint_radius = 0.2");
     let r = mission(&text);
     assert!(!r.reached);
@@ -186,7 +191,12 @@ fn two_runs_give_identical_results() {
 
 #[test]
 fn input_errors_are_errors() {
-    let err = |text: &str| parse(text).and_then(|m| run(&m).map(|_| ())).unwrap_err().to_string();
+    let err = |text: &str| {
+        parse(text)
+            .and_then(|m| run(&m).map(|_| ()))
+            .unwrap_err()
+            .to_string()
+    };
     // goal in an obstacle of the map (the depot's outer wall)
     let e = err(&mission_text("[goal]\npose = [0.02, 5.0, 0.0]", ""));
     assert!(e.contains("goal.pose"), "{e}");
@@ -194,21 +204,32 @@ fn input_errors_are_errors() {
     let e = err(&mission_text("[goal]\npose = [50.0, 5.0, 0.0]", ""));
     assert!(e.contains("goal.pose") && e.contains("outside"), "{e}");
     // start where the footprint does not fit (0.2 m from the wall)
-    let e = err(&mission_text(GOAL, "").replace("pose = [2.0, 2.0, 0.0]", "pose = [0.3, 2.0, 0.0]"));
-    assert!(e.contains("start.pose") && e.contains("does not fit"), "{e}");
+    let e =
+        err(&mission_text(GOAL, "").replace("pose = [2.0, 2.0, 0.0]", "pose = [0.3, 2.0, 0.0]"));
+    assert!(
+        e.contains("start.pose") && e.contains("does not fit"),
+        "{e}"
+    );
     // a footprint that fits nowhere
-    let e = err(&mission_text(GOAL, "").replace("footprint_radius = 0.38", "footprint_radius = 9.0"));
+    let e =
+        err(&mission_text(GOAL, "").replace("footprint_radius = 0.38", "footprint_radius = 9.0"));
     assert!(e.contains("fits nowhere"), "{e}");
     // wrong arm posture length
     let e = err(&mission_text(GOAL, "").replace(
         "transport_posture = [0.0, -0.5, 2.6, 1.04, 0.0, 0.0]",
         "transport_posture = [0.0, 1.0]",
     ));
-    assert!(e.contains("robot.transport_posture") && e.contains("expected 6"), "{e}");
+    assert!(
+        e.contains("robot.transport_posture") && e.contains("expected 6"),
+        "{e}"
+    );
     // bad limits
     let e = err(&mission_text(GOAL, "").replace("v_max = 1.0", "v_max = -1.0"));
     assert!(e.contains("limits.v_max"), "{e}");
-    let e = err(&mission_text(GOAL, "[[obstacles]]\nt = -1.0\ncenter = [1.0, 1.0]\nradius = 0.2"));
+    let e = err(&mission_text(
+        GOAL,
+        "[[obstacles]]\nt = -1.0\ncenter = [1.0, 1.0]\nradius = 0.2",
+    ));
     assert!(e.contains("obstacles[0].t"), "{e}");
 }
 

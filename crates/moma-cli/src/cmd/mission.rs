@@ -147,12 +147,16 @@ fn opt_num(x: Option<f64>) -> String {
 fn trajectory_csv(r: &MissionResult) -> String {
     let s = &r.samples;
     let mut out = String::new();
-    out.push_str("t,x,y,theta,v,omega,v_ref,omega_ref,x_ref,y_ref,zmp_margin,force_angle_min,moment_height_min,clearance,tracking_error,slip_ratio,ee_x,ee_y,ee_z,energy,phase");
+    out.push_str(
+        "t [s],x [m],y [m],theta [rad],v [m/s],omega [rad/s],v_ref [m/s],omega_ref [rad/s],\
+         x_ref [m],y_ref [m],zmp_margin [m],force_angle_min [rad],moment_height_min,\
+         clearance [m],tracking_error [m],slip_ratio,ee_x [m],ee_y [m],ee_z [m],energy [J],phase",
+    );
     for n in &r.arm_names {
-        let _ = write!(out, ",q_{n}");
+        let _ = write!(out, ",q_{n} [rad]");
     }
     for n in &r.u_names {
-        let _ = write!(out, ",u_{n}");
+        let _ = write!(out, ",u_{n} [N m]");
     }
     out.push('\n');
     let arm: Vec<usize> = r
