@@ -28,9 +28,11 @@ const OUTPUTS: &[&str] = &[
     "summary.json",
     "trajectory.csv",
     "events.json",
+    "report.html",
     "top_view.svg",
-    "speeds.svg",
-    "margins.svg",
+    "speed.svg",
+    "zmp_margin.svg",
+    "torques.svg",
 ];
 
 #[test]

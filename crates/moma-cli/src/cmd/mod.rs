@@ -13,6 +13,7 @@ pub mod mission;
 pub mod osc;
 pub mod plan;
 pub mod reach_map;
+pub mod render_report;
 pub mod scen;
 pub mod simulate;
 pub mod simulate_space;
