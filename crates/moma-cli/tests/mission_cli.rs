@@ -93,7 +93,7 @@ fn default_mission_runs_without_an_argument_and_reaches_its_goal() {
         "zmp_margin [m]",
         "clearance [m]",
         "q_shoulder_lift_joint [rad]",
-        "u_left_wheel_joint [N m]",
+        "tau_left [N m]",
     ] {
         assert!(
             header.split(',').any(|c| c == col),

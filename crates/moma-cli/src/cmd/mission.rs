@@ -163,7 +163,7 @@ fn trajectory_csv(r: &MissionResult) -> String {
         let _ = write!(out, ",q_{n} [rad]");
     }
     for n in &r.u_names {
-        let _ = write!(out, ",u_{n} [N m]");
+        let _ = write!(out, ",{n} [N m]");
     }
     out.push('\n');
     let arm: Vec<usize> = r
