@@ -9,6 +9,7 @@
 #[macro_use]
 mod output;
 mod cmd;
+mod report;
 mod svg_heatmap;
 mod svg_map;
 mod svg_plots;
@@ -38,6 +39,8 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Print an occupancy map's size, resolution, origin and cell counts.
     MapInfo(cmd::map_info::Args),
+    /// Run a mission: plan on a map, track in dynamic simulation, re-plan, reach; write the report.
+    Mission(cmd::mission::Args),
     /// Plan a path on an occupancy map.
     Plan(cmd::plan::Args),
     /// Run every problem of a Moving AI scenario file and compare with the optimal lengths.
@@ -59,6 +62,9 @@ enum Command {
     /// Sweep a stability or placement study over a grid or a seeded random sample (or
     /// one shard of it) into one CSV table; `moma sweep merge` joins shard tables.
     Sweep(cmd::sweep::Args),
+    /// Render a mission's report.html and SVG figures from a saved MissionReport (JSON).
+    #[command(hide = true)]
+    RenderReport(cmd::render_report::Args),
 }
 
 fn main() {
@@ -70,6 +76,7 @@ fn main() {
         Command::Eval(a) => cmd::eval::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::MapInfo(a) => cmd::map_info::run(a),
+        Command::Mission(a) => cmd::mission::run(a),
         Command::Plan(a) => cmd::plan::run(a),
         Command::Scen(a) => cmd::scen::run(a),
         Command::Manipulability(a) => cmd::manipulability::run(a),
@@ -80,6 +87,7 @@ fn main() {
         Command::StabilityMap(a) => cmd::stability_map::run(a),
         Command::Space(a) => cmd::space::run(a),
         Command::Sweep(a) => cmd::sweep::run(a),
+        Command::RenderReport(a) => cmd::render_report::run(a),
     };
     if let Err(e) = result {
         if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {
