@@ -58,6 +58,177 @@ pub fn read_states_text(path: &Path) -> Result<String> {
         .with_context(|| format!("{}: cannot read states file", path.display()))
 }
 
+/// The state layout of a command's inputs and outputs (`--layout`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Layout {
+    /// moma's: planar root `[x, y, θ]` with world-axes velocity, continuous joints as one
+    /// angle.
+    #[default]
+    Moma,
+    /// Pinocchio's: planar root `[x, y, cos θ, sin θ]` with base-frame velocity,
+    /// continuous joints as `[cos θ, sin θ]` (see `moma::io::pinocchio_layout`).
+    Pinocchio,
+}
+
+/// The conversions of one command run between `--layout` and moma's layout (the identity
+/// for `--layout moma`).
+pub struct LayoutConv {
+    map: Option<moma::io::pinocchio_layout::PinocchioLayout>,
+    nq: usize,
+    nv: usize,
+    planar: bool,
+}
+
+impl LayoutConv {
+    /// The conversions for `model` in `layout`.
+    pub fn new(model: &Model, layout: Layout) -> Self {
+        Self {
+            map: (layout == Layout::Pinocchio)
+                .then(|| moma::io::pinocchio_layout::PinocchioLayout::new(model)),
+            nq: model.nq,
+            nv: model.nv,
+            planar: model
+                .joint_types
+                .iter()
+                .any(|j| matches!(j, moma::multibody::JointType::Planar)),
+        }
+    }
+
+    /// True for `--layout pinocchio` on a model with a planar root (where velocities,
+    /// forces and matrices change, not only q).
+    pub fn moves_velocities(&self) -> bool {
+        self.map.is_some() && self.planar
+    }
+
+    /// moma's q from a q in the command's layout; `field` names it in errors. A q of the
+    /// wrong length is passed through for the command's own length check.
+    pub fn q_in(&self, q: Vec<f64>, field: &str) -> Result<Vec<f64>> {
+        match &self.map {
+            None => Ok(q),
+            Some(m) => {
+                if q.len() != m.nq() {
+                    bail!(
+                        "{field}: expected length {} (nq in the Pinocchio layout), got {}",
+                        m.nq(),
+                        q.len()
+                    );
+                }
+                let mut out = vec![0.0; self.nq];
+                m.q_from_pinocchio(&q, &mut out)
+                    .map_err(|e| anyhow!("{field}: {e}"))?;
+                Ok(out)
+            }
+        }
+    }
+
+    /// moma's velocity (or generalised force) from one in the command's layout at moma's
+    /// `q`; a vector of the wrong length is passed through for the command's length check.
+    pub fn v_in(&self, q: &[f64], x: Vec<f64>) -> Vec<f64> {
+        match &self.map {
+            Some(m) if x.len() == self.nv && q.len() == self.nq => {
+                let mut out = vec![0.0; self.nv];
+                m.v_from_pinocchio(q, &x, &mut out);
+                out
+            }
+            _ => x,
+        }
+    }
+
+    /// moma's acceleration from one in the command's layout at moma's `q` and `v` (zero
+    /// when not given).
+    pub fn a_in(&self, q: &[f64], v: Option<&[f64]>, a: Vec<f64>) -> Vec<f64> {
+        match &self.map {
+            Some(m) if a.len() == self.nv && q.len() == self.nq => {
+                let zero = vec![0.0; self.nv];
+                let v = v.filter(|v| v.len() == self.nv).unwrap_or(&zero);
+                let mut out = vec![0.0; self.nv];
+                m.a_from_pinocchio(q, v, &a, &mut out);
+                out
+            }
+            _ => a,
+        }
+    }
+
+    /// Converts one states-file state (q, v, a, tau) into moma's layout; `field` names it.
+    pub fn state_in(&self, st: &mut State, field: &str) -> Result<()> {
+        if self.map.is_none() {
+            return Ok(());
+        }
+        st.q = self.q_in(std::mem::take(&mut st.q), &format!("{field}.q"))?;
+        let q = st.q.clone();
+        st.v = st.v.take().map(|v| self.v_in(&q, v));
+        st.a = st.a.take().map(|a| self.a_in(&q, st.v.as_deref(), a));
+        st.tau = st.tau.take().map(|t| self.v_in(&q, t));
+        Ok(())
+    }
+
+    /// A moma q in the command's layout.
+    pub fn q_out(&self, q: &[f64]) -> Vec<f64> {
+        match &self.map {
+            None => q.to_vec(),
+            Some(m) => {
+                let mut out = vec![0.0; m.nq()];
+                m.q_to_pinocchio(q, &mut out);
+                out
+            }
+        }
+    }
+
+    /// A moma velocity or generalised force at moma's `q` in the command's layout.
+    pub fn v_out(&self, q: &[f64], x: &[f64]) -> Vec<f64> {
+        match &self.map {
+            None => x.to_vec(),
+            Some(m) => {
+                let mut out = vec![0.0; self.nv];
+                m.v_to_pinocchio(q, x, &mut out);
+                out
+            }
+        }
+    }
+
+    /// A moma acceleration at moma's `(q, v)` in the command's layout.
+    pub fn a_out(&self, q: &[f64], v: &[f64], a: &[f64]) -> Vec<f64> {
+        match &self.map {
+            None => a.to_vec(),
+            Some(m) => {
+                let mut out = vec![0.0; self.nv];
+                m.a_to_pinocchio(q, v, a, &mut out);
+                out
+            }
+        }
+    }
+
+    /// The acceleration (moma layout) that is zero in the command's layout at `(q, v)`:
+    /// RNEA there gives the layout's bias forces.
+    pub fn zero_acceleration(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
+        self.a_in(q, Some(v), vec![0.0; self.nv])
+    }
+
+    /// An nv × nv velocity-to-force matrix (the mass matrix) in the command's layout.
+    pub fn matrix_out(&self, q: &[f64], h: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+        match &self.map {
+            None => h.clone(),
+            Some(m) => {
+                let mut out = nalgebra::DMatrix::zeros(self.nv, self.nv);
+                m.matrix_to_pinocchio(q, h, &mut out);
+                out
+            }
+        }
+    }
+
+    /// A Jacobian (any rows, nv columns) in the command's layout.
+    pub fn jacobian_out(&self, q: &[f64], j: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+        match &self.map {
+            None => j.clone(),
+            Some(m) => {
+                let mut out = nalgebra::DMatrix::zeros(j.nrows(), self.nv);
+                m.jacobian_to_pinocchio(q, j, &mut out);
+                out
+            }
+        }
+    }
+}
+
 /// Parses a comma-separated list of finite numbers for option `field`.
 pub fn parse_list(field: &str, text: &str) -> Result<Vec<f64>> {
     let mut out = Vec::new();

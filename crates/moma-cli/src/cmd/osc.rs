@@ -36,6 +36,10 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
+    /// Layout of the states' q (and v): moma or pinocchio (continuous joints as cos, sin;
+    /// the free-flyer is the same in both).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 #[derive(Serialize)]
@@ -63,16 +67,24 @@ pub fn run(args: Args) -> Result<()> {
     let text = super::common::read_states_text(&args.states)?;
     let states = moma::io::states::parse_osc_states(&text, &args.states)?;
     let nv = model.nv;
+    let conv = super::common::LayoutConv::new(&model, args.layout);
+    if conv.moves_velocities() {
+        bail!(
+            "--layout pinocchio: not supported by osc on a planar root (the task bias and \
+             torques depend on the layout's velocity frame); use --layout moma"
+        );
+    }
     let mut data = Data::new(&model);
     let mut od = OscData::new(nv, &rows);
     let mut out = Vec::with_capacity(states.len());
     for (k, s) in states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
-        kinematics::check_state(&model, &src, Some(&s.q), s.v.as_deref(), None, None)?;
+        let q_in = conv.q_in(s.q.clone(), &format!("{src}.q"))?;
+        kinematics::check_state(&model, &src, Some(&q_in), s.v.as_deref(), None, None)?;
         let (a_des, tau0) = s.task_inputs(&rows, nv, k, &args.states)?;
         let a_des = DVector::from_vec(a_des);
         let tau0 = DVector::from_vec(tau0);
-        let q = DVector::from_column_slice(&s.q);
+        let q = DVector::from_column_slice(&q_in);
         let v =
             s.v.as_ref()
                 .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x));

@@ -29,6 +29,10 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long)]
     pub output: Option<PathBuf>,
+    /// Layout of the states' q (and v): moma or pinocchio (continuous joints as cos, sin;
+    /// the free-flyer is the same in both).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 #[derive(Serialize)]
@@ -52,18 +56,20 @@ pub fn run(args: Args) -> Result<()> {
     let mut sd = SpaceData::new(&model).with_context(|| args.urdf.display().to_string())?;
     let text = super::common::read_states_text(&args.states)?;
     let states = moma::io::states::parse_space_states(&text, &args.states)?;
+    let conv = super::common::LayoutConv::new(&model, args.layout);
     let n = sd.n;
     let mut data = Data::new(&model);
     let mut out_states = Vec::with_capacity(states.len());
     for (k, s) in states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
-        moma::kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
+        let q_in = conv.q_in(s.q.clone(), &format!("{src}.q"))?;
+        moma::kinematics::check_state(&model, &src, Some(&q_in), None, None, None)?;
         let h = s.check(n, model.nv, k, &args.states)?;
         let h = Force::new(
             Vector3::new(h[0], h[1], h[2]),
             Vector3::new(h[3], h[4], h[5]),
         );
-        let q = DVector::from_column_slice(&s.q);
+        let q = DVector::from_column_slice(&q_in);
         let st = space::state_report(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h, fid)
             .with_context(|| src.clone())?;
         if !st.is_finite() {

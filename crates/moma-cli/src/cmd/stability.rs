@@ -43,6 +43,10 @@ pub struct Args {
     /// Write the JSON result to this file (default: standard output).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
+    /// State layout of the states file: moma or pinocchio (planar root [x, y, cos θ,
+    /// sin θ] with base-frame v and a; continuous joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 /// The support options shared by `stability` and `stability-map`.
@@ -155,11 +159,17 @@ pub(crate) struct State {
 
 /// Reads and validates STATES.json for `model` (the one states reader of
 /// `common::read_states`, with the `external` loads of this command).
-pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
+pub(crate) fn read_states(
+    path: &Path,
+    model: &Model,
+    layout: super::common::Layout,
+) -> Result<Vec<State>> {
     let states = super::common::read_states(path, &["q", "v", "a", "external"])?;
+    let conv = super::common::LayoutConv::new(model, layout);
     let mut out = Vec::with_capacity(states.len());
-    for (i, st) in states.into_iter().enumerate() {
+    for (i, mut st) in states.into_iter().enumerate() {
         let field = format!("states[{i}]");
+        conv.state_in(&mut st, &format!("{}: {field}", path.display()))?;
         let q = st.q;
         let vv = st.v.unwrap_or_else(|| vec![0.0; model.nv]);
         let aa = st.a.unwrap_or_else(|| vec![0.0; model.nv]);
@@ -201,7 +211,7 @@ pub fn run(args: Args) -> Result<()> {
         &args.mhs_bodies,
         args.gravity.as_deref(),
     )?;
-    let states = read_states(&args.states, &model)?;
+    let states = read_states(&args.states, &model, args.layout)?;
     let mut data = moma::multibody::Data::new(&model);
     let mut sd = StabilityData::new(&sm);
     let mut out = Vec::with_capacity(states.len());

@@ -1,0 +1,361 @@
+//! `moma mission [MISSION.toml]`: plan on a map, time the path under the tip-over limits,
+//! track it in closed-loop dynamic simulation, re-plan when obstacles appear, reach an
+//! end-effector target at the goal, and write the whole output set at once.
+//!
+//! Without an argument `scenarios/mission.toml` runs (looked up in the current
+//! directory, then next to the source tree this binary was built from). The schema and
+//! the outputs are documented in `docs/mission.md`; the page and its figures come from
+//! [`crate::report`]. Exit status: 0 reached, 1 input error
+//! (nothing written), 3 the mission ran but did not reach its goal (every output written,
+//! `reached: false` and a `reason` in `summary.json`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Result, anyhow, bail};
+use moma::mission::{Mission, MissionResult};
+use serde_json::{Value, json};
+
+use crate::output::write_dir;
+
+/// Arguments of `moma mission`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Mission file (TOML). Default: scenarios/mission.toml.
+    pub scenario: Option<PathBuf>,
+    /// Output directory (overrides the mission's `output.dir`; relative to the current
+    /// directory).
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Do not print the summary on standard output.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
+    if let Some(p) = arg {
+        return Ok(p);
+    }
+    let local = PathBuf::from("scenarios/mission.toml");
+    if local.is_file() {
+        return Ok(local);
+    }
+    let bundled = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/mission.toml");
+    if bundled.is_file() {
+        return Ok(bundled);
+    }
+    bail!(
+        "no mission given and no scenarios/mission.toml found in the current directory or at {}",
+        bundled.display()
+    )
+}
+
+fn opt(x: Option<f64>) -> Value {
+    x.filter(|v| v.is_finite())
+        .map_or(Value::Null, |v| json!(v))
+}
+
+/// The summary object (`summary.json`).
+fn summary(
+    m: &Mission,
+    r: &MissionResult,
+    wall_total: f64,
+    report_s: f64,
+    files: &[String],
+) -> Value {
+    let f = &m.file;
+    let last = r.samples.t.len().saturating_sub(1);
+    let final_pose = r.samples.q.get(last).map(|q| [q[0], q[1], q[2]]);
+    let final_pose_error = final_pose.map(|p| {
+        let g = f.goal.pose;
+        json!([
+            (p[0] - g[0]).hypot(p[1] - g[1]),
+            moma::control::wrap_angle(g[2] - p[2]).abs()
+        ])
+    });
+    let ee_error = f.goal.end_effector.and_then(|target| {
+        r.samples.ee.get(last).map(|e| {
+            ((e[0] - target[0]).powi(2) + (e[1] - target[1]).powi(2) + (e[2] - target[2]).powi(2))
+                .sqrt()
+        })
+    });
+    let replan_search: Vec<Value> = r
+        .plans
+        .iter()
+        .skip(1)
+        .map(|p| {
+            json!({
+                "t": p.t,
+                "trigger": p.trigger,
+                "dstar_lite_ms": p.search.search_s * 1e3,
+                "expanded": p.search.expanded,
+                "smoothing_timing_ms": p.smoothing_timing_s * 1e3,
+                "v_start": p.v_start,
+                "duration": p.duration,
+            })
+        })
+        .collect();
+    let sim_time = r.duration;
+    json!({
+        "mission": m.name,
+        "reached": r.reached,
+        "reason": r.reason,
+        "time_to_goal": opt(r.time_to_goal),
+        "simulated_time": sim_time,
+        "replans": r.replans(),
+        "min_zmp_margin": opt(r.min_zmp_margin()),
+        "min_force_angle": opt(r.min_force_angle()),
+        "min_moment_height": opt(r.min_mhs()),
+        "min_clearance": opt(r.min_clearance()),
+        "max_tracking_error": opt(r.max_tracking_error()),
+        "final_pose_error": final_pose_error,
+        "end_effector_error": opt(ee_error),
+        "max_slip_ratio": opt(r.max_slip_ratio()),
+        "torque_saturated_steps": r.torque_saturated_steps,
+        "speed_saturated_steps": r.speed_saturated_steps,
+        "control_steps": r.steps,
+        "actuator_energy": r.samples.energy.last().copied().unwrap_or(0.0),
+        "input_work": r.input_work,
+        "tip_over_limits": {
+            "forward": opt(r.tip_limits.forward),
+            "backward": opt(r.tip_limits.backward),
+            "left": opt(r.tip_limits.left),
+            "right": opt(r.tip_limits.right),
+        },
+        "timing_acceleration": r.timing_acceleration,
+        "replan_timing": replan_search,
+        "wall_time_s": wall_total,
+        "wall_time": {
+            "planning_s": r.wall.planning_s,
+            "smoothing_timing_s": r.wall.smoothing_timing_s,
+            "simulation_s": r.wall.simulation_s,
+            "report_s": report_s,
+        },
+        "real_time_factor": if wall_total > 0.0 { json!(sim_time / wall_total) } else { Value::Null },
+        "samples": r.samples.t.len(),
+        "files": files,
+    })
+}
+
+fn num(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        String::new()
+    }
+}
+
+fn opt_num(x: Option<f64>) -> String {
+    x.map_or_else(String::new, num)
+}
+
+/// `trajectory.csv`: one row per recorded sample.
+fn trajectory_csv(r: &MissionResult) -> String {
+    let s = &r.samples;
+    let mut out = String::new();
+    out.push_str(
+        "t [s],x [m],y [m],theta [rad],v [m/s],omega [rad/s],v_ref [m/s],omega_ref [rad/s],\
+         x_ref [m],y_ref [m],zmp_margin [m],force_angle_min [rad],moment_height_min,\
+         clearance [m],tracking_error [m],slip_ratio,ee_x [m],ee_y [m],ee_z [m],energy [J],phase",
+    );
+    for n in &r.arm_names {
+        let _ = write!(out, ",q_{n} [rad]");
+    }
+    for n in &r.u_names {
+        let _ = write!(out, ",{n} [N m]");
+    }
+    out.push('\n');
+    let arm: Vec<usize> = r
+        .arm_names
+        .iter()
+        .filter_map(|n| r.q_names.iter().position(|q| q == n))
+        .collect();
+    for i in 0..s.t.len() {
+        let q = &s.q[i];
+        let _ = write!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            num(s.t[i]),
+            num(q[0]),
+            num(q[1]),
+            num(q[2]),
+            num(s.v[i]),
+            num(s.omega[i]),
+            num(s.v_ref[i]),
+            num(s.omega_ref[i]),
+            num(s.ref_xy[i][0]),
+            num(s.ref_xy[i][1]),
+            opt_num(s.zmp_margin[i]),
+            opt_num(s.force_angle_min[i]),
+            opt_num(s.mhs_min[i]),
+            num(s.clearance[i]),
+            num(s.tracking_error[i]),
+            opt_num(s.slip_ratio[i]),
+            num(s.ee[i][0]),
+            num(s.ee[i][1]),
+            num(s.ee[i][2]),
+            num(s.energy[i]),
+            s.phase[i]
+        );
+        for &j in &arm {
+            let _ = write!(out, ",{}", num(q[j]));
+        }
+        for u in &s.u[i] {
+            let _ = write!(out, ",{}", num(*u));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Runs `moma mission`.
+pub fn run(args: Args) -> Result<()> {
+    let clock = Instant::now();
+    let path = resolve_scenario(args.scenario)?;
+    let m = moma::mission::load(&path).map_err(|e| anyhow!("{e}"))?;
+    let result = moma::mission::run(&m).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    // everything but the page and the figures, with the summary as of now (the page's
+    // summary table shows the wall times up to the report)
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    let events = serde_json::to_vec_pretty(&json!({
+        "events": result.events,
+        "plans": result.plans.iter().map(|p| json!({
+            "t": p.t, "trigger": p.trigger, "path": p.path, "duration": p.duration,
+        })).collect::<Vec<_>>(),
+    }))?;
+    files.push(("events.json".into(), events));
+    files.push((
+        "trajectory.csv".into(),
+        trajectory_csv(&result).into_bytes(),
+    ));
+    let report_clock = Instant::now();
+    let pre = summary(&m, &result, clock.elapsed().as_secs_f64(), 0.0, &[]);
+    let report = mission_report(&m, &result, &pre);
+    report
+        .check()
+        .map_err(|e| anyhow!("{}: the report data is malformed: {e}", path.display()))?;
+    let html = crate::report::render_html(&report);
+    let figures = crate::report::render_svgs(&report);
+    let mut names: Vec<String> = [
+        "summary.json",
+        "trajectory.csv",
+        "events.json",
+        "report.html",
+    ]
+    .iter()
+    .map(|s| (*s).to_string())
+    .collect();
+    names.extend(figures.iter().map(|(n, _)| n.clone()));
+    files.push(("report.html".into(), html.into_bytes()));
+    for (n, svg) in figures {
+        files.push((n, svg.into_bytes()));
+    }
+    let report_s = report_clock.elapsed().as_secs_f64();
+    let wall = clock.elapsed().as_secs_f64();
+    let sum = summary(&m, &result, wall, report_s, &names);
+    let mut sum_text = serde_json::to_vec_pretty(&sum)?;
+    sum_text.push(b'\n');
+    files.push(("summary.json".into(), sum_text));
+    let dir = args.output.unwrap_or_else(|| m.output_dir.clone());
+    write_dir(&dir, &files)?;
+    if !args.quiet {
+        crate::output::print_json(&sum)?;
+    }
+    if !result.reached {
+        return crate::cmd::common::goal_not_reached(format!(
+            "{}: {} (outputs in {})",
+            path.display(),
+            result.reason.as_deref().unwrap_or("not reached"),
+            dir.display()
+        ));
+    }
+    Ok(())
+}
+
+/// The report's data from a run (the interface of `crate::report`).
+fn mission_report(m: &Mission, r: &MissionResult, summary: &Value) -> crate::report::MissionReport {
+    use crate::report::{
+        MissionReport, ReportEvent, ReportMap, ReportObstacle, ReportPlan, ReportSamples,
+    };
+    let g = &m.map.grid;
+    let cells = g
+        .cells
+        .iter()
+        .map(|&c| match c {
+            c if c < 0 => 2,
+            c if c >= 100 => 1,
+            _ => 0,
+        })
+        .collect();
+    // the lower-left corner of cell (0, 0) in the world (ROS maps; a rotated origin is
+    // drawn unrotated, Moving AI cells are centred on integers)
+    let origin = match g.kind {
+        moma::planning::MapKind::Ros => [g.origin[0], g.origin[1]],
+        moma::planning::MapKind::MovingAi => [-0.5, -0.5],
+    };
+    let f = &m.file;
+    let s = &r.samples;
+    let col = |k: usize| s.q.iter().map(|q| q[k]).collect::<Vec<f64>>();
+    let nu = r.u_names.len();
+    MissionReport {
+        title: m.name.clone(),
+        map: ReportMap {
+            width: g.width,
+            height: g.height,
+            resolution: g.resolution,
+            origin,
+            cells,
+        },
+        footprint_radius: f.robot.footprint_radius,
+        start: f.start.pose,
+        goal: f.goal.pose,
+        end_effector_target: f.goal.end_effector,
+        plans: r
+            .plans
+            .iter()
+            .map(|p| ReportPlan {
+                t: p.t,
+                points: p.path.clone(),
+            })
+            .collect(),
+        obstacles: f
+            .obstacles
+            .iter()
+            .map(|o| ReportObstacle {
+                t: o.t,
+                center: o.center,
+                radius: o.radius,
+            })
+            .collect(),
+        samples: ReportSamples {
+            t: s.t.clone(),
+            x: col(0),
+            y: col(1),
+            theta: col(2),
+            v: s.v.clone(),
+            omega: s.omega.clone(),
+            v_ref: s.v_ref.clone(),
+            omega_ref: s.omega_ref.clone(),
+            zmp_margin: s.zmp_margin.clone(),
+            force_angle_min: s.force_angle_min.clone(),
+            clearance: s.clearance.iter().map(|c| c.min(1e3)).collect(),
+            tracking_error: s.tracking_error.clone(),
+            torque_names: r.u_names.clone(),
+            torques: (0..nu)
+                .map(|j| s.u.iter().map(|u| u[j]).collect())
+                .collect(),
+            arm_side: s.arm_side.clone(),
+        },
+        events: r
+            .events
+            .iter()
+            .map(|e| ReportEvent {
+                t: e.t,
+                kind: e.kind.clone(),
+                text: e.text.clone(),
+            })
+            .collect(),
+        summary: summary.clone(),
+    }
+}
