@@ -217,6 +217,63 @@ fn loads_balance_the_wrench_and_the_ground_forces_are_the_multipliers() {
 }
 
 #[test]
+fn massless_wheels_push_with_their_torque_over_the_radius() {
+    // Wheel joints not tracked: the wheels are free-spinning joints and the drive pushes
+    // with τ / r_w at the contacts; the ground force is still the wrench's.
+    let mut wm = robot(&REAR_PAIR, 9.81);
+    wm.base.wheel_joints = None;
+    let wm = WheeledModel::new(wm.model, wm.base).unwrap();
+    assert!(wm.wheel_dofs().is_none());
+    let m = manoeuvre();
+    let zero = constant(0.0);
+    let input = InputProfile {
+        channels: vec![
+            m.channels[0].clone(),
+            m.channels[1].clone(),
+            zero.clone(),
+            zero,
+            m.channels[2].clone(),
+            m.channels[3].clone(),
+            m.channels[4].clone(),
+        ],
+    };
+    let settings = StabilitySettings {
+        mu: Some(0.8),
+        ..Default::default()
+    };
+    let mut n = 0;
+    let mut check = |mon: &StabilityMonitor, q: &[f64], u: &[f64]| {
+        n += 1;
+        let w = mon.wrench();
+        let mg = w.mass * 9.81;
+        let lam = mon.multipliers();
+        assert_eq!(lam.len(), 1);
+        let (s, c) = q[2].sin_cos();
+        let ground = Vector2::new(-s, c) * (-lam[0]) + Vector2::new(c, s) * ((u[0] + u[1]) / 0.1);
+        assert!(
+            (w.force.xy() + ground).norm() < 1e-8 * mg,
+            "{} vs {ground}",
+            w.force.xy()
+        );
+        let f = mon.trace.wheels.last().unwrap();
+        assert!((f[0].longitudinal - u[0] / 0.1).abs() < 1e-12 * mg);
+        let sum: f64 = mon.normal_loads().iter().sum();
+        assert!((sum + w.force.z).abs() < 1e-9 * mg);
+    };
+    let v0 = [1.0, 0.4, 10.0, 6.0, 0.2, 0.0, 0.0];
+    run(
+        &wm,
+        settings,
+        &input,
+        &extended_q(),
+        &v0,
+        &options(0.3, 0.02),
+        &mut check,
+    );
+    assert_eq!(n, 16);
+}
+
+#[test]
 fn the_full_state_acceleration_is_the_derivative_of_the_full_velocity() {
     let wm = robot(&REAR_PAIR, 9.81);
     let mut rows: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
@@ -291,6 +348,29 @@ fn extended_arm_brake_tips_and_the_crossing_is_accurate_to_the_record_interval()
     assert!((coarse - fine).abs() <= 0.01, "{coarse} vs {fine}");
     // the interpolation does better than the interval
     assert!((coarse - fine).abs() <= 0.002, "{coarse} vs {fine}");
+
+    // the same brake heading elsewhere: same crossing, same edge (base-frame numbering)
+    let mut q0 = extended_q();
+    q0[..3].copy_from_slice(&[3.0, -1.0, 2.0]);
+    let (mon, _, _) = run(
+        &wm,
+        settings.clone(),
+        &brake_inputs(),
+        &q0,
+        &v0,
+        &options(0.4, 0.01),
+        &mut none,
+    );
+    let tr = &mon.trace;
+    let c = first_crossing(&tr.times, &tr.zmp_margin, true).unwrap();
+    assert!((c.time - coarse).abs() < 1e-9, "{} vs {coarse}", c.time);
+    let e = mon.edges()[tr.critical_edge[c.sample].unwrap()];
+    assert_eq!((e.from, e.to), (0, 1));
+    assert!(
+        tr.critical_edge
+            .iter()
+            .all(|&e| e.is_some_and(|e| e == 0 || e == 2))
+    );
 
     // stop_at_tip ends the run at the crossing sample
     let stop = StabilitySettings {
