@@ -5,12 +5,14 @@
 use super::common::{load_model, parse_root};
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow, bail};
-use moma::control::osc::{MIN_TASK_CONDITIONING, OscData, osc_fixed_base, task_conditioning};
+use moma::control::osc::{
+    MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, task_conditioning,
+};
 use moma::ik::tasks::TaskRows;
 use moma::kinematics;
 use moma::multibody::{Data, RootJoint};
-use nalgebra::{DMatrix, DVector};
-use serde::{Deserialize, Serialize};
+use nalgebra::DVector;
+use serde::Serialize;
 use std::path::PathBuf;
 
 /// Arguments of `moma osc`.
@@ -36,33 +38,6 @@ pub struct Args {
     pub output: Option<PathBuf>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StateIn {
-    q: Vec<f64>,
-    #[serde(default)]
-    v: Option<Vec<f64>>,
-    task_acceleration: Vec<f64>,
-    #[serde(default)]
-    null_torque: Option<Vec<f64>>,
-}
-
-#[derive(Deserialize)]
-struct StatesIn {
-    states: Vec<StateIn>,
-}
-
-#[derive(Serialize)]
-struct StateOut {
-    task_inertia: Vec<Vec<f64>>,
-    dynamically_consistent_inverse: Vec<Vec<f64>>,
-    nullspace_projector: Vec<Vec<f64>>,
-    acceleration_bias: Vec<f64>,
-    task_force: Vec<f64>,
-    torque: Vec<f64>,
-    task_conditioning: f64,
-}
-
 #[derive(Serialize)]
 struct Output {
     robot: String,
@@ -73,11 +48,7 @@ struct Output {
     frame: String,
     rows: Vec<usize>,
     min_task_conditioning: f64,
-    states: Vec<StateOut>,
-}
-
-fn rows_of(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    m.row_iter().map(|r| r.iter().copied().collect()).collect()
+    states: Vec<OscStateReport>,
 }
 
 /// Runs `moma osc`.
@@ -89,54 +60,18 @@ pub fn run(args: Args) -> Result<()> {
     let task_rows: TaskRows = args.rows.parse().map_err(|e| anyhow!("--rows: {e}"))?;
     task_rows.validate().map_err(|e| anyhow!("--rows: {e}"))?;
     let rows = task_rows.indices();
-    let m = rows.len();
-    let text = std::fs::read_to_string(&args.states)
-        .with_context(|| format!("{}: cannot read states file", args.states.display()))?;
-    let states: StatesIn = serde_json::from_str(&text).map_err(|e| {
-        anyhow!(
-            "{}: invalid states file (expected {{\"states\": [{{\"q\": [..], \"v\": [..], \"task_acceleration\": [6], \"null_torque\": [nv]}}]}}): {e}",
-            args.states.display()
-        )
-    })?;
-    if states.states.is_empty() {
-        bail!("{}: 'states' is empty", args.states.display());
-    }
+    let text = super::common::read_states_text(&args.states)?;
+    let states = moma::io::states::parse_osc_states(&text, &args.states)?;
     let nv = model.nv;
     let mut data = Data::new(&model);
     let mut od = OscData::new(nv, &rows);
-    let mut out = Vec::with_capacity(states.states.len());
-    for (k, s) in states.states.iter().enumerate() {
+    let mut out = Vec::with_capacity(states.len());
+    for (k, s) in states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
         kinematics::check_state(&model, &src, Some(&s.q), s.v.as_deref(), None, None)?;
-        let a = &s.task_acceleration;
-        let a_des = if a.len() == m {
-            DVector::from_column_slice(a)
-        } else if a.len() == 6 {
-            DVector::from_iterator(m, rows.iter().map(|&r| a[r]))
-        } else {
-            bail!(
-                "{src}.task_acceleration: expected 6 values (or {m}, one per selected row), got {}",
-                a.len()
-            );
-        };
-        if let Some(i) = a_des.iter().position(|x| !x.is_finite()) {
-            bail!("{src}.task_acceleration[{i}]: not finite");
-        }
-        let tau0 = match &s.null_torque {
-            Some(t) => {
-                if t.len() != nv {
-                    bail!(
-                        "{src}.null_torque: expected {nv} values (nv), got {}",
-                        t.len()
-                    );
-                }
-                if let Some(i) = t.iter().position(|x| !x.is_finite()) {
-                    bail!("{src}.null_torque[{i}]: not finite");
-                }
-                DVector::from_column_slice(t)
-            }
-            None => DVector::zeros(nv),
-        };
+        let (a_des, tau0) = s.task_inputs(&rows, nv, k, &args.states)?;
+        let a_des = DVector::from_vec(a_des);
+        let tau0 = DVector::from_vec(tau0);
         let q = DVector::from_column_slice(&s.q);
         let v =
             s.v.as_ref()
@@ -151,15 +86,7 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         res.map_err(|e| anyhow!("{src}: {e}"))?;
-        out.push(StateOut {
-            task_inertia: rows_of(&od.task_inertia),
-            dynamically_consistent_inverse: rows_of(&od.dynamically_consistent_inverse),
-            nullspace_projector: rows_of(&od.nullspace_projector),
-            acceleration_bias: od.acceleration_bias.as_slice().to_vec(),
-            task_force: od.task_force.as_slice().to_vec(),
-            torque: od.torque.as_slice().to_vec(),
-            task_conditioning: cond,
-        });
+        out.push(OscStateReport::new(&od, cond));
     }
     let output = Output {
         robot: model.name.clone(),

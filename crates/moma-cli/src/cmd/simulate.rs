@@ -69,6 +69,12 @@ pub struct Scenario {
     /// Tip-over stability, wheel loads and slip (URDF robots; docs/simulate.md).
     #[serde(default)]
     pub stability: Option<super::simulate_stability::StabilitySpec>,
+    /// Closed-loop control: the law and its gains (schema in docs/simulate.md).
+    #[serde(default)]
+    pub controller: Option<super::simulate_control::ControllerSpec>,
+    /// What the closed-loop law tracks or stabilises to.
+    #[serde(default)]
+    pub reference: Option<super::simulate_control::ReferenceSpec>,
 }
 
 /// The robot of a scenario.
@@ -229,7 +235,7 @@ pub fn load_scenario(path: &Path) -> Result<Scenario> {
     toml::from_str(&text).map_err(|e| anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
 }
 
-fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
+pub(super) fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
     if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
         bail!("{field}[{i}] is not a finite number");
     }
@@ -237,7 +243,7 @@ fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
 }
 
 /// Builds the robot of a scenario; `base_dir` resolves relative URDF paths.
-fn build_robot(
+pub(super) fn build_robot(
     spec: &RobotSpec,
     gravity: Option<f64>,
     base_dir: &Path,
@@ -269,15 +275,7 @@ fn build_robot(
                      (only m5 uses it)"
                 );
             }
-            let mut json = serde_json::to_value(params).context("robot.params")?;
-            if let (Some(g), true) = (gravity, is_m5)
-                && let Some(obj) = json.as_object_mut()
-            {
-                if obj.contains_key("g") {
-                    bail!("gravity is given twice: top-level `gravity` and robot.params.g");
-                }
-                obj.insert("g".into(), serde_json::json!(g));
-            }
+            let json = chapter_params_json(params, gravity, is_m5)?;
             let sys = chapter_system(model, &json).context("robot")?;
             Ok((sys, format!("chapter model {model}")))
         }
@@ -297,6 +295,24 @@ fn build_robot(
     }
 }
 
+/// The chapter parameters as JSON, with the top-level gravity moved into `g` for m5.
+pub(super) fn chapter_params_json(
+    params: &toml::Table,
+    gravity: Option<f64>,
+    is_m5: bool,
+) -> Result<serde_json::Value> {
+    let mut json = serde_json::to_value(params).context("robot.params")?;
+    if let (Some(g), true) = (gravity, is_m5)
+        && let Some(obj) = json.as_object_mut()
+    {
+        if obj.contains_key("g") {
+            bail!("gravity is given twice: top-level `gravity` and robot.params.g");
+        }
+        obj.insert("g".into(), serde_json::json!(g));
+    }
+    Ok(json)
+}
+
 fn build_urdf_robot(
     path: &Path,
     drive: &DriveSpec,
@@ -308,7 +324,8 @@ fn build_urdf_robot(
     Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
 }
 
-/// The wheeled model of a URDF robot spec (also read by the stability monitor).
+/// The wheeled model of a URDF robot on a differential drive (also read by the stability
+/// monitor).
 pub(super) fn build_wheeled_model(
     path: &Path,
     drive: &DriveSpec,
@@ -341,7 +358,7 @@ pub(super) fn build_wheeled_model(
     WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))
 }
 
-fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
+pub(super) fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
     Series { name, x: t, y }
 }
 
@@ -385,7 +402,7 @@ fn column(rec: &Recorder, row: &dyn Fn(usize) -> f64) -> Vec<f64> {
 }
 
 /// Platform path, heading and arm joints, wheel angles (when tracked) and inputs.
-fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+pub(super) fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
     let t = &rec.times;
     let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
     let x = col(&|i| rec.q_row(i)[0]);
@@ -453,7 +470,7 @@ fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<
 }
 
 /// Energy balance and its error, the constraint multipliers and the residual.
-fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+pub(super) fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
     let t = &rec.times;
     let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
     let energy = vec![
@@ -514,7 +531,7 @@ fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
 
 /// The initial configuration, reduced velocity and input profile of a scenario, checked
 /// against the system's sizes (errors name the field and the expected channels).
-fn initial_state(
+pub(super) fn initial_state(
     sc: &Scenario,
     system: &dyn ReducedSystem,
     ctx: &dyn Fn(&str) -> String,
@@ -570,7 +587,7 @@ fn initial_state(
 }
 
 /// A progress bar on standard error when it is a terminal.
-fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
+pub(super) fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
     if std::io::stderr().is_terminal() {
         let pb = indicatif::ProgressBar::new((duration * 1000.0).round() as u64);
         pb.set_style(
@@ -606,6 +623,17 @@ pub fn run(args: Args) -> Result<()> {
         bail!("{}", ctx("gravity is not a finite number"));
     }
     let base_dir = path.parent().unwrap_or(Path::new("."));
+    if sc.controller.is_some() || sc.reference.is_some() {
+        if sc.stability.is_some() {
+            bail!(
+                "{}",
+                ctx(
+                    "[stability] is not recorded in closed-loop runs yet: remove it, or the [controller] table"
+                )
+            );
+        }
+        return super::simulate_control::run(&path, &sc, base_dir, &args);
+    }
     if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
         if sc.stability.is_some() {
             bail!(

@@ -7,11 +7,11 @@
 use super::common::load_model;
 use anyhow::{Context, Result, bail};
 use moma::multibody::{Data, RootJoint};
-use moma::space::{self, SpaceData};
+use moma::space::{self, SpaceData, SpaceStateReport};
 use moma::spatial::Force;
 use nalgebra::{DVector, Vector3};
-use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use serde::Serialize;
+use std::path::PathBuf;
 
 /// Arguments of `moma space`.
 #[derive(clap::Args)]
@@ -31,38 +31,6 @@ pub struct Args {
     pub output: Option<PathBuf>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MomentumIn {
-    linear: Vec<f64>,
-    angular_about_com: Vec<f64>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StateIn {
-    q: Vec<f64>,
-    qdot_joints: Vec<f64>,
-    #[serde(default)]
-    momentum: Option<MomentumIn>,
-}
-
-#[derive(Deserialize)]
-struct StatesIn {
-    states: Vec<StateIn>,
-}
-
-#[derive(Serialize)]
-struct StateOut {
-    total_mass: f64,
-    com: [f64; 3],
-    base_velocity: [f64; 6],
-    v: Vec<f64>,
-    generalized_jacobian: Vec<Vec<f64>>,
-    generalized_inertia: Vec<Vec<f64>>,
-    frame_velocity: [f64; 6],
-}
-
 #[derive(Serialize)]
 struct Output {
     robot: String,
@@ -71,28 +39,7 @@ struct Output {
     nq: usize,
     nv: usize,
     frame: String,
-    states: Vec<StateOut>,
-}
-
-fn read_states(path: &Path) -> Result<StatesIn> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: invalid states file (expected {{\"states\": [{{\"q\": [..], \"qdot_joints\": [..], \"momentum\": {{\"linear\": [3], \"angular_about_com\": [3]}}}}]}}): {e}",
-            path.display()
-        )
-    })
-}
-
-fn vec3(src: &str, name: &str, x: &[f64]) -> Result<Vector3<f64>> {
-    if x.len() != 3 {
-        bail!("{src} {name}: expected 3 numbers, got {}", x.len());
-    }
-    if let Some(k) = x.iter().position(|y| !y.is_finite()) {
-        bail!("{src} {name}[{k}]: not finite");
-    }
-    Ok(Vector3::new(x[0], x[1], x[2]))
+    states: Vec<SpaceStateReport>,
 }
 
 /// Runs `moma space`.
@@ -103,64 +50,23 @@ pub fn run(args: Args) -> Result<()> {
         .frame_id(&args.frame)
         .with_context(|| format!("{}: --frame", args.urdf.display()))?;
     let mut sd = SpaceData::new(&model).with_context(|| args.urdf.display().to_string())?;
-    let states = read_states(&args.states)?;
-    if states.states.is_empty() {
-        bail!("{}: 'states' is empty", args.states.display());
-    }
+    let text = super::common::read_states_text(&args.states)?;
+    let states = moma::io::states::parse_space_states(&text, &args.states)?;
     let n = sd.n;
     let mut data = Data::new(&model);
-    let mut out_states = Vec::with_capacity(states.states.len());
-    for (k, s) in states.states.iter().enumerate() {
+    let mut out_states = Vec::with_capacity(states.len());
+    for (k, s) in states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
         moma::kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
-        if s.qdot_joints.len() != n {
-            bail!(
-                "{src} qdot_joints: expected {n} numbers (nv − 6 = {} − 6), got {}",
-                model.nv,
-                s.qdot_joints.len()
-            );
-        }
-        if let Some(i) = s.qdot_joints.iter().position(|y| !y.is_finite()) {
-            bail!("{src} qdot_joints[{i}]: not finite");
-        }
-        let h = match &s.momentum {
-            Some(m) => Force::new(
-                vec3(&src, "momentum.linear", &m.linear)?,
-                vec3(&src, "momentum.angular_about_com", &m.angular_about_com)?,
-            ),
-            None => Force::zero(),
-        };
+        let h = s.check(n, model.nv, k, &args.states)?;
+        let h = Force::new(
+            Vector3::new(h[0], h[1], h[2]),
+            Vector3::new(h[3], h[4], h[5]),
+        );
         let q = DVector::from_column_slice(&s.q);
-        let vb = space::base_velocity(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h)
+        let st = space::state_report(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h, fid)
             .with_context(|| src.clone())?;
-        let v = sd.v.as_slice().to_vec();
-        space::generalized_jacobian(&model, &mut data, &mut sd, &q, fid)
-            .with_context(|| src.clone())?;
-        let xf = space::frame_velocity(&sd, &s.qdot_joints, &h);
-        let gj = sd
-            .generalized_jacobian
-            .row_iter()
-            .map(|r| r.iter().copied().collect())
-            .collect();
-        let hs = space::generalized_inertia(&model, &mut data, &mut sd, &q)
-            .with_context(|| src.clone())?
-            .row_iter()
-            .map(|r| r.iter().copied().collect())
-            .collect();
-        let st = StateOut {
-            total_mass: sd.total_mass,
-            com: [sd.com.x, sd.com.y, sd.com.z],
-            base_velocity: vb.to_vector().into(),
-            v,
-            generalized_jacobian: gj,
-            generalized_inertia: hs,
-            frame_velocity: xf.into(),
-        };
-        let finite =
-            st.v.iter()
-                .chain(st.frame_velocity.iter())
-                .all(|x| x.is_finite());
-        if !finite {
+        if !st.is_finite() {
             bail!("{src}: non-finite result (degenerate mass distribution?)");
         }
         out_states.push(st);

@@ -9,17 +9,15 @@ use moma::kinematics::check_state;
 use moma::mobile::{Caster, WheeledBase};
 use moma::multibody::{Model, RootJoint};
 use moma::stability::{
-    AccelerationLimits, BodySet, ExternalLoads, PointForce, StabilityData, StabilityModel,
+    BodySet, ExternalLoads, PointForce, StabilityData, StabilityModel, StateReport,
     SupportAttachment, SupportPolygon, evaluate,
 };
 use nalgebra::{DVector, Vector2, Vector3};
 use serde::Serialize;
-use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-/// Largest number of states, support points and external loads accepted.
+/// Largest number of support points accepted.
 const MAX_POINTS: usize = 10_000;
-const MAX_EXTERNAL: usize = 10_000;
 
 /// Arguments of `moma stability`.
 #[derive(clap::Args)]
@@ -155,21 +153,6 @@ pub(crate) struct State {
     pub at_rest: bool,
 }
 
-fn vec3(v: &Value, field: &str, path: &Path) -> Result<Vector3<f64>> {
-    let x = super::common::number_array(v, field, path)?;
-    if x.len() != 3 {
-        bail!(
-            "{}: {field}: expected length 3, got {}",
-            path.display(),
-            x.len()
-        );
-    }
-    if x.iter().any(|y| !y.is_finite()) {
-        bail!("{}: {field}: non-finite value", path.display());
-    }
-    Ok(Vector3::new(x[0], x[1], x[2]))
-}
-
 /// Reads and validates STATES.json for `model` (the one states reader of
 /// `common::read_states`, with the `external` loads of this command).
 pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
@@ -182,31 +165,16 @@ pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
         let aa = st.a.unwrap_or_else(|| vec![0.0; model.nv]);
         check_state(model, &field, Some(&q), Some(&vv), Some(&aa), None)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        let mut external = Vec::new();
-        if let Some(ext) = st.extra.get("external") {
-            let list = ext.as_array().ok_or_else(|| {
-                anyhow!("{}: {field}.external: expected an array", path.display())
-            })?;
-            if list.len() > MAX_EXTERNAL {
-                bail!(
-                    "{}: {field}.external: more than {MAX_EXTERNAL} loads",
-                    path.display()
-                );
-            }
-            for (k, e) in list.iter().enumerate() {
-                let f = format!("{field}.external[{k}]");
-                let pt = e
-                    .get("point")
-                    .ok_or_else(|| anyhow!("{}: {f}: missing field \"point\"", path.display()))?;
-                let fo = e
-                    .get("force")
-                    .ok_or_else(|| anyhow!("{}: {f}: missing field \"force\"", path.display()))?;
-                external.push(PointForce {
-                    point: vec3(pt, &format!("{f}.point"), path)?,
-                    force: vec3(fo, &format!("{f}.force"), path)?,
-                });
-            }
-        }
+        let external: Vec<PointForce> = match st.extra.get("external") {
+            Some(ext) => moma::io::states::point_loads(ext, &format!("{field}.external"), path)?
+                .into_iter()
+                .map(|l| PointForce {
+                    point: Vector3::from(l.point),
+                    force: Vector3::from(l.force),
+                })
+                .collect(),
+            None => Vec::new(),
+        };
         let at_rest = vv.iter().chain(&aa).all(|x| *x == 0.0) && external.is_empty();
         out.push(State {
             q: DVector::from_vec(q),
@@ -220,50 +188,8 @@ pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
 }
 
 #[derive(Serialize)]
-struct Giw {
-    force: [f64; 3],
-    moment_about_com: [f64; 3],
-}
-
-#[derive(Serialize)]
-struct EdgeOut {
-    from: [f64; 3],
-    to: [f64; 3],
-    zmp_distance: Option<f64>,
-    force_angle: Option<f64>,
-    force_angle_no_couple: Option<f64>,
-    force_angle_beta: Option<f64>,
-    moment: f64,
-    inertia: f64,
-    mhs: Option<f64>,
-}
-
-#[derive(Serialize)]
-struct StateOut {
-    total_mass: f64,
-    com: [f64; 3],
-    giw: Giw,
-    support: Vec<[f64; 3]>,
-    zmp: Option<[f64; 3]>,
-    zmp_margin: Option<f64>,
-    zmp_critical_edge: Option<usize>,
-    edges: Vec<EdgeOut>,
-    force_angle_min: Option<f64>,
-    force_angle_alpha: Option<f64>,
-    force_angle_beta_min: Option<f64>,
-    mhs_min: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    acceleration_limits: Option<AccelerationLimits>,
-    stable: bool,
-}
-
-#[derive(Serialize)]
 struct Output {
-    states: Vec<StateOut>,
-}
-
-fn arr(v: &Vector3<f64>) -> [f64; 3] {
-    [v.x, v.y, v.z]
+    states: Vec<StateReport>,
 }
 
 /// Runs `moma stability`.
@@ -285,44 +211,7 @@ pub fn run(args: Args) -> Result<()> {
             moments: &[],
         };
         evaluate(&model, &mut data, &sm, &mut sd, &s.q, &s.v, &s.a, &ext);
-        let (w, r, sup) = (&sd.wrench, &sd.report, &sd.support);
-        out.push(StateOut {
-            total_mass: w.mass,
-            com: arr(&w.com),
-            giw: Giw {
-                force: arr(&w.force),
-                moment_about_com: arr(&w.moment_about_com),
-            },
-            support: (0..sup.len()).map(|i| arr(&sup.vertex(i))).collect(),
-            zmp: r.zmp.as_ref().map(arr),
-            zmp_margin: r.zmp_margin,
-            zmp_critical_edge: r.zmp_critical_edge,
-            edges: r
-                .edges
-                .iter()
-                .enumerate()
-                .map(|(i, e)| {
-                    let ed = sup.edge(i);
-                    EdgeOut {
-                        from: arr(&ed.from),
-                        to: arr(&ed.to),
-                        zmp_distance: e.zmp_distance,
-                        force_angle: e.force_angle,
-                        force_angle_no_couple: e.force_angle_no_couple,
-                        force_angle_beta: e.force_angle_beta,
-                        moment: e.moment,
-                        inertia: e.inertia,
-                        mhs: e.mhs,
-                    }
-                })
-                .collect(),
-            force_angle_min: r.force_angle_min,
-            force_angle_alpha: r.force_angle_alpha,
-            force_angle_beta_min: r.force_angle_beta_min,
-            mhs_min: r.mhs_min,
-            acceleration_limits: s.at_rest.then(|| sd.acceleration_limits(&sm)),
-            stable: r.stable,
-        });
+        out.push(StateReport::new(&sm, &sd, s.at_rest));
     }
     let result = Output { states: out };
     match &args.output {

@@ -458,3 +458,43 @@ mod tests {
         assert!(cholesky_in_place(&mut bad, 0.0).is_err());
     }
 }
+
+/// The per-state result document of an operational-space update: the `states[i]` object
+/// of `moma osc` (schema in `docs/cli.md`) and the dictionary of the Python package's
+/// `moma.osc`. Matrices are lists of rows.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct OscStateReport {
+    /// Λ (m × m).
+    pub task_inertia: Vec<Vec<f64>>,
+    /// J̄ = H⁻¹ Jᵀ Λ (n × m).
+    pub dynamically_consistent_inverse: Vec<Vec<f64>>,
+    /// N = I − J̄ J (n × n).
+    pub nullspace_projector: Vec<Vec<f64>>,
+    /// J̇v of the selected rows (m).
+    pub acceleration_bias: Vec<f64>,
+    /// F (m).
+    pub task_force: Vec<f64>,
+    /// τ = Jᵀ F + Nᵀ τ₀ (n).
+    pub torque: Vec<f64>,
+    /// σ_min/σ_max of the task Jacobian ([`task_conditioning`]).
+    pub task_conditioning: f64,
+}
+
+impl OscStateReport {
+    /// The report of the update last written into `od`, with its conditioning.
+    #[must_use]
+    pub fn new(od: &OscData, task_conditioning: f64) -> Self {
+        let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
+            m.row_iter().map(|r| r.iter().copied().collect()).collect()
+        };
+        Self {
+            task_inertia: rows(&od.task_inertia),
+            dynamically_consistent_inverse: rows(&od.dynamically_consistent_inverse),
+            nullspace_projector: rows(&od.nullspace_projector),
+            acceleration_bias: od.acceleration_bias.as_slice().to_vec(),
+            task_force: od.task_force.as_slice().to_vec(),
+            torque: od.torque.as_slice().to_vec(),
+            task_conditioning,
+        }
+    }
+}

@@ -5,6 +5,8 @@
 //! working.
 
 pub mod chapter_models;
+pub mod closed_loop;
+pub mod feedback;
 pub mod free_floating;
 pub mod monitor;
 pub mod recorder;

@@ -481,3 +481,77 @@ pub fn dynamic_singularity(
         det_fixed_base,
     })
 }
+
+/// The per-state result document of a free-floating evaluation: the `states[i]` object
+/// of `moma space` (schema in `docs/cli.md`) and the dictionary of the Python package's
+/// `moma.space`. Matrices are lists of rows.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SpaceStateReport {
+    /// Total mass (kg).
+    pub total_mass: f64,
+    /// System centre of mass (world).
+    pub com: [f64; 3],
+    /// The induced base twist `[v_b; ω_b]` (base frame).
+    pub base_velocity: [f64; 6],
+    /// The whole generalized velocity (nv).
+    pub v: Vec<f64>,
+    /// J* (6 × n).
+    pub generalized_jacobian: Vec<Vec<f64>>,
+    /// H* (n × n).
+    pub generalized_inertia: Vec<Vec<f64>>,
+    /// The frame's `[ṗ; ω]` (world axes), drift included.
+    pub frame_velocity: [f64; 6],
+}
+
+impl SpaceStateReport {
+    /// True when the velocities are finite (a degenerate mass distribution gives NaN).
+    #[must_use]
+    pub fn is_finite(&self) -> bool {
+        self.v
+            .iter()
+            .chain(self.frame_velocity.iter())
+            .all(|x| x.is_finite())
+    }
+}
+
+/// Everything `moma space` reports for one state: [`base_velocity`],
+/// [`generalized_jacobian`] and [`frame_velocity`] of `frame`, and
+/// [`generalized_inertia`], for joint rates `qdot_joints` (n) and momentum `h`.
+///
+/// # Errors
+/// As [`momentum_maps`] and [`generalized_inertia`].
+///
+/// # Panics
+/// On wrong vector lengths.
+pub fn state_report(
+    model: &Model,
+    data: &mut Data,
+    sd: &mut SpaceData,
+    q: &DVector<f64>,
+    qdot_joints: &[f64],
+    h: &Force,
+    frame: FrameIndex,
+) -> Result<SpaceStateReport> {
+    let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
+        m.row_iter().map(|r| r.iter().copied().collect()).collect()
+    };
+    let vb = base_velocity(model, data, sd, q, qdot_joints, h)?;
+    let v = sd.v.as_slice().to_vec();
+    generalized_jacobian(model, data, sd, q, frame)?;
+    let xf = frame_velocity(sd, qdot_joints, h);
+    let gj = sd
+        .generalized_jacobian
+        .row_iter()
+        .map(|r| r.iter().copied().collect())
+        .collect();
+    let hs = rows(generalized_inertia(model, data, sd, q)?);
+    Ok(SpaceStateReport {
+        total_mass: sd.total_mass,
+        com: [sd.com.x, sd.com.y, sd.com.z],
+        base_velocity: vb.to_vector().into(),
+        v,
+        generalized_jacobian: gj,
+        generalized_inertia: hs,
+        frame_velocity: xf.into(),
+    })
+}

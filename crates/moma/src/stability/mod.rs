@@ -56,6 +56,7 @@ mod limits;
 pub mod loads;
 mod measures;
 mod polygon;
+mod state_report;
 mod wrench;
 
 pub use limits::{AccelerationLimits, acceleration_limit, acceleration_limits};
@@ -66,6 +67,7 @@ pub use measures::{
     EdgeMeasures, StabilityReport, evaluate_measures, inertia_about_axis, zero_moment_point,
 };
 pub use polygon::{Edge, SupportKind, SupportPolygon};
+pub use state_report::{EdgeState, StateReport, WrenchState};
 pub use wrench::{
     ExternalLoads, GravitoInertialWrench, PointForce, gravito_inertial_wrench,
     gravito_inertial_wrench_per_body, gravito_inertial_wrench_with_set,
