@@ -30,8 +30,9 @@ use crate::error::{Error, Result};
 use crate::mobile::{WheeledData, WheeledModel};
 use crate::sim::wheeled::SampleObserver;
 use crate::stability::{
-    BodySet, ExternalLoads, LoadRule, StabilityData, StabilityModel, SupportAttachment,
-    SupportPolygon, WheelFriction, contact_normal_loads, driven_wheel_friction, evaluate,
+    BodySet, ExternalLoads, GravitoInertialWrench, LoadRule, StabilityData, StabilityModel,
+    SupportAttachment, SupportPolygon, WheelFriction, contact_normal_loads, driven_wheel_friction,
+    evaluate,
 };
 
 /// What the monitor computes and when it stops a run.
@@ -340,6 +341,38 @@ impl StabilityMonitor {
     #[must_use]
     pub fn tipped(&self) -> bool {
         self.tipped
+    }
+
+    /// The gravito-inertial wrench of the last sample.
+    #[must_use]
+    pub fn wrench(&self) -> &GravitoInertialWrench {
+        &self.sd.wrench
+    }
+
+    /// The constraint multipliers λ of the last sample (no side slip, then the rolling
+    /// rows of tracked wheels).
+    #[must_use]
+    pub fn multipliers(&self) -> &DVector<f64> {
+        &self.wd.reduced.lambda
+    }
+
+    /// The full joint-space velocity `q̇ = N_C v` and acceleration `q̈ = N_C v̇ + Ṅ_C v`
+    /// of the last sample.
+    #[must_use]
+    pub fn full_state_rates(&self) -> (&DVector<f64>, &DVector<f64>) {
+        (&self.wd.qdot, &self.wd.reduced.qddot)
+    }
+
+    /// The contacts of the last sample in world coordinates (order of the names).
+    #[must_use]
+    pub fn contacts_world(&self) -> &[Vector2<f64>] {
+        &self.contacts
+    }
+
+    /// The normal loads of the last sample (order of the names, N).
+    #[must_use]
+    pub fn normal_loads(&self) -> &[f64] {
+        &self.loads
     }
 
     /// Evaluates one sample `(t, q, v, u)` and appends it to the trace; returns whether
