@@ -150,7 +150,7 @@ fn a_crate_too_close_to_avoid_is_a_collision_and_ends_the_mission() {
     let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
     let r = mission(&mission_text(GOAL, extra));
     assert!(!r.reached);
-    assert!(r.reason.unwrap().contains("collision"));
+    assert!(r.reason.as_deref().unwrap().contains("collision"));
     assert!(r.events.iter().any(|e| e.kind == "contact"));
     assert!(r.min_clearance().unwrap() < 0.0);
 }
