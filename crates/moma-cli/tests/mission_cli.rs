@@ -163,12 +163,12 @@ fn input_errors_exit_1_with_no_output() {
     let cases = [
         (
             "goal_in_wall",
-            text.replace("pose = [18.35, 7.3, -1.5707963]", "pose = [0.02, 7.3, 0.0]"),
+            text.replace("pose = [17.0, 7.3, 0.0]", "pose = [0.02, 7.3, 0.0]"),
             "goal.pose",
         ),
         (
             "goal_outside",
-            text.replace("pose = [18.35, 7.3, -1.5707963]", "pose = [99.0, 7.3, 0.0]"),
+            text.replace("pose = [17.0, 7.3, 0.0]", "pose = [99.0, 7.3, 0.0]"),
             "outside",
         ),
         (

@@ -119,16 +119,20 @@ fn end_effector_reaches_its_target_at_the_goal() {
 
 #[test]
 fn obstacle_on_the_path_triggers_a_replan_and_the_goal_is_still_reached() {
-    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    let extra = "[[obstacles]]\nt = 1.0\ncenter = [4.5, 2.75]\nradius = 0.35";
     let r = mission(&mission_text(GOAL, extra));
     assert!(r.reached, "{:?}", r.reason);
     assert_eq!(r.replans(), 1, "{:#?}", r.events);
     let p = &r.plans[1];
-    assert!((p.t - 1.5).abs() < 1e-9);
+    assert!((p.t - 1.0).abs() < 1e-9);
+    assert!(
+        p.v_start > 0.1,
+        "the re-plan continues from the current speed"
+    );
     assert!(p.search.expanded > 0);
     // the new path keeps the footprint off the obstacle disk
     for w in &p.path {
-        assert!((w[0] - 4.2).hypot(w[1] - 2.6) > 0.35 + 0.38 - 0.05, "{w:?}");
+        assert!((w[0] - 4.5).hypot(w[1] - 2.75) > 0.35 + 0.38, "{w:?}");
     }
     assert!(r.min_clearance().unwrap() > 0.0);
     // an obstacle away from the path does not re-plan
@@ -137,6 +141,18 @@ fn obstacle_on_the_path_triggers_a_replan_and_the_goal_is_still_reached() {
     assert!(r2.reached);
     assert_eq!(r2.replans(), 0);
     assert!(r2.events.iter().any(|e| e.kind == "obstacle"));
+}
+
+#[test]
+fn a_crate_too_close_to_avoid_is_a_collision_and_ends_the_mission() {
+    // appears 1.5 m ahead of a robot at speed, right on its line: the re-plan cannot
+    // swing wide enough in time
+    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    let r = mission(&mission_text(GOAL, extra));
+    assert!(!r.reached);
+    assert!(r.reason.as_deref().unwrap().contains("collision"));
+    assert!(r.events.iter().any(|e| e.kind == "contact"));
+    assert!(r.min_clearance().unwrap() < 0.0);
 }
 
 #[test]
@@ -177,7 +193,7 @@ fn a_posture_that_tips_at_rest_ends_the_mission_with_a_reason() {
 
 #[test]
 fn two_runs_give_identical_results() {
-    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    let extra = "[[obstacles]]\nt = 1.0\ncenter = [4.5, 2.75]\nradius = 0.35";
     let a = mission(&mission_text(GOAL, extra));
     let b = mission(&mission_text(GOAL, extra));
     assert_eq!(a.samples, b.samples);

@@ -9,7 +9,7 @@
 //! | --- | --- |
 //! | map → C-space | [`crate::planning::load_map`], the distance transform, disk dilation by `footprint_radius` + ½ cell |
 //! | search | [`crate::planning::dstar_lite::DStarLite`] from the start pose's cell to the goal's cell |
-//! | path → motion | shortcut smoothing against the C-space, then time parameterisation under v, ω, a, α and the tip-over accelerations ([`crate::stability::acceleration_limits`] of the transport posture, times `tip_fraction`) |
+//! | path → motion | curvature-bounded smoothing from the exact start pose to the exact goal pose ([`crate::planning::curvature::smooth_diff_drive`]), then near time-optimal timing under v, ω, a, α and the tip-over accelerations ([`crate::stability::acceleration_limits`] of the transport posture, times `tip_fraction`; [`crate::planning::trajectory::time_parameterize_curve`]), re-plans continuing from the current speed |
 //! | tracking | Kanayama's law on the timed reference gives (v, ω); an inner loop turns them into wheel torques by computed torque on the reduced model `Mr v̇ + cr + Gr = N_Cᵀ S u`; the arm holds its transport posture (PD + gravity and coupling compensation, in the same computed torque) |
 //! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period |
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |

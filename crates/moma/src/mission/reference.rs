@@ -2,7 +2,8 @@
 //! built from a planned cell path.
 
 use crate::error::Result;
-use crate::planning::trajectory::{DiffDriveLimits, DirectionalAcceleration};
+use crate::planning::curvature::{SmoothOptions, smooth_diff_drive};
+use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, time_parameterize_curve};
 use crate::planning::{OccupancyGrid, SearchGrid};
 
 /// One reference sample (world frame).
@@ -33,6 +34,11 @@ pub struct Reference {
     pub samples: Vec<RefSample>,
     /// The smoothed geometric path (world, m), for drawing.
     pub path: Vec<[f64; 2]>,
+    /// The curvature bound the smoothing used (1/m).
+    pub kappa_max: f64,
+    /// `true` when the path ends with the heading it arrives with (no smooth path ends at
+    /// the goal heading); the heading is then taken by a turn in place at the goal.
+    pub turn_at_goal: bool,
 }
 
 impl Reference {
@@ -93,9 +99,16 @@ pub(crate) struct TimingStart {
     pub v: f64,
 }
 
-/// Builds a reference from a cell path: shortcut smoothing against the configuration
-/// space, then the time parameterisation under the platform and tip-over limits. The
-/// path runs from the exact start pose to the exact goal position.
+/// Builds a reference from a cell path: curvature-bounded smoothing against the
+/// configuration space from the exact start pose to the exact goal pose
+/// (`planning::curvature::smooth_diff_drive`), then the near time-optimal time
+/// parameterisation under the platform limits and the tip-over accelerations
+/// (`planning::trajectory::time_parameterize_curve`), continuing from the current speed.
+/// A path that must begin with a turn in place cannot start moving: it is then timed
+/// from rest (the robot brakes onto it; the caller's reference starts with `v = 0`).
+/// When no smooth path ends at the goal pose with `kappa_max`, tighter bounds (2x, 4x)
+/// are tried, then the heading the cell path arrives with (see [`Reference`]).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn build_reference(
     map: &OccupancyGrid,
     cspace: &SearchGrid,
@@ -103,56 +116,78 @@ pub(crate) fn build_reference(
     start: &TimingStart,
     goal: [f64; 3],
     limits: &DiffDriveLimits,
-    tip: &DirectionalAcceleration,
+    tip: &TipOverAcceleration,
+    kappa_max: f64,
     dt: f64,
 ) -> Result<Reference> {
-    let kept = crate::planning::smooth::smooth(cspace, cells);
-    let mut pts: Vec<[f64; 2]> = kept
-        .iter()
-        .map(|&(x, y)| map.cell_to_world(x as f64, y as f64))
-        .collect();
-    if let Some(first) = pts.first_mut() {
-        *first = [start.pose[0], start.pose[1]];
+    // First the goal pose as given, with the curvature bound, then tighter bounds (2x,
+    // 4x); last the heading the path arrives with, the goal heading then being taken by a
+    // turn in place at the goal (the settling phase).
+    let arrival = arrival_heading(map, cells, goal);
+    let mut first_err = None;
+    let mut found = None;
+    for (k, g) in [
+        (kappa_max, goal),
+        (2.0 * kappa_max, goal),
+        (4.0 * kappa_max, goal),
+        (kappa_max, [goal[0], goal[1], arrival]),
+        (4.0 * kappa_max, [goal[0], goal[1], arrival]),
+    ] {
+        match smooth_diff_drive(cspace, map, cells, start.pose, g, &SmoothOptions::new(k)) {
+            Ok(p) => {
+                found = Some((p, k, g[2] != goal[2]));
+                break;
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
     }
-    if let Some(last) = pts.last_mut() {
-        *last = [goal[0], goal[1]];
-    }
-    let traj = crate::planning::trajectory::time_parameterize_directional(
-        &pts,
-        Some(start.pose[2]),
-        limits,
-        Some(tip),
-        dt,
-    )?;
-    let mut samples: Vec<RefSample> = traj
+    let Some((path, kappa_used, turn_at_goal)) = found else {
+        return Err(first_err.expect("at least one attempt"));
+    };
+    let v0 = if path.pivot() != 0.0 {
+        0.0
+    } else {
+        start.v.max(0.0)
+    };
+    let timed = time_parameterize_curve(&path, limits, Some(tip), v0, 0.0)?;
+    let samples = timed
+        .samples(dt)?
         .iter()
         .map(|p| RefSample {
             t: start.t0 + p.t,
             x: p.x,
             y: p.y,
-            theta: p.theta,
+            theta: crate::control::wrap_angle(p.theta),
             v: p.v,
             omega: p.omega,
-            a: 0.0,
-            alpha: 0.0,
+            a: p.a,
+            alpha: p.alpha,
         })
         .collect();
-    fill_accelerations(&mut samples);
-    Ok(Reference { samples, path: pts })
+    Ok(Reference {
+        samples,
+        path: path.points(),
+        kappa_max: kappa_used,
+        turn_at_goal,
+    })
 }
 
-/// Forward differences of v and ω into a and α (the last sample keeps the previous one).
-fn fill_accelerations(s: &mut [RefSample]) {
-    for i in 0..s.len().saturating_sub(1) {
-        let dt = s[i + 1].t - s[i].t;
-        if dt > 1e-12 {
-            s[i].a = (s[i + 1].v - s[i].v) / dt;
-            s[i].alpha = (s[i + 1].omega - s[i].omega) / dt;
-        }
+/// The direction (rad) from a point of the cell path about 0.6 m before the goal to the
+/// goal: the heading a path arrives with when it does not turn to the goal heading.
+fn arrival_heading(map: &OccupancyGrid, cells: &[(usize, usize)], goal: [f64; 3]) -> f64 {
+    let back = ((0.6 / map.resolution).ceil() as usize).max(1);
+    let n = cells.len();
+    if n < 2 {
+        return goal[2];
     }
-    if s.len() >= 2 {
-        let n = s.len();
-        s[n - 1].a = 0.0;
-        s[n - 1].alpha = 0.0;
+    let (x, y) = cells[n.saturating_sub(1 + back)];
+    let p = map.cell_to_world(x as f64, y as f64);
+    let (dx, dy) = (goal[0] - p[0], goal[1] - p[1]);
+    if dx.hypot(dy) < 1e-9 {
+        goal[2]
+    } else {
+        dy.atan2(dx)
     }
 }

@@ -18,7 +18,7 @@ use crate::mobile::wheeled::{
 use crate::mobile::{WheeledData, WheeledModel, reduced_forward_dynamics};
 use crate::multibody::{Data, JointType};
 use crate::ode::{OdeSystem, Rk4};
-use crate::planning::trajectory::{DiffDriveLimits, DirectionalAcceleration};
+use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::wheeled::ReducedSystem;
 use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{
@@ -335,7 +335,7 @@ struct Runner<'m> {
     wall: WallTimes,
     tip: AccelerationLimits,
     limits: DiffDriveLimits,
-    timing_accel: Option<DirectionalAcceleration>,
+    timing_accel: Option<TipOverAcceleration>,
     plans: Vec<PlanRecord>,
     events: Vec<Event>,
     samples: Samples,
@@ -363,11 +363,19 @@ impl<'m> Runner<'m> {
             a_max: l.a_max,
             alpha_max: l.alpha_max,
         };
+        // the tip-over limits the timing may use: a side no edge limits is unbounded; a
+        // posture that tips at rest (or has no room to accelerate) cannot be timed
         let timing_accel = match (tip.forward, tip.backward) {
-            (Some(fw), Some(bw)) if fw > 0.0 && bw > 0.0 => Some(DirectionalAcceleration {
-                forward: l.tip_fraction * fw,
-                backward: l.tip_fraction * bw,
-            }),
+            (Some(fw), Some(bw)) if fw > 0.0 && bw > 0.0 => {
+                let side = |x: Option<f64>| x.map_or(f64::INFINITY, |a| l.tip_fraction * a);
+                Some(TipOverAcceleration {
+                    forward: l.tip_fraction * fw,
+                    backward: l.tip_fraction * bw,
+                    left: side(tip.left),
+                    right: side(tip.right),
+                })
+                .filter(|t| t.left > 0.0 && t.right > 0.0)
+            }
             _ => None,
         };
         Ok(Self {
@@ -424,12 +432,26 @@ impl<'m> Runner<'m> {
             self.m.file.goal.pose,
             &self.limits,
             &accel,
+            self.m.file.limits.kappa_max,
             REF_DT,
         );
         let st = clock.elapsed().as_secs_f64();
         self.wall.smoothing_timing_s += st;
         match r {
             Ok(r) => {
+                if r.kappa_max != self.m.file.limits.kappa_max || r.turn_at_goal {
+                    let text = format!(
+                        "smoothing with kappa_max = {} 1/m{}",
+                        r.kappa_max,
+                        if r.turn_at_goal {
+                            "; no smooth path ends at the goal heading: the path ends with its \
+                             arrival heading and the base turns in place at the goal"
+                        } else {
+                            ""
+                        }
+                    );
+                    self.event(start.t0, "smoothing", text);
+                }
                 self.plans.push(PlanRecord {
                     t: start.t0,
                     trigger: trigger.to_string(),
@@ -1075,6 +1097,16 @@ impl<'m> Runner<'m> {
                             "contact",
                             format!("footprint overlaps an obstacle by {:.3} m", -clear),
                         );
+                        if phase != Phase::Done {
+                            self.fail(
+                                t,
+                                format!(
+                                    "collision: the footprint overlaps an obstacle by {:.3} m",
+                                    -clear
+                                ),
+                            );
+                            phase = Phase::Done;
+                        }
                     }
                 }
             }

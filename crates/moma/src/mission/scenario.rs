@@ -152,6 +152,10 @@ pub struct LimitsSpec {
     pub alpha_max: f64,
     /// Tyre-ground friction coefficient (slip monitor).
     pub mu: f64,
+    /// Largest path curvature (1/m) of the smoothed path (default 2: turns of at least
+    /// 0.5 m radius).
+    #[serde(default = "default_kappa_max")]
+    pub kappa_max: f64,
     /// Fraction of the tip-over acceleration limits the timing may use (default 0.8).
     #[serde(default = "default_tip_fraction")]
     pub tip_fraction: f64,
@@ -248,6 +252,9 @@ fn default_heading_tol() -> f64 {
 }
 fn default_ee_tol() -> f64 {
     0.02
+}
+fn default_kappa_max() -> f64 {
+    2.0
 }
 fn default_tip_fraction() -> f64 {
     0.8
@@ -351,6 +358,7 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
         ("limits.a_max", l.a_max),
         ("limits.alpha_max", l.alpha_max),
         ("limits.mu", l.mu),
+        ("limits.kappa_max", l.kappa_max),
         ("robot.footprint_radius", file.robot.footprint_radius),
         ("robot.drive.r_w", file.robot.drive.r_w),
         ("robot.drive.b", file.robot.drive.b),
