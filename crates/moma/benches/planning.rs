@@ -9,12 +9,22 @@
 //!   changed map, over a set of changes per map (see [`replan_positions`]): a printed table
 //!   of per-change medians, then criterion groups over the whole set.
 //!
+//! * re-planning on ROS maps after a disk obstacle appears on the path ahead of the robot
+//!   (nav2 `tb3_sandbox`, turtlebot3, nav2 `warehouse`): D* Lite `set_blocked` of every
+//!   C-space cell of the disk + `compute` + `path`, then, timed separately, smoothing the
+//!   new path ([`planning::curvature::smooth_diff_drive`]) and timing it
+//!   ([`planning::trajectory::time_parameterize_curve`]): a printed table of medians and
+//!   criterion groups.
+//!
 //! Run: `cargo bench -p moma --bench planning` (add `RUSTFLAGS="-C target-cpu=native"`
 //! for a native build).
 
 use criterion::{Criterion, criterion_group};
+use moma::planning::curvature::{SmoothOptions, smooth_diff_drive};
+use moma::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, time_parameterize_curve};
 use moma::planning::{
-    self, AstarWorkspace, MovingAiScenario, SearchGrid, astar_with, dstar_lite::DStarLite, load_map,
+    self, AstarWorkspace, MovingAiScenario, OccupancyGrid, SearchGrid, astar_with, costmap,
+    dstar_lite::DStarLite, load_map,
 };
 use pathfinding::num_traits::Zero;
 use std::hint::black_box;
@@ -538,7 +548,253 @@ fn bench_dstar(cr: &mut Criterion, sets: &[(&str, Vec<ReplanPosition>)]) {
     grp.finish();
 }
 
+/// A disk-obstacle re-plan case on a ROS map: the planner after driving part of the way,
+/// the C-space cells of the disk that appears ahead, and what smoothing needs.
+struct DiskCase {
+    name: String,
+    map: OccupancyGrid,
+    planner: DStarLite,
+    disk: Vec<(usize, usize)>,
+    goal: [f64; 3],
+    opts: SmoothOptions,
+}
+
+/// Per map: robot radius (m), obstacle radius (m), κ_max, start and goal poses.
+type DiskMap = (&'static str, f64, f64, f64, [f64; 3], [f64; 3]);
+
+const DISK_MAPS: [DiskMap; 3] = [
+    (
+        "nav2/tb3_sandbox.yaml",
+        0.12,
+        0.15,
+        4.0,
+        [-2.0, -0.5, 0.0],
+        [2.0, 0.55, std::f64::consts::FRAC_PI_2],
+    ),
+    (
+        "turtlebot3/map.yaml",
+        0.12,
+        0.15,
+        4.0,
+        [-1.6, 1.6, -0.3],
+        [1.55, -1.6, 0.0],
+    ),
+    (
+        "nav2/warehouse_png.yaml",
+        0.3,
+        0.4,
+        1.5,
+        [-5.5, -20.0, std::f64::consts::FRAC_PI_2],
+        [11.0, 7.5, 0.0],
+    ),
+];
+
+/// Cases: on each map, the robot drives 20 %, 40 % and 60 % of its path, then a disk
+/// (obstacle radius + robot radius in the C-space) appears centred on the path cell 1 m
+/// ahead (the goal cell and the robot's cell are never blocked).
+fn disk_cases() -> Vec<DiskCase> {
+    let mut out = Vec::new();
+    for &(file, r_robot, r_obs, kmax, start, goal) in &DISK_MAPS {
+        let m = load_map(&data(&format!("rosmaps/{file}")), None)
+            .unwrap()
+            .grid;
+        let obst = m.obstacle_mask(100, true);
+        let mask = costmap::inflate(&obst, m.width, m.height, r_robot / m.resolution).unwrap();
+        let cs = SearchGrid::from_obstacles(&mask, m.width, m.height).unwrap();
+        let sc = m.world_to_cell("start", start[0], start[1]).unwrap();
+        let gc = m.world_to_cell("goal", goal[0], goal[1]).unwrap();
+        let mut d = DStarLite::new(&cs, sc, gc).unwrap();
+        d.compute().expect("goal reachable");
+        let path = d.path().unwrap();
+        let ahead = (1.0 / m.resolution).round() as usize;
+        let rc = (r_obs + r_robot) / m.resolution;
+        for frac in [0.2, 0.4, 0.6] {
+            let mut p = d.clone();
+            let k = (path.len() as f64 * frac) as usize;
+            p.move_start(path[k]).unwrap();
+            let Some(c) = path.get(k + ahead) else {
+                continue;
+            };
+            let mut disk = Vec::new();
+            let ri = rc.ceil() as i64;
+            for dy in -ri..=ri {
+                for dx in -ri..=ri {
+                    let (x, y) = (c.0 as i64 + dx, c.1 as i64 + dy);
+                    if ((dx * dx + dy * dy) as f64) <= rc * rc
+                        && x >= 0
+                        && y >= 0
+                        && (x as usize) < m.width
+                        && (y as usize) < m.height
+                        && (x as usize, y as usize) != gc
+                        && (x as usize, y as usize) != path[k]
+                    {
+                        disk.push((x as usize, y as usize));
+                    }
+                }
+            }
+            out.push(DiskCase {
+                name: format!(
+                    "{}@{:.0}%",
+                    file.split('/').next_back().unwrap(),
+                    frac * 100.0
+                ),
+                map: m.clone(),
+                planner: p,
+                disk,
+                goal,
+                opts: SmoothOptions::new(kmax),
+            });
+        }
+    }
+    out
+}
+
+/// The re-plan: block the disk, compute, extract the path.
+fn disk_replan(p: &mut DStarLite, disk: &[(usize, usize)]) -> Option<Vec<(usize, usize)>> {
+    for &c in disk {
+        p.set_blocked(c, true).unwrap();
+    }
+    p.compute()?;
+    p.path()
+}
+
+/// The robot's pose for smoothing the new path: its cell centre, heading along the new
+/// path's first cells (a robot driving the old path points about that way).
+fn robot_pose(m: &OccupancyGrid, cells: &[(usize, usize)]) -> [f64; 3] {
+    let a = m.cell_to_world(cells[0].0 as f64, cells[0].1 as f64);
+    let b = cells[cells.len().min(6) - 1];
+    let b = m.cell_to_world(b.0 as f64, b.1 as f64);
+    [a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0])]
+}
+
+const DD: DiffDriveLimits = DiffDriveLimits {
+    v_max: 1.0,
+    omega_max: 1.5,
+    a_max: 0.8,
+    alpha_max: 2.0,
+};
+const TIP: TipOverAcceleration = TipOverAcceleration {
+    forward: 1.5,
+    backward: 1.0,
+    left: 1.2,
+    right: 1.2,
+};
+
+/// The printed table: per case the median of 11 runs of the re-plan (on a fresh copy of
+/// the planner, the copy untimed), of smoothing and of timing the new path.
+fn disk_table(cases: &[DiskCase]) {
+    println!(
+        "\nDisk obstacle on the path 1 m ahead: D* Lite re-plan, then smoothing and timing (medians of 11 runs)"
+    );
+    println!(
+        "| case | map cells | disk cells | new path (cells) | re-plan (set_blocked + compute + path) | expansions | smoothing | smooth length | timing | duration |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for c in cases {
+        let mut p = c.planner.clone();
+        let (mut tr, mut ts, mut tt) = (vec![], vec![], vec![]);
+        let mut cells = None;
+        let mut smooth = None;
+        let mut timed = None;
+        for _ in 0..11 {
+            p.clone_from(&c.planner);
+            let t0 = Instant::now();
+            let path = black_box(disk_replan(&mut p, &c.disk));
+            tr.push(t0.elapsed().as_secs_f64());
+            let Some(path) = path else { break };
+            let start = robot_pose(&c.map, &path);
+            let t0 = Instant::now();
+            let sp = smooth_diff_drive(p.grid(), &c.map, &path, start, c.goal, &c.opts);
+            ts.push(t0.elapsed().as_secs_f64());
+            if let Ok(sp) = &sp {
+                let t0 = Instant::now();
+                let tp = black_box(time_parameterize_curve(sp, &DD, Some(&TIP), 0.0, 0.0));
+                tt.push(t0.elapsed().as_secs_f64());
+                timed = tp.ok().map(|t| t.duration());
+            }
+            smooth = Some(sp.map(|s| s.length()));
+            cells = Some(path.len());
+        }
+        let ms = |v: &mut Vec<f64>| {
+            if v.is_empty() {
+                "–".to_string()
+            } else {
+                format!("{:.3} ms", median(v) * 1e3)
+            }
+        };
+        println!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            c.name,
+            c.map.width * c.map.height,
+            c.disk.len(),
+            cells.map_or("goal cut off".into(), |n| n.to_string()),
+            ms(&mut tr),
+            p.expanded(),
+            ms(&mut ts),
+            match &smooth {
+                Some(Ok(l)) => format!("{l:.2} m"),
+                Some(Err(e)) => format!("error: {e}"),
+                None => "–".into(),
+            },
+            ms(&mut tt),
+            timed.map_or("–".into(), |d| format!("{d:.2} s")),
+        );
+    }
+    println!();
+}
+
+fn bench_disk(cr: &mut Criterion, cases: &[DiskCase]) {
+    let mut grp = cr.benchmark_group("disk_replan");
+    grp.sample_size(20)
+        .measurement_time(std::time::Duration::from_secs(3));
+    for c in cases {
+        let mut p = c.planner.clone();
+        grp.bench_function(format!("{}/dstar_lite", c.name), |b| {
+            b.iter_custom(|iters| {
+                let mut total = std::time::Duration::ZERO;
+                for _ in 0..iters {
+                    p.clone_from(&c.planner);
+                    let t0 = Instant::now();
+                    black_box(disk_replan(&mut p, &c.disk));
+                    total += t0.elapsed();
+                }
+                total
+            })
+        });
+        p.clone_from(&c.planner);
+        let Some(path) = disk_replan(&mut p, &c.disk) else {
+            continue;
+        };
+        let start = robot_pose(&c.map, &path);
+        let Ok(sp) = smooth_diff_drive(p.grid(), &c.map, &path, start, c.goal, &c.opts) else {
+            continue;
+        };
+        grp.bench_function(format!("{}/smooth", c.name), |b| {
+            b.iter(|| {
+                black_box(smooth_diff_drive(
+                    p.grid(),
+                    &c.map,
+                    &path,
+                    start,
+                    c.goal,
+                    &c.opts,
+                ))
+            })
+        });
+        grp.bench_function(format!("{}/time", c.name), |b| {
+            b.iter(|| black_box(time_parameterize_curve(&sp, &DD, Some(&TIP), 0.0, 0.0)))
+        });
+    }
+    grp.finish();
+}
+
 fn all(c: &mut Criterion) {
+    let disk = disk_cases();
+    disk_table(&disk);
+    if std::env::var_os("MOMA_BENCH_DISK_ONLY").is_some() {
+        bench_disk(c, &disk);
+        return;
+    }
     let replan_sets: Vec<(&str, Vec<ReplanPosition>)> =
         MAPS.iter().map(|&m| (m, replan_positions(m, 6))).collect();
     replan_table(&replan_sets);
@@ -553,6 +809,7 @@ fn all(c: &mut Criterion) {
     bench_astar(c, &cases);
     bench_edt(c);
     bench_dstar(c, &replan_sets);
+    bench_disk(c, &disk);
 }
 
 criterion_group!(benches, all);

@@ -444,3 +444,45 @@ fn errors_are_reported() {
     let tp = time_parameterize_curve(&p, &lim, None, 0.0, 0.0).unwrap();
     assert!(tp.samples(0.0).is_err() && tp.samples(1e-12).is_err());
 }
+
+#[test]
+fn replan_on_the_map_continues_without_stopping() {
+    // Drive part of a timed path, then re-plan from the robot's exact pose and speed (a
+    // new grid path from its cell): the new path starts where the robot is, along its
+    // heading, without a turn in place, and its timing starts at the robot's speed.
+    let m = map("nav2/tb3_sandbox.yaml");
+    let cs = cspace(&m, 0.12);
+    let opts = SmoothOptions::new(4.0);
+    let (start, goal) = ([-2.0, -0.5, 0.0], [2.0, 0.55, PI / 2.0]);
+    let p = plan(&m, &cs, start, goal, &opts).unwrap();
+    let lim = limits();
+    let tp = time_parameterize_curve(&p, &lim, None, 0.0, 0.0).unwrap();
+    let mut continued = 0;
+    for frac in [0.2, 0.35, 0.5, 0.7] {
+        let now = tp.sample(frac * tp.duration());
+        assert!(now.v > 0.1);
+        let pose = [now.x, now.y, now.theta];
+        let Ok(q) = plan(&m, &cs, pose, goal, &opts) else {
+            continue;
+        };
+        check_path(&q, &m, &cs, pose, goal, 4.0);
+        if q.pivot() != 0.0 {
+            continue;
+        }
+        continued += 1;
+        let tq = time_parameterize_curve(&q, &lim, None, now.v, 0.0).unwrap();
+        let k = tq.knots();
+        assert_eq!(k[0].v, now.v);
+        if tq.overspeed_until().is_none() {
+            check_timing(&tq, &lim, None);
+        }
+        assert!(
+            k[1..k.len() - 1].iter().all(|q| q.v > 0.0),
+            "no stop on the way"
+        );
+    }
+    assert!(
+        continued >= 3,
+        "only {continued} of 4 re-plans continued without stopping"
+    );
+}
