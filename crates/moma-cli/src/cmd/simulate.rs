@@ -94,6 +94,11 @@ pub enum RobotSpec {
         #[serde(default)]
         casters: Vec<CasterSpec>,
     },
+    /// A URDF arm with a fixed base (every joint actuated).
+    FixedBase {
+        /// URDF file, relative to the scenario file.
+        urdf: PathBuf,
+    },
     /// A URDF model as a free-floating (space) robot in zero gravity.
     FreeFloating {
         /// URDF file, relative to the scenario file.
@@ -289,10 +294,33 @@ pub(super) fn build_robot(
             let sys = build_urdf_robot(&path, drive, wheel_joints.clone(), casters, gravity)?;
             Ok((sys, format!("URDF {}", urdf.display())))
         }
+        RobotSpec::FixedBase { urdf } => {
+            let model = fixed_base_model(&base_dir.join(urdf), gravity)?;
+            let sys = moma::sim::fixed_base::FixedBaseSystem::new(model)
+                .with_context(|| format!("{}", urdf.display()))?;
+            Ok((
+                Box::new(sys),
+                format!("URDF {} (fixed base)", urdf.display()),
+            ))
+        }
         RobotSpec::FreeFloating { .. } => {
             bail!("a free-floating robot is run by the space simulation")
         }
     }
+}
+
+/// A fixed-base URDF model under gravity `g` (default 9.81) along −z.
+pub(super) fn fixed_base_model(
+    path: &Path,
+    gravity: Option<f64>,
+) -> Result<moma::multibody::Model> {
+    let mut model = moma::io::urdf::model_from_urdf_file(path, moma::multibody::RootJoint::Fixed)?;
+    let g = gravity.unwrap_or(9.81);
+    if !g.is_finite() {
+        bail!("gravity is not a finite number");
+    }
+    model.gravity = nalgebra::Vector3::new(0.0, 0.0, -g);
+    Ok(model)
 }
 
 /// The chapter parameters as JSON, with the top-level gravity moved into `g` for m5.
@@ -364,6 +392,7 @@ pub(super) fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a>
 
 /// Builds every output file in memory.
 fn render(
+    fixed_base: bool,
     wheels: &[String],
     result: &SimulationResult,
     summary: &mut Summary,
@@ -379,7 +408,11 @@ fn render(
         ));
     }
     if plots {
-        motion_plots(wheels, rec, &mut files);
+        if fixed_base {
+            arm_plots(rec, &mut files);
+        } else {
+            motion_plots(wheels, rec, &mut files);
+        }
         balance_plots(rec, &mut files);
         if let Some(mon) = stability {
             super::simulate_stability::plots(mon, &mut files);
@@ -399,6 +432,44 @@ fn render(
 /// The column `row(i)` of every recorded sample.
 fn column(rec: &Recorder, row: &dyn Fn(usize) -> f64) -> Vec<f64> {
     (0..rec.len()).map(row).collect()
+}
+
+/// A fixed-base arm: every joint coordinate and the input torques against time.
+pub(super) fn arm_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+    let t = &rec.times;
+    let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
+    let joints: Vec<Series> = rec
+        .q_names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| series(t, n, col(&|i| rec.q_row(i)[k])))
+        .collect();
+    files.push((
+        "joints.svg".to_string(),
+        line_chart(
+            "Joints",
+            "t [s]",
+            "angle [rad] (prismatic joints: [m])",
+            &joints,
+        )
+        .into_bytes(),
+    ));
+    let inputs: Vec<Series> = rec
+        .u_names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| series(t, n, col(&|i| rec.u_row(i)[k])))
+        .collect();
+    files.push((
+        "inputs.svg".to_string(),
+        line_chart(
+            "Inputs (joint torques)",
+            "t [s]",
+            "torque [N m] (prismatic joints: force [N])",
+            &inputs,
+        )
+        .into_bytes(),
+    ));
 }
 
 /// Platform path, heading and arm joints, wheel angles (when tracked) and inputs.
@@ -755,7 +826,9 @@ pub fn run(args: Args) -> Result<()> {
         } => w.to_vec(),
         _ => Vec::new(),
     };
+    let fixed = matches!(sc.robot, RobotSpec::FixedBase { .. });
     let files = render(
+        fixed,
         &wheels,
         &result,
         &mut summary,

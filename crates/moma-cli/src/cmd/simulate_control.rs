@@ -8,8 +8,8 @@
 //! `docs/simulate.md`.
 
 use super::simulate::{
-    Args, RobotSpec, Scenario, balance_plots, build_wheeled_model, chapter_params_json,
-    initial_state, motion_plots, progress_bar, series,
+    Args, RobotSpec, Scenario, arm_plots, balance_plots, build_wheeled_model, chapter_params_json,
+    fixed_base_model, initial_state, motion_plots, progress_bar, series,
 };
 use crate::output::write_dir;
 use crate::svg_plots::line_chart;
@@ -24,9 +24,10 @@ use moma::sim::closed_loop::{
     ClosedLoopOptions, ClosedLoopResult, FeedbackLaw, simulate_closed_loop,
 };
 use moma::sim::feedback::{
-    M5TaskController, OscController, OscGains, PlatformController, PlatformLaw, PointReference,
-    SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
+    FixedOscController, M5TaskController, OscController, OscGains, PlatformController, PlatformLaw,
+    PointReference, SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
 };
+use moma::sim::fixed_base::FixedBaseSystem;
 use moma::sim::scenario::IntegratorSettings;
 use moma::sim::wheeled::ReducedSystem;
 use serde::{Deserialize, Serialize};
@@ -427,6 +428,17 @@ fn point_reference(law: &str, r: &ReferenceSpec) -> Result<PointReference> {
     Ok(p)
 }
 
+fn osc_gains(law: &str, gains: &toml::Table) -> Result<OscGains> {
+    let all = ["kp", "kv", "posture_kp", "posture_kd"];
+    check_keys(law, gains, &all)?;
+    Ok(OscGains {
+        kp: gain(law, gains, "kp", &all)?,
+        kv: gain(law, gains, "kv", &all)?,
+        posture_kp: opt_gain(gains, "posture_kp")?.unwrap_or(0.0),
+        posture_kd: opt_gain(gains, "posture_kd")?.unwrap_or(0.0),
+    })
+}
+
 const PLATFORM_LAWS: [&str; 5] = ["kanayama", "samson", "astolfi", "aicardi", "pure_pursuit"];
 const M5_LAWS: [&str; 5] = [
     "pd_plus",
@@ -465,6 +477,53 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
     nonneg("max_wheel_speed", c.max_wheel_speed)?;
     nonneg("max_wheel_torque", c.max_wheel_torque)?;
     nonneg("max_torque", c.max_torque)?;
+    if law == "osc"
+        && let RobotSpec::FixedBase { urdf } = &sc.robot
+    {
+        only_for(
+            law,
+            c,
+            &[
+                ("velocity_gain", c.velocity_gain.is_some()),
+                ("arm_kp", c.arm_kp.is_some()),
+                ("arm_kd", c.arm_kd.is_some()),
+                ("max_wheel_speed", c.max_wheel_speed.is_some()),
+                ("max_wheel_torque", c.max_wheel_torque.is_some()),
+            ],
+        )?;
+        let model = fixed_base_model(&base_dir.join(urdf), sc.gravity).context("robot")?;
+        let q0 = sc.initial.q.clone().unwrap_or_else(|| vec![0.0; model.nq]);
+        if q0.len() != model.nq {
+            bail!("initial.q: expected {} values, got {}", model.nq, q0.len());
+        }
+        let gains = osc_gains(law, &c.gains)?;
+        let frame = c
+            .frame
+            .as_deref()
+            .ok_or_else(|| anyhow!("controller.frame: missing (law osc needs the frame)"))?;
+        let posture = c.posture.clone().unwrap_or(q0);
+        if posture.len() != model.nv {
+            bail!(
+                "controller.posture: expected {} values (the joints), got {}",
+                model.nv,
+                posture.len()
+            );
+        }
+        let ctl = FixedOscController::new(
+            model.clone(),
+            frame,
+            point_reference(law, r)?,
+            gains,
+            posture,
+            c.max_torque,
+        )?;
+        let sys = FixedBaseSystem::new(model).context("robot")?;
+        return Ok((
+            Box::new(sys),
+            Box::new(ctl),
+            format!("URDF {} (fixed base)", urdf.display()),
+        ));
+    }
     if PLATFORM_LAWS.contains(&law) || law == "osc" {
         let RobotSpec::Urdf {
             urdf,
@@ -473,7 +532,14 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
             casters,
         } = &sc.robot
         else {
-            bail!("law {law} drives a URDF robot on a differential drive (robot.kind = \"urdf\")");
+            bail!(
+                "law {law} drives a URDF robot on a differential drive (robot.kind = \"urdf\"{})",
+                if law == "osc" {
+                    ", or \"fixed_base\""
+                } else {
+                    ""
+                }
+            );
         };
         let path = base_dir.join(urdf);
         let wm = build_wheeled_model(&path, drive, wheel_joints.clone(), casters, sc.gravity)
@@ -506,14 +572,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
                     ("max_wheel_torque", c.max_wheel_torque.is_some()),
                 ],
             )?;
-            let all = ["kp", "kv", "posture_kp", "posture_kd"];
-            check_keys(law, &c.gains, &all)?;
-            let gains = OscGains {
-                kp: gain(law, &c.gains, "kp", &all)?,
-                kv: gain(law, &c.gains, "kv", &all)?,
-                posture_kp: opt_gain(&c.gains, "posture_kp")?.unwrap_or(0.0),
-                posture_kd: opt_gain(&c.gains, "posture_kd")?.unwrap_or(0.0),
-            };
+            let gains = osc_gains(law, &c.gains)?;
             let frame = c
                 .frame
                 .as_deref()
@@ -906,7 +965,11 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         ("control.csv".to_string(), control_csv(&res).into_bytes()),
     ];
     if sc.output.plots {
-        motion_plots(&wheels, rec, &mut files);
+        if matches!(sc.robot, RobotSpec::FixedBase { .. }) {
+            arm_plots(rec, &mut files);
+        } else {
+            motion_plots(&wheels, rec, &mut files);
+        }
         balance_plots(rec, &mut files);
         control_plots(&res, &mut files);
     }

@@ -7,6 +7,7 @@
 pub mod chapter_models;
 pub mod closed_loop;
 pub mod feedback;
+pub mod fixed_base;
 pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
