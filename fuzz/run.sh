@@ -9,7 +9,8 @@ secs=${1:?usage: fuzz/run.sh SECONDS [TARGET...]}
 shift
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(urdf ros_yaml map_image movingai_2d movingai_3d sim_scenario)
+  targets=(urdf ros_yaml map_image movingai_2d movingai_3d sim_scenario states_json states_struct
+    eval_json eval_cases sim_scenario_struct)
 fi
 cargo fuzz build -s none -O
 failed=()

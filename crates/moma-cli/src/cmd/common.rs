@@ -284,13 +284,28 @@ pub fn parse_task_rows(rows: Option<&str>, tvals: &[f64]) -> Result<TaskRows> {
     Ok(rows)
 }
 
-/// Checks the IK budget options `--tol` (> 0) and `--max-iters` (>= 1).
-pub fn check_ik_budget(tol: f64, max_iters: usize) -> Result<()> {
+/// Largest number of IK iterations one solve may spend over all its attempts,
+/// `(--restarts + 1) × --max-iters` (about a second of a 7-joint arm).
+pub const MAX_IK_ITERATIONS: usize = 1_000_000;
+
+/// Checks the IK budget options `--tol` (> 0), `--max-iters` (>= 1) and `--restarts`:
+/// together at most [`MAX_IK_ITERATIONS`] iterations per solve, so an unreachable target
+/// cannot keep the command restarting for ever.
+pub fn check_ik_budget(tol: f64, max_iters: usize, restarts: usize) -> Result<()> {
     if !(tol.is_finite() && tol > 0.0) {
         bail!("--tol: must be > 0, got {tol}");
     }
     if max_iters == 0 {
         bail!("--max-iters: must be at least 1");
+    }
+    let total = restarts
+        .checked_add(1)
+        .and_then(|a| a.checked_mul(max_iters));
+    if total.is_none_or(|t| t > MAX_IK_ITERATIONS) {
+        bail!(
+            "--restarts/--max-iters: ({restarts} + 1) attempts × {max_iters} iterations exceed \
+             the budget of {MAX_IK_ITERATIONS} iterations per solve"
+        );
     }
     Ok(())
 }
@@ -316,6 +331,15 @@ mod tests {
         let missing = p.with_file_name("absent.json");
         let e = format!("{:#}", read_states(&missing, &["q"]).unwrap_err());
         assert!(e.contains("cannot read states file"), "{e}");
+    }
+
+    #[test]
+    fn ik_budget_is_bounded() {
+        assert!(check_ik_budget(1e-6, 200, 10).is_ok());
+        for (max_iters, restarts) in [(20, usize::MAX), (usize::MAX, 0), (1000, 1000)] {
+            let e = check_ik_budget(1e-6, max_iters, restarts).unwrap_err();
+            assert!(e.to_string().contains("--restarts/--max-iters"), "{e}");
+        }
     }
 
     #[test]

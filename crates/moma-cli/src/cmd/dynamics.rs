@@ -175,7 +175,12 @@ fn evaluate_state(
     let aba_ddq = conv.a_out(qs, v.as_slice(), aba.as_slice());
     if let Some(i) = aba_ddq.iter().position(|x| !x.is_finite()) {
         bail!(
-            "{src}: forward dynamics gave a non-finite acceleration at v[{i}] (singular mass matrix: massless subtree?)"
+            "{src}: forward dynamics gave a non-finite acceleration at v[{i}] (singular mass matrix: massless subtree? or inputs v, tau, --gravity beyond f64's range)"
+        );
+    }
+    if let Some(i) = rnea_tau.iter().position(|x| !x.is_finite()) {
+        bail!(
+            "{src}: inverse dynamics gave a non-finite torque at tau[{i}] (inputs v, a, --gravity beyond f64's range)"
         );
     }
     // The bias is RNEA at zero acceleration *in the output layout* (for a planar root in

@@ -9,6 +9,11 @@ use anyhow::{Context, Result, anyhow};
 use moma::closed_form::cases::{DEFAULT_TOLERANCE, evaluate_document};
 use std::path::PathBuf;
 
+/// Smallest `--tol`: a few units of f64's relative resolution (2.2e-16).
+const MIN_TOL: f64 = 1e-15;
+/// Largest `--tol`: beyond it a "trajectory" carries no digit.
+const MAX_TOL: f64 = 0.1;
+
 /// Arguments of `moma eval`.
 #[derive(clap::Args)]
 pub struct Args {
@@ -21,16 +26,17 @@ pub struct Args {
     /// Output file (JSON); standard output if omitted. Written only if every case succeeds.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-    /// Integration tolerance (rtol = atol) for trajectories.
+    /// Integration tolerance (rtol = atol) for trajectories, in [1e-15, 0.1].
     #[arg(long, default_value_t = DEFAULT_TOLERANCE)]
     pub tol: f64,
 }
 
 /// Runs `moma eval`.
 pub fn run(args: Args) -> Result<()> {
-    if !(args.tol > 0.0 && args.tol.is_finite()) {
+    if !(MIN_TOL..=MAX_TOL).contains(&args.tol) {
         return Err(anyhow!(
-            "--tol must be positive and finite, got {}",
+            "--tol must be in [{MIN_TOL:e}, {MAX_TOL}] (the integrator cannot meet a relative \
+             tolerance below f64's resolution), got {}",
             args.tol
         ));
     }
@@ -39,7 +45,14 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("{}: cannot read case file", path.display()))?;
     let doc: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| anyhow!("{}: malformed JSON: {e}", path.display()))?;
-    let out = evaluate_document(&doc, args.tol).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let out = evaluate_document(&doc, args.tol).map_err(|e| {
+        let hint = if e.to_string().contains("step size underflow") {
+            format!(" (--tol {:e} may be too tight for this case)", args.tol)
+        } else {
+            String::new()
+        };
+        anyhow!("{}: {e}{hint}", path.display())
+    })?;
     if let Some(cases) = out.get("cases").and_then(|c| c.as_array()) {
         for c in cases {
             if let Some(ws) = c.get("warnings").and_then(|w| w.as_array()) {

@@ -192,7 +192,13 @@ pub fn run(args: Args) -> Result<()> {
     let tvals = parse_list("--target", &args.target)?;
     let target = target_from_slice(&tvals).map_err(|e| anyhow!("--target: {e}"))?;
     let rows = parse_task_rows(args.rows.as_deref(), &tvals)?;
-    check_ik_budget(args.tol, args.max_iters)?;
+    check_ik_budget(args.tol, args.max_iters, args.restarts)?;
+    if !(args.null_gain.is_finite() && args.null_gain >= 0.0) {
+        bail!(
+            "--null-gain: must be finite and >= 0, got {}",
+            args.null_gain
+        );
+    }
     if !(args.base_weight.is_finite() && args.base_weight > 0.0) {
         bail!("--base-weight: must be > 0, got {}", args.base_weight);
     }

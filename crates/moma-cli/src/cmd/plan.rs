@@ -225,12 +225,50 @@ impl MapFrame {
             || y >= g.height as f64
         {
             bail!(
-                "{what} ({x}, {y}) must be a cell of the {} x {} map (integers from 0)",
+                "--{what}: ({}, {}) must be a cell of the {} x {} map (integers from 0)",
+                short(x),
+                short(y),
                 g.width,
                 g.height
             );
         }
         Ok((x as usize, y as usize))
+    }
+}
+
+/// Refuses NaN and ±inf in every numeric option, naming the option (the library's
+/// range checks name its own parameter, e.g. `v_max`).
+fn check_finite_options(args: &PlanArgs) -> Result<()> {
+    let opt = |x: Option<f64>| x.unwrap_or(0.0);
+    for (name, v) in [
+        ("--resolution", opt(args.resolution)),
+        ("--radius", opt(args.radius)),
+        ("--inflation-radius", opt(args.inflation_radius)),
+        ("--cost-scaling", opt(args.cost_scaling)),
+        ("--cost-multiplier", args.cost_multiplier),
+        ("--goal-weight", args.goal_weight),
+        ("--influence", opt(args.influence)),
+        ("--turn-cost", args.turn_cost),
+        ("--v-max", args.v_max),
+        ("--omega-max", args.omega_max),
+        ("--a-max", args.a_max),
+        ("--alpha-max", args.alpha_max),
+        ("--dt", args.dt),
+    ] {
+        if !v.is_finite() {
+            bail!("{name}: must be a finite number, got {v}");
+        }
+    }
+    Ok(())
+}
+
+/// A number for a message: plain when moderate, in exponent form when huge or tiny (so
+/// 1e308 does not print 309 digits).
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
     }
 }
 
@@ -305,9 +343,9 @@ fn disk_cspace(
     for (what, c) in [("start", ends.start), ("goal", ends.goal)] {
         if !sg.is_free(c.0 as i64, c.1 as i64) {
             bail!(
-                "{what} at {} is closer than the robot radius {} {} to an obstacle (inside the configuration-space obstacle)",
+                "{what} at {} is closer than the robot radius (--radius) {} {} to an obstacle (inside the configuration-space obstacle)",
                 mf.describe(c),
-                args.radius.unwrap_or(0.0),
+                short(args.radius.unwrap_or(0.0)),
                 mf.units()
             );
         }
@@ -381,6 +419,17 @@ fn cost_aware_grid(
 ) -> Result<SearchGrid> {
     if args.algo != Algo::Astar {
         bail!("--cost-aware works with --algo astar");
+    }
+    for (opt, v) in [
+        ("--radius", args.radius),
+        ("--inflation-radius", args.inflation_radius),
+        ("--cost-scaling", args.cost_scaling),
+    ] {
+        if let Some(v) = v
+            && !(v.is_finite() && v >= 0.0)
+        {
+            bail!("{opt}: must be finite and >= 0, got {v}");
+        }
     }
     let g = &mf.grid;
     let params = InflationParams {
@@ -495,6 +544,7 @@ fn search_potential(
 /// outputs (status `local_minimum`), then ends in `GoalNotReached` (exit status 3).
 pub fn run(args: Args) -> Result<()> {
     let args = *args.inner;
+    check_finite_options(&args)?;
     let loaded = load_map(&args.map, args.resolution)?;
     let world = loaded.grid.kind == MapKind::Ros;
     let mf = MapFrame {

@@ -160,7 +160,7 @@ fn setup(args: &Args) -> Result<(Vec<f64>, PlacementGrid, ArmReachEvaluator<Mode
         None => MeasureScope::Arm,
     };
     let mount = parse_mount(args.mount.as_deref())?;
-    check_ik_budget(args.tol, args.max_iters)?;
+    check_ik_budget(args.tol, args.max_iters, args.restarts)?;
     let model = Arc::new(load_model(&args.robot, RootJoint::Fixed)?);
     let arm = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let seed = match &args.q0 {

@@ -632,6 +632,18 @@ pub(super) fn initial_state(
     }
     ensure_finite("initial.q", &q0).with_context(|| ctx("initial state"))?;
     ensure_finite("initial.v", &v0).with_context(|| ctx("initial state"))?;
+    let blowup = sc.limits.unwrap_or_default().blowup;
+    for (name, xs) in [("initial.q", &q0), ("initial.v", &v0)] {
+        if let Some(i) = xs.iter().position(|x| x.abs() > blowup) {
+            bail!(
+                "{}",
+                ctx(&format!(
+                    "{name}[{i}] = {:e} exceeds the blow-up bound limits.blowup = {blowup:e}",
+                    xs[i]
+                ))
+            );
+        }
+    }
     let input = match &sc.inputs {
         None => InputProfile::zero(nu),
         Some(ch) => {

@@ -148,13 +148,23 @@ pub fn spd_solve<const N: usize>(
         what: what.to_string(),
         detail: Some("not positive definite".into()),
     })?;
+    if !b.iter().all(|v| v.is_finite()) {
+        return Err(Error::Singular {
+            what: what.to_string(),
+            detail: Some(
+                "right-hand side not finite (the inputs or the state overflow f64)".into(),
+            ),
+        });
+    }
     let x = chol.solve(b);
     if x.iter().all(|v| v.is_finite()) {
         Ok(x)
     } else {
         Err(Error::Singular {
             what: what.to_string(),
-            detail: Some("solution not finite".into()),
+            detail: Some(
+                "solution not finite (a near-singular matrix, or inputs too large for f64)".into(),
+            ),
         })
     }
 }

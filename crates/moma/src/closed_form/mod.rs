@@ -95,7 +95,7 @@ pub fn platform_basis<T: Real>(phi: T, d: f64, param: PlatformVelocity) -> [[T; 
     }
 }
 
-/// Rejects a non-finite or non-positive parameter.
+/// Rejects a non-finite or non-positive parameter, or one outside [`POSITIVE_RANGE`].
 pub(crate) fn positive(name: &str, x: f64) -> Result<()> {
     if !x.is_finite() {
         return Err(Error::NonFinite {
@@ -108,8 +108,22 @@ pub(crate) fn positive(name: &str, x: f64) -> Result<()> {
             format!("must be positive, got {x}"),
         ));
     }
+    if !(POSITIVE_RANGE.0..=POSITIVE_RANGE.1).contains(&x) {
+        return Err(Error::invalid(
+            format!("params.{name}"),
+            format!(
+                "must lie in [{:e}, {:e}] (SI units; beyond, the model's products of \
+                 parameters leave f64's range), got {x:e}",
+                POSITIVE_RANGE.0, POSITIVE_RANGE.1
+            ),
+        ));
+    }
     Ok(())
 }
+
+/// The range of a positive parameter (mass, length, inertia, radius): products of up to
+/// six of them stay well inside f64's range.
+pub const POSITIVE_RANGE: (f64, f64) = (1e-50, 1e50);
 
 /// Rejects a non-finite or negative parameter.
 pub(crate) fn nonnegative(name: &str, x: f64) -> Result<()> {

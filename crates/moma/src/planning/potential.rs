@@ -139,7 +139,7 @@ pub fn potential_field(
     if term == GoalTerm::Geodesic && w <= 1.0 {
         return Err(Error::invalid(
             "goal weight",
-            format!("the geodesic potential needs w > 1 to be free of local minima, got {w}"),
+            format!("the geodesic potential needs w > 1 to be free of local minima, got {w:?}"),
         ));
     }
     if !(params.influence.is_finite() && params.influence >= 0.0) {
