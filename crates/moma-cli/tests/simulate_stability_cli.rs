@@ -197,3 +197,45 @@ fn bad_stability_tables_fail_with_the_field_and_no_output() {
     assert!(String::from_utf8_lossy(&r.stderr).contains("[stability] needs a URDF robot"));
     let _ = std::fs::remove_dir_all(&work);
 }
+
+#[test]
+fn closed_loop_runs_evaluate_stability_after_the_run() {
+    let work = temp_dir("closed");
+    let text = std::fs::read_to_string(scenarios().join("control_kanayama.toml")).unwrap();
+    let urdf = scenarios().join("robots/diffdrive_arm.urdf");
+    let text = text.replace(
+        "urdf = \"robots/diffdrive_arm.urdf\"",
+        &format!("urdf = {:?}", urdf.to_str().unwrap()),
+    );
+    let p = work.join("kanayama.toml");
+    std::fs::write(&p, format!("{text}\n[stability]\nmu = 0.6\n")).unwrap();
+    let out = work.join("out");
+    let r = run(&p, &out);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let s = summary(&out);
+    let st = &s["stability"];
+    assert_eq!(st["load_rule"], "exact");
+    // tipped agrees with the first crossing and the smallest margin
+    let tipped = st["tipped"].as_bool().unwrap();
+    assert_eq!(tipped, !st["first_crossing"]["zmp_margin"].is_null());
+    assert_eq!(
+        tipped,
+        st["min_zmp_margin"]["value"].as_f64().unwrap() <= 0.0
+    );
+    assert!(st["max_slip_ratio"]["value"].as_f64().unwrap().is_finite());
+    let csv = std::fs::read_to_string(out.join("stability.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count() as u64,
+        s["samples"].as_u64().unwrap() + 1
+    );
+    assert!(out.join("stability_zmp.svg").is_file());
+    assert!(!csv.contains("NaN"));
+    // stopping needs an observer inside the loop: refused, no output
+    std::fs::write(&p, format!("{text}\n[stability]\nstop_at_tip = true\n")).unwrap();
+    let out2 = work.join("out2");
+    let r = run(&p, &out2);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("stop_at_tip"));
+    assert!(!out2.exists());
+    let _ = std::fs::remove_dir_all(&work);
+}

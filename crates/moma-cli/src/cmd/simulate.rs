@@ -707,12 +707,18 @@ pub fn run(args: Args) -> Result<()> {
     }
     let base_dir = path.parent().unwrap_or(Path::new("."));
     if sc.controller.is_some() || sc.reference.is_some() {
-        if sc.stability.is_some() {
+        if sc.stability.as_ref().is_some_and(|s| s.stop_at_tip) {
             bail!(
                 "{}",
                 ctx(
-                    "[stability] is not recorded in closed-loop runs yet: remove it, or the [controller] table"
+                    "stability.stop_at_tip is not available in closed-loop runs (their samples are evaluated after the run): remove it"
                 )
+            );
+        }
+        if sc.stability.is_some() && !matches!(sc.robot, RobotSpec::Urdf { .. }) {
+            bail!(
+                "{}",
+                ctx("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")")
             );
         }
         return super::simulate_control::run(&path, &sc, base_dir, &args);

@@ -744,6 +744,8 @@ struct ControlSummary {
     wall_time_s: f64,
     steps_per_second: f64,
     files: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stability: Option<super::simulate_stability::StabilitySummary>,
 }
 
 /// `t, errors…, V, V̇_analytic` per sample.
@@ -952,6 +954,16 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         wall_time_s: wall,
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
+        stability: None,
+    };
+    let monitor = match &sc.stability {
+        None => None,
+        Some(spec) => {
+            let mon = super::simulate_stability::replay(spec, &sc.robot, sc.gravity, base_dir, rec)
+                .with_context(|| ctx("stability"))?;
+            summary.stability = Some(super::simulate_stability::summary(spec, &mon, None));
+            Some(mon)
+        }
     };
     let wheels = match &sc.robot {
         RobotSpec::Urdf {
@@ -964,6 +976,12 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         ("trajectory.csv".to_string(), rec.to_csv().into_bytes()),
         ("control.csv".to_string(), control_csv(&res).into_bytes()),
     ];
+    if let Some(mon) = &monitor {
+        files.push((
+            "stability.csv".to_string(),
+            super::simulate_stability::csv(mon).into_bytes(),
+        ));
+    }
     if sc.output.plots {
         if matches!(sc.robot, RobotSpec::FixedBase { .. }) {
             arm_plots(rec, &mut files);
@@ -972,6 +990,9 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         }
         balance_plots(rec, &mut files);
         control_plots(&res, &mut files);
+        if let Some(mon) = &monitor {
+            super::simulate_stability::plots(mon, &mut files);
+        }
     }
     summary.files = files
         .iter()
@@ -984,6 +1005,12 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
     write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&summary)?;
+    }
+    if let (Some(spec), Some(mon)) = (&sc.stability, &monitor)
+        && spec.require_stable
+        && mon.tipped()
+    {
+        return super::common::goal_not_reached(super::simulate_stability::tip_message(mon));
     }
     if goal_reached == Some(false) {
         return super::common::goal_not_reached(format!(

@@ -57,6 +57,39 @@ pub fn monitor(spec: &StabilitySpec, wm: &WheeledModel) -> Result<StabilityMonit
     StabilityMonitor::new(wm, settings).context("stability")
 }
 
+/// Evaluates every recorded sample of a finished run (closed-loop runs, whose loop has no
+/// sample observer): the robot must be a URDF on a wheeled base.
+pub fn replay(
+    spec: &StabilitySpec,
+    robot: &super::simulate::RobotSpec,
+    gravity: Option<f64>,
+    base_dir: &std::path::Path,
+    rec: &moma::sim::recorder::Recorder,
+) -> Result<StabilityMonitor> {
+    let super::simulate::RobotSpec::Urdf {
+        urdf,
+        drive,
+        wheel_joints,
+        casters,
+    } = robot
+    else {
+        bail!("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")");
+    };
+    let wm = super::simulate::build_wheeled_model(
+        &base_dir.join(urdf),
+        drive,
+        wheel_joints.clone(),
+        casters,
+        gravity,
+    )?;
+    let mut mon = monitor(spec, &wm)?;
+    for i in 0..rec.len() {
+        mon.sample(rec.times[i], rec.q_row(i), rec.v_row(i), rec.u_row(i))
+            .with_context(|| format!("sample at t = {}", rec.times[i]))?;
+    }
+    Ok(mon)
+}
+
 /// A named ground contact.
 #[derive(Debug, Serialize)]
 struct Contact {
