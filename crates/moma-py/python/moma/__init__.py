@@ -1,0 +1,52 @@
+"""moma: kinematics, dynamics, tip-over stability, control and planning of wheeled
+mobile manipulators and free-floating space manipulators.
+
+The Python face of the moma Rust library: an immutable ``Model``, a reusable ``Data``
+workspace, and free functions ``algo(model, data, ...)`` taking and returning numpy
+arrays. Errors raise ``moma.MomaError`` with the library's message. The ``*_batch``
+functions take one state per row and loop in Rust with the GIL released.
+"""
+
+from ._moma import (
+    Data,
+    Map,
+    Model,
+    MomaError,
+    __version__,
+    aba,
+    aba_batch,
+    crba,
+    crba_batch,
+    frame_jacobian,
+    frame_jacobian_batch,
+    load_map,
+    osc,
+    plan,
+    rnea,
+    rnea_batch,
+    space,
+    stability,
+    stability_batch,
+)
+
+__all__ = [
+    "Data",
+    "Map",
+    "Model",
+    "MomaError",
+    "__version__",
+    "aba",
+    "aba_batch",
+    "crba",
+    "crba_batch",
+    "frame_jacobian",
+    "frame_jacobian_batch",
+    "load_map",
+    "osc",
+    "plan",
+    "rnea",
+    "rnea_batch",
+    "space",
+    "stability",
+    "stability_batch",
+]
