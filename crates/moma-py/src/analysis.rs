@@ -1,7 +1,10 @@
 //! Tip-over stability, free-floating space manipulators and operational-space control:
 //! the per-state documents of `moma stability`, `moma space` and `moma osc`.
 
-use crate::model::{Mat2, PyData, PyModel, Vec1, batch_rows, check_state, load, load_row, vector};
+use crate::model::{
+    Mat2, PyData, PyModel, Vec1, batch_rows, check_rows, check_state, load, load_row, par_rows,
+    vector,
+};
 use crate::{err, to_py};
 use moma::control::osc::{
     MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, task_conditioning,
@@ -123,8 +126,8 @@ pub(crate) fn stability<'py>(
     to_py(py, &StateReport::new(&sm, &sd, at_rest))
 }
 
-/// `stability` on every row of q (n, nq) (v and a (n, nv), zero when omitted), GIL
-/// released. Returns a dict of arrays, one entry per state: `total_mass` (n),
+/// `stability` on every row of q (n, nq) (v and a (n, nv), zero when omitted), on all
+/// cores with the GIL released (one workspace per worker; `data` is only checked). Returns a dict of arrays, one entry per state: `total_mass` (n),
 /// `com` (n, 3), `zmp` (n, 3), `zmp_margin`, `force_angle_min`, `force_angle_alpha`,
 /// `force_angle_beta_min`, `mhs_min` (n; NaN where the measure is undefined),
 /// `zmp_critical_edge` (n, int; -1 where undefined) and `stable` (n, bool).
@@ -133,7 +136,7 @@ pub(crate) fn stability<'py>(
 pub(crate) fn stability_batch<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
-    mut data: PyRefMut<'py, PyData>,
+    data: PyRef<'py, PyData>,
     q: Mat2<'py>,
     v: Option<Mat2<'py>>,
     a: Option<Mat2<'py>>,
@@ -155,56 +158,62 @@ pub(crate) fn stability_batch<'py>(
     if let Some(x) = &as_ {
         batch_rows(src, "a", x, m.nv, Some(n))?;
     }
-    let d = &mut *data;
     let nan = f64::NAN;
-    let out = py.detach(|| -> PyResult<BatchOut> {
-        let mut o = BatchOut::new(n);
-        let mut sd = StabilityData::new(&sm);
-        d.v.fill(0.0);
-        d.a.fill(0.0);
-        for k in 0..n {
-            load_row(&qs, k, &mut d.q);
-            if let Some(x) = &vs {
-                load_row(x, k, &mut d.v);
+    // per row: mass, com (3), zmp (3), margin, critical edge, FA min, FA alpha, FA beta, MHS, stable
+    const W: usize = 14;
+    let flat = py.detach(|| -> PyResult<Vec<f64>> {
+        check_rows(m, src, n, &qs, vs.as_ref(), as_.as_ref(), None)?;
+        let sd0 = StabilityData::new(&sm);
+        Ok(par_rows(m, n, W, |s, k, row| {
+            load_row(&qs, k, &mut s.q);
+            match &vs {
+                Some(x) => load_row(x, k, &mut s.v),
+                None => s.v.fill(0.0),
             }
-            if let Some(x) = &as_ {
-                load_row(x, k, &mut d.a);
+            match &as_ {
+                Some(x) => load_row(x, k, &mut s.a),
+                None => s.a.fill(0.0),
             }
-            check_state(
-                m,
-                || format!("{src} row {k}"),
-                d.q.as_slice(),
-                Some(d.v.as_slice()),
-                Some(d.a.as_slice()),
-                None,
-            )?;
+            let mut sd = sd0.clone();
             evaluate(
                 m,
-                &mut d.inner,
+                &mut s.data,
                 &sm,
                 &mut sd,
-                &d.q,
-                &d.v,
-                &d.a,
+                &s.q,
+                &s.v,
+                &s.a,
                 &ExternalLoads::default(),
             );
             let (w, r) = (&sd.wrench, &sd.report);
-            o.total_mass[k] = w.mass;
-            o.com[3 * k..3 * k + 3].copy_from_slice(w.com.as_slice());
+            row[0] = w.mass;
+            row[1..4].copy_from_slice(w.com.as_slice());
             match &r.zmp {
-                Some(z) => o.zmp[3 * k..3 * k + 3].copy_from_slice(z.as_slice()),
-                None => o.zmp[3 * k..3 * k + 3].fill(nan),
+                Some(z) => row[4..7].copy_from_slice(z.as_slice()),
+                None => row[4..7].fill(nan),
             }
-            o.zmp_margin[k] = r.zmp_margin.unwrap_or(nan);
-            o.zmp_critical_edge[k] = r.zmp_critical_edge.map_or(-1, |e| e as i64);
-            o.force_angle_min[k] = r.force_angle_min.unwrap_or(nan);
-            o.force_angle_alpha[k] = r.force_angle_alpha.unwrap_or(nan);
-            o.force_angle_beta_min[k] = r.force_angle_beta_min.unwrap_or(nan);
-            o.mhs_min[k] = r.mhs_min.unwrap_or(nan);
-            o.stable[k] = r.stable;
-        }
-        Ok(o)
+            row[7] = r.zmp_margin.unwrap_or(nan);
+            row[8] = r.zmp_critical_edge.map_or(-1.0, |e| e as f64);
+            row[9] = r.force_angle_min.unwrap_or(nan);
+            row[10] = r.force_angle_alpha.unwrap_or(nan);
+            row[11] = r.force_angle_beta_min.unwrap_or(nan);
+            row[12] = r.mhs_min.unwrap_or(nan);
+            row[13] = if r.stable { 1.0 } else { 0.0 };
+        }))
     })?;
+    let mut out = BatchOut::new(n);
+    for (k, row) in flat.chunks(W).enumerate() {
+        out.total_mass[k] = row[0];
+        out.com[3 * k..3 * k + 3].copy_from_slice(&row[1..4]);
+        out.zmp[3 * k..3 * k + 3].copy_from_slice(&row[4..7]);
+        out.zmp_margin[k] = row[7];
+        out.zmp_critical_edge[k] = row[8] as i64;
+        out.force_angle_min[k] = row[9];
+        out.force_angle_alpha[k] = row[10];
+        out.force_angle_beta_min[k] = row[11];
+        out.mhs_min[k] = row[12];
+        out.stable[k] = row[13] == 1.0;
+    }
     let dict = PyDict::new(py);
     dict.set_item("total_mass", PyArray1::from_vec(py, out.total_mass))?;
     dict.set_item("com", PyArray1::from_vec(py, out.com).reshape([n, 3])?)?;

@@ -1,6 +1,8 @@
 //! Rigid-body algorithms: RNEA, CRBA, ABA, frame Jacobians, one state or a batch.
 
-use crate::model::{Mat2, PyData, PyModel, Vec1, batch_rows, check_state, load, load_row};
+use crate::model::{
+    Mat2, PyData, PyModel, Vec1, batch_rows, check_rows, check_state, load, load_row, par_rows,
+};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, ToPyArray};
@@ -118,12 +120,12 @@ pub(crate) fn frame_jacobian<'py>(
 }
 
 /// `rnea` on every row: q (n, nq), v and a (n, nv) → tau (n, nv). Loops in Rust with
-/// the GIL released.
+/// the GIL released, on all cores (one workspace per worker; `data` is only checked).
 #[pyfunction]
 pub(crate) fn rnea_batch<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
-    mut data: PyRefMut<'py, PyData>,
+    data: PyRef<'py, PyData>,
     q: Mat2<'py>,
     v: Mat2<'py>,
     a: Mat2<'py>,
@@ -136,35 +138,24 @@ pub(crate) fn rnea_batch<'py>(
     batch_rows(src, "v", &vs, m.nv, Some(n))?;
     batch_rows(src, "a", &as_, m.nv, Some(n))?;
     let nv = m.nv;
-    let d = &mut *data;
     let out = py.detach(|| -> PyResult<Vec<f64>> {
-        let mut out = vec![0.0; n * nv];
-        for k in 0..n {
-            load_row(&qs, k, &mut d.q);
-            load_row(&vs, k, &mut d.v);
-            load_row(&as_, k, &mut d.a);
-            check_state(
-                m,
-                || format!("{src} row {k}"),
-                d.q.as_slice(),
-                Some(d.v.as_slice()),
-                Some(d.a.as_slice()),
-                None,
-            )?;
-            let tau = dynamics::rnea(m, &mut d.inner, &d.q, &d.v, &d.a);
-            out[k * nv..(k + 1) * nv].copy_from_slice(tau.as_slice());
-        }
-        Ok(out)
+        check_rows(m, src, n, &qs, Some(&vs), Some(&as_), None)?;
+        Ok(par_rows(m, n, nv, |s, k, row| {
+            load_row(&qs, k, &mut s.q);
+            load_row(&vs, k, &mut s.v);
+            load_row(&as_, k, &mut s.a);
+            row.copy_from_slice(dynamics::rnea(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
+        }))
     })?;
     PyArray1::from_vec(py, out).reshape([n, nv])
 }
 
-/// `aba` on every row: q (n, nq), v and tau (n, nv) → ddq (n, nv), GIL released.
+/// `aba` on every row: q (n, nq), v and tau (n, nv) → ddq (n, nv), on all cores with the GIL released.
 #[pyfunction]
 pub(crate) fn aba_batch<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
-    mut data: PyRefMut<'py, PyData>,
+    data: PyRef<'py, PyData>,
     q: Mat2<'py>,
     v: Mat2<'py>,
     tau: Mat2<'py>,
@@ -177,35 +168,24 @@ pub(crate) fn aba_batch<'py>(
     batch_rows(src, "v", &vs, m.nv, Some(n))?;
     batch_rows(src, "tau", &ts, m.nv, Some(n))?;
     let nv = m.nv;
-    let d = &mut *data;
     let out = py.detach(|| -> PyResult<Vec<f64>> {
-        let mut out = vec![0.0; n * nv];
-        for k in 0..n {
-            load_row(&qs, k, &mut d.q);
-            load_row(&vs, k, &mut d.v);
-            load_row(&ts, k, &mut d.a);
-            check_state(
-                m,
-                || format!("{src} row {k}"),
-                d.q.as_slice(),
-                Some(d.v.as_slice()),
-                None,
-                Some(d.a.as_slice()),
-            )?;
-            let ddq = dynamics::aba(m, &mut d.inner, &d.q, &d.v, &d.a);
-            out[k * nv..(k + 1) * nv].copy_from_slice(ddq.as_slice());
-        }
-        Ok(out)
+        check_rows(m, src, n, &qs, Some(&vs), None, Some(&ts))?;
+        Ok(par_rows(m, n, nv, |s, k, row| {
+            load_row(&qs, k, &mut s.q);
+            load_row(&vs, k, &mut s.v);
+            load_row(&ts, k, &mut s.a);
+            row.copy_from_slice(dynamics::aba(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
+        }))
     })?;
     PyArray1::from_vec(py, out).reshape([n, nv])
 }
 
-/// `crba` on every row: q (n, nq) → M (n, nv, nv), GIL released.
+/// `crba` on every row: q (n, nq) → M (n, nv, nv), on all cores with the GIL released.
 #[pyfunction]
 pub(crate) fn crba_batch<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
-    mut data: PyRefMut<'py, PyData>,
+    data: PyRef<'py, PyData>,
     q: Mat2<'py>,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
     let m = &model.inner;
@@ -214,39 +194,28 @@ pub(crate) fn crba_batch<'py>(
     let src = "crba_batch";
     let n = batch_rows(src, "q", &qs, m.nq, None)?;
     let nv = m.nv;
-    let d = &mut *data;
     let out = py.detach(|| -> PyResult<Vec<f64>> {
-        let mut out = vec![0.0; n * nv * nv];
-        for k in 0..n {
-            load_row(&qs, k, &mut d.q);
-            check_state(
-                m,
-                || format!("{src} row {k}"),
-                d.q.as_slice(),
-                None,
-                None,
-                None,
-            )?;
-            let h = dynamics::crba(m, &mut d.inner, &d.q);
-            // row-major (n, nv, nv)
-            let blk = &mut out[k * nv * nv..(k + 1) * nv * nv];
+        check_rows(m, src, n, &qs, None, None, None)?;
+        Ok(par_rows(m, n, nv * nv, |s, k, blk| {
+            load_row(&qs, k, &mut s.q);
+            let h = dynamics::crba(m, &mut s.data, &s.q);
+            // row-major (nv, nv)
             for r in 0..nv {
                 for c in 0..nv {
                     blk[r * nv + c] = h[(r, c)];
                 }
             }
-        }
-        Ok(out)
+        }))
     })?;
     PyArray1::from_vec(py, out).reshape([n, nv, nv])
 }
 
-/// `frame_jacobian` on every row: q (n, nq) → J (n, 6, nv), GIL released.
+/// `frame_jacobian` on every row: q (n, nq) → J (n, 6, nv), on all cores with the GIL released.
 #[pyfunction]
 pub(crate) fn frame_jacobian_batch<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
-    mut data: PyRefMut<'py, PyData>,
+    data: PyRef<'py, PyData>,
     q: Mat2<'py>,
     frame: &str,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
@@ -257,35 +226,24 @@ pub(crate) fn frame_jacobian_batch<'py>(
     let src = "frame_jacobian_batch";
     let n = batch_rows(src, "q", &qs, m.nq, None)?;
     let nv = m.nv;
-    let d = &mut *data;
     let out = py.detach(|| -> PyResult<Vec<f64>> {
-        let mut out = vec![0.0; n * 6 * nv];
-        for k in 0..n {
-            load_row(&qs, k, &mut d.q);
-            check_state(
-                m,
-                || format!("{src} row {k}"),
-                d.q.as_slice(),
-                None,
-                None,
-                None,
-            )?;
+        check_rows(m, src, n, &qs, None, None, None)?;
+        Ok(par_rows(m, n, 6 * nv, |s, k, blk| {
+            load_row(&qs, k, &mut s.q);
             kinematics::frame_jacobian(
                 m,
-                &mut d.inner,
-                &d.q,
+                &mut s.data,
+                &s.q,
                 fid,
                 ReferenceFrame::LocalWorldAligned,
-                &mut d.jac,
+                &mut s.jac,
             );
-            let blk = &mut out[k * 6 * nv..(k + 1) * 6 * nv];
             for r in 0..6 {
                 for c in 0..nv {
-                    blk[r * nv + c] = d.jac[(r, c)];
+                    blk[r * nv + c] = s.jac[(r, c)];
                 }
             }
-        }
-        Ok(out)
+        }))
     })?;
     PyArray1::from_vec(py, out).reshape([n, 6, nv])
 }

@@ -302,3 +302,92 @@ pub(crate) fn check_state(
     }
     moma::kinematics::check_state(m, &src(), Some(q), v, a, tau).map_err(err)
 }
+
+/// One worker's buffers for the batch forms.
+pub(crate) struct Scratch {
+    pub(crate) data: Data,
+    pub(crate) q: DVector<f64>,
+    pub(crate) v: DVector<f64>,
+    pub(crate) a: DVector<f64>,
+    pub(crate) jac: Matrix6xX<f64>,
+}
+
+impl Scratch {
+    pub(crate) fn new(m: &Model) -> Self {
+        Self {
+            data: Data::new(m),
+            q: DVector::zeros(m.nq),
+            v: DVector::zeros(m.nv),
+            a: DVector::zeros(m.nv),
+            jac: Matrix6xX::zeros(m.nv),
+        }
+    }
+}
+
+/// States per parallel task of the batch forms.
+const CHUNK: usize = 64;
+
+/// Evaluates `f(scratch, k, out_row)` for rows `k = 0..n` on all cores (rayon, one
+/// [`Scratch`] per task of [`CHUNK`] rows) into a row-major `n × width` array. Each row
+/// depends only on its own inputs, so the result does not depend on the thread count.
+pub(crate) fn par_rows(
+    m: &Model,
+    n: usize,
+    width: usize,
+    f: impl Fn(&mut Scratch, usize, &mut [f64]) + Sync,
+) -> Vec<f64> {
+    use rayon::prelude::*;
+    let mut out = vec![0.0; n * width];
+    if width == 0 {
+        return out;
+    }
+    out.par_chunks_mut(width * CHUNK)
+        .enumerate()
+        .for_each(|(c, block)| {
+            let mut s = Scratch::new(m);
+            for (j, row) in block.chunks_mut(width).enumerate() {
+                f(&mut s, c * CHUNK + j, row);
+            }
+        });
+    out
+}
+
+/// Checks every row of a batch (finite values, unit base quaternion) before the parallel
+/// pass, so the error names the first bad row.
+pub(crate) fn check_rows(
+    m: &Model,
+    src: &str,
+    n: usize,
+    q: &ArrayView2<'_, f64>,
+    v: Option<&ArrayView2<'_, f64>>,
+    a: Option<&ArrayView2<'_, f64>>,
+    tau: Option<&ArrayView2<'_, f64>>,
+) -> PyResult<()> {
+    let mut s = (
+        DVector::zeros(m.nq),
+        DVector::zeros(m.nv),
+        DVector::zeros(m.nv),
+        DVector::zeros(m.nv),
+    );
+    for k in 0..n {
+        load_row(q, k, &mut s.0);
+        if let Some(x) = v {
+            load_row(x, k, &mut s.1);
+        }
+        if let Some(x) = a {
+            load_row(x, k, &mut s.2);
+        }
+        if let Some(x) = tau {
+            load_row(x, k, &mut s.3);
+        }
+        check_state(
+            m,
+            || format!("{src} row {k}"),
+            s.0.as_slice(),
+            v.map(|_| s.1.as_slice()),
+            a.map(|_| s.2.as_slice()),
+            tau.map(|_| s.3.as_slice()),
+        )?;
+    }
+    Ok(())
+}
