@@ -56,6 +56,9 @@ enum Command {
     Osc(cmd::osc::Args),
     /// Free-floating (space) robot: base motion from joint rates, generalized Jacobian and inertia.
     Space(cmd::space::Args),
+    /// Sweep a stability or placement study over a grid or a seeded random sample (or
+    /// one shard of it) into one CSV table; `moma sweep merge` joins shard tables.
+    Sweep(cmd::sweep::Args),
 }
 
 fn main() {
@@ -76,6 +79,7 @@ fn main() {
         Command::Stability(a) => cmd::stability::run(a),
         Command::StabilityMap(a) => cmd::stability_map::run(a),
         Command::Space(a) => cmd::space::run(a),
+        Command::Sweep(a) => cmd::sweep::run(a),
     };
     if let Err(e) = result {
         if let Some(g) = e.downcast_ref::<cmd::common::GoalNotReached>() {

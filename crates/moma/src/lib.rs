@@ -53,5 +53,6 @@ pub mod sim;
 pub mod space;
 pub mod spatial;
 pub mod stability;
+pub mod sweep;
 
 pub use error::{Error, Result};

@@ -33,6 +33,7 @@ const LAYERS: &[&[&str]] = &[
     &["closed_form"],
     &["sim"],
     &["mission"],
+    &["sweep"],
 ];
 
 /// Items re-exported at the crate root, with the module that defines them.

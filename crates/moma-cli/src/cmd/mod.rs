@@ -18,3 +18,4 @@ pub mod simulate_space;
 pub mod space;
 pub mod stability;
 pub mod stability_map;
+pub mod sweep;

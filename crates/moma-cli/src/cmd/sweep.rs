@@ -1,0 +1,155 @@
+//! `moma sweep SWEEP.toml`: a grid or seeded random sweep of a stability or placement
+//! study on all cores (or one shard of it), into one CSV table; `moma sweep merge`
+//! joins shard tables. The schema and the sharding rule are in `docs/sweep.md`.
+
+use crate::output::write_atomic;
+use anyhow::{Context, Result, anyhow, bail};
+use moma::sweep::{Sweep, Table, merge};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `moma sweep`.
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct Args {
+    #[command(subcommand)]
+    pub merge: Option<MergeCommand>,
+    /// Sweep file (TOML; schema in docs/sweep.md).
+    pub sweep: Option<PathBuf>,
+    /// Output table (CSV), written atomically.
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Run only shard K of N (1 <= K <= N): the points whose index i has i mod N = K - 1.
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// No progress bar and no summary line.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `moma sweep merge`.
+#[derive(clap::Subcommand)]
+pub enum MergeCommand {
+    /// Join shard tables (equal headers, disjoint indices covering 0..n) into one, sorted
+    /// by index.
+    Merge {
+        /// Merged table (CSV), written atomically.
+        out: PathBuf,
+        /// Shard tables (CSV).
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+    },
+}
+
+/// Parses `--shard K/N`.
+fn parse_shard(text: &str) -> Result<(u64, u64)> {
+    let (k, n) = text
+        .split_once('/')
+        .ok_or_else(|| anyhow!("--shard: expected K/N (e.g. 2/8), got '{text}'"))?;
+    let parse = |s: &str, what: &str| -> Result<u64> {
+        s.trim()
+            .parse::<u64>()
+            .map_err(|_| anyhow!("--shard: {what} '{s}' is not a positive integer"))
+    };
+    let (k, n) = (parse(k, "K")?, parse(n, "N")?);
+    if n == 0 || k == 0 || k > n {
+        bail!("--shard: needs 1 <= K <= N, got {k}/{n}");
+    }
+    Ok((k, n))
+}
+
+fn progress_bar(len: u64, quiet: bool) -> Option<indicatif::ProgressBar> {
+    if quiet || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let pb = indicatif::ProgressBar::new(len);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} sweeping [{bar:40}] {pos}/{len} points  {elapsed_precise} (eta {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    Some(pb)
+}
+
+fn run_merge(out: PathBuf, shards: Vec<PathBuf>) -> Result<()> {
+    if shards.len() > 1_000_000 {
+        bail!("merge: more than 1000000 shard files");
+    }
+    let mut tables = Vec::with_capacity(shards.len());
+    for p in &shards {
+        tables.push(Table::read_csv(p)?);
+    }
+    let names: Vec<String> = shards.iter().map(|p| p.display().to_string()).collect();
+    let merged = merge(tables, &names)?;
+    write_atomic(&out, merged.to_csv().as_bytes())?;
+    outln!(
+        "wrote {}: {} rows from {} shard tables",
+        out.display(),
+        merged.rows.len(),
+        shards.len()
+    );
+    Ok(())
+}
+
+/// Runs `moma sweep`.
+pub fn run(args: Args) -> Result<()> {
+    if let Some(MergeCommand::Merge { out, shards }) = args.merge {
+        return run_merge(out, shards);
+    }
+    let Some(path) = args.sweep else {
+        bail!("give a sweep file (moma sweep SWEEP.toml -o OUT.csv) or use moma sweep merge");
+    };
+    let Some(output) = args.output else {
+        bail!("--output: give the CSV file to write (moma sweep SWEEP.toml -o OUT.csv)");
+    };
+    let (k, n) = match &args.shard {
+        Some(s) => parse_shard(s)?,
+        None => (1, 1),
+    };
+    let sweep = Sweep::from_file(&path)?;
+    let indices =
+        moma::sweep::shard_indices(sweep.len(), k, n).map_err(|e| anyhow!("--shard: {e}"))?;
+    let pb = progress_bar(indices.len() as u64, args.quiet);
+    let start = Instant::now();
+    let table = sweep
+        .run_with_progress(&indices, args.threads, &|d| {
+            if let Some(pb) = &pb {
+                pb.inc(d);
+            }
+        })
+        .with_context(|| path.display().to_string())?;
+    let secs = start.elapsed().as_secs_f64();
+    if let Some(pb) = &pb {
+        pb.finish_and_clear();
+    }
+    write_atomic(&output, table.to_csv().as_bytes())?;
+    if !args.quiet {
+        outln!(
+            "wrote {}: {} of {} points (shard {k}/{n}, {} study) in {secs:.3} s",
+            output.display(),
+            table.rows.len(),
+            sweep.len(),
+            sweep.study()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_shard;
+
+    #[test]
+    fn shard_option() {
+        assert_eq!(parse_shard("2/8").unwrap(), (2, 8));
+        for bad in ["0/3", "4/3", "1/0", "a/2", "3", "-1/2"] {
+            assert!(parse_shard(bad).is_err(), "{bad}");
+        }
+    }
+}

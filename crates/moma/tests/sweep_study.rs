@@ -1,0 +1,377 @@
+//! Sweeps: a stability row equals the stability library on the same state (the payload
+//! checked through two independent routes: an external point force for the ZMP, and a
+//! point-mass link added to the URDF for every measure), result columns are
+//! identical whatever the thread count and the sharding, random points depend only on
+//! the seed and the index, and bad sweep files are errors naming the field.
+
+use moma::io::urdf::model_from_urdf_file;
+use moma::multibody::{Data, RootJoint, neutral};
+use moma::stability::{
+    BodySet, ExternalLoads, PointForce, StabilityData, StabilityModel, SupportAttachment,
+    SupportPolygon, evaluate,
+};
+use moma::sweep::{Sweep, Value, merge, shard_indices};
+use nalgebra::{DVector, Vector2, Vector3};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn tiago() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/pinocchio/urdf/tiago.urdf")
+}
+
+const CASTERS: [[f64; 2]; 4] = [
+    [0.1535, 0.102],
+    [0.1535, -0.102],
+    [-0.1895, 0.102],
+    [-0.1895, -0.102],
+];
+
+fn stability_toml(sample: &str, params: &str) -> String {
+    format!(
+        r#"study = "stability"
+[sample]
+{sample}
+[parameters]
+{params}
+[stability]
+robot = "{}"
+base = {{ r_w = 0.0985, b = 0.2022, d = 0.0, casters = [[0.1535, 0.102], [0.1535, -0.102], [-0.1895, 0.102], [-0.1895, -0.102]] }}
+payload_frame = "arm_tool_link"
+[[stability.postures]]
+name = "forward"
+q = {{ torso_lift_joint = 0.2, arm_1_joint = 1.5 }}
+[[stability.postures]]
+name = "tucked"
+q = {{ arm_1_joint = 0.2, arm_2_joint = -1.34, arm_4_joint = 1.94 }}
+"#,
+        tiago().display()
+    )
+}
+
+fn sweep(text: &str) -> moma::Result<Sweep> {
+    Sweep::from_toml_str(text, Path::new("test.toml"), Path::new("."))
+}
+
+fn f(v: &Value) -> f64 {
+    match v {
+        Value::Float(x) => *x,
+        other => panic!("not a float: {other:?}"),
+    }
+}
+
+#[test]
+fn a_row_is_the_stability_of_its_state_with_the_payload_as_a_point_force() {
+    let s = sweep(&stability_toml(
+        "mode = \"grid\"",
+        "posture = [\"forward\", \"tucked\"]\naccel = [-2.5, 0.0, 1.5]\npayload = [0.0, 2.0]",
+    ))
+    .unwrap();
+    assert_eq!(s.len(), 12);
+    let cols = s.columns();
+    assert_eq!(cols[..4], ["index", "posture", "accel", "payload"]);
+    assert_eq!(cols.last().unwrap(), "eval_time_s");
+    let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
+
+    // The same state through the stability library, the payload as a force m (g − a) at
+    // the tool frame (the whole robot translates rigidly with acceleration (accel, 0, 0)).
+    let model = model_from_urdf_file(tiago(), RootJoint::Planar).unwrap();
+    let mut pts: Vec<Vector2<f64>> = vec![Vector2::new(0.0, 0.2022), Vector2::new(0.0, -0.2022)];
+    pts.extend(CASTERS.iter().map(|c| Vector2::new(c[0], c[1])));
+    let sm = StabilityModel::new(
+        &model,
+        SupportPolygon::from_points(&pts).unwrap(),
+        SupportAttachment::Base,
+        &BodySet::All,
+    )
+    .unwrap();
+    let mut data = Data::new(&model);
+    let mut sd = StabilityData::new(&sm);
+    // TIAGo with a 2 kg point-mass link fixed at the tool frame
+    let urdf = std::fs::read_to_string(tiago()).unwrap().replace(
+        "</robot>",
+        r#"<link name="payload"><inertial><mass value="2.0"/><origin xyz="0 0 0"/>
+           <inertia ixx="0" iyy="0" izz="0" ixy="0" ixz="0" iyz="0"/></inertial></link>
+           <joint name="payload_joint" type="fixed"><parent link="arm_tool_link"/>
+           <child link="payload"/><origin xyz="0 0 0"/></joint></robot>"#,
+    );
+    let loaded =
+        moma::io::urdf::model_from_urdf_str(&urdf, RootJoint::Planar, "tiago+payload.urdf")
+            .unwrap();
+    let sm_loaded = StabilityModel::new(
+        &loaded,
+        sm.support.clone(),
+        SupportAttachment::Base,
+        &BodySet::All,
+    )
+    .unwrap();
+    let mut data_loaded = Data::new(&loaded);
+    let mut sd_loaded = StabilityData::new(&sm_loaded);
+    let tool = model.frame_id("arm_tool_link").unwrap();
+    let mut checked = 0;
+    for i in 0..s.len() {
+        let row = s.evaluate(i).unwrap();
+        let posture = match &row[col("posture")] {
+            Value::Text(n) => n.clone(),
+            other => panic!("{other:?}"),
+        };
+        let (accel, payload) = (f(&row[col("accel")]), f(&row[col("payload")]));
+        let mut q = neutral(&model);
+        let set = |q: &mut DVector<f64>, j: &str, x: f64| {
+            q[model.idx_q[model.joint_id(j).unwrap().0]] = x;
+        };
+        if posture == "forward" {
+            set(&mut q, "torso_lift_joint", 0.2);
+            set(&mut q, "arm_1_joint", 1.5);
+        } else {
+            set(&mut q, "arm_1_joint", 0.2);
+            set(&mut q, "arm_2_joint", -1.34);
+            set(&mut q, "arm_4_joint", 1.94);
+        }
+        let v = DVector::zeros(model.nv);
+        let mut a = DVector::zeros(model.nv);
+        a[0] = accel;
+        moma::kinematics::forward_kinematics(&model, &mut data, &q);
+        let fr = &model.frames[tool.0];
+        let p = data.world_from_joint[fr.parent_joint.0]
+            .compose(&fr.placement)
+            .translation;
+        let force = [PointForce {
+            point: p,
+            force: payload * (model.gravity - Vector3::new(accel, 0.0, 0.0)),
+        }];
+        let ext = ExternalLoads {
+            forces: &force,
+            moments: &[],
+        };
+        let r = evaluate(&model, &mut data, &sm, &mut sd, &q, &v, &a, &ext).clone();
+        let close = |name: &str, want: f64| {
+            let got = f(&row[col(name)]);
+            assert!(
+                (got - want).abs() <= 1e-9 * want.abs().max(1.0),
+                "point {i} {name}: {got} vs {want}"
+            );
+        };
+        close("zmp_margin", r.zmp_margin.unwrap());
+        close("zmp_x", r.zmp.unwrap().x);
+        assert_eq!(row[col("stable")], Value::Bool(r.stable), "point {i}");
+        close("mass", model.total_mass() + payload);
+        // every measure against the model that carries the payload as a link
+        let r = if payload == 0.0 {
+            evaluate(
+                &model,
+                &mut data,
+                &sm,
+                &mut sd,
+                &q,
+                &v,
+                &a,
+                &ExternalLoads::NONE,
+            )
+            .clone()
+        } else {
+            assert_eq!(payload, 2.0);
+            evaluate(
+                &loaded,
+                &mut data_loaded,
+                &sm_loaded,
+                &mut sd_loaded,
+                &q,
+                &v,
+                &a,
+                &ExternalLoads::NONE,
+            )
+            .clone()
+        };
+        close("zmp_margin", r.zmp_margin.unwrap());
+        close("fa_alpha", r.force_angle_alpha.unwrap());
+        close("fa_min", r.force_angle_min.unwrap());
+        close("fa_beta", r.force_angle_beta_min.unwrap());
+        close("mhs_min", r.mhs_min.unwrap());
+        checked += 1;
+    }
+    assert_eq!(checked, 12);
+}
+
+#[test]
+fn results_do_not_depend_on_threads_or_shards() {
+    for sample in ["mode = \"grid\"", "mode = \"random\"\ncount = 60\nseed = 7"] {
+        let s = sweep(&stability_toml(
+            sample,
+            "posture = [\"forward\", \"tucked\"]\naccel = { linspace = [-3, 3, 5] }\nyaw_rate = { linspace = [-1, 1, 3] }\npayload = { linspace = [0, 3, 2] }\nspeed = 0.5",
+        ))
+        .unwrap();
+        let all: Vec<u64> = (0..s.len()).collect();
+        let one = s.run(&all, 1).unwrap().without_timing();
+        let two = s.run(&all, 2).unwrap().without_timing();
+        assert_eq!(one.to_csv(), two.to_csv(), "{sample}");
+        assert_eq!(one.rows.len() as u64, s.len());
+        for n in [2, 3, 7] {
+            let shards: Vec<_> = (1..=n)
+                .map(|k| s.run(&shard_indices(s.len(), k, n).unwrap(), 2).unwrap())
+                .collect();
+            let names: Vec<String> = (1..=n).map(|k| format!("shard {k}")).collect();
+            // through CSV text, as `moma sweep merge` does
+            let read: Vec<_> = shards
+                .iter()
+                .map(|t| moma::sweep::Table::parse_csv(&t.to_csv(), Path::new("s.csv")).unwrap())
+                .collect();
+            let merged = merge(read, &names).unwrap().without_timing();
+            assert_eq!(merged.to_csv(), one.to_csv(), "{sample}, {n} shards");
+        }
+    }
+}
+
+#[test]
+fn random_points_depend_on_the_seed_and_index_only() {
+    let text = |seed: u64| {
+        stability_toml(
+            &format!("mode = \"random\"\ncount = 1000\nseed = {seed}"),
+            "posture = [\"forward\", \"tucked\"]\naccel = { linspace = [-3, 3, 2] }\npayload = [0.5, 1.5]",
+        )
+    };
+    let (a, b, c) = (
+        sweep(&text(1)).unwrap(),
+        sweep(&text(1)).unwrap(),
+        sweep(&text(2)).unwrap(),
+    );
+    let mut seen = [0usize; 2];
+    for i in [0, 1, 17, 999] {
+        assert_eq!(a.point(i).unwrap(), b.point(i).unwrap());
+        assert_ne!(a.point(i).unwrap(), c.point(i).unwrap());
+    }
+    for i in 0..1000 {
+        let p = a.point(i).unwrap();
+        let x = f(&p[1]);
+        assert!((-3.0..=3.0).contains(&x));
+        assert!(p[2] == Value::Float(0.5) || p[2] == Value::Float(1.5));
+        seen[usize::from(p[0] == Value::Text("tucked".into()))] += 1;
+    }
+    // both postures drawn, roughly evenly
+    assert!(seen[0] > 400 && seen[1] > 400, "{seen:?}");
+    assert!(a.point(1000).is_err());
+}
+
+#[test]
+fn shards_partition_the_indices() {
+    let mut all: Vec<u64> = (1..=4)
+        .flat_map(|k| shard_indices(10, k, 4).unwrap())
+        .collect();
+    assert_eq!(shard_indices(10, 2, 4).unwrap(), [1, 5, 9]);
+    all.sort_unstable();
+    assert_eq!(all, (0..10).collect::<Vec<_>>());
+    assert!(shard_indices(3, 5, 5).unwrap().is_empty());
+    for (k, n) in [(0, 3), (4, 3), (1, 0)] {
+        let e = shard_indices(10, k, n).unwrap_err().to_string();
+        assert!(e.contains("1 <= K <= N"), "{e}");
+    }
+}
+
+#[test]
+fn bad_sweep_files_name_the_field() {
+    let huge = "accel = { linspace = [0, 1, 1000000] }\nspeed = { linspace = [0, 1, 1000000] }";
+    let cases = [
+        (
+            stability_toml("mode = \"grid\"", huge),
+            "more than 1000000000 points",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "wobble = [1]"),
+            "parameters.wobble",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "posture = [\"nope\"]"),
+            "parameters.posture[0]",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "payload = [-1]"),
+            "parameters.payload",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "accel = [\"x\"]"),
+            "parameters.accel[0]",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "\"q.nope\" = [1]"),
+            "q.nope",
+        ),
+        (
+            stability_toml("mode = \"random\"\ncount = 5", "accel = [1]"),
+            "sample.seed",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "accel = { linspace = [1, 0, 3] }"),
+            "lo <= hi",
+        ),
+        (
+            stability_toml("mode = \"fancy\"", "accel = [1]"),
+            "sample.mode",
+        ),
+        (
+            stability_toml("mode = \"grid\"", "accel = [1]")
+                .replace("payload_frame", "payload_frme"),
+            "payload_frme",
+        ),
+    ];
+    for (text, needle) in cases {
+        let e = sweep(&text).unwrap_err().to_string();
+        assert!(e.contains(needle), "{needle}: {e}");
+        assert!(e.contains("test.toml"), "{e}");
+    }
+}
+
+#[test]
+fn placement_reaches_near_targets_and_not_far_ones() {
+    let text = format!(
+        r#"study = "placement"
+[parameters]
+target = ["near", "far"]
+base_x = [0.0, 5.0]
+[placement]
+robot = "{}"
+frame = "panda_hand"
+mount = [0.0, 0.0, 0.4]
+[[placement.targets]]
+name = "near"
+pose = [0.4, 0.1, 0.9]
+[[placement.targets]]
+name = "far"
+pose = [0.4, 0.1, 3.0]
+"#,
+        root().join("scenarios/robots/panda.urdf").display()
+    );
+    let s = sweep(&text).unwrap();
+    let t = s.run(&[0, 1, 2, 3], 2).unwrap();
+    let c = t.column("reachable").unwrap();
+    let reach: Vec<_> = t.rows.iter().map(|r| r[c].clone()).collect();
+    // (near, 0), (near, 5), (far, 0), (far, 5)
+    assert_eq!(
+        reach,
+        [
+            Value::Bool(true),
+            Value::Bool(false),
+            Value::Bool(false),
+            Value::Bool(false)
+        ]
+    );
+    let m = t.column("measure").unwrap();
+    assert!(f(&t.rows[0][m]) > 0.0);
+    assert_eq!(t.rows[1][m], Value::Missing);
+}
+
+#[test]
+fn shipped_example_sweeps_load() {
+    for name in [
+        "tiago_stability.toml",
+        "tiago_stability_random.toml",
+        "panda_placement.toml",
+    ] {
+        let s = Sweep::from_file(root().join("scenarios/sweeps").join(name)).unwrap();
+        assert!(s.len() > 0, "{name}");
+        s.evaluate(s.len() - 1).unwrap();
+    }
+    let s = Sweep::from_file(root().join("scenarios/sweeps/tiago_stability.toml")).unwrap();
+    assert_eq!(s.len(), 10_000);
+}
