@@ -38,6 +38,8 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Print an occupancy map's size, resolution, origin and cell counts.
     MapInfo(cmd::map_info::Args),
+    /// Run a mission: plan on a map, track in dynamic simulation, re-plan, reach; write the report.
+    Mission(cmd::mission::Args),
     /// Plan a path on an occupancy map.
     Plan(cmd::plan::Args),
     /// Run every problem of a Moving AI scenario file and compare with the optimal lengths.
@@ -70,6 +72,7 @@ fn main() {
         Command::Eval(a) => cmd::eval::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::MapInfo(a) => cmd::map_info::run(a),
+        Command::Mission(a) => cmd::mission::run(a),
         Command::Plan(a) => cmd::plan::run(a),
         Command::Scen(a) => cmd::scen::run(a),
         Command::Manipulability(a) => cmd::manipulability::run(a),

@@ -45,6 +45,7 @@ pub mod io;
 pub mod kinematics;
 pub(crate) mod linalg;
 pub mod manipulability;
+pub mod mission;
 pub mod mobile;
 pub mod multibody;
 pub mod ode;

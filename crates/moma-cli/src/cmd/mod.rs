@@ -9,6 +9,7 @@ pub mod ik;
 pub mod inspect;
 pub mod manipulability;
 pub mod map_info;
+pub mod mission;
 pub mod osc;
 pub mod plan;
 pub mod reach_map;

@@ -53,12 +53,16 @@
 //!   potential method", IROS 1994 (ZMP on mobile manipulators).
 
 mod limits;
+pub mod loads;
 mod measures;
 mod polygon;
 mod state_report;
 mod wrench;
 
 pub use limits::{AccelerationLimits, acceleration_limit, acceleration_limits};
+pub use loads::{
+    LoadRule, WheelFriction, contact_normal_loads, driven_wheel_friction, load_equilibrium_residual,
+};
 pub use measures::{
     EdgeMeasures, StabilityReport, evaluate_measures, inertia_about_axis, zero_moment_point,
 };

@@ -1,0 +1,256 @@
+//! The mission's planner: the configuration space of the map, D* Lite from the robot's
+//! cell to the goal's cell, and the turn from a cell path into a timed reference.
+
+use std::time::Instant;
+
+use crate::error::{Error, Result};
+use crate::planning::dstar_lite::DStarLite;
+use crate::planning::{OccupancyGrid, SearchGrid, distance_transform};
+
+/// Per-cell state of the world the robot knows: obstacles of the map plus the obstacles
+/// that have appeared, their distance transform, and the D* Lite planner on the
+/// configuration space (the obstacles dilated by the footprint).
+pub(crate) struct Planner {
+    pub width: usize,
+    pub height: usize,
+    /// `true` = occupied cell (map or appeared obstacle).
+    pub occupied: Vec<bool>,
+    /// Distance (cells) from each cell centre to the nearest occupied cell centre.
+    pub dist: Vec<f32>,
+    /// Dilation radius of the configuration space (cells): footprint radius + ½ cell.
+    pub r_cells: f64,
+    pub dstar: DStarLite,
+    pub goal_cell: (usize, usize),
+}
+
+/// One D* Lite query's figures.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct SearchTiming {
+    /// Wall time of the incremental search (s): `move_start`, `set_blocked`, `compute`
+    /// and the path extraction.
+    pub search_s: f64,
+    /// Cells expanded by `compute`.
+    pub expanded: usize,
+}
+
+impl Planner {
+    /// Builds the configuration space and plans once from `start` to `goal` (world).
+    ///
+    /// # Errors
+    /// Start or goal outside the map, a footprint that fits nowhere, start or goal where
+    /// the footprint does not fit (all input errors). An unreachable goal is not an
+    /// error: the returned path is `None`.
+    pub fn new(
+        grid: &OccupancyGrid,
+        unknown_is_obstacle: bool,
+        footprint_radius: f64,
+        start: [f64; 2],
+        goal: [f64; 2],
+    ) -> Result<(Self, Option<Vec<(usize, usize)>>, SearchTiming)> {
+        let (w, h) = (grid.width, grid.height);
+        let occupied = grid.obstacle_mask(crate::planning::grid::OCCUPIED, unknown_is_obstacle);
+        let dist = distance_transform(&occupied, w, h);
+        let r_cells = footprint_radius / grid.resolution + 0.5;
+        let blocked: Vec<bool> = dist.iter().map(|&d| f64::from(d) <= r_cells).collect();
+        if blocked.iter().all(|&b| b) {
+            return Err(Error::invalid(
+                "robot.footprint_radius",
+                format!(
+                    "a footprint of radius {footprint_radius} m fits nowhere on the map (every \
+                     cell lies within that distance of an obstacle or unknown cell)"
+                ),
+            ));
+        }
+        let start_cell = grid.world_to_cell("start.pose", start[0], start[1])?;
+        let goal_cell = grid.world_to_cell("goal.pose", goal[0], goal[1])?;
+        for (what, c, p) in [
+            ("start.pose", start_cell, start),
+            ("goal.pose", goal_cell, goal),
+        ] {
+            let i = c.1 * w + c.0;
+            if occupied[i] {
+                return Err(Error::invalid(
+                    what,
+                    format!("({}, {}) lies in an obstacle of the map", p[0], p[1]),
+                ));
+            }
+            if blocked[i] {
+                return Err(Error::invalid(
+                    what,
+                    format!(
+                        "the footprint (radius {footprint_radius} m) does not fit at ({}, {}): \
+                         an obstacle lies {:.3} m from it",
+                        p[0],
+                        p[1],
+                        f64::from(dist[i]) * grid.resolution
+                    ),
+                ));
+            }
+        }
+        let sgrid = SearchGrid::from_obstacles(&blocked, w, h)?;
+        let clock = Instant::now();
+        let mut dstar = DStarLite::new(&sgrid, start_cell, goal_cell)?;
+        let path = dstar.compute().and_then(|_| dstar.path());
+        let timing = SearchTiming {
+            search_s: clock.elapsed().as_secs_f64(),
+            expanded: dstar.expanded(),
+        };
+        Ok((
+            Self {
+                width: w,
+                height: h,
+                occupied,
+                dist,
+                r_cells,
+                dstar,
+                goal_cell,
+            },
+            path,
+            timing,
+        ))
+    }
+
+    /// Marks a disk obstacle (centre in continuous cell coordinates, radius in cells)
+    /// occupied, refreshes the distance transform, and blocks its dilated cells in the
+    /// planner (after moving the planner's start to `robot_cell`). Returns the newly
+    /// blocked configuration-space cells and the search time spent.
+    pub fn add_disk(
+        &mut self,
+        center: [f64; 2],
+        radius: f64,
+        robot_cell: (usize, usize),
+    ) -> Result<(Vec<(usize, usize)>, f64)> {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let reach = radius + self.r_cells;
+        let x0 = ((center[0] - reach).floor() as i64).clamp(0, w - 1);
+        let x1 = ((center[0] + reach).ceil() as i64).clamp(0, w - 1);
+        let y0 = ((center[1] - reach).floor() as i64).clamp(0, h - 1);
+        let y1 = ((center[1] + reach).ceil() as i64).clamp(0, h - 1);
+        let mut newly = Vec::new();
+        let mut changed = false;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let d = (x as f64 + 0.5 - center[0]).hypot(y as f64 + 0.5 - center[1]);
+                let i = (y * w + x) as usize;
+                if d <= radius && !self.occupied[i] {
+                    self.occupied[i] = true;
+                    changed = true;
+                }
+                if d <= reach {
+                    newly.push((x as usize, y as usize));
+                }
+            }
+        }
+        if changed {
+            self.dist = distance_transform(&self.occupied, self.width, self.height);
+        }
+        let clock = Instant::now();
+        self.move_start(robot_cell)?;
+        newly.retain(|&c| self.dstar.grid().is_free(c.0 as i64, c.1 as i64));
+        for &c in &newly {
+            self.dstar.set_blocked(c, true)?;
+        }
+        Ok((newly, clock.elapsed().as_secs_f64()))
+    }
+
+    /// Moves the planner's start to `cell`, or to the nearest free cell within two cells
+    /// if the robot stands in the configuration-space obstacle.
+    pub fn move_start(&mut self, cell: (usize, usize)) -> Result<()> {
+        let c = self.nearest_free(cell).unwrap_or(cell);
+        self.dstar.move_start(c)
+    }
+
+    fn nearest_free(&self, cell: (usize, usize)) -> Option<(usize, usize)> {
+        let g = self.dstar.grid();
+        let (cx, cy) = (cell.0 as i64, cell.1 as i64);
+        let mut best: Option<((usize, usize), i64)> = None;
+        for dy in -2i64..=2 {
+            for dx in -2i64..=2 {
+                if g.is_free(cx + dx, cy + dy) {
+                    let d2 = dx * dx + dy * dy;
+                    if best.is_none_or(|(_, b)| d2 < b) {
+                        best = Some((((cx + dx) as usize, (cy + dy) as usize), d2));
+                    }
+                }
+            }
+        }
+        best.map(|b| b.0)
+    }
+
+    /// Re-plans from the planner's current start: the cell path, or `None` when the goal
+    /// is cut off.
+    pub fn replan(&mut self) -> (Option<Vec<(usize, usize)>>, SearchTiming) {
+        let clock = Instant::now();
+        let path = self.dstar.compute().and_then(|_| self.dstar.path());
+        (
+            path,
+            SearchTiming {
+                search_s: clock.elapsed().as_secs_f64(),
+                expanded: self.dstar.expanded(),
+            },
+        )
+    }
+
+    /// `true` if the configuration-space cell containing continuous cell coordinates
+    /// `(fx, fy)` is blocked (or outside the map).
+    pub fn blocked_at(&self, fx: f64, fy: f64) -> bool {
+        !self
+            .dstar
+            .grid()
+            .is_free(fx.floor() as i64, fy.floor() as i64)
+    }
+
+    /// Distance (cells) from a point (continuous cell coordinates) to the boundary of
+    /// the nearest occupied cell: exact within `exact_cells` of the point, beyond it the
+    /// distance transform's value at the point's cell minus one cell diagonal (a lower
+    /// bound within 1.5 cells). `None` on a map without occupied cells.
+    pub fn obstacle_distance(&self, fx: f64, fy: f64, exact_cells: f64) -> Option<f64> {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let cx = (fx.floor() as i64).clamp(0, w - 1);
+        let cy = (fy.floor() as i64).clamp(0, h - 1);
+        let dc = f64::from(self.dist[(cy * w + cx) as usize]);
+        if !dc.is_finite() {
+            return None;
+        }
+        if dc > exact_cells {
+            return Some((dc - std::f64::consts::SQRT_2).max(0.0));
+        }
+        let r = (dc + 2.2).ceil() as i64;
+        let mut best = f64::INFINITY;
+        for y in (cy - r).max(0)..=(cy + r).min(h - 1) {
+            let row = (y * w) as usize;
+            let ddy = if fy < y as f64 {
+                y as f64 - fy
+            } else if fy > (y + 1) as f64 {
+                fy - (y + 1) as f64
+            } else {
+                0.0
+            };
+            if ddy >= best {
+                continue;
+            }
+            for x in (cx - r).max(0)..=(cx + r).min(w - 1) {
+                if self.occupied[row + x as usize] {
+                    let ddx = if fx < x as f64 {
+                        x as f64 - fx
+                    } else if fx > (x + 1) as f64 {
+                        fx - (x + 1) as f64
+                    } else {
+                        0.0
+                    };
+                    let d = ddx.hypot(ddy);
+                    if d < best {
+                        best = d;
+                    }
+                }
+            }
+        }
+        // Off-window obstacles lie farther than the window's reach (see above), so a miss
+        // means the map's border-less outside: fall back to the transform.
+        Some(if best.is_finite() {
+            best
+        } else {
+            (dc - std::f64::consts::SQRT_2).max(0.0)
+        })
+    }
+}

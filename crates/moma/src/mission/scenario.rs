@@ -1,0 +1,585 @@
+//! The mission file (TOML) and its validation into a ready-to-run [`Mission`].
+//!
+//! Schema (documented for users in `docs/mission.md`); every table rejects unknown keys,
+//! naming the key and the file. Relative paths (`map.file`, `robot.urdf`, `output.dir`)
+//! resolve against the folder of the mission file.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
+use crate::multibody::{FrameIndex, RootJoint};
+use crate::planning::LoadedMap;
+
+/// The mission file as written.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissionFile {
+    /// Free-text title (default: the file name).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The map.
+    pub map: MapSpec,
+    /// The robot.
+    pub robot: RobotSpec,
+    /// Start state.
+    pub start: StartSpec,
+    /// Goal.
+    pub goal: GoalSpec,
+    /// Platform limits (the mission's own table).
+    pub limits: LimitsSpec,
+    /// Obstacles that appear during the run.
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Controller gains (optional).
+    #[serde(default)]
+    pub control: ControlSpec,
+    /// Simulation settings (optional).
+    #[serde(default)]
+    pub simulation: SimulationSpec,
+    /// Outputs.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// `[map]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapSpec {
+    /// ROS `map_server` YAML, Moving AI `.map`, or a bare PGM/PNG image.
+    pub file: PathBuf,
+    /// Resolution (m/cell) of a bare image (not allowed for YAML or `.map`).
+    #[serde(default)]
+    pub resolution: Option<f64>,
+    /// Treat unknown cells as obstacles (default `true`).
+    #[serde(default = "yes")]
+    pub unknown_is_obstacle: bool,
+}
+
+/// `[robot]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// URDF file; its root link is the base frame.
+    pub urdf: PathBuf,
+    /// Differential drive `{ r_w, b, d }` (m).
+    pub drive: DriveSpec,
+    /// `[left, right]` wheel joints of the URDF (optional, as in `moma simulate`).
+    #[serde(default)]
+    pub wheel_joints: Option<[String; 2]>,
+    /// Passive casters, as in `moma simulate`.
+    #[serde(default)]
+    pub casters: Vec<CasterSpec>,
+    /// Radius (m) of the disk that covers the base, for the configuration space.
+    pub footprint_radius: f64,
+    /// The end-effector frame (default: the URDF's last link).
+    #[serde(default)]
+    pub end_effector: Option<String>,
+    /// Arm joint angles of the transport posture (default: `start.q_arm`, else zeros).
+    #[serde(default)]
+    pub transport_posture: Option<Vec<f64>>,
+    /// Gravity magnitude (m/s², default 9.81).
+    #[serde(default)]
+    pub gravity: Option<f64>,
+}
+
+/// Differential-drive geometry.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveSpec {
+    /// Wheel radius (m).
+    pub r_w: f64,
+    /// Half track (m).
+    pub b: f64,
+    /// Base origin ahead of the driven-axle midpoint (m); the mission needs 0.
+    pub d: f64,
+}
+
+/// A passive caster (support point in the base frame).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CasterSpec {
+    /// Name.
+    pub name: String,
+    /// Contact point `[x, y]` in the base frame (m).
+    pub position: [f64; 2],
+}
+
+/// `[start]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartSpec {
+    /// Base pose `[x, y, θ]` in the world (m, rad).
+    pub pose: [f64; 3],
+    /// Initial arm joint angles (default: the transport posture).
+    #[serde(default)]
+    pub q_arm: Option<Vec<f64>>,
+}
+
+/// `[goal]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSpec {
+    /// Base pose `[x, y, θ]` (m, rad).
+    pub pose: [f64; 3],
+    /// End-effector target `[x, y, z]` in the world (m), reached at the goal.
+    #[serde(default)]
+    pub end_effector: Option<[f64; 3]>,
+    /// Position tolerance of the base at the goal (m, default 0.10).
+    #[serde(default = "default_pos_tol")]
+    pub position_tolerance: f64,
+    /// Heading tolerance at the goal (rad, default 0.10).
+    #[serde(default = "default_heading_tol")]
+    pub heading_tolerance: f64,
+    /// End-effector tolerance (m, default 0.02).
+    #[serde(default = "default_ee_tol")]
+    pub end_effector_tolerance: f64,
+}
+
+/// `[limits]`.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsSpec {
+    /// Largest forward speed (m/s).
+    pub v_max: f64,
+    /// Largest yaw rate (rad/s).
+    pub omega_max: f64,
+    /// Largest linear acceleration (m/s²).
+    pub a_max: f64,
+    /// Largest angular acceleration (rad/s²).
+    pub alpha_max: f64,
+    /// Tyre-ground friction coefficient (slip monitor).
+    pub mu: f64,
+    /// Fraction of the tip-over acceleration limits the timing may use (default 0.8).
+    #[serde(default = "default_tip_fraction")]
+    pub tip_fraction: f64,
+}
+
+/// `[[obstacles]]`: a disk that appears at time `t`.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    /// Appearance time (s).
+    pub t: f64,
+    /// Centre `[x, y]` (m, world).
+    pub center: [f64; 2],
+    /// Radius (m).
+    pub radius: f64,
+}
+
+/// `[control]`: gains (all optional).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControlSpec {
+    /// Kanayama K_x (1/s).
+    pub kx: f64,
+    /// Kanayama K_y (1/m²).
+    pub ky: f64,
+    /// Kanayama K_θ (1/m).
+    pub kth: f64,
+    /// Inner speed loop bandwidth on [v, ω] (1/s).
+    pub speed_gain: f64,
+    /// Arm joint PD natural frequency (rad/s).
+    pub arm_frequency: f64,
+    /// End-effector task natural frequency (rad/s).
+    pub task_frequency: f64,
+}
+
+impl Default for ControlSpec {
+    fn default() -> Self {
+        Self {
+            kx: 2.0,
+            ky: 6.0,
+            kth: 3.0,
+            speed_gain: 20.0,
+            arm_frequency: 12.0,
+            task_frequency: 6.0,
+        }
+    }
+}
+
+/// `[simulation]`.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimulationSpec {
+    /// Fixed RK4 step and control period (s).
+    pub dt: f64,
+    /// Recording interval (s).
+    pub record_interval: f64,
+    /// Give up after this mission time (s); default: 3 × the first plan's duration + 30 s.
+    pub time_limit: Option<f64>,
+}
+
+impl Default for SimulationSpec {
+    fn default() -> Self {
+        Self {
+            dt: 0.002,
+            record_interval: 0.02,
+            time_limit: None,
+        }
+    }
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Output folder (relative to the mission file).
+    #[serde(default = "default_dir")]
+    pub dir: PathBuf,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { dir: default_dir() }
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_pos_tol() -> f64 {
+    0.10
+}
+fn default_heading_tol() -> f64 {
+    0.10
+}
+fn default_ee_tol() -> f64 {
+    0.02
+}
+fn default_tip_fraction() -> f64 {
+    0.8
+}
+fn default_dir() -> PathBuf {
+    PathBuf::from("mission-output")
+}
+
+/// Most obstacles a mission may list.
+pub const MAX_OBSTACLES: usize = 10_000;
+/// Most recorded samples a run may produce (time limit / record interval).
+pub const MAX_SAMPLES: f64 = 2_000_000.0;
+/// Most control steps a run may take (time limit / dt).
+pub const MAX_STEPS: f64 = 50_000_000.0;
+
+/// A validated mission, ready for [`super::run`].
+#[derive(Debug, Clone)]
+pub struct Mission {
+    /// Title.
+    pub name: String,
+    /// The mission file (for messages).
+    pub path: PathBuf,
+    /// The file as written.
+    pub file: MissionFile,
+    /// The map.
+    pub map: LoadedMap,
+    /// The robot on its wheels.
+    pub robot: WheeledModel,
+    /// The end-effector frame.
+    pub ee_frame: FrameIndex,
+    /// Arm joint angles of the transport posture (one per arm dof).
+    pub transport: Vec<f64>,
+    /// Initial arm joint angles.
+    pub q_arm0: Vec<f64>,
+    /// Output folder, resolved against the mission file's folder.
+    pub output_dir: PathBuf,
+}
+
+/// Reads and validates a mission file.
+///
+/// # Errors
+/// A file that cannot be read or parsed (naming the file, and the key for unknown or
+/// missing keys), an invalid value (naming the field), a map or URDF that does not load.
+pub fn load(path: &Path) -> Result<Mission> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let file: MissionFile = toml::from_str(&text).map_err(|e| {
+        // one line: where, then what (toml's own message, without its source excerpt)
+        let at = e.span().map_or_else(String::new, |sp| {
+            let before = &text[..sp.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {col}: ")
+        });
+        Error::parse(path, format!("{at}{}", e.message().trim().replace('\n', "; ")))
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    from_file(file, path, base)
+}
+
+fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
+    Error::parse(path, format!("{field}: {msg}"))
+}
+
+fn finite(path: &Path, field: &str, xs: &[f64]) -> Result<()> {
+    if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
+        return Err(field_err(
+            path,
+            field,
+            format!("entry {i} is not a finite number"),
+        ));
+    }
+    Ok(())
+}
+
+fn positive(path: &Path, field: &str, x: f64) -> Result<()> {
+    if !(x.is_finite() && x > 0.0) {
+        return Err(field_err(
+            path,
+            field,
+            format!("must be a positive finite number, got {x}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Validates a parsed mission file; `base` resolves relative paths.
+///
+/// # Errors
+/// As [`load`].
+pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission> {
+    let l = &file.limits;
+    for (n, x) in [
+        ("limits.v_max", l.v_max),
+        ("limits.omega_max", l.omega_max),
+        ("limits.a_max", l.a_max),
+        ("limits.alpha_max", l.alpha_max),
+        ("limits.mu", l.mu),
+        ("robot.footprint_radius", file.robot.footprint_radius),
+        ("robot.drive.r_w", file.robot.drive.r_w),
+        ("robot.drive.b", file.robot.drive.b),
+        ("goal.position_tolerance", file.goal.position_tolerance),
+        ("goal.heading_tolerance", file.goal.heading_tolerance),
+        (
+            "goal.end_effector_tolerance",
+            file.goal.end_effector_tolerance,
+        ),
+        ("simulation.dt", file.simulation.dt),
+        (
+            "simulation.record_interval",
+            file.simulation.record_interval,
+        ),
+    ] {
+        positive(path, n, x)?;
+    }
+    if !(l.tip_fraction > 0.0 && l.tip_fraction <= 1.0) {
+        return Err(field_err(
+            path,
+            "limits.tip_fraction",
+            format!("must lie in (0, 1], got {}", l.tip_fraction),
+        ));
+    }
+    let c = &file.control;
+    for (n, x) in [
+        ("control.kx", c.kx),
+        ("control.ky", c.ky),
+        ("control.kth", c.kth),
+        ("control.speed_gain", c.speed_gain),
+        ("control.arm_frequency", c.arm_frequency),
+        ("control.task_frequency", c.task_frequency),
+    ] {
+        positive(path, n, x)?;
+    }
+    if file.robot.drive.d != 0.0 {
+        return Err(field_err(
+            path,
+            "robot.drive.d",
+            format!(
+                "the mission tracks the base frame as the unicycle point, so the base frame \
+                 must sit on the driven-axle midpoint (d = 0), got {}",
+                file.robot.drive.d
+            ),
+        ));
+    }
+    finite(path, "start.pose", &file.start.pose)?;
+    finite(path, "goal.pose", &file.goal.pose)?;
+    if let Some(ee) = &file.goal.end_effector {
+        finite(path, "goal.end_effector", ee)?;
+    }
+    if let Some(tl) = file.simulation.time_limit {
+        positive(path, "simulation.time_limit", tl)?;
+        if tl / file.simulation.dt > MAX_STEPS {
+            return Err(field_err(
+                path,
+                "simulation.time_limit",
+                format!(
+                    "{tl} s at dt = {} s is more than {MAX_STEPS:e} steps",
+                    file.simulation.dt
+                ),
+            ));
+        }
+        if tl / file.simulation.record_interval > MAX_SAMPLES {
+            return Err(field_err(
+                path,
+                "simulation.time_limit",
+                format!(
+                    "{tl} s at record_interval = {} s is more than {MAX_SAMPLES:e} samples",
+                    file.simulation.record_interval
+                ),
+            ));
+        }
+    }
+    if file.simulation.record_interval < file.simulation.dt {
+        return Err(field_err(
+            path,
+            "simulation.record_interval",
+            format!(
+                "must be at least simulation.dt = {} s, got {}",
+                file.simulation.dt, file.simulation.record_interval
+            ),
+        ));
+    }
+    if file.simulation.dt > 0.05 {
+        return Err(field_err(
+            path,
+            "simulation.dt",
+            format!(
+                "at most 0.05 s (the control period), got {}",
+                file.simulation.dt
+            ),
+        ));
+    }
+    if file.obstacles.len() > MAX_OBSTACLES {
+        return Err(field_err(
+            path,
+            "obstacles",
+            format!(
+                "at most {MAX_OBSTACLES} obstacles, got {}",
+                file.obstacles.len()
+            ),
+        ));
+    }
+    for (k, o) in file.obstacles.iter().enumerate() {
+        let f = format!("obstacles[{k}]");
+        finite(path, &format!("{f}.center"), &o.center)?;
+        if !(o.t.is_finite() && o.t >= 0.0) {
+            return Err(field_err(
+                path,
+                &format!("{f}.t"),
+                format!("must be a finite time >= 0, got {}", o.t),
+            ));
+        }
+        positive(path, &format!("{f}.radius"), o.radius)?;
+    }
+    for (k, cs) in file.robot.casters.iter().enumerate() {
+        finite(path, &format!("robot.casters[{k}].position"), &cs.position)?;
+    }
+    if let Some(g) = file.robot.gravity {
+        positive(path, "robot.gravity", g)?;
+    }
+
+    // map
+    let map_path = base.join(&file.map.file);
+    if let Some(r) = file.map.resolution {
+        positive(path, "map.resolution", r)?;
+    }
+    let map = crate::planning::load_map(&map_path, file.map.resolution)
+        .map_err(|e| field_err(path, "map.file", e))?;
+    let grid = &map.grid;
+    // A footprint larger than the map itself fits nowhere.
+    let extent = grid.width.max(grid.height) as f64 * grid.resolution;
+    if file.robot.footprint_radius > extent {
+        return Err(field_err(
+            path,
+            "robot.footprint_radius",
+            format!(
+                "{} m is larger than the whole map ({extent} m): it fits nowhere",
+                file.robot.footprint_radius
+            ),
+        ));
+    }
+
+    // robot
+    let urdf_path = base.join(&file.robot.urdf);
+    let mut model = crate::io::urdf::model_from_urdf_file(&urdf_path, RootJoint::Planar)
+        .map_err(|e| field_err(path, "robot.urdf", e))?;
+    model.gravity = nalgebra::Vector3::new(0.0, 0.0, -file.robot.gravity.unwrap_or(9.81));
+    let drive = DiffDrive::new(file.robot.drive.r_w, file.robot.drive.b, file.robot.drive.d)
+        .map_err(|e| field_err(path, "robot.drive", e))?;
+    let wbase = WheeledBase {
+        drive,
+        casters: file
+            .robot
+            .casters
+            .iter()
+            .map(|c| Caster {
+                name: c.name.clone(),
+                position: c.position,
+            })
+            .collect(),
+        wheel_joints: file.robot.wheel_joints.clone(),
+    };
+    let robot = WheeledModel::new(model, wbase).map_err(|e| field_err(path, "robot", e))?;
+    crate::stability::SupportPolygon::from_wheeled_base(&robot.base)
+        .map_err(|e| field_err(path, "robot.casters", format!("support polygon: {e}")))?;
+    let ee_frame = match &file.robot.end_effector {
+        Some(n) => robot
+            .model
+            .frame_id(n)
+            .map_err(|e| field_err(path, "robot.end_effector", e))?,
+        None => robot.model.last_link_frame(),
+    };
+    let na = robot.arm_dofs().len();
+    let check_arm = |field: &str, q: &[f64]| -> Result<()> {
+        if q.len() != na {
+            return Err(field_err(
+                path,
+                field,
+                format!("expected {na} arm joint angles, got {}", q.len()),
+            ));
+        }
+        finite(path, field, q)?;
+        let m = &robot.model;
+        for (k, &i) in robot.arm_dofs().iter().enumerate() {
+            let (lo, hi) = (m.lower_position_limit[i], m.upper_position_limit[i]);
+            if q[k] < lo || q[k] > hi {
+                return Err(field_err(
+                    path,
+                    field,
+                    format!(
+                        "entry {k} ({}) = {} lies outside the joint limits [{lo}, {hi}]",
+                        m.names[m.joint_of_dof[i].0], q[k]
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    };
+    if let Some(q) = &file.robot.transport_posture {
+        check_arm("robot.transport_posture", q)?;
+    }
+    if let Some(q) = &file.start.q_arm {
+        check_arm("start.q_arm", q)?;
+    }
+    let transport = file
+        .robot
+        .transport_posture
+        .clone()
+        .or_else(|| file.start.q_arm.clone())
+        .unwrap_or_else(|| vec![0.0; na]);
+    let q_arm0 = file
+        .start
+        .q_arm
+        .clone()
+        .unwrap_or_else(|| transport.clone());
+    let name = file.name.clone().unwrap_or_else(|| {
+        path.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "mission".into())
+    });
+    let output_dir = base.join(&file.output.dir);
+    Ok(Mission {
+        name,
+        path: path.to_path_buf(),
+        file,
+        map,
+        robot,
+        ee_frame,
+        transport,
+        q_arm0,
+        output_dir,
+    })
+}

@@ -1,0 +1,225 @@
+//! `moma::mission` end to end on the shipped depot map (nav2's, 30 m x 15 m at 5 cm) and
+//! the shipped mobile manipulator: short missions reach their goal, an obstacle on the
+//! path triggers a D* Lite re-plan, a sealed goal and a posture that tips at rest end
+//! with `reached: false` and a reason, runs are deterministic, input errors are errors.
+
+use std::path::{Path, PathBuf};
+
+use moma::mission::{Mission, MissionFile, MissionResult, run, scenario::from_file};
+
+fn scenarios() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
+}
+
+/// A short mission in the open lower-left part of the depot (about 4 m), with `extra`
+/// TOML appended (obstacles, overrides of whole tables).
+fn mission_text(goal: &str, extra: &str) -> String {
+    format!(
+        r#"
+name = "test"
+[map]
+file = "maps/depot.yaml"
+[robot]
+urdf = "robots/mobile_manipulator.urdf"
+drive = {{ r_w = 0.10, b = 0.22, d = 0.0 }}
+wheel_joints = ["left_wheel_joint", "right_wheel_joint"]
+casters = [
+  {{ name = "fl", position = [0.24, 0.16] }},
+  {{ name = "fr", position = [0.24, -0.16] }},
+  {{ name = "rl", position = [-0.24, 0.16] }},
+  {{ name = "rr", position = [-0.24, -0.16] }},
+]
+footprint_radius = 0.38
+end_effector = "tool0"
+transport_posture = [0.0, -0.5, 2.6, 1.04, 0.0, 0.0]
+[start]
+pose = [2.0, 2.0, 0.0]
+{goal}
+[limits]
+v_max = 1.0
+omega_max = 1.0
+a_max = 0.5
+alpha_max = 1.0
+mu = 0.6
+{extra}
+"#
+    )
+}
+
+const GOAL: &str = "[goal]\npose = [5.5, 3.5, 1.5707963]";
+
+fn parse(text: &str) -> moma::Result<Mission> {
+    let file: MissionFile = toml::from_str(text).expect("test mission parses");
+    from_file(file, &scenarios().join("test.toml"), &scenarios())
+}
+
+fn mission(text: &str) -> MissionResult {
+    run(&parse(text).expect("valid mission")).expect("mission runs")
+}
+
+#[test]
+fn short_mission_reaches_its_goal_without_tipping() {
+    let r = mission(&mission_text(GOAL, ""));
+    assert!(r.reached, "{:?}", r.reason);
+    assert!(r.reason.is_none());
+    assert_eq!(r.replans(), 0);
+    let last = r.samples.q.last().unwrap();
+    assert!((last[0] - 5.5).hypot(last[1] - 3.5) < 0.1);
+    assert!((last[2] - 1.5707963).abs() < 0.1);
+    // the ZMP stays inside the support all along, the footprint never touches
+    let zmp = r.min_zmp_margin().unwrap();
+    assert!(zmp > 0.05, "min ZMP margin {zmp}");
+    assert!(r.samples.zmp_margin.iter().all(|z| z.is_some()));
+    assert!(r.min_clearance().unwrap() > 0.0);
+    assert!(r.min_force_angle().unwrap() > 0.0);
+    // the motion really moved: the robot drove the ~4 m at up to v_max
+    let vmax = r.samples.v.iter().copied().fold(0.0, f64::max);
+    assert!(vmax > 0.5 && vmax <= 1.0 + 1e-6, "peak speed {vmax}");
+    // the arm held its transport posture while driving
+    let arm: Vec<usize> = r
+        .arm_names
+        .iter()
+        .map(|n| r.q_names.iter().position(|q| q == n).unwrap())
+        .collect();
+    let posture = [0.0, -0.5, 2.6, 1.04, 0.0, 0.0];
+    for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
+        if *phase == "drive" {
+            for (k, &j) in arm.iter().enumerate() {
+                assert!((q[j] - posture[k]).abs() < 0.02, "joint {k} drifted: {}", q[j]);
+            }
+        }
+    }
+    // the energy balance of the plant: net input work is bounded by the actuator energy
+    assert!(r.input_work.abs() <= r.samples.energy.last().unwrap() + 1e-9);
+}
+
+#[test]
+fn end_effector_reaches_its_target_at_the_goal() {
+    let goal = "[goal]\npose = [5.5, 3.5, 1.5707963]\nend_effector = [5.5, 4.2, 0.9]";
+    let r = mission(&mission_text(goal, ""));
+    assert!(r.reached, "{:?}", r.reason);
+    let ee = r.samples.ee.last().unwrap();
+    let err = ((ee[0] - 5.5).powi(2) + (ee[1] - 4.2).powi(2) + (ee[2] - 0.9).powi(2)).sqrt();
+    assert!(err < 0.02, "end-effector error {err}");
+    assert!(r.samples.phase.contains(&"reach"));
+    assert!(r.events.iter().any(|e| e.kind == "reached"));
+    // the platform held still while the arm reached
+    let reach: Vec<usize> = (0..r.samples.t.len())
+        .filter(|&i| r.samples.phase[i] == "reach")
+        .collect();
+    let q0 = &r.samples.q[reach[0]];
+    let q1 = r.samples.q.last().unwrap();
+    assert!((q0[0] - q1[0]).hypot(q0[1] - q1[1]) < 0.01);
+    assert!(r.min_zmp_margin().unwrap() > 0.0);
+}
+
+#[test]
+fn obstacle_on_the_path_triggers_a_replan_and_the_goal_is_still_reached() {
+    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    let r = mission(&mission_text(GOAL, extra));
+    assert!(r.reached, "{:?}", r.reason);
+    assert_eq!(r.replans(), 1, "{:#?}", r.events);
+    let p = &r.plans[1];
+    assert!((p.t - 1.5).abs() < 1e-9);
+    assert!(p.search.expanded > 0);
+    // the new path keeps the footprint off the obstacle disk
+    for w in &p.path {
+        assert!((w[0] - 4.2).hypot(w[1] - 2.6) > 0.35 + 0.38 - 0.05, "{w:?}");
+    }
+    assert!(r.min_clearance().unwrap() > 0.0);
+    // an obstacle away from the path does not re-plan
+    let far = "[[obstacles]]\nt = 1.5\ncenter = [10.0, 12.0]\nradius = 0.35";
+    let r2 = mission(&mission_text(GOAL, far));
+    assert!(r2.reached);
+    assert_eq!(r2.replans(), 0);
+    assert!(r2.events.iter().any(|e| e.kind == "obstacle"));
+}
+
+#[test]
+fn an_obstacle_that_seals_the_goal_ends_the_mission_with_a_reason() {
+    let extra = "[[obstacles]]\nt = 1.0\ncenter = [5.5, 3.5]\nradius = 0.8";
+    let r = mission(&mission_text(GOAL, extra));
+    assert!(!r.reached);
+    let reason = r.reason.as_deref().unwrap();
+    assert!(reason.contains("seals the goal"), "{reason}");
+    assert!(r.time_to_goal.is_none());
+    assert!(!r.samples.t.is_empty());
+}
+
+#[test]
+fn a_goal_enclosed_by_walls_is_unreachable() {
+    // inside the first shelf block of the depot: free cells, walled in
+    let goal = "[goal]\npose = [15.4, 5.5, 0.0]";
+    let text = mission_text(goal, "").replace("footprint_radius = 0.38", "footprint_radius = 0.2");
+    let r = mission(&text);
+    assert!(!r.reached);
+    assert!(r.reason.unwrap().contains("unreachable"));
+    assert_eq!(r.samples.t.len(), 1);
+}
+
+#[test]
+fn a_posture_that_tips_at_rest_ends_the_mission_with_a_reason() {
+    // casters only behind the axle while the arm's mass sits ahead of it
+    let text = mission_text(GOAL, "").replace(
+        "casters = [\n  { name = \"fl\", position = [0.24, 0.16] },\n  { name = \"fr\", position = [0.24, -0.16] },",
+        "casters = [",
+    );
+    let r = mission(&text);
+    assert!(!r.reached);
+    assert!(r.reason.unwrap().contains("tip"), "{:?}", r.events);
+    assert!(r.tip_limits.forward.is_none());
+}
+
+#[test]
+fn two_runs_give_identical_results() {
+    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    let a = mission(&mission_text(GOAL, extra));
+    let b = mission(&mission_text(GOAL, extra));
+    assert_eq!(a.samples, b.samples);
+    assert_eq!(a.events, b.events);
+    assert_eq!(a.plans.len(), b.plans.len());
+    for (p, q) in a.plans.iter().zip(&b.plans) {
+        assert_eq!(p.cells, q.cells);
+        assert_eq!(p.path, q.path);
+    }
+}
+
+#[test]
+fn input_errors_are_errors() {
+    let err = |text: &str| parse(text).and_then(|m| run(&m).map(|_| ())).unwrap_err().to_string();
+    // goal in an obstacle of the map (the depot's outer wall)
+    let e = err(&mission_text("[goal]\npose = [0.02, 5.0, 0.0]", ""));
+    assert!(e.contains("goal.pose"), "{e}");
+    // goal outside the map
+    let e = err(&mission_text("[goal]\npose = [50.0, 5.0, 0.0]", ""));
+    assert!(e.contains("goal.pose") && e.contains("outside"), "{e}");
+    // start where the footprint does not fit (0.2 m from the wall)
+    let e = err(&mission_text(GOAL, "").replace("pose = [2.0, 2.0, 0.0]", "pose = [0.3, 2.0, 0.0]"));
+    assert!(e.contains("start.pose") && e.contains("does not fit"), "{e}");
+    // a footprint that fits nowhere
+    let e = err(&mission_text(GOAL, "").replace("footprint_radius = 0.38", "footprint_radius = 9.0"));
+    assert!(e.contains("fits nowhere"), "{e}");
+    // wrong arm posture length
+    let e = err(&mission_text(GOAL, "").replace(
+        "transport_posture = [0.0, -0.5, 2.6, 1.04, 0.0, 0.0]",
+        "transport_posture = [0.0, 1.0]",
+    ));
+    assert!(e.contains("robot.transport_posture") && e.contains("expected 6"), "{e}");
+    // bad limits
+    let e = err(&mission_text(GOAL, "").replace("v_max = 1.0", "v_max = -1.0"));
+    assert!(e.contains("limits.v_max"), "{e}");
+    let e = err(&mission_text(GOAL, "[[obstacles]]\nt = -1.0\ncenter = [1.0, 1.0]\nradius = 0.2"));
+    assert!(e.contains("obstacles[0].t"), "{e}");
+}
+
+#[test]
+fn unknown_keys_name_the_key_and_the_file() {
+    let dir = std::env::temp_dir().join(format!("moma-mission-keys-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("bad.toml");
+    let text = mission_text(GOAL, "").replace("mu = 0.6", "mu = 0.6\nv_maxx = 2.0");
+    std::fs::write(&path, text).unwrap();
+    let e = moma::mission::load(&path).unwrap_err().to_string();
+    assert!(e.contains("bad.toml") && e.contains("v_maxx"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
