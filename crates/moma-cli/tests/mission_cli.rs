@@ -44,7 +44,11 @@ fn default_mission_runs_without_an_argument_and_reaches_its_goal() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert!(run.stdout.is_empty());
     for f in OUTPUTS {
         assert!(out.join(f).is_file(), "missing {f}");
@@ -67,7 +71,12 @@ fn default_mission_runs_without_an_argument_and_reaches_its_goal() {
     ] {
         assert!(s[k].is_number(), "{k}: {}", s[k]);
     }
-    for k in ["planning_s", "smoothing_timing_s", "simulation_s", "report_s"] {
+    for k in [
+        "planning_s",
+        "smoothing_timing_s",
+        "simulation_s",
+        "report_s",
+    ] {
         assert!(s["wall_time"][k].is_number(), "{k}");
     }
     let rp = &s["replan_timing"][0];
@@ -75,10 +84,21 @@ fn default_mission_runs_without_an_argument_and_reaches_its_goal() {
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     let header = csv.lines().next().unwrap();
     assert!(header.starts_with("t,x,y,theta,v,omega,"), "{header}");
-    for col in ["zmp_margin", "clearance", "q_shoulder_lift_joint", "u_left_wheel_joint"] {
-        assert!(header.split(',').any(|c| c == col), "no column {col}: {header}");
+    for col in [
+        "zmp_margin",
+        "clearance",
+        "q_shoulder_lift_joint",
+        "u_left_wheel_joint",
+    ] {
+        assert!(
+            header.split(',').any(|c| c == col),
+            "no column {col}: {header}"
+        );
     }
-    assert_eq!(csv.lines().count() as u64, s["samples"].as_u64().unwrap() + 1);
+    assert_eq!(
+        csv.lines().count() as u64,
+        s["samples"].as_u64().unwrap() + 1
+    );
     // a rerun replaces the folder as a whole
     std::fs::write(out.join("stale.txt"), "old").unwrap();
     let again = moma()
@@ -102,7 +122,12 @@ fn sealed_goal_writes_everything_and_exits_3() {
         .arg(scenarios().join("mission_sealed.toml"))
         .output()
         .unwrap();
-    assert_eq!(run.status.code(), Some(3), "{}", String::from_utf8_lossy(&run.stderr));
+    assert_eq!(
+        run.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     for f in OUTPUTS {
         assert!(out.join(f).is_file(), "missing {f}");
     }
@@ -119,16 +144,38 @@ fn input_errors_exit_1_with_no_output() {
     let work = temp_dir("errors");
     let text = std::fs::read_to_string(scenarios().join("mission.toml")).unwrap();
     let text = text
-        .replace("maps/depot.yaml", &scenarios().join("maps/depot.yaml").display().to_string())
+        .replace(
+            "maps/depot.yaml",
+            &scenarios().join("maps/depot.yaml").display().to_string(),
+        )
         .replace(
             "robots/mobile_manipulator.urdf",
-            &scenarios().join("robots/mobile_manipulator.urdf").display().to_string(),
+            &scenarios()
+                .join("robots/mobile_manipulator.urdf")
+                .display()
+                .to_string(),
         );
     let cases = [
-        ("goal_in_wall", text.replace("pose = [18.35, 7.3, -1.5707963]", "pose = [0.02, 7.3, 0.0]"), "goal.pose"),
-        ("goal_outside", text.replace("pose = [18.35, 7.3, -1.5707963]", "pose = [99.0, 7.3, 0.0]"), "outside"),
-        ("huge_footprint", text.replace("footprint_radius = 0.38", "footprint_radius = 8.0"), "fits nowhere"),
-        ("unknown_key", text.replace("mu = 0.6", "mu = 0.6\nspeed = 3"), "speed"),
+        (
+            "goal_in_wall",
+            text.replace("pose = [18.35, 7.3, -1.5707963]", "pose = [0.02, 7.3, 0.0]"),
+            "goal.pose",
+        ),
+        (
+            "goal_outside",
+            text.replace("pose = [18.35, 7.3, -1.5707963]", "pose = [99.0, 7.3, 0.0]"),
+            "outside",
+        ),
+        (
+            "huge_footprint",
+            text.replace("footprint_radius = 0.38", "footprint_radius = 8.0"),
+            "fits nowhere",
+        ),
+        (
+            "unknown_key",
+            text.replace("mu = 0.6", "mu = 0.6\nspeed = 3"),
+            "speed",
+        ),
         ("malformed", text.replace("[limits]", "[limits"), "bad.toml"),
     ];
     for (tag, body, needle) in cases {

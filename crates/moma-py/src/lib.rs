@@ -21,6 +21,7 @@ mod analysis;
 mod dynamics;
 mod model;
 mod planning;
+mod sweep;
 
 create_exception!(
     moma,
@@ -90,5 +91,6 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     dynamics::register(m)?;
     analysis::register(m)?;
     planning::register(m)?;
+    sweep::register(m)?;
     Ok(())
 }

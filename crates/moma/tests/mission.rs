@@ -85,7 +85,11 @@ fn short_mission_reaches_its_goal_without_tipping() {
     for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
         if *phase == "drive" {
             for (k, &j) in arm.iter().enumerate() {
-                assert!((q[j] - posture[k]).abs() < 0.02, "joint {k} drifted: {}", q[j]);
+                assert!(
+                    (q[j] - posture[k]).abs() < 0.02,
+                    "joint {k} drifted: {}",
+                    q[j]
+                );
             }
         }
     }
@@ -186,7 +190,12 @@ fn two_runs_give_identical_results() {
 
 #[test]
 fn input_errors_are_errors() {
-    let err = |text: &str| parse(text).and_then(|m| run(&m).map(|_| ())).unwrap_err().to_string();
+    let err = |text: &str| {
+        parse(text)
+            .and_then(|m| run(&m).map(|_| ()))
+            .unwrap_err()
+            .to_string()
+    };
     // goal in an obstacle of the map (the depot's outer wall)
     let e = err(&mission_text("[goal]\npose = [0.02, 5.0, 0.0]", ""));
     assert!(e.contains("goal.pose"), "{e}");
@@ -194,21 +203,32 @@ fn input_errors_are_errors() {
     let e = err(&mission_text("[goal]\npose = [50.0, 5.0, 0.0]", ""));
     assert!(e.contains("goal.pose") && e.contains("outside"), "{e}");
     // start where the footprint does not fit (0.2 m from the wall)
-    let e = err(&mission_text(GOAL, "").replace("pose = [2.0, 2.0, 0.0]", "pose = [0.3, 2.0, 0.0]"));
-    assert!(e.contains("start.pose") && e.contains("does not fit"), "{e}");
+    let e =
+        err(&mission_text(GOAL, "").replace("pose = [2.0, 2.0, 0.0]", "pose = [0.3, 2.0, 0.0]"));
+    assert!(
+        e.contains("start.pose") && e.contains("does not fit"),
+        "{e}"
+    );
     // a footprint that fits nowhere
-    let e = err(&mission_text(GOAL, "").replace("footprint_radius = 0.38", "footprint_radius = 9.0"));
+    let e =
+        err(&mission_text(GOAL, "").replace("footprint_radius = 0.38", "footprint_radius = 9.0"));
     assert!(e.contains("fits nowhere"), "{e}");
     // wrong arm posture length
     let e = err(&mission_text(GOAL, "").replace(
         "transport_posture = [0.0, -0.5, 2.6, 1.04, 0.0, 0.0]",
         "transport_posture = [0.0, 1.0]",
     ));
-    assert!(e.contains("robot.transport_posture") && e.contains("expected 6"), "{e}");
+    assert!(
+        e.contains("robot.transport_posture") && e.contains("expected 6"),
+        "{e}"
+    );
     // bad limits
     let e = err(&mission_text(GOAL, "").replace("v_max = 1.0", "v_max = -1.0"));
     assert!(e.contains("limits.v_max"), "{e}");
-    let e = err(&mission_text(GOAL, "[[obstacles]]\nt = -1.0\ncenter = [1.0, 1.0]\nradius = 0.2"));
+    let e = err(&mission_text(
+        GOAL,
+        "[[obstacles]]\nt = -1.0\ncenter = [1.0, 1.0]\nradius = 0.2",
+    ));
     assert!(e.contains("obstacles[0].t"), "{e}");
 }
 

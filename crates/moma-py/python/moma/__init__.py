@@ -12,6 +12,8 @@ from ._moma import (
     Map,
     Model,
     MomaError,
+    Sweep,
+    Table,
     __version__,
     aba,
     aba_batch,
@@ -24,16 +26,20 @@ from ._moma import (
     plan,
     rnea,
     rnea_batch,
+    run_mission,
     space,
     stability,
     stability_batch,
 )
+from . import sweep
 
 __all__ = [
     "Data",
     "Map",
     "Model",
     "MomaError",
+    "Sweep",
+    "Table",
     "__version__",
     "aba",
     "aba_batch",
@@ -46,7 +52,9 @@ __all__ = [
     "plan",
     "rnea",
     "rnea_batch",
+    "run_mission",
     "space",
     "stability",
     "stability_batch",
+    "sweep",
 ]

@@ -304,7 +304,10 @@ pub fn load(path: &Path) -> Result<Mission> {
             let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
             format!("line {line}, column {col}: ")
         });
-        Error::parse(path, format!("{at}{}", e.message().trim().replace('\n', "; ")))
+        Error::parse(
+            path,
+            format!("{at}{}", e.message().trim().replace('\n', "; ")),
+        )
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
     from_file(file, path, base)
