@@ -19,6 +19,7 @@ use pyo3::{IntoPyObjectExt, create_exception};
 
 mod analysis;
 mod dynamics;
+mod layout;
 mod model;
 mod planning;
 mod sweep;
@@ -89,6 +90,7 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     model::register(m)?;
     dynamics::register(m)?;
+    layout::register(m)?;
     analysis::register(m)?;
     planning::register(m)?;
     sweep::register(m)?;

@@ -128,3 +128,39 @@ def test_error_messages():
     with pytest.raises(moma.MomaError, match="rnea"):
         moma.rnea(ff, ff.create_data(), q, np.zeros(ff.nv), np.zeros(ff.nv))
     assert issubclass(moma.MomaError, Exception)
+
+
+@pytest.mark.parametrize("name", ["tiago_planar.json", "panda_planar.json"])
+def test_pinocchio_layout_on_planar_dumps(name):
+    """Pinocchio's states fed as they are: converted in, computed, converted out."""
+    ref = load_json(DATA / "pinocchio" / name)
+    model = model_of(ref)
+    data = model.create_data()
+    assert model.nv == ref["nv"]
+    for s in ref["states"]:
+        st = moma.from_pinocchio(model, s["q"], s["v"], s["a"], s["tau_in"])
+        assert st["q"].shape == (model.nq,)
+        tau = moma.rnea(model, data, st["q"], st["v"], st["a"])
+        back = moma.to_pinocchio(model, st["q"], st["v"], st["a"], tau)
+        np.testing.assert_allclose(back["tau"], s["rnea_tau"], rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(back["q"], s["q"], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(back["v"], s["v"], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(back["a"], s["a"], rtol=0, atol=1e-12)
+        ddq = moma.aba(model, data, st["q"], st["v"], st["tau"])
+        pin_ddq = moma.to_pinocchio(model, st["q"], st["v"], ddq)["a"]
+        np.testing.assert_allclose(pin_ddq, s["aba_ddq"], rtol=1e-8, atol=1e-8)
+
+
+def test_pinocchio_layout_errors():
+    model = moma.Model.from_urdf(URDF / "tiago.urdf", root="planar")
+    q = model.neutral()
+    with pytest.raises(moma.MomaError, match="converting a needs v"):
+        moma.to_pinocchio(model, q, a=np.zeros(model.nv))
+    qp = moma.to_pinocchio(model, q)["q"]
+    assert len(qp) > model.nq
+    bad = qp.copy()
+    bad[2] = 3.0
+    with pytest.raises(moma.MomaError, match="^from_pinocchio: "):
+        moma.from_pinocchio(model, bad)
+    with pytest.raises(moma.MomaError, match=r"^from_pinocchio: .*expected length"):
+        moma.from_pinocchio(model, qp[:-1])

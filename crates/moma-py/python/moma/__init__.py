@@ -21,6 +21,7 @@ from ._moma import (
     crba_batch,
     frame_jacobian,
     frame_jacobian_batch,
+    from_pinocchio,
     load_map,
     osc,
     plan,
@@ -30,6 +31,7 @@ from ._moma import (
     space,
     stability,
     stability_batch,
+    to_pinocchio,
 )
 from . import sweep
 
@@ -47,6 +49,7 @@ __all__ = [
     "crba_batch",
     "frame_jacobian",
     "frame_jacobian_batch",
+    "from_pinocchio",
     "load_map",
     "osc",
     "plan",
@@ -57,4 +60,5 @@ __all__ = [
     "stability",
     "stability_batch",
     "sweep",
+    "to_pinocchio",
 ]

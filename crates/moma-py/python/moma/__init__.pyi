@@ -190,3 +190,21 @@ class Sweep:
 
 def run_mission(path: Path) -> dict[str, Any]:
     """Runs a mission file end to end; the summary dict (no files written)."""
+
+def to_pinocchio(
+    model: Model,
+    q: ArrayLike,
+    v: Optional[ArrayLike] = None,
+    a: Optional[ArrayLike] = None,
+    tau: Optional[ArrayLike] = None,
+) -> dict[str, F64]:
+    """moma's q (and v, a, tau) in Pinocchio's layout; a needs v."""
+
+def from_pinocchio(
+    model: Model,
+    q: ArrayLike,
+    v: Optional[ArrayLike] = None,
+    a: Optional[ArrayLike] = None,
+    tau: Optional[ArrayLike] = None,
+) -> dict[str, F64]:
+    """A Pinocchio q (and v, a, tau) in moma's layout; a needs v."""
