@@ -1,6 +1,6 @@
 """Sweeps from Python: ``moma.sweep.run(path, backend="local" | "ray", ...)``.
 
-A sweep file (the TOML of ``moma sweep``, see docs/sweep.md) defines a grid or a seeded
+A sweep file (the TOML of ``moma sweep``; examples in scenarios/sweeps/) defines a grid or a seeded
 random sample of the parameters of a stability or placement study. Every point is
 evaluated by the Rust evaluator; the results table has one row per point, sorted by
 index, and its columns other than the ``*_time_s`` timings are identical whatever the
