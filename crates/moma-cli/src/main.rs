@@ -9,6 +9,7 @@
 #[macro_use]
 mod output;
 mod cmd;
+mod report;
 mod svg_heatmap;
 mod svg_map;
 mod svg_plots;
@@ -58,6 +59,9 @@ enum Command {
     Osc(cmd::osc::Args),
     /// Free-floating (space) robot: base motion from joint rates, generalized Jacobian and inertia.
     Space(cmd::space::Args),
+    /// Render a mission's report.html and SVG figures from a saved MissionReport (JSON).
+    #[command(hide = true)]
+    RenderReport(cmd::render_report::Args),
     /// Sweep a stability or placement study over a grid or a seeded random sample (or
     /// one shard of it) into one CSV table; `moma sweep merge` joins shard tables.
     Sweep(cmd::sweep::Args),
@@ -82,6 +86,7 @@ fn main() {
         Command::Stability(a) => cmd::stability::run(a),
         Command::StabilityMap(a) => cmd::stability_map::run(a),
         Command::Space(a) => cmd::space::run(a),
+        Command::RenderReport(a) => cmd::render_report::run(a),
         Command::Sweep(a) => cmd::sweep::run(a),
     };
     if let Err(e) = result {

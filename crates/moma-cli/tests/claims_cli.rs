@@ -73,6 +73,7 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         "bench",
         "eval",
         "simulate",
+        "mission",
         "manipulability",
         "ik",
         "reach-map",
@@ -134,6 +135,7 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         "unicycle.json",
         "osc.json",
         "simulation-output/default/summary.json",
+        "mission-output/summary.json",
     ] {
         assert!(root.join(f).is_file(), "README example did not write {f}");
     }

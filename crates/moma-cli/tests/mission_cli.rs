@@ -28,9 +28,11 @@ const OUTPUTS: &[&str] = &[
     "summary.json",
     "trajectory.csv",
     "events.json",
+    "report.html",
     "top_view.svg",
-    "speeds.svg",
-    "margins.svg",
+    "speed.svg",
+    "zmp_margin.svg",
+    "torques.svg",
 ];
 
 #[test]
@@ -83,12 +85,15 @@ fn default_mission_runs_without_an_argument_and_reaches_its_goal() {
     assert!(rp["dstar_lite_ms"].is_number() && rp["smoothing_timing_ms"].is_number());
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     let header = csv.lines().next().unwrap();
-    assert!(header.starts_with("t,x,y,theta,v,omega,"), "{header}");
+    assert!(
+        header.starts_with("t [s],x [m],y [m],theta [rad],v [m/s],omega [rad/s],"),
+        "{header}"
+    );
     for col in [
-        "zmp_margin",
-        "clearance",
-        "q_shoulder_lift_joint",
-        "u_left_wheel_joint",
+        "zmp_margin [m]",
+        "clearance [m]",
+        "q_shoulder_lift_joint [rad]",
+        "tau_left [N m]",
     ] {
         assert!(
             header.split(',').any(|c| c == col),

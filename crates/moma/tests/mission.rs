@@ -65,7 +65,7 @@ fn short_mission_reaches_its_goal_without_tipping() {
     assert_eq!(r.replans(), 0);
     let last = r.samples.q.last().unwrap();
     assert!((last[0] - 5.5).hypot(last[1] - 3.5) < 0.1);
-    assert!((last[2] - 1.5707963).abs() < 0.1);
+    assert!((last[2] - std::f64::consts::FRAC_PI_2).abs() < 0.1);
     // the ZMP stays inside the support all along, the footprint never touches
     let zmp = r.min_zmp_margin().unwrap();
     assert!(zmp > 0.05, "min ZMP margin {zmp}");
@@ -74,7 +74,7 @@ fn short_mission_reaches_its_goal_without_tipping() {
     assert!(r.min_force_angle().unwrap() > 0.0);
     // the motion really moved: the robot drove the ~4 m at up to v_max
     let vmax = r.samples.v.iter().copied().fold(0.0, f64::max);
-    assert!(vmax > 0.5 && vmax <= 1.0 + 1e-6, "peak speed {vmax}");
+    assert!(vmax > 0.5 && vmax <= 1.01, "peak speed {vmax}");
     // the arm held its transport posture while driving
     let arm: Vec<usize> = r
         .arm_names
@@ -146,14 +146,15 @@ fn an_obstacle_that_seals_the_goal_ends_the_mission_with_a_reason() {
     assert!(!r.reached);
     let reason = r.reason.as_deref().unwrap();
     assert!(reason.contains("seals the goal"), "{reason}");
+    assert_eq!(r.replans(), 0);
     assert!(r.time_to_goal.is_none());
     assert!(!r.samples.t.is_empty());
 }
 
 #[test]
 fn a_goal_enclosed_by_walls_is_unreachable() {
-    // inside the first shelf block of the depot: free cells, walled in
-    let goal = "[goal]\npose = [15.4, 5.5, 0.0]";
+    // inside a shelf block of the depot: free cells (0.3 m from any occupied one), walled in
+    let goal = "[goal]\npose = [23.725, 3.175, 0.0]";
     let text = mission_text(goal, "").replace("footprint_radius = 0.38", "footprint_radius = 0.2");
     let r = mission(&text);
     assert!(!r.reached);

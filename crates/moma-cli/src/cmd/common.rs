@@ -7,7 +7,6 @@ use moma::ik::model::ModelFrame;
 use moma::ik::tasks::TaskRows;
 use moma::mobile::DiffDrive;
 use moma::multibody::{Model, RootJoint};
-use serde_json::Value;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -43,131 +42,191 @@ pub fn load_model(path: &Path, root: RootJoint) -> Result<Model> {
     Ok(moma::io::urdf::model_from_urdf_file(path, root)?)
 }
 
-/// One state of a states file: `q` and whichever of `v`, `a`, `tau`, `u` it gives.
-#[derive(Debug, Clone, Default)]
-pub struct State {
-    /// Configuration (nq).
-    pub q: Vec<f64>,
-    /// Velocity (nv), if given.
-    pub v: Option<Vec<f64>>,
-    /// Acceleration (nv), if given.
-    pub a: Option<Vec<f64>>,
-    /// Generalised force (nv), if given.
-    pub tau: Option<Vec<f64>>,
-    /// Whole-body inputs, if given.
-    pub u: Option<Vec<f64>>,
-    /// The other fields the command allowed (e.g. `stability`'s `external`), as given.
-    pub extra: serde_json::Map<String, Value>,
-}
+pub use moma::io::states::State;
 
-const NUMBER_FIELDS: [&str; 5] = ["q", "v", "a", "tau", "u"];
-
-/// Largest number of states a states file may hold (checked before they are parsed).
-pub const MAX_STATES: usize = 1_000_000;
-
-/// The JSON array `v` as numbers; errors name the file and `field[i]`.
-pub fn number_array(v: &Value, field: &str, path: &Path) -> Result<Vec<f64>> {
-    let arr = v
-        .as_array()
-        .ok_or_else(|| anyhow!("{}: {field}: expected an array of numbers", path.display()))?;
-    arr.iter()
-        .enumerate()
-        .map(|(i, x)| {
-            x.as_f64().ok_or_else(|| {
-                anyhow!(
-                    "{}: {field}[{i}]: expected a number, got {x}",
-                    path.display()
-                )
-            })
-        })
-        .collect()
-}
-
-fn parse_state(s: &Value, i: usize, path: &Path, allowed: &[&str]) -> Result<State> {
-    let o = match s {
-        Value::Array(_) => {
-            return Ok(State {
-                q: number_array(s, &format!("states[{i}]"), path)?,
-                ..State::default()
-            });
-        }
-        Value::Object(o) => o,
-        _ => bail!(
-            "{}: states[{i}]: expected an object with \"q\" or an array of numbers",
-            path.display()
-        ),
-    };
-    for key in o.keys() {
-        if !allowed.contains(&key.as_str()) {
-            bail!(
-                "{}: states[{i}].{key}: unknown field (this command reads {})",
-                path.display(),
-                allowed.join(", ")
-            );
-        }
-    }
-    let get = |name: &str| -> Result<Option<Vec<f64>>> {
-        o.get(name)
-            .map(|x| number_array(x, &format!("states[{i}].{name}"), path))
-            .transpose()
-    };
-    let q =
-        get("q")?.ok_or_else(|| anyhow!("{}: states[{i}]: missing field \"q\"", path.display()))?;
-    let extra = o
-        .iter()
-        .filter(|(k, _)| !NUMBER_FIELDS.contains(&k.as_str()))
-        .map(|(k, v)| (k.clone(), v.clone()))
-        .collect();
-    Ok(State {
-        q,
-        v: get("v")?,
-        a: get("a")?,
-        tau: get("tau")?,
-        u: get("u")?,
-        extra,
-    })
-}
-
-/// Reads a states file: `{"states": [STATE, ...]}` or a bare `[STATE, ...]`, where a STATE
-/// is an object `{"q": [..], ...}` or a bare q array. `allowed` lists the fields the
-/// command reads: number arrays among `q, v, a, tau, u`, any other name is handed over
-/// raw in [`State::extra`]; a field not allowed is an error naming it, so no input is
-/// silently ignored. The list must hold 1 to [`MAX_STATES`] states. Lengths and
-/// finiteness are checked by the caller against its model.
+/// Reads a states file and parses it with [`moma::io::states::parse_states`] (schema,
+/// `allowed` fields and bounds documented there); errors name the file and the field.
 pub fn read_states(path: &Path, allowed: &[&str]) -> Result<Vec<State>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    let doc: Value = serde_json::from_str(&text).map_err(|e| {
-        anyhow!(
-            "{}: invalid states file: invalid JSON (expected {{\"states\": [{{\"q\": [..], ...}}]}}): {e}",
-            path.display()
-        )
-    })?;
-    let list = match &doc {
-        Value::Array(a) => a,
-        Value::Object(o) => {
-            if let Some(k) = o.keys().find(|k| *k != "states") {
-                bail!(
-                    "{}: {k}: unknown field (expected only \"states\")",
-                    path.display()
-                );
-            }
-            o.get("states")
-                .and_then(|s| s.as_array())
-                .ok_or_else(|| anyhow!("{}: expected a \"states\" array", path.display()))?
+    Ok(moma::io::states::parse_states(&text, path, allowed)?)
+}
+
+/// Reads the text of a states file (the error names the file).
+pub fn read_states_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read states file", path.display()))
+}
+
+/// The state layout of a command's inputs and outputs (`--layout`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Layout {
+    /// moma's: planar root `[x, y, θ]` with world-axes velocity, continuous joints as one
+    /// angle.
+    #[default]
+    Moma,
+    /// Pinocchio's: planar root `[x, y, cos θ, sin θ]` with base-frame velocity,
+    /// continuous joints as `[cos θ, sin θ]` (see `moma::io::pinocchio_layout`).
+    Pinocchio,
+}
+
+/// The conversions of one command run between `--layout` and moma's layout (the identity
+/// for `--layout moma`).
+pub struct LayoutConv {
+    map: Option<moma::io::pinocchio_layout::PinocchioLayout>,
+    nq: usize,
+    nv: usize,
+    planar: bool,
+}
+
+impl LayoutConv {
+    /// The conversions for `model` in `layout`.
+    pub fn new(model: &Model, layout: Layout) -> Self {
+        Self {
+            map: (layout == Layout::Pinocchio)
+                .then(|| moma::io::pinocchio_layout::PinocchioLayout::new(model)),
+            nq: model.nq,
+            nv: model.nv,
+            planar: model
+                .joint_types
+                .iter()
+                .any(|j| matches!(j, moma::multibody::JointType::Planar)),
         }
-        _ => bail!("{}: expected a JSON object or array", path.display()),
-    };
-    if list.is_empty() {
-        bail!("{}: 'states' is empty", path.display());
     }
-    if list.len() > MAX_STATES {
-        bail!("{}: states: more than {MAX_STATES} states", path.display());
+
+    /// True for `--layout pinocchio` on a model with a planar root (where velocities,
+    /// forces and matrices change, not only q).
+    pub fn moves_velocities(&self) -> bool {
+        self.map.is_some() && self.planar
     }
-    list.iter()
-        .enumerate()
-        .map(|(i, s)| parse_state(s, i, path, allowed))
-        .collect()
+
+    /// moma's q from a q in the command's layout; `field` names it in errors. A q of the
+    /// wrong length is passed through for the command's own length check.
+    pub fn q_in(&self, q: Vec<f64>, field: &str) -> Result<Vec<f64>> {
+        match &self.map {
+            None => Ok(q),
+            Some(m) => {
+                if q.len() != m.nq() {
+                    bail!(
+                        "{field}: expected length {} (nq in the Pinocchio layout), got {}",
+                        m.nq(),
+                        q.len()
+                    );
+                }
+                let mut out = vec![0.0; self.nq];
+                m.q_from_pinocchio(&q, &mut out)
+                    .map_err(|e| anyhow!("{field}: {e}"))?;
+                Ok(out)
+            }
+        }
+    }
+
+    /// moma's velocity (or generalised force) from one in the command's layout at moma's
+    /// `q`; a vector of the wrong length is passed through for the command's length check.
+    pub fn v_in(&self, q: &[f64], x: Vec<f64>) -> Vec<f64> {
+        match &self.map {
+            Some(m) if x.len() == self.nv && q.len() == self.nq => {
+                let mut out = vec![0.0; self.nv];
+                m.v_from_pinocchio(q, &x, &mut out);
+                out
+            }
+            _ => x,
+        }
+    }
+
+    /// moma's acceleration from one in the command's layout at moma's `q` and `v` (zero
+    /// when not given).
+    pub fn a_in(&self, q: &[f64], v: Option<&[f64]>, a: Vec<f64>) -> Vec<f64> {
+        match &self.map {
+            Some(m) if a.len() == self.nv && q.len() == self.nq => {
+                let zero = vec![0.0; self.nv];
+                let v = v.filter(|v| v.len() == self.nv).unwrap_or(&zero);
+                let mut out = vec![0.0; self.nv];
+                m.a_from_pinocchio(q, v, &a, &mut out);
+                out
+            }
+            _ => a,
+        }
+    }
+
+    /// Converts one states-file state (q, v, a, tau) into moma's layout; `field` names it.
+    pub fn state_in(&self, st: &mut State, field: &str) -> Result<()> {
+        if self.map.is_none() {
+            return Ok(());
+        }
+        st.q = self.q_in(std::mem::take(&mut st.q), &format!("{field}.q"))?;
+        let q = st.q.clone();
+        st.v = st.v.take().map(|v| self.v_in(&q, v));
+        st.a = st.a.take().map(|a| self.a_in(&q, st.v.as_deref(), a));
+        st.tau = st.tau.take().map(|t| self.v_in(&q, t));
+        Ok(())
+    }
+
+    /// A moma q in the command's layout.
+    pub fn q_out(&self, q: &[f64]) -> Vec<f64> {
+        match &self.map {
+            None => q.to_vec(),
+            Some(m) => {
+                let mut out = vec![0.0; m.nq()];
+                m.q_to_pinocchio(q, &mut out);
+                out
+            }
+        }
+    }
+
+    /// A moma velocity or generalised force at moma's `q` in the command's layout.
+    pub fn v_out(&self, q: &[f64], x: &[f64]) -> Vec<f64> {
+        match &self.map {
+            None => x.to_vec(),
+            Some(m) => {
+                let mut out = vec![0.0; self.nv];
+                m.v_to_pinocchio(q, x, &mut out);
+                out
+            }
+        }
+    }
+
+    /// A moma acceleration at moma's `(q, v)` in the command's layout.
+    pub fn a_out(&self, q: &[f64], v: &[f64], a: &[f64]) -> Vec<f64> {
+        match &self.map {
+            None => a.to_vec(),
+            Some(m) => {
+                let mut out = vec![0.0; self.nv];
+                m.a_to_pinocchio(q, v, a, &mut out);
+                out
+            }
+        }
+    }
+
+    /// The acceleration (moma layout) that is zero in the command's layout at `(q, v)`:
+    /// RNEA there gives the layout's bias forces.
+    pub fn zero_acceleration(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
+        self.a_in(q, Some(v), vec![0.0; self.nv])
+    }
+
+    /// An nv × nv velocity-to-force matrix (the mass matrix) in the command's layout.
+    pub fn matrix_out(&self, q: &[f64], h: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+        match &self.map {
+            None => h.clone(),
+            Some(m) => {
+                let mut out = nalgebra::DMatrix::zeros(self.nv, self.nv);
+                m.matrix_to_pinocchio(q, h, &mut out);
+                out
+            }
+        }
+    }
+
+    /// A Jacobian (any rows, nv columns) in the command's layout.
+    pub fn jacobian_out(&self, q: &[f64], j: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+        match &self.map {
+            None => j.clone(),
+            Some(m) => {
+                let mut out = nalgebra::DMatrix::zeros(j.nrows(), self.nv);
+                m.jacobian_to_pinocchio(q, j, &mut out);
+                out
+            }
+        }
+    }
 }
 
 /// Parses a comma-separated list of finite numbers for option `field`.
@@ -249,40 +308,14 @@ mod tests {
     }
 
     #[test]
-    fn states_in_every_accepted_shape() {
-        let p = write(
-            "ok.json",
-            r#"{"states": [{"q": [1, 2], "v": [3, 4]}, [5, 6]]}"#,
-        );
-        let s = read_states(&p, &["q", "v"]).unwrap();
-        assert_eq!(s[0].q, [1.0, 2.0]);
-        assert_eq!(s[0].v.as_deref(), Some(&[3.0, 4.0][..]));
-        assert_eq!(s[1].q, [5.0, 6.0]);
-        assert!(s[1].v.is_none());
-        let p = write("bare.json", r#"[[0.5]]"#);
-        assert_eq!(read_states(&p, &["q"]).unwrap()[0].q, [0.5]);
-    }
-
-    #[test]
-    fn states_errors_name_the_field() {
-        let cases = [
-            (
-                r#"{"states": [{"q": [1], "u": [2]}]}"#,
-                "states[0].u: unknown field",
-            ),
-            (r#"{"states": [{"v": [1]}]}"#, "missing field \"q\""),
-            (r#"{"states": [{"q": [1, "x"]}]}"#, "states[0].q[1]"),
-            (r#"{"states": []}"#, "'states' is empty"),
-            (r#"{"state": []}"#, "state: unknown field"),
-            (r#"{"states": [1]}"#, "states[0]: expected an object"),
-            ("{", "invalid states file"),
-        ];
-        for (k, (text, needle)) in cases.iter().enumerate() {
-            let p = write(&format!("bad{k}.json"), text);
-            let e = format!("{:#}", read_states(&p, &["q", "v"]).unwrap_err());
-            assert!(e.contains(needle), "{text}: {e}");
-            assert!(e.contains(&p.display().to_string()), "{e}");
-        }
+    fn states_errors_name_the_file() {
+        let p = write("bad.json", r#"{"states": [{"q": [1], "u": [2]}]}"#);
+        let e = format!("{:#}", read_states(&p, &["q", "v"]).unwrap_err());
+        assert!(e.contains("states[0].u: unknown field"), "{e}");
+        assert!(e.contains(&p.display().to_string()), "{e}");
+        let missing = p.with_file_name("absent.json");
+        let e = format!("{:#}", read_states(&missing, &["q"]).unwrap_err());
+        assert!(e.contains("cannot read states file"), "{e}");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! CoM, centroidal map and one frame's placement and Jacobian for each state. Schema:
 //! `docs/cli.md`.
 
-use super::common::{State, load_model, parse_root, read_states};
+use super::common::{Layout, LayoutConv, State, load_model, parse_root, read_states};
 use anyhow::{Context, Result, bail};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
@@ -32,6 +32,11 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long)]
     pub output: Option<PathBuf>,
+    /// State layout of the states file and of the outputs: moma (planar root [x, y, θ],
+    /// world-axes velocity; continuous joints as one angle) or pinocchio ([x, y, cos θ,
+    /// sin θ], base-frame velocity; continuous joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = Layout::Moma)]
+    pub layout: Layout,
 }
 
 fn parse_gravity(s: &str) -> Result<Vector3<f64>, String> {
@@ -81,16 +86,13 @@ struct Output {
     root: String,
     nq: usize,
     nv: usize,
+    layout: &'static str,
     gravity: [f64; 3],
     frame: String,
     states: Vec<StateOut>,
 }
 
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    m.row_iter().map(|r| r.iter().copied().collect()).collect()
-}
-
-fn rows6(m: &Matrix6xX<f64>) -> Vec<Vec<f64>> {
     m.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
@@ -106,22 +108,31 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("{}: --frame", args.urdf.display()))?,
         None => model.last_link_frame(),
     };
-    let states = read_states(&args.states, &["q", "v", "a", "tau"])?;
+    let mut states = read_states(&args.states, &["q", "v", "a", "tau"])?;
+    let conv = LayoutConv::new(&model, args.layout);
     let mut data = Data::new(&model);
     let out_states = states
-        .iter()
+        .iter_mut()
         .enumerate()
         .map(|(k, s)| {
             let src = format!("{}: states[{k}]", args.states.display());
-            evaluate_state(&model, &mut data, fid, s, &src)
+            conv.state_in(s, &src)?;
+            evaluate_state(&model, &mut data, fid, s, &src, &conv)
         })
         .collect::<Result<Vec<_>>>()?;
     let out = Output {
         robot: model.name.clone(),
         source: args.urdf.display().to_string(),
         root: model.root.to_string(),
-        nq: model.nq,
+        nq: match args.layout {
+            Layout::Moma => model.nq,
+            Layout::Pinocchio => moma::io::pinocchio_layout::PinocchioLayout::new(&model).nq(),
+        },
         nv: model.nv,
+        layout: match args.layout {
+            Layout::Moma => "moma",
+            Layout::Pinocchio => "pinocchio",
+        },
         gravity: [model.gravity.x, model.gravity.y, model.gravity.z],
         frame: model.frames[fid.0].name.clone(),
         states: out_states,
@@ -132,13 +143,15 @@ pub fn run(args: Args) -> Result<()> {
     }
 }
 
-/// Every output of one state; `src` names the state in errors.
+/// Every output of one state (in moma's layout), written in `conv`'s layout; `src` names
+/// the state in errors.
 fn evaluate_state(
     model: &Model,
     data: &mut Data,
     fid: FrameIndex,
     s: &State,
     src: &str,
+    conv: &LayoutConv,
 ) -> Result<StateOut> {
     let nv = model.nv;
     kinematics::check_state(
@@ -155,21 +168,29 @@ fn evaluate_state(
             .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x))
     };
     let (v, a, tau) = (get(&s.v), get(&s.a), get(&s.tau));
-    let rnea_tau = dynamics::rnea(model, data, &q, &v, &a).as_slice().to_vec();
-    let crba_m = rows(dynamics::crba(model, data, &q));
-    let aba_ddq = dynamics::aba(model, data, &q, &v, &tau).as_slice().to_vec();
+    let qs = q.as_slice();
+    let rnea_tau = conv.v_out(qs, dynamics::rnea(model, data, &q, &v, &a).as_slice());
+    let crba_m = rows(&conv.matrix_out(qs, dynamics::crba(model, data, &q)));
+    let aba = dynamics::aba(model, data, &q, &v, &tau).clone();
+    let aba_ddq = conv.a_out(qs, v.as_slice(), aba.as_slice());
     if let Some(i) = aba_ddq.iter().position(|x| !x.is_finite()) {
         bail!(
             "{src}: forward dynamics gave a non-finite acceleration at v[{i}] (singular mass matrix: massless subtree?)"
         );
     }
-    let nle = dynamics::nonlinear_effects(model, data, &q, &v)
-        .as_slice()
-        .to_vec();
-    let gravity_torque = dynamics::gravity_torque(model, data, &q)
-        .as_slice()
-        .to_vec();
-    let ag = rows6(dynamics::centroidal_momentum_matrix(model, data, &q));
+    // The bias is RNEA at zero acceleration *in the output layout* (for a planar root in
+    // Pinocchio's layout that is not a = 0, see moma::io::pinocchio_layout).
+    let nle = if conv.moves_velocities() {
+        let a0 = DVector::from_vec(conv.zero_acceleration(qs, v.as_slice()));
+        conv.v_out(qs, dynamics::rnea(model, data, &q, &v, &a0).as_slice())
+    } else {
+        dynamics::nonlinear_effects(model, data, &q, &v)
+            .as_slice()
+            .to_vec()
+    };
+    let gravity_torque = conv.v_out(qs, dynamics::gravity_torque(model, data, &q).as_slice());
+    let ag_m = dynamics::centroidal_momentum_matrix(model, data, &q).clone();
+    let ag = rows(&conv.jacobian_out(qs, &DMatrix::from_column_slice(6, nv, ag_m.as_slice())));
     let com = data.com;
     let kinetic_energy = dynamics::kinetic_energy(model, data, &q, &v);
     let potential_energy = dynamics::potential_energy(model, data, &q);
@@ -202,6 +223,8 @@ fn evaluate_state(
             [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
         ],
         quaternion_xyzw: [c[0], c[1], c[2], c[3]],
-        jacobian_local_world_aligned: rows6(&jac),
+        jacobian_local_world_aligned: rows(
+            &conv.jacobian_out(qs, &DMatrix::from_column_slice(6, nv, jac.as_slice())),
+        ),
     })
 }

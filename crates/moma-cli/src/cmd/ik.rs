@@ -52,6 +52,10 @@ pub struct Args {
     /// one); also seeds the restarts.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Layout of --q0 and of the output q: moma or pinocchio (planar root [x, y, cos θ,
+    /// sin θ]; continuous joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
     /// Convergence tolerance on the residual norm (m, rad).
     #[arg(long, default_value_t = 1e-6)]
     pub tol: f64,
@@ -127,7 +131,8 @@ fn initial_q(args: &Args, model: &Model, whole_body: bool) -> Result<DVector<f64
     let nq = model.nq;
     match (&args.q0, args.seed) {
         (Some(s), _) => {
-            let v = parse_list("--q0", s)?;
+            let v = super::common::LayoutConv::new(model, args.layout)
+                .q_in(parse_list("--q0", s)?, "--q0")?;
             if v.len() != nq {
                 bail!(
                     "--q0: expected {nq} values ({}), got {}",
@@ -250,7 +255,7 @@ pub fn run(args: Args) -> Result<()> {
         orientation_error: part(3..6),
         iterations: result.iterations,
         sigma_min: result.sigma_min,
-        q: result.q.iter().copied().collect(),
+        q: super::common::LayoutConv::new(&model, args.layout).q_out(result.q.as_slice()),
         pose: pose_vec(&pose),
         time_ms,
     };

@@ -53,6 +53,10 @@ pub struct Args {
     /// Also write the JSON result to this file.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
+    /// State layout of the states file's q and of the output q: moma or pinocchio (planar
+    /// root [x, y, cos θ, sin θ]; continuous joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 #[derive(Serialize)]
@@ -235,12 +239,17 @@ pub fn run(args: Args) -> Result<()> {
     let model = Arc::new(load_model(&args.robot, root)?);
     let mut kin = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let states = read_states(&args.states, &["q", "u"])?;
+    let conv = super::common::LayoutConv::new(&model, args.layout);
     let mut out_states = Vec::with_capacity(states.len());
     for (i, st) in states.into_iter().enumerate() {
         let src = format!("{}: states[{i}]", args.states.display());
-        let q = DVector::from_vec(st.q);
+        let q = DVector::from_vec(conv.q_in(st.q, &format!("{src}.q"))?);
         let u = st.u.map(DVector::from_vec);
-        out_states.push(evaluate_state(&setup, &mut kin, i, q, u, &src)?);
+        let mut s = evaluate_state(&setup, &mut kin, i, q, u, &src)?;
+        if s.q.len() == model.nq {
+            s.q = conv.q_out(&s.q);
+        }
+        out_states.push(s);
     }
     let out = Output {
         robot: args.robot.display().to_string(),

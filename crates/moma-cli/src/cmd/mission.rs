@@ -4,7 +4,8 @@
 //!
 //! Without an argument `scenarios/mission.toml` runs (looked up in the current
 //! directory, then next to the source tree this binary was built from). The schema and
-//! the outputs are documented in `docs/mission.md`. Exit status: 0 reached, 1 input error
+//! the outputs are documented in `docs/mission.md`; the page and its figures come from
+//! [`crate::report`]. Exit status: 0 reached, 1 input error
 //! (nothing written), 3 the mission ran but did not reach its goal (every output written,
 //! `reached: false` and a `reason` in `summary.json`).
 
@@ -56,7 +57,13 @@ fn opt(x: Option<f64>) -> Value {
 }
 
 /// The summary object (`summary.json`).
-fn summary(m: &Mission, r: &MissionResult, wall_total: f64, report_s: f64) -> Value {
+fn summary(
+    m: &Mission,
+    r: &MissionResult,
+    wall_total: f64,
+    report_s: f64,
+    files: &[String],
+) -> Value {
     let f = &m.file;
     let last = r.samples.t.len().saturating_sub(1);
     let final_pose = r.samples.q.get(last).map(|q| [q[0], q[1], q[2]]);
@@ -127,7 +134,7 @@ fn summary(m: &Mission, r: &MissionResult, wall_total: f64, report_s: f64) -> Va
         },
         "real_time_factor": if wall_total > 0.0 { json!(sim_time / wall_total) } else { Value::Null },
         "samples": r.samples.t.len(),
-        "files": ["summary.json", "trajectory.csv", "events.json", "top_view.svg", "speeds.svg", "margins.svg"],
+        "files": files,
     })
 }
 
@@ -147,12 +154,16 @@ fn opt_num(x: Option<f64>) -> String {
 fn trajectory_csv(r: &MissionResult) -> String {
     let s = &r.samples;
     let mut out = String::new();
-    out.push_str("t,x,y,theta,v,omega,v_ref,omega_ref,x_ref,y_ref,zmp_margin,force_angle_min,moment_height_min,clearance,tracking_error,slip_ratio,ee_x,ee_y,ee_z,energy,phase");
+    out.push_str(
+        "t [s],x [m],y [m],theta [rad],v [m/s],omega [rad/s],v_ref [m/s],omega_ref [rad/s],\
+         x_ref [m],y_ref [m],zmp_margin [m],force_angle_min [rad],moment_height_min,\
+         clearance [m],tracking_error [m],slip_ratio,ee_x [m],ee_y [m],ee_z [m],energy [J],phase",
+    );
     for n in &r.arm_names {
-        let _ = write!(out, ",q_{n}");
+        let _ = write!(out, ",q_{n} [rad]");
     }
     for n in &r.u_names {
-        let _ = write!(out, ",u_{n}");
+        let _ = write!(out, ",{n} [N m]");
     }
     out.push('\n');
     let arm: Vec<usize> = r
@@ -198,105 +209,15 @@ fn trajectory_csv(r: &MissionResult) -> String {
     out
 }
 
-fn svgs(m: &Mission, r: &MissionResult) -> Result<Vec<(String, Vec<u8>)>> {
-    use crate::svg_plots::{Series, line_chart};
-    let grid = &m.map.grid;
-    let cell = |p: [f64; 2]| -> (usize, usize) {
-        let [fx, fy] = grid.world_to_cell_f(p[0], p[1]);
-        (
-            (fx.floor().max(0.0) as usize).min(grid.width - 1),
-            (fy.floor().max(0.0) as usize).min(grid.height - 1),
-        )
-    };
-    let f = &m.file;
-    let start = cell([f.start.pose[0], f.start.pose[1]]);
-    let goal = cell([f.goal.pose[0], f.goal.pose[1]]);
-    let executed: Vec<(usize, usize)> = r.samples.q.iter().map(|q| cell([q[0], q[1]])).collect();
-    let planned: Vec<(usize, usize)> = r
-        .plans
-        .last()
-        .map(|p| p.path.iter().map(|&w| cell(w)).collect())
-        .unwrap_or_default();
-    let cspace = vec![false; grid.len()];
-    let scene = crate::svg_map::Scene {
-        grid,
-        cspace: &cspace,
-        path: &executed,
-        smooth: &planned,
-        start,
-        goal,
-        title: format!("{}: executed path and last plan", m.name),
-    };
-    let top = crate::svg_map::render(&scene)?;
-    let t = &r.samples.t;
-    let speeds = line_chart(
-        "speeds",
-        "t (s)",
-        "m/s, rad/s",
-        &[
-            Series {
-                name: "v",
-                x: t,
-                y: r.samples.v.clone(),
-            },
-            Series {
-                name: "v_ref",
-                x: t,
-                y: r.samples.v_ref.clone(),
-            },
-            Series {
-                name: "omega",
-                x: t,
-                y: r.samples.omega.clone(),
-            },
-            Series {
-                name: "omega_ref",
-                x: t,
-                y: r.samples.omega_ref.clone(),
-            },
-        ],
-    );
-    let margins = line_chart(
-        "margins",
-        "t (s)",
-        "m",
-        &[
-            Series {
-                name: "ZMP margin",
-                x: t,
-                y: r.samples
-                    .zmp_margin
-                    .iter()
-                    .map(|z| z.unwrap_or(f64::NAN))
-                    .collect(),
-            },
-            Series {
-                name: "clearance",
-                x: t,
-                y: r.samples.clearance.iter().map(|c| c.min(2.0)).collect(),
-            },
-            Series {
-                name: "tracking error",
-                x: t,
-                y: r.samples.tracking_error.clone(),
-            },
-        ],
-    );
-    Ok(vec![
-        ("top_view.svg".into(), top.into_bytes()),
-        ("speeds.svg".into(), speeds.into_bytes()),
-        ("margins.svg".into(), margins.into_bytes()),
-    ])
-}
-
 /// Runs `moma mission`.
 pub fn run(args: Args) -> Result<()> {
     let clock = Instant::now();
     let path = resolve_scenario(args.scenario)?;
     let m = moma::mission::load(&path).map_err(|e| anyhow!("{e}"))?;
     let result = moma::mission::run(&m).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    let report_clock = Instant::now();
-    let mut files = svgs(&m, &result)?;
+    // everything but the page and the figures, with the summary as of now (the page's
+    // summary table shows the wall times up to the report)
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     let events = serde_json::to_vec_pretty(&json!({
         "events": result.events,
         "plans": result.plans.iter().map(|p| json!({
@@ -308,9 +229,31 @@ pub fn run(args: Args) -> Result<()> {
         "trajectory.csv".into(),
         trajectory_csv(&result).into_bytes(),
     ));
+    let report_clock = Instant::now();
+    let pre = summary(&m, &result, clock.elapsed().as_secs_f64(), 0.0, &[]);
+    let report = mission_report(&m, &result, &pre);
+    report
+        .check()
+        .map_err(|e| anyhow!("{}: the report data is malformed: {e}", path.display()))?;
+    let html = crate::report::render_html(&report);
+    let figures = crate::report::render_svgs(&report);
+    let mut names: Vec<String> = [
+        "summary.json",
+        "trajectory.csv",
+        "events.json",
+        "report.html",
+    ]
+    .iter()
+    .map(|s| (*s).to_string())
+    .collect();
+    names.extend(figures.iter().map(|(n, _)| n.clone()));
+    files.push(("report.html".into(), html.into_bytes()));
+    for (n, svg) in figures {
+        files.push((n, svg.into_bytes()));
+    }
     let report_s = report_clock.elapsed().as_secs_f64();
     let wall = clock.elapsed().as_secs_f64();
-    let sum = summary(&m, &result, wall, report_s);
+    let sum = summary(&m, &result, wall, report_s, &names);
     let mut sum_text = serde_json::to_vec_pretty(&sum)?;
     sum_text.push(b'\n');
     files.push(("summary.json".into(), sum_text));
@@ -328,4 +271,91 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The report's data from a run (the interface of `crate::report`).
+fn mission_report(m: &Mission, r: &MissionResult, summary: &Value) -> crate::report::MissionReport {
+    use crate::report::{
+        MissionReport, ReportEvent, ReportMap, ReportObstacle, ReportPlan, ReportSamples,
+    };
+    let g = &m.map.grid;
+    let cells = g
+        .cells
+        .iter()
+        .map(|&c| match c {
+            c if c < 0 => 2,
+            c if c >= 100 => 1,
+            _ => 0,
+        })
+        .collect();
+    // the lower-left corner of cell (0, 0) in the world (ROS maps; a rotated origin is
+    // drawn unrotated, Moving AI cells are centred on integers)
+    let origin = match g.kind {
+        moma::planning::MapKind::Ros => [g.origin[0], g.origin[1]],
+        moma::planning::MapKind::MovingAi => [-0.5, -0.5],
+    };
+    let f = &m.file;
+    let s = &r.samples;
+    let col = |k: usize| s.q.iter().map(|q| q[k]).collect::<Vec<f64>>();
+    let nu = r.u_names.len();
+    MissionReport {
+        title: m.name.clone(),
+        map: ReportMap {
+            width: g.width,
+            height: g.height,
+            resolution: g.resolution,
+            origin,
+            cells,
+        },
+        footprint_radius: f.robot.footprint_radius,
+        start: f.start.pose,
+        goal: f.goal.pose,
+        end_effector_target: f.goal.end_effector,
+        plans: r
+            .plans
+            .iter()
+            .map(|p| ReportPlan {
+                t: p.t,
+                points: p.path.clone(),
+            })
+            .collect(),
+        obstacles: f
+            .obstacles
+            .iter()
+            .map(|o| ReportObstacle {
+                t: o.t,
+                center: o.center,
+                radius: o.radius,
+            })
+            .collect(),
+        samples: ReportSamples {
+            t: s.t.clone(),
+            x: col(0),
+            y: col(1),
+            theta: col(2),
+            v: s.v.clone(),
+            omega: s.omega.clone(),
+            v_ref: s.v_ref.clone(),
+            omega_ref: s.omega_ref.clone(),
+            zmp_margin: s.zmp_margin.clone(),
+            force_angle_min: s.force_angle_min.clone(),
+            clearance: s.clearance.iter().map(|c| c.min(1e3)).collect(),
+            tracking_error: s.tracking_error.clone(),
+            torque_names: r.u_names.clone(),
+            torques: (0..nu)
+                .map(|j| s.u.iter().map(|u| u[j]).collect())
+                .collect(),
+            arm_side: s.arm_side.clone(),
+        },
+        events: r
+            .events
+            .iter()
+            .map(|e| ReportEvent {
+                t: e.t,
+                kind: e.kind.clone(),
+                text: e.text.clone(),
+            })
+            .collect(),
+        summary: summary.clone(),
+    }
 }

@@ -12,7 +12,7 @@ use moma::ik::tasks::TaskRows;
 use moma::kinematics;
 use moma::multibody::{Data, RootJoint};
 use nalgebra::DVector;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::path::PathBuf;
 
 /// Arguments of `moma osc`.
@@ -36,22 +36,10 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StateIn {
-    q: Vec<f64>,
-    #[serde(default)]
-    v: Option<Vec<f64>>,
-    task_acceleration: Vec<f64>,
-    #[serde(default)]
-    null_torque: Option<Vec<f64>>,
-}
-
-#[derive(Deserialize)]
-struct StatesIn {
-    states: Vec<StateIn>,
+    /// Layout of the states' q (and v): moma or pinocchio (continuous joints as cos, sin;
+    /// the free-flyer is the same in both).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 #[derive(Serialize)]
@@ -76,55 +64,27 @@ pub fn run(args: Args) -> Result<()> {
     let task_rows: TaskRows = args.rows.parse().map_err(|e| anyhow!("--rows: {e}"))?;
     task_rows.validate().map_err(|e| anyhow!("--rows: {e}"))?;
     let rows = task_rows.indices();
-    let m = rows.len();
-    let text = std::fs::read_to_string(&args.states)
-        .with_context(|| format!("{}: cannot read states file", args.states.display()))?;
-    let states: StatesIn = serde_json::from_str(&text).map_err(|e| {
-        anyhow!(
-            "{}: invalid states file (expected {{\"states\": [{{\"q\": [..], \"v\": [..], \"task_acceleration\": [6], \"null_torque\": [nv]}}]}}): {e}",
-            args.states.display()
-        )
-    })?;
-    if states.states.is_empty() {
-        bail!("{}: 'states' is empty", args.states.display());
-    }
+    let text = super::common::read_states_text(&args.states)?;
+    let states = moma::io::states::parse_osc_states(&text, &args.states)?;
     let nv = model.nv;
+    let conv = super::common::LayoutConv::new(&model, args.layout);
+    if conv.moves_velocities() {
+        bail!(
+            "--layout pinocchio: not supported by osc on a planar root (the task bias and \
+             torques depend on the layout's velocity frame); use --layout moma"
+        );
+    }
     let mut data = Data::new(&model);
     let mut od = OscData::new(nv, &rows);
-    let mut out = Vec::with_capacity(states.states.len());
-    for (k, s) in states.states.iter().enumerate() {
+    let mut out = Vec::with_capacity(states.len());
+    for (k, s) in states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
-        kinematics::check_state(&model, &src, Some(&s.q), s.v.as_deref(), None, None)?;
-        let a = &s.task_acceleration;
-        let a_des = if a.len() == m {
-            DVector::from_column_slice(a)
-        } else if a.len() == 6 {
-            DVector::from_iterator(m, rows.iter().map(|&r| a[r]))
-        } else {
-            bail!(
-                "{src}.task_acceleration: expected 6 values (or {m}, one per selected row), got {}",
-                a.len()
-            );
-        };
-        if let Some(i) = a_des.iter().position(|x| !x.is_finite()) {
-            bail!("{src}.task_acceleration[{i}]: not finite");
-        }
-        let tau0 = match &s.null_torque {
-            Some(t) => {
-                if t.len() != nv {
-                    bail!(
-                        "{src}.null_torque: expected {nv} values (nv), got {}",
-                        t.len()
-                    );
-                }
-                if let Some(i) = t.iter().position(|x| !x.is_finite()) {
-                    bail!("{src}.null_torque[{i}]: not finite");
-                }
-                DVector::from_column_slice(t)
-            }
-            None => DVector::zeros(nv),
-        };
-        let q = DVector::from_column_slice(&s.q);
+        let q_in = conv.q_in(s.q.clone(), &format!("{src}.q"))?;
+        kinematics::check_state(&model, &src, Some(&q_in), s.v.as_deref(), None, None)?;
+        let (a_des, tau0) = s.task_inputs(&rows, nv, k, &args.states)?;
+        let a_des = DVector::from_vec(a_des);
+        let tau0 = DVector::from_vec(tau0);
+        let q = DVector::from_column_slice(&q_in);
         let v =
             s.v.as_ref()
                 .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x));

@@ -70,6 +70,9 @@ pub struct Args {
     /// IK seed (arm joints; default neutral).
     #[arg(long, allow_hyphen_values = true)]
     pub q0: Option<String>,
+    /// Layout of --q0: moma or pinocchio (continuous joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
     /// IK tolerance.
     #[arg(long, default_value_t = 1e-6)]
     pub tol: f64,
@@ -162,7 +165,8 @@ fn setup(args: &Args) -> Result<(Vec<f64>, PlacementGrid, ArmReachEvaluator<Mode
     let arm = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let seed = match &args.q0 {
         Some(s) => {
-            let v = parse_list("--q0", s)?;
+            let v = super::common::LayoutConv::new(&model, args.layout)
+                .q_in(parse_list("--q0", s)?, "--q0")?;
             if v.len() != arm.nq() {
                 bail!("--q0: expected {} values, got {}", arm.nq(), v.len());
             }

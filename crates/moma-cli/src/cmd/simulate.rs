@@ -15,7 +15,7 @@ use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
 use moma::sim::recorder::Recorder;
 use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
-use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate};
+use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate_observed};
 use serde::{Deserialize, Serialize};
 
 use crate::output::write_dir;
@@ -66,6 +66,15 @@ pub struct Scenario {
     /// Free-floating settings (robot kind `free_floating`; schema in docs/space.md).
     #[serde(default)]
     pub space: Option<super::simulate_space::SpaceSpec>,
+    /// Tip-over stability, wheel loads and slip (URDF robots; docs/simulate.md).
+    #[serde(default)]
+    pub stability: Option<super::simulate_stability::StabilitySpec>,
+    /// Closed-loop control: the law and its gains (schema in docs/simulate.md).
+    #[serde(default)]
+    pub controller: Option<super::simulate_control::ControllerSpec>,
+    /// What the closed-loop law tracks or stabilises to.
+    #[serde(default)]
+    pub reference: Option<super::simulate_control::ReferenceSpec>,
 }
 
 /// The robot of a scenario.
@@ -195,6 +204,8 @@ struct Summary {
     wall_time_s: f64,
     steps_per_second: f64,
     files: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stability: Option<super::simulate_stability::StabilitySummary>,
 }
 
 /// Finds the scenario: the argument, else `scenarios/default.toml` in the current
@@ -224,7 +235,7 @@ pub fn load_scenario(path: &Path) -> Result<Scenario> {
     toml::from_str(&text).map_err(|e| anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
 }
 
-fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
+pub(super) fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
     if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
         bail!("{field}[{i}] is not a finite number");
     }
@@ -232,7 +243,7 @@ fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
 }
 
 /// Builds the robot of a scenario; `base_dir` resolves relative URDF paths.
-fn build_robot(
+pub(super) fn build_robot(
     spec: &RobotSpec,
     gravity: Option<f64>,
     base_dir: &Path,
@@ -264,15 +275,7 @@ fn build_robot(
                      (only m5 uses it)"
                 );
             }
-            let mut json = serde_json::to_value(params).context("robot.params")?;
-            if let (Some(g), true) = (gravity, is_m5)
-                && let Some(obj) = json.as_object_mut()
-            {
-                if obj.contains_key("g") {
-                    bail!("gravity is given twice: top-level `gravity` and robot.params.g");
-                }
-                obj.insert("g".into(), serde_json::json!(g));
-            }
+            let json = chapter_params_json(params, gravity, is_m5)?;
             let sys = chapter_system(model, &json).context("robot")?;
             Ok((sys, format!("chapter model {model}")))
         }
@@ -292,6 +295,24 @@ fn build_robot(
     }
 }
 
+/// The chapter parameters as JSON, with the top-level gravity moved into `g` for m5.
+pub(super) fn chapter_params_json(
+    params: &toml::Table,
+    gravity: Option<f64>,
+    is_m5: bool,
+) -> Result<serde_json::Value> {
+    let mut json = serde_json::to_value(params).context("robot.params")?;
+    if let (Some(g), true) = (gravity, is_m5)
+        && let Some(obj) = json.as_object_mut()
+    {
+        if obj.contains_key("g") {
+            bail!("gravity is given twice: top-level `gravity` and robot.params.g");
+        }
+        obj.insert("g".into(), serde_json::json!(g));
+    }
+    Ok(json)
+}
+
 fn build_urdf_robot(
     path: &Path,
     drive: &DriveSpec,
@@ -299,6 +320,19 @@ fn build_urdf_robot(
     casters: &[CasterSpec],
     gravity: Option<f64>,
 ) -> Result<Box<dyn ReducedSystem>> {
+    let wm = build_wheeled_model(path, drive, wheel_joints, casters, gravity)?;
+    Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
+}
+
+/// The wheeled model of a URDF robot on a differential drive (also read by the stability
+/// monitor).
+pub(super) fn build_wheeled_model(
+    path: &Path,
+    drive: &DriveSpec,
+    wheel_joints: Option<[String; 2]>,
+    casters: &[CasterSpec],
+    gravity: Option<f64>,
+) -> Result<moma::mobile::WheeledModel> {
     use moma::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
     let dd = DiffDrive::new(drive.r_w, drive.b, drive.d).context("robot.drive")?;
     for c in casters {
@@ -321,11 +355,10 @@ fn build_urdf_robot(
         bail!("gravity is not a finite number");
     }
     model.gravity = nalgebra::Vector3::new(0.0, 0.0, -g);
-    let wm = WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))?;
-    Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
+    WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))
 }
 
-fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
+pub(super) fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
     Series { name, x: t, y }
 }
 
@@ -335,12 +368,22 @@ fn render(
     result: &SimulationResult,
     summary: &mut Summary,
     plots: bool,
+    stability: Option<&moma::sim::stability_monitor::StabilityMonitor>,
 ) -> Result<Vec<(String, Vec<u8>)>> {
     let rec = &result.recorder;
     let mut files = vec![("trajectory.csv".to_string(), rec.to_csv().into_bytes())];
+    if let Some(mon) = stability {
+        files.push((
+            "stability.csv".to_string(),
+            super::simulate_stability::csv(mon).into_bytes(),
+        ));
+    }
     if plots {
         motion_plots(wheels, rec, &mut files);
         balance_plots(rec, &mut files);
+        if let Some(mon) = stability {
+            super::simulate_stability::plots(mon, &mut files);
+        }
     }
     summary.files = files
         .iter()
@@ -359,7 +402,7 @@ fn column(rec: &Recorder, row: &dyn Fn(usize) -> f64) -> Vec<f64> {
 }
 
 /// Platform path, heading and arm joints, wheel angles (when tracked) and inputs.
-fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+pub(super) fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
     let t = &rec.times;
     let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
     let x = col(&|i| rec.q_row(i)[0]);
@@ -427,7 +470,7 @@ fn motion_plots(wheels: &[String], rec: &Recorder, files: &mut Vec<(String, Vec<
 }
 
 /// Energy balance and its error, the constraint multipliers and the residual.
-fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
+pub(super) fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
     let t = &rec.times;
     let col = |row: &dyn Fn(usize) -> f64| column(rec, row);
     let energy = vec![
@@ -488,7 +531,7 @@ fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) {
 
 /// The initial configuration, reduced velocity and input profile of a scenario, checked
 /// against the system's sizes (errors name the field and the expected channels).
-fn initial_state(
+pub(super) fn initial_state(
     sc: &Scenario,
     system: &dyn ReducedSystem,
     ctx: &dyn Fn(&str) -> String,
@@ -544,7 +587,7 @@ fn initial_state(
 }
 
 /// A progress bar on standard error when it is a terminal.
-fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
+pub(super) fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
     if std::io::stderr().is_terminal() {
         let pb = indicatif::ProgressBar::new((duration * 1000.0).round() as u64);
         pb.set_style(
@@ -580,7 +623,24 @@ pub fn run(args: Args) -> Result<()> {
         bail!("{}", ctx("gravity is not a finite number"));
     }
     let base_dir = path.parent().unwrap_or(Path::new("."));
+    if sc.controller.is_some() || sc.reference.is_some() {
+        if sc.stability.is_some() {
+            bail!(
+                "{}",
+                ctx(
+                    "[stability] is not recorded in closed-loop runs yet: remove it, or the [controller] table"
+                )
+            );
+        }
+        return super::simulate_control::run(&path, &sc, base_dir, &args);
+    }
     if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
+        if sc.stability.is_some() {
+            bail!(
+                "{}",
+                ctx("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")")
+            );
+        }
         return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
     }
     if sc.space.is_some() {
@@ -591,6 +651,32 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (mut system, robot_name) =
         build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
+    let mut monitor = match (&sc.stability, &sc.robot) {
+        (None, _) => None,
+        (
+            Some(spec),
+            RobotSpec::Urdf {
+                urdf,
+                drive,
+                wheel_joints,
+                casters,
+            },
+        ) => {
+            let wm = build_wheeled_model(
+                &base_dir.join(urdf),
+                drive,
+                wheel_joints.clone(),
+                casters,
+                sc.gravity,
+            )
+            .with_context(|| ctx("robot"))?;
+            Some(super::simulate_stability::monitor(spec, &wm).with_context(|| ctx("stability"))?)
+        }
+        (Some(_), _) => bail!(
+            "{}",
+            ctx("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")")
+        ),
+    };
     let (q0, v0, input) = initial_state(&sc, system.as_ref(), &ctx)?;
     sc.integrator
         .validate()
@@ -604,11 +690,22 @@ pub fn run(args: Args) -> Result<()> {
     let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
     let bar = progress_bar(sc.duration);
     let start = Instant::now();
-    let result = simulate(system.as_mut(), &input, &q0, &v0, &options, &mut |t| {
-        if let Some(pb) = &bar {
-            pb.set_position((t * 1000.0).round() as u64);
-        }
-    });
+    let observer = monitor
+        .as_mut()
+        .map(|m| m as &mut dyn moma::sim::wheeled::SampleObserver);
+    let result = simulate_observed(
+        system.as_mut(),
+        &input,
+        &q0,
+        &v0,
+        &options,
+        &mut |t| {
+            if let Some(pb) = &bar {
+                pb.set_position((t * 1000.0).round() as u64);
+            }
+        },
+        observer,
+    );
     if let Some(pb) = &bar {
         pb.finish_and_clear();
     }
@@ -642,7 +739,15 @@ pub fn run(args: Args) -> Result<()> {
         wall_time_s: wall,
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
+        stability: None,
     };
+    if let (Some(spec), Some(mon)) = (&sc.stability, &monitor) {
+        summary.stability = Some(super::simulate_stability::summary(
+            spec,
+            mon,
+            result.stopped_at,
+        ));
+    }
     let wheels = match &sc.robot {
         RobotSpec::Urdf {
             wheel_joints: Some(w),
@@ -650,10 +755,22 @@ pub fn run(args: Args) -> Result<()> {
         } => w.to_vec(),
         _ => Vec::new(),
     };
-    let files = render(&wheels, &result, &mut summary, sc.output.plots)?;
+    let files = render(
+        &wheels,
+        &result,
+        &mut summary,
+        sc.output.plots,
+        monitor.as_ref(),
+    )?;
     write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&summary)?;
+    }
+    if let (Some(spec), Some(mon)) = (&sc.stability, &monitor)
+        && spec.require_stable
+        && mon.tipped()
+    {
+        return super::common::goal_not_reached(super::simulate_stability::tip_message(mon));
     }
     Ok(())
 }

@@ -10,8 +10,8 @@ use moma::multibody::{Data, RootJoint};
 use moma::space::{self, SpaceData, SpaceStateReport};
 use moma::spatial::Force;
 use nalgebra::{DVector, Vector3};
-use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use serde::Serialize;
+use std::path::PathBuf;
 
 /// Arguments of `moma space`.
 #[derive(clap::Args)]
@@ -29,27 +29,10 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long)]
     pub output: Option<PathBuf>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MomentumIn {
-    linear: Vec<f64>,
-    angular_about_com: Vec<f64>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StateIn {
-    q: Vec<f64>,
-    qdot_joints: Vec<f64>,
-    #[serde(default)]
-    momentum: Option<MomentumIn>,
-}
-
-#[derive(Deserialize)]
-struct StatesIn {
-    states: Vec<StateIn>,
+    /// Layout of the states' q (and v): moma or pinocchio (continuous joints as cos, sin;
+    /// the free-flyer is the same in both).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 #[derive(Serialize)]
@@ -63,27 +46,6 @@ struct Output {
     states: Vec<SpaceStateReport>,
 }
 
-fn read_states(path: &Path) -> Result<StatesIn> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read states file", path.display()))?;
-    serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: invalid states file (expected {{\"states\": [{{\"q\": [..], \"qdot_joints\": [..], \"momentum\": {{\"linear\": [3], \"angular_about_com\": [3]}}}}]}}): {e}",
-            path.display()
-        )
-    })
-}
-
-fn vec3(src: &str, name: &str, x: &[f64]) -> Result<Vector3<f64>> {
-    if x.len() != 3 {
-        bail!("{src} {name}: expected 3 numbers, got {}", x.len());
-    }
-    if let Some(k) = x.iter().position(|y| !y.is_finite()) {
-        bail!("{src} {name}[{k}]: not finite");
-    }
-    Ok(Vector3::new(x[0], x[1], x[2]))
-}
-
 /// Runs `moma space`.
 pub fn run(args: Args) -> Result<()> {
     let mut model = load_model(&args.urdf, RootJoint::FreeFlyer)?;
@@ -92,34 +54,22 @@ pub fn run(args: Args) -> Result<()> {
         .frame_id(&args.frame)
         .with_context(|| format!("{}: --frame", args.urdf.display()))?;
     let mut sd = SpaceData::new(&model).with_context(|| args.urdf.display().to_string())?;
-    let states = read_states(&args.states)?;
-    if states.states.is_empty() {
-        bail!("{}: 'states' is empty", args.states.display());
-    }
+    let text = super::common::read_states_text(&args.states)?;
+    let states = moma::io::states::parse_space_states(&text, &args.states)?;
+    let conv = super::common::LayoutConv::new(&model, args.layout);
     let n = sd.n;
     let mut data = Data::new(&model);
-    let mut out_states = Vec::with_capacity(states.states.len());
-    for (k, s) in states.states.iter().enumerate() {
+    let mut out_states = Vec::with_capacity(states.len());
+    for (k, s) in states.iter().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
-        moma::kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
-        if s.qdot_joints.len() != n {
-            bail!(
-                "{src} qdot_joints: expected {n} numbers (nv − 6 = {} − 6), got {}",
-                model.nv,
-                s.qdot_joints.len()
-            );
-        }
-        if let Some(i) = s.qdot_joints.iter().position(|y| !y.is_finite()) {
-            bail!("{src} qdot_joints[{i}]: not finite");
-        }
-        let h = match &s.momentum {
-            Some(m) => Force::new(
-                vec3(&src, "momentum.linear", &m.linear)?,
-                vec3(&src, "momentum.angular_about_com", &m.angular_about_com)?,
-            ),
-            None => Force::zero(),
-        };
-        let q = DVector::from_column_slice(&s.q);
+        let q_in = conv.q_in(s.q.clone(), &format!("{src}.q"))?;
+        moma::kinematics::check_state(&model, &src, Some(&q_in), None, None, None)?;
+        let h = s.check(n, model.nv, k, &args.states)?;
+        let h = Force::new(
+            Vector3::new(h[0], h[1], h[2]),
+            Vector3::new(h[3], h[4], h[5]),
+        );
+        let q = DVector::from_column_slice(&q_in);
         let st = space::state_report(&model, &mut data, &mut sd, &q, &s.qdot_joints, &h, fid)
             .with_context(|| src.clone())?;
         if !st.is_finite() {

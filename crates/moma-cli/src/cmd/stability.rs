@@ -14,12 +14,10 @@ use moma::stability::{
 };
 use nalgebra::{DVector, Vector2, Vector3};
 use serde::Serialize;
-use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-/// Largest number of states, support points and external loads accepted.
+/// Largest number of support points accepted.
 const MAX_POINTS: usize = 10_000;
-const MAX_EXTERNAL: usize = 10_000;
 
 /// Arguments of `moma stability`.
 #[derive(clap::Args)]
@@ -45,6 +43,10 @@ pub struct Args {
     /// Write the JSON result to this file (default: standard output).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
+    /// State layout of the states file: moma or pinocchio (planar root [x, y, cos θ,
+    /// sin θ] with base-frame v and a; continuous joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
 }
 
 /// The support options shared by `stability` and `stability-map`.
@@ -155,58 +157,34 @@ pub(crate) struct State {
     pub at_rest: bool,
 }
 
-fn vec3(v: &Value, field: &str, path: &Path) -> Result<Vector3<f64>> {
-    let x = super::common::number_array(v, field, path)?;
-    if x.len() != 3 {
-        bail!(
-            "{}: {field}: expected length 3, got {}",
-            path.display(),
-            x.len()
-        );
-    }
-    if x.iter().any(|y| !y.is_finite()) {
-        bail!("{}: {field}: non-finite value", path.display());
-    }
-    Ok(Vector3::new(x[0], x[1], x[2]))
-}
-
 /// Reads and validates STATES.json for `model` (the one states reader of
 /// `common::read_states`, with the `external` loads of this command).
-pub(crate) fn read_states(path: &Path, model: &Model) -> Result<Vec<State>> {
+pub(crate) fn read_states(
+    path: &Path,
+    model: &Model,
+    layout: super::common::Layout,
+) -> Result<Vec<State>> {
     let states = super::common::read_states(path, &["q", "v", "a", "external"])?;
+    let conv = super::common::LayoutConv::new(model, layout);
     let mut out = Vec::with_capacity(states.len());
-    for (i, st) in states.into_iter().enumerate() {
+    for (i, mut st) in states.into_iter().enumerate() {
         let field = format!("states[{i}]");
+        conv.state_in(&mut st, &format!("{}: {field}", path.display()))?;
         let q = st.q;
         let vv = st.v.unwrap_or_else(|| vec![0.0; model.nv]);
         let aa = st.a.unwrap_or_else(|| vec![0.0; model.nv]);
         check_state(model, &field, Some(&q), Some(&vv), Some(&aa), None)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        let mut external = Vec::new();
-        if let Some(ext) = st.extra.get("external") {
-            let list = ext.as_array().ok_or_else(|| {
-                anyhow!("{}: {field}.external: expected an array", path.display())
-            })?;
-            if list.len() > MAX_EXTERNAL {
-                bail!(
-                    "{}: {field}.external: more than {MAX_EXTERNAL} loads",
-                    path.display()
-                );
-            }
-            for (k, e) in list.iter().enumerate() {
-                let f = format!("{field}.external[{k}]");
-                let pt = e
-                    .get("point")
-                    .ok_or_else(|| anyhow!("{}: {f}: missing field \"point\"", path.display()))?;
-                let fo = e
-                    .get("force")
-                    .ok_or_else(|| anyhow!("{}: {f}: missing field \"force\"", path.display()))?;
-                external.push(PointForce {
-                    point: vec3(pt, &format!("{f}.point"), path)?,
-                    force: vec3(fo, &format!("{f}.force"), path)?,
-                });
-            }
-        }
+        let external: Vec<PointForce> = match st.extra.get("external") {
+            Some(ext) => moma::io::states::point_loads(ext, &format!("{field}.external"), path)?
+                .into_iter()
+                .map(|l| PointForce {
+                    point: Vector3::from(l.point),
+                    force: Vector3::from(l.force),
+                })
+                .collect(),
+            None => Vec::new(),
+        };
         let at_rest = vv.iter().chain(&aa).all(|x| *x == 0.0) && external.is_empty();
         out.push(State {
             q: DVector::from_vec(q),
@@ -233,7 +211,7 @@ pub fn run(args: Args) -> Result<()> {
         &args.mhs_bodies,
         args.gravity.as_deref(),
     )?;
-    let states = read_states(&args.states, &model)?;
+    let states = read_states(&args.states, &model, args.layout)?;
     let mut data = moma::multibody::Data::new(&model);
     let mut sd = StabilityData::new(&sm);
     let mut out = Vec::with_capacity(states.len());

@@ -29,6 +29,10 @@ pub struct Args {
     /// The posture q (comma-separated, nq values); default the neutral configuration.
     #[arg(long, allow_hyphen_values = true)]
     pub q: Option<String>,
+    /// Layout of --q: moma or pinocchio (planar root [x, y, cos θ, sin θ]; continuous
+    /// joints as cos, sin).
+    #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
+    pub layout: super::common::Layout,
     /// The two arm joints of the heat map, "JOINT_X,JOINT_Y".
     #[arg(long)]
     pub joints: String,
@@ -99,7 +103,10 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let q0 = match &args.q {
-        Some(t) => DVector::from_vec(super::common::parse_list("--q", t)?),
+        Some(t) => DVector::from_vec(
+            super::common::LayoutConv::new(&model, args.layout)
+                .q_in(super::common::parse_list("--q", t)?, "--q")?,
+        ),
         None => moma::kinematics::neutral(&model),
     };
     check_state(&model, "--q", Some(q0.as_slice()), None, None, None)?;

@@ -193,6 +193,25 @@ pub struct TaskSpace {
     pub manipulability_A: Manipulability,
 }
 
+/// The task-space terms of [`MobileManipulator::task_terms`].
+#[derive(Clone, Debug)]
+pub struct TaskTerms {
+    /// `x = [x_B, y_B, x_E − x_B, y_E − y_B, z_E]`.
+    pub x: SVector<f64, 5>,
+    /// `ẋ = A v`.
+    pub xdot: SVector<f64, 5>,
+    /// `A = J N_C`.
+    pub a: SMatrix<f64, 5, 5>,
+    /// `Hx = A⁻ᵀ Mr A⁻¹` (symmetric positive definite).
+    pub hx: SMatrix<f64, 5, 5>,
+    /// `B V` (the task-space Coriolis matrix, `Ḣx − 2 B V` skew).
+    pub bv: SMatrix<f64, 5, 5>,
+    /// `B G` (task-space gravity).
+    pub bg: SVector<f64, 5>,
+    /// `N_Cᵀ S` (5×5).
+    pub actuation: SMatrix<f64, 5, 5>,
+}
+
 /// Every output of m5 at `(q, v, u)` (names as in the reference vectors).
 #[derive(Clone, Debug, Serialize)]
 #[allow(non_snake_case)]
@@ -412,6 +431,27 @@ impl MobileManipulator {
             BgG: c.b * e.terms.gravity,
             BQ: c.b * e.q_force,
             manipulability_A: manipulability(&to_dmatrix(&c.a))?,
+        })
+    }
+
+    /// The task-space model a feedback law needs at `(q, v)`: `x`, `ẋ = A v`, `A = J N_C`,
+    /// `Hx = A⁻ᵀ Mr A⁻¹`, the Christoffel-consistent `B V`, `B G` and the actuator map
+    /// `N_Cᵀ S` (so that `N_Cᵀ S u = Aᵀ τ_x` gives the inputs of a task force τ_x).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] when A is singular or ill-conditioned.
+    pub fn task_terms(&self, q: &SVector<f64, 6>, v: &SVector<f64, 5>) -> Result<TaskTerms> {
+        let ct = lagrange::constraint_terms(self, q, v);
+        let terms = lagrange::lagrange_terms(self, q, &ct.qdot);
+        let core = self.task_core(q, v, &ct, &terms)?;
+        Ok(TaskTerms {
+            x: core.x,
+            xdot: core.xdot,
+            a: core.a,
+            hx: core.hx,
+            bv: core.b * core.vm,
+            bg: core.b * terms.gravity,
+            actuation: ct.basis.transpose() * self.input_matrix(q),
         })
     }
 

@@ -1,5 +1,6 @@
-//! Input and output: the URDF loader, and the map between moma's state layout and
-//! Pinocchio's.
+//! Input and output: the URDF loader, the JSON states files of the command line, and the
+//! map between moma's state layout and Pinocchio's.
 
 pub mod pinocchio_layout;
+pub mod states;
 pub mod urdf;

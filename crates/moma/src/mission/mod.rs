@@ -14,7 +14,7 @@
 //! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period |
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |
 //! | goal | the base settles on the goal pose, then task-space inverse dynamics on the reduced model brings the end effector along a minimum-jerk line to its target while the platform holds still |
-//! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (lateral multiplier against μ N), torque and speed saturation, tracking error, clearance, energy |
+//! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (the axle's lateral multiplier and the wheels' longitudinal forces against μ N, `stability::loads`), torque and speed saturation, tracking error, clearance, energy |
 //!
 //! A run that starts but cannot finish (an unreachable or sealed goal, a posture under
 //! which every motion tips, a time-out) returns `reached: false` and a reason; input
@@ -27,7 +27,5 @@ pub mod scenario;
 
 pub use plan::SearchTiming;
 pub use reference::{RefSample, Reference};
-pub use run::{
-    Event, MissionResult, PlanRecord, Samples, WallTimes, normal_loads, run, transport_tip_limits,
-};
+pub use run::{Event, MissionResult, PlanRecord, Samples, WallTimes, run, transport_tip_limits};
 pub use scenario::{Mission, MissionFile, load};

@@ -23,6 +23,9 @@ pub(crate) struct Planner {
     pub goal_cell: (usize, usize),
 }
 
+/// A path of cells `(x, y)`, start to goal.
+pub(crate) type CellPath = Vec<(usize, usize)>;
+
 /// One D* Lite query's figures.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct SearchTiming {
@@ -46,7 +49,7 @@ impl Planner {
         footprint_radius: f64,
         start: [f64; 2],
         goal: [f64; 2],
-    ) -> Result<(Self, Option<Vec<(usize, usize)>>, SearchTiming)> {
+    ) -> Result<(Self, Option<CellPath>, SearchTiming)> {
         let (w, h) = (grid.width, grid.height);
         let occupied = grid.obstacle_mask(crate::planning::grid::OCCUPIED, unknown_is_obstacle);
         let dist = distance_transform(&occupied, w, h);
@@ -147,7 +150,9 @@ impl Planner {
         let clock = Instant::now();
         self.move_start(robot_cell)?;
         newly.retain(|&c| self.dstar.grid().is_free(c.0 as i64, c.1 as i64));
-        for &c in &newly {
+        // D* Lite keeps its goal cell free; a disk over the goal is reported by the
+        // caller (the goal's cell in the returned list) instead.
+        for &c in newly.iter().filter(|&&c| c != self.goal_cell) {
             self.dstar.set_blocked(c, true)?;
         }
         Ok((newly, clock.elapsed().as_secs_f64()))

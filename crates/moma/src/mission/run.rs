@@ -23,7 +23,7 @@ use crate::sim::wheeled::ReducedSystem;
 use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{
     AccelerationLimits, BodySet, ExternalLoads, StabilityData, StabilityModel, SupportAttachment,
-    SupportPolygon,
+    SupportPolygon, contact_normal_loads, driven_wheel_friction,
 };
 
 /// Spacing of the reference samples (s).
@@ -95,8 +95,9 @@ pub struct Samples {
     pub clearance: Vec<f64>,
     /// Distance from the reference position (m).
     pub tracking_error: Vec<f64>,
-    /// |lateral axle force| / (μ · drive-wheel normal load); `None` if the wheels carry
-    /// no load.
+    /// Larger drive-wheel slip ratio |(F_long, F_lat)| / (μ N) (`stability::loads`: the
+    /// lateral axle force −λ₀ shared in proportion to the normal loads); `None` if a wheel
+    /// carries no load.
     pub slip_ratio: Vec<Option<f64>>,
     /// Actuator torques per sample (`u`, the model's input order).
     pub u: Vec<Vec<f64>>,
@@ -269,6 +270,13 @@ impl EeTrajectory {
         };
         (self.from + d * p, d * dp, d * ddp)
     }
+}
+
+/// Length of a polyline (m).
+fn path_length(p: &[[f64; 2]]) -> f64 {
+    p.windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum()
 }
 
 /// The tip-over acceleration limits of the robot in its transport posture, at rest, in
@@ -522,6 +530,8 @@ impl<'m> Runner<'m> {
         let sm = StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
         let mut sd = StabilityData::new(&sm);
         let support_pts = wm.base.support_points();
+        let mut contacts = support_pts.clone();
+        let mut loads = vec![0.0; support_pts.len()];
         let mut rk = Rk4::new(nq + nr + 1);
         let mut qv = DVector::zeros(nq);
         let mut vv = DVector::zeros(nr);
@@ -663,15 +673,26 @@ impl<'m> Runner<'m> {
                         break;
                     }
                 };
-                let goal_sealed = newly.contains(&self.planner.goal_cell);
+                if newly.contains(&self.planner.goal_cell) && phase == Phase::Drive {
+                    self.wall.planning_s += s_time;
+                    excluded += clock.elapsed().as_secs_f64();
+                    self.fail(
+                        t,
+                        format!(
+                            "obstacle {oi} (t = {ot} s) seals the goal: the footprint no \
+                             longer fits at the goal pose"
+                        ),
+                    );
+                    phase = Phase::Done;
+                    break;
+                }
                 let affected = phase == Phase::Drive
-                    && (goal_sealed
-                        || self.reference.as_ref().is_some_and(|r| {
-                            r.samples.iter().filter(|s| s.t >= t).any(|s| {
-                                let [cx, cy] = grid.world_to_cell_f(s.x, s.y);
-                                self.planner.blocked_at(cx, cy)
-                            })
-                        }));
+                    && self.reference.as_ref().is_some_and(|r| {
+                        r.samples.iter().filter(|s| s.t >= t).any(|s| {
+                            let [cx, cy] = grid.world_to_cell_f(s.x, s.y);
+                            self.planner.blocked_at(cx, cy)
+                        })
+                    });
                 if affected {
                     let (path, mut timing) = self.planner.replan();
                     timing.search_s += s_time;
@@ -693,12 +714,12 @@ impl<'m> Runner<'m> {
                             {
                                 let p = self.plans.last().expect("just pushed");
                                 let text = format!(
-                                    "re-plan after obstacle {oi}: D* Lite {:.3} ms ({} cells \
-                                     expanded), smoothing + timing {:.3} ms, {:.2} s to go",
-                                    p.search.search_s * 1e3,
+                                    "re-plan after obstacle {oi}: D* Lite expanded {} cells, \
+                                     new path {:.2} m, {:.2} s to go from {:.2} m/s",
                                     p.search.expanded,
-                                    p.smoothing_timing_s * 1e3,
-                                    p.duration
+                                    path_length(&p.path),
+                                    p.duration,
+                                    p.v_start
                                 );
                                 self.event(t, "replan", text);
                             } else {
@@ -766,7 +787,7 @@ impl<'m> Runner<'m> {
             let mut ee_p = Vector3::zeros();
             let mut ee_dp = Vector3::zeros();
             let mut ee_bias = Vector3::zeros();
-            let need_ee = phase == Phase::Reach || k % rec_every == 0;
+            let need_ee = phase == Phase::Reach || k.is_multiple_of(rec_every);
             if need_ee {
                 let qd = &cwd.qdot;
                 let acc = frame_acceleration_bias(
@@ -1019,7 +1040,7 @@ impl<'m> Runner<'m> {
 
             // record
             let last = phase == Phase::Done;
-            if k % rec_every == 0 || last {
+            if k.is_multiple_of(rec_every) || last {
                 let rec = self.record(
                     &mut RecordCtx {
                         mwd: &mut mwd,
@@ -1027,6 +1048,8 @@ impl<'m> Runner<'m> {
                         sm: &sm,
                         sd: &mut sd,
                         support_pts: &support_pts,
+                        contacts: &mut contacts,
+                        loads: &mut loads,
                         chain: &chain,
                     },
                     t,
@@ -1160,7 +1183,10 @@ impl<'m> Runner<'m> {
         let ok = reduced_forward_dynamics(wm, ctx.mwd, q, v, u).is_ok();
         let (mut zmp, mut fa, mut mhs, mut slip) = (None, None, None, None);
         if ok {
-            let lam0 = lagrange_multipliers(wm, ctx.mwd, q).ok().map(|l| l[0]);
+            let lam = lagrange_multipliers(wm, ctx.mwd, q).ok().map(|l| {
+                let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
+                ([at(0), at(1), at(2)], l.len())
+            });
             let rep = crate::stability::evaluate(
                 model,
                 ctx.data,
@@ -1174,13 +1200,33 @@ impl<'m> Runner<'m> {
             zmp = rep.zmp_margin;
             fa = rep.force_angle_min;
             mhs = rep.mhs_min;
-            if let (Some(z), Some(lam)) = (rep.zmp, lam0) {
-                let n_tot = -ctx.sd.wrench.force.z;
-                let loads = normal_loads(ctx.support_pts, q, [z.x, z.y], n_tot);
-                if let Some(nl) = loads {
-                    let nw = nl[0] + nl[1];
-                    if nw > 1e-9 {
-                        slip = Some(lam.abs() / (self.m.file.limits.mu * nw));
+            if let Some((lam, nk)) = lam {
+                // contacts in the world, loads from the wrench (stability::loads)
+                let (sn, cs) = q[2].sin_cos();
+                for (w, p) in ctx.contacts.iter_mut().zip(ctx.support_pts) {
+                    *w = Vector2::new(q[0] + cs * p.x - sn * p.y, q[1] + sn * p.x + cs * p.y);
+                }
+                let ground = ctx.sm.support.ground_z();
+                if contact_normal_loads(ctx.contacts, ground, &ctx.sd.wrench, ctx.loads).is_ok() {
+                    // longitudinal wheel forces: the rolling multipliers of tracked wheels,
+                    // else the wheel torques over the radius
+                    let long = if nk == 3 {
+                        [lam[1], lam[2]]
+                    } else {
+                        let r = wm.base.drive.wheel_radius;
+                        [u[0] / r, u[1] / r]
+                    };
+                    if let Ok(fr) = driven_wheel_friction(
+                        -lam[0],
+                        long,
+                        [ctx.loads[0], ctx.loads[1]],
+                        self.m.file.limits.mu,
+                    ) {
+                        slip = fr
+                            .iter()
+                            .map(|w| w.slip_ratio.unwrap_or(f64::INFINITY))
+                            .reduce(f64::max)
+                            .filter(|x| x.is_finite());
                     }
                 }
             }
@@ -1233,42 +1279,7 @@ struct RecordCtx<'a> {
     sm: &'a StabilityModel,
     sd: &'a mut StabilityData,
     support_pts: &'a [Vector2<f64>],
+    contacts: &'a mut [Vector2<f64>],
+    loads: &'a mut [f64],
     chain: &'a [usize],
-}
-
-/// Normal loads of the support points (base-frame `pts`, placed at the base pose of `q`)
-/// that carry `n_tot` with their centre of pressure at the ZMP `zmp` (world): the
-/// least-norm distribution `N = Aᵀ (A Aᵀ)⁻¹ b` of the three balance equations
-/// `Σ N_i = n_tot`, `Σ N_i (p_i − zmp) = 0`. Loads are not clipped at 0 (a negative load
-/// marks a contact that would lift). `None` if the support is degenerate.
-#[must_use]
-pub fn normal_loads(
-    pts: &[Vector2<f64>],
-    q: &DVector<f64>,
-    zmp: [f64; 2],
-    n_tot: f64,
-) -> Option<Vec<f64>> {
-    let (s, c) = q[2].sin_cos();
-    let rows: Vec<[f64; 3]> = pts
-        .iter()
-        .map(|p| {
-            let wx = q[0] + c * p.x - s * p.y;
-            let wy = q[1] + s * p.x + c * p.y;
-            [1.0, wx - zmp[0], wy - zmp[1]]
-        })
-        .collect();
-    let mut aat = Matrix3::zeros();
-    for r in &rows {
-        for i in 0..3 {
-            for j in 0..3 {
-                aat[(i, j)] += r[i] * r[j];
-            }
-        }
-    }
-    let y = aat.try_inverse()? * Vector3::new(n_tot, 0.0, 0.0);
-    Some(
-        rows.iter()
-            .map(|r| r[0] * y[0] + r[1] * y[1] + r[2] * y[2])
-            .collect(),
-    )
 }

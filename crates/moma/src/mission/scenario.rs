@@ -573,7 +573,7 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| "mission".into())
     });
-    let output_dir = base.join(&file.output.dir);
+    let output_dir = lexical_clean(&base.join(&file.output.dir));
     Ok(Mission {
         name,
         path: path.to_path_buf(),
@@ -585,4 +585,29 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
         q_arm0,
         output_dir,
     })
+}
+
+/// `path` with `.` components dropped and each `..` cancelling the component before it
+/// (lexically, without following symbolic links), so `scenarios/../out` is `out`.
+fn lexical_clean(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out: Vec<Component<'_>> = Vec::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => match out.last() {
+                Some(Component::Normal(_)) => {
+                    out.pop();
+                }
+                Some(Component::RootDir | Component::Prefix(_)) => {}
+                _ => out.push(c),
+            },
+            other => out.push(other),
+        }
+    }
+    if out.is_empty() {
+        PathBuf::from(".")
+    } else {
+        out.iter().collect()
+    }
 }

@@ -550,6 +550,13 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
         self.stats = StepStats::default();
     }
 
+    /// Forgets only the cached derivative `f(t, x)` and keeps the step-size history and
+    /// the statistics: call it when the right-hand side changes between calls of
+    /// `integrate_to` (a zero-order-hold input switching at a control tick).
+    pub fn invalidate_derivative(&mut self) {
+        self.fsal_valid = false;
+    }
+
     /// The step size the controller proposes next (if any step was taken).
     pub fn next_step(&self) -> Option<f64> {
         self.h

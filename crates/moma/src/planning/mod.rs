@@ -9,6 +9,7 @@
 
 pub mod astar;
 pub mod costmap;
+pub mod curvature;
 pub mod dstar_lite;
 pub mod edt;
 pub mod grid;

@@ -5,10 +5,13 @@
 //! working.
 
 pub mod chapter_models;
+pub mod closed_loop;
+pub mod feedback;
 pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
 pub mod scenario;
+pub mod stability_monitor;
 pub mod wheeled;
 pub mod wheeled_system;
 

@@ -129,6 +129,19 @@ pub struct SimulationResult {
     pub monitor: Monitor,
     /// Integrator step statistics.
     pub stats: StepStats,
+    /// The time of the recorded sample at which a [`SampleObserver`] stopped the run
+    /// (the last sample recorded); `None` when the run reached its duration.
+    pub stopped_at: Option<f64>,
+}
+
+/// Watches every recorded sample of a run (after it is recorded) and may end the run
+/// there: [`SampleObserver::observe`] returns `true` to stop.
+pub trait SampleObserver {
+    /// Sees the sample at time `t`: configuration `q`, reduced velocity `v`, input `u`.
+    ///
+    /// # Errors
+    /// An error ends the run with that error.
+    fn observe(&mut self, t: f64, q: &[f64], v: &[f64], u: &[f64]) -> Result<bool>;
 }
 
 /// Simulates `system` from `(q0, v0)` under `input`; `progress(t)` is called after every
@@ -141,13 +154,35 @@ pub fn simulate(
     options: &SimulationOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimulationResult> {
+    simulate_observed(system, input, q0, v0, options, progress, None)
+}
+
+/// [`simulate`] with an `observer` that sees every recorded sample (t = 0 included) and
+/// may stop the run there ([`SimulationResult::stopped_at`]).
+pub fn simulate_observed<'a>(
+    system: &mut dyn ReducedSystem,
+    input: &'a InputProfile,
+    q0: &[f64],
+    v0: &[f64],
+    options: &SimulationOptions,
+    progress: &mut dyn FnMut(f64),
+    observer: Option<&'a mut dyn SampleObserver>,
+) -> Result<SimulationResult> {
     let n_samples = validate_run(system, input, q0, v0, options)?;
     let (nq, nv) = (system.nq(), system.nv());
     let mut x = vec![0.0; nq + nv + 1];
     x[..nq].copy_from_slice(q0);
     x[nq..nq + nv].copy_from_slice(v0);
     let mut rec = RunRecorder::new(system, input, q0, v0, options, n_samples)?;
-    rec.record(system, 0.0, &x)?;
+    rec.observer = observer;
+    if rec.record(system, 0.0, &x)? {
+        return Ok(SimulationResult {
+            recorder: rec.recorder,
+            monitor: rec.monitor,
+            stats: StepStats::default(),
+            stopped_at: Some(0.0),
+        });
+    }
     // One right-hand side for the whole run: building it per step would allocate its
     // input buffer inside the step loop. `record` reaches the system through it.
     let mut ode = ReducedOde::new(system, input)?;
@@ -175,6 +210,7 @@ pub fn simulate(
         recorder: rec.recorder,
         monitor: rec.monitor,
         stats,
+        stopped_at: rec.stopped_at,
     })
 }
 
@@ -234,6 +270,8 @@ fn validate_run(
 
 /// The recorder and monitor of a run, with the buffers one sample needs.
 struct RunRecorder<'a> {
+    observer: Option<&'a mut dyn SampleObserver>,
+    stopped_at: Option<f64>,
     recorder: Recorder,
     monitor: Monitor,
     input: &'a InputProfile,
@@ -263,6 +301,8 @@ impl<'a> RunRecorder<'a> {
         recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
         let (t0, p0) = system.energy(q0, v0)?;
         Ok(Self {
+            observer: None,
+            stopped_at: None,
             recorder,
             monitor: Monitor::new(options.limits, t0, p0),
             input,
@@ -273,8 +313,9 @@ impl<'a> RunRecorder<'a> {
         })
     }
 
-    /// Monitors and records the state `x = [q, v, W]` at time `t`.
-    fn record(&mut self, system: &mut dyn ReducedSystem, t: f64, x: &[f64]) -> Result<()> {
+    /// Monitors and records the state `x = [q, v, W]` at time `t`; true when the
+    /// observer stops the run here.
+    fn record(&mut self, system: &mut dyn ReducedSystem, t: f64, x: &[f64]) -> Result<bool> {
         let (nq, nv) = (self.nq, self.nv);
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         self.input.eval(t, &mut self.u);
@@ -293,7 +334,13 @@ impl<'a> RunRecorder<'a> {
             work: x[nq + nv],
             residual: res,
         });
-        Ok(())
+        if let Some(obs) = self.observer.as_mut()
+            && obs.observe(t, q, v, &self.u)?
+        {
+            self.stopped_at = Some(t);
+            return Ok(true);
+        }
+        Ok(false)
     }
 }
 
@@ -317,8 +364,11 @@ fn run_rk4(
         rk.step(ode, t, x, h)?;
         if (s + 1) % every == 0 || s + 1 == steps {
             let t1 = (s + 1) as f64 * h;
-            rec.record(&mut *ode.system, t1, x)?;
+            let stop = rec.record(&mut *ode.system, t1, x)?;
             progress(t1);
+            if stop {
+                break;
+            }
         }
     }
     Ok(rk.stats)
@@ -339,9 +389,9 @@ fn run_adaptive(
     loop {
         let te = (k as f64 * options.record_interval).min(options.duration);
         dp.integrate_to(ode, &mut t, x, te)?;
-        rec.record(&mut *ode.system, te, x)?;
+        let stop = rec.record(&mut *ode.system, te, x)?;
         progress(te);
-        if te >= options.duration {
+        if stop || te >= options.duration {
             break;
         }
         k += 1;

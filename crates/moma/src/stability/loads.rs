@@ -34,12 +34,13 @@
 //! (see [`crate::mobile`]); two wheels on one axle share it in a way rigid-body
 //! mechanics does not fix. The rule used: **in proportion to the wheels' normal loads**
 //! (negative loads counted as zero; equal shares if neither wheel is loaded), so both
-//! wheels carry the same fraction of their load, the split that lets the axle hold the
-//! largest force before either wheel slides. The longitudinal (traction or braking) force
-//! of each wheel adds to it: the friction demand is `|(F_long, F_lat,i)|` against the
-//! Coulomb limit `μ N_i`, and the slip ratio `|F| / (μ N_i)` exceeds one where the wheel
-//! would slide. A wheel with `N_i ≤ 0` has no ratio (`None`) and slides as soon as any
-//! tangential force is asked of it.
+//! wheels carry the same fraction of their load in lateral force: of all splits, the one
+//! that lets the axle alone hold the largest lateral force before either wheel slides.
+//! The longitudinal (traction or braking) force of each wheel adds to it: the friction
+//! demand is `|(F_long, F_lat,i)|` against the Coulomb limit `μ N_i`, and the slip ratio
+//! `|F| / (μ N_i)` exceeds one where the wheel would slide. An unloaded wheel (`N_i` not
+//! above a nano-newton) has no ratio (`None`) and slides as soon as a tangential force
+//! (above a nano-newton) is asked of it.
 
 use nalgebra::{Matrix3, Vector2, Vector3};
 
@@ -180,6 +181,11 @@ pub fn load_equilibrium_residual(
     an - equilibrium_rhs(wrench, &c, ground_z)
 }
 
+/// Forces below this (N) are rounding, not forces: a wheel whose normal load is not above
+/// it is unloaded (no slip ratio), and a tangential force not above it asked of an
+/// unloaded wheel does not make it slide.
+pub const UNLOADED_FORCE_TOL: f64 = 1e-9;
+
 /// The friction demand of one driven wheel.
 #[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize)]
 pub struct WheelFriction {
@@ -190,10 +196,10 @@ pub struct WheelFriction {
     pub lateral: f64,
     /// Longitudinal ground force along the heading (N): traction (+) or braking (−).
     pub longitudinal: f64,
-    /// `|(F_long, F_lat)| / (μ N)`; `None` when `N ≤ 0`.
+    /// `|(F_long, F_lat)| / (μ N)`; `None` when `N ≤` [`UNLOADED_FORCE_TOL`].
     pub slip_ratio: Option<f64>,
-    /// True when the wheel would slide: ratio above one, or a tangential force asked of
-    /// an unloaded wheel.
+    /// True when the wheel would slide: ratio above one, or a tangential force (above
+    /// [`UNLOADED_FORCE_TOL`]) asked of an unloaded wheel.
     pub slips: bool,
 }
 
@@ -239,11 +245,11 @@ pub fn driven_wheel_friction(
     for i in 0..2 {
         let lateral = axle_lateral * share[i];
         let demand = lateral.hypot(longitudinal[i]);
-        let (slip_ratio, slips) = if normal[i] > 0.0 {
+        let (slip_ratio, slips) = if normal[i] > UNLOADED_FORCE_TOL {
             let r = demand / (mu * normal[i]);
             (Some(r), r > 1.0)
         } else {
-            (None, demand > 0.0)
+            (None, demand > UNLOADED_FORCE_TOL)
         };
         out[i] = WheelFriction {
             normal: normal[i],

@@ -1,0 +1,488 @@
+//! Closed-loop simulation: a feedback law driving a [`ReducedSystem`].
+//!
+//! The controller is sampled with a **zero-order hold**: at every control tick
+//! `t_k = k T` it reads the state `(q, v)` and writes the actuator inputs `u_k`, which are
+//! held over `[t_k, t_{k+1})` while the plant is integrated (fixed-step RK4 with `dt`
+//! dividing `T`, or adaptive Dormand–Prince 5(4) stopping exactly at every tick, its
+//! cached derivative dropped at each switch). With no control period the law is
+//! evaluated inside the right-hand side (continuous feedback), which is what an
+//! exact-model test needs (the closed loop is then an ODE the integrator resolves to its
+//! tolerance).
+//!
+//! The state is `[q, v, W]` as in [`crate::sim::wheeled`], so the energy balance of the
+//! plant (`T + V − T₀ − V₀ − W`, with the held inputs' work `W`) and the constraint residual
+//! are monitored as in open loop. In addition, at every recorded sample the controller
+//! reports its tracking error and, when the law has one, its Lyapunov value `V` and the
+//! analytic rate `V̇`; a [`LyapunovMonitor`] turns those into the run's report
+//! (monotonicity violations with their time, the largest gap between the recorded `V`
+//! and `V₀ + ∫ V̇`). Saturation of wheel speeds or torques is counted per tick with the
+//! first time it happened.
+
+use crate::control::lyapunov::{LyapunovMonitor, LyapunovReport};
+use crate::error::{Error, Result};
+use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+use crate::sim::monitor::{Monitor, MonitorLimits};
+use crate::sim::recorder::{Recorder, Sample};
+use crate::sim::scenario::IntegratorSettings;
+use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, MAX_RK4_STEPS, ReducedSystem};
+
+/// Largest number of control ticks a run accepts (`duration / control_period`).
+pub const MAX_CONTROL_TICKS: f64 = 100_000_000.0;
+
+/// What limited the command at one control tick.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SaturationFlags {
+    /// A wheel-speed (or other velocity) limit scaled the command down.
+    pub speed: bool,
+    /// A torque limit clipped an actuator input.
+    pub torque: bool,
+}
+
+/// What the controller reports at a recorded sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Observation {
+    /// The Lyapunov value V, if the law has one.
+    pub lyapunov: Option<f64>,
+    /// The law's analytic rate V̇ at this state (with its own, unsaturated actuation).
+    pub lyapunov_rate: Option<f64>,
+}
+
+/// A feedback law on a [`ReducedSystem`]: reads `(t, q, v)`, writes the actuator inputs.
+pub trait FeedbackLaw {
+    /// Number of inputs it writes (the plant's `nu`).
+    fn nu(&self) -> usize;
+    /// Names of the tracking-error components it reports (with units in brackets).
+    fn error_names(&self) -> Vec<String>;
+    /// Whether [`FeedbackLaw::observe`] reports a Lyapunov value.
+    fn has_lyapunov(&self) -> bool;
+    /// Writes the inputs `u` at `(t, q, v)` and says what saturated.
+    ///
+    /// # Errors
+    /// When the law is undefined at this state (a singular task Jacobian, …).
+    fn control(&mut self, t: f64, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<SaturationFlags>;
+    /// Writes the tracking error at `(t, q, v)` into `error` and returns V, V̇.
+    ///
+    /// # Errors
+    /// As [`FeedbackLaw::control`].
+    fn observe(&mut self, t: f64, q: &[f64], v: &[f64], error: &mut [f64]) -> Result<Observation>;
+}
+
+/// Settings of a closed-loop run.
+#[derive(Debug, Clone, Copy)]
+pub struct ClosedLoopOptions {
+    /// Duration (s), > 0.
+    pub duration: f64,
+    /// Plant integrator.
+    pub integrator: IntegratorSettings,
+    /// Control period T (s) of the zero-order hold; `None`: continuous feedback. The
+    /// period is rounded so that a whole number of ticks fills the duration.
+    pub control_period: Option<f64>,
+    /// Recording interval (s) (rounded to a whole number of ticks under a hold).
+    pub record_interval: f64,
+    /// Monitor limits.
+    pub limits: MonitorLimits,
+    /// Increase of V between consecutive samples tolerated as round-off.
+    pub lyapunov_tolerance: f64,
+}
+
+/// Saturation statistics of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SaturationReport {
+    /// Control evaluations.
+    pub evaluations: usize,
+    /// Evaluations whose velocity command was scaled down.
+    pub speed: usize,
+    /// Evaluations with a clipped torque.
+    pub torque: usize,
+    /// First time a speed limit acted.
+    pub first_speed: Option<f64>,
+    /// First time a torque limit acted.
+    pub first_torque: Option<f64>,
+}
+
+impl SaturationReport {
+    fn add(&mut self, t: f64, f: SaturationFlags) {
+        self.evaluations += 1;
+        if f.speed {
+            self.speed += 1;
+            self.first_speed.get_or_insert(t);
+        }
+        if f.torque {
+            self.torque += 1;
+            self.first_torque.get_or_insert(t);
+        }
+    }
+}
+
+/// The result of a closed-loop run.
+#[derive(Debug, Clone)]
+pub struct ClosedLoopResult {
+    /// The sampled trajectory (q, v, the applied inputs u, energies, residual).
+    pub recorder: Recorder,
+    /// Energy-balance and residual statistics of the plant.
+    pub monitor: Monitor,
+    /// Integrator statistics.
+    pub stats: StepStats,
+    /// Names of the tracking-error components.
+    pub error_names: Vec<String>,
+    /// Tracking errors, one row of `error_names.len()` per sample.
+    pub errors: Vec<f64>,
+    /// V per sample (empty when the law has no Lyapunov function).
+    pub lyapunov: Vec<f64>,
+    /// The law's analytic V̇ per sample (empty likewise).
+    pub lyapunov_rate: Vec<f64>,
+    /// The Lyapunov monitor's summary (`None` without a Lyapunov function).
+    pub lyapunov_report: Option<LyapunovReport>,
+    /// Saturation statistics.
+    pub saturation: SaturationReport,
+    /// Control ticks (evaluations of the law under a hold; right-hand-side calls when
+    /// continuous).
+    pub control_ticks: usize,
+    /// The control period actually used (`None`: continuous).
+    pub control_period: Option<f64>,
+}
+
+impl ClosedLoopResult {
+    /// The tracking-error row of sample `i`.
+    #[must_use]
+    pub fn error_row(&self, i: usize) -> &[f64] {
+        let m = self.error_names.len();
+        &self.errors[i * m..(i + 1) * m]
+    }
+}
+
+/// The plant ODE `[q, v, W]` under either held inputs or continuous feedback.
+struct LoopOde<'a> {
+    system: &'a mut dyn ReducedSystem,
+    law: &'a mut dyn FeedbackLaw,
+    continuous: bool,
+    u: Vec<f64>,
+    saturation: SaturationReport,
+}
+
+impl OdeSystem for LoopOde<'_> {
+    fn dim(&self) -> usize {
+        self.system.nq() + self.system.nv() + 1
+    }
+
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
+        let (nq, nv) = (self.system.nq(), self.system.nv());
+        let (q, rest) = x.split_at(nq);
+        let v = &rest[..nv];
+        if self.continuous {
+            let f = self.law.control(t, q, v, &mut self.u)?;
+            self.saturation.add(t, f);
+        }
+        let (qd, rest_d) = dx.split_at_mut(nq);
+        let (vd, wd) = rest_d.split_at_mut(nv);
+        self.system
+            .dynamics(q, v, &self.u, qd, vd)
+            .map_err(|e| e.singular_at_time(t))?;
+        wd[0] = self.system.input_power(q, v, &self.u)?;
+        Ok(())
+    }
+}
+
+struct Rec {
+    recorder: Recorder,
+    monitor: Monitor,
+    lyap: Option<LyapunovMonitor>,
+    errors: Vec<f64>,
+    err: Vec<f64>,
+    lambda: Vec<f64>,
+    rate: Vec<f64>,
+}
+
+impl Rec {
+    fn record(&mut self, ode: &mut LoopOde<'_>, t: f64, x: &[f64]) -> Result<()> {
+        let (nq, nv) = (ode.system.nq(), ode.system.nv());
+        let (q, v) = (&x[..nq], &x[nq..nq + nv]);
+        if ode.continuous {
+            // the input applied at this instant
+            ode.law.control(t, q, v, &mut ode.u)?;
+        }
+        let (kin, pot) = ode.system.energy(q, v)?;
+        let res = ode.system.constraint_residual(q, v)?;
+        self.monitor.check(t, x, kin, pot, x[nq + nv], res)?;
+        ode.system.multipliers(q, v, &ode.u, &mut self.lambda)?;
+        self.recorder.lambda.extend_from_slice(&self.lambda);
+        self.recorder.push(Sample {
+            t,
+            q,
+            v,
+            u: &ode.u,
+            kinetic: kin,
+            potential: pot,
+            work: x[nq + nv],
+            residual: res,
+        });
+        let obs = ode.law.observe(t, q, v, &mut self.err)?;
+        self.errors.extend_from_slice(&self.err);
+        if let (Some(m), Some(val)) = (self.lyap.as_mut(), obs.lyapunov) {
+            m.record(t, val, obs.lyapunov_rate);
+            self.rate.push(obs.lyapunov_rate.unwrap_or(f64::NAN));
+        }
+        Ok(())
+    }
+}
+
+fn positive(field: &str, x: f64) -> Result<()> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("must be a positive finite number, got {x}"),
+        ))
+    }
+}
+
+/// Runs `law` on `system` from `(q0, v0)`; `progress(t)` is called after every recorded
+/// sample.
+///
+/// # Errors
+/// Invalid options or initial state (named), a run that goes numerically wrong (with its
+/// time), or a law that fails at some state.
+///
+/// # Panics
+/// If `law.nu()` differs from `system.nu()`.
+#[allow(clippy::too_many_lines)]
+pub fn simulate_closed_loop(
+    system: &mut dyn ReducedSystem,
+    law: &mut dyn FeedbackLaw,
+    q0: &[f64],
+    v0: &[f64],
+    options: &ClosedLoopOptions,
+    progress: &mut dyn FnMut(f64),
+) -> Result<ClosedLoopResult> {
+    assert_eq!(
+        law.nu(),
+        system.nu(),
+        "law and plant disagree on the inputs"
+    );
+    crate::error::ensure_len("initial q", system.nq(), q0.len())?;
+    crate::error::ensure_len("initial v", system.nv(), v0.len())?;
+    crate::error::ensure_finite("initial q", q0)?;
+    crate::error::ensure_finite("initial v", v0)?;
+    options.integrator.validate()?;
+    positive("duration", options.duration)?;
+    positive("record interval", options.record_interval)?;
+    if !(options.lyapunov_tolerance.is_finite() && options.lyapunov_tolerance >= 0.0) {
+        return Err(Error::invalid(
+            "lyapunov tolerance",
+            "must be a finite number >= 0",
+        ));
+    }
+    let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
+    // Tick and recording grid.
+    let (ticks, period, every) = match options.control_period {
+        Some(p) => {
+            positive("controller.period", p)?;
+            let n = (options.duration / p).round().max(1.0);
+            if n > MAX_CONTROL_TICKS {
+                return Err(Error::invalid(
+                    "controller.period",
+                    format!(
+                        "duration / period = {n:e} ticks exceeds the limit of {MAX_CONTROL_TICKS:e}"
+                    ),
+                ));
+            }
+            let h = options.duration / n;
+            let every = (options.record_interval / h).round().max(1.0);
+            (n as usize, h, every as usize)
+        }
+        None => {
+            let n = (options.duration / options.record_interval).ceil();
+            if n > MAX_RECORDED_SAMPLES {
+                return Err(Error::invalid(
+                    "record interval",
+                    format!(
+                        "duration / record interval = {n:e} samples exceeds the limit of {MAX_RECORDED_SAMPLES:e}"
+                    ),
+                ));
+            }
+            (n as usize, options.record_interval, 1)
+        }
+    };
+    let n_samples = ticks / every + 2;
+    if n_samples as f64 > MAX_RECORDED_SAMPLES {
+        return Err(Error::invalid(
+            "record interval",
+            format!("{n_samples} samples exceed the limit of {MAX_RECORDED_SAMPLES:e}"),
+        ));
+    }
+    if let IntegratorSettings::Rk4 { dt } = options.integrator {
+        let steps = (options.duration / dt).round();
+        if steps > MAX_RK4_STEPS {
+            return Err(Error::invalid(
+                "integrator.dt",
+                format!("duration / dt = {steps:e} steps exceeds the limit of {MAX_RK4_STEPS:e}"),
+            ));
+        }
+    }
+    let mut recorder = Recorder::new(
+        system.q_names(),
+        system.v_names(),
+        system.u_names(),
+        n_samples,
+    );
+    recorder.set_units(system.q_units(), system.v_units(), system.u_units());
+    let nk = system.nk();
+    recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
+    let (t0, p0) = system.energy(q0, v0)?;
+    let error_names = law.error_names();
+    let ne = error_names.len();
+    let has_v = law.has_lyapunov();
+    let mut rec = Rec {
+        recorder,
+        monitor: Monitor::new(options.limits, t0, p0),
+        lyap: has_v.then(|| LyapunovMonitor::with_capacity(n_samples, options.lyapunov_tolerance)),
+        errors: Vec::with_capacity(n_samples * ne),
+        err: vec![0.0; ne],
+        lambda: vec![0.0; nk],
+        rate: Vec::with_capacity(if has_v { n_samples } else { 0 }),
+    };
+    let mut x = vec![0.0; nq + nv + 1];
+    x[..nq].copy_from_slice(q0);
+    x[nq..nq + nv].copy_from_slice(v0);
+    let continuous = options.control_period.is_none();
+    let mut ode = LoopOde {
+        system,
+        law,
+        continuous,
+        u: vec![0.0; nu],
+        saturation: SaturationReport::default(),
+    };
+    let mut evaluations = 0usize;
+    if !continuous {
+        let f = ode.law.control(0.0, q0, v0, &mut ode.u)?;
+        ode.saturation.add(0.0, f);
+        evaluations += 1;
+    }
+    rec.record(&mut ode, 0.0, &x)?;
+    let stats = match options.integrator {
+        IntegratorSettings::Rk4 { dt } => {
+            let mut rk = Rk4::new(x.len());
+            rk.blowup = options.limits.blowup;
+            // sub-steps per tick (hold) or per recording interval (continuous)
+            let sub = (period / dt).round().max(1.0) as usize;
+            let h = period / sub as f64;
+            for k in 0..ticks {
+                let t0 = k as f64 * period;
+                for s in 0..sub {
+                    rk.step(&mut ode, t0 + s as f64 * h, &mut x, h)?;
+                }
+                let t1 = if k + 1 == ticks {
+                    options.duration
+                } else {
+                    (k + 1) as f64 * period
+                };
+                tick_end(
+                    &mut ode,
+                    &mut rec,
+                    &mut evaluations,
+                    k,
+                    ticks,
+                    every,
+                    t1,
+                    &x,
+                    progress,
+                )?;
+            }
+            rk.stats
+        }
+        IntegratorSettings::Adaptive {
+            rtol,
+            atol,
+            max_step,
+        } => {
+            let opts = AdaptiveOptions {
+                rtol,
+                atol,
+                blowup: options.limits.blowup,
+                max_step: max_step.unwrap_or(f64::INFINITY).min(period),
+                max_steps: 50_000_000,
+                ..AdaptiveOptions::default()
+            };
+            let mut dp = DormandPrince45::new(x.len(), opts)?;
+            let mut t = 0.0;
+            for k in 0..ticks {
+                let t1 = if k + 1 == ticks {
+                    options.duration
+                } else {
+                    ((k + 1) as f64 * period).min(options.duration)
+                };
+                dp.integrate_to(&mut ode, &mut t, &mut x, t1)?;
+                tick_end(
+                    &mut ode,
+                    &mut rec,
+                    &mut evaluations,
+                    k,
+                    ticks,
+                    every,
+                    t1,
+                    &x,
+                    progress,
+                )?;
+                if !continuous {
+                    // the held input has switched: f(t, x) changed
+                    dp.invalidate_derivative();
+                }
+            }
+            dp.stats
+        }
+    };
+    let control_ticks = if continuous {
+        ode.saturation.evaluations
+    } else {
+        evaluations
+    };
+    let lyapunov_report = rec.lyap.as_ref().map(LyapunovMonitor::report);
+    let lyapunov = rec
+        .lyap
+        .as_ref()
+        .map(|m| m.values().to_vec())
+        .unwrap_or_default();
+    Ok(ClosedLoopResult {
+        recorder: rec.recorder,
+        monitor: rec.monitor,
+        stats,
+        error_names,
+        errors: rec.errors,
+        lyapunov,
+        lyapunov_rate: rec.rate,
+        lyapunov_report,
+        saturation: ode.saturation,
+        control_ticks,
+        control_period: options.control_period.map(|_| period),
+    })
+}
+
+/// End of tick `k` at time `t1`: record if due, then (under a hold) sample the law for
+/// the next tick.
+#[allow(clippy::too_many_arguments)]
+fn tick_end(
+    ode: &mut LoopOde<'_>,
+    rec: &mut Rec,
+    evaluations: &mut usize,
+    k: usize,
+    ticks: usize,
+    every: usize,
+    t1: f64,
+    x: &[f64],
+    progress: &mut dyn FnMut(f64),
+) -> Result<()> {
+    let last = k + 1 == ticks;
+    let (nq, nv) = (ode.system.nq(), ode.system.nv());
+    if !ode.continuous && !last {
+        let (q, v) = (&x[..nq], &x[nq..nq + nv]);
+        let f = ode.law.control(t1, q, v, &mut ode.u)?;
+        ode.saturation.add(t1, f);
+        *evaluations += 1;
+    }
+    if (k + 1).is_multiple_of(every) || last {
+        rec.record(ode, t1, x)?;
+        progress(t1);
+    }
+    Ok(())
+}
