@@ -369,9 +369,39 @@ fn shipped_example_sweeps_load() {
         "panda_placement.toml",
     ] {
         let s = Sweep::from_file(root().join("scenarios/sweeps").join(name)).unwrap();
-        assert!(s.len() > 0, "{name}");
+        assert!(!s.is_empty(), "{name}");
         s.evaluate(s.len() - 1).unwrap();
     }
     let s = Sweep::from_file(root().join("scenarios/sweeps/tiago_stability.toml")).unwrap();
     assert_eq!(s.len(), 10_000);
+}
+
+#[test]
+fn a_mission_row_is_the_mission_run_with_the_point_applied() {
+    let text = format!(
+        "study = \"mission\"\n[parameters]\nobstacle_t = [1.0, 9.0]\n[mission]\nscenario = \"{}\"\n",
+        root().join("scenarios/mission.toml").display()
+    );
+    let s = sweep(&text).unwrap();
+    let cols = s.columns();
+    let one = s.run(&[0, 1], 1).unwrap().without_timing();
+    let two = s.run(&[0, 1], 2).unwrap().without_timing();
+    assert_eq!(one, two);
+    // point 1 by hand: the scenario with its obstacle arriving at t = 9 s
+    let path = root().join("scenarios/mission.toml");
+    let mut file = moma::mission::load(&path).unwrap().file;
+    file.obstacles[0].t = 9.0;
+    let m = moma::mission::scenario::from_file(file, &path, &root().join("scenarios")).unwrap();
+    let r = moma::mission::run(&m).unwrap();
+    let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
+    let row = &one.rows[1];
+    assert_eq!(row[col("reached")], Value::Bool(r.reached));
+    assert_eq!(row[col("time_to_goal")], Value::opt(r.time_to_goal));
+    assert_eq!(row[col("replans")], Value::Int(r.replans() as i64));
+    assert_eq!(row[col("min_zmp_margin")], Value::opt(r.min_zmp_margin()));
+    // an obstacle parameter needs an obstacle in the scenario
+    let e = sweep(&text.replace("obstacle_t", "wobble"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("parameters.wobble"), "{e}");
 }

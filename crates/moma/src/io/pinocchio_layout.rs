@@ -73,8 +73,8 @@ struct JointMap {
 /// The map between a model's moma layout and Pinocchio's (see the module docs).
 #[derive(Clone, Debug)]
 pub struct PinocchioLayout {
-    nq: usize,
-    nq_pin: usize,
+    moma_nq: usize,
+    pinocchio_nq: usize,
     nv: usize,
     joints: Vec<JointMap>,
     /// `(idx_q, idx_v)` of the planar root, if any.
@@ -117,8 +117,8 @@ impl PinocchioLayout {
             };
         }
         Self {
-            nq: model.nq,
-            nq_pin: iq_pin,
+            moma_nq: model.nq,
+            pinocchio_nq: iq_pin,
             nv: model.nv,
             joints,
             planar,
@@ -128,7 +128,7 @@ impl PinocchioLayout {
     /// Length of Pinocchio's configuration vector.
     #[must_use]
     pub fn nq(&self) -> usize {
-        self.nq_pin
+        self.pinocchio_nq
     }
 
     /// Length of the velocity vector (the same in both layouts).
@@ -154,8 +154,8 @@ impl PinocchioLayout {
     /// # Panics
     /// If `out` does not have the model's nq.
     pub fn q_from_pinocchio(&self, q_pin: &[f64], out: &mut [f64]) -> Result<()> {
-        assert_eq!(out.len(), self.nq, "out length");
-        ensure_len("q (Pinocchio layout)", self.nq_pin, q_pin.len())?;
+        assert_eq!(out.len(), self.moma_nq, "out length");
+        ensure_len("q (Pinocchio layout)", self.pinocchio_nq, q_pin.len())?;
         ensure_finite("q (Pinocchio layout)", q_pin)?;
         for j in &self.joints {
             let p = j.iq_pin;
@@ -177,8 +177,8 @@ impl PinocchioLayout {
     /// # Panics
     /// On wrong lengths.
     pub fn q_to_pinocchio(&self, q: &[f64], out: &mut [f64]) {
-        assert_eq!(q.len(), self.nq, "q length");
-        assert_eq!(out.len(), self.nq_pin, "out length");
+        assert_eq!(q.len(), self.moma_nq, "q length");
+        assert_eq!(out.len(), self.pinocchio_nq, "out length");
         for j in &self.joints {
             let p = j.iq_pin;
             match j.kind {
@@ -201,7 +201,7 @@ impl PinocchioLayout {
 
     /// The planar root's `(cos θ, sin θ, idx_v)` at moma configuration `q`.
     fn heading(&self, q: &[f64]) -> Option<(f64, f64, usize)> {
-        assert_eq!(q.len(), self.nq, "q length");
+        assert_eq!(q.len(), self.moma_nq, "q length");
         self.planar.map(|(iq, iv)| {
             let (s, c) = q[iq + 2].sin_cos();
             (c, s, iv)

@@ -5,7 +5,7 @@
 //! sampling, and the parameters:
 //!
 //! ```toml
-//! study = "stability"            # stability | placement
+//! study = "stability"            # stability | placement | mission
 //! [sample]
 //! mode = "grid"                  # grid (cartesian product) | random (count, seed)
 //! [parameters]
@@ -39,6 +39,7 @@
 //! Rust's shortest round-trip formatting, so the result columns are byte-identical
 //! whatever the thread count, the shard count or the machine's load.
 
+mod mission;
 mod placement;
 mod stability;
 mod table;
@@ -159,6 +160,7 @@ struct FileSpec {
     parameters: std::collections::BTreeMap<toml::Spanned<String>, toml::Value>,
     stability: Option<toml::Value>,
     placement: Option<toml::Value>,
+    mission: Option<toml::Value>,
 }
 
 #[derive(Deserialize, Default)]
@@ -171,14 +173,16 @@ struct SampleSpec {
 
 /// The prepared study.
 enum Study {
-    Stability(stability::StabilityStudy),
+    Stability(Box<stability::StabilityStudy>),
     Placement(placement::PlacementStudy),
+    Mission(Box<mission::MissionStudy>),
 }
 
 /// Per-worker workspace of a study.
 enum Workspace {
     Stability(Box<stability::Workspace>),
     Placement(Box<placement::Workspace>),
+    Mission(mission::Workspace),
 }
 
 /// A loaded, validated sweep: the study with its robot, the parameters and the sampling.
@@ -416,6 +420,7 @@ impl Sweep {
         let other_sections = [
             ("stability", &spec.stability),
             ("placement", &spec.placement),
+            ("mission", &spec.mission),
         ];
         for (name, v) in other_sections {
             if v.is_some() && name != spec.study {
@@ -430,23 +435,29 @@ impl Sweep {
             }
         }
         let study = match spec.study.as_str() {
-            "stability" => Study::Stability(stability::StabilityStudy::new(
+            "stability" => Study::Stability(Box::new(stability::StabilityStudy::new(
                 path,
                 dir,
                 section("stability", &spec.stability)?,
                 &parameters,
-            )?),
+            )?)),
             "placement" => Study::Placement(placement::PlacementStudy::new(
                 path,
                 dir,
                 section("placement", &spec.placement)?,
                 &parameters,
             )?),
+            "mission" => Study::Mission(Box::new(mission::MissionStudy::new(
+                path,
+                dir,
+                section("mission", &spec.mission)?,
+                &parameters,
+            )?)),
             other => {
                 return Err(file_error(
                     path,
                     "study",
-                    format!("unknown study '{other}' (expected stability or placement)"),
+                    format!("unknown study '{other}' (expected stability, placement or mission)"),
                 ));
             }
         };
@@ -460,7 +471,7 @@ impl Sweep {
         })
     }
 
-    /// The study's name (`stability`, `placement`).
+    /// The study's name (`stability`, `placement`, `mission`).
     #[must_use]
     pub fn study(&self) -> &str {
         &self.study_name
@@ -500,6 +511,7 @@ impl Sweep {
         match &self.study {
             Study::Stability(_) => stability::RESULTS,
             Study::Placement(_) => placement::RESULTS,
+            Study::Mission(_) => mission::RESULTS,
         }
     }
 
@@ -555,6 +567,7 @@ impl Sweep {
         match &self.study {
             Study::Stability(s) => Workspace::Stability(Box::new(s.workspace())),
             Study::Placement(s) => Workspace::Placement(Box::new(s.workspace())),
+            Study::Mission(s) => Workspace::Mission(s.workspace()),
         }
     }
 
@@ -567,6 +580,7 @@ impl Sweep {
         match (&self.study, ws) {
             (Study::Stability(s), Workspace::Stability(w)) => s.evaluate(w, &point, &mut row),
             (Study::Placement(s), Workspace::Placement(w)) => s.evaluate(w, &point, &mut row),
+            (Study::Mission(s), Workspace::Mission(w)) => s.evaluate(w, &point, &mut row),
             _ => unreachable!("a workspace is made by its own study"),
         }
         .map_err(|e| Error::invalid(format!("sweep point {index}"), e.to_string()))?;

@@ -1,0 +1,202 @@
+//! The mission study: one full mission run ([`crate::mission::run`]) per point, with the
+//! scenario's start, goal, first obstacle and limits taken from the point. Each point
+//! re-validates the modified scenario as `moma mission` would; a point whose scenario is
+//! invalid (a start off the map, say) or whose run fails is a row with `reached = false`
+//! and the message in `reason`, so one bad corner of a sweep does not stop it.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::{Parameter, Value, file_error, num, require_numbers, resolve};
+use crate::error::Result;
+use crate::mission::{self, MissionFile};
+
+/// Result columns of the mission study (the summary's fields).
+pub(super) const RESULTS: &[&str] = &[
+    "reached",
+    "reason",
+    "time_to_goal",
+    "simulated_time",
+    "replans",
+    "min_zmp_margin",
+    "min_force_angle",
+    "min_moment_height",
+    "min_clearance",
+    "max_tracking_error",
+    "max_slip_ratio",
+    "torque_saturated_steps",
+    "speed_saturated_steps",
+    "input_work",
+];
+
+const NAMES: &str = "start_x, start_y, start_yaw, goal_x, goal_y, goal_yaw, obstacle_t, \
+                     obstacle_x, obstacle_y, obstacle_radius, v_max, omega_max, a_max, \
+                     alpha_max, mu, tip_fraction";
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Spec {
+    scenario: String,
+}
+
+#[derive(Clone, Copy)]
+enum Slot {
+    StartX,
+    StartY,
+    StartYaw,
+    GoalX,
+    GoalY,
+    GoalYaw,
+    ObstacleT,
+    ObstacleX,
+    ObstacleY,
+    ObstacleRadius,
+    VMax,
+    OmegaMax,
+    AMax,
+    AlphaMax,
+    Mu,
+    TipFraction,
+}
+
+/// The prepared study: the scenario as loaded (validated once at load).
+pub(super) struct MissionStudy {
+    path: PathBuf,
+    base: PathBuf,
+    file: MissionFile,
+    slots: Vec<Slot>,
+}
+
+/// Per-worker workspace (a mission run builds its own state).
+pub(super) struct Workspace;
+
+impl MissionStudy {
+    pub(super) fn new(
+        path: &Path,
+        dir: &Path,
+        section: toml::Value,
+        params: &[Parameter],
+    ) -> Result<Self> {
+        let spec: Spec = section
+            .try_into()
+            .map_err(|e: toml::de::Error| file_error(path, "mission", e.message()))?;
+        let scenario = resolve(dir, &spec.scenario);
+        let m = mission::load(&scenario)?;
+        let mut slots = Vec::with_capacity(params.len());
+        for p in params {
+            let slot = match p.name.as_str() {
+                "start_x" => Slot::StartX,
+                "start_y" => Slot::StartY,
+                "start_yaw" => Slot::StartYaw,
+                "goal_x" => Slot::GoalX,
+                "goal_y" => Slot::GoalY,
+                "goal_yaw" => Slot::GoalYaw,
+                "obstacle_t" => Slot::ObstacleT,
+                "obstacle_x" => Slot::ObstacleX,
+                "obstacle_y" => Slot::ObstacleY,
+                "obstacle_radius" => Slot::ObstacleRadius,
+                "v_max" => Slot::VMax,
+                "omega_max" => Slot::OmegaMax,
+                "a_max" => Slot::AMax,
+                "alpha_max" => Slot::AlphaMax,
+                "mu" => Slot::Mu,
+                "tip_fraction" => Slot::TipFraction,
+                n => {
+                    return Err(file_error(
+                        path,
+                        &format!("parameters.{n}"),
+                        format!("unknown parameter of the mission study (expected {NAMES})"),
+                    ));
+                }
+            };
+            if matches!(
+                slot,
+                Slot::ObstacleT | Slot::ObstacleX | Slot::ObstacleY | Slot::ObstacleRadius
+            ) && m.file.obstacles.is_empty()
+            {
+                return Err(file_error(
+                    path,
+                    &format!("parameters.{}", p.name),
+                    format!(
+                        "the scenario {} has no [[obstacles]] entry",
+                        scenario.display()
+                    ),
+                ));
+            }
+            require_numbers(path, p)?;
+            slots.push(slot);
+        }
+        let base = scenario
+            .parent()
+            .unwrap_or_else(|| Path::new("."))
+            .to_path_buf();
+        Ok(Self {
+            path: scenario,
+            base,
+            file: m.file,
+            slots,
+        })
+    }
+
+    pub(super) fn workspace(&self) -> Workspace {
+        Workspace
+    }
+
+    pub(super) fn evaluate(
+        &self,
+        _ws: &mut Workspace,
+        point: &[Value],
+        row: &mut Vec<Value>,
+    ) -> Result<()> {
+        let mut f = self.file.clone();
+        for (s, v) in self.slots.iter().zip(point) {
+            let x = num(v);
+            match s {
+                Slot::StartX => f.start.pose[0] = x,
+                Slot::StartY => f.start.pose[1] = x,
+                Slot::StartYaw => f.start.pose[2] = x,
+                Slot::GoalX => f.goal.pose[0] = x,
+                Slot::GoalY => f.goal.pose[1] = x,
+                Slot::GoalYaw => f.goal.pose[2] = x,
+                Slot::ObstacleT => f.obstacles[0].t = x,
+                Slot::ObstacleX => f.obstacles[0].center[0] = x,
+                Slot::ObstacleY => f.obstacles[0].center[1] = x,
+                Slot::ObstacleRadius => f.obstacles[0].radius = x,
+                Slot::VMax => f.limits.v_max = x,
+                Slot::OmegaMax => f.limits.omega_max = x,
+                Slot::AMax => f.limits.a_max = x,
+                Slot::AlphaMax => f.limits.alpha_max = x,
+                Slot::Mu => f.limits.mu = x,
+                Slot::TipFraction => f.limits.tip_fraction = x,
+            }
+        }
+        let outcome = mission::scenario::from_file(f, &self.path, &self.base)
+            .map_err(|e| format!("invalid scenario: {e}"))
+            .and_then(|m| mission::run(&m).map_err(|e| format!("run failed: {e}")));
+        match outcome {
+            Ok(r) => {
+                row.push(Value::Bool(r.reached));
+                row.push(r.reason.clone().map_or(Value::Missing, Value::Text));
+                row.push(Value::opt(r.time_to_goal));
+                row.push(Value::Float(r.duration));
+                row.push(Value::Int(r.replans() as i64));
+                row.push(Value::opt(r.min_zmp_margin()));
+                row.push(Value::opt(r.min_force_angle()));
+                row.push(Value::opt(r.min_mhs()));
+                row.push(Value::opt(r.min_clearance()));
+                row.push(Value::opt(r.max_tracking_error()));
+                row.push(Value::opt(r.max_slip_ratio()));
+                row.push(Value::Int(r.torque_saturated_steps as i64));
+                row.push(Value::Int(r.speed_saturated_steps as i64));
+                row.push(Value::Float(r.input_work));
+            }
+            Err(reason) => {
+                row.push(Value::Bool(false));
+                row.push(Value::Text(reason));
+                row.extend(std::iter::repeat_n(Value::Missing, RESULTS.len() - 2));
+            }
+        }
+        Ok(())
+    }
+}
