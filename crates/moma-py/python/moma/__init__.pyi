@@ -1,0 +1,210 @@
+"""Type stubs of the moma package (the Rust extension moma._moma)."""
+
+from os import PathLike
+from typing import Any, Literal, Mapping, Optional, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import sweep as sweep
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+F64 = npt.NDArray[np.float64]
+Path = Union[str, PathLike[str]]
+Root = Literal["fixed", "planar", "free-flyer"]
+
+class MomaError(Exception):
+    """Invalid input or a failing solver; the message is the moma library's."""
+
+class Model:
+    """A robot model (immutable): kinematic tree, inertias, frames, limits, gravity."""
+    @staticmethod
+    def from_urdf(path: Path, root: Root = "fixed") -> Model: ...
+    @staticmethod
+    def from_urdf_string(text: str, root: Root = "fixed", source: str = "<string>") -> Model: ...
+    def create_data(self) -> Data: ...
+    def neutral(self) -> F64: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def root(self) -> str: ...
+    @property
+    def nq(self) -> int: ...
+    @property
+    def nv(self) -> int: ...
+    @property
+    def njoints(self) -> int: ...
+    @property
+    def joint_names(self) -> list[str]: ...
+    @property
+    def frame_names(self) -> list[str]: ...
+    @property
+    def gravity(self) -> F64: ...
+    @property
+    def lower_position_limit(self) -> F64: ...
+    @property
+    def upper_position_limit(self) -> F64: ...
+
+class Data:
+    """The workspace of one Model's algorithms (model.create_data())."""
+    @property
+    def tau(self) -> F64: ...
+    @property
+    def ddq(self) -> F64: ...
+    @property
+    def mass_matrix(self) -> F64: ...
+
+class Map:
+    """An occupancy grid: ROS map (world metres) or Moving AI map (cells)."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def resolution(self) -> float: ...
+    @property
+    def origin(self) -> tuple[float, float, float]: ...
+    @property
+    def kind(self) -> Literal["ros", "movingai"]: ...
+    @property
+    def cells(self) -> npt.NDArray[np.int8]: ...
+
+def rnea(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
+    """Inverse dynamics: tau = M(q) a + C(q, v) v + g(q) (nv)."""
+
+def crba(model: Model, data: Data, q: ArrayLike) -> F64:
+    """Joint-space inertia matrix M(q) (nv x nv)."""
+
+def aba(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> F64:
+    """Forward dynamics: ddq (nv)."""
+
+def frame_jacobian(model: Model, data: Data, q: ArrayLike, frame: str) -> F64:
+    """6 x nv Jacobian of a frame, LOCAL_WORLD_ALIGNED ([p_dot; omega], world axes)."""
+
+def rnea_batch(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
+    """rnea per row: q (n, nq), v and a (n, nv) -> (n, nv); GIL released."""
+
+def aba_batch(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> F64:
+    """aba per row -> (n, nv); GIL released."""
+
+def crba_batch(model: Model, data: Data, q: ArrayLike) -> F64:
+    """crba per row -> (n, nv, nv); GIL released."""
+
+def frame_jacobian_batch(model: Model, data: Data, q: ArrayLike, frame: str) -> F64:
+    """frame_jacobian per row -> (n, 6, nv); GIL released."""
+
+def stability(
+    model: Model,
+    data: Data,
+    q: ArrayLike,
+    v: Optional[ArrayLike] = None,
+    a: Optional[ArrayLike] = None,
+    *,
+    support: Sequence[Sequence[float]],
+    mhs_bodies: str = "all",
+    gravity: Optional[Sequence[float]] = None,
+    external: Optional[Sequence[Mapping[str, Sequence[float]]]] = None,
+) -> dict[str, Any]:
+    """Tip-over measures of one state: the dict of `moma stability`'s states[i]."""
+
+def stability_batch(
+    model: Model,
+    data: Data,
+    q: ArrayLike,
+    v: Optional[ArrayLike] = None,
+    a: Optional[ArrayLike] = None,
+    *,
+    support: Sequence[Sequence[float]],
+    mhs_bodies: str = "all",
+    gravity: Optional[Sequence[float]] = None,
+) -> dict[str, npt.NDArray[Any]]:
+    """Tip-over measures per row, as arrays (NaN / -1 where undefined); GIL released."""
+
+def space(
+    model: Model,
+    data: Data,
+    q: ArrayLike,
+    qdot_joints: ArrayLike,
+    frame: str,
+    momentum: Optional[Mapping[str, Sequence[float]]] = None,
+) -> dict[str, Any]:
+    """Free-floating quantities of one state: the dict of `moma space`'s states[i]."""
+
+def osc(
+    model: Model,
+    data: Data,
+    q: ArrayLike,
+    v: Optional[ArrayLike],
+    frame: str,
+    task_acceleration: ArrayLike,
+    null_torque: Optional[ArrayLike] = None,
+    rows: str = "full",
+) -> dict[str, Any]:
+    """Operational-space quantities of one state: the dict of `moma osc`'s states[i]."""
+
+def load_map(path: Path, resolution: Optional[float] = None) -> Map:
+    """Loads a ROS YAML, Moving AI .map or bare PGM/PNG map."""
+
+def plan(
+    grid: Map,
+    start: Sequence[float],
+    goal: Sequence[float],
+    radius: float = 0.0,
+    unknown: Literal["obstacle", "free"] = "obstacle",
+    smooth: bool = True,
+) -> Optional[F64]:
+    """A* + shortcut smoothing for a disk robot: (n, 2) waypoints, or None."""
+
+Cell = Union[int, float, bool, str, None]
+
+class Table:
+    """A sweep's results table; CSV as `moma sweep` writes it."""
+    def __init__(self, columns: Sequence[str], rows: Sequence[Sequence[Cell]]) -> None: ...
+    @staticmethod
+    def read_csv(path: Path) -> Table: ...
+    @staticmethod
+    def merge(tables: Sequence[Table]) -> Table: ...
+    @property
+    def columns(self) -> list[str]: ...
+    @property
+    def rows(self) -> list[list[Cell]]: ...
+    def indices(self) -> list[int]: ...
+    def without_timing(self) -> Table: ...
+    def to_csv(self) -> str: ...
+    def write_csv(self, path: Path) -> None: ...
+    def __len__(self) -> int: ...
+
+class Sweep:
+    """A validated sweep file: points, columns, evaluation on a rayon pool."""
+    @staticmethod
+    def from_file(path: Path) -> Sweep: ...
+    @property
+    def study(self) -> str: ...
+    @property
+    def columns(self) -> list[str]: ...
+    def run(self, indices: Optional[Sequence[int]] = None, threads: int = 0) -> Table: ...
+    def shard_indices(self, k: int, n: int) -> list[int]: ...
+    def __len__(self) -> int: ...
+
+def run_mission(path: Path) -> dict[str, Any]:
+    """Runs a mission file end to end; the summary dict (no files written)."""
+
+def to_pinocchio(
+    model: Model,
+    q: ArrayLike,
+    v: Optional[ArrayLike] = None,
+    a: Optional[ArrayLike] = None,
+    tau: Optional[ArrayLike] = None,
+) -> dict[str, F64]:
+    """moma's q (and v, a, tau) in Pinocchio's layout; a needs v."""
+
+def from_pinocchio(
+    model: Model,
+    q: ArrayLike,
+    v: Optional[ArrayLike] = None,
+    a: Optional[ArrayLike] = None,
+    tau: Optional[ArrayLike] = None,
+) -> dict[str, F64]:
+    """A Pinocchio q (and v, a, tau) in moma's layout; a needs v."""

@@ -1,0 +1,262 @@
+//! Rigid-body algorithms: RNEA, CRBA, ABA, frame Jacobians, one state or a batch.
+
+use crate::model::{
+    Mat2, PyData, PyModel, Vec1, batch_rows, check_rows, check_state, load, load_row, par_rows,
+};
+use moma::dynamics;
+use moma::kinematics::{self, ReferenceFrame};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, ToPyArray};
+use pyo3::prelude::*;
+
+/// Inverse dynamics (recursive Newton-Euler): the joint torques
+/// `tau = M(q) a + C(q, v) v + g(q)` (nv), also left in `data.tau`.
+///
+/// Raises MomaError on a wrong length, a non-finite value or another model's data.
+#[pyfunction]
+pub(crate) fn rnea<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    mut data: PyRefMut<'py, PyData>,
+    q: Vec1<'py>,
+    v: Vec1<'py>,
+    a: Vec1<'py>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let d = &mut *data;
+    load("rnea", "q", q.as_array(), &mut d.q)?;
+    load("rnea", "v", v.as_array(), &mut d.v)?;
+    load("rnea", "a", a.as_array(), &mut d.a)?;
+    check_state(
+        m,
+        || "rnea".into(),
+        d.q.as_slice(),
+        Some(d.v.as_slice()),
+        Some(d.a.as_slice()),
+        None,
+    )?;
+    let tau = dynamics::rnea(m, &mut d.inner, &d.q, &d.v, &d.a);
+    Ok(PyArray1::from_slice(py, tau.as_slice()))
+}
+
+/// The joint-space inertia matrix M(q) (nv × nv, composite rigid-body algorithm), also
+/// left in `data.mass_matrix`.
+#[pyfunction]
+pub(crate) fn crba<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    mut data: PyRefMut<'py, PyData>,
+    q: Vec1<'py>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let d = &mut *data;
+    load("crba", "q", q.as_array(), &mut d.q)?;
+    check_state(m, || "crba".into(), d.q.as_slice(), None, None, None)?;
+    Ok(dynamics::crba(m, &mut d.inner, &d.q).to_pyarray(py))
+}
+
+/// Forward dynamics (articulated-body algorithm): the accelerations
+/// `ddq = M(q)⁻¹ (tau − C(q, v) v − g(q))` (nv), also left in `data.ddq`.
+#[pyfunction]
+pub(crate) fn aba<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    mut data: PyRefMut<'py, PyData>,
+    q: Vec1<'py>,
+    v: Vec1<'py>,
+    tau: Vec1<'py>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let d = &mut *data;
+    load("aba", "q", q.as_array(), &mut d.q)?;
+    load("aba", "v", v.as_array(), &mut d.v)?;
+    load("aba", "tau", tau.as_array(), &mut d.a)?;
+    check_state(
+        m,
+        || "aba".into(),
+        d.q.as_slice(),
+        Some(d.v.as_slice()),
+        None,
+        Some(d.a.as_slice()),
+    )?;
+    let ddq = dynamics::aba(m, &mut d.inner, &d.q, &d.v, &d.a);
+    Ok(PyArray1::from_slice(py, ddq.as_slice()))
+}
+
+/// The Jacobian of frame `frame` (6 × nv, rows `[ṗ; ω]` of the frame origin in world
+/// axes: Pinocchio's LOCAL_WORLD_ALIGNED).
+#[pyfunction]
+pub(crate) fn frame_jacobian<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    mut data: PyRefMut<'py, PyData>,
+    q: Vec1<'py>,
+    frame: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let fid = model.frame(frame)?;
+    let d = &mut *data;
+    load("frame_jacobian", "q", q.as_array(), &mut d.q)?;
+    check_state(
+        m,
+        || "frame_jacobian".into(),
+        d.q.as_slice(),
+        None,
+        None,
+        None,
+    )?;
+    kinematics::frame_jacobian(
+        m,
+        &mut d.inner,
+        &d.q,
+        fid,
+        ReferenceFrame::LocalWorldAligned,
+        &mut d.jac,
+    );
+    Ok(d.jac.to_pyarray(py))
+}
+
+/// `rnea` on every row: q (n, nq), v and a (n, nv) → tau (n, nv). Loops in Rust with
+/// the GIL released, on all cores (one workspace per worker; `data` is only checked).
+#[pyfunction]
+pub(crate) fn rnea_batch<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    data: PyRef<'py, PyData>,
+    q: Mat2<'py>,
+    v: Mat2<'py>,
+    a: Mat2<'py>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let (qs, vs, as_) = (q.as_array(), v.as_array(), a.as_array());
+    let src = "rnea_batch";
+    let n = batch_rows(src, "q", &qs, m.nq, None)?;
+    batch_rows(src, "v", &vs, m.nv, Some(n))?;
+    batch_rows(src, "a", &as_, m.nv, Some(n))?;
+    let nv = m.nv;
+    let out = py.detach(|| -> PyResult<Vec<f64>> {
+        check_rows(m, src, n, &qs, Some(&vs), Some(&as_), None)?;
+        Ok(par_rows(m, n, nv, |s, k, row| {
+            load_row(&qs, k, &mut s.q);
+            load_row(&vs, k, &mut s.v);
+            load_row(&as_, k, &mut s.a);
+            row.copy_from_slice(dynamics::rnea(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
+        }))
+    })?;
+    PyArray1::from_vec(py, out).reshape([n, nv])
+}
+
+/// `aba` on every row: q (n, nq), v and tau (n, nv) → ddq (n, nv), on all cores with the GIL released.
+#[pyfunction]
+pub(crate) fn aba_batch<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    data: PyRef<'py, PyData>,
+    q: Mat2<'py>,
+    v: Mat2<'py>,
+    tau: Mat2<'py>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let (qs, vs, ts) = (q.as_array(), v.as_array(), tau.as_array());
+    let src = "aba_batch";
+    let n = batch_rows(src, "q", &qs, m.nq, None)?;
+    batch_rows(src, "v", &vs, m.nv, Some(n))?;
+    batch_rows(src, "tau", &ts, m.nv, Some(n))?;
+    let nv = m.nv;
+    let out = py.detach(|| -> PyResult<Vec<f64>> {
+        check_rows(m, src, n, &qs, Some(&vs), None, Some(&ts))?;
+        Ok(par_rows(m, n, nv, |s, k, row| {
+            load_row(&qs, k, &mut s.q);
+            load_row(&vs, k, &mut s.v);
+            load_row(&ts, k, &mut s.a);
+            row.copy_from_slice(dynamics::aba(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
+        }))
+    })?;
+    PyArray1::from_vec(py, out).reshape([n, nv])
+}
+
+/// `crba` on every row: q (n, nq) → M (n, nv, nv), on all cores with the GIL released.
+#[pyfunction]
+pub(crate) fn crba_batch<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    data: PyRef<'py, PyData>,
+    q: Mat2<'py>,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let qs = q.as_array();
+    let src = "crba_batch";
+    let n = batch_rows(src, "q", &qs, m.nq, None)?;
+    let nv = m.nv;
+    let out = py.detach(|| -> PyResult<Vec<f64>> {
+        check_rows(m, src, n, &qs, None, None, None)?;
+        Ok(par_rows(m, n, nv * nv, |s, k, blk| {
+            load_row(&qs, k, &mut s.q);
+            let h = dynamics::crba(m, &mut s.data, &s.q);
+            // row-major (nv, nv)
+            for r in 0..nv {
+                for c in 0..nv {
+                    blk[r * nv + c] = h[(r, c)];
+                }
+            }
+        }))
+    })?;
+    PyArray1::from_vec(py, out).reshape([n, nv, nv])
+}
+
+/// `frame_jacobian` on every row: q (n, nq) → J (n, 6, nv), on all cores with the GIL released.
+#[pyfunction]
+pub(crate) fn frame_jacobian_batch<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    data: PyRef<'py, PyData>,
+    q: Mat2<'py>,
+    frame: &str,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let fid = model.frame(frame)?;
+    let qs = q.as_array();
+    let src = "frame_jacobian_batch";
+    let n = batch_rows(src, "q", &qs, m.nq, None)?;
+    let nv = m.nv;
+    let out = py.detach(|| -> PyResult<Vec<f64>> {
+        check_rows(m, src, n, &qs, None, None, None)?;
+        Ok(par_rows(m, n, 6 * nv, |s, k, blk| {
+            load_row(&qs, k, &mut s.q);
+            kinematics::frame_jacobian(
+                m,
+                &mut s.data,
+                &s.q,
+                fid,
+                ReferenceFrame::LocalWorldAligned,
+                &mut s.jac,
+            );
+            for r in 0..6 {
+                for c in 0..nv {
+                    blk[r * nv + c] = s.jac[(r, c)];
+                }
+            }
+        }))
+    })?;
+    PyArray1::from_vec(py, out).reshape([n, 6, nv])
+}
+
+/// Registers the functions.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(rnea, m)?)?;
+    m.add_function(wrap_pyfunction!(crba, m)?)?;
+    m.add_function(wrap_pyfunction!(aba, m)?)?;
+    m.add_function(wrap_pyfunction!(frame_jacobian, m)?)?;
+    m.add_function(wrap_pyfunction!(rnea_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(aba_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(crba_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(frame_jacobian_batch, m)?)?;
+    Ok(())
+}
