@@ -261,11 +261,19 @@ dt = 0.01
         ),
         &["bad.toml", "casters"],
     );
-    // A run that blows up writes nothing.
+    // An initial state beyond the blow-up bound is refused before the run, naming it.
+    fails_with(
+        "blow-up-at-start",
+        &format!(
+            "{M1}\n[limits]\nblowup = 1.0\nmax_residual = 1.0\n[initial]\nq = [0.0, 0.0, 0.0]\nv = [5.0, 0.0]\n"
+        ),
+        &["initial.v[0]", "blowup"],
+    );
+    // A run that blows up on the way writes nothing.
     fails_with(
         "blow-up",
         &format!(
-            "{M1}\n[limits]\nblowup = 1.0\nmax_residual = 1.0\n[initial]\nq = [0.0, 0.0, 0.0]\nv = [5.0, 0.0]\n"
+            "{M1}\n[limits]\nblowup = 1.0\nmax_residual = 1.0\n[initial]\nq = [0.0, 0.0, 0.0]\nv = [0.9, 0.0]\n[[inputs]]\nkind = \"constant\"\nvalue = 50.0\n[[inputs]]\nkind = \"constant\"\nvalue = 50.0\n"
         ),
         &["numerical failure"],
     );

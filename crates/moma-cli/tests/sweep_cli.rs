@@ -44,8 +44,10 @@ fn results(p: &Path) -> String {
     out
 }
 
-fn small_sweep() -> PathBuf {
-    // the shipped random TIAGo sweep, cut to 200 points
+fn small_sweep(name: &str) -> PathBuf {
+    // the shipped random TIAGo sweep, cut to 200 points; one file per test, since the
+    // tests run in parallel in one process (one shared file raced: a test read it while
+    // another truncated it)
     let text = std::fs::read_to_string(root().join("scenarios/sweeps/tiago_stability_random.toml"))
         .unwrap()
         .replace("count = 10000", "count = 200")
@@ -53,14 +55,14 @@ fn small_sweep() -> PathBuf {
             "../../crates/moma/tests/data/pinocchio/urdf/tiago.urdf",
             s(&root().join("crates/moma/tests/data/pinocchio/urdf/tiago.urdf")),
         );
-    let p = tmp("small.toml");
+    let p = tmp(name);
     std::fs::write(&p, text).unwrap();
     p
 }
 
 #[test]
 fn shards_merged_equal_the_whole_run_on_any_thread_count() {
-    let sw = small_sweep();
+    let sw = small_sweep("small_shards.toml");
     let whole = tmp("whole.csv");
     let o = moma(&["sweep", s(&sw), "-o", s(&whole)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -125,7 +127,7 @@ fn shards_merged_equal_the_whole_run_on_any_thread_count() {
 
 #[test]
 fn bad_input_is_one_error_and_no_output() {
-    let sw = small_sweep();
+    let sw = small_sweep("small_bad.toml");
     let bad = tmp("bad.toml");
     std::fs::write(
         &bad,
