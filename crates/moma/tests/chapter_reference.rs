@@ -159,3 +159,22 @@ fn string_ids_are_named_in_errors() {
         "{e}"
     );
 }
+
+/// A case horizon past `MAX_CASE_TIME` is refused up front, naming the time (a fuzzed
+/// m2 case with one time set to 1e9 s kept the integrator running without end).
+#[test]
+fn case_horizon_is_bounded() {
+    let mut doc = load("m2_platform_planar_arm");
+    let case = doc["cases"].as_array().unwrap()[0].clone();
+    let mut long = case.clone();
+    long["trajectory"] = serde_json::json!({ "t": [0.0, 0.5, 1e9] });
+    doc["cases"] = serde_json::json!([long]);
+    let e = evaluate_document(&doc, DEFAULT_TOLERANCE)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("trajectory.t[2]") && e.contains("1000"), "{e}");
+    let mut ok = case;
+    ok["trajectory"] = serde_json::json!({ "t": [0.0, 0.5, 1.0] });
+    doc["cases"] = serde_json::json!([ok]);
+    assert!(evaluate_document(&doc, DEFAULT_TOLERANCE).is_ok());
+}

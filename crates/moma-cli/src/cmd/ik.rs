@@ -199,8 +199,13 @@ pub fn run(args: Args) -> Result<()> {
             args.null_gain
         );
     }
-    if !(args.base_weight.is_finite() && args.base_weight > 0.0) {
-        bail!("--base-weight: must be > 0, got {}", args.base_weight);
+    // The weights scale the damped normal matrix; beyond twelve decades either way its
+    // Cholesky loses every digit (a subnormal weight made it "not positive definite").
+    if !(args.base_weight.is_finite() && (1e-12..=1e12).contains(&args.base_weight)) {
+        bail!(
+            "--base-weight: must lie in [1e-12, 1e12], got {}",
+            args.base_weight
+        );
     }
     let drive = parse_drive(&args)?;
     let inputs: BaseInputs = args.inputs.parse().map_err(|e| anyhow!("--inputs: {e}"))?;

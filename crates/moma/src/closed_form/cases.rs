@@ -82,10 +82,25 @@ fn times(case: &Value) -> Result<Option<Vec<f64>>> {
                     "times start at 0 and must not be negative",
                 ));
             }
+            if let Some(&t_end) = t.last()
+                && t_end > MAX_CASE_TIME
+            {
+                return Err(Error::invalid(
+                    format!("trajectory.t[{}]", t.len() - 1),
+                    format!(
+                        "{t_end} s is past the longest case horizon, {MAX_CASE_TIME} s (longer runs belong in `moma simulate`)"
+                    ),
+                ));
+            }
             Ok(Some(t))
         }
     }
 }
+
+/// Longest simulated time a case's `trajectory.t` may reach (s). The reference cases
+/// span about a second; an unbounded horizon let one number (1e9 s) keep the integrator
+/// busy without end (found by fuzzing).
+pub const MAX_CASE_TIME: f64 = 1000.0;
 
 fn to_value<T: Serialize>(x: &T) -> Result<Value> {
     serde_json::to_value(x).map_err(|e| Error::invalid("outputs", e.to_string()))
