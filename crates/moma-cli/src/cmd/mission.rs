@@ -51,11 +51,6 @@ fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
     )
 }
 
-fn opt(x: Option<f64>) -> Value {
-    x.filter(|v| v.is_finite())
-        .map_or(Value::Null, |v| json!(v))
-}
-
 /// The summary object (`summary.json`).
 fn summary(
     m: &Mission,
@@ -64,22 +59,6 @@ fn summary(
     report_s: f64,
     files: &[String],
 ) -> Value {
-    let f = &m.file;
-    let last = r.samples.t.len().saturating_sub(1);
-    let final_pose = r.samples.q.get(last).map(|q| [q[0], q[1], q[2]]);
-    let final_pose_error = final_pose.map(|p| {
-        let g = f.goal.pose;
-        json!([
-            (p[0] - g[0]).hypot(p[1] - g[1]),
-            moma::control::wrap_angle(g[2] - p[2]).abs()
-        ])
-    });
-    let ee_error = f.goal.end_effector.and_then(|target| {
-        r.samples.ee.get(last).map(|e| {
-            ((e[0] - target[0]).powi(2) + (e[1] - target[1]).powi(2) + (e[2] - target[2]).powi(2))
-                .sqrt()
-        })
-    });
     let replan_search: Vec<Value> = r
         .plans
         .iter()
@@ -96,46 +75,28 @@ fn summary(
             })
         })
         .collect();
-    let sim_time = r.duration;
-    json!({
-        "mission": m.name,
-        "reached": r.reached,
-        "reason": r.reason,
-        "time_to_goal": opt(r.time_to_goal),
-        "simulated_time": sim_time,
-        "replans": r.replans(),
-        "min_zmp_margin": opt(r.min_zmp_margin()),
-        "min_force_angle": opt(r.min_force_angle()),
-        "min_moment_height": opt(r.min_mhs()),
-        "min_clearance": opt(r.min_clearance()),
-        "max_tracking_error": opt(r.max_tracking_error()),
-        "final_pose_error": final_pose_error,
-        "end_effector_error": opt(ee_error),
-        "max_slip_ratio": opt(r.max_slip_ratio()),
-        "torque_saturated_steps": r.torque_saturated_steps,
-        "speed_saturated_steps": r.speed_saturated_steps,
-        "control_steps": r.steps,
-        "actuator_energy": r.samples.energy.last().copied().unwrap_or(0.0),
-        "input_work": r.input_work,
-        "tip_over_limits": {
-            "forward": opt(r.tip_limits.forward),
-            "backward": opt(r.tip_limits.backward),
-            "left": opt(r.tip_limits.left),
-            "right": opt(r.tip_limits.right),
-        },
-        "timing_acceleration": r.timing_acceleration,
-        "replan_timing": replan_search,
-        "wall_time_s": wall_total,
-        "wall_time": {
+    let mut doc = moma::mission::summary(m, r);
+    doc.insert("replan_timing".into(), json!(replan_search));
+    doc.insert("wall_time_s".into(), json!(wall_total));
+    doc.insert(
+        "wall_time".into(),
+        json!({
             "planning_s": r.wall.planning_s,
             "smoothing_timing_s": r.wall.smoothing_timing_s,
             "simulation_s": r.wall.simulation_s,
             "report_s": report_s,
+        }),
+    );
+    doc.insert(
+        "real_time_factor".into(),
+        if wall_total > 0.0 {
+            json!(r.duration / wall_total)
+        } else {
+            Value::Null
         },
-        "real_time_factor": if wall_total > 0.0 { json!(sim_time / wall_total) } else { Value::Null },
-        "samples": r.samples.t.len(),
-        "files": files,
-    })
+    );
+    doc.insert("files".into(), json!(files));
+    Value::Object(doc)
 }
 
 fn num(x: f64) -> String {

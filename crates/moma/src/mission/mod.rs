@@ -29,3 +29,64 @@ pub use plan::SearchTiming;
 pub use reference::{RefSample, Reference};
 pub use run::{Event, MissionResult, PlanRecord, Samples, WallTimes, run, transport_tip_limits};
 pub use scenario::{Mission, MissionFile, load};
+
+/// The summary of a finished mission that does not depend on how it was run: `mission`,
+/// `reached`, `reason`, `time_to_goal`, `simulated_time`, `replans`, the stability,
+/// clearance, tracking and slip extremes, `final_pose_error` ([m, rad]),
+/// `end_effector_error`, saturation counts, energies, `tip_over_limits`,
+/// `timing_acceleration` and `samples`. Non-finite or missing values are `null`.
+/// `moma mission` adds its timing and file keys to this map; the Python package returns
+/// it as it is.
+#[must_use]
+pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_json::Value> {
+    use serde_json::json;
+    let fin = |x: Option<f64>| x.filter(|v| v.is_finite());
+    let f = &m.file;
+    let last = r.samples.t.len().saturating_sub(1);
+    let final_pose_error = r.samples.q.get(last).map(|q| {
+        let g = f.goal.pose;
+        [
+            (q[0] - g[0]).hypot(q[1] - g[1]),
+            crate::control::wrap_angle(g[2] - q[2]).abs(),
+        ]
+    });
+    let ee_error = f.goal.end_effector.and_then(|target| {
+        r.samples.ee.get(last).map(|e| {
+            ((e[0] - target[0]).powi(2) + (e[1] - target[1]).powi(2) + (e[2] - target[2]).powi(2))
+                .sqrt()
+        })
+    });
+    let doc = json!({
+        "mission": m.name,
+        "reached": r.reached,
+        "reason": r.reason,
+        "time_to_goal": fin(r.time_to_goal),
+        "simulated_time": r.duration,
+        "replans": r.replans(),
+        "min_zmp_margin": fin(r.min_zmp_margin()),
+        "min_force_angle": fin(r.min_force_angle()),
+        "min_moment_height": fin(r.min_mhs()),
+        "min_clearance": fin(r.min_clearance()),
+        "max_tracking_error": fin(r.max_tracking_error()),
+        "final_pose_error": final_pose_error,
+        "end_effector_error": fin(ee_error),
+        "max_slip_ratio": fin(r.max_slip_ratio()),
+        "torque_saturated_steps": r.torque_saturated_steps,
+        "speed_saturated_steps": r.speed_saturated_steps,
+        "control_steps": r.steps,
+        "actuator_energy": r.samples.energy.last().copied().unwrap_or(0.0),
+        "input_work": r.input_work,
+        "tip_over_limits": {
+            "forward": fin(r.tip_limits.forward),
+            "backward": fin(r.tip_limits.backward),
+            "left": fin(r.tip_limits.left),
+            "right": fin(r.tip_limits.right),
+        },
+        "timing_acceleration": r.timing_acceleration,
+        "samples": r.samples.t.len(),
+    });
+    match doc {
+        serde_json::Value::Object(map) => map,
+        _ => unreachable!("json! of an object literal is an object"),
+    }
+}
