@@ -178,3 +178,32 @@ fn case_horizon_is_bounded() {
     doc["cases"] = serde_json::json!([ok]);
     assert!(evaluate_document(&doc, DEFAULT_TOLERANCE).is_ok());
 }
+
+/// The same bound on an m6 run's `trajectories.NAME.t` and on `joint_loop.period` (the
+/// fuzzer's second timeout: an m6 run with one time set to 3.3e27 s).
+#[test]
+fn m6_run_horizon_is_bounded() {
+    let doc = load("m6_space_manipulator");
+    let case = doc["cases"].as_array().unwrap()[0].clone();
+    let run = case["trajectories"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .next()
+        .unwrap()
+        .clone();
+    let mut long = case.clone();
+    long["trajectories"][&run]["t"] = serde_json::json!([0.5, 3.3e27]);
+    let mut d = doc.clone();
+    d["cases"] = serde_json::json!([long]);
+    let e = evaluate_document(&d, 1e-6).unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("trajectories.{run}.t[1]")) && e.contains("1000"),
+        "{e}"
+    );
+    let mut slow_loop = case;
+    slow_loop["joint_loop"]["period"] = serde_json::json!(1e12);
+    d["cases"] = serde_json::json!([slow_loop]);
+    let e = evaluate_document(&d, 1e-6).unwrap_err().to_string();
+    assert!(e.contains("joint_loop.period") && e.contains("1000"), "{e}");
+}

@@ -72,6 +72,16 @@ fn eval_names_violated_astolfi_condition_and_warns_on_strong_one() {
     assert!(e.contains("unknown law"), "{e}");
 }
 
+/// A closed-loop case's horizon is bounded like the chapter cases' (`MAX_CASE_TIME`).
+#[test]
+fn eval_refuses_a_horizon_past_the_case_bound() {
+    let mut doc = load("unicycle_control.json");
+    doc["cases"] = serde_json::json!([doc["cases"][0].clone()]);
+    doc["cases"][0]["trajectory"]["t"] = serde_json::json!([0.0, 1.0, 1e9]);
+    let e = evaluate_document(&doc, 1e-10).unwrap_err().to_string();
+    assert!(e.contains("trajectory.t[2]") && e.contains("1000"), "{e}");
+}
+
 #[test]
 fn kanayama_with_zero_yaw_rate_follows_a_line() {
     let doc = serde_json::json!({"model": "unicycle_control", "cases": [{

@@ -82,25 +82,30 @@ fn times(case: &Value) -> Result<Option<Vec<f64>>> {
                     "times start at 0 and must not be negative",
                 ));
             }
-            if let Some(&t_end) = t.last()
-                && t_end > MAX_CASE_TIME
-            {
-                return Err(Error::invalid(
-                    format!("trajectory.t[{}]", t.len() - 1),
-                    format!(
-                        "{t_end} s is past the longest case horizon, {MAX_CASE_TIME} s (longer runs belong in `moma simulate`)"
-                    ),
-                ));
-            }
+            check_horizon("trajectory.t", &t)?;
             Ok(Some(t))
         }
     }
 }
 
-/// Longest simulated time a case's `trajectory.t` may reach (s). The reference cases
-/// span about a second; an unbounded horizon let one number (1e9 s) keep the integrator
-/// busy without end (found by fuzzing).
+/// Longest simulated time a case may reach (s): the last of `trajectory.t`, of an m6
+/// `trajectories.NAME.t`, and m6's `joint_loop.period`. The reference cases span about a
+/// second; an unbounded horizon let one number (1e9 s) keep the integrator busy without
+/// end (found by fuzzing, first on an m2 case, then on an m6 run).
 pub const MAX_CASE_TIME: f64 = 1000.0;
+
+/// Refuses a time list whose last entry is past [`MAX_CASE_TIME`], naming `field[i]`.
+pub(crate) fn check_horizon(field: &str, t: &[f64]) -> Result<()> {
+    match t.last() {
+        Some(&t_end) if t_end > MAX_CASE_TIME => Err(Error::invalid(
+            format!("{field}[{}]", t.len() - 1),
+            format!(
+                "{t_end} s is past the longest case horizon, {MAX_CASE_TIME} s (longer runs belong in `moma simulate`)"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
 
 fn to_value<T: Serialize>(x: &T) -> Result<Value> {
     serde_json::to_value(x).map_err(|e| Error::invalid("outputs", e.to_string()))
@@ -271,6 +276,7 @@ fn m6_case(case: &Value, tol: f64) -> Result<(Value, Value)> {
                     "times must be non-negative and non-decreasing",
                 ));
             }
+            check_horizon(&format!("trajectories.{name}.t"), &t)?;
             let torque = vector::<2>(case, &[path[0], path[1], "torque"])?;
             let qdot0 = vector::<5>(case, &[path[0], path[1], "qdot0"])?;
             let samples = sys.simulate(&q, &qdot0, &torque, &t, tol)?;
@@ -299,6 +305,12 @@ fn m6_case(case: &Value, tol: f64) -> Result<(Value, Value)> {
         let period = field(case, &["joint_loop", "period"])?
             .as_f64()
             .ok_or_else(|| Error::invalid("joint_loop.period", "expected a number"))?;
+        if period > MAX_CASE_TIME {
+            return Err(Error::invalid(
+                "joint_loop.period",
+                format!("{period} s is past the longest case horizon, {MAX_CASE_TIME} s"),
+            ));
+        }
         let theta0 = nalgebra::Vector2::new(q[3], q[4]);
         let d = sys.joint_loop_rotation(&theta0, &a, period, tol)?;
         let mut m = jl.as_object().cloned().unwrap_or_default();
