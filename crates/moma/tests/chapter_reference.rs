@@ -207,3 +207,21 @@ fn m6_run_horizon_is_bounded() {
     let e = evaluate_document(&d, 1e-6).unwrap_err().to_string();
     assert!(e.contains("joint_loop.period") && e.contains("1000"), "{e}");
 }
+
+/// A case whose parameters make the dynamics fast (the fuzzer's m5 case with one link
+/// mass of 2.1e11 kg beside masses of a few kg needed 130,000 DOP853 steps for one second,
+/// about 20 s) ends at the closed-form models' step budget with an error naming the case.
+#[test]
+fn stiff_case_stops_at_the_step_budget() {
+    let mut doc = load("m5_mobile_manipulator_3d");
+    let mut case = doc["cases"].as_array().unwrap()[0].clone();
+    case.as_object_mut().unwrap().remove("outputs");
+    case["params"]["M1"] = serde_json::json!(214798761983.0_f64);
+    doc["cases"] = serde_json::json!([case]);
+    let e = evaluate_document(&doc, 1e-9).unwrap_err().to_string();
+    let budget = format!(
+        "maximum number of steps ({})",
+        moma::closed_form::CASE_MAX_STEPS
+    );
+    assert!(e.contains(&budget) && e.contains("case 0"), "{e}");
+}

@@ -262,3 +262,79 @@ fn dop853_is_eighth_order() {
         "ratio {ratio} ({e1:e}, {e2:e})"
     );
 }
+
+/// ẋ = −λ (x − cos t) − sin t, x(0) = 1: the solution is cos t whatever λ, and for large λ
+/// the problem is stiff (an explicit method's step is bounded by about bound / λ).
+struct Prothero {
+    lambda: f64,
+}
+impl OdeSystem for Prothero {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> moma::Result<()> {
+        dx[0] = -self.lambda * (x[0] - t.cos()) - t.sin();
+        Ok(())
+    }
+}
+
+/// Hairer's stiffness test ends a stiff integration early with a message that says so
+/// (both methods), where without it the explicit method would creep on at its stability
+/// limit until the step-count guard; the same problem at a mild λ is not flagged.
+#[test]
+fn stiff_problems_are_detected_early_and_mild_ones_are_not() {
+    use moma::ode::Dop853;
+    let stiff = Prothero { lambda: 1e7 };
+    let mut dp = Dop853::new(1, AdaptiveOptions::with_tolerance(1e-8)).unwrap();
+    let e = dp
+        .solve_at(
+            &mut Prothero {
+                lambda: stiff.lambda,
+            },
+            0.0,
+            &[1.0],
+            &[10.0],
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("stiff") && e.contains("DOP853"), "{e}");
+    // found at the first test (after 1000 accepted steps) plus 14 more steps, not after
+    // the ~1.6e7 steps that the stability limit would need to reach t = 10
+    assert!(dp.stats.accepted < 1100, "{}", dp.stats.accepted);
+    let mut d45 = DormandPrince45::new(1, AdaptiveOptions::with_tolerance(1e-8)).unwrap();
+    let e = d45
+        .solve_at(&mut Prothero { lambda: 1e7 }, 0.0, &[1.0], &[10.0])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("stiff") && e.contains("Dormand-Prince"), "{e}");
+    // switched off, the same run goes on until the step-count guard
+    let opts = AdaptiveOptions {
+        stiffness_test: None,
+        max_steps: 20_000,
+        ..AdaptiveOptions::with_tolerance(1e-8)
+    };
+    let mut dp = Dop853::new(1, opts).unwrap();
+    let e = dp
+        .solve_at(&mut Prothero { lambda: 1e7 }, 0.0, &[1.0], &[10.0])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("maximum number of steps"), "{e}");
+    // mild: solved to tolerance, never flagged (tight tolerance keeps h·λ small)
+    for tol in [1e-6, 1e-10] {
+        let mut dp = Dop853::new(1, AdaptiveOptions::with_tolerance(tol)).unwrap();
+        let x = dp
+            .solve_at(&mut Prothero { lambda: 10.0 }, 0.0, &[1.0], &[50.0])
+            .unwrap();
+        assert!((x[0][0] - 50f64.cos()).abs() < 1e3 * tol, "{}", x[0][0]);
+    }
+    assert!(
+        DormandPrince45::new(
+            1,
+            AdaptiveOptions {
+                stiffness_test: Some(0),
+                ..Default::default()
+            }
+        )
+        .is_err()
+    );
+}

@@ -15,7 +15,7 @@
 use super::ad::{Real, seed_all};
 use super::{Manipulability, check_finite, finite, manipulability, positive, ser, to_dmatrix};
 use crate::error::{Error, Result};
-use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{Dop853, OdeSystem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
@@ -213,7 +213,7 @@ impl DiffDriveKinematics {
         check_finite("state.q", q0)?;
         check_finite("inputs.v", v)?;
         let mut ode = KinematicOde { model: self, v: *v };
-        let mut dp = Dop853::new(6, AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = Dop853::new(6, super::case_integrator_options(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, q0.as_slice(), times)?;
         Ok(rows
             .iter()

@@ -21,7 +21,7 @@ use super::ad::Real;
 use super::lagrange::{self, LagrangianSystem};
 use super::{check_finite, finite, nonnegative, positive, ser};
 use crate::error::Result;
-use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{Dop853, OdeSystem};
 use crate::spatial::Inertia;
 use crate::stability::{GravitoInertialWrench, StabilityReport, SupportPolygon, evaluate_measures};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
@@ -387,7 +387,7 @@ impl CartTwoLink {
         check_finite("inputs.u", u)?;
         let mut ode = CartOde { model: self, u: *u };
         let x0 = [q0[0], q0[1], q0[2], qdot0[0], qdot0[1], qdot0[2]];
-        let mut dp = Dop853::new(6, AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = Dop853::new(6, super::case_integrator_options(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
         Ok(rows
             .iter()

@@ -765,7 +765,7 @@ impl TaskController {
         let mut x0 = [0.0; 12];
         x0[..6].copy_from_slice(q0.as_slice());
         x0[6..11].copy_from_slice(v0.as_slice());
-        let mut dp = crate::ode::Dop853::new(12, crate::ode::AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = crate::ode::Dop853::new(12, super::case_integrator_options(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
         rows.iter()
             .zip(times)

@@ -17,7 +17,7 @@ use super::ad::Real;
 use super::lagrange::{self, LagrangianSystem};
 use super::{check_finite, finite, positive, ser};
 use crate::error::{Error, Result};
-use crate::ode::{AdaptiveOptions, Dop853, OdeSystem};
+use crate::ode::{Dop853, OdeSystem};
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -421,7 +421,7 @@ impl SpaceManipulator {
         x0[5..10].copy_from_slice(qdot0.as_slice());
         x0[10] = q0[2];
         x0[11] = q0[2];
-        let mut dp = Dop853::new(12, AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = Dop853::new(12, super::case_integrator_options(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &x0, times)?;
         Ok(rows
             .iter()
@@ -464,7 +464,7 @@ impl SpaceManipulator {
             amplitude: *amplitude,
             period,
         };
-        let mut dp = Dop853::new(1, AdaptiveOptions::with_tolerance(tol))?;
+        let mut dp = Dop853::new(1, super::case_integrator_options(tol))?;
         let rows = dp.solve_at(&mut ode, 0.0, &[0.0], &[period])?;
         Ok(rows[0][0])
     }
