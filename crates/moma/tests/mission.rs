@@ -281,7 +281,7 @@ fn offset_urdf(d: f64, tag: &str) -> PathBuf {
             in_base = true;
         } else if l.starts_with("</link>") {
             in_base = false;
-        } else if l.starts_with("<joint ") {
+        } else if l.starts_with("<joint ") || l.starts_with("</joint>") {
             base_child = false;
         } else if l.starts_with("<parent link=\"base_link\"") {
             base_child = true;
