@@ -145,6 +145,34 @@ fn sealed_goal_writes_everything_and_exits_3() {
 }
 
 #[test]
+fn shipped_offset_mission_reaches_its_goal_with_the_base_frame_off_the_axle() {
+    // d = 0.12: planned and tracked on the axle midpoint, reported for the base frame
+    let work = temp_dir("offset");
+    let out = work.join("out");
+    let run = moma()
+        .args(["mission", "--quiet", "--output"])
+        .arg(&out)
+        .arg(scenarios().join("mission_offset.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let s = summary(&out);
+    assert_eq!(s["reached"], true, "{:?}", s["reason"]);
+    assert_eq!(s["replans"], 1);
+    let fpe = s["final_pose_error"].as_array().unwrap();
+    assert!(fpe[0].as_f64().unwrap() < 0.02 && fpe[1].as_f64().unwrap() < 0.02);
+    assert!(s["max_tracking_error"].as_f64().unwrap() < 0.01);
+    assert!(s["min_clearance"].as_f64().unwrap() > 0.0);
+    assert!(s["min_zmp_margin"].as_f64().unwrap() > 0.0);
+    assert!(s["end_effector_error"].as_f64().unwrap() < 0.02);
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
 fn input_errors_exit_1_with_no_output() {
     let work = temp_dir("errors");
     let text = std::fs::read_to_string(scenarios().join("mission.toml")).unwrap();

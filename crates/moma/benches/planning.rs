@@ -14,7 +14,14 @@
 //!   C-space cell of the disk + `compute` + `path`, then, timed separately, smoothing the
 //!   new path ([`planning::curvature::smooth_diff_drive`]) and timing it
 //!   ([`planning::trajectory::time_parameterize_curve`]): a printed table of medians and
-//!   criterion groups.
+//!   criterion groups;
+//! * the default mission's own re-plan (`scenarios/mission.toml`, nav2's depot map): the
+//!   mission is run once to find the robot's cell, pose and speed when the crate appears;
+//!   then, on a copy of the mission's first D* Lite planner, the same `move_start`,
+//!   `set_blocked` of the crate's C-space cells, `compute` and `path` (checked to give the
+//!   mission's re-planned cells and expansion count), the refresh of the distance
+//!   transform, the smoothing and the timing of the new path (checked to give the
+//!   mission's path) are timed separately ([`MissionReplan`]).
 //!
 //! Run: `cargo bench -p moma --bench planning` (add `RUSTFLAGS="-C target-cpu=native"`
 //! for a native build).
@@ -788,10 +795,264 @@ fn bench_disk(cr: &mut Criterion, cases: &[DiskCase]) {
     grp.finish();
 }
 
+/// The default mission's re-plan when its crate appears, rebuilt from public parts.
+struct MissionReplan {
+    /// The mission's D* Lite planner after its first search (start to goal).
+    planner: DStarLite,
+    /// The robot's cell when the crate appears (the re-plan's first cell).
+    robot: (usize, usize),
+    /// The crate's configuration-space cells (free before, not the goal cell).
+    disk: Vec<(usize, usize)>,
+    /// Occupied map cells with the crate, for the distance-transform refresh.
+    occupied: Vec<bool>,
+    map: OccupancyGrid,
+    start: [f64; 3],
+    v0: f64,
+    goal: [f64; 3],
+    /// `kappa_max`, 2x, 4x: the bounds the mission tries in turn (`mission::reference`).
+    kappas: [f64; 3],
+    limits: DiffDriveLimits,
+    tip: TipOverAcceleration,
+    /// What the mission got: re-planned cells, expansions, smoothed path.
+    cells: Vec<(usize, usize)>,
+    expanded: usize,
+    path: Vec<[f64; 2]>,
+}
+
+fn mission_replan_case() -> MissionReplan {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/mission.toml");
+    let m = moma::mission::load(&file).expect("default mission loads");
+    let r = moma::mission::run(&m).expect("default mission runs");
+    assert!(
+        r.reached && r.replans() == 1,
+        "the default mission re-plans once"
+    );
+    let f = &m.file;
+    let o = f.obstacles[0];
+    let rp = &r.plans[1];
+    assert!((rp.t - o.t).abs() < 1e-9);
+    let grid = m.map.grid.clone();
+    let res = grid.resolution;
+    // the mission's configuration space (mission::plan): disk dilation by the footprint
+    // radius + |d| + half a cell of the distance transform of the occupied cells
+    let mut occupied = grid.obstacle_mask(planning::grid::OCCUPIED, f.map.unknown_is_obstacle);
+    let dist = planning::distance_transform(&occupied, grid.width, grid.height);
+    let r_cells = (f.robot.footprint_radius + f.robot.drive.d.abs()) / res + 0.5;
+    let blocked: Vec<bool> = dist.iter().map(|&d| f64::from(d) <= r_cells).collect();
+    let cs = SearchGrid::from_obstacles(&blocked, grid.width, grid.height).unwrap();
+    let sc = grid
+        .world_to_cell("start", f.start.pose[0], f.start.pose[1])
+        .unwrap();
+    let gc = grid
+        .world_to_cell("goal", f.goal.pose[0], f.goal.pose[1])
+        .unwrap();
+    let mut planner = DStarLite::new(&cs, sc, gc).unwrap();
+    planner.compute().expect("goal reachable");
+    assert_eq!(
+        planner.path().unwrap(),
+        r.plans[0].cells,
+        "the mission's first path"
+    );
+    // the crate's cells, as the mission marks them
+    let c = grid.world_to_cell_f(o.center[0], o.center[1]);
+    let (radius, reach) = (o.radius / res, o.radius / res + r_cells);
+    let mut disk = Vec::new();
+    for y in 0..grid.height {
+        for x in 0..grid.width {
+            let dc = (x as f64 + 0.5 - c[0]).hypot(y as f64 + 0.5 - c[1]);
+            if dc <= radius {
+                occupied[y * grid.width + x] = true;
+            }
+            if dc <= reach && (x, y) != gc && cs.is_free(x as i64, y as i64) {
+                disk.push((x, y));
+            }
+        }
+    }
+    let i = r
+        .samples
+        .t
+        .iter()
+        .position(|&t| (t - o.t).abs() < 1e-9)
+        .unwrap();
+    let q = &r.samples.q[i];
+    let l = &f.limits;
+    let tl = &r.tip_limits;
+    let side = |x: Option<f64>| x.map_or(f64::INFINITY, |a| l.tip_fraction * a);
+    let case = MissionReplan {
+        planner,
+        robot: rp.cells[0],
+        disk,
+        occupied,
+        start: [q[0], q[1], q[2]],
+        v0: rp.v_start,
+        goal: f.goal.pose,
+        kappas: [l.kappa_max, 2.0 * l.kappa_max, 4.0 * l.kappa_max],
+        limits: DiffDriveLimits {
+            v_max: l.v_max,
+            omega_max: l.omega_max,
+            a_max: l.a_max,
+            alpha_max: l.alpha_max,
+        },
+        tip: TipOverAcceleration {
+            forward: l.tip_fraction * tl.forward.unwrap(),
+            backward: l.tip_fraction * tl.backward.unwrap(),
+            left: side(tl.left),
+            right: side(tl.right),
+        },
+        cells: rp.cells.clone(),
+        expanded: rp.search.expanded,
+        path: rp.path.clone(),
+        map: grid,
+    };
+    // the rebuilt re-plan is the mission's
+    let mut p = case.planner.clone();
+    let cells = mission_replan(&mut p, &case).expect("a path remains");
+    assert_eq!(cells, case.cells, "the mission's re-planned cells");
+    assert_eq!(p.expanded(), case.expanded, "the mission's expansion count");
+    let sp = mission_smooth(&p, &case, &cells).expect("the mission's smoothing succeeds");
+    assert_eq!(sp.points(), case.path, "the mission's smoothed path");
+    case
+}
+
+/// The mission's re-plan: `move_start` to the robot's cell, `set_blocked` on the crate's
+/// cells, `compute`, `path`.
+fn mission_replan(p: &mut DStarLite, c: &MissionReplan) -> Option<Vec<(usize, usize)>> {
+    p.move_start(c.robot).unwrap();
+    for &cell in &c.disk {
+        p.set_blocked(cell, true).unwrap();
+    }
+    p.compute()?;
+    p.path()
+}
+
+/// The mission's smoothing: the goal pose with `kappa_max`, then 2x, then 4x, the first
+/// that succeeds (failed attempts included in its time, as in the mission).
+fn mission_smooth(
+    p: &DStarLite,
+    c: &MissionReplan,
+    cells: &[(usize, usize)],
+) -> Option<planning::curvature::SmoothPath> {
+    c.kappas.iter().find_map(|&k| {
+        smooth_diff_drive(
+            p.grid(),
+            &c.map,
+            cells,
+            c.start,
+            c.goal,
+            &SmoothOptions::new(k),
+        )
+        .ok()
+    })
+}
+
+/// The speed the timing starts from (`mission::reference`: from rest if the new path
+/// begins with a turn in place).
+fn mission_v0(sp: &planning::curvature::SmoothPath, c: &MissionReplan) -> f64 {
+    if sp.pivot() != 0.0 {
+        0.0
+    } else {
+        c.v0.max(0.0)
+    }
+}
+
+fn mission_table(c: &MissionReplan) {
+    let (mut tr, mut te, mut ts, mut tt) = (vec![], vec![], vec![], vec![]);
+    let mut p = c.planner.clone();
+    for _ in 0..21 {
+        p.clone_from(&c.planner);
+        let t0 = Instant::now();
+        let cells = black_box(mission_replan(&mut p, c)).unwrap();
+        tr.push(t0.elapsed().as_secs_f64());
+        let t0 = Instant::now();
+        black_box(planning::distance_transform(
+            &c.occupied,
+            c.map.width,
+            c.map.height,
+        ));
+        te.push(t0.elapsed().as_secs_f64());
+        let t0 = Instant::now();
+        let sp = mission_smooth(&p, c, &cells).unwrap();
+        ts.push(t0.elapsed().as_secs_f64());
+        let t0 = Instant::now();
+        black_box(
+            time_parameterize_curve(&sp, &c.limits, Some(&c.tip), mission_v0(&sp, c), 0.0).unwrap(),
+        );
+        tt.push(t0.elapsed().as_secs_f64());
+    }
+    println!(
+        "\nThe default mission's re-plan (depot, {} x {} cells, crate at t = 5 s: {} C-space cells; medians of 21 runs)",
+        c.map.width,
+        c.map.height,
+        c.disk.len()
+    );
+    println!(
+        "| D* Lite (move_start + set_blocked + compute + path) | expansions | distance transform refresh | smoothing | timing |"
+    );
+    println!("| --- | --- | --- | --- | --- |");
+    println!(
+        "| {:.3} ms | {} | {:.3} ms | {:.3} ms | {:.3} ms |\n",
+        median(&mut tr) * 1e3,
+        p.expanded(),
+        median(&mut te) * 1e3,
+        median(&mut ts) * 1e3,
+        median(&mut tt) * 1e3
+    );
+}
+
+fn bench_mission(cr: &mut Criterion, c: &MissionReplan) {
+    let mut grp = cr.benchmark_group("disk_replan");
+    grp.sample_size(20)
+        .measurement_time(std::time::Duration::from_secs(3));
+    let mut p = c.planner.clone();
+    grp.bench_function("depot_mission/dstar_lite", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            for _ in 0..iters {
+                p.clone_from(&c.planner);
+                let t0 = Instant::now();
+                black_box(mission_replan(&mut p, c));
+                total += t0.elapsed();
+            }
+            total
+        })
+    });
+    grp.bench_function("depot_mission/distance_transform", |b| {
+        b.iter(|| {
+            black_box(planning::distance_transform(
+                &c.occupied,
+                c.map.width,
+                c.map.height,
+            ))
+        })
+    });
+    p.clone_from(&c.planner);
+    let cells = mission_replan(&mut p, c).unwrap();
+    grp.bench_function("depot_mission/smooth", |b| {
+        b.iter(|| black_box(mission_smooth(&p, c, &cells)))
+    });
+    let sp = mission_smooth(&p, c, &cells).unwrap();
+    let v0 = mission_v0(&sp, c);
+    grp.bench_function("depot_mission/time", |b| {
+        b.iter(|| {
+            black_box(time_parameterize_curve(
+                &sp,
+                &c.limits,
+                Some(&c.tip),
+                v0,
+                0.0,
+            ))
+        })
+    });
+    grp.finish();
+}
+
 fn all(c: &mut Criterion) {
+    let mission = mission_replan_case();
+    mission_table(&mission);
     let disk = disk_cases();
     disk_table(&disk);
     if std::env::var_os("MOMA_BENCH_DISK_ONLY").is_some() {
+        bench_mission(c, &mission);
         bench_disk(c, &disk);
         return;
     }
@@ -809,6 +1070,7 @@ fn all(c: &mut Criterion) {
     bench_astar(c, &cases);
     bench_edt(c);
     bench_dstar(c, &replan_sets);
+    bench_mission(c, &mission);
     bench_disk(c, &disk);
 }
 

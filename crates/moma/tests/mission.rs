@@ -260,3 +260,168 @@ fn unknown_keys_name_the_key_and_the_file() {
     assert!(e.contains("bad.toml") && e.contains("v_maxx"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The shipped mobile manipulator with its root frame moved `d` ahead of the driven-axle
+/// midpoint (the same physical robot: every joint hung on the root and the chassis'
+/// centre of mass shifted by −d along x), written to a temporary folder.
+fn offset_urdf(d: f64, tag: &str) -> PathBuf {
+    let text = std::fs::read_to_string(scenarios().join("robots/mobile_manipulator.urdf"))
+        .expect("shipped URDF");
+    let shift = |line: &str| -> String {
+        let (head, rest) = line.split_once("xyz=\"").expect("origin with xyz");
+        let (xyz, tail) = rest.split_once('"').expect("closing quote");
+        let v: Vec<f64> = xyz.split_whitespace().map(|s| s.parse().unwrap()).collect();
+        format!("{head}xyz=\"{} {} {}\"{tail}", v[0] - d, v[1], v[2])
+    };
+    let (mut in_base, mut base_child) = (false, false);
+    let mut out = String::new();
+    for line in text.lines() {
+        let l = line.trim_start();
+        if l.starts_with("<link name=\"base_link\"") {
+            in_base = true;
+        } else if l.starts_with("</link>") {
+            in_base = false;
+        } else if l.starts_with("<joint ") || l.starts_with("</joint>") {
+            base_child = false;
+        } else if l.starts_with("<parent link=\"base_link\"") {
+            base_child = true;
+        }
+        if l.starts_with("<origin ") && (in_base || base_child) {
+            out.push_str(&shift(line));
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    let dir = std::env::temp_dir().join(format!("moma-mission-d-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("offset.urdf");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// The short mission with the base frame `d` ahead of the axle: the same robot, the same
+/// axle-midpoint start (2, 2, 0) and goal (5.5, 3.5, π/2) as [`mission_text`], so the
+/// base frame poses are those moved `d` along the heading.
+fn offset_mission(d: f64, tag: &str) -> (MissionResult, PathBuf) {
+    let urdf = offset_urdf(d, tag);
+    let caster = |x: f64, y: f64| format!("[{}, {y}]", x - d);
+    let text = mission_text(
+        &format!("[goal]\npose = [5.5, {}, 1.5707963267948966]", 3.5 + d),
+        "",
+    )
+    .replace(
+        "urdf = \"robots/mobile_manipulator.urdf\"",
+        &format!("urdf = {:?}", urdf.to_str().unwrap()),
+    )
+    .replace("d = 0.0", &format!("d = {d}"))
+    .replace(
+        "pose = [2.0, 2.0, 0.0]",
+        &format!("pose = [{}, 2.0, 0.0]", 2.0 + d),
+    )
+    .replace("[0.24, 0.16]", &caster(0.24, 0.16))
+    .replace("[0.24, -0.16]", &caster(0.24, -0.16))
+    .replace("[-0.24, 0.16]", &caster(-0.24, 0.16))
+    .replace("[-0.24, -0.16]", &caster(-0.24, -0.16));
+    let r = mission(&text);
+    (r, urdf)
+}
+
+/// Checks an offset mission: the goal is reached within tolerance, the axle midpoint
+/// never slips sideways while the base frame origin (d ahead) does move sideways in the
+/// turns, the wheels roll without slipping, and the footprint stays clear.
+fn check_offset_mission(d: f64, tag: &str) {
+    let (r, urdf) = offset_mission(d, tag);
+    assert!(r.reached, "d = {d}: {:?} {:#?}", r.reason, r.events);
+    let last = r.samples.q.last().unwrap();
+    let pe = (last[0] - 5.5).hypot(last[1] - (3.5 + d));
+    let he = (last[2] - std::f64::consts::FRAC_PI_2).abs();
+    assert!(
+        pe < 0.02 && he < 0.02,
+        "d = {d}: final error {pe} m, {he} rad"
+    );
+    assert!(r.min_clearance().unwrap() > 0.0);
+    assert!(r.min_zmp_margin().unwrap() > 0.0);
+    // the reference and the executed base path agree (base frame origin on both)
+    let te = r.max_tracking_error().unwrap();
+    assert!(te < 0.01, "d = {d}: tracking error {te}");
+    let col = |n: &str| r.q_names.iter().position(|q| q == n).unwrap();
+    let (jl, jr) = (col("left_wheel_joint"), col("right_wheel_joint"));
+    let (rw, b) = (0.10, 0.22);
+    let (mut axle_lat, mut base_lat, mut roll, mut moved) = (0.0f64, 0.0f64, 0.0f64, 0.0);
+    for w in r.samples.q.windows(2) {
+        let (p, q) = (&w[0], &w[1]);
+        let th = 0.5 * (p[2] + q[2]);
+        let (e, lat) = ([th.cos(), th.sin()], [-th.sin(), th.cos()]);
+        let axle = |s: &[f64]| [s[0] - d * s[2].cos(), s[1] - d * s[2].sin()];
+        let (a0, a1) = (axle(p), axle(q));
+        let da = [a1[0] - a0[0], a1[1] - a0[1]];
+        axle_lat = axle_lat.max((da[0] * lat[0] + da[1] * lat[1]).abs());
+        base_lat = base_lat.max(((q[0] - p[0]) * lat[0] + (q[1] - p[1]) * lat[1]).abs());
+        // each wheel's contact moves forward by r_w times its rotation
+        let fwd = da[0] * e[0] + da[1] * e[1];
+        let dth = q[2] - p[2];
+        roll = roll
+            .max((fwd - b * dth - rw * (q[jl] - p[jl])).abs())
+            .max((fwd + b * dth - rw * (q[jr] - p[jr])).abs());
+        moved += fwd.abs();
+    }
+    assert!(moved > 3.0, "d = {d}: drove {moved} m");
+    // per 20 ms sample: the axle's sideways motion is the finite-difference error only
+    assert!(
+        axle_lat < 2e-5,
+        "d = {d}: axle slid {axle_lat} m sideways in a sample"
+    );
+    assert!(roll < 2e-5, "d = {d}: a wheel slid {roll} m in a sample");
+    // the base frame origin swings sideways by d·Δθ in turns (what the test tells apart)
+    assert!(
+        base_lat > 20.0 * axle_lat && base_lat > 1e-3 * d.abs(),
+        "d = {d}: base frame sideways {base_lat}, axle {axle_lat}"
+    );
+    let _ = std::fs::remove_dir_all(urdf.parent().unwrap());
+}
+
+#[test]
+fn base_frame_ahead_of_the_axle_is_planned_and_tracked_on_the_axle() {
+    check_offset_mission(0.2, "ahead");
+}
+
+#[test]
+fn base_frame_behind_the_axle_is_planned_and_tracked_on_the_axle() {
+    check_offset_mission(-0.15, "behind");
+}
+
+#[test]
+fn a_goal_heading_no_smooth_path_ends_with_is_taken_by_a_turn_in_place() {
+    // the goal faces back the way the robot comes: no curvature-bounded path ends there
+    // with that heading, so the path ends with its arrival heading and the base turns
+    // in place on the goal
+    let goal = "[goal]\npose = [5.5, 2.0, 3.14159265]";
+    let r = mission(&mission_text(goal, ""));
+    assert!(r.reached, "{:?} {:#?}", r.reason, r.events);
+    let ev = r
+        .events
+        .iter()
+        .find(|e| e.kind == "smoothing")
+        .unwrap_or_else(|| panic!("no smoothing event: {:#?}", r.events));
+    assert!(
+        ev.text.contains("turns in place at the goal"),
+        "{}",
+        ev.text
+    );
+    let last = r.samples.q.last().unwrap();
+    assert!((last[0] - 5.5).hypot(last[1] - 2.0) < 0.1);
+    let he = moma::control::wrap_angle(std::f64::consts::PI - last[2]).abs();
+    assert!(he < 0.1, "final heading error {he}");
+    // the turn happened on the spot after the reference ended (arrive phase)
+    let arrive: Vec<usize> = (0..r.samples.t.len())
+        .filter(|&i| r.samples.phase[i] == "arrive")
+        .collect();
+    let (q0, q1) = (
+        &r.samples.q[arrive[0]],
+        &r.samples.q[*arrive.last().unwrap()],
+    );
+    let turned = moma::control::wrap_angle(q1[2] - q0[2]).abs();
+    assert!(turned > 2.0, "turned {turned} rad at the goal");
+    assert!((q0[0] - q1[0]).hypot(q0[1] - q1[1]) < 0.15);
+}

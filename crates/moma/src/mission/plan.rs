@@ -17,7 +17,7 @@ pub(crate) struct Planner {
     pub occupied: Vec<bool>,
     /// Distance (cells) from each cell centre to the nearest occupied cell centre.
     pub dist: Vec<f32>,
-    /// Dilation radius of the configuration space (cells): footprint radius + ½ cell.
+    /// Dilation radius of the configuration space (cells): footprint radius + |d| + ½ cell.
     pub r_cells: f64,
     pub dstar: DStarLite,
     pub goal_cell: (usize, usize),
@@ -37,7 +37,12 @@ pub struct SearchTiming {
 }
 
 impl Planner {
-    /// Builds the configuration space and plans once from `start` to `goal` (world).
+    /// Builds the configuration space and plans once from `start` to `goal` (world, the
+    /// driven-axle midpoints). The footprint is a disk of `footprint_radius` about the
+    /// base frame origin, which lies `axle_offset` (the drive's `d`) ahead of the axle
+    /// midpoint; the planned point being the axle midpoint, the obstacles are dilated by
+    /// `footprint_radius + |axle_offset|` (the disk about the axle midpoint that holds
+    /// the footprint at every heading; exact for `d = 0`).
     ///
     /// # Errors
     /// Start or goal outside the map, a footprint that fits nowhere, start or goal where
@@ -47,20 +52,31 @@ impl Planner {
         grid: &OccupancyGrid,
         unknown_is_obstacle: bool,
         footprint_radius: f64,
+        axle_offset: f64,
         start: [f64; 2],
         goal: [f64; 2],
     ) -> Result<(Self, Option<CellPath>, SearchTiming)> {
         let (w, h) = (grid.width, grid.height);
         let occupied = grid.obstacle_mask(crate::planning::grid::OCCUPIED, unknown_is_obstacle);
         let dist = distance_transform(&occupied, w, h);
-        let r_cells = footprint_radius / grid.resolution + 0.5;
+        let dilation = footprint_radius + axle_offset.abs();
+        let r_cells = dilation / grid.resolution + 0.5;
         let blocked: Vec<bool> = dist.iter().map(|&d| f64::from(d) <= r_cells).collect();
+        // for d != 0 the messages say that the planned point is the axle midpoint
+        let offset_note = if axle_offset == 0.0 {
+            String::new()
+        } else {
+            format!(
+                " (the driven-axle midpoint is planned, on obstacles dilated by \
+                 footprint_radius + |d| = {dilation} m)"
+            )
+        };
         if blocked.iter().all(|&b| b) {
             return Err(Error::invalid(
                 "robot.footprint_radius",
                 format!(
                     "a footprint of radius {footprint_radius} m fits nowhere on the map (every \
-                     cell lies within that distance of an obstacle or unknown cell)"
+                     cell lies within that distance of an obstacle or unknown cell){offset_note}"
                 ),
             ));
         }
@@ -82,7 +98,7 @@ impl Planner {
                     what,
                     format!(
                         "the footprint (radius {footprint_radius} m) does not fit at ({}, {}): \
-                         an obstacle lies {:.3} m from it",
+                         an obstacle lies {:.3} m from it{offset_note}",
                         p[0],
                         p[1],
                         f64::from(dist[i]) * grid.resolution

@@ -28,11 +28,17 @@ pub struct RefSample {
 }
 
 /// A timed reference: samples in increasing time.
+///
+/// The reference is planned for the unicycle point of the platform, the driven-axle
+/// midpoint P0: `samples` are poses and speeds of P0 (its forward speed `v` and the yaw
+/// rate are the platform inputs of the reduced model). The base frame origin lies `d`
+/// ahead of P0 along the heading, at `(x + d cos θ, y + d sin θ)`; for `d = 0` the two
+/// coincide.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reference {
-    /// The samples (at least one).
+    /// The samples of the axle midpoint (at least one).
     pub samples: Vec<RefSample>,
-    /// The smoothed geometric path (world, m), for drawing.
+    /// The smoothed geometric path of the base frame origin (world, m), for drawing.
     pub path: Vec<[f64; 2]>,
     /// The curvature bound the smoothing used (1/m).
     pub kappa_max: f64,
@@ -93,7 +99,7 @@ impl Reference {
 pub(crate) struct TimingStart {
     /// Mission time of the first sample (s).
     pub t0: f64,
-    /// Exact start pose `[x, y, θ]`.
+    /// Exact start pose `[x, y, θ]` of the axle midpoint.
     pub pose: [f64; 3],
     /// Current forward speed (m/s).
     pub v: f64,
@@ -108,6 +114,8 @@ pub(crate) struct TimingStart {
 /// from rest (the robot brakes onto it; the caller's reference starts with `v = 0`).
 /// When no smooth path ends at the goal pose with `kappa_max`, tighter bounds (2x, 4x)
 /// are tried, then the heading the cell path arrives with (see [`Reference`]).
+/// `start`, `goal` and `cspace` are those of the axle midpoint; `d` places the base frame
+/// origin on the drawn path.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn build_reference(
     map: &OccupancyGrid,
@@ -115,6 +123,7 @@ pub(crate) fn build_reference(
     cells: &[(usize, usize)],
     start: &TimingStart,
     goal: [f64; 3],
+    d: f64,
     limits: &DiffDriveLimits,
     tip: &TipOverAcceleration,
     kappa_max: f64,
@@ -166,9 +175,20 @@ pub(crate) fn build_reference(
             alpha: p.alpha,
         })
         .collect();
+    let drawn = if d == 0.0 {
+        path.points()
+    } else {
+        path.samples()
+            .iter()
+            .map(|p| {
+                let (s, c) = p.theta.sin_cos();
+                [p.x + d * c, p.y + d * s]
+            })
+            .collect()
+    };
     Ok(Reference {
         samples,
-        path: path.points(),
+        path: drawn,
         kappa_max: kappa_used,
         turn_at_goal,
     })

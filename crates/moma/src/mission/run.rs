@@ -75,7 +75,7 @@ pub struct Samples {
     pub t: Vec<f64>,
     /// Full configuration q per sample (the model's order).
     pub q: Vec<Vec<f64>>,
-    /// Executed forward speed (m/s) and yaw rate (rad/s).
+    /// Executed forward speed of the driven-axle midpoint (m/s).
     pub v: Vec<f64>,
     /// Executed yaw rate (rad/s).
     pub omega: Vec<f64>,
@@ -83,7 +83,8 @@ pub struct Samples {
     pub v_ref: Vec<f64>,
     /// Reference yaw rate.
     pub omega_ref: Vec<f64>,
-    /// Reference position.
+    /// Reference position of the base frame origin (the axle midpoint's reference moved
+    /// `d` ahead along the reference heading).
     pub ref_xy: Vec<[f64; 2]>,
     /// ZMP margin (m); `None` where the ZMP is undefined (tipping).
     pub zmp_margin: Vec<Option<f64>>,
@@ -93,7 +94,7 @@ pub struct Samples {
     pub mhs_min: Vec<Option<f64>>,
     /// Footprint edge to the nearest occupied cell's boundary (m).
     pub clearance: Vec<f64>,
-    /// Distance from the reference position (m).
+    /// Distance of the base frame origin from its reference position (m).
     pub tracking_error: Vec<f64>,
     /// Larger drive-wheel slip ratio |(F_long, F_lat)| / (μ N) (`stability::loads`: the
     /// lateral axle force −λ₀ shared in proportion to the normal loads); `None` if a wheel
@@ -279,6 +280,27 @@ fn path_length(p: &[[f64; 2]]) -> f64 {
         .sum()
 }
 
+/// The pose of the driven-axle midpoint P0 (the unicycle point) of a base pose
+/// `[x, y, θ]` whose origin lies `d` ahead of it: `[x − d cos θ, y − d sin θ, θ]`.
+fn axle_pose(base: [f64; 3], d: f64) -> [f64; 3] {
+    if d == 0.0 {
+        return base;
+    }
+    let (s, c) = base[2].sin_cos();
+    [base[0] - d * c, base[1] - d * s, base[2]]
+}
+
+/// The reference of the base frame origin for a reference sample of the axle midpoint
+/// (position moved `d` ahead along the reference heading; speeds as they are).
+fn base_reference(mut r: RefSample, d: f64) -> RefSample {
+    if d != 0.0 {
+        let (s, c) = r.theta.sin_cos();
+        r.x += d * c;
+        r.y += d * s;
+    }
+    r
+}
+
 /// The tip-over acceleration limits of the robot in its transport posture, at rest, in
 /// base axes.
 pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
@@ -347,12 +369,15 @@ impl<'m> Runner<'m> {
     fn new(m: &'m Mission) -> Result<Self> {
         let f = &m.file;
         let clock = Instant::now();
+        let d = m.robot.base.drive.d;
+        let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(f.goal.pose, d));
         let (planner, first_path, first_search) = Planner::new(
             &m.map.grid,
             f.map.unknown_is_obstacle,
             f.robot.footprint_radius,
-            [f.start.pose[0], f.start.pose[1]],
-            [f.goal.pose[0], f.goal.pose[1]],
+            d,
+            [s0[0], s0[1]],
+            [g0[0], g0[1]],
         )?;
         let planning_s = clock.elapsed().as_secs_f64();
         let tip = transport_tip_limits(m)?;
@@ -429,7 +454,8 @@ impl<'m> Runner<'m> {
             self.planner.dstar.grid(),
             &cells,
             &start,
-            self.m.file.goal.pose,
+            axle_pose(self.m.file.goal.pose, self.wm.base.drive.d),
+            self.wm.base.drive.d,
             &self.limits,
             &accel,
             self.m.file.limits.kappa_max,
@@ -485,6 +511,10 @@ impl<'m> Runner<'m> {
         let res = grid.resolution;
         let r_foot = f.robot.footprint_radius;
         let goal = f.goal.pose;
+        // the unicycle point the platform is planned and tracked by: the driven-axle
+        // midpoint, `d` behind the base frame origin
+        let d = wm.base.drive.d;
+        let goal_axle = axle_pose(goal, d);
 
         // initial state
         let mut x = vec![0.0; nq + nr + 1];
@@ -518,7 +548,7 @@ impl<'m> Runner<'m> {
                 Some(cells) => {
                     let start = TimingStart {
                         t0: 0.0,
-                        pose: f.start.pose,
+                        pose: axle_pose(f.start.pose, d),
                         v: 0.0,
                     };
                     let search = self.first_search;
@@ -661,6 +691,7 @@ impl<'m> Runner<'m> {
             qv.copy_from_slice(&x[..nq]);
             vv.copy_from_slice(&x[nq..nq + nr]);
             let pose = [x[0], x[1], x[2]];
+            let axle = axle_pose(pose, d);
             let (v, w) = (x[nq], x[nq + 1]);
 
             // obstacles that appear now
@@ -673,7 +704,7 @@ impl<'m> Runner<'m> {
                 let o = f.obstacles[oi];
                 let clock = Instant::now();
                 let c = grid.world_to_cell_f(o.center[0], o.center[1]);
-                let [fx, fy] = grid.world_to_cell_f(pose[0], pose[1]);
+                let [fx, fy] = grid.world_to_cell_f(axle[0], axle[1]);
                 let rc = (
                     (fx.floor().max(0.0) as usize).min(grid.width - 1),
                     (fy.floor().max(0.0) as usize).min(grid.height - 1),
@@ -731,7 +762,11 @@ impl<'m> Runner<'m> {
                             phase = Phase::Done;
                         }
                         Some(cells) => {
-                            let start = TimingStart { t0: t, pose, v };
+                            let start = TimingStart {
+                                t0: t,
+                                pose: axle,
+                                v,
+                            };
                             if self.make_reference(cells, start, &format!("obstacle {oi}"), timing)
                             {
                                 let p = self.plans.last().expect("just pushed");
@@ -866,14 +901,14 @@ impl<'m> Runner<'m> {
                             v: r.v,
                             w: r.omega,
                         };
-                        (kan.inputs(&pose, &rs), r)
+                        (kan.inputs(&axle, &rs), base_reference(r, d))
                     } else {
                         let rs = ReferenceSample {
-                            pose: goal,
+                            pose: goal_axle,
                             v: 0.0,
                             w: 0.0,
                         };
-                        let [ex, _, eth] = Kanayama::error(&pose, &rs);
+                        let [ex, _, eth] = Kanayama::error(&axle, &rs);
                         let r = RefSample {
                             t,
                             x: goal[0],

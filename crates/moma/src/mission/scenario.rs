@@ -93,7 +93,9 @@ pub struct DriveSpec {
     pub r_w: f64,
     /// Half track (m).
     pub b: f64,
-    /// Base origin ahead of the driven-axle midpoint (m); the mission needs 0.
+    /// Base frame origin ahead of the driven-axle midpoint along the heading (m; any
+    /// finite value, negative behind it). The mission plans and tracks the axle midpoint
+    /// (the unicycle point); see [`super::reference::Reference`].
     pub d: f64,
 }
 
@@ -393,17 +395,6 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
         ("control.task_frequency", c.task_frequency),
     ] {
         positive(path, n, x)?;
-    }
-    if file.robot.drive.d != 0.0 {
-        return Err(field_err(
-            path,
-            "robot.drive.d",
-            format!(
-                "the mission tracks the base frame as the unicycle point, so the base frame \
-                 must sit on the driven-axle midpoint (d = 0), got {}",
-                file.robot.drive.d
-            ),
-        ));
     }
     finite(path, "start.pose", &file.start.pose)?;
     finite(path, "goal.pose", &file.goal.pose)?;
