@@ -27,7 +27,9 @@ fn urdf_path(p: &Path) -> PathBuf {
     } else {
         ROBOTS[p.len() % ROBOTS.len()]
     };
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios").join(kept)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenarios")
+        .join(kept)
 }
 
 fn system(sc: &Scenario) -> Option<Box<dyn ReducedSystem>> {
@@ -63,7 +65,9 @@ fn system(sc: &Scenario) -> Option<Box<dyn ReducedSystem>> {
         RobotSpec::FixedBase { urdf } => {
             let model =
                 moma::io::urdf::model_from_urdf_file(&urdf_path(urdf), RootJoint::Fixed).ok()?;
-            Some(Box::new(moma::sim::fixed_base::FixedBaseSystem::new(model).ok()?))
+            Some(Box::new(
+                moma::sim::fixed_base::FixedBaseSystem::new(model).ok()?,
+            ))
         }
         RobotSpec::FreeFloating { .. } => None,
     }
@@ -90,7 +94,10 @@ pub fn check(text: &str) {
         let mut u = vec![0.0; p.channels.len()];
         for t in [0.0, 0.5, 1e9, -1.0] {
             p.eval(t, &mut u);
-            assert!(u.iter().all(|x| x.is_finite()), "a validated profile gave {u:?}");
+            assert!(
+                u.iter().all(|x| x.is_finite()),
+                "a validated profile gave {u:?}"
+            );
         }
     }
     if !header {

@@ -4,8 +4,8 @@
 //! library's whole scenario schema and its checks, as in `sim_scenario` (see `sim_check`).
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-mod sim_check;
 mod mutate;
+mod sim_check;
 
 const TEMPLATES: [&str; 8] = [
     include_str!("../../scenarios/default.toml"),

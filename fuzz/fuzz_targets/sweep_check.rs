@@ -87,7 +87,11 @@ pub fn check(text: &str) {
     if evaluate {
         for i in [0, n - 1] {
             if let Ok(row) = s.evaluate(i) {
-                assert_eq!(row.len(), s.columns().len(), "row {i} and the columns differ");
+                assert_eq!(
+                    row.len(),
+                    s.columns().len(),
+                    "row {i} and the columns differ"
+                );
             }
         }
     }

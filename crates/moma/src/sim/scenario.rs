@@ -516,12 +516,17 @@ mod tests {
         assert_eq!((q.len(), v.len(), u.channels.len()), (3, 2, 2));
         assert_eq!(sc.output.record_interval, 0.01);
 
-        let msg = |t: &str| match parse_scenario::<toml::Table, toml::Table, toml::Table, toml::Table>(t, path) {
+        let msg = |t: &str| match parse_scenario::<toml::Table, toml::Table, toml::Table, toml::Table>(
+            t, path,
+        ) {
             Ok(_) => String::new(),
             Err(e) => e.to_string(),
         };
         let e = msg(&text.replace("duration = 3.0", "duration = 3.0\nspeed = 1"));
-        assert!(e.starts_with("m1.toml: ") && e.contains("unknown field `speed`"), "{e}");
+        assert!(
+            e.starts_with("m1.toml: ") && e.contains("unknown field `speed`"),
+            "{e}"
+        );
         let e = msg(&text.replace("kind = \"chapter\"", "kind = \"wheelbarrow\""));
         assert!(e.contains("wheelbarrow"), "{e}");
 
@@ -545,14 +550,15 @@ mod tests {
         );
         assert_eq!(
             bad("v = [-0.959265, -0.368072]", "v = [1.0]"),
-            "m1.toml: initial.v: expected 2 values (v, omega), got 1"
+            "m1.toml: initial.v: expected 2 values (v_F, v_T), got 1"
         );
         assert_eq!(
             bad("v = [-0.959265, -0.368072]", "v = [1.0, inf]"),
             "m1.toml: initial state: initial.v[1] is not a finite number"
         );
         assert!(
-            bad("q = [0.520404,", "q = [1e300,").contains("initial.q[0] = 1e300 exceeds the blow-up bound"),
+            bad("q = [0.520404,", "q = [1e300,")
+                .contains("initial.q[0] = 1e300 exceeds the blow-up bound"),
         );
         assert!(bad("value = 0.8", "value = nan").starts_with("m1.toml: inputs: "));
     }
