@@ -1,31 +1,22 @@
 //! Structured `moma simulate` scenarios: one of the shipped scenario files, changed by
 //! `arbitrary`-derived edits (NaN, ±inf, huge, tiny and negative numbers, wrong types,
 //! removed, added, repeated and cut fields), rendered to TOML text and read through the
-//! library's part of the schema (`[integrator]`, `[[inputs]]`, `[limits]`): serde,
-//! validation, then the input profiles evaluated at four times.
+//! library's whole scenario schema and its checks, as in `sim_scenario` (see `sim_check`).
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
-
 mod mutate;
+mod sim_check;
 
-const TEMPLATES: [&str; 6] = [
+const TEMPLATES: [&str; 8] = [
     include_str!("../../scenarios/default.toml"),
     include_str!("../../scenarios/m1_unicycle.toml"),
     include_str!("../../scenarios/m2_platform_arm.toml"),
     include_str!("../../scenarios/m5_mobile_manipulator.toml"),
     include_str!("../../scenarios/space_capture.toml"),
     include_str!("../../scenarios/space_resolved_rate.toml"),
+    include_str!("../../scenarios/brake_arm_tucked.toml"),
+    include_str!("../../scenarios/control_osc_panda_fixed.toml"),
 ];
-
-#[derive(serde::Deserialize)]
-struct Tables {
-    integrator: Option<IntegratorSettings>,
-    inputs: Option<Vec<ChannelProfile>>,
-    #[allow(dead_code)]
-    limits: Option<MonitorLimits>,
-}
 
 #[derive(arbitrary::Arbitrary, Debug)]
 struct Input {
@@ -40,28 +31,5 @@ fuzz_target!(|input: Input| {
     let Ok(text) = toml::to_string(&doc) else {
         return;
     };
-    let Ok(t) = toml::from_str::<Tables>(&text) else {
-        return;
-    };
-    if let Some(i) = t.integrator {
-        let _ = i.validate();
-    }
-    if let Some(channels) = t.inputs {
-        let p = InputProfile { channels };
-        let ok = p
-            .channels
-            .iter()
-            .enumerate()
-            .all(|(k, c)| c.validate(&format!("inputs[{k}]")).is_ok());
-        if ok && p.channels.len() <= 64 {
-            let mut u = vec![0.0; p.channels.len()];
-            for t in [0.0, 0.5, 1e9, -1.0] {
-                p.eval(t, &mut u);
-            }
-            assert!(
-                u.iter().all(|x| x.is_finite()),
-                "a validated profile gave {u:?}"
-            );
-        }
-    }
+    sim_check::check(&text);
 });

@@ -138,6 +138,28 @@ fn parse_measure(text: &str, rows: &TaskRows) -> Result<Measure> {
     Ok(measure)
 }
 
+/// Most IK iterations a whole map may spend in the worst case (every sample unreachable,
+/// every attempt to its last iteration): the sample count is bounded by the grid
+/// (`moma::ik::placement::MAX_SAMPLES`) and each solve by the IK budget, but their product
+/// is not, so a small `--step` with many restarts could run for hours.
+pub const MAX_MAP_IK_ITERATIONS: f64 = 1e8;
+
+/// Refuses a map whose worst-case work, samples × (restarts + 1) × max_iters, exceeds
+/// [`MAX_MAP_IK_ITERATIONS`], naming the options that set it.
+fn check_total_work(grid: &PlacementGrid, restarts: usize, max_iters: usize) -> Result<()> {
+    let samples = grid.nx as f64 * grid.ny as f64 * grid.headings as f64;
+    let work = samples * (restarts as f64 + 1.0) * max_iters as f64;
+    if work > MAX_MAP_IK_ITERATIONS {
+        bail!(
+            "--step/--headings/--restarts/--max-iters: {samples:.0} samples × ({restarts} + 1) \
+             attempts × {max_iters} iterations = {work:.3e} IK iterations in the worst case \
+             exceed the budget of {MAX_MAP_IK_ITERATIONS:e}; use a larger --step or fewer \
+             --headings, --restarts or --max-iters"
+        );
+    }
+    Ok(())
+}
+
 /// Checks every option and builds the grid and the per-pose evaluator (robot loaded).
 fn setup(args: &Args) -> Result<(Vec<f64>, PlacementGrid, ArmReachEvaluator<ModelFrame>)> {
     let tvals = parse_list("--target", &args.target)?;
@@ -161,6 +183,7 @@ fn setup(args: &Args) -> Result<(Vec<f64>, PlacementGrid, ArmReachEvaluator<Mode
     };
     let mount = parse_mount(args.mount.as_deref())?;
     check_ik_budget(args.tol, args.max_iters, args.restarts)?;
+    check_total_work(&grid, args.restarts, args.max_iters)?;
     let model = Arc::new(load_model(&args.robot, RootJoint::Fixed)?);
     let arm = frame_of(&model, args.frame.as_deref(), &args.robot)?;
     let seed = match &args.q0 {

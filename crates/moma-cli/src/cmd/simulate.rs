@@ -12,11 +12,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use moma::closed_form::ChapterModel;
 use moma::sim::chapter_models::chapter_system;
-use moma::sim::monitor::MonitorLimits;
 use moma::sim::recorder::Recorder;
-use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
+pub use moma::sim::scenario::{CasterSpec, DriveSpec, RobotSpec};
+use moma::sim::scenario::{InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate_observed};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::output::write_dir;
 use crate::svg_plots::{Series, line_chart, path_chart};
@@ -34,156 +34,14 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// A scenario file.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Scenario {
-    /// Free-text name, copied into the summary.
-    #[serde(default)]
-    pub name: Option<String>,
-    /// Simulated time (s).
-    pub duration: f64,
-    /// Gravity magnitude g (m/s², acting along −z). For URDF robots it sets the model's
-    /// gravity (default 9.81); for m5 it sets `params.g` if that is absent.
-    #[serde(default)]
-    pub gravity: Option<f64>,
-    /// The robot.
-    pub robot: RobotSpec,
-    /// Initial state.
-    #[serde(default)]
-    pub initial: InitialState,
-    /// One profile per input channel (default: all zero).
-    #[serde(default)]
-    pub inputs: Option<Vec<ChannelProfile>>,
-    /// Integrator.
-    pub integrator: IntegratorSettings,
-    /// Outputs.
-    #[serde(default)]
-    pub output: OutputSpec,
-    /// Monitor limits.
-    #[serde(default)]
-    pub limits: Option<MonitorLimits>,
-    /// Free-floating settings (robot kind `free_floating`; schema in docs/space.md).
-    #[serde(default)]
-    pub space: Option<super::simulate_space::SpaceSpec>,
-    /// Tip-over stability, wheel loads and slip (URDF robots; docs/simulate.md).
-    #[serde(default)]
-    pub stability: Option<super::simulate_stability::StabilitySpec>,
-    /// Closed-loop control: the law and its gains (schema in docs/simulate.md).
-    #[serde(default)]
-    pub controller: Option<super::simulate_control::ControllerSpec>,
-    /// What the closed-loop law tracks or stabilises to.
-    #[serde(default)]
-    pub reference: Option<super::simulate_control::ReferenceSpec>,
-}
-
-/// The robot of a scenario.
-#[derive(Debug, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum RobotSpec {
-    /// A URDF model on a differential-drive base.
-    Urdf {
-        /// URDF file, relative to the scenario file.
-        urdf: PathBuf,
-        /// Differential drive: `{ r_w, b, d }`.
-        drive: DriveSpec,
-        /// Names of the `[left, right]` wheel joints to track (optional).
-        #[serde(default)]
-        wheel_joints: Option<[String; 2]>,
-        /// Passive casters (optional).
-        #[serde(default)]
-        casters: Vec<CasterSpec>,
-    },
-    /// A URDF arm with a fixed base (every joint actuated).
-    FixedBase {
-        /// URDF file, relative to the scenario file.
-        urdf: PathBuf,
-    },
-    /// A URDF model as a free-floating (space) robot in zero gravity.
-    FreeFloating {
-        /// URDF file, relative to the scenario file.
-        urdf: PathBuf,
-        /// Frame recorded, controlled and used for a capture.
-        frame: String,
-    },
-    /// One of the chapter's closed-form models.
-    Chapter {
-        /// `m1`, `m2` or `m5` (or a canonical name such as `m1_unicycle`; the names of
-        /// `moma eval`).
-        model: String,
-        /// Its parameters (names as in docs/simulate.md).
-        params: toml::Table,
-    },
-}
-
-/// Differential-drive geometry.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DriveSpec {
-    /// Wheel radius (m).
-    pub r_w: f64,
-    /// Half track (m).
-    pub b: f64,
-    /// Base origin ahead of the axle midpoint (m).
-    pub d: f64,
-}
-
-/// A passive caster.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CasterSpec {
-    /// Name.
-    pub name: String,
-    /// Contact point in the base frame `[x, y]` (m).
-    pub position: [f64; 2],
-}
-
-/// Initial configuration and reduced velocity (default: zeros).
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct InitialState {
-    /// Configuration q.
-    #[serde(default)]
-    pub q: Option<Vec<f64>>,
-    /// Reduced velocity v.
-    #[serde(default)]
-    pub v: Option<Vec<f64>>,
-}
-
-/// Output settings.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct OutputSpec {
-    /// Output directory (relative to the current directory).
-    #[serde(default = "default_dir")]
-    pub dir: PathBuf,
-    /// Recording interval (s).
-    #[serde(default = "default_interval")]
-    pub record_interval: f64,
-    /// Write the SVG plots.
-    #[serde(default = "default_true")]
-    pub plots: bool,
-}
-
-fn default_dir() -> PathBuf {
-    PathBuf::from("simulation-output")
-}
-fn default_interval() -> f64 {
-    0.01
-}
-fn default_true() -> bool {
-    true
-}
-
-impl Default for OutputSpec {
-    fn default() -> Self {
-        Self {
-            dir: default_dir(),
-            record_interval: default_interval(),
-            plots: true,
-        }
-    }
-}
+/// A scenario file: the library's schema ([`moma::sim::scenario::Scenario`]) with this
+/// command's `[space]`, `[stability]`, `[controller]` and `[reference]` tables.
+pub type Scenario = moma::sim::scenario::Scenario<
+    super::simulate_space::SpaceSpec,
+    super::simulate_stability::StabilitySpec,
+    super::simulate_control::ControllerSpec,
+    super::simulate_control::ReferenceSpec,
+>;
 
 /// The summary written as `summary.json`.
 #[derive(Debug, Serialize)]
@@ -237,7 +95,7 @@ fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
 pub fn load_scenario(path: &Path) -> Result<Scenario> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read scenario file", path.display()))?;
-    toml::from_str(&text).map_err(|e| anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
+    Ok(moma::sim::scenario::parse_scenario(&text, path)?)
 }
 
 pub(super) fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
@@ -607,66 +465,11 @@ pub(super) fn initial_state(
     system: &dyn ReducedSystem,
     ctx: &dyn Fn(&str) -> String,
 ) -> Result<(Vec<f64>, Vec<f64>, InputProfile)> {
-    let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
-    let q0 = sc.initial.q.clone().unwrap_or_else(|| vec![0.0; nq]);
-    let v0 = sc.initial.v.clone().unwrap_or_else(|| vec![0.0; nv]);
-    if q0.len() != nq {
-        bail!(
-            "{}",
-            ctx(&format!(
-                "initial.q: expected {nq} values ({}), got {}",
-                system.q_names().join(", "),
-                q0.len()
-            ))
-        );
-    }
-    if v0.len() != nv {
-        bail!(
-            "{}",
-            ctx(&format!(
-                "initial.v: expected {nv} values ({}), got {}",
-                system.v_names().join(", "),
-                v0.len()
-            ))
-        );
-    }
-    ensure_finite("initial.q", &q0).with_context(|| ctx("initial state"))?;
-    ensure_finite("initial.v", &v0).with_context(|| ctx("initial state"))?;
-    let blowup = sc.limits.unwrap_or_default().blowup;
-    for (name, xs) in [("initial.q", &q0), ("initial.v", &v0)] {
-        if let Some(i) = xs.iter().position(|x| x.abs() > blowup) {
-            bail!(
-                "{}",
-                ctx(&format!(
-                    "{name}[{i}] = {:e} exceeds the blow-up bound limits.blowup = {blowup:e}",
-                    xs[i]
-                ))
-            );
-        }
-    }
-    let input = match &sc.inputs {
-        None => InputProfile::zero(nu),
-        Some(ch) => {
-            if ch.len() != nu {
-                bail!(
-                    "{}",
-                    ctx(&format!(
-                        "inputs: expected {nu} channels ({}), got {}",
-                        system.u_names().join(", "),
-                        ch.len()
-                    ))
-                );
-            }
-            for (i, c) in ch.iter().enumerate() {
-                c.validate(&format!("inputs[{i}]"))
-                    .with_context(|| ctx("inputs"))?;
-            }
-            InputProfile {
-                channels: ch.clone(),
-            }
-        }
-    };
-    Ok((q0, v0, input))
+    sc.initial_state(system, Path::new(""))
+        .map_err(|e| match e {
+            moma::Error::Parse { message, .. } => anyhow!("{}", ctx(&message)),
+            e => e.into(),
+        })
 }
 
 /// A progress bar on standard error when it is a terminal.
@@ -691,20 +494,7 @@ pub fn run(args: Args) -> Result<()> {
     let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
     let ctx = |what: &str| format!("{}: {what}", path.display());
-    if !(sc.duration.is_finite() && sc.duration > 0.0) {
-        bail!(
-            "{}",
-            ctx(&format!(
-                "duration must be a positive finite number, got {}",
-                sc.duration
-            ))
-        );
-    }
-    if let Some(g) = sc.gravity
-        && !g.is_finite()
-    {
-        bail!("{}", ctx("gravity is not a finite number"));
-    }
+    sc.check_header(&path)?;
     let base_dir = path.parent().unwrap_or(Path::new("."));
     if sc.controller.is_some() || sc.reference.is_some() {
         if sc.stability.as_ref().is_some_and(|s| s.stop_at_tip) {

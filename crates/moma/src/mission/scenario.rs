@@ -305,7 +305,19 @@ pub fn load(path: &Path) -> Result<Mission> {
         path: path.to_path_buf(),
         source: e,
     })?;
-    let file: MissionFile = toml::from_str(&text).map_err(|e| {
+    let file = parse_file(&text, path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    from_file(file, path, base)
+}
+
+/// Parses the text of a mission file (`path` names it in errors) without validating it
+/// or loading its map and robot: [`from_file`] does that.
+///
+/// # Errors
+/// Malformed TOML, an unknown or missing key, a value of the wrong type: one line
+/// naming the file, the line and column, and the key.
+pub fn parse_file(text: &str, path: &Path) -> Result<MissionFile> {
+    toml::from_str(text).map_err(|e| {
         // one line: where, then what (toml's own message, without its source excerpt)
         let at = e.span().map_or_else(String::new, |sp| {
             let before = &text[..sp.start.min(text.len())];
@@ -317,9 +329,7 @@ pub fn load(path: &Path) -> Result<Mission> {
             path,
             format!("{at}{}", e.message().trim().replace('\n', "; ")),
         )
-    })?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    from_file(file, path, base)
+    })
 }
 
 fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
