@@ -151,13 +151,6 @@ pub struct AdaptiveOptions {
     pub max_steps: usize,
     /// Blow-up bound on |x_i|.
     pub blowup: f64,
-    /// Stiffness test (Hairer's `dopri5`/`dop853`): every this many accepted steps, and
-    /// on each step after a positive test, h·|λ| is estimated from the two last stages
-    /// (both at `t + h`); fifteen estimates in a row above the method's stability bound
-    /// end the integration with an error saying the problem is stiff, instead of letting
-    /// an explicit method creep on at its stability limit for up to `max_steps` steps.
-    /// `None` switches the test off.
-    pub stiffness_test: Option<usize>,
 }
 
 impl Default for AdaptiveOptions {
@@ -169,7 +162,6 @@ impl Default for AdaptiveOptions {
             max_step: f64::INFINITY,
             max_steps: 1_000_000,
             blowup: 1e12,
-            stiffness_test: Some(1000),
         }
     }
 }
@@ -194,9 +186,6 @@ impl AdaptiveOptions {
         if self.max_step.is_nan() || self.max_step <= 0.0 {
             return Err(Error::invalid("max_step", "must be positive"));
         }
-        if self.stiffness_test == Some(0) {
-            return Err(Error::invalid("stiffness_test", "must be at least 1 step"));
-        }
         if let Some(h) = self.initial_step
             && !(h > 0.0 && h.is_finite())
         {
@@ -218,10 +207,6 @@ pub trait EmbeddedMethod {
     const ORDER: i32;
     /// Short name (for diagnostics).
     const NAME: &'static str;
-    /// Where h·|λ| of the stiffness test counts as beyond the stability region (Hairer's
-    /// codes: 3.25 for `dopri5`, 6.1 for `dop853`). The estimate needs the stage before
-    /// the FSAL one to sit at `c = 1`, with its input left in `tmp` by `try_step`.
-    const STIFF_BOUND: f64;
     /// One trial step of size `h` from `(t, x)`: `k[0] = f(t, x)` on entry; writes the
     /// candidate into `y1` and `f(t + h, y1)` into `k[STAGES − 1]`, and returns the error
     /// norm (≤ 1 means acceptable) for the given scaling.
@@ -316,7 +301,6 @@ impl EmbeddedMethod for Dp45Method {
     const STAGES: usize = 7;
     const ORDER: i32 = 4;
     const NAME: &'static str = "Dormand-Prince 5(4)";
-    const STIFF_BOUND: f64 = 3.25;
     fn try_step<S: OdeSystem>(
         sys: &mut S,
         k: &mut [Vec<f64>],
@@ -473,7 +457,6 @@ impl EmbeddedMethod for Dop853Method {
     const STAGES: usize = 13;
     const ORDER: i32 = 7;
     const NAME: &'static str = "DOP853";
-    const STIFF_BOUND: f64 = 6.1;
     fn try_step<S: OdeSystem>(
         sys: &mut S,
         k: &mut [Vec<f64>],
@@ -530,9 +513,6 @@ pub struct AdaptiveRk<M: EmbeddedMethod> {
     tmp: Vec<f64>,
     h: Option<f64>,
     fsal_valid: bool,
-    /// Positive stiffness tests in a row, and negative ones since the last positive.
-    stiff_hits: usize,
-    stiff_misses: usize,
     /// Statistics.
     pub stats: StepStats,
     _method: std::marker::PhantomData<M>,
@@ -558,8 +538,6 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
             tmp: vec![0.0; n],
             h: options.initial_step,
             fsal_valid: false,
-            stiff_hits: 0,
-            stiff_misses: 0,
             stats: StepStats::default(),
             _method: std::marker::PhantomData,
         })
@@ -570,8 +548,6 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
     pub fn reset(&mut self) {
         self.h = self.options.initial_step;
         self.fsal_valid = false;
-        self.stiff_hits = 0;
-        self.stiff_misses = 0;
         self.stats = StepStats::default();
     }
 
@@ -580,49 +556,6 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
     /// `integrate_to` (a zero-order-hold input switching at a control tick).
     pub fn invalidate_derivative(&mut self) {
         self.fsal_valid = false;
-    }
-
-    /// Hairer's stiffness test after an accepted step of size `h` (see
-    /// [`AdaptiveOptions::stiffness_test`]): h·|λ| ≈ h·‖f(t+h, y₁) − f(t+h, y_s)‖ / ‖y₁ − y_s‖
-    /// with y_s the last stage's input (also at `t + h`) in `tmp` and f(t+h, y_s) in
-    /// `k[S−2]`; called after the FSAL swap, so f(t+h, y₁) is in `k[0]`.
-    fn stiffness_test(&mut self, t: f64, h: f64) -> Result<()> {
-        let Some(every) = self.options.stiffness_test else {
-            return Ok(());
-        };
-        if !self.stats.accepted.is_multiple_of(every) && self.stiff_hits == 0 {
-            return Ok(());
-        }
-        let (fa, fb) = (&self.k[0], &self.k[M::STAGES - 2]);
-        let (mut num, mut den) = (0.0, 0.0);
-        for i in 0..self.y1.len() {
-            num += (fa[i] - fb[i]).powi(2);
-            den += (self.y1[i] - self.tmp[i]).powi(2);
-        }
-        if den > 0.0 && h.abs() * (num / den).sqrt() > M::STIFF_BOUND {
-            self.stiff_misses = 0;
-            self.stiff_hits += 1;
-            if self.stiff_hits >= 15 {
-                return Err(Error::Numerical {
-                    t,
-                    message: format!(
-                        "{}: the problem is stiff (h·|λ| ≈ {:.3} past the stability bound {} \
-                         for 15 tests in a row, step h = {h:e}); an explicit method would creep \
-                         on at its stability limit. Check for widely separated scales (e.g. a \
-                         mass or gain many orders of magnitude from the others)",
-                        M::NAME,
-                        h.abs() * (num / den).sqrt(),
-                        M::STIFF_BOUND
-                    ),
-                });
-            }
-        } else if self.stiff_hits > 0 {
-            self.stiff_misses += 1;
-            if self.stiff_misses >= 6 {
-                self.stiff_hits = 0;
-            }
-        }
-        Ok(())
     }
 
     /// The step size the controller proposes next (if any step was taken).
@@ -763,7 +696,6 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
                 self.k.swap(0, M::STAGES - 1);
                 self.stats.accepted += 1;
                 check_state(*t, x, self.options.blowup)?;
-                self.stiffness_test(*t, hs)?;
                 let fac = if err == 0.0 {
                     5.0
                 } else {
