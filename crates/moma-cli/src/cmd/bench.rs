@@ -9,7 +9,7 @@ use super::common::{load_model, parse_root};
 use anyhow::{Context, Result};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
-use moma::multibody::{Data, Model, RootJoint};
+use moma::multibody::{Data, FrameIndex, Model, RootJoint};
 use nalgebra::{DVector, Matrix6xX};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -101,8 +101,63 @@ fn time(nbatch: usize, warmup: usize, mut f: impl FnMut(usize) -> f64) -> (f64, 
     (per_call[per_call.len() / 2], per_call[0])
 }
 
+/// (median, min) per-call nanoseconds of each algorithm.
+struct Measured {
+    rnea: (f64, f64),
+    crba: (f64, f64),
+    aba: (f64, f64),
+    fk: (f64, f64),
+    frame_jacobian: (f64, f64),
+    nle: (f64, f64),
+    gravity: (f64, f64),
+    fk_frames: (f64, f64),
+    joint_jacobians: (f64, f64),
+    osc: (f64, f64),
+}
+
+impl Measured {
+    /// One figure (`f`: the median or the min) of each algorithm.
+    fn pick(&self, f: fn(&(f64, f64)) -> f64) -> Times {
+        Times {
+            rnea: f(&self.rnea),
+            crba: f(&self.crba),
+            aba: f(&self.aba),
+            fk: f(&self.fk),
+            frame_jacobian: f(&self.frame_jacobian),
+            nle: f(&self.nle),
+            gravity: f(&self.gravity),
+            fk_frames: f(&self.fk_frames),
+            joint_jacobians: f(&self.joint_jacobians),
+            osc: f(&self.osc),
+        }
+    }
+}
+
 /// Runs `moma bench`.
 pub fn run(args: Args) -> Result<()> {
+    let (model, fid) = bench_model(&args)?;
+    let nbatch = env_usize("NBATCH", 300).max(1);
+    // at least one timed batch
+    let warmup = env_usize("WARMUP", 30).min(nbatch - 1);
+    let measured = measure(&model, fid, nbatch, warmup);
+    let report = Report {
+        robot: args.label.clone().unwrap_or_else(|| model.name.clone()),
+        root: model.root.to_string(),
+        frame: model.frames[fid.0].name.clone(),
+        nq: model.nq,
+        nv: model.nv,
+        nstates: NSTATES,
+        nbatch,
+        warmup,
+        median_ns: measured.pick(|x| x.0),
+        min_ns: measured.pick(|x| x.1),
+    };
+    print_report(&args, &report)
+}
+
+/// The model of `moma bench` (gravity zeroed on request) and the Jacobian's frame; an
+/// error for an unknown frame or a model without degrees of freedom.
+fn bench_model(args: &Args) -> Result<(Model, FrameIndex)> {
     let mut model = load_model(&args.urdf, args.root)?;
     if args.zero_gravity {
         model.gravity = nalgebra::Vector3::zeros();
@@ -113,20 +168,22 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("{}: --frame", args.urdf.display()))?,
         None => model.last_link_frame(),
     };
-    let (nq, nv) = (model.nq, model.nv);
-    if nv == 0 {
+    if model.nv == 0 {
         anyhow::bail!(
             "{}: the model has no degrees of freedom: nothing to benchmark",
             args.urdf.display()
         );
     }
-    let [qs, vs, as_, ts] = random_states(&model);
-    let nbatch = env_usize("NBATCH", 300).max(1);
-    // at least one timed batch
-    let warmup = env_usize("WARMUP", 30).min(nbatch - 1);
-    let mut data = Data::new(&model);
+    Ok((model, fid))
+}
+
+/// Times every algorithm over the seeded random states.
+fn measure(model: &Model, fid: FrameIndex, nbatch: usize, warmup: usize) -> Measured {
+    let nv = model.nv;
+    let [qs, vs, as_, ts] = random_states(model);
+    let mut data = Data::new(model);
     let mut jac = Matrix6xX::zeros(nv);
-    let m = &model;
+    let m = model;
     let last = model.njoints - 1;
     let rnea = time(nbatch, warmup, |i| {
         dynamics::rnea(m, &mut data, &qs[i], &vs[i], &as_[i])[0]
@@ -166,49 +223,49 @@ pub fn run(args: Args) -> Result<()> {
         kinematics::compute_joint_jacobians(m, &mut data, &qs[i]);
         data.joint_jacobians[(0, nv - 1)]
     });
-    // One OSC update per state: the same computation as Pinocchio's side of the benchmark
-    // (crba, nonLinearEffects, classical acceleration, frame Jacobian, two Cholesky).
-    let osc = if nv >= 6 {
-        let mut od = moma::control::osc::OscData::new(nv, &[0, 1, 2, 3, 4, 5]);
-        let a6 = DVector::from_fn(6, |k, _| 0.1 * (k as f64 + 1.0));
-        time(
-            nbatch,
-            warmup,
-            |i| match moma::control::osc::osc_fixed_base(
-                m, &mut data, &mut od, fid, &qs[i], &vs[i], &a6, &ts[i],
-            ) {
-                Ok(()) => od.torque[0],
-                Err(_) => f64::NAN,
-            },
-        )
-    } else {
-        (f64::NAN, f64::NAN)
-    };
-    let pick = |f: fn(&(f64, f64)) -> f64| Times {
-        rnea: f(&rnea),
-        crba: f(&crba),
-        aba: f(&aba),
-        fk: f(&fk),
-        frame_jacobian: f(&frame_jacobian),
-        nle: f(&nle),
-        gravity: f(&gravity),
-        fk_frames: f(&fk_frames),
-        joint_jacobians: f(&joint_jacobians),
-        osc: f(&osc),
-    };
-    let report = Report {
-        robot: args.label.clone().unwrap_or_else(|| model.name.clone()),
-        root: model.root.to_string(),
-        frame: model.frames[fid.0].name.clone(),
-        nq,
-        nv,
-        nstates: NSTATES,
+    let osc = time_osc(m, &mut data, fid, &qs, &vs, &ts, nbatch, warmup);
+    Measured {
+        rnea,
+        crba,
+        aba,
+        fk,
+        frame_jacobian,
+        nle,
+        gravity,
+        fk_frames,
+        joint_jacobians,
+        osc,
+    }
+}
+
+/// One OSC update per state: the same computation as Pinocchio's side of the benchmark
+/// (crba, nonLinearEffects, classical acceleration, frame Jacobian, two Cholesky); NaN
+/// when nv < 6.
+fn time_osc(
+    m: &Model,
+    data: &mut Data,
+    fid: FrameIndex,
+    qs: &[DVector<f64>],
+    vs: &[DVector<f64>],
+    ts: &[DVector<f64>],
+    nbatch: usize,
+    warmup: usize,
+) -> (f64, f64) {
+    if m.nv < 6 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mut od = moma::control::osc::OscData::new(m.nv, &[0, 1, 2, 3, 4, 5]);
+    let a6 = DVector::from_fn(6, |k, _| 0.1 * (k as f64 + 1.0));
+    time(
         nbatch,
         warmup,
-        median_ns: pick(|x| x.0),
-        min_ns: pick(|x| x.1),
-    };
-    print_report(&args, &report)
+        |i| match moma::control::osc::osc_fixed_base(
+            m, data, &mut od, fid, &qs[i], &vs[i], &a6, &ts[i],
+        ) {
+            Ok(()) => od.torque[0],
+            Err(_) => f64::NAN,
+        },
+    )
 }
 
 /// The seeded random states of the Pinocchio benchmark: q = neutral ⊕ π·U(−1,1)^nv and

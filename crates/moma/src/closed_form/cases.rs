@@ -138,116 +138,119 @@ fn trajectory<const A: usize, const B: usize>(
     Value::Object(m)
 }
 
+/// Outputs, trajectory and extra top-level keys of one case.
+type CaseParts = (Value, Option<Value>, Option<Value>);
+
+/// The trajectory object of a case with `trajectory.t` (`t`), run by `simulate`; `None`
+/// without one.
+fn trajectory_if<const A: usize, const B: usize>(
+    t: Option<&[f64]>,
+    names: [&str; 2],
+    simulate: impl FnOnce(&[f64]) -> Result<Vec<(SVector<f64, A>, SVector<f64, B>)>>,
+) -> Result<Option<Value>> {
+    match t {
+        Some(t) => Ok(Some(trajectory(names, &simulate(t)?, t))),
+        None => Ok(None),
+    }
+}
+
 /// Outputs and trajectory (keys `t` plus the state names) of one case.
-#[allow(clippy::type_complexity)]
-fn evaluate_inner(
-    model: ChapterModel,
-    case: &Value,
-    tol: f64,
-) -> Result<(Value, Option<Value>, Option<Value>)> {
+fn evaluate_inner(model: ChapterModel, case: &Value, tol: f64) -> Result<CaseParts> {
     let t = times(case)?;
+    let t = t.as_deref();
     match model {
-        ChapterModel::M1Unicycle => {
-            let sys = Unicycle::new(params::<UnicycleParams>(case)?)?;
-            let q = vector::<3>(case, &["state", "q"])?;
-            let v = vector::<2>(case, &["state", "v"])?;
-            let u = vector::<2>(case, &["inputs", "u"])?;
-            let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
-            let tr = match &t {
-                Some(t) => Some(trajectory(
-                    ["q", "v"],
-                    &sys.simulate(&q, &v, &u, t, tol)?,
-                    t,
-                )),
-                None => None,
-            };
-            Ok((out, tr, None))
-        }
-        ChapterModel::M2PlatformArm => {
-            let sys = PlatformArm::new(params::<PlatformArmParams>(case)?)?;
-            let q = vector::<5>(case, &["state", "q"])?;
-            let v = vector::<4>(case, &["state", "v"])?;
-            let u = vector::<4>(case, &["inputs", "u"])?;
-            let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
-            let tr = match &t {
-                Some(t) => Some(trajectory(
-                    ["q", "v"],
-                    &sys.simulate(&q, &v, &u, t, tol)?,
-                    t,
-                )),
-                None => None,
-            };
-            Ok((out, tr, None))
-        }
-        ChapterModel::M3DiffDrive => {
-            let sys = DiffDriveKinematics::new(params::<DiffDriveKinematicsParams>(case)?)?;
-            let q = vector::<6>(case, &["state", "q"])?;
-            let v = vector::<5>(case, &["inputs", "v"])?;
-            let out = to_value(&sys.evaluate(&q, &v)?)?;
-            let tr = match &t {
-                Some(t) => Some(trajectory(["q", "X"], &sys.simulate(&q, &v, t, tol)?, t)),
-                None => None,
-            };
-            Ok((out, tr, None))
-        }
-        ChapterModel::M4CartTwoLink => {
-            let sys = CartTwoLink::new(params::<CartTwoLinkParams>(case)?)?;
-            let q = vector::<3>(case, &["state", "q"])?;
-            let qd = vector::<3>(case, &["state", "qdot"])?;
-            let u = vector::<3>(case, &["inputs", "u"])?;
-            if let Some(b) = case.get("balanced") {
-                let b = b
-                    .as_bool()
-                    .ok_or_else(|| Error::invalid("balanced", "expected true or false"))?;
-                let p = &sys.params;
-                let scale = p.arm_mass() * (p.L1 + p.L2);
-                if b && !sys.is_balanced(1e-6 * scale.max(1.0)) {
-                    return Err(Error::invalid(
-                        "balanced",
-                        format!(
-                            "marked balanced but Γ1 = {:e}, Γ2 = {:e} (need L1cm = −(m2+M1+M2) L1/m1, L2cm = −M2 L2/m2)",
-                            p.gamma1(),
-                            p.gamma2()
-                        ),
-                    ));
-                }
-            }
-            let out = to_value(&sys.evaluate(&q, &qd, &u)?)?;
-            let tr = match &t {
-                Some(t) => Some(trajectory(
-                    ["q", "qdot"],
-                    &sys.simulate(&q, &qd, &u, t, tol)?,
-                    t,
-                )),
-                None => None,
-            };
-            Ok((out, tr, None))
-        }
-        ChapterModel::M5MobileManipulator => {
-            let sys = MobileManipulator::new(params::<MobileManipulatorParams>(case)?)?;
-            let q = vector::<6>(case, &["state", "q"])?;
-            let v = vector::<5>(case, &["state", "v"])?;
-            let u = vector::<5>(case, &["inputs", "u"])?;
-            let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
-            let tr = match &t {
-                Some(t) => Some(trajectory(
-                    ["q", "v"],
-                    &sys.simulate(&q, &v, &u, t, tol)?,
-                    t,
-                )),
-                None => None,
-            };
-            let control = match case.get("control") {
-                Some(_) => Some(control_block(&sys, case, tol)?),
-                None => None,
-            };
-            Ok((out, tr, control))
-        }
+        ChapterModel::M1Unicycle => m1_case(case, t, tol),
+        ChapterModel::M2PlatformArm => m2_case(case, t, tol),
+        ChapterModel::M3DiffDrive => m3_case(case, t, tol),
+        ChapterModel::M4CartTwoLink => m4_case(case, t, tol),
+        ChapterModel::M5MobileManipulator => m5_case(case, t, tol),
         ChapterModel::M6SpaceManipulator => {
             let (out, extras) = m6_case(case, tol)?;
             Ok((out, None, Some(extras)))
         }
     }
+}
+
+/// m1: outputs and trajectory.
+fn m1_case(case: &Value, t: Option<&[f64]>, tol: f64) -> Result<CaseParts> {
+    let sys = Unicycle::new(params::<UnicycleParams>(case)?)?;
+    let q = vector::<3>(case, &["state", "q"])?;
+    let v = vector::<2>(case, &["state", "v"])?;
+    let u = vector::<2>(case, &["inputs", "u"])?;
+    let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
+    let tr = trajectory_if(t, ["q", "v"], |t| sys.simulate(&q, &v, &u, t, tol))?;
+    Ok((out, tr, None))
+}
+
+/// m2: outputs and trajectory.
+fn m2_case(case: &Value, t: Option<&[f64]>, tol: f64) -> Result<CaseParts> {
+    let sys = PlatformArm::new(params::<PlatformArmParams>(case)?)?;
+    let q = vector::<5>(case, &["state", "q"])?;
+    let v = vector::<4>(case, &["state", "v"])?;
+    let u = vector::<4>(case, &["inputs", "u"])?;
+    let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
+    let tr = trajectory_if(t, ["q", "v"], |t| sys.simulate(&q, &v, &u, t, tol))?;
+    Ok((out, tr, None))
+}
+
+/// m3: outputs and trajectory.
+fn m3_case(case: &Value, t: Option<&[f64]>, tol: f64) -> Result<CaseParts> {
+    let sys = DiffDriveKinematics::new(params::<DiffDriveKinematicsParams>(case)?)?;
+    let q = vector::<6>(case, &["state", "q"])?;
+    let v = vector::<5>(case, &["inputs", "v"])?;
+    let out = to_value(&sys.evaluate(&q, &v)?)?;
+    let tr = trajectory_if(t, ["q", "X"], |t| sys.simulate(&q, &v, t, tol))?;
+    Ok((out, tr, None))
+}
+
+/// m4: outputs and trajectory, after checking a case marked `balanced`.
+fn m4_case(case: &Value, t: Option<&[f64]>, tol: f64) -> Result<CaseParts> {
+    let sys = CartTwoLink::new(params::<CartTwoLinkParams>(case)?)?;
+    let q = vector::<3>(case, &["state", "q"])?;
+    let qd = vector::<3>(case, &["state", "qdot"])?;
+    let u = vector::<3>(case, &["inputs", "u"])?;
+    check_balanced(case, &sys)?;
+    let out = to_value(&sys.evaluate(&q, &qd, &u)?)?;
+    let tr = trajectory_if(t, ["q", "qdot"], |t| sys.simulate(&q, &qd, &u, t, tol))?;
+    Ok((out, tr, None))
+}
+
+/// A case's optional `balanced: true` must hold for its parameters (Γ1 = Γ2 = 0).
+fn check_balanced(case: &Value, sys: &CartTwoLink) -> Result<()> {
+    let Some(b) = case.get("balanced") else {
+        return Ok(());
+    };
+    let b = b
+        .as_bool()
+        .ok_or_else(|| Error::invalid("balanced", "expected true or false"))?;
+    let p = &sys.params;
+    let scale = p.arm_mass() * (p.L1 + p.L2);
+    if b && !sys.is_balanced(1e-6 * scale.max(1.0)) {
+        return Err(Error::invalid(
+            "balanced",
+            format!(
+                "marked balanced but Γ1 = {:e}, Γ2 = {:e} (need L1cm = −(m2+M1+M2) L1/m1, L2cm = −M2 L2/m2)",
+                p.gamma1(),
+                p.gamma2()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// m5: outputs, trajectory and the optional `control` block.
+fn m5_case(case: &Value, t: Option<&[f64]>, tol: f64) -> Result<CaseParts> {
+    let sys = MobileManipulator::new(params::<MobileManipulatorParams>(case)?)?;
+    let q = vector::<6>(case, &["state", "q"])?;
+    let v = vector::<5>(case, &["state", "v"])?;
+    let u = vector::<5>(case, &["inputs", "u"])?;
+    let out = to_value(&sys.evaluate(&q, &v, &u)?)?;
+    let tr = trajectory_if(t, ["q", "v"], |t| sys.simulate(&q, &v, &u, t, tol))?;
+    let control = match case.get("control") {
+        Some(_) => Some(control_block(&sys, case, tol)?),
+        None => None,
+    };
+    Ok((out, tr, control))
 }
 
 /// m6: outputs, plus the `trajectories` runs and the `joint_loop` (returned as one object

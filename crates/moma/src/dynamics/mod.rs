@@ -12,7 +12,7 @@
 //! with specialised kernels for axis-aligned revolute and prismatic joints.
 
 mod aba;
-pub(crate) use aba::aba_forward_pass;
+pub(crate) use aba::{aba_forward_pass, accelerate_one_dof, condense_one_dof};
 mod centroidal;
 mod coriolis;
 mod crba;

@@ -265,7 +265,107 @@ pub fn solve<T: KinematicTask + ?Sized>(
     options: &IkOptions,
     ws: &mut IkWorkspace,
 ) -> Result<IkResult> {
-    let (m, nq, nv) = (task.task_dim(), task.nq(), task.nv());
+    prepare_solve(task, q0, options, ws)?;
+    let (nq, nv) = (task.nq(), task.nv());
+    // Start from the seed projected into the feasible set.
+    let zero = DVector::zeros(nv);
+    let mut q = DVector::zeros(nq);
+    task.integrate(q0, &zero, &mut q);
+    task.residual_and_jacobian(&q, &mut ws.e, &mut ws.j)?;
+    check_finite_eval(&ws.e, &ws.j)?;
+    let mut lm = LmState {
+        err: ws.e.norm(),
+        lambda: options.initial_damping,
+        iterations: 0,
+        slow: 0,
+        ns_scale: 1.0,
+    };
+    // With a secondary objective the solver keeps improving it after the task is met,
+    // as long as the residual stays within the tolerance and the step is not negligible.
+    let secondary = options.null_space.gain() > 0.0;
+    let status = loop {
+        let met = lm.err <= options.tolerance;
+        if let Some(status) = lm.stop_status(met, secondary, options) {
+            break status;
+        }
+        lm.iterations += 1;
+        // Null-space direction (computed at the current q, reused across retries).
+        let have_grad = secondary_gradient(task, &q, options, ws)?;
+        step_with_blocked_inputs(task, &q, ws, lm.lambda, have_grad, lm.ns_scale, options)?;
+        let norm = ws.delta.norm();
+        if met && norm < SECONDARY_STEP_TOL {
+            break IkStatus::Converged;
+        }
+        if norm > options.max_step {
+            ws.delta *= options.max_step / norm;
+        }
+        if let Some(status) = try_step(task, &mut q, ws, &mut lm, met, secondary, options)? {
+            break status;
+        }
+    };
+    let sigma_min = JacobianSvd::new(&ws.j)
+        .map(|s| s.sigma_min())
+        .unwrap_or(0.0);
+    Ok(IkResult {
+        converged: status == IkStatus::Converged,
+        task_met: matches!(status, IkStatus::Converged | IkStatus::ObjectiveUnsettled),
+        q,
+        status,
+        residual_norm: lm.err,
+        residual: ws.e.clone(),
+        iterations: lm.iterations,
+        damping: lm.lambda,
+        sigma_min,
+    })
+}
+
+/// The iteration state of [`solve`]'s Levenberg–Marquardt loop.
+struct LmState {
+    /// Residual norm at the current q.
+    err: f64,
+    /// Damping λ.
+    lambda: f64,
+    /// Iterations so far (accepted and rejected steps).
+    iterations: usize,
+    /// Consecutive accepted steps that improved the residual too little.
+    slow: usize,
+    /// Share of the null-space term in the step: halved after a rejected step before the
+    /// damping grows, so the secondary objective never prevents convergence.
+    ns_scale: f64,
+}
+
+impl LmState {
+    /// Why the loop stops before the next iteration, if it does (`met`: the residual is
+    /// within the tolerance).
+    fn stop_status(&self, met: bool, secondary: bool, options: &IkOptions) -> Option<IkStatus> {
+        if met && !secondary {
+            return Some(IkStatus::Converged);
+        }
+        if self.iterations >= options.max_iterations || self.lambda > options.max_damping {
+            return Some(if met && self.lambda > options.max_damping {
+                // no step improves the objective while keeping the task met: settled
+                IkStatus::Converged
+            } else if met {
+                IkStatus::ObjectiveUnsettled
+            } else if self.iterations >= options.max_iterations {
+                IkStatus::MaxIterations
+            } else {
+                IkStatus::Stalled
+            });
+        }
+        None
+    }
+}
+
+/// Checks the seed and options of [`solve`], sizes the workspace for `task` and sets the
+/// inverse weights.
+fn prepare_solve<T: KinematicTask + ?Sized>(
+    task: &T,
+    q0: &DVector<f64>,
+    options: &IkOptions,
+    ws: &mut IkWorkspace,
+) -> Result<()> {
+    let (nq, nv) = (task.nq(), task.nv());
     crate::error::ensure_len("ik seed q0", nq, q0.len())?;
     ensure_finite("ik seed q0", q0.iter())?;
     validate_options(options, nv)?;
@@ -280,111 +380,81 @@ pub fn solve<T: KinematicTask + ?Sized>(
         }
         None => ws.winv.fill(1.0),
     }
+    Ok(())
+}
 
-    // Start from the seed projected into the feasible set.
-    let zero = DVector::zeros(nv);
-    let mut q = DVector::zeros(nq);
-    task.integrate(q0, &zero, &mut q);
-    task.residual_and_jacobian(&q, &mut ws.e, &mut ws.j)?;
-    check_finite_eval(&ws.e, &ws.j)?;
-    let mut err = ws.e.norm();
-    let mut lambda = options.initial_damping;
-    let mut iterations = 0;
-    let mut slow = 0;
-    // With a secondary objective the solver keeps improving it after the task is met,
-    // as long as the residual stays within the tolerance and the step is not negligible.
-    let secondary = options.null_space.gain() > 0.0;
-    // Share of the null-space term in the step: halved after a rejected step before the
-    // damping grows, so the secondary objective never prevents convergence.
-    let mut ns_scale = 1.0;
-    let status = loop {
-        let met = err <= options.tolerance;
-        if met && !secondary {
-            break IkStatus::Converged;
-        }
-        if iterations >= options.max_iterations || lambda > options.max_damping {
-            break if met && lambda > options.max_damping {
-                // no step improves the objective while keeping the task met: settled
-                IkStatus::Converged
-            } else if met {
-                IkStatus::ObjectiveUnsettled
-            } else if iterations >= options.max_iterations {
-                IkStatus::MaxIterations
-            } else {
-                IkStatus::Stalled
-            };
-        }
-        iterations += 1;
-
-        // Null-space direction (computed at the current q, reused across retries).
-        let have_grad = secondary_gradient(task, &q, options, ws)?;
-
-        // Damped weighted step, re-solved once with blocked inputs frozen.
-        ws.winv_eff.copy_from(&ws.winv);
-        ws.blocked.iter_mut().for_each(|b| *b = false);
-        for pass in 0..2 {
-            damped_step(ws, lambda, m, nv, have_grad, ns_scale, options)?;
-            if pass == 0 {
-                task.blocked_inputs(&q, &ws.delta, &mut ws.blocked);
-                if !ws.blocked.iter().any(|&b| b) {
-                    break;
-                }
-                for k in 0..nv {
-                    if ws.blocked[k] {
-                        ws.winv_eff[k] = 0.0;
-                    }
+/// The damped weighted step `ws.delta` at `q`, re-solved once with the inputs that the
+/// task blocks ([`KinematicTask::blocked_inputs`]) frozen.
+fn step_with_blocked_inputs<T: KinematicTask + ?Sized>(
+    task: &mut T,
+    q: &DVector<f64>,
+    ws: &mut IkWorkspace,
+    lambda: f64,
+    have_grad: bool,
+    ns_scale: f64,
+    options: &IkOptions,
+) -> Result<()> {
+    let (m, nv) = (task.task_dim(), task.nv());
+    ws.winv_eff.copy_from(&ws.winv);
+    ws.blocked.iter_mut().for_each(|b| *b = false);
+    for pass in 0..2 {
+        damped_step(ws, lambda, m, nv, have_grad, ns_scale, options)?;
+        if pass == 0 {
+            task.blocked_inputs(q, &ws.delta, &mut ws.blocked);
+            if !ws.blocked.iter().any(|&b| b) {
+                break;
+            }
+            for k in 0..nv {
+                if ws.blocked[k] {
+                    ws.winv_eff[k] = 0.0;
                 }
             }
         }
-        let norm = ws.delta.norm();
-        if met && norm < SECONDARY_STEP_TOL {
-            break IkStatus::Converged;
-        }
-        if norm > options.max_step {
-            ws.delta *= options.max_step / norm;
-        }
-        task.integrate(&q, &ws.delta, &mut ws.q_trial);
-        task.residual_and_jacobian(&ws.q_trial, &mut ws.e_trial, &mut ws.j_trial)?;
-        let err_trial = ws.e_trial.norm();
-        let finite = err_trial.is_finite() && ws.j_trial.iter().all(|x| x.is_finite());
-        let accept =
-            finite && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
-        if accept {
-            if !met && err - err_trial <= options.stall_relative * err {
-                slow += 1;
-            } else {
-                slow = 0;
-            }
-            std::mem::swap(&mut q, &mut ws.q_trial);
-            std::mem::swap(&mut ws.e, &mut ws.e_trial);
-            std::mem::swap(&mut ws.j, &mut ws.j_trial);
-            err = err_trial;
-            lambda = (lambda / 3.0).max(options.min_damping);
-            ns_scale = (ns_scale * 2.0).min(1.0);
-            if slow >= options.stall_iterations && err > options.tolerance {
-                break IkStatus::Stalled;
-            }
-        } else if secondary && ns_scale > 1e-3 {
-            ns_scale *= 0.25;
+    }
+    Ok(())
+}
+
+/// Evaluates the trial `q ⊕ ws.delta`, accepts it (into `q`, `ws.e`, `ws.j`) when it
+/// lowers the residual (or keeps a met task met while a secondary objective runs), and
+/// adapts the damping and null-space share; `Some(Stalled)` when progress has stalled.
+fn try_step<T: KinematicTask + ?Sized>(
+    task: &mut T,
+    q: &mut DVector<f64>,
+    ws: &mut IkWorkspace,
+    lm: &mut LmState,
+    met: bool,
+    secondary: bool,
+    options: &IkOptions,
+) -> Result<Option<IkStatus>> {
+    task.integrate(q, &ws.delta, &mut ws.q_trial);
+    task.residual_and_jacobian(&ws.q_trial, &mut ws.e_trial, &mut ws.j_trial)?;
+    let err_trial = ws.e_trial.norm();
+    let finite = err_trial.is_finite() && ws.j_trial.iter().all(|x| x.is_finite());
+    let err = lm.err;
+    let accept =
+        finite && (err_trial < err || (secondary && met && err_trial <= options.tolerance));
+    if accept {
+        if !met && err - err_trial <= options.stall_relative * err {
+            lm.slow += 1;
         } else {
-            ns_scale = 0.0;
-            lambda *= 8.0;
+            lm.slow = 0;
         }
-    };
-    let sigma_min = JacobianSvd::new(&ws.j)
-        .map(|s| s.sigma_min())
-        .unwrap_or(0.0);
-    Ok(IkResult {
-        converged: status == IkStatus::Converged,
-        task_met: matches!(status, IkStatus::Converged | IkStatus::ObjectiveUnsettled),
-        q,
-        status,
-        residual_norm: err,
-        residual: ws.e.clone(),
-        iterations,
-        damping: lambda,
-        sigma_min,
-    })
+        std::mem::swap(q, &mut ws.q_trial);
+        std::mem::swap(&mut ws.e, &mut ws.e_trial);
+        std::mem::swap(&mut ws.j, &mut ws.j_trial);
+        lm.err = err_trial;
+        lm.lambda = (lm.lambda / 3.0).max(options.min_damping);
+        lm.ns_scale = (lm.ns_scale * 2.0).min(1.0);
+        if lm.slow >= options.stall_iterations && lm.err > options.tolerance {
+            return Ok(Some(IkStatus::Stalled));
+        }
+    } else if secondary && lm.ns_scale > 1e-3 {
+        lm.ns_scale *= 0.25;
+    } else {
+        lm.ns_scale = 0.0;
+        lm.lambda *= 8.0;
+    }
+    Ok(None)
 }
 
 /// [`solve`] from `q0`, then, while not converged, from up to `restarts` random

@@ -27,6 +27,7 @@ use crate::mobile::wheeled::{
     WheeledData, WheeledModel, admissible_velocity_basis, check_state, generalized_force,
     reduced_forward_dynamics_crba,
 };
+use crate::multibody::{Data, Model};
 use crate::spatial::{Force, Motion};
 
 /// Reduced forward dynamics v̇_r (nr) of `Mr v̇ + Cr v + Gr = Qr` for wheel and joint
@@ -76,17 +77,42 @@ fn root_constrained_aba(
     generalized_force(wm, q, u, &mut wd.force);
     let data = &mut wd.data;
     let (qs, vs, ts) = (q.as_slice(), wd.qdot.as_slice(), wd.force.as_slice());
-    let n = model.njoints;
-    let root = 1usize;
     // Forward pass: velocities, bias accelerations, rigid-body inertias and biases.
     crate::dynamics::aba_forward_pass(model, data, qs, vs);
-    // Backward pass over the arm (all one-dof joints), condensing onto the root.
-    for i in (root + 1..n).rev() {
+    arm_backward_pass(model, data, ts)?;
+    let (dmat, rhs, acc0) = root_articulated_equation(model, data, ts);
+    let vb = Vector2::new(v_r[0], v_r[1]);
+    let (vdb, qddb) = platform_acceleration(wm, q[2], wd.qdot[2], vb, &dmat, &rhs)?;
+    let mut acc = acc0;
+    for k in 0..3 {
+        data.ddq[k] = qddb[k];
+        acc += data.s[k] * qddb[k];
+    }
+    data.a[ROOT] = acc;
+    // Forward pass over the arm.
+    for i in ROOT + 1..model.njoints {
+        crate::dynamics::accelerate_one_dof(model, data, i);
+    }
+    let red = &mut wd.reduced;
+    red.vdot[0] = vdb[0];
+    red.vdot[1] = vdb[1];
+    for (k, &i) in wm.arm_dofs().iter().enumerate() {
+        red.vdot[2 + k] = data.ddq[i];
+    }
+    red.qddot.copy_from(&data.ddq);
+    Ok(())
+}
+
+/// The planar root joint's index.
+const ROOT: usize = 1;
+
+/// Backward pass over the arm (all one-dof joints), condensing it onto the root; an error
+/// names the first joint that moves no inertia.
+#[inline(always)]
+fn arm_backward_pass(model: &Model, data: &mut Data, ts: &[f64]) -> Result<()> {
+    for i in (ROOT + 1..model.njoints).rev() {
         let iv = model.idx_v[i];
-        let ia = data.ia[i];
-        let pa = data.pa[i];
-        let p = model.parents[i].0;
-        let uvec = ia.mul_motion(&data.s[iv]);
+        let uvec = data.ia[i].mul_motion(&data.s[iv]);
         let d = data.s[iv].dot(&uvec);
         if !d.is_finite() || d <= 0.0 {
             return Err(Error::Singular {
@@ -97,21 +123,22 @@ fn root_constrained_aba(
                 )),
             });
         }
-        let dinv = 1.0 / d;
-        let uu = ts[iv] - data.s[iv].dot(&pa);
-        data.u[iv] = uvec;
-        data.uu[iv] = uu;
-        data.dinv[i][(0, 0)] = dinv;
-        let mut ia2 = ia;
-        ia2.sub_outer(&uvec, &uvec, dinv);
-        let pa2 = pa + ia2.mul_motion(&data.c[i]) + uvec * (dinv * uu);
-        let x = data.parent_from_joint[i];
-        data.ia[p] += ia2.transformed(&x);
-        data.pa[p] += x.act_force(&pa2);
+        crate::dynamics::condense_one_dof(model, data, ts, i, uvec, d);
     }
-    // Root: D q̈_b = rhs − C_bᵀ λ with q̈_b = N_b v̇_b + Ṅ_b v_b.
-    let ia = data.ia[root];
-    let pa = data.pa[root];
+    Ok(())
+}
+
+/// The root's equation `D q̈_b = rhs − C_bᵀ λ` after the arm is condensed onto it:
+/// `D = S_bᵀ IA S_b`, `rhs = τ_b − S_bᵀ pA − Uᵀ a₀`, and `a₀` (the root's acceleration
+/// with `q̈_b = 0`). Sets `data.a[0]` to −gravity.
+#[inline(always)]
+fn root_articulated_equation(
+    model: &Model,
+    data: &mut Data,
+    ts: &[f64],
+) -> (Matrix3<f64>, Vector3<f64>, Motion) {
+    let ia = data.ia[ROOT];
+    let pa = data.pa[ROOT];
     let mut uroot = [Force::zero(); 3];
     let mut dmat = Matrix3::zeros();
     for k in 0..3 {
@@ -123,16 +150,30 @@ fn root_constrained_aba(
         }
     }
     data.a[0] = Motion::new(-model.gravity, Vector3::zeros());
-    let acc0 = data.parent_from_joint[root].inverse_act_motion(&data.a[0]) + data.c[root];
+    let acc0 = data.parent_from_joint[ROOT].inverse_act_motion(&data.a[0]) + data.c[ROOT];
     let mut rhs = Vector3::zeros();
     for k in 0..3 {
         rhs[k] = ts[k] - data.s[k].dot(&pa) - uroot[k].dot(&acc0);
     }
+    (dmat, rhs, acc0)
+}
+
+/// The platform's reduced accelerations `v̇_b` (2) and root accelerations
+/// `q̈_b = N_b v̇_b + Ṅ_b v_b` (3) from the 2×2 system `N_bᵀ D N_b v̇_b = N_bᵀ (rhs − D Ṅ_b
+/// v_b)` at heading `theta` and heading rate `theta_dot`; [`Error::Singular`] if that
+/// system is not positive definite.
+#[inline(always)]
+fn platform_acceleration(
+    wm: &WheeledModel,
+    theta: f64,
+    theta_dot: f64,
+    vb: Vector2<f64>,
+    dmat: &Matrix3<f64>,
+    rhs: &Vector3<f64>,
+) -> Result<(Vector2<f64>, Vector3<f64>)> {
     let dd = &wm.base.drive;
-    let theta = q[2];
     let nb: Matrix3x2<f64> = dd.basis(theta);
-    let vb = Vector2::new(v_r[0], v_r[1]);
-    let ndv = dd.basis_dot(theta, wd.qdot[2]) * vb;
+    let ndv = dd.basis_dot(theta, theta_dot) * vb;
     let m2 = nb.transpose() * dmat * nb;
     let r2 = nb.transpose() * (rhs - dmat * ndv);
     let det = m2[(0, 0)] * m2[(1, 1)] - m2[(0, 1)] * m2[(1, 0)];
@@ -150,29 +191,5 @@ fn root_constrained_aba(
         (m2[(1, 1)] * r2[0] - m2[(0, 1)] * r2[1]) / det,
         (m2[(0, 0)] * r2[1] - m2[(1, 0)] * r2[0]) / det,
     );
-    let qddb = nb * vdb + ndv;
-    let mut acc = acc0;
-    for k in 0..3 {
-        data.ddq[k] = qddb[k];
-        acc += data.s[k] * qddb[k];
-    }
-    data.a[root] = acc;
-    // Forward pass over the arm.
-    for i in root + 1..n {
-        let iv = model.idx_v[i];
-        let p = model.parents[i].0;
-        let mut acc = data.parent_from_joint[i].inverse_act_motion(&data.a[p]) + data.c[i];
-        let qdd = data.dinv[i][(0, 0)] * (data.uu[iv] - data.u[iv].dot(&acc));
-        data.ddq[iv] = qdd;
-        acc += data.s[iv] * qdd;
-        data.a[i] = acc;
-    }
-    let red = &mut wd.reduced;
-    red.vdot[0] = vdb[0];
-    red.vdot[1] = vdb[1];
-    for (k, &i) in wm.arm_dofs().iter().enumerate() {
-        red.vdot[2 + k] = data.ddq[i];
-    }
-    red.qddot.copy_from(&data.ddq);
-    Ok(())
+    Ok((vdb, nb * vdb + ndv))
 }

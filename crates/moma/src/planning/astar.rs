@@ -1070,6 +1070,7 @@ fn search_weighted(
     ws.prepare(n);
     let open_stamp = ws.generation * 2;
     let closed_stamp = open_stamp + 1;
+    let stamps = (open_stamp, closed_stamp);
     let pw = grid.pw;
     let pwi = pw as isize;
     let rows = RowDivider::new(pw);
@@ -1123,19 +1124,8 @@ fn search_weighted(
                 continue;
             }
             open_card[k] = true;
-            let sv = &mut st[v];
-            if sv.stamp == closed_stamp {
-                continue;
-            }
             let ng = gu + weight[v] as f64;
-            if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
-                *sv = CellState {
-                    g: ng.to_bits(),
-                    parent: u as u32,
-                    stamp: open_stamp,
-                };
-                heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
-            }
+            relax_weighted(st, &mut heap, stamps, u, v, ng, || h(x + dx, y + dy));
         }
         for &(off, dx, dy, a, b) in &diag {
             if !(open_card[a] && open_card[b]) {
@@ -1145,24 +1135,40 @@ fn search_weighted(
             if !pass[v] {
                 continue;
             }
-            let sv = &mut st[v];
-            if sv.stamp == closed_stamp {
-                continue;
-            }
             let ng = gu + SQRT2 * weight[v] as f64;
-            if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
-                *sv = CellState {
-                    g: ng.to_bits(),
-                    parent: u as u32,
-                    stamp: open_stamp,
-                };
-                heap.push((ng + h(x + dx, y + dy)).to_bits(), v as u32);
-            }
+            relax_weighted(st, &mut heap, stamps, u, v, ng, || h(x + dx, y + dy));
         }
     }
     *expanded_out = expanded;
     ws.heap = heap;
     result
+}
+
+/// Relaxes the step `u → v` of the cost-aware search to the cost `ng` (`hv` gives the
+/// heuristic at v, evaluated only for a push): unless v is closed, a lower or first g
+/// opens v with parent u. `stamps` are the query's (open, closed) stamps.
+#[inline(always)]
+fn relax_weighted(
+    st: &mut [CellState],
+    heap: &mut OpenList,
+    (open_stamp, closed_stamp): (u32, u32),
+    u: usize,
+    v: usize,
+    ng: f64,
+    hv: impl FnOnce() -> f64,
+) {
+    let sv = &mut st[v];
+    if sv.stamp == closed_stamp {
+        return;
+    }
+    if sv.stamp != open_stamp || ng < f64::from_bits(sv.g) {
+        *sv = CellState {
+            g: ng.to_bits(),
+            parent: u as u32,
+            stamp: open_stamp,
+        };
+        heap.push((ng + hv()).to_bits(), v as u32);
+    }
 }
 
 /// Dijkstra wavefront from `goal` over the same move model: the geodesic (shortest-path)

@@ -410,8 +410,19 @@ pub fn astar_footprint(
     goal: (usize, usize),
     turn_cost: f64,
 ) -> Result<Option<FootprintPath>> {
-    use std::cmp::Reverse;
-    use std::collections::BinaryHeap;
+    check_footprint_query(cs, start, goal, turn_cost)?;
+    Ok(footprint_search(cs, start, goal, turn_cost))
+}
+
+/// The checks of [`astar_footprint`] before it allocates: an 8-heading C-space of a
+/// bounded state count, a usable turn cost, and start and goal on the map and free (the
+/// start at its heading, the goal at some heading).
+fn check_footprint_query(
+    cs: &FootprintCSpace,
+    start: (usize, usize, usize),
+    goal: (usize, usize),
+    turn_cost: f64,
+) -> Result<()> {
     if cs.headings != 8 {
         return Err(Error::invalid(
             "headings",
@@ -460,6 +471,18 @@ pub fn astar_footprint(
             goal.0, goal.1
         )));
     }
+    Ok(())
+}
+
+/// The search of [`astar_footprint`] on a checked query: states `(y · w + x) · 8 + k`.
+fn footprint_search(
+    cs: &FootprintCSpace,
+    start: (usize, usize, usize),
+    goal: (usize, usize),
+    turn_cost: f64,
+) -> Option<FootprintPath> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
     const DIRS: [(i64, i64); 8] = [
         (1, 0),
         (1, 1),
@@ -470,6 +493,7 @@ pub fn astar_footprint(
         (0, -1),
         (1, -1),
     ];
+    let (w, h) = (cs.width, cs.height);
     let free = |k: usize, x: i64, y: i64| {
         x >= 0
             && y >= 0
@@ -502,19 +526,11 @@ pub fn astar_footprint(
         let (k, cell) = (u % 8, u / 8);
         let (x, y) = (cell % w, cell / w);
         if (x, y) == goal {
-            let mut states = Vec::new();
-            let mut c = u as u32;
-            while c != u32::MAX {
-                let ci = c as usize;
-                states.push(((ci / 8) % w, (ci / 8) / w, ci % 8));
-                c = parent[ci];
-            }
-            states.reverse();
-            return Ok(Some(FootprintPath {
-                states,
+            return Some(FootprintPath {
+                states: footprint_states(&parent, u, w),
                 cost: g[u],
                 expanded,
-            }));
+            });
         }
         let mut relax = |v: usize, c: f64, heap: &mut BinaryHeap<(Reverse<u64>, u32)>| {
             let ng = g[u] + c;
@@ -551,5 +567,19 @@ pub fn astar_footprint(
             relax(sid(x, y, km), turn_cost, &mut heap);
         }
     }
-    Ok(None)
+    None
+}
+
+/// The (x, y, heading) states from the start to state `u`, by the parent links of a
+/// map `w` cells wide.
+fn footprint_states(parent: &[u32], u: usize, w: usize) -> Vec<(usize, usize, usize)> {
+    let mut states = Vec::new();
+    let mut c = u as u32;
+    while c != u32::MAX {
+        let ci = c as usize;
+        states.push(((ci / 8) % w, (ci / 8) / w, ci % 8));
+        c = parent[ci];
+    }
+    states.reverse();
+    states
 }

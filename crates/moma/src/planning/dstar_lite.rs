@@ -528,45 +528,9 @@ impl DStarLite {
             self.expanded += 1;
             let CellState { g, rhs } = self.cells[u];
             if g > rhs {
-                // Overconsistent: g(u) drops to rhs(u); a neighbour's rhs can only fall
-                // to the cost through u (Koenig & Likhachev's optimized D* Lite).
-                self.heap_remove(u);
-                self.cells[u].g = rhs;
-                let c = self.step_costs(u);
-                for (k, &ck) in c.iter().enumerate() {
-                    if ck != INF {
-                        let (off, dx, dy) = self.offsets[k];
-                        let v = (u as isize + off) as usize;
-                        let through = ck + rhs;
-                        let cv = self.cells[v];
-                        if v != self.goal && through < cv.rhs {
-                            self.cells[v].rhs = through;
-                            if cv.g != through {
-                                let kv = self.key_at(v, x + dx, y + dy);
-                                self.heap_set(v, kv);
-                            } else {
-                                self.heap_remove(v);
-                            }
-                        }
-                    }
-                }
+                self.lower_to_rhs(u, x, y, rhs);
             } else {
-                // Underconsistent: g(u) becomes infinite; only the neighbours whose rhs
-                // came through u need their rhs recomputed (rhs(u) itself does not depend
-                // on g(u)).
-                self.cells[u].g = INF;
-                let c = self.step_costs(u);
-                for (k, &ck) in c.iter().enumerate() {
-                    if ck != INF {
-                        let (off, dx, dy) = self.offsets[k];
-                        let v = (u as isize + off) as usize;
-                        if v != self.goal && self.cells[v].rhs == ck.saturating_add(g) {
-                            self.recompute_rhs(v);
-                            self.update_queue_at(v, x + dx, y + dy);
-                        }
-                    }
-                }
-                self.update_queue_at(u, x, y);
+                self.raise_to_infinity(u, x, y, g);
             }
         }
         let c = self.cells[self.start].g.min(self.cells[self.start].rhs);
@@ -574,6 +538,53 @@ impl DStarLite {
             return None;
         }
         fixed_point_length(c, self.one, self.diag).or_else(|| self.path_length())
+    }
+
+    /// Expands the overconsistent cell `u` (at padded `(x, y)`): g(u) drops to rhs(u); a
+    /// neighbour's rhs can only fall to the cost through u (Koenig & Likhachev's
+    /// optimized D* Lite).
+    #[inline(always)]
+    fn lower_to_rhs(&mut self, u: usize, x: i64, y: i64, rhs: u64) {
+        self.heap_remove(u);
+        self.cells[u].g = rhs;
+        let c = self.step_costs(u);
+        for (k, &ck) in c.iter().enumerate() {
+            if ck != INF {
+                let (off, dx, dy) = self.offsets[k];
+                let v = (u as isize + off) as usize;
+                let through = ck + rhs;
+                let cv = self.cells[v];
+                if v != self.goal && through < cv.rhs {
+                    self.cells[v].rhs = through;
+                    if cv.g != through {
+                        let kv = self.key_at(v, x + dx, y + dy);
+                        self.heap_set(v, kv);
+                    } else {
+                        self.heap_remove(v);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Expands the underconsistent cell `u` (at padded `(x, y)`, old g `g`): g(u) becomes
+    /// infinite; only the neighbours whose rhs came through u need their rhs recomputed
+    /// (rhs(u) itself does not depend on g(u)).
+    #[inline(always)]
+    fn raise_to_infinity(&mut self, u: usize, x: i64, y: i64, g: u64) {
+        self.cells[u].g = INF;
+        let c = self.step_costs(u);
+        for (k, &ck) in c.iter().enumerate() {
+            if ck != INF {
+                let (off, dx, dy) = self.offsets[k];
+                let v = (u as isize + off) as usize;
+                if v != self.goal && self.cells[v].rhs == ck.saturating_add(g) {
+                    self.recompute_rhs(v);
+                    self.update_queue_at(v, x + dx, y + dy);
+                }
+            }
+        }
+        self.update_queue_at(u, x, y);
     }
 
     /// Whether the goal is reachable from the robot's cell on the current grid: a flood

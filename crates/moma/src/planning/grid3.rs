@@ -504,6 +504,84 @@ struct Layout<'a> {
 /// A search met a path cost that does not fit its g type.
 struct Overflow;
 
+/// The fixed geometry of one 3-D search: padded-index offsets and fixed-point costs of
+/// the 26 moves, index → coordinate dividers, the brick layout and the goal.
+struct Frame3<'a> {
+    off: [isize; 26],
+    step: [u64; 26],
+    rows: super::astar::RowDivider,
+    slices: super::astar::RowDivider,
+    lay: &'a Layout<'a>,
+    /// The goal in padded coordinates.
+    goal: (i64, i64, i64),
+}
+
+/// The brick-layout slots of the 3 × 3 × 3 block around a voxel, by axis.
+type Around = ([usize; 3], [usize; 3], [usize; 3]);
+
+impl<'a> Frame3<'a> {
+    #[inline(always)]
+    fn new(grid: &Grid3, lay: &'a Layout<'a>, goal: (usize, usize, usize)) -> Self {
+        let (px, pxy) = (grid.px, grid.pxy);
+        let mut off = [0isize; 26];
+        let mut step = [0u64; 26];
+        for k in 0..26 {
+            let (dx, dy, dz) = MOVES3.d[k];
+            off[k] = dx as isize + dy as isize * px as isize + dz as isize * pxy as isize;
+            step[k] = STEPS3[MOVES3.kind[k]];
+        }
+        Self {
+            off,
+            step,
+            // padded index → padded coordinates by multiply-high (no `div`)
+            rows: super::astar::RowDivider::new(px),
+            slices: super::astar::RowDivider::new(grid.ny + 2),
+            lay,
+            goal: (goal.0 as i64 + 1, goal.1 as i64 + 1, goal.2 as i64 + 1),
+        }
+    }
+
+    /// Padded index → padded coordinates.
+    #[inline(always)]
+    fn coords(&self, i: usize) -> (usize, usize, usize) {
+        let (x, r) = self.rows.xy(i);
+        let (y, z) = self.slices.xy(r as usize);
+        (x as usize, y as usize, z as usize)
+    }
+
+    /// The brick-layout slots of the 3 × 3 × 3 block around padded (x, y, z), by axis.
+    #[inline(always)]
+    fn around(&self, x: usize, y: usize, z: usize) -> Around {
+        let lay = self.lay;
+        (
+            [lay.sx[x - 1], lay.sx[x], lay.sx[x + 1]],
+            [lay.sy[y - 1], lay.sy[y], lay.sy[y + 1]],
+            [lay.sz[z - 1], lay.sz[z], lay.sz[z + 1]],
+        )
+    }
+
+    /// The slot of move `k`'s target in the block `nbr`.
+    #[inline(always)]
+    fn slot_of(nbr: &Around, k: usize) -> usize {
+        let (ax, ay, az) = nbr;
+        let (dx, dy, dz) = MOVES3.d[k];
+        ax[(dx + 1) as usize] + ay[(dy + 1) as usize] + az[(dz + 1) as usize]
+    }
+
+    /// The slot of the block's centre voxel.
+    #[inline(always)]
+    fn centre(nbr: &Around) -> usize {
+        nbr.0[1] + nbr.1[1] + nbr.2[1]
+    }
+
+    /// The integer heuristic from padded (x, y, z) to the goal.
+    #[inline(always)]
+    fn h(&self, x: usize, y: usize, z: usize) -> u64 {
+        let (gx, gy, gz) = self.goal;
+        octile3_fixed(gx - x as i64, gy - y as i64, gz - z as i64)
+    }
+}
+
 /// The A* of [`astar3d`] with g of type `G`. No closed flag: with integer costs and a
 /// consistent integer heuristic each push strictly lowers g, so an open-list entry is
 /// current exactly when its key equals g + h of its voxel, and each voxel's current
@@ -517,114 +595,18 @@ fn search<G: G3>(
     start: (usize, usize, usize),
     goal: (usize, usize, usize),
 ) -> std::result::Result<Option<Path3>, Overflow> {
-    let (px, pxy) = (grid.px, grid.pxy);
-    let mut off = [0isize; 26];
-    let mut step = [0u64; 26];
-    for k in 0..26 {
-        let (dx, dy, dz) = MOVES3.d[k];
-        off[k] = dx as isize + dy as isize * px as isize + dz as isize * pxy as isize;
-        step[k] = STEPS3[MOVES3.kind[k]];
-    }
-    // padded index → padded coordinates by multiply-high (no `div`)
-    let rows = super::astar::RowDivider::new(px);
-    let slices = super::astar::RowDivider::new(grid.ny + 2);
-    let coords = |i: usize| {
-        let (x, r) = rows.xy(i);
-        let (y, z) = slices.xy(r as usize);
-        (x as usize, y as usize, z as usize)
-    };
-    // the brick-layout slots of the 3 × 3 × 3 block around padded (x, y, z), by axis
-    let around = |x: usize, y: usize, z: usize| {
-        (
-            [lay.sx[x - 1], lay.sx[x], lay.sx[x + 1]],
-            [lay.sy[y - 1], lay.sy[y], lay.sy[y + 1]],
-            [lay.sz[z - 1], lay.sz[z], lay.sz[z + 1]],
-        )
-    };
-    let slot_of = |(ax, ay, az): &([usize; 3], [usize; 3], [usize; 3]), k: usize| {
-        let (dx, dy, dz) = MOVES3.d[k];
-        ax[(dx + 1) as usize] + ay[(dy + 1) as usize] + az[(dz + 1) as usize]
-    };
-    let (gx, gy, gz) = (goal.0 as i64 + 1, goal.1 as i64 + 1, goal.2 as i64 + 1);
-    let h =
-        |x: usize, y: usize, z: usize| octile3_fixed(gx - x as i64, gy - y as i64, gz - z as i64);
+    let fr = Frame3::new(grid, lay, goal);
     let s = grid.pidx(start.0, start.1, start.2);
     let t = grid.pidx(goal.0, goal.1, goal.2);
-    let (sx, sy, sz) = (start.0 + 1, start.1 + 1, start.2 + 1);
-    let h0 = h(sx, sy, sz);
-    open.clear(h0);
-    open.push(h0, s as u32);
-    g.set(
-        lay.sx[sx] + lay.sy[sy] + lay.sz[sz],
-        G::from_u64(0).ok_or(Overflow)?,
-    );
-    let mut expanded = 0;
-    let mut found = false;
-    while let Some((key, ui)) = open.pop() {
-        let u = ui as usize;
-        let (x, y, z) = coords(u);
-        let nbr = around(x, y, z);
-        let gu = g.get(nbr.0[1] + nbr.1[1] + nbr.2[1]).to_u64();
-        if key != gu + h(x, y, z) {
-            continue; // superseded by a cheaper entry of the same voxel
-        }
-        expanded += 1;
-        if u == t {
-            found = true;
-            break;
-        }
-        let mut legal = legal_moves(grid.blocked27(u));
-        while legal != 0 {
-            let k = legal.trailing_zeros() as usize;
-            legal &= legal - 1;
-            let ng = gu + step[k];
-            let ngv = G::from_u64(ng).ok_or(Overflow)?;
-            let vs = slot_of(&nbr, k);
-            if ngv < g.get(vs) {
-                g.set(vs, ngv);
-                let (dx, dy, dz) = MOVES3.d[k];
-                let (vx, vy, vz) = (
-                    (x as i64 + dx) as usize,
-                    (y as i64 + dy) as usize,
-                    (z as i64 + dz) as usize,
-                );
-                open.push(ng + h(vx, vy, vz), (u as isize + off[k]) as u32);
-            }
-        }
-    }
-    if !found {
+    let Some(expanded) = expand_until_goal(grid, g, &fr, open, start, t)? else {
         return Ok(None);
-    }
-    // Walk back from the goal through neighbours whose g plus the step equals the
-    // voxel's g (every reached voxel's g is the cost of a path through such a chain).
-    let mut path = vec![t];
-    let mut n = [0u32; 3];
-    let mut c = t;
-    while c != s {
-        let (x, y, z) = coords(c);
-        let nbr = around(x, y, z);
-        let gc = g.get(nbr.0[1] + nbr.1[1] + nbr.2[1]).to_u64();
-        let mut legal = legal_moves(grid.blocked27(c));
-        let mut prev = None;
-        while legal != 0 {
-            let k = legal.trailing_zeros() as usize;
-            legal &= legal - 1;
-            let gv = g.get(slot_of(&nbr, k));
-            if gv != G::MAX && gv.to_u64() + step[k] == gc {
-                prev = Some(k);
-                break;
-            }
-        }
-        let k = prev.expect("a reached voxel has a predecessor on its g");
-        n[MOVES3.kind[k]] += 1;
-        c = (c as isize + off[k]) as usize;
-        path.push(c);
-    }
+    };
+    let (path, n) = walk_back3(grid, g, &fr, s, t);
     let voxels = path
         .iter()
         .rev()
         .map(|&i| {
-            let (x, y, z) = coords(i);
+            let (x, y, z) = fr.coords(i);
             (x - 1, y - 1, z - 1)
         })
         .collect();
@@ -635,6 +617,98 @@ fn search<G: G3>(
         cost,
         expanded,
     }))
+}
+
+/// The search loop of [`search`]: expands voxels from `start` until the goal (padded
+/// index `t`) is popped; `Some(expanded)` then, `None` when the open list runs dry.
+#[inline(always)]
+fn expand_until_goal<G: G3>(
+    grid: &Grid3,
+    g: &mut Pages<G>,
+    fr: &Frame3<'_>,
+    open: &mut BandQueue,
+    start: (usize, usize, usize),
+    t: usize,
+) -> std::result::Result<Option<usize>, Overflow> {
+    let lay = fr.lay;
+    let s = grid.pidx(start.0, start.1, start.2);
+    let (sx, sy, sz) = (start.0 + 1, start.1 + 1, start.2 + 1);
+    let h0 = fr.h(sx, sy, sz);
+    open.clear(h0);
+    open.push(h0, s as u32);
+    g.set(
+        lay.sx[sx] + lay.sy[sy] + lay.sz[sz],
+        G::from_u64(0).ok_or(Overflow)?,
+    );
+    let mut expanded = 0;
+    while let Some((key, ui)) = open.pop() {
+        let u = ui as usize;
+        let (x, y, z) = fr.coords(u);
+        let nbr = fr.around(x, y, z);
+        let gu = g.get(Frame3::centre(&nbr)).to_u64();
+        if key != gu + fr.h(x, y, z) {
+            continue; // superseded by a cheaper entry of the same voxel
+        }
+        expanded += 1;
+        if u == t {
+            return Ok(Some(expanded));
+        }
+        let mut legal = legal_moves(grid.blocked27(u));
+        while legal != 0 {
+            let k = legal.trailing_zeros() as usize;
+            legal &= legal - 1;
+            let ng = gu + fr.step[k];
+            let ngv = G::from_u64(ng).ok_or(Overflow)?;
+            let vs = Frame3::slot_of(&nbr, k);
+            if ngv < g.get(vs) {
+                g.set(vs, ngv);
+                let (dx, dy, dz) = MOVES3.d[k];
+                let (vx, vy, vz) = (
+                    (x as i64 + dx) as usize,
+                    (y as i64 + dy) as usize,
+                    (z as i64 + dz) as usize,
+                );
+                open.push(ng + fr.h(vx, vy, vz), (u as isize + fr.off[k]) as u32);
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// Walks back from the goal `t` to the start `s` through neighbours whose g plus the
+/// step equals the voxel's g (every reached voxel's g is the cost of a path through such
+/// a chain). Returns the padded indices from `t` to `s` and the count of each move kind.
+fn walk_back3<G: G3>(
+    grid: &Grid3,
+    g: &Pages<G>,
+    fr: &Frame3<'_>,
+    s: usize,
+    t: usize,
+) -> (Vec<usize>, [u32; 3]) {
+    let mut path = vec![t];
+    let mut n = [0u32; 3];
+    let mut c = t;
+    while c != s {
+        let (x, y, z) = fr.coords(c);
+        let nbr = fr.around(x, y, z);
+        let gc = g.get(Frame3::centre(&nbr)).to_u64();
+        let mut legal = legal_moves(grid.blocked27(c));
+        let mut prev = None;
+        while legal != 0 {
+            let k = legal.trailing_zeros() as usize;
+            legal &= legal - 1;
+            let gv = g.get(Frame3::slot_of(&nbr, k));
+            if gv != G::MAX && gv.to_u64() + fr.step[k] == gc {
+                prev = Some(k);
+                break;
+            }
+        }
+        let k = prev.expect("a reached voxel has a predecessor on its g");
+        n[MOVES3.kind[k]] += 1;
+        c = (c as isize + fr.off[k]) as usize;
+        path.push(c);
+    }
+    (path, n)
 }
 
 #[cfg(test)]
