@@ -200,6 +200,29 @@ fn eval_errors_are_clear_and_leave_no_output() {
         }),
         &["case 3", "I_c"],
     );
+    // No silently ignored input: a parameter the model does not have is named, with the
+    // model's parameters (m1 has no gravity; a typo of a real name).
+    expect_failure(
+        "unknown-param",
+        &reference_with("m1_unicycle", |v| {
+            v["cases"][1]["params"]["g"] = serde_json::json!(9.81)
+        }),
+        &[
+            "case 1",
+            "params.g",
+            "unknown parameter 'g' of model m1_unicycle",
+            "m, I, d, r_w, b",
+        ],
+    );
+    expect_failure(
+        "misspelt-param",
+        &reference_with("m4_cart_two_link", |v| {
+            let p = v["cases"][0]["params"].as_object_mut().unwrap();
+            let l1 = p.remove("L1").unwrap();
+            p.insert("l1".into(), l1);
+        }),
+        &["case 0", "params.l1", "m4_cart_two_link", "L1"],
+    );
     expect_failure(
         "wrong-length",
         &reference_with("m2_platform_planar_arm", |v| {

@@ -224,6 +224,18 @@ gravity = 9.81",
         ),
         &["bad.toml", "gravity", "m1", "no gravity term"],
     );
+    // A parameter that the chapter model does not have is an error naming it and the
+    // model's parameters, not ignored.
+    fails_with(
+        "unknown-param",
+        &M1.replace("b = 0.2", "b = 0.2\nwheel_mass = 1.5"),
+        &[
+            "bad.toml",
+            "params.wheel_mass",
+            "unknown parameter 'wheel_mass' of model m1_unicycle",
+            "m, I, d, r_w, b",
+        ],
+    );
     let urdf = scenarios().join("robots/diffdrive_arm.urdf");
     let urdf_robot = |casters: &str| {
         format!(

@@ -147,3 +147,53 @@ fn bad_grids_are_errors() {
     ev.seed = DVector::from_vec(vec![0.0]);
     assert!(ev.validate().is_err());
 }
+
+/// The map depends on the base pose alone: evaluating every pose on its own, in
+/// column-major order with headings reversed and one reused workspace, gives the samples
+/// of `placement_map` bit for bit (the IK used to warm-start along grid rows, which drew
+/// horizontal stripes of another IK branch in the heat map).
+#[test]
+fn the_map_does_not_depend_on_the_order_poses_are_visited_in() {
+    use moma::ik::model::ModelFrame;
+    use moma::ik::placement::PlacementEvaluator;
+    use moma::io::urdf::model_from_urdf_file;
+    use moma::multibody::RootJoint;
+    use std::sync::Arc;
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/manipulability/panda.urdf"
+    );
+    let model = Arc::new(model_from_urdf_file(path, RootJoint::Fixed).unwrap());
+    let arm = ModelFrame::by_name(model.clone(), "panda_hand_tcp").unwrap();
+    let drive = DiffDrive::new(0.08, 0.27, 0.12).unwrap();
+    for scope in [
+        MeasureScope::Arm,
+        MeasureScope::WholeBody(drive, BaseInputs::Platform),
+    ] {
+        let ev = ArmReachEvaluator {
+            arm: arm.clone(),
+            mount: Isometry3::translation(0.1, 0.0, 0.3),
+            target: Isometry3::translation(1.0, 0.5, 0.5),
+            rows: TaskRows::Full,
+            options: IkOptions::default(),
+            seed: moma::kinematics::neutral(&model),
+            restarts: 2,
+            measure: Measure::Yoshikawa,
+            scope,
+        };
+        let grid = PlacementGrid::new([0.0, -0.5, 2.0, 1.5], 0.25, 4).unwrap();
+        let map = placement_map(&ev, &grid).unwrap();
+        assert!(map.reachable > 50, "{}", map.reachable);
+        let mut ws = ev.workspace();
+        let h = grid.headings;
+        for ix in 0..grid.nx {
+            for iy in 0..grid.ny {
+                for k in (0..h).rev() {
+                    let index = (iy * grid.nx + ix) * h + k;
+                    let alone = ev.evaluate(&mut ws, grid.pose(index)).unwrap();
+                    assert_eq!(alone, map.samples[index], "pose {index} ({ix}, {iy}, {k})");
+                }
+            }
+        }
+    }
+}

@@ -653,7 +653,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
         }
         let json = chapter_params_json(params, sc.gravity, true)?;
         let p: MobileManipulatorParams =
-            serde_json::from_value(json.clone()).context("robot.params")?;
+            moma::closed_form::parse_params("robot.params", &json).context("robot")?;
         let mm = MobileManipulator::new(p).context("robot.params")?;
         let sys = moma::sim::chapter_models::chapter_system(model, &json).context("robot")?;
         check_keys(law, &c.gains, &["Kp", "Kd"])?;

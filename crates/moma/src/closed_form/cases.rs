@@ -15,7 +15,6 @@ use super::m6_space_manipulator::{SpaceManipulator, SpaceManipulatorParams};
 use crate::error::{Error, Result};
 use nalgebra::{SMatrix, SVector};
 use serde::Serialize;
-use serde::de::DeserializeOwned;
 use serde_json::{Map, Value, json};
 
 pub use super::registry::{ChapterModel, MODEL_NAMES};
@@ -48,7 +47,7 @@ fn vector<const K: usize>(case: &Value, path: &[&str]) -> Result<SVector<f64, K>
     fixed_vector(&path.join("."), &numbers(case, path)?)
 }
 
-fn params<P: DeserializeOwned>(case: &Value) -> Result<P> {
+fn params<P: super::ChapterParams>(case: &Value) -> Result<P> {
     let p = field(case, &["params"])?;
     if let Some(obj) = p.as_object() {
         for (k, v) in obj {
@@ -57,7 +56,7 @@ fn params<P: DeserializeOwned>(case: &Value) -> Result<P> {
             }
         }
     }
-    serde_json::from_value(p.clone()).map_err(|e| Error::invalid("params", e.to_string()))
+    super::parse_params("params", p)
 }
 
 fn times(case: &Value) -> Result<Option<Vec<f64>>> {

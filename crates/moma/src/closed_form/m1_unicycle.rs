@@ -17,6 +17,7 @@ pub type State = super::ModelState<3, 2>;
 
 /// Parameters of the unicycle platform (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
 pub struct UnicycleParams {
     /// Platform mass `m` (kg).
     pub m: f64,

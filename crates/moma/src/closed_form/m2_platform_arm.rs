@@ -18,6 +18,7 @@ pub type State = super::ModelState<5, 4>;
 /// Parameters of m2 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
+#[serde(deny_unknown_fields)]
 pub struct PlatformArmParams {
     /// Platform mass `m_p`.
     pub m_p: f64,

@@ -26,6 +26,7 @@ pub type Configuration = SVector<f64, 6>;
 /// Parameters of m3 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
+#[serde(deny_unknown_fields)]
 pub struct DiffDriveKinematicsParams {
     /// Wheel radius.
     pub r_w: f64,

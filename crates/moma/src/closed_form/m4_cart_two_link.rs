@@ -33,6 +33,7 @@ pub type State = super::ModelState<3, 3>;
 /// Parameters of m4 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
+#[serde(deny_unknown_fields)]
 pub struct CartTwoLinkParams {
     /// Link-1 mass.
     pub m1: f64,

@@ -30,6 +30,7 @@ pub type State = super::ModelState<6, 5>;
 /// Parameters of m5 (SI units).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[allow(non_snake_case)]
+#[serde(deny_unknown_fields)]
 pub struct MobileManipulatorParams {
     /// Platform mass (CM at (x, y)).
     pub M_cart: f64,

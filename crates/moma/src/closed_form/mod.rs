@@ -44,6 +44,58 @@ use lagrange::PfaffianSystem;
 use nalgebra::{DMatrix, SMatrix, SVector};
 use serde::Serialize;
 
+/// The parameter struct of one chapter model (for [`parse_params`]).
+pub trait ChapterParams: serde::de::DeserializeOwned {
+    /// The model these are the parameters of.
+    const MODEL: ChapterModel;
+}
+
+impl ChapterParams for m1_unicycle::UnicycleParams {
+    const MODEL: ChapterModel = ChapterModel::M1Unicycle;
+}
+impl ChapterParams for m2_platform_arm::PlatformArmParams {
+    const MODEL: ChapterModel = ChapterModel::M2PlatformArm;
+}
+impl ChapterParams for m3_diffdrive::DiffDriveKinematicsParams {
+    const MODEL: ChapterModel = ChapterModel::M3DiffDrive;
+}
+impl ChapterParams for m4_cart_two_link::CartTwoLinkParams {
+    const MODEL: ChapterModel = ChapterModel::M4CartTwoLink;
+}
+impl ChapterParams for m5_mobile_manipulator::MobileManipulatorParams {
+    const MODEL: ChapterModel = ChapterModel::M5MobileManipulator;
+}
+impl ChapterParams for m6_space_manipulator::SpaceManipulatorParams {
+    const MODEL: ChapterModel = ChapterModel::M6SpaceManipulator;
+}
+
+/// Reads a chapter model's parameter table (`params` of a case file or of a scenario's
+/// `robot.params`) into its parameter struct, which refuses names it does not have: an
+/// unknown name is an error on `params.NAME` that names the model and lists its
+/// parameters; other deserialization errors (a missing parameter) are reported on
+/// `field`.
+pub fn parse_params<P: ChapterParams>(field: &str, params: &serde_json::Value) -> Result<P> {
+    serde_json::from_value(params.clone()).map_err(|e| {
+        let text = e.to_string();
+        // serde's message: unknown field `NAME`, expected one of `a`, `b`, … (or
+        // "expected `a`" / "expected `a` or `b`").
+        if let Some(rest) = text.strip_prefix("unknown field `")
+            && let Some((name, tail)) = rest.split_once('`')
+        {
+            let valid: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();
+            return Error::invalid(
+                format!("params.{name}"),
+                format!(
+                    "unknown parameter '{name}' of model {}; its parameters are: {}",
+                    P::MODEL.canonical_name(),
+                    valid.join(", ")
+                ),
+            );
+        }
+        Error::invalid(field, text)
+    })
+}
+
 /// Smallest |d| (m) for which the lateral-velocity parametrisation `v = [v_F, v_T]` is used
 /// automatically; below it [`PlatformVelocity::YawRate`] is chosen.
 pub const MIN_AXLE_OFFSET: f64 = 1e-9;

@@ -5,7 +5,8 @@
 use super::tasks::FrameKinematics;
 use crate::error::{Error, Result, ensure_finite, ensure_len};
 use crate::kinematics::{self, ReferenceFrame};
-use crate::multibody::{Data, FrameIndex, Model, RootJoint};
+use crate::multibody::{Data, FrameIndex, Model, RootJoint, mount_on_root};
+use crate::spatial::SE3;
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix6xX};
 use std::sync::Arc;
 
@@ -41,6 +42,23 @@ impl ModelFrame {
     pub fn by_name(model: Arc<Model>, name: &str) -> Result<Self> {
         let frame = model.frame_id(name)?;
         Self::new(model, frame)
+    }
+
+    /// The same frame on the model mounted at `mount` on a planar root
+    /// ([`crate::multibody::mount_on_root`]): `q = [x, y, θ, q…]`.
+    ///
+    /// # Errors
+    /// As [`crate::multibody::mount_on_root`] (a model that is not fixed-based, a
+    /// non-rigid mount).
+    pub fn on_planar_base(&self, mount: &Isometry3<f64>) -> Result<Self> {
+        let mounted = mount_on_root(&self.model, RootJoint::Planar, &SE3::from_isometry(mount))?;
+        // mount_on_root inserts the root joint's frame at index 1 and shifts the others.
+        let frame = if self.frame.0 == 0 {
+            0
+        } else {
+            self.frame.0 + 1
+        };
+        Self::new(Arc::new(mounted), FrameIndex(frame))
     }
 
     /// The model.
@@ -142,6 +160,9 @@ impl FrameKinematics for ModelFrame {
         Some((m.joint_placements[first].translation, radius))
     }
 
+    fn on_planar_base(&self, mount: &Isometry3<f64>) -> Option<Result<Self>> {
+        Some(ModelFrame::on_planar_base(self, mount))
+    }
     fn nq(&self) -> usize {
         self.model.nq
     }

@@ -12,7 +12,7 @@
 //! the IK's manipulability objective already uses its measures.
 
 use super::tasks::{FrameKinematics, PoseTask, TaskRows};
-use super::{IkOptions, IkWorkspace, solve, solve_with_restarts};
+use super::{IkOptions, IkWorkspace, solve_with_restarts};
 use crate::error::{Error, Result, ensure_finite};
 use crate::manipulability::{JacobianSvd, Measure, evaluate_svd};
 use crate::mobile::DiffDrive;
@@ -137,15 +137,10 @@ pub trait PlacementEvaluator: Sync {
     type Workspace: Send;
     /// A fresh workspace.
     fn workspace(&self) -> Self::Workspace;
-    /// Evaluates the base pose `[x, y, θ]`. `warm_start` is the solution found at the
-    /// neighbouring pose (previous cell of the same grid row, same heading), if any; the
-    /// second return value is the solution to pass on.
-    fn evaluate(
-        &self,
-        ws: &mut Self::Workspace,
-        base: [f64; 3],
-        warm_start: Option<&DVector<f64>>,
-    ) -> Result<(PlacementSample, Option<DVector<f64>>)>;
+    /// Evaluates the base pose `[x, y, θ]`. The result must depend on the pose alone
+    /// (not on the poses evaluated before with the same workspace), so that a map does
+    /// not depend on the order its poses are visited in.
+    fn evaluate(&self, ws: &mut Self::Workspace, base: [f64; 3]) -> Result<PlacementSample>;
     /// Whether a larger measure is better (for picking the best placement).
     fn larger_is_better(&self) -> bool;
     /// Checks the evaluator's configuration before any workspace is built.
@@ -190,41 +185,24 @@ impl PlacementMap {
 
 /// Evaluates every base pose of `grid` in parallel and picks the best placement.
 ///
-/// Grid rows (constant y) are distributed over the rayon workers; along a row the poses
-/// are visited in order and each IK is warm-started from the solution of the previous
-/// cell at the same heading. Every row starts from the evaluator's own seed, so the
-/// result does not depend on the number of threads.
+/// The poses are distributed over the rayon workers, each with its own workspace. Every
+/// pose is solved on its own, from the same starting points (no warm start from a
+/// neighbouring pose), so the map depends neither on the number of threads nor on the
+/// order the poses are visited in. (Warm-starting along grid rows carried one arm
+/// posture through each row and drew horizontal stripes in the heat map: two rows that
+/// started on different IK branches kept them.)
 pub fn placement_map<E: PlacementEvaluator>(
     evaluator: &E,
     grid: &PlacementGrid,
 ) -> Result<PlacementMap> {
     evaluator.validate()?;
-    let h = grid.headings;
-    let nx = grid.nx;
-    let per_row: Vec<Result<Vec<PlacementSample>>> = (0..grid.ny)
+    let samples: Vec<PlacementSample> = (0..grid.len())
         .into_par_iter()
         .map_init(
             || evaluator.workspace(),
-            |ws, iy| {
-                let mut warm: Vec<Option<DVector<f64>>> = vec![None; h];
-                let mut row = Vec::with_capacity(nx * h);
-                for ix in 0..nx {
-                    let cell = iy * nx + ix;
-                    for (k, w) in warm.iter_mut().enumerate() {
-                        let (sample, next) =
-                            evaluator.evaluate(ws, grid.pose(cell * h + k), w.as_ref())?;
-                        *w = next;
-                        row.push(sample);
-                    }
-                }
-                Ok(row)
-            },
+            |ws, i| evaluator.evaluate(ws, grid.pose(i)),
         )
-        .collect();
-    let mut samples = Vec::with_capacity(grid.len());
-    for r in per_row {
-        samples.extend(r?);
-    }
+        .collect::<Result<_>>()?;
     let larger = evaluator.larger_is_better();
     let mut best: Option<PlacementSample> = None;
     let mut reachable = 0;
@@ -261,12 +239,17 @@ pub enum MeasureScope {
     WholeBody(DiffDrive, BaseInputs),
 }
 
+/// Seed of the random restart configurations of [`ArmReachEvaluator`]: the same at every
+/// base pose, so neighbouring poses that need restarts start from the same postures.
+pub const RESTART_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
+
 /// Reachability by arm IK from each base pose, and a measure at the solution.
 ///
 /// The arm model is fixed-based (its root is the arm base); it is mounted on the platform
 /// at `mount` (arm base in the platform frame). From base pose `b = (x, y, θ)` the target
 /// is expressed in the arm base frame as `(b · mount)⁻¹ · target` and solved with
-/// [`solve_with_restarts`] from `seed`.
+/// [`solve_with_restarts`] from `seed`, then from `restarts` random configurations drawn
+/// with [`RESTART_SEED`] (the same ones at every pose).
 pub struct ArmReachEvaluator<K> {
     /// Arm kinematics (cloned per worker).
     pub arm: K,
@@ -293,6 +276,10 @@ pub struct ArmReachWorkspace<K: FrameKinematics> {
     task: PoseTask<K>,
     ik: IkWorkspace,
     j6: DMatrix<f64>,
+    /// The arm mounted on a planar base (whole-body scope only).
+    mounted: Option<K>,
+    /// `[x, y, θ, q_arm]` for `mounted`.
+    q_full: DVector<f64>,
     jfull: DMatrix<f64>,
     jbar: DMatrix<f64>,
     pose: Isometry3<f64>,
@@ -300,6 +287,38 @@ pub struct ArmReachWorkspace<K: FrameKinematics> {
 }
 
 impl<K: FrameKinematics + Clone + Send + Sync> ArmReachEvaluator<K> {
+    /// The arm mounted on the planar base ([`FrameKinematics::on_planar_base`]), for the
+    /// whole-body scope.
+    fn mounted_arm(&self) -> Result<K> {
+        match self.arm.on_planar_base(&self.mount) {
+            Some(k) => k,
+            None => Err(Error::invalid(
+                "measure scope",
+                "the whole-body measure needs an arm kinematics that can be mounted on a \
+                 planar base",
+            )),
+        }
+    }
+
+    /// The 6 × (nv + 3) `LocalWorldAligned` Jacobian of the frame with respect to
+    /// `[ẋ, ẏ, θ̇, q̇_arm]` at base pose `base` and arm configuration `q`, from the
+    /// kinematics of the arm mounted on a planar root, into `ws.jfull` (no allocation).
+    fn planar_root_jacobian(
+        ws: &mut ArmReachWorkspace<K>,
+        base: [f64; 3],
+        q: &DVector<f64>,
+    ) -> Result<()> {
+        let mounted = ws
+            .mounted
+            .as_mut()
+            .expect("the workspace of a whole-body scope holds the mounted arm");
+        ws.q_full[0] = base[0];
+        ws.q_full[1] = base[1];
+        ws.q_full[2] = base[2];
+        ws.q_full.rows_mut(3, q.len()).copy_from(q);
+        mounted.pose_and_jacobian(&ws.q_full, &mut ws.pose, &mut ws.jfull)
+    }
+
     /// Measure at arm configuration `q` for base pose `base` (on the workspace buffers).
     fn measure_at(
         &self,
@@ -307,34 +326,16 @@ impl<K: FrameKinematics + Clone + Send + Sync> ArmReachEvaluator<K> {
         base: [f64; 3],
         q: &DVector<f64>,
     ) -> Result<Option<f64>> {
-        ws.task
-            .kinematics
-            .pose_and_jacobian(q, &mut ws.pose, &mut ws.j6)?;
         let rows = self.rows.indices();
         let j = match self.scope {
-            MeasureScope::Arm => ws.j6.select_rows(&rows),
+            MeasureScope::Arm => {
+                ws.task
+                    .kinematics
+                    .pose_and_jacobian(q, &mut ws.pose, &mut ws.j6)?;
+                ws.j6.select_rows(&rows)
+            }
             MeasureScope::WholeBody(drive, inputs) => {
-                // World Jacobian of the frame w.r.t. [ẋ, ẏ, θ̇, q̇_arm]: arm columns
-                // rotated into world, base columns of a planar root.
-                let world_base = platform_pose(base) * self.mount;
-                let rot = world_base.rotation.to_rotation_matrix();
-                let n = ws.j6.ncols();
-                let p_e = world_base * nalgebra::Point3::from(ws.pose.translation.vector);
-                let r = p_e.coords - Vector3::new(base[0], base[1], 0.0);
-                ws.jfull.fill(0.0);
-                ws.jfull[(0, 0)] = 1.0;
-                ws.jfull[(1, 1)] = 1.0;
-                ws.jfull[(0, 2)] = -r.y;
-                ws.jfull[(1, 2)] = r.x;
-                ws.jfull[(5, 2)] = 1.0;
-                for k in 0..n {
-                    let lin = rot * Vector3::new(ws.j6[(0, k)], ws.j6[(1, k)], ws.j6[(2, k)]);
-                    let ang = rot * Vector3::new(ws.j6[(3, k)], ws.j6[(4, k)], ws.j6[(5, k)]);
-                    for i in 0..3 {
-                        ws.jfull[(i, k + 3)] = lin[i];
-                        ws.jfull[(i + 3, k + 3)] = ang[i];
-                    }
-                }
+                Self::planar_root_jacobian(ws, base, q)?;
                 compose_jacobian(&drive, inputs, base[2], &ws.jfull, &mut ws.jbar)?;
                 ws.jbar.select_rows(&rows)
             }
@@ -360,10 +361,19 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
             .expect("rows validated when the evaluator was built");
         let ik = IkWorkspace::new(&task);
         let n = self.arm.nv();
+        let mounted = match self.scope {
+            MeasureScope::Arm => None,
+            MeasureScope::WholeBody(..) => Some(
+                self.mounted_arm()
+                    .expect("the mount was checked when the evaluator was validated"),
+            ),
+        };
         ArmReachWorkspace {
             task,
             ik,
             j6: DMatrix::zeros(6, n),
+            mounted,
+            q_full: DVector::zeros(self.arm.nq() + 3),
             jfull: DMatrix::zeros(6, n + 3),
             jbar: DMatrix::zeros(6, n + 2),
             pose: Isometry3::identity(),
@@ -376,12 +386,7 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
         }
     }
 
-    fn evaluate(
-        &self,
-        ws: &mut Self::Workspace,
-        base: [f64; 3],
-        warm_start: Option<&DVector<f64>>,
-    ) -> Result<(PlacementSample, Option<DVector<f64>>)> {
+    fn evaluate(&self, ws: &mut Self::Workspace, base: [f64; 3]) -> Result<PlacementSample> {
         let arm_base = platform_pose(base) * self.mount;
         let local = arm_base.inverse() * self.target;
         ws.task.target = local;
@@ -389,57 +394,36 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
         if let Some((center, radius)) = ws.reach {
             let gap = (local.translation.vector - center).norm() - radius;
             if gap > self.options.tolerance {
-                let sample = PlacementSample {
+                return Ok(PlacementSample {
                     base,
                     reachable: false,
                     measure: None,
                     residual: gap,
                     iterations: 0,
-                };
-                return Ok((sample, None));
+                });
             }
         }
-        let mut iterations = 0;
-        let mut result = None;
-        if let Some(w) = warm_start {
-            let r = solve(&mut ws.task, w, &self.options, &mut ws.ik)?;
-            iterations += r.iterations;
-            if r.task_met {
-                result = Some(r);
-            }
-        }
-        let r = match result {
-            Some(r) => r,
-            None => {
-                let seed_rng = (base[0].to_bits()
-                    ^ base[1].to_bits().rotate_left(21)
-                    ^ base[2].to_bits().rotate_left(42))
-                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
-                let r = solve_with_restarts(
-                    &mut ws.task,
-                    &self.seed,
-                    &self.options,
-                    self.restarts,
-                    seed_rng,
-                    &mut ws.ik,
-                )?;
-                iterations += r.iterations;
-                r
-            }
-        };
+        // The seed, then the same restart configurations at every pose.
+        let r = solve_with_restarts(
+            &mut ws.task,
+            &self.seed,
+            &self.options,
+            self.restarts,
+            RESTART_SEED,
+            &mut ws.ik,
+        )?;
         let measure = if r.task_met {
             self.measure_at(ws, base, &r.q)?
         } else {
             None
         };
-        let sample = PlacementSample {
+        Ok(PlacementSample {
             base,
             reachable: r.task_met,
             measure,
             residual: r.residual_norm,
-            iterations,
-        };
-        Ok((sample, if r.task_met { Some(r.q) } else { None }))
+            iterations: r.iterations,
+        })
     }
 
     fn larger_is_better(&self) -> bool {
@@ -452,7 +436,8 @@ impl<K: FrameKinematics + Clone + Send + Sync> PlacementEvaluator for ArmReachEv
 }
 
 impl<K: FrameKinematics + Clone + Send + Sync> ArmReachEvaluator<K> {
-    /// Validates the configuration (rows, seed length, finite target).
+    /// Validates the configuration (rows, seed length, finite target; for the
+    /// whole-body scope, an arm that mounts on a planar base).
     pub fn validate(&self) -> Result<()> {
         self.rows.validate()?;
         crate::error::ensure_len("ik seed", self.arm.nq(), self.seed.len())?;
@@ -465,6 +450,195 @@ impl<K: FrameKinematics + Clone + Send + Sync> ArmReachEvaluator<K> {
                 .iter()
                 .chain(self.target.rotation.coords.iter()),
         )?;
+        if let MeasureScope::WholeBody(..) = self.scope {
+            let mounted = self.mounted_arm()?;
+            crate::error::ensure_len("mounted arm nq", self.arm.nq() + 3, mounted.nq())?;
+            crate::error::ensure_len("mounted arm nv", self.arm.nv() + 3, mounted.nv())?;
+        }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ik::model::ModelFrame;
+    use crate::multibody::{JointIndex, JointLimits, JointType, Model, ModelBuilder, RootJoint};
+    use crate::spatial::{Inertia, SE3};
+    use nalgebra::Matrix3;
+    use rand::{Rng, SeedableRng};
+    use std::sync::Arc;
+
+    /// A fixed-based 5-joint arm with offsets, aligned and unaligned revolute axes and a
+    /// prismatic joint, its root body carrying mass (fixed to the arm's world).
+    fn arm(root: RootJoint) -> Model {
+        let mut b = ModelBuilder::new("arm5");
+        b.set_root(root);
+        let link = Inertia::new(
+            1.0,
+            Vector3::new(0.1, 0.0, 0.05),
+            Matrix3::identity() * 0.01,
+        );
+        let mut parent = JointIndex(0);
+        if root == RootJoint::Planar {
+            parent = b
+                .add_joint(
+                    parent,
+                    "base",
+                    JointType::Planar,
+                    SE3::identity(),
+                    JointLimits::unlimited(),
+                )
+                .unwrap();
+        }
+        b.append_body_inertia(parent, &link, &SE3::identity())
+            .unwrap();
+        let joints = [
+            (JointType::RevoluteZ, [0.05, 0.0, 0.3], [0.0, 0.0, 0.4]),
+            (
+                JointType::revolute(Vector3::new(0.3, 1.0, -0.2)).unwrap(),
+                [0.0, 0.1, 0.2],
+                [0.2, 0.0, 0.0],
+            ),
+            (JointType::PrismaticX, [0.4, 0.0, 0.0], [0.0, 0.3, 0.0]),
+            (JointType::RevoluteY, [0.3, -0.05, 0.1], [0.0, 0.0, -0.5]),
+            (
+                JointType::revolute(Vector3::new(1.0, -0.4, 0.6)).unwrap(),
+                [0.0, 0.0, 0.15],
+                [0.7, 0.2, 0.1],
+            ),
+        ];
+        for (k, (jt, xyz, rpy)) in joints.into_iter().enumerate() {
+            let limits = JointLimits::scalar(-2.5, 2.5, 1.0, 10.0);
+            parent = b
+                .add_joint(
+                    parent,
+                    &format!("j{k}"),
+                    jt,
+                    SE3::from_xyz_rpy(xyz, rpy),
+                    limits,
+                )
+                .unwrap();
+            b.append_body_inertia(parent, &link, &SE3::identity())
+                .unwrap();
+        }
+        let tool = SE3::from_xyz_rpy([0.1, 0.02, 0.08], [0.3, 0.0, 0.2]);
+        b.add_frame(
+            "tool",
+            parent,
+            FrameIndex(b.nframes() - 1),
+            tool,
+            FrameKind::Operational,
+        )
+        .unwrap();
+        b.build().unwrap()
+    }
+
+    use crate::multibody::{FrameIndex, FrameKind};
+
+    /// The planar-root Jacobian built by hand from the arm's own Jacobian (the formula
+    /// this module used before the mounted model existed): arm columns rotated into
+    /// world, base columns of a planar root, `θ̇` column `ẑ × r` with `r` from the base
+    /// origin to the frame.
+    fn by_hand(
+        j6: &DMatrix<f64>,
+        arm_pose: &Isometry3<f64>,
+        mount: &Isometry3<f64>,
+        base: [f64; 3],
+    ) -> DMatrix<f64> {
+        let world_base = platform_pose(base) * mount;
+        let rot = world_base.rotation.to_rotation_matrix();
+        let n = j6.ncols();
+        let p_e = world_base * nalgebra::Point3::from(arm_pose.translation.vector);
+        let r = p_e.coords - Vector3::new(base[0], base[1], 0.0);
+        let mut j = DMatrix::zeros(6, n + 3);
+        j[(0, 0)] = 1.0;
+        j[(1, 1)] = 1.0;
+        j[(0, 2)] = -r.y;
+        j[(1, 2)] = r.x;
+        j[(5, 2)] = 1.0;
+        for k in 0..n {
+            let lin = rot * Vector3::new(j6[(0, k)], j6[(1, k)], j6[(2, k)]);
+            let ang = rot * Vector3::new(j6[(3, k)], j6[(4, k)], j6[(5, k)]);
+            for i in 0..3 {
+                j[(i, k + 3)] = lin[i];
+                j[(i + 3, k + 3)] = ang[i];
+            }
+        }
+        j
+    }
+
+    fn evaluator(arm: ModelFrame, mount: Isometry3<f64>) -> ArmReachEvaluator<ModelFrame> {
+        let seed = crate::multibody::neutral(arm.model());
+        ArmReachEvaluator {
+            arm,
+            mount,
+            target: Isometry3::translation(1.0, 0.5, 0.5),
+            rows: TaskRows::Full,
+            options: IkOptions::default(),
+            seed,
+            restarts: 0,
+            measure: Measure::Yoshikawa,
+            scope: MeasureScope::WholeBody(
+                DiffDrive::new(0.1, 0.25, 0.0).unwrap(),
+                BaseInputs::Platform,
+            ),
+        }
+    }
+
+    #[test]
+    fn planar_root_jacobian_of_the_mounted_model_equals_the_hand_built_one() {
+        let model = Arc::new(arm(RootJoint::Fixed));
+        let tool = model.frame_id("tool").unwrap();
+        let mut arm = ModelFrame::new(model.clone(), tool).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for trial in 0..40 {
+            // Mounts with yaw, a tilt and an offset; random postures and base poses.
+            let mount = Isometry3::from_parts(
+                Translation3::new(
+                    rng.random_range(-0.3..0.3),
+                    rng.random_range(-0.3..0.3),
+                    rng.random_range(0.0..0.5),
+                ),
+                UnitQuaternion::from_euler_angles(
+                    rng.random_range(-0.4..0.4),
+                    rng.random_range(-0.4..0.4),
+                    rng.random_range(-3.1..3.1),
+                ),
+            );
+            let ev = evaluator(arm.clone(), mount);
+            ev.validate().unwrap();
+            let mut ws = ev.workspace();
+            let q = crate::kinematics::random_configuration(&model, &mut rng);
+            let base = [
+                rng.random_range(-2.0..2.0),
+                rng.random_range(-2.0..2.0),
+                rng.random_range(-3.2..3.2),
+            ];
+            ArmReachEvaluator::planar_root_jacobian(&mut ws, base, &q).unwrap();
+            let (mut pose, mut j6) = (Isometry3::identity(), DMatrix::zeros(6, model.nv));
+            arm.pose_and_jacobian(&q, &mut pose, &mut j6).unwrap();
+            let want = by_hand(&j6, &pose, &mount, base);
+            let err = (&ws.jfull - &want).abs().max();
+            assert!(err < 1e-12, "trial {trial}: max |ΔJ| = {err:e}");
+            // The frame pose agrees too: the mounted model is the arm placed by b · mount.
+            let world = platform_pose(base) * mount * pose;
+            assert!((ws.pose.translation.vector - world.translation.vector).norm() < 1e-12);
+            assert!(ws.pose.rotation.angle_to(&world.rotation) < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_whole_body_scope_needs_an_arm_that_mounts() {
+        // An arm that already has a planar root is refused when the evaluator is
+        // validated.
+        let model = Arc::new(arm(RootJoint::Planar));
+        let tool = model.frame_id("tool").unwrap();
+        let ev = evaluator(ModelFrame::new(model, tool).unwrap(), Isometry3::identity());
+        let err = ev.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("only a fixed-based model can be mounted"),
+            "{err}"
+        );
     }
 }

@@ -75,6 +75,18 @@ pub trait FrameKinematics {
     ) -> bool {
         false
     }
+    /// The same frame with this (fixed-based) chain mounted at `mount` on a planar base:
+    /// `q = [x, y, θ, q…]`, `v = [ẋ, ẏ, θ̇, q̇…]` in world axes, and the arm's world frame at
+    /// `mount` in the platform frame. Its [`FrameKinematics::pose_and_jacobian`] gives
+    /// the whole-body frame Jacobian that the placement maps reduce by the wheel map.
+    /// `None` when this kinematics cannot be re-rooted (the default), `Some(Err)` when the
+    /// mount is invalid for it.
+    fn on_planar_base(&self, _mount: &Isometry3<f64>) -> Option<Result<Self>>
+    where
+        Self: Sized,
+    {
+        None
+    }
 }
 
 /// Which rows of the 6-D pose error/Jacobian `[linear; angular]` a task uses.

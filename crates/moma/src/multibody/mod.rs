@@ -46,8 +46,10 @@ mod crba_plan;
 mod data;
 mod joint;
 mod model;
+mod mount;
 
 pub use builder::{JointLimits, ModelBuilder};
 pub use data::{ArticulatedInertia, Data};
 pub use joint::{FrameIndex, JointIndex, JointType, axis_rotation, free_flyer_transform};
 pub use model::{Frame, FrameKind, Model, RootJoint, neutral};
+pub use mount::{MOUNT_ROOT_JOINT_NAME, mount_on_root};

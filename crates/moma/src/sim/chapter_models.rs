@@ -87,7 +87,10 @@ pub fn m5(params: MobileManipulatorParams) -> Result<ClosedFormSystem<MobileMani
 /// models m1, m2 and m5 can be simulated. Unknown names, the other models and missing or
 /// malformed parameters are errors naming the field.
 pub fn chapter_system(name: &str, params: &serde_json::Value) -> Result<Box<dyn ReducedSystem>> {
-    fn parse<T: serde::de::DeserializeOwned>(name: &str, params: &serde_json::Value) -> Result<T> {
+    fn parse<T: crate::closed_form::ChapterParams>(
+        name: &str,
+        params: &serde_json::Value,
+    ) -> Result<T> {
         if let Some(obj) = params.as_object() {
             for (k, v) in obj {
                 if !v.is_number() {
@@ -98,8 +101,7 @@ pub fn chapter_system(name: &str, params: &serde_json::Value) -> Result<Box<dyn 
                 }
             }
         }
-        serde_json::from_value(params.clone())
-            .map_err(|e| Error::invalid(format!("params of model {name}"), e.to_string()))
+        crate::closed_form::parse_params(&format!("params of model {name}"), params)
     }
     match ChapterModel::from_name(name)? {
         ChapterModel::M1Unicycle => Ok(Box::new(m1(parse(name, params)?)?)),

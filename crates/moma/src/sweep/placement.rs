@@ -1,7 +1,8 @@
 //! The placement study: can the arm reach a target from a base pose, and how well (a
 //! manipulability measure at the IK solution)? Each point is one (target, base pose) pair,
-//! solved by [`ArmReachEvaluator`] without warm start, so a point's result depends on the
-//! point alone (the IK restarts are seeded from the base pose).
+//! solved by [`ArmReachEvaluator`] as `moma reach-map` solves each pose (from the seed,
+//! then the same restart configurations at every pose), so a point's result depends on
+//! the point alone.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -265,7 +266,7 @@ impl PlacementStudy {
         }
         let ev = &self.evaluators[target];
         let w = ws[target].get_or_insert_with(|| ev.workspace());
-        let (sample, _) = ev.evaluate(w, base, None)?;
+        let sample = ev.evaluate(w, base)?;
         row.push(Value::Bool(sample.reachable));
         row.push(Value::opt(sample.measure));
         row.push(Value::Float(sample.residual));

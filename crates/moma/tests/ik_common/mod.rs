@@ -54,6 +54,21 @@ impl PlanarChain {
 }
 
 impl FrameKinematics for PlanarChain {
+    fn on_planar_base(&self, mount: &Isometry3<f64>) -> Option<moma::Result<Self>> {
+        // The chain can only sit on the platform's x axis, facing forward.
+        let t = mount.translation.vector;
+        if self.mobile || t.y != 0.0 || t.z != 0.0 || mount.rotation.angle() != 0.0 {
+            return Some(Err(moma::Error::invalid(
+                "mount",
+                "the planar chain mounts only on the platform's x axis",
+            )));
+        }
+        Some(Ok(Self {
+            mobile: true,
+            mount: t.x,
+            ..self.clone()
+        }))
+    }
     fn nq(&self) -> usize {
         self.off() + self.lengths.len()
     }
