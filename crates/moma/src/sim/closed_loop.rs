@@ -65,6 +65,18 @@ pub trait FeedbackLaw {
     /// # Errors
     /// As [`FeedbackLaw::control`].
     fn observe(&mut self, t: f64, q: &[f64], v: &[f64], error: &mut [f64]) -> Result<Observation>;
+    /// Names (with units in brackets) of further signals the law reports at every
+    /// recorded sample (e.g. the arm's manipulability); none by default.
+    fn signal_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Writes the signals of [`FeedbackLaw::signal_names`] at `(t, q, v)`.
+    ///
+    /// # Errors
+    /// As [`FeedbackLaw::control`].
+    fn signals(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// Settings of a closed-loop run.
@@ -127,6 +139,10 @@ pub struct ClosedLoopResult {
     pub error_names: Vec<String>,
     /// Tracking errors, one row of `error_names.len()` per sample.
     pub errors: Vec<f64>,
+    /// Names of the law's further signals ([`FeedbackLaw::signal_names`]).
+    pub signal_names: Vec<String>,
+    /// The signals, one row of `signal_names.len()` per sample.
+    pub signals: Vec<f64>,
     /// V per sample (empty when the law has no Lyapunov function).
     pub lyapunov: Vec<f64>,
     /// The law's analytic V̇ per sample (empty likewise).
@@ -148,6 +164,13 @@ impl ClosedLoopResult {
     pub fn error_row(&self, i: usize) -> &[f64] {
         let m = self.error_names.len();
         &self.errors[i * m..(i + 1) * m]
+    }
+
+    /// The signal row of sample `i`.
+    #[must_use]
+    pub fn signal_row(&self, i: usize) -> &[f64] {
+        let m = self.signal_names.len();
+        &self.signals[i * m..(i + 1) * m]
     }
 }
 
@@ -189,6 +212,8 @@ struct Rec {
     lyap: Option<LyapunovMonitor>,
     errors: Vec<f64>,
     err: Vec<f64>,
+    signals: Vec<f64>,
+    sig: Vec<f64>,
     lambda: Vec<f64>,
     rate: Vec<f64>,
 }
@@ -218,6 +243,10 @@ impl Rec {
         });
         let obs = ode.law.observe(t, q, v, &mut self.err)?;
         self.errors.extend_from_slice(&self.err);
+        if !self.sig.is_empty() {
+            ode.law.signals(t, q, v, &mut self.sig)?;
+            self.signals.extend_from_slice(&self.sig);
+        }
         if let (Some(m), Some(val)) = (self.lyap.as_mut(), obs.lyapunov) {
             m.record(t, val, obs.lyapunov_rate);
             self.rate.push(obs.lyapunov_rate.unwrap_or(f64::NAN));
@@ -332,6 +361,8 @@ pub fn simulate_closed_loop(
     let (t0, p0) = system.energy(q0, v0)?;
     let error_names = law.error_names();
     let ne = error_names.len();
+    let signal_names = law.signal_names();
+    let ns = signal_names.len();
     let has_v = law.has_lyapunov();
     let mut rec = Rec {
         recorder,
@@ -339,6 +370,8 @@ pub fn simulate_closed_loop(
         lyap: has_v.then(|| LyapunovMonitor::with_capacity(n_samples, options.lyapunov_tolerance)),
         errors: Vec::with_capacity(n_samples * ne),
         err: vec![0.0; ne],
+        signals: Vec::with_capacity(n_samples * ns),
+        sig: vec![0.0; ns],
         lambda: vec![0.0; nk],
         rate: Vec::with_capacity(if has_v { n_samples } else { 0 }),
     };
@@ -449,6 +482,8 @@ pub fn simulate_closed_loop(
         stats,
         error_names,
         errors: rec.errors,
+        signal_names,
+        signals: rec.signals,
         lyapunov,
         lyapunov_rate: rec.rate,
         lyapunov_report,

@@ -152,7 +152,7 @@ pub struct VelocityServo {
 }
 
 impl VelocityServo {
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         for (n, x) in [
             ("controller.velocity_gain", self.gain),
             ("controller.arm_kp", self.arm_kp),
@@ -172,7 +172,7 @@ impl VelocityServo {
 /// Reduced generalised force `tau_r` (nr) → actuator inputs `u` for a wheeled model:
 /// `N_Cᵀ S` is block diagonal (a 2 × 2 wheel block and the identity on the arm), so
 /// the wheel block is solved in closed form. `s` is an nv × nu buffer.
-fn actuators_from_reduced(
+pub(crate) fn actuators_from_reduced(
     wm: &WheeledModel,
     basis: &DMatrix<f64>,
     q: &DVector<f64>,
@@ -206,7 +206,7 @@ fn actuators_from_reduced(
     Ok(())
 }
 
-fn clip(u: &mut [f64], limit: f64) -> bool {
+pub(crate) fn clip(u: &mut [f64], limit: f64) -> bool {
     let mut hit = false;
     for x in u.iter_mut() {
         if x.abs() > limit {
