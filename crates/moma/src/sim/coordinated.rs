@@ -27,12 +27,12 @@ use crate::control::coordinated::{
 use crate::control::unicycle::WheelLimits;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_jacobian};
-use crate::mobile::wheeled::{admissible_velocity_basis, reduced_forward_dynamics_crba};
+use crate::mobile::wheeled::admissible_velocity_basis;
 use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::FrameIndex;
 use crate::sim::closed_loop::{FeedbackLaw, Observation, SaturationFlags};
-use crate::sim::feedback::{PointReference, VelocityServo, actuators_from_reduced, clip};
-use nalgebra::{DMatrix, DVector};
+use crate::sim::feedback::{InnerLoop, PointReference, VelocityServo};
+use nalgebra::DVector;
 
 /// Gains of the coordinated law.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,12 +61,8 @@ pub struct CoordinatedController {
     posture: Vec<f64>,
     y_star: [f64; 2],
     w_star: f64,
-    s: DMatrix<f64>,
+    inner: InnerLoop,
     q: DVector<f64>,
-    v: DVector<f64>,
-    acc: DVector<f64>,
-    tau_r: DVector<f64>,
-    zero_u: Vec<f64>,
 }
 
 impl CoordinatedController {
@@ -134,8 +130,9 @@ impl CoordinatedController {
             max_wheel_speed.unwrap_or(f64::INFINITY),
             max_wheel_torque.unwrap_or(f64::INFINITY),
         )?;
-        let (nq, nv, nr, nu) = (wm.model.nq, wm.nv(), wm.nr(), wm.nu());
+        let nq = wm.model.nq;
         let mut me = Self {
+            inner: InnerLoop::new(&wm, limits.max_wheel_torque),
             wd: WheeledData::new(&wm),
             frame: fid,
             joints: idx,
@@ -146,12 +143,7 @@ impl CoordinatedController {
             posture,
             y_star: [0.0; 2],
             w_star: 0.0,
-            s: DMatrix::zeros(nv, nu),
             q: DVector::zeros(nq),
-            v: DVector::zeros(nr),
-            acc: DVector::zeros(nr),
-            tau_r: DVector::zeros(nr),
-            zero_u: vec![0.0; nu],
             wm,
         };
         // y* from the preferred posture (y does not depend on the platform pose)
@@ -276,32 +268,18 @@ impl FeedbackLaw for CoordinatedController {
             .map_err(|e| e.singular_at_time(t))?;
         let mut cmd = [rates[0], rates[1]];
         let speed = self.limits.limit_inputs(&mut cmd).speed;
-        self.v.copy_from_slice(v);
-        reduced_forward_dynamics_crba(&self.wm, &mut self.wd, &self.q, &self.v, &self.zero_u)?;
-        let k = self.servo.gain;
-        self.acc[0] = k * (cmd[0] - v[0]);
-        self.acc[1] = k * (cmd[1] - v[1]);
-        for (j, &dof) in self.wm.arm_dofs().iter().enumerate() {
-            self.acc[2 + j] = if j == self.joints[0] {
-                k * (rates[2] - v[2 + j])
-            } else if j == self.joints[1] {
-                k * (rates[3] - v[2 + j])
+        let (servo, joints, posture) = (self.servo, self.joints, &self.posture);
+        let torque = self.inner.inputs(q, v, u, |i, qi, vi| {
+            if i < 2 {
+                servo.gain * (cmd[i] - vi)
+            } else if i - 2 == joints[0] {
+                servo.gain * (rates[2] - vi)
+            } else if i - 2 == joints[1] {
+                servo.gain * (rates[3] - vi)
             } else {
-                self.servo.arm_kp * (self.posture[j] - q[dof]) - self.servo.arm_kd * v[2 + j]
-            };
-        }
-        let red = &self.wd.reduced;
-        self.tau_r.copy_from(&red.velocity_terms);
-        self.tau_r.gemv(1.0, &red.mass_matrix, &self.acc, 1.0);
-        actuators_from_reduced(
-            &self.wm,
-            &self.wd.basis,
-            &self.q,
-            &mut self.s,
-            &self.tau_r,
-            u,
-        )?;
-        let torque = clip(&mut u[..2], self.limits.max_wheel_torque);
+                servo.arm_kp * (posture[i - 2] - qi) - servo.arm_kd * vi
+            }
+        })?;
         Ok(SaturationFlags { speed, torque })
     }
 
