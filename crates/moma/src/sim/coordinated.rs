@@ -148,7 +148,7 @@ impl CoordinatedController {
         };
         // y* from the preferred posture (y does not depend on the platform pose)
         let mut q_star = vec![0.0; nq];
-        for (k, &d) in me.wm.arm_dofs().to_vec().iter().enumerate() {
+        for (k, &d) in me.wm.arm_dofs().iter().enumerate() {
             q_star[d] = me.posture[k];
         }
         let (m, w) = me.measure(&q_star);

@@ -26,6 +26,9 @@ pub(crate) struct Grid<'a> {
     pub max_step_cap: f64,
 }
 
+/// What happens at a segment end: `(ode, k, t_k, x)`, true to stop the run.
+pub(crate) type SegmentEnd<'a, O> = dyn FnMut(&mut O, usize, f64, &[f64]) -> Result<bool> + 'a;
+
 /// Integrates `x` over `grid` with `integrator`, calling `at_end(ode, k, t_k, x)` at every
 /// segment end; stops early when it returns true.
 ///
@@ -37,7 +40,7 @@ pub(crate) fn integrate_on_grid<O: OdeSystem>(
     integrator: IntegratorSettings,
     limits: &MonitorLimits,
     grid: &Grid<'_>,
-    at_end: &mut dyn FnMut(&mut O, usize, f64, &[f64]) -> Result<bool>,
+    at_end: &mut SegmentEnd<'_, O>,
 ) -> Result<StepStats> {
     match integrator {
         IntegratorSettings::Rk4 { .. } => {
