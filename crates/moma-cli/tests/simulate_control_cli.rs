@@ -121,6 +121,26 @@ fn shipped_control_scenarios_run_and_report() {
                 let l = &s["lyapunov"];
                 assert!(f(&l["max_integral_error"]) > 1e-4, "{name}");
             }
+            "control_coordinated.toml" => {
+                // the tool follows the line beyond the arm's reach; the platform drove
+                assert_eq!(s["goal_reached"].as_bool(), Some(true));
+                assert!(f(&s["final_error_norm"]) < 1e-4);
+                assert!(s["final_q"][0].as_f64().unwrap() > 1.9);
+                assert!(files.contains(&"manipulability.svg"));
+                let header = csv.lines().next().unwrap();
+                assert!(header.ends_with(",manipulability [m^2]"), "{header}");
+                let l = &s["lyapunov"];
+                assert!(f(&l["v_last"]) < 1e-6 * f(&l["v_first"]));
+            }
+            "control_kanayama_map.toml" => {
+                // reaches the planned goal across the depot
+                assert_eq!(s["reference"].as_str(), Some("planned"));
+                assert_eq!(s["goal_reached"].as_bool(), Some(true));
+                let q = &s["final_q"];
+                let (x, y, th) = (f(&q[0]), f(&q[1]), f(&q[2]));
+                let axle = (x - 0.1 * th.cos(), y - 0.1 * th.sin());
+                assert!((axle.0 - 17.0).hypot(axle.1 - 7.3) < 0.01, "{axle:?}");
+            }
             "control_osc_panda.toml" => {
                 assert_eq!(f(&s["control_period"]), 0.002);
                 assert_eq!(s["control_ticks"].as_u64().unwrap(), 2000);
@@ -163,7 +183,15 @@ dt = 0.002
 #[test]
 fn bad_controller_tables_fail_cleanly() {
     let work = temp_dir("bad");
-    let cases: [(&str, &str); 10] = [
+    let cases: [(&str, &str); 12] = [
+        (
+            "[controller]\nlaw = \"coordinated\"\nframe = \"tool\"\ngains = { K_E = 2.0, K_Y = 1.0 }\n[reference]\nkind = \"ee_line\"\nfrom = [0, 0, 0]\nto = [1, 0, 0]\nduration = 1.0\n",
+            "controller.joints: missing",
+        ),
+        (
+            "[controller]\nlaw = \"kanayama\"\ngains = { Kx = 1.0, Ky = 4.0, Kth = 4.0 }\n[reference]\nkind = \"planned\"\nmap = \"nowhere.yaml\"\nstart = [0, 0, 0]\ngoal = [1, 0, 0]\nfootprint_radius = 0.2\ntiming = { v_max = 0.5, omega_max = 1.0, a_max = 0.5, alpha_max = 1.0 }\n",
+            "reference.map nowhere.yaml",
+        ),
         (
             "[controller]\nlaw = \"bogus\"\n[reference]\nkind = \"pose\"\ngoal = [0, 0, 0]\n",
             "controller.law = \"bogus\": unknown law",
@@ -237,5 +265,57 @@ fn missed_goal_tolerance_is_status_3_with_outputs() {
     assert!(String::from_utf8_lossy(&r.stderr).contains("goal_tolerance"));
     let s = summary(&out);
     assert_eq!(s["goal_reached"].as_bool(), Some(false));
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+/// A 4 m × 4 m ROS map (5 cm cells) with a closed 1 m box in the middle.
+fn write_box_map(dir: &Path) {
+    let (w, h) = (80usize, 80usize);
+    let mut px = vec![254u8; w * h];
+    for i in 30..=50 {
+        for (x, y) in [(i, 30), (i, 50), (30, i), (50, i)] {
+            px[y * w + x] = 0;
+        }
+    }
+    let mut pgm = format!("P5\n{w} {h}\n255\n").into_bytes();
+    pgm.extend_from_slice(&px);
+    std::fs::write(dir.join("box.pgm"), pgm).unwrap();
+    std::fs::write(
+        dir.join("box.yaml"),
+        "image: box.pgm\nmode: trinary\nresolution: 0.05\norigin: [0.0, 0.0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n",
+    )
+    .unwrap();
+}
+
+#[test]
+fn a_planned_reference_reaches_its_goal_and_an_unreachable_goal_is_an_error() {
+    let work = temp_dir("planned");
+    write_box_map(&work);
+    let body = |goal: &str| {
+        format!(
+            "{HEAD}[initial]\nq = [0.7, 0.6, 0.0, 0.0, 0.0, 0.0, 2.8, 0.3]\n[controller]\nlaw = \"kanayama\"\nperiod = 0.02\ngains = {{ Kx = 2.0, Ky = 8.0, Kth = 4.0 }}\ngoal_tolerance = 0.03\n[reference]\nkind = \"planned\"\nmap = \"box.yaml\"\nstart = [0.6, 0.6, 0.0]\ngoal = {goal}\nfootprint_radius = 0.2\ntiming = {{ v_max = 0.5, omega_max = 1.0, a_max = 0.5, alpha_max = 1.0 }}\n[output]\nrecord_interval = 0.05\n"
+        )
+        .replace("duration = 1.0", "duration = 14.0")
+    };
+    // around the box to the far corner
+    let p = write_scenario(&work, "reach.toml", &body("[3.4, 3.4, 1.5707963]"));
+    let out = work.join("reach");
+    let r = run(&p, &out);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let s = summary(&out);
+    assert_eq!(s["goal_reached"].as_bool(), Some(true), "{s}");
+    // inside the closed box: status 1, the goal named, nothing written
+    let p = write_scenario(&work, "sealed.toml", &body("[2.0, 2.0, 0.0]"));
+    let out = work.join("sealed");
+    let r = run(&p, &out);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("sealed.toml")
+            && err.contains("reference.goal")
+            && err.contains("unreachable"),
+        "{err}"
+    );
+    assert!(!out.exists());
     let _ = std::fs::remove_dir_all(&work);
 }

@@ -1,6 +1,8 @@
 //! `moma simulate` in closed loop: a scenario with a `[controller]` table (the law and its
 //! gains) and a `[reference]` table (what it tracks). The unicycle laws and regulated pure
-//! pursuit drive a wheeled URDF robot through an inner computed-torque loop; `osc` drives
+//! pursuit drive a wheeled URDF robot through an inner computed-torque loop (their
+//! reference may be a path planned on a map); `coordinated` coordinates the platform
+//! with two arm joints so the end effector tracks its reference; `osc` drives
 //! an end-effector point of a wheeled URDF robot through the reduced model; `pd_plus`,
 //! `computed_torque` and the `decoupled_*` laws run on the chapter's model m5. Writes the
 //! open-loop files plus `control.csv`, `tracking_error.svg` and `lyapunov.svg`, and a
@@ -19,15 +21,18 @@ use moma::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipula
 use moma::control::pursuit::{PurePursuit, PurePursuitParams};
 use moma::control::task::Coupling;
 use moma::control::unicycle::{Aicardi, Astolfi, ConstantInputReference, Kanayama, Samson};
+use moma::planning::load_map;
 use moma::planning::trajectory::{DiffDriveLimits, time_parameterize};
 use moma::sim::closed_loop::{
     ClosedLoopOptions, ClosedLoopResult, FeedbackLaw, simulate_closed_loop,
 };
+use moma::sim::coordinated::{CoordinatedController, CoordinatedGains};
 use moma::sim::feedback::{
     FixedOscController, M5TaskController, OscController, OscGains, PlatformController, PlatformLaw,
     PointReference, SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
 };
 use moma::sim::fixed_base::FixedBaseSystem;
+use moma::sim::planned::{PlannedPath, PlannedPathRequest, plan_platform_reference};
 use moma::sim::scenario::IntegratorSettings;
 use moma::sim::wheeled::ReducedSystem;
 use serde::{Deserialize, Serialize};
@@ -69,10 +74,14 @@ pub struct ControllerSpec {
     /// Limit on every actuator input (`osc` and the m5 laws).
     #[serde(default)]
     pub max_torque: Option<f64>,
-    /// The controlled frame (`osc`).
+    /// The controlled frame (`osc`, `coordinated`).
     #[serde(default)]
     pub frame: Option<String>,
-    /// Null-space posture of the arm joints (`osc`; default: the initial configuration).
+    /// The two arm joints coordinated with the platform (`coordinated`).
+    #[serde(default)]
+    pub joints: Option<[String; 2]>,
+    /// Null-space posture of the arm joints (`osc`), preferred posture (`coordinated`);
+    /// default: the initial configuration.
     #[serde(default)]
     pub posture: Option<Vec<f64>>,
     /// Increase of V between samples tolerated as round-off (default 1e-9).
@@ -158,6 +167,27 @@ pub enum ReferenceSpec {
         /// Times (s), strictly increasing.
         times: Vec<f64>,
     },
+    /// Kanayama, pure pursuit: a path planned on a map from `start` to `goal` for a disk
+    /// footprint (D* Lite on the configuration space, curvature-bounded smoothing, timing
+    /// under `timing`), as `moma mission` plans.
+    Planned {
+        /// The map (ROS YAML, Moving AI `.map` or image), relative to the scenario.
+        map: std::path::PathBuf,
+        /// Start pose `[x, y, θ]` of the axle midpoint (world).
+        start: [f64; 3],
+        /// Goal pose.
+        goal: [f64; 3],
+        /// Radius of the disk covering the footprint (m).
+        footprint_radius: f64,
+        /// Unknown cells are obstacles (default true).
+        #[serde(default)]
+        unknown_is_obstacle: Option<bool>,
+        /// Curvature bound of the smoothing (1/m, default 2).
+        #[serde(default)]
+        kappa_max: Option<f64>,
+        /// Platform limits of the timing.
+        timing: TimingSpec,
+    },
     /// m5 laws: `x_d(t) = x_ref + amplitude ⊙ sin(omega ⊙ t)` in the task coordinates.
     TaskSinusoid {
         /// x_ref.
@@ -176,6 +206,7 @@ impl ReferenceSpec {
             Self::Line { .. } => "line",
             Self::Pose { .. } => "pose",
             Self::Waypoints { .. } => "waypoints",
+            Self::Planned { .. } => "planned",
             Self::EeLine { .. } => "ee_line",
             Self::EeCircle { .. } => "ee_circle",
             Self::EeWaypoints { .. } => "ee_waypoints",
@@ -266,7 +297,7 @@ fn bounded_points<T>(points: &[T]) -> Result<()> {
 }
 
 /// Kanayama's reference.
-fn tracking_reference(law: &str, r: &ReferenceSpec) -> Result<TrackingReference> {
+fn tracking_reference(law: &str, r: &ReferenceSpec, base_dir: &Path) -> Result<TrackingReference> {
     match r {
         ReferenceSpec::Circle { vr, wr } => {
             super::simulate::ensure_finite("reference (vr, wr)", &[*vr, *wr])?;
@@ -300,8 +331,49 @@ fn tracking_reference(law: &str, r: &ReferenceSpec) -> Result<TrackingReference>
                 .context("reference.timing")?;
             Ok(TrackingReference::Sampled(SampledTrajectory::new(traj)?))
         }
-        other => Err(wrong_reference(law, other, "circle, line or waypoints")),
+        ReferenceSpec::Planned { .. } => Ok(TrackingReference::Sampled(
+            planned_reference(r, base_dir)?.trajectory,
+        )),
+        other => Err(wrong_reference(
+            law,
+            other,
+            "circle, line, waypoints or planned",
+        )),
     }
+}
+
+/// Plans the `planned` reference on its map (the library's planner, as `moma mission`).
+fn planned_reference(r: &ReferenceSpec, base_dir: &Path) -> Result<PlannedPath> {
+    let ReferenceSpec::Planned {
+        map,
+        start,
+        goal,
+        footprint_radius,
+        unknown_is_obstacle,
+        kappa_max,
+        timing,
+    } = r
+    else {
+        unreachable!("planned_reference called for {}", r.kind());
+    };
+    let grid = load_map(&base_dir.join(map), None)
+        .with_context(|| format!("reference.map {}", map.display()))?
+        .grid;
+    let request = PlannedPathRequest {
+        start: *start,
+        goal: *goal,
+        footprint_radius: *footprint_radius,
+        unknown_is_obstacle: unknown_is_obstacle.unwrap_or(true),
+        limits: DiffDriveLimits {
+            v_max: timing.v_max,
+            omega_max: timing.omega_max,
+            a_max: timing.a_max,
+            alpha_max: timing.alpha_max,
+        },
+        kappa_max: kappa_max.unwrap_or(2.0),
+        dt: timing.dt.unwrap_or(0.02),
+    };
+    Ok(plan_platform_reference(&grid, &request)?)
 }
 
 fn goal_pose(law: &str, r: &ReferenceSpec) -> Result<[f64; 3]> {
@@ -315,7 +387,12 @@ fn goal_pose(law: &str, r: &ReferenceSpec) -> Result<[f64; 3]> {
 }
 
 /// The platform law with its gains and reference.
-fn platform_law(law: &str, gains: &toml::Table, r: &ReferenceSpec) -> Result<PlatformLaw> {
+fn platform_law(
+    law: &str,
+    gains: &toml::Table,
+    r: &ReferenceSpec,
+    base_dir: &Path,
+) -> Result<PlatformLaw> {
     let named = |all: &[&str]| -> Result<Vec<f64>> {
         check_keys(law, gains, all)?;
         all.iter().map(|n| gain(law, gains, n, all)).collect()
@@ -325,7 +402,7 @@ fn platform_law(law: &str, gains: &toml::Table, r: &ReferenceSpec) -> Result<Pla
             let g = named(&["Kx", "Ky", "Kth"])?;
             PlatformLaw::Kanayama(
                 Kanayama::new(g[0], g[1], g[2])?,
-                tracking_reference(law, r)?,
+                tracking_reference(law, r, base_dir)?,
             )
         }
         "samson" => {
@@ -372,8 +449,15 @@ fn platform_law(law: &str, gains: &toml::Table, r: &ReferenceSpec) -> Result<Pla
                     *f = x;
                 }
             }
+            if let ReferenceSpec::Planned { .. } = r {
+                let path = planned_reference(r, base_dir)?.path;
+                return Ok(PlatformLaw::PurePursuit(
+                    Box::new(PurePursuit::new(p).context("controller.gains")?),
+                    path,
+                ));
+            }
             let ReferenceSpec::Waypoints { points, timing } = r else {
-                return Err(wrong_reference(law, r, "waypoints"));
+                return Err(wrong_reference(law, r, "waypoints or planned"));
             };
             if timing.is_some() {
                 bail!("reference.timing: pure pursuit follows the path itself (remove timing)");
@@ -484,6 +568,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
             law,
             c,
             &[
+                ("joints", c.joints.is_some()),
                 ("velocity_gain", c.velocity_gain.is_some()),
                 ("arm_kp", c.arm_kp.is_some()),
                 ("arm_kd", c.arm_kd.is_some()),
@@ -524,7 +609,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
             format!("URDF {} (fixed base)", urdf.display()),
         ));
     }
-    if PLATFORM_LAWS.contains(&law) || law == "osc" {
+    if PLATFORM_LAWS.contains(&law) || law == "osc" || law == "coordinated" {
         let RobotSpec::Urdf {
             urdf,
             drive,
@@ -560,11 +645,59 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
         }
         let arm0: Vec<f64> = wm.arm_dofs().iter().map(|&d| q0[d]).collect();
         let name = format!("URDF {}", urdf.display());
+        if law == "coordinated" {
+            only_for(law, c, &[("max_torque", c.max_torque.is_some())])?;
+            let all = ["K_E", "K_Y"];
+            check_keys(law, &c.gains, &all)?;
+            let gains = CoordinatedGains {
+                k_e: gain(law, &c.gains, "K_E", &all)?,
+                k_y: gain(law, &c.gains, "K_Y", &all)?,
+            };
+            let frame = c.frame.as_deref().ok_or_else(|| {
+                anyhow!("controller.frame: missing (law coordinated needs the end-effector frame)")
+            })?;
+            let joints = c.joints.as_ref().ok_or_else(|| {
+                anyhow!(
+                    "controller.joints: missing (law coordinated needs the two arm joints that \
+                     move the end effector in the horizontal plane)"
+                )
+            })?;
+            let posture = c.posture.clone().unwrap_or(arm0);
+            if posture.len() != nr - 2 {
+                bail!(
+                    "controller.posture: expected {} values (the arm joints), got {}",
+                    nr - 2,
+                    posture.len()
+                );
+            }
+            let servo = VelocityServo {
+                gain: c.velocity_gain.unwrap_or(20.0),
+                arm_kp: c.arm_kp.unwrap_or(100.0),
+                arm_kd: c.arm_kd.unwrap_or(20.0),
+            };
+            let ctl = CoordinatedController::new(
+                wm.clone(),
+                frame,
+                [joints[0].as_str(), joints[1].as_str()],
+                point_reference(law, r)?,
+                gains,
+                posture,
+                servo,
+                c.max_wheel_speed,
+                c.max_wheel_torque,
+            )?;
+            return Ok((
+                Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)),
+                Box::new(ctl),
+                name,
+            ));
+        }
         if law == "osc" {
             only_for(
                 law,
                 c,
                 &[
+                    ("joints", c.joints.is_some()),
                     ("velocity_gain", c.velocity_gain.is_some()),
                     ("arm_kp", c.arm_kp.is_some()),
                     ("arm_kd", c.arm_kd.is_some()),
@@ -605,6 +738,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
             &[
                 ("max_torque", c.max_torque.is_some()),
                 ("frame", c.frame.is_some()),
+                ("joints", c.joints.is_some()),
                 ("posture", c.posture.is_some()),
             ],
         )?;
@@ -613,7 +747,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
             arm_kp: c.arm_kp.unwrap_or(100.0),
             arm_kd: c.arm_kd.unwrap_or(20.0),
         };
-        let pl = platform_law(law, &c.gains, r)?;
+        let pl = platform_law(law, &c.gains, r, base_dir)?;
         let ctl = PlatformController::new(
             wm.clone(),
             pl,
@@ -639,6 +773,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
                 ("max_wheel_speed", c.max_wheel_speed.is_some()),
                 ("max_wheel_torque", c.max_wheel_torque.is_some()),
                 ("frame", c.frame.is_some()),
+                ("joints", c.joints.is_some()),
                 ("posture", c.posture.is_some()),
             ],
         )?;
@@ -678,7 +813,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
         return Ok((sys, Box::new(ctl), format!("chapter model {model}")));
     }
     bail!(
-        "controller.law = \"{law}\": unknown law (expected one of {}, osc, {})",
+        "controller.law = \"{law}\": unknown law (expected one of {}, osc, coordinated, {})",
         PLATFORM_LAWS.join(", "),
         M5_LAWS.join(", ")
     )
@@ -759,6 +894,10 @@ fn control_csv(res: &ClosedLoopResult) -> String {
     if has_v {
         s.push_str(",V,V_rate_analytic [1/s]");
     }
+    for n in &res.signal_names {
+        s.push(',');
+        s.push_str(n);
+    }
     s.push('\n');
     for (i, t) in res.recorder.times.iter().enumerate() {
         s.push_str(&format!("{t:.17e}"));
@@ -770,6 +909,9 @@ fn control_csv(res: &ClosedLoopResult) -> String {
                 ",{:.17e},{:.17e}",
                 res.lyapunov[i], res.lyapunov_rate[i]
             ));
+        }
+        for x in res.signal_row(i) {
+            s.push_str(&format!(",{x:.17e}"));
         }
         s.push('\n');
     }
@@ -804,6 +946,25 @@ fn control_plots(res: &ClosedLoopResult, files: &mut Vec<(String, Vec<u8>)>) {
         files.push((
             "lyapunov.svg".to_string(),
             line_chart("Lyapunov function", "t [s]", "V", &s).into_bytes(),
+        ));
+    }
+    // one plot per further signal of the law, named by the signal (e.g. manipulability.svg)
+    for (k, n) in res.signal_names.iter().enumerate() {
+        let stem: String = n
+            .split([' ', '['])
+            .next()
+            .unwrap_or("signal")
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect();
+        let s = vec![series(
+            t,
+            n,
+            (0..t.len()).map(|i| res.signal_row(i)[k]).collect(),
+        )];
+        files.push((
+            format!("{stem}.svg"),
+            line_chart(&stem, "t [s]", n, &s).into_bytes(),
         ));
     }
 }

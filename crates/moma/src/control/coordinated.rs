@@ -139,6 +139,83 @@ impl Coordinated {
     }
 }
 
+/// What [`coordinated_rates`] needs of a measured state: the platform heading, the end
+/// effector's world position, its position relative to the **axle midpoint** in the
+/// platform frame `y = Rᵀ(p_E − p_A)`, and the horizontal rows of its reduced Jacobian
+/// `ṗ_E = J u` for `u = [v, ω, q̇_a, q̇_b]` (the platform's speed and turn rate and the two
+/// arm joints that move the end effector in the horizontal plane).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeasuredPlanarArm {
+    /// Heading φ of the platform.
+    pub heading: f64,
+    /// p_E (world, horizontal).
+    pub p_e: [f64; 2],
+    /// y = Rᵀ(p_E − p_A), p_A the axle midpoint.
+    pub y: [f64; 2],
+    /// Rows x, y of the world velocity of the end effector in `u`.
+    pub jacobian: [[f64; 4]; 2],
+}
+
+/// The coordinated law on a measured state (any arm whose two chosen joints move the end
+/// effector in the horizontal plane, e.g. a URDF arm on the platform): solves
+///
+/// ```text
+/// ṗ_E = J u                          = ṗ_E,d + K_E (p_E,d − p_E)
+/// ẏ   = Rᵀ J u + A(y) [v; ω]        = K_Y (y* − y),      A(y) = [[−1, y2], [0, −y1]]
+/// ```
+///
+/// for `u = [v, ω, q̇_a, q̇_b]` (y measured from the axle midpoint, so `A` has no `L`:
+/// [`Coordinated::rates`] is the special case of a planar 2R arm L ahead of the axle).
+/// Returns `u` and `|det|` of the 4 × 4 output map.
+///
+/// # Errors
+/// [`Error::Singular`] when the output map is singular (`|det| <` [`SINGULARITY_GUARD`]
+/// relative to the product of its row norms): the end effector over the axle line
+/// (`y1 = 0`) or an arm singularity of the two joints.
+pub fn coordinated_rates(
+    m: &MeasuredPlanarArm,
+    y_star: [f64; 2],
+    r: &PointReference,
+    k_e: f64,
+    k_y: f64,
+) -> Result<[f64; 4]> {
+    let (sn, c) = m.heading.sin_cos();
+    let j = &m.jacobian;
+    let mut a = nalgebra::Matrix4::<f64>::zeros();
+    for k in 0..4 {
+        a[(0, k)] = j[0][k];
+        a[(1, k)] = j[1][k];
+        a[(2, k)] = c * j[0][k] + sn * j[1][k];
+        a[(3, k)] = -sn * j[0][k] + c * j[1][k];
+    }
+    a[(2, 0)] -= 1.0;
+    a[(2, 1)] += m.y[1];
+    a[(3, 1)] -= m.y[0];
+    let rhs = nalgebra::Vector4::new(
+        r.v[0] + k_e * (r.p[0] - m.p_e[0]),
+        r.v[1] + k_e * (r.p[1] - m.p_e[1]),
+        k_y * (y_star[0] - m.y[0]),
+        k_y * (y_star[1] - m.y[1]),
+    );
+    let scale: f64 = (0..4).map(|i| a.row(i).norm()).product();
+    let lu = a.lu();
+    let det = lu.determinant();
+    if !(det.is_finite() && scale > 0.0 && det.abs() >= SINGULARITY_GUARD * scale) {
+        return Err(Error::Singular {
+            what: "coordinated control: output map [p_E; y]".into(),
+            detail: Some(format!(
+                "det = {det:e} (y1 = {:.4} m from the axle)",
+                m.y[0]
+            )),
+        });
+    }
+    let u = lu.solve(&rhs).ok_or_else(|| Error::Singular {
+        what: "coordinated control: output map [p_E; y]".into(),
+        detail: None,
+    })?;
+    Ok([u[0], u[1], u[2], u[3]])
+}
+
 impl Controller for Coordinated {
     type State = [f64; 5];
     type Reference = PointReference;
@@ -166,5 +243,94 @@ impl Controller for Coordinated {
             -self.k_e * (ee[0] * ee[0] + ee[1] * ee[1])
                 - self.k_y * (ey[0] * ey[0] + ey[1] * ey[1]),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The measured-state form on the planar 2R equals the closed form of the theory
+    /// notes (y shifted by L to the axle, the Jacobian of ṗ_E in u written out).
+    #[test]
+    fn measured_form_equals_the_closed_form_on_the_planar_2r() {
+        let law = Coordinated {
+            l: 0.3,
+            l1: 0.6,
+            l2: 0.5,
+            q_star: [-0.6, std::f64::consts::FRAC_PI_2],
+            k_e: 2.0,
+            k_y: 1.0,
+        };
+        for (s, r) in [
+            (
+                [0.0, 0.0, 0.2, 0.0, 1.2],
+                PointReference {
+                    p: [1.0, 0.5],
+                    v: [0.2, 0.03],
+                },
+            ),
+            (
+                [0.4, -0.3, -1.1, 0.7, -0.9],
+                PointReference {
+                    p: [1.2, -0.1],
+                    v: [-0.1, 0.25],
+                },
+            ),
+        ] {
+            let want = law.rates(&s, &r).unwrap();
+            let (sn, c) = s[2].sin_cos();
+            let yb = law.arm([s[3], s[4]]);
+            let y = [yb[0] + law.l, yb[1]];
+            // ṗ_E = R(v, 0) + ω ẑ×(R y) + R J_arm q̇
+            let a = s[3] + s[4];
+            let ja = [
+                [-law.l1 * s[3].sin() - law.l2 * a.sin(), -law.l2 * a.sin()],
+                [law.l1 * s[3].cos() + law.l2 * a.cos(), law.l2 * a.cos()],
+            ];
+            let ry = [c * y[0] - sn * y[1], sn * y[0] + c * y[1]];
+            let jacobian = [
+                [
+                    c,
+                    -ry[1],
+                    c * ja[0][0] - sn * ja[1][0],
+                    c * ja[0][1] - sn * ja[1][1],
+                ],
+                [
+                    sn,
+                    ry[0],
+                    sn * ja[0][0] + c * ja[1][0],
+                    sn * ja[0][1] + c * ja[1][1],
+                ],
+            ];
+            let m = MeasuredPlanarArm {
+                heading: s[2],
+                p_e: law.end_effector(&s),
+                y,
+                jacobian,
+            };
+            let ys = law.arm(law.q_star);
+            let got = coordinated_rates(&m, [ys[0] + law.l, ys[1]], &r, law.k_e, law.k_y).unwrap();
+            for k in 0..4 {
+                assert!((got[k] - want[k]).abs() < 1e-12, "{k}: {got:?} vs {want:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn measured_form_refuses_the_end_effector_over_the_axle() {
+        let m = MeasuredPlanarArm {
+            heading: 0.0,
+            p_e: [0.0, 0.5],
+            y: [0.0, 0.5],
+            // base rotation moves the point along −x; arm joints only along y
+            jacobian: [[1.0, -0.5, 0.0, 0.0], [0.0, 0.0, 1.0, 0.5]],
+        };
+        let r = PointReference {
+            p: [0.0, 0.5],
+            v: [0.0, 0.0],
+        };
+        let e = coordinated_rates(&m, [0.5, 0.0], &r, 1.0, 1.0).unwrap_err();
+        assert!(e.to_string().contains("output map"), "{e}");
     }
 }

@@ -21,7 +21,7 @@
 //! which every motion tips, a time-out) returns `reached: false` and a reason; input
 //! errors are [`crate::Error`]s.
 
-mod plan;
+pub(crate) mod plan;
 pub mod reference;
 mod run;
 pub mod scenario;

@@ -20,11 +20,15 @@
 
 use crate::control::lyapunov::{LyapunovMonitor, LyapunovReport};
 use crate::error::{Error, Result};
-use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+use crate::ode::{OdeSystem, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
-use crate::sim::recorder::{Recorder, Sample};
+use crate::sim::recorder::Recorder;
 use crate::sim::scenario::IntegratorSettings;
-use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, MAX_RK4_STEPS, ReducedSystem};
+use crate::sim::stepping::{
+    Grid, check_rk4_budget, integrate_on_grid, positive, record_plant_sample, start_recording,
+    validate_run_common,
+};
+use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem};
 
 /// Largest number of control ticks a run accepts (`duration / control_period`).
 pub const MAX_CONTROL_TICKS: f64 = 100_000_000.0;
@@ -65,6 +69,18 @@ pub trait FeedbackLaw {
     /// # Errors
     /// As [`FeedbackLaw::control`].
     fn observe(&mut self, t: f64, q: &[f64], v: &[f64], error: &mut [f64]) -> Result<Observation>;
+    /// Names (with units in brackets) of further signals the law reports at every
+    /// recorded sample (e.g. the arm's manipulability); none by default.
+    fn signal_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Writes the signals of [`FeedbackLaw::signal_names`] at `(t, q, v)`.
+    ///
+    /// # Errors
+    /// As [`FeedbackLaw::control`].
+    fn signals(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// Settings of a closed-loop run.
@@ -127,6 +143,10 @@ pub struct ClosedLoopResult {
     pub error_names: Vec<String>,
     /// Tracking errors, one row of `error_names.len()` per sample.
     pub errors: Vec<f64>,
+    /// Names of the law's further signals ([`FeedbackLaw::signal_names`]).
+    pub signal_names: Vec<String>,
+    /// The signals, one row of `signal_names.len()` per sample.
+    pub signals: Vec<f64>,
     /// V per sample (empty when the law has no Lyapunov function).
     pub lyapunov: Vec<f64>,
     /// The law's analytic V̇ per sample (empty likewise).
@@ -148,6 +168,13 @@ impl ClosedLoopResult {
     pub fn error_row(&self, i: usize) -> &[f64] {
         let m = self.error_names.len();
         &self.errors[i * m..(i + 1) * m]
+    }
+
+    /// The signal row of sample `i`.
+    #[must_use]
+    pub fn signal_row(&self, i: usize) -> &[f64] {
+        let m = self.signal_names.len();
+        &self.signals[i * m..(i + 1) * m]
     }
 }
 
@@ -189,6 +216,8 @@ struct Rec {
     lyap: Option<LyapunovMonitor>,
     errors: Vec<f64>,
     err: Vec<f64>,
+    signals: Vec<f64>,
+    sig: Vec<f64>,
     lambda: Vec<f64>,
     rate: Vec<f64>,
 }
@@ -201,39 +230,26 @@ impl Rec {
             // the input applied at this instant
             ode.law.control(t, q, v, &mut ode.u)?;
         }
-        let (kin, pot) = ode.system.energy(q, v)?;
-        let res = ode.system.constraint_residual(q, v)?;
-        self.monitor.check(t, x, kin, pot, x[nq + nv], res)?;
-        ode.system.multipliers(q, v, &ode.u, &mut self.lambda)?;
-        self.recorder.lambda.extend_from_slice(&self.lambda);
-        self.recorder.push(Sample {
+        record_plant_sample(
+            &mut *ode.system,
+            &mut self.recorder,
+            &mut self.monitor,
+            &mut self.lambda,
             t,
-            q,
-            v,
-            u: &ode.u,
-            kinetic: kin,
-            potential: pot,
-            work: x[nq + nv],
-            residual: res,
-        });
+            x,
+            &ode.u,
+        )?;
         let obs = ode.law.observe(t, q, v, &mut self.err)?;
         self.errors.extend_from_slice(&self.err);
+        if !self.sig.is_empty() {
+            ode.law.signals(t, q, v, &mut self.sig)?;
+            self.signals.extend_from_slice(&self.sig);
+        }
         if let (Some(m), Some(val)) = (self.lyap.as_mut(), obs.lyapunov) {
             m.record(t, val, obs.lyapunov_rate);
             self.rate.push(obs.lyapunov_rate.unwrap_or(f64::NAN));
         }
         Ok(())
-    }
-}
-
-fn positive(field: &str, x: f64) -> Result<()> {
-    if x.is_finite() && x > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            field,
-            format!("must be a positive finite number, got {x}"),
-        ))
     }
 }
 
@@ -260,13 +276,14 @@ pub fn simulate_closed_loop(
         system.nu(),
         "law and plant disagree on the inputs"
     );
-    crate::error::ensure_len("initial q", system.nq(), q0.len())?;
-    crate::error::ensure_len("initial v", system.nv(), v0.len())?;
-    crate::error::ensure_finite("initial q", q0)?;
-    crate::error::ensure_finite("initial v", v0)?;
-    options.integrator.validate()?;
-    positive("duration", options.duration)?;
-    positive("record interval", options.record_interval)?;
+    validate_run_common(
+        system,
+        q0,
+        v0,
+        &options.integrator,
+        options.duration,
+        options.record_interval,
+    )?;
     if !(options.lyapunov_tolerance.is_finite() && options.lyapunov_tolerance >= 0.0) {
         return Err(Error::invalid(
             "lyapunov tolerance",
@@ -311,34 +328,22 @@ pub fn simulate_closed_loop(
             format!("{n_samples} samples exceed the limit of {MAX_RECORDED_SAMPLES:e}"),
         ));
     }
-    if let IntegratorSettings::Rk4 { dt } = options.integrator {
-        let steps = (options.duration / dt).round();
-        if steps > MAX_RK4_STEPS {
-            return Err(Error::invalid(
-                "integrator.dt",
-                format!("duration / dt = {steps:e} steps exceeds the limit of {MAX_RK4_STEPS:e}"),
-            ));
-        }
-    }
-    let mut recorder = Recorder::new(
-        system.q_names(),
-        system.v_names(),
-        system.u_names(),
-        n_samples,
-    );
-    recorder.set_units(system.q_units(), system.v_units(), system.u_units());
+    check_rk4_budget(&options.integrator, options.duration)?;
+    let (recorder, monitor) = start_recording(system, q0, v0, options.limits, n_samples)?;
     let nk = system.nk();
-    recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
-    let (t0, p0) = system.energy(q0, v0)?;
     let error_names = law.error_names();
     let ne = error_names.len();
+    let signal_names = law.signal_names();
+    let ns = signal_names.len();
     let has_v = law.has_lyapunov();
     let mut rec = Rec {
         recorder,
-        monitor: Monitor::new(options.limits, t0, p0),
+        monitor,
         lyap: has_v.then(|| LyapunovMonitor::with_capacity(n_samples, options.lyapunov_tolerance)),
         errors: Vec::with_capacity(n_samples * ne),
         err: vec![0.0; ne],
+        signals: Vec::with_capacity(n_samples * ns),
+        sig: vec![0.0; ns],
         lambda: vec![0.0; nk],
         rate: Vec::with_capacity(if has_v { n_samples } else { 0 }),
     };
@@ -360,78 +365,48 @@ pub fn simulate_closed_loop(
         evaluations += 1;
     }
     rec.record(&mut ode, 0.0, &x)?;
-    let stats = match options.integrator {
-        IntegratorSettings::Rk4 { dt } => {
-            let mut rk = Rk4::new(x.len());
-            rk.blowup = options.limits.blowup;
-            // sub-steps per tick (hold) or per recording interval (continuous)
-            let sub = (period / dt).round().max(1.0) as usize;
-            let h = period / sub as f64;
-            for k in 0..ticks {
-                let t0 = k as f64 * period;
-                for s in 0..sub {
-                    rk.step(&mut ode, t0 + s as f64 * h, &mut x, h)?;
-                }
-                let t1 = if k + 1 == ticks {
-                    options.duration
-                } else {
-                    (k + 1) as f64 * period
-                };
-                tick_end(
-                    &mut ode,
-                    &mut rec,
-                    &mut evaluations,
-                    k,
-                    ticks,
-                    every,
-                    t1,
-                    &x,
-                    progress,
-                )?;
-            }
-            rk.stats
-        }
-        IntegratorSettings::Adaptive {
-            rtol,
-            atol,
-            max_step,
-        } => {
-            let opts = AdaptiveOptions {
-                rtol,
-                atol,
-                blowup: options.limits.blowup,
-                max_step: max_step.unwrap_or(f64::INFINITY).min(period),
-                max_steps: 50_000_000,
-                ..AdaptiveOptions::default()
-            };
-            let mut dp = DormandPrince45::new(x.len(), opts)?;
-            let mut t = 0.0;
-            for k in 0..ticks {
-                let t1 = if k + 1 == ticks {
-                    options.duration
-                } else {
-                    ((k + 1) as f64 * period).min(options.duration)
-                };
-                dp.integrate_to(&mut ode, &mut t, &mut x, t1)?;
-                tick_end(
-                    &mut ode,
-                    &mut rec,
-                    &mut evaluations,
-                    k,
-                    ticks,
-                    every,
-                    t1,
-                    &x,
-                    progress,
-                )?;
-                if !continuous {
-                    // the held input has switched: f(t, x) changed
-                    dp.invalidate_derivative();
-                }
-            }
-            dp.stats
+    // RK4: `sub` steps per tick (hold) or per recording interval (continuous)
+    let sub = match options.integrator {
+        IntegratorSettings::Rk4 { dt } => (period / dt).round().max(1.0) as usize,
+        IntegratorSettings::Adaptive { .. } => 1,
+    };
+    let h = period / sub as f64;
+    let end = |k: usize| {
+        if k + 1 == ticks {
+            options.duration
+        } else {
+            ((k + 1) as f64 * period).min(options.duration)
         }
     };
+    let steps = |_: usize| sub;
+    let grid = Grid {
+        n: ticks,
+        end: &end,
+        rk4: Some((h, &steps)),
+        switches: !continuous,
+        max_step_cap: period,
+    };
+    let stats = integrate_on_grid(
+        &mut ode,
+        &mut x,
+        options.integrator,
+        &options.limits,
+        &grid,
+        &mut |ode, k, t1, x| {
+            tick_end(
+                ode,
+                &mut rec,
+                &mut evaluations,
+                k,
+                ticks,
+                every,
+                t1,
+                x,
+                progress,
+            )?;
+            Ok(false)
+        },
+    )?;
     let control_ticks = if continuous {
         ode.saturation.evaluations
     } else {
@@ -449,6 +424,8 @@ pub fn simulate_closed_loop(
         stats,
         error_names,
         errors: rec.errors,
+        signal_names,
+        signals: rec.signals,
         lyapunov,
         lyapunov_rate: rec.rate,
         lyapunov_report,

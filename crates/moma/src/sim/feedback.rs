@@ -152,7 +152,7 @@ pub struct VelocityServo {
 }
 
 impl VelocityServo {
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         for (n, x) in [
             ("controller.velocity_gain", self.gain),
             ("controller.arm_kp", self.arm_kp),
@@ -222,19 +222,78 @@ fn clip(u: &mut [f64], limit: f64) -> bool {
 #[derive(Clone, Debug)]
 pub struct PlatformController {
     wm: WheeledModel,
-    wd: WheeledData,
+    inner: InnerLoop,
     /// The law and its reference.
     pub law: PlatformLaw,
     /// The inner loop.
     pub servo: VelocityServo,
     limits: WheelLimits,
     arm_target: Vec<f64>,
+}
+
+/// The inner computed-torque loop on the reduced dynamics shared by the platform laws
+/// and the coordinated law: `Qr = Mr a + (cr + Gr)` for a commanded reduced
+/// acceleration `a`, the actuator inputs from `N_Cᵀ S u = Qr`, wheel torques clipped.
+#[derive(Clone, Debug)]
+pub(crate) struct InnerLoop {
+    wm: WheeledModel,
+    wd: WheeledData,
+    max_wheel_torque: f64,
     s: DMatrix<f64>,
     q: DVector<f64>,
     v: DVector<f64>,
     acc: DVector<f64>,
     tau_r: DVector<f64>,
     zero_u: Vec<f64>,
+}
+
+impl InnerLoop {
+    pub(crate) fn new(wm: &WheeledModel, max_wheel_torque: f64) -> Self {
+        let (nq, nv, nr, nu) = (wm.model.nq, wm.nv(), wm.nr(), wm.nu());
+        Self {
+            wd: WheeledData::new(wm),
+            max_wheel_torque,
+            s: DMatrix::zeros(nv, nu),
+            q: DVector::zeros(nq),
+            v: DVector::zeros(nr),
+            acc: DVector::zeros(nr),
+            tau_r: DVector::zeros(nr),
+            zero_u: vec![0.0; nu],
+            wm: wm.clone(),
+        }
+    }
+
+    /// Writes the inputs `u` at `(q, v)` for the reduced acceleration
+    /// `a_i = accel(i, q_i, v_i)` (`q_i` the configuration of reduced coordinate i for
+    /// the arm, 0 for the two platform rates); true when a wheel torque was clipped.
+    pub(crate) fn inputs(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        u: &mut [f64],
+        accel: impl Fn(usize, f64, f64) -> f64,
+    ) -> Result<bool> {
+        self.q.copy_from_slice(q);
+        self.v.copy_from_slice(v);
+        reduced_forward_dynamics_crba(&self.wm, &mut self.wd, &self.q, &self.v, &self.zero_u)?;
+        self.acc[0] = accel(0, 0.0, v[0]);
+        self.acc[1] = accel(1, 0.0, v[1]);
+        for (j, &dof) in self.wm.arm_dofs().iter().enumerate() {
+            self.acc[2 + j] = accel(2 + j, q[dof], v[2 + j]);
+        }
+        let red = &self.wd.reduced;
+        self.tau_r.copy_from(&red.velocity_terms);
+        self.tau_r.gemv(1.0, &red.mass_matrix, &self.acc, 1.0);
+        actuators_from_reduced(
+            &self.wm,
+            &self.wd.basis,
+            &self.q,
+            &mut self.s,
+            &self.tau_r,
+            u,
+        )?;
+        Ok(clip(&mut u[..2], self.max_wheel_torque))
+    }
 }
 
 impl PlatformController {
@@ -259,19 +318,12 @@ impl PlatformController {
             max_wheel_speed.unwrap_or(f64::INFINITY),
             max_wheel_torque.unwrap_or(f64::INFINITY),
         )?;
-        let (nq, nv, nr, nu) = (wm.model.nq, wm.nv(), wm.nr(), wm.nu());
         Ok(Self {
-            wd: WheeledData::new(&wm),
+            inner: InnerLoop::new(&wm, limits.max_wheel_torque),
             law,
             servo,
             limits,
             arm_target,
-            s: DMatrix::zeros(nv, nu),
-            q: DVector::zeros(nq),
-            v: DVector::zeros(nr),
-            acc: DVector::zeros(nr),
-            tau_r: DVector::zeros(nr),
-            zero_u: vec![0.0; nu],
             wm,
         })
     }
@@ -347,28 +399,15 @@ impl FeedbackLaw for PlatformController {
         let pose = self.pose(q);
         let mut cmd = self.command(t, &pose)?;
         let speed = self.limits.limit_inputs(&mut cmd).speed;
-        self.q.copy_from_slice(q);
-        self.v.copy_from_slice(v);
-        reduced_forward_dynamics_crba(&self.wm, &mut self.wd, &self.q, &self.v, &self.zero_u)?;
-        let k = self.servo.gain;
-        self.acc[0] = k * (cmd[0] - v[0]);
-        self.acc[1] = k * (cmd[1] - v[1]);
-        for (j, &dof) in self.wm.arm_dofs().iter().enumerate() {
-            self.acc[2 + j] =
-                self.servo.arm_kp * (self.arm_target[j] - q[dof]) - self.servo.arm_kd * v[2 + j];
-        }
-        let red = &self.wd.reduced;
-        self.tau_r.copy_from(&red.velocity_terms);
-        self.tau_r.gemv(1.0, &red.mass_matrix, &self.acc, 1.0);
-        actuators_from_reduced(
-            &self.wm,
-            &self.wd.basis,
-            &self.q,
-            &mut self.s,
-            &self.tau_r,
-            u,
-        )?;
-        let torque = clip(&mut u[..2], self.limits.max_wheel_torque);
+        let servo = self.servo;
+        let target = &self.arm_target;
+        let torque = self.inner.inputs(q, v, u, |j, qj, vj| {
+            if j < 2 {
+                servo.gain * (cmd[j] - vj)
+            } else {
+                servo.arm_kp * (target[j - 2] - qj) - servo.arm_kd * vj
+            }
+        })?;
         Ok(SaturationFlags { speed, torque })
     }
 
@@ -617,27 +656,7 @@ impl OscController {
     ) -> Result<Self> {
         let fid = wm.model.frame_id(frame)?;
         reference.validate()?;
-        for (n, x) in [
-            ("controller.kp", gains.kp),
-            ("controller.kv", gains.kv),
-            ("controller.posture_kp", gains.posture_kp),
-            ("controller.posture_kd", gains.posture_kd),
-        ] {
-            if !(x.is_finite() && x >= 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be >= 0 and finite, got {x}"),
-                ));
-            }
-        }
-        if let Some(m) = max_torque
-            && !(m.is_finite() && m > 0.0)
-        {
-            return Err(Error::invalid(
-                "controller.max_torque",
-                format!("must be > 0 and finite, got {m}"),
-            ));
-        }
+        check_osc_gains(&gains, max_torque)?;
         crate::error::ensure_len("posture", wm.nr() - 2, posture.len())?;
         crate::error::ensure_finite("posture", &posture)?;
         let (nq, nv, nr, nu) = (wm.model.nq, wm.nv(), wm.nr(), wm.nu());
@@ -679,12 +698,7 @@ impl OscController {
             &self.tau0,
         )?;
         let p = self.rod.wheeled.data.world_from_frame[self.frame.0].translation;
-        let j = &self.rod.osc.jacobian;
-        let mut xd = [0.0; 3];
-        for (k, x) in xd.iter_mut().enumerate() {
-            *x = (0..j.ncols()).map(|c| j[(k, c)] * v[c]).sum();
-        }
-        Ok(([p[0], p[1], p[2]], xd))
+        Ok(([p[0], p[1], p[2]], task_velocity(&self.rod.osc.jacobian, v)))
     }
 }
 
@@ -694,10 +708,7 @@ impl FeedbackLaw for OscController {
     }
 
     fn error_names(&self) -> Vec<String> {
-        ["e_x [m]", "e_y [m]", "e_z [m]"]
-            .iter()
-            .map(|s| (*s).to_string())
-            .collect()
+        position_error_names()
     }
 
     fn has_lyapunov(&self) -> bool {
@@ -706,22 +717,15 @@ impl FeedbackLaw for OscController {
 
     fn control(&mut self, t: f64, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<SaturationFlags> {
         let (x, xdot) = self.update(q, v)?;
-        let (xd, vd, ad) = self.reference.at(t);
-        let g = self.gains;
-        let mut a = [0.0; 3];
-        for k in 0..3 {
-            a[k] = ad[k] + g.kv * (vd[k] - xdot[k]) + g.kp * (xd[k] - x[k]);
-        }
-        // τ_r = τ(a = 0) + Jᵀ Λ a (F is affine in the task acceleration)
-        let od = &self.rod.osc;
-        self.tau_r.copy_from(&od.torque);
-        let mut la = [0.0; 3];
-        for (i, l) in la.iter_mut().enumerate() {
-            *l = (0..3).map(|k| od.task_inertia[(i, k)] * a[k]).sum();
-        }
-        for c in 0..self.tau_r.len() {
-            self.tau_r[c] += (0..3).map(|k| od.jacobian[(k, c)] * la[k]).sum::<f64>();
-        }
+        osc_torque(
+            &self.rod.osc,
+            &self.gains,
+            &self.reference,
+            t,
+            x,
+            xdot,
+            self.tau_r.as_mut_slice(),
+        );
         actuators_from_reduced(
             &self.wm,
             &self.rod.wheeled.basis,
@@ -739,18 +743,7 @@ impl FeedbackLaw for OscController {
 
     fn observe(&mut self, t: f64, q: &[f64], v: &[f64], e: &mut [f64]) -> Result<Observation> {
         let (x, xdot) = self.update(q, v)?;
-        let (xd, vd, _) = self.reference.at(t);
-        let (mut ee, mut ed) = (0.0, 0.0);
-        for k in 0..3 {
-            e[k] = xd[k] - x[k];
-            let d = vd[k] - xdot[k];
-            ee += e[k] * e[k];
-            ed += d * d;
-        }
-        Ok(Observation {
-            lyapunov: Some(0.5 * ed + 0.5 * self.gains.kp * ee),
-            lyapunov_rate: Some(-self.gains.kv * ed),
-        })
+        Ok(osc_observation(&self.gains, &self.reference, t, x, xdot, e))
     }
 }
 
@@ -1026,13 +1019,25 @@ impl FixedOscController {
             &self.tau0,
         )?;
         let p = self.data.world_from_frame[self.frame.0].translation;
-        let j = &self.od.jacobian;
-        let mut xd = [0.0; 3];
-        for (k, x) in xd.iter_mut().enumerate() {
-            *x = (0..j.ncols()).map(|c| j[(k, c)] * v[c]).sum();
-        }
-        Ok(([p[0], p[1], p[2]], xd))
+        Ok(([p[0], p[1], p[2]], task_velocity(&self.od.jacobian, v)))
     }
+}
+
+/// `J v` for the three position rows of a task Jacobian.
+fn task_velocity(j: &DMatrix<f64>, v: &[f64]) -> [f64; 3] {
+    let mut xd = [0.0; 3];
+    for (k, x) in xd.iter_mut().enumerate() {
+        *x = (0..j.ncols()).map(|c| j[(k, c)] * v[c]).sum();
+    }
+    xd
+}
+
+/// The error names of a frame-position task.
+fn position_error_names() -> Vec<String> {
+    ["e_x [m]", "e_y [m]", "e_z [m]"]
+        .iter()
+        .map(|s| (*s).to_string())
+        .collect()
 }
 
 fn check_osc_gains(gains: &OscGains, max_torque: Option<f64>) -> Result<()> {
@@ -1112,10 +1117,7 @@ impl FeedbackLaw for FixedOscController {
     }
 
     fn error_names(&self) -> Vec<String> {
-        ["e_x [m]", "e_y [m]", "e_z [m]"]
-            .iter()
-            .map(|s| (*s).to_string())
-            .collect()
+        position_error_names()
     }
 
     fn has_lyapunov(&self) -> bool {

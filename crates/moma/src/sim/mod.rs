@@ -6,13 +6,16 @@
 
 pub mod chapter_models;
 pub mod closed_loop;
+pub mod coordinated;
 pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
 pub mod monitor;
+pub mod planned;
 pub mod recorder;
 pub mod scenario;
 pub mod stability_monitor;
+mod stepping;
 pub mod wheeled;
 pub mod wheeled_system;
 

@@ -10,10 +10,14 @@
 //! model ([`crate::mobile::WheeledModel`]) and the chapter's closed-form models.
 
 use crate::error::{Error, Result};
-use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+use crate::ode::{OdeSystem, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
-use crate::sim::recorder::{Recorder, Sample};
+use crate::sim::recorder::Recorder;
 use crate::sim::scenario::{InputProfile, IntegratorSettings};
+use crate::sim::stepping::{
+    Grid, check_rk4_budget, integrate_on_grid, record_plant_sample, start_recording,
+    validate_run_common,
+};
 
 /// Largest number of recorded samples [`simulate`] accepts (`duration / record_interval`):
 /// beyond it the recorder's buffers would exhaust memory before the first step.
@@ -186,26 +190,57 @@ pub fn simulate_observed<'a>(
     // One right-hand side for the whole run: building it per step would allocate its
     // input buffer inside the step loop. `record` reaches the system through it.
     let mut ode = ReducedOde::new(system, input)?;
-    let stats = match options.integrator {
+    let (d, ri) = (options.duration, options.record_interval);
+    // RK4: the step rounded to divide the duration, a sample every `every` steps and at
+    // the end; adaptive: a stop at every recording time and at the end.
+    let (steps, h, every) = match options.integrator {
         IntegratorSettings::Rk4 { dt } => {
-            run_rk4(&mut ode, &mut x, dt, options, &mut rec, progress)?
+            let steps = (d / dt).round().max(1.0) as usize;
+            let h = d / steps as f64;
+            (steps, h, ((ri / h).round() as usize).max(1))
         }
-        IntegratorSettings::Adaptive {
-            rtol,
-            atol,
-            max_step,
-        } => {
-            let opts = AdaptiveOptions {
-                rtol,
-                atol,
-                blowup: options.limits.blowup,
-                max_step: max_step.unwrap_or(f64::INFINITY).min(options.duration),
-                max_steps: 50_000_000,
-                ..AdaptiveOptions::default()
-            };
-            run_adaptive(&mut ode, &mut x, opts, options, &mut rec, progress)?
+        IntegratorSettings::Adaptive { .. } => (0, 0.0, 1),
+    };
+    let rk4_end = |k: usize| ((k + 1) * every).min(steps) as f64 * h;
+    let rk4_steps = |k: usize| every.min(steps - k * every);
+    let adaptive_end = |k: usize| ((k + 1) as f64 * ri).min(d);
+    let grid = match options.integrator {
+        IntegratorSettings::Rk4 { .. } => Grid {
+            n: steps.div_ceil(every),
+            end: &rk4_end,
+            rk4: Some((h, &rk4_steps)),
+            switches: false,
+            max_step_cap: d,
+        },
+        IntegratorSettings::Adaptive { .. } => {
+            let mut n = ((d / ri).ceil() as usize).max(1);
+            while adaptive_end(n - 1) < d {
+                n += 1;
+            }
+            while n > 1 && adaptive_end(n - 2) >= d {
+                n -= 1;
+            }
+            Grid {
+                n,
+                end: &adaptive_end,
+                rk4: None,
+                switches: false,
+                max_step_cap: d,
+            }
         }
     };
+    let stats = integrate_on_grid(
+        &mut ode,
+        &mut x,
+        options.integrator,
+        &options.limits,
+        &grid,
+        &mut |ode, _, t1, x| {
+            let stop = rec.record(&mut *ode.system, t1, x)?;
+            progress(t1);
+            Ok(stop)
+        },
+    )?;
     Ok(SimulationResult {
         recorder: rec.recorder,
         monitor: rec.monitor,
@@ -224,26 +259,14 @@ fn validate_run(
     options: &SimulationOptions,
 ) -> Result<usize> {
     crate::error::ensure_len("inputs", system.nu(), input.channels.len())?;
-    crate::error::ensure_len("initial q", system.nq(), q0.len())?;
-    crate::error::ensure_len("initial v", system.nv(), v0.len())?;
-    crate::error::ensure_finite("initial q", q0)?;
-    crate::error::ensure_finite("initial v", v0)?;
-    options.integrator.validate()?;
-    if !(options.duration.is_finite() && options.duration > 0.0) {
-        return Err(Error::invalid(
-            "duration",
-            format!("must be a positive finite number, got {}", options.duration),
-        ));
-    }
-    if !(options.record_interval.is_finite() && options.record_interval > 0.0) {
-        return Err(Error::invalid(
-            "record interval",
-            format!(
-                "must be a positive finite number, got {}",
-                options.record_interval
-            ),
-        ));
-    }
+    validate_run_common(
+        system,
+        q0,
+        v0,
+        &options.integrator,
+        options.duration,
+        options.record_interval,
+    )?;
     for (i, ch) in input.channels.iter().enumerate() {
         ch.validate(&format!("inputs[{i}]"))?;
     }
@@ -256,15 +279,7 @@ fn validate_run(
             ),
         ));
     }
-    if let IntegratorSettings::Rk4 { dt } = options.integrator {
-        let steps = (options.duration / dt).round();
-        if steps > MAX_RK4_STEPS {
-            return Err(Error::invalid(
-                "integrator.dt",
-                format!("duration / dt = {steps:e} steps exceeds the limit of {MAX_RK4_STEPS:e}"),
-            ));
-        }
-    }
+    check_rk4_budget(&options.integrator, options.duration)?;
     Ok(n_samples_f as usize + 1)
 }
 
@@ -290,21 +305,13 @@ impl<'a> RunRecorder<'a> {
         options: &SimulationOptions,
         n_samples: usize,
     ) -> Result<Self> {
-        let mut recorder = Recorder::new(
-            system.q_names(),
-            system.v_names(),
-            system.u_names(),
-            n_samples,
-        );
-        recorder.set_units(system.q_units(), system.v_units(), system.u_units());
+        let (recorder, monitor) = start_recording(system, q0, v0, options.limits, n_samples)?;
         let nk = system.nk();
-        recorder.lambda_names = (0..nk).map(|i| format!("lambda_{i}")).collect();
-        let (t0, p0) = system.energy(q0, v0)?;
         Ok(Self {
             observer: None,
             stopped_at: None,
             recorder,
-            monitor: Monitor::new(options.limits, t0, p0),
+            monitor,
             input,
             u: vec![0.0; system.nu()],
             lam: vec![0.0; nk],
@@ -319,21 +326,15 @@ impl<'a> RunRecorder<'a> {
         let (nq, nv) = (self.nq, self.nv);
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         self.input.eval(t, &mut self.u);
-        let (kin, pot) = system.energy(q, v)?;
-        let res = system.constraint_residual(q, v)?;
-        self.monitor.check(t, x, kin, pot, x[nq + nv], res)?;
-        system.multipliers(q, v, &self.u, &mut self.lam)?;
-        self.recorder.lambda.extend_from_slice(&self.lam);
-        self.recorder.push(Sample {
+        record_plant_sample(
+            system,
+            &mut self.recorder,
+            &mut self.monitor,
+            &mut self.lam,
             t,
-            q,
-            v,
-            u: &self.u,
-            kinetic: kin,
-            potential: pot,
-            work: x[nq + nv],
-            residual: res,
-        });
+            x,
+            &self.u,
+        )?;
         if let Some(obs) = self.observer.as_mut()
             && obs.observe(t, q, v, &self.u)?
         {
@@ -342,59 +343,4 @@ impl<'a> RunRecorder<'a> {
         }
         Ok(false)
     }
-}
-
-/// Fixed-step RK4 over the whole duration (the step rounded to divide it), recording
-/// every `record_interval` and at the end.
-fn run_rk4(
-    ode: &mut ReducedOde<'_, dyn ReducedSystem + '_>,
-    x: &mut [f64],
-    dt: f64,
-    options: &SimulationOptions,
-    rec: &mut RunRecorder<'_>,
-    progress: &mut dyn FnMut(f64),
-) -> Result<StepStats> {
-    let steps = (options.duration / dt).round().max(1.0) as usize;
-    let h = options.duration / steps as f64;
-    let every = ((options.record_interval / h).round() as usize).max(1);
-    let mut rk = Rk4::new(x.len());
-    rk.blowup = options.limits.blowup;
-    for s in 0..steps {
-        let t = s as f64 * h;
-        rk.step(ode, t, x, h)?;
-        if (s + 1) % every == 0 || s + 1 == steps {
-            let t1 = (s + 1) as f64 * h;
-            let stop = rec.record(&mut *ode.system, t1, x)?;
-            progress(t1);
-            if stop {
-                break;
-            }
-        }
-    }
-    Ok(rk.stats)
-}
-
-/// Adaptive Dormand–Prince 5(4), stopping exactly at every recording time.
-fn run_adaptive(
-    ode: &mut ReducedOde<'_, dyn ReducedSystem + '_>,
-    x: &mut [f64],
-    opts: AdaptiveOptions,
-    options: &SimulationOptions,
-    rec: &mut RunRecorder<'_>,
-    progress: &mut dyn FnMut(f64),
-) -> Result<StepStats> {
-    let mut dp = DormandPrince45::new(x.len(), opts)?;
-    let mut t = 0.0;
-    let mut k = 1usize;
-    loop {
-        let te = (k as f64 * options.record_interval).min(options.duration);
-        dp.integrate_to(ode, &mut t, x, te)?;
-        let stop = rec.record(&mut *ode.system, te, x)?;
-        progress(te);
-        if stop || te >= options.duration {
-            break;
-        }
-        k += 1;
-    }
-    Ok(dp.stats)
 }
