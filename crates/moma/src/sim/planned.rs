@@ -108,6 +108,8 @@ pub fn plan_platform_reference(
         grid,
         r.unknown_is_obstacle,
         r.footprint_radius,
+        // the reference is planned for the point the platform law tracks (its base frame)
+        0.0,
         [r.start[0], r.start[1]],
         [r.goal[0], r.goal[1]],
     )
@@ -140,6 +142,7 @@ pub fn plan_platform_reference(
         &cells,
         &start,
         r.goal,
+        0.0,
         &r.limits,
         &tip,
         r.kappa_max,
