@@ -340,6 +340,32 @@ impl PinocchioLayout {
         self.columns(q, j_pin, out, true);
     }
 
+    /// `m ← T m` in place, for a matrix whose rows are velocity (or generalised-force)
+    /// coordinates and whose columns are not, such as the dynamically consistent inverse
+    /// J̄ (nv × m): `J̄_P = T J̄`.
+    ///
+    /// # Panics
+    /// If `m` does not have nv rows or `q` the model's nq.
+    pub fn rows_to_pinocchio_in_place(&self, q: &[f64], m: &mut DMatrix<f64>) {
+        assert_eq!(m.nrows(), self.nv, "matrix rows");
+        if let Some((c, s, iv)) = self.heading(q) {
+            rotate_rows(m, iv, c, s);
+        }
+    }
+
+    /// `m ← m Tᵀ` in place, for a matrix whose columns are velocity coordinates (a
+    /// Jacobian); with [`Self::rows_to_pinocchio_in_place`] it makes the congruence
+    /// `T m Tᵀ` of an nv × nv matrix (a mass matrix, a null-space projector).
+    ///
+    /// # Panics
+    /// If `m` does not have nv columns or `q` the model's nq.
+    pub fn columns_to_pinocchio_in_place(&self, q: &[f64], m: &mut DMatrix<f64>) {
+        assert_eq!(m.ncols(), self.nv, "matrix columns");
+        if let Some((c, s, iv)) = self.heading(q) {
+            rotate_cols(m, iv, c, s);
+        }
+    }
+
     fn columns(&self, q: &[f64], j: &DMatrix<f64>, out: &mut DMatrix<f64>, transpose: bool) {
         assert_eq!(j.ncols(), self.nv, "Jacobian columns");
         assert_eq!(out.shape(), j.shape(), "out size");
