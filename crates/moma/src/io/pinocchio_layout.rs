@@ -515,6 +515,29 @@ mod tests {
     }
 
     #[test]
+    fn in_place_maps_equal_the_copying_ones() {
+        let l = layout();
+        let q = [0.0, 0.0, -0.7, 0.0, 0.0];
+        let h = DMatrix::from_fn(5, 5, |i, j| 1.0 / (1.0 + i as f64 + j as f64));
+        let jb = DMatrix::from_fn(5, 3, |i, j| (i * 3 + j) as f64 * 0.1 - 0.4);
+        let (mut hp, mut jt) = (DMatrix::zeros(5, 5), DMatrix::zeros(3, 5));
+        l.matrix_to_pinocchio(&q, &h, &mut hp);
+        l.jacobian_to_pinocchio(&q, &jb.transpose(), &mut jt);
+        let mut h2 = h.clone();
+        l.rows_to_pinocchio_in_place(&q, &mut h2);
+        l.columns_to_pinocchio_in_place(&q, &mut h2);
+        assert!((h2 - hp).norm() < 1e-15);
+        // T J̄ = (J̄ᵀ Tᵀ)ᵀ
+        let mut j2 = jb.clone();
+        l.rows_to_pinocchio_in_place(&q, &mut j2);
+        assert!((j2 - jt.transpose()).norm() < 1e-15);
+        assert!(
+            (jb[(0, 0)] - jt[(0, 0)]).abs() > 1e-3,
+            "the heading must act"
+        );
+    }
+
+    #[test]
     fn bad_pinocchio_configurations_are_errors() {
         let l = layout();
         let mut out = [0.0; 5];
