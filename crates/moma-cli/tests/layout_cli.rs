@@ -319,27 +319,106 @@ fn space_and_osc_read_pinocchio_q() {
         &a["states"][0]["task_inertia"],
         &b["states"][0]["task_inertia"],
     );
+}
 
-    // osc on a planar root in Pinocchio's layout is refused, not approximated
-    let (pin, _) = planar_states(&["q"]);
-    let f = states_file(
-        "osc_planar.json",
-        vec![json!({"q": pin[0]["q"], "task_acceleration": [0, 0, 0, 0, 0, 0]})],
+/// `osc --layout pinocchio` on a planar root: the states of the TIAGo planar dump as they
+/// are (base-frame v, null torque in Pinocchio's layout) against Λ, J̄, N, J̇v, F and τ
+/// computed with Pinocchio 4.1 and numpy in Pinocchio's layout
+/// (`control/osc_tiago_planar.json`), to 1e-9; and the same states in moma's layout give
+/// the task quantities unchanged and J̄, τ through T.
+#[test]
+fn osc_on_a_planar_root_takes_and_gives_pinocchio_quantities() {
+    let refdoc: Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{DATA}/../control/osc_tiago_planar.json")).unwrap(),
+    )
+    .unwrap();
+    let states: Vec<Value> = refdoc["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| {
+            json!({"q": s["q"], "v": s["v"], "task_acceleration": s["task_acceleration"],
+                   "null_torque": s["null_torque"]})
+        })
+        .collect();
+    let f = states_file("osc_planar.json", states.clone());
+    let run = |f: &str, lay: &str| {
+        run_json(&[
+            "osc",
+            &tiago_urdf(),
+            "--root",
+            "planar",
+            "--frame",
+            "arm_tool_link",
+            "--states",
+            f,
+            "--layout",
+            lay,
+        ])
+    };
+    let got = run(&f, "pinocchio");
+    let keys = [
+        "task_inertia",
+        "dynamically_consistent_inverse",
+        "nullspace_projector",
+        "acceleration_bias",
+        "task_force",
+        "torque",
+    ];
+    for (k, want) in refdoc["states"].as_array().unwrap().iter().enumerate() {
+        for key in keys {
+            close(
+                &format!("osc state {k} {key}"),
+                &got["states"][k][key],
+                &want[key],
+            );
+        }
+    }
+    // moma's layout: the same physical states; J̄ and τ differ by T, Λ and F do not
+    let (l, nq) = layout(RootJoint::Planar);
+    let mut mom = Vec::new();
+    for s in &states {
+        let (qp, vp, tp) = (nums(&s["q"]), nums(&s["v"]), nums(&s["null_torque"]));
+        let mut q = vec![0.0; nq];
+        l.q_from_pinocchio(&qp, &mut q).unwrap();
+        let (mut v, mut t) = (vec![0.0; vp.len()], vec![0.0; vp.len()]);
+        l.v_from_pinocchio(&q, &vp, &mut v);
+        l.tau_from_pinocchio(&q, &tp, &mut t);
+        mom.push((
+            q.clone(),
+            json!({"q": q, "v": v, "task_acceleration": s["task_acceleration"],
+                                     "null_torque": t}),
+        ));
+    }
+    let fm = states_file(
+        "osc_planar_moma.json",
+        mom.iter().map(|m| m.1.clone()).collect(),
     );
-    let o = moma(&[
-        "osc",
-        &tiago_urdf(),
-        "--root",
-        "planar",
-        "--frame",
-        "arm_tool_link",
-        "--states",
-        &f,
-        "--layout",
-        "pinocchio",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("not supported by osc on a planar root"));
+    let base = run(&fm, "moma");
+    for (k, (q, _)) in mom.iter().enumerate() {
+        for key in ["task_inertia", "task_force"] {
+            close(
+                &format!("moma layout {key}"),
+                &base["states"][k][key],
+                &got["states"][k][key],
+            );
+        }
+        let tau = nums(&base["states"][k]["torque"]);
+        let mut tau_p = vec![0.0; tau.len()];
+        l.tau_to_pinocchio(q, &tau, &mut tau_p);
+        close(
+            "moma layout torque",
+            &json!(tau_p),
+            &got["states"][k]["torque"],
+        );
+        let jbar = &base["states"][k]["dynamically_consistent_inverse"];
+        assert!(
+            (nums(&jbar[0])[0] - nums(&got["states"][k]["dynamically_consistent_inverse"][0])[0])
+                .abs()
+                > 1e-6,
+            "J̄ must change with the layout on a rotated base"
+        );
+    }
 }
 
 #[test]

@@ -1,15 +1,14 @@
 //! Tip-over stability, free-floating space manipulators and operational-space control:
 //! the per-state documents of `moma stability`, `moma space` and `moma osc`.
 
-use crate::model::{
-    Mat2, PyData, PyModel, Vec1, batch_rows, check_rows, check_state, load, load_row, par_rows,
-    vector,
-};
+use crate::model::{BatchInputs, Mat2, PyData, PyModel, Vec1, check_state, load, par_rows, vector};
 use crate::{err, to_py};
 use moma::control::osc::{
-    MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, task_conditioning,
+    MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, osc_to_pinocchio_layout,
+    task_conditioning,
 };
 use moma::ik::tasks::TaskRows;
+use moma::io::pinocchio_layout::PinocchioLayout;
 use moma::multibody::Model;
 use moma::space::{SpaceData, state_report};
 use moma::spatial::Force;
@@ -147,33 +146,23 @@ pub(crate) fn stability_batch<'py>(
     let m = &model.inner;
     model.check_data(&data)?;
     let sm = stability_model(m, &support, mhs_bodies, gravity)?;
-    let src = "stability_batch";
-    let qs = q.as_array();
-    let n = batch_rows(src, "q", &qs, m.nq, None)?;
-    let vs = v.as_ref().map(|x| x.as_array());
-    let as_ = a.as_ref().map(|x| x.as_array());
-    if let Some(x) = &vs {
-        batch_rows(src, "v", x, m.nv, Some(n))?;
-    }
-    if let Some(x) = &as_ {
-        batch_rows(src, "a", x, m.nv, Some(n))?;
-    }
+    let inputs = BatchInputs {
+        src: "stability_batch",
+        q: q.as_array(),
+        v: v.as_ref().map(|x| x.as_array()),
+        a: a.as_ref().map(|x| x.as_array()),
+        second_is_tau: false,
+    };
+    let n = inputs.rows(m)?;
     let nan = f64::NAN;
     // per row: mass, com (3), zmp (3), margin, critical edge, FA min, FA alpha, FA beta, MHS, stable
     const W: usize = 14;
-    let flat = py.detach(|| -> PyResult<Vec<f64>> {
-        check_rows(m, src, n, &qs, vs.as_ref(), as_.as_ref(), None)?;
+    let mut flat = vec![0.0; n * W];
+    py.detach(|| -> PyResult<()> {
+        inputs.check(m, n)?;
         let sd0 = StabilityData::new(&sm);
-        Ok(par_rows(m, n, W, |s, k, row| {
-            load_row(&qs, k, &mut s.q);
-            match &vs {
-                Some(x) => load_row(x, k, &mut s.v),
-                None => s.v.fill(0.0),
-            }
-            match &as_ {
-                Some(x) => load_row(x, k, &mut s.a),
-                None => s.a.fill(0.0),
-            }
+        par_rows(m, W, &mut flat, |s, k, row| {
+            inputs.load(k, s);
             let mut sd = sd0.clone();
             evaluate(
                 m,
@@ -199,7 +188,8 @@ pub(crate) fn stability_batch<'py>(
             row[11] = r.force_angle_beta_min.unwrap_or(nan);
             row[12] = r.mhs_min.unwrap_or(nan);
             row[13] = if r.stable { 1.0 } else { 0.0 };
-        }))
+        });
+        Ok(())
     })?;
     let mut out = BatchOut::new(n);
     for (k, row) in flat.chunks(W).enumerate() {
@@ -348,8 +338,14 @@ pub(crate) fn space_state<'py>(
 /// `task_acceleration` has 6 entries (`[ẍ; ω̇]`, world axes) or one per selected row;
 /// `null_torque` (nv) defaults to zero; `rows` is "position", "orientation", "full" or
 /// "rows:i,j,...". A task Jacobian with σ_min/σ_max below 1e-6 raises MomaError.
+///
+/// `layout="pinocchio"` takes q, v and `null_torque` in Pinocchio's layout (planar base
+/// `[x, y, cos θ, sin θ]` with base-frame velocity, continuous joints as cos/sin pairs)
+/// and gives J̄ (`T J̄`), N (`T N Tᵀ`), τ (`T τ`) and J̇v (Pinocchio's, at its zero
+/// acceleration) in it too, as `moma osc --layout pinocchio`; Λ and F are the same in
+/// both layouts.
 #[pyfunction]
-#[pyo3(signature = (model, data, q, v, frame, task_acceleration, null_torque = None, rows = "full"))]
+#[pyo3(signature = (model, data, q, v, frame, task_acceleration, null_torque = None, rows = "full", *, layout = "moma"))]
 pub(crate) fn osc<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
@@ -360,6 +356,7 @@ pub(crate) fn osc<'py>(
     task_acceleration: Vec1<'py>,
     null_torque: Option<Vec1<'py>>,
     rows: &str,
+    layout: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let m = &model.inner;
     model.check_data(&data)?;
@@ -372,11 +369,31 @@ pub(crate) fn osc<'py>(
     let nr = rows.len();
     let nv = m.nv;
     let src = "osc";
+    let pin = match layout {
+        "moma" => None,
+        "pinocchio" => Some(PinocchioLayout::new(m)),
+        other => {
+            return Err(err(format!(
+                "{src} layout: expected \"moma\" or \"pinocchio\", got \"{other}\""
+            )));
+        }
+    };
     let d = &mut *data;
-    load(src, "q", q.as_array(), &mut d.q)?;
+    match &pin {
+        None => load(src, "q", q.as_array(), &mut d.q)?,
+        Some(l) => {
+            let qp: Vec<f64> = q.as_array().iter().copied().collect();
+            l.q_from_pinocchio(&qp, d.q.as_mut_slice())
+                .map_err(|e| err(format!("{src}: {e}")))?;
+        }
+    }
     d.v.fill(0.0);
     if let Some(v) = &v {
         load(src, "v", v.as_array(), &mut d.v)?;
+        if let Some(l) = &pin {
+            d.a.copy_from(&d.v);
+            l.v_from_pinocchio(d.q.as_slice(), d.a.as_slice(), d.v.as_mut_slice());
+        }
     }
     check_state(
         m,
@@ -406,7 +423,14 @@ pub(crate) fn osc<'py>(
             if let Some(i) = t.iter().position(|x| !x.is_finite()) {
                 return Err(err(format!("{src} null_torque[{i}]: not finite")));
             }
-            t
+            match &pin {
+                None => t,
+                Some(l) => {
+                    let mut tm = DVector::zeros(nv);
+                    l.tau_from_pinocchio(d.q.as_slice(), t.as_slice(), tm.as_mut_slice());
+                    tm
+                }
+            }
         }
         None => DVector::zeros(nv),
     };
@@ -419,6 +443,9 @@ pub(crate) fn osc<'py>(
         )));
     }
     res.map_err(|e| err(format!("{src}: {e}")))?;
+    if let Some(l) = &pin {
+        osc_to_pinocchio_layout(l, d.q.as_slice(), d.v.as_slice(), &mut od);
+    }
     to_py(py, &OscStateReport::new(&od, cond))
 }
 

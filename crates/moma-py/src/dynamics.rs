@@ -1,11 +1,9 @@
 //! Rigid-body algorithms: RNEA, CRBA, ABA, frame Jacobians, one state or a batch.
 
-use crate::model::{
-    Mat2, PyData, PyModel, Vec1, batch_rows, check_rows, check_state, load, load_row, par_rows,
-};
+use crate::model::{BatchInputs, Mat2, PyData, PyModel, Vec1, check_state, load, run_batch};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, ToPyArray};
+use numpy::{PyArray1, PyArray2, PyArrayDyn, ToPyArray};
 use pyo3::prelude::*;
 
 /// Inverse dynamics (recursive Newton-Euler): the joint torques
@@ -120,7 +118,8 @@ pub(crate) fn frame_jacobian<'py>(
 }
 
 /// `rnea` on every row: q (n, nq), v and a (n, nv) → tau (n, nv). Loops in Rust with
-/// the GIL released, on all cores (one workspace per worker; `data` is only checked).
+/// the GIL released, on all cores (one workspace per worker; `data` is only checked),
+/// writing straight into the returned array.
 #[pyfunction]
 pub(crate) fn rnea_batch<'py>(
     py: Python<'py>,
@@ -129,25 +128,18 @@ pub(crate) fn rnea_batch<'py>(
     q: Mat2<'py>,
     v: Mat2<'py>,
     a: Mat2<'py>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let m = &model.inner;
-    model.check_data(&data)?;
-    let (qs, vs, as_) = (q.as_array(), v.as_array(), a.as_array());
-    let src = "rnea_batch";
-    let n = batch_rows(src, "q", &qs, m.nq, None)?;
-    batch_rows(src, "v", &vs, m.nv, Some(n))?;
-    batch_rows(src, "a", &as_, m.nv, Some(n))?;
-    let nv = m.nv;
-    let out = py.detach(|| -> PyResult<Vec<f64>> {
-        check_rows(m, src, n, &qs, Some(&vs), Some(&as_), None)?;
-        Ok(par_rows(m, n, nv, |s, k, row| {
-            load_row(&qs, k, &mut s.q);
-            load_row(&vs, k, &mut s.v);
-            load_row(&as_, k, &mut s.a);
-            row.copy_from_slice(dynamics::rnea(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
-        }))
-    })?;
-    PyArray1::from_vec(py, out).reshape([n, nv])
+    let inputs = BatchInputs {
+        src: "rnea_batch",
+        q: q.as_array(),
+        v: Some(v.as_array()),
+        a: Some(a.as_array()),
+        second_is_tau: false,
+    };
+    run_batch(py, &model, &data, &inputs, &[m.nv], |s, row| {
+        row.copy_from_slice(dynamics::rnea(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
+    })
 }
 
 /// `aba` on every row: q (n, nq), v and tau (n, nv) → ddq (n, nv), on all cores with the GIL released.
@@ -159,25 +151,28 @@ pub(crate) fn aba_batch<'py>(
     q: Mat2<'py>,
     v: Mat2<'py>,
     tau: Mat2<'py>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let m = &model.inner;
-    model.check_data(&data)?;
-    let (qs, vs, ts) = (q.as_array(), v.as_array(), tau.as_array());
-    let src = "aba_batch";
-    let n = batch_rows(src, "q", &qs, m.nq, None)?;
-    batch_rows(src, "v", &vs, m.nv, Some(n))?;
-    batch_rows(src, "tau", &ts, m.nv, Some(n))?;
-    let nv = m.nv;
-    let out = py.detach(|| -> PyResult<Vec<f64>> {
-        check_rows(m, src, n, &qs, Some(&vs), None, Some(&ts))?;
-        Ok(par_rows(m, n, nv, |s, k, row| {
-            load_row(&qs, k, &mut s.q);
-            load_row(&vs, k, &mut s.v);
-            load_row(&ts, k, &mut s.a);
-            row.copy_from_slice(dynamics::aba(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
-        }))
-    })?;
-    PyArray1::from_vec(py, out).reshape([n, nv])
+    let inputs = BatchInputs {
+        src: "aba_batch",
+        q: q.as_array(),
+        v: Some(v.as_array()),
+        a: Some(tau.as_array()),
+        second_is_tau: true,
+    };
+    run_batch(py, &model, &data, &inputs, &[m.nv], |s, row| {
+        row.copy_from_slice(dynamics::aba(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
+    })
+}
+
+/// Copies the first `out.len() / ncols` rows of `x` into the row-major `out`.
+fn rows_into(x: &nalgebra::DMatrix<f64>, out: &mut [f64]) {
+    let nc = x.ncols();
+    for (r, row) in out.chunks_mut(nc).enumerate() {
+        for (c, o) in row.iter_mut().enumerate() {
+            *o = x[(r, c)];
+        }
+    }
 }
 
 /// `crba` on every row: q (n, nq) → M (n, nv, nv), on all cores with the GIL released.
@@ -187,27 +182,18 @@ pub(crate) fn crba_batch<'py>(
     model: PyRef<'py, PyModel>,
     data: PyRef<'py, PyData>,
     q: Mat2<'py>,
-) -> PyResult<Bound<'py, PyArray3<f64>>> {
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let m = &model.inner;
-    model.check_data(&data)?;
-    let qs = q.as_array();
-    let src = "crba_batch";
-    let n = batch_rows(src, "q", &qs, m.nq, None)?;
-    let nv = m.nv;
-    let out = py.detach(|| -> PyResult<Vec<f64>> {
-        check_rows(m, src, n, &qs, None, None, None)?;
-        Ok(par_rows(m, n, nv * nv, |s, k, blk| {
-            load_row(&qs, k, &mut s.q);
-            let h = dynamics::crba(m, &mut s.data, &s.q);
-            // row-major (nv, nv)
-            for r in 0..nv {
-                for c in 0..nv {
-                    blk[r * nv + c] = h[(r, c)];
-                }
-            }
-        }))
-    })?;
-    PyArray1::from_vec(py, out).reshape([n, nv, nv])
+    let inputs = BatchInputs {
+        src: "crba_batch",
+        q: q.as_array(),
+        v: None,
+        a: None,
+        second_is_tau: false,
+    };
+    run_batch(py, &model, &data, &inputs, &[m.nv, m.nv], |s, blk| {
+        rows_into(dynamics::crba(m, &mut s.data, &s.q), blk);
+    })
 }
 
 /// `frame_jacobian` on every row: q (n, nq) → J (n, 6, nv), on all cores with the GIL released.
@@ -218,34 +204,32 @@ pub(crate) fn frame_jacobian_batch<'py>(
     data: PyRef<'py, PyData>,
     q: Mat2<'py>,
     frame: &str,
-) -> PyResult<Bound<'py, PyArray3<f64>>> {
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let m = &model.inner;
-    model.check_data(&data)?;
     let fid = model.frame(frame)?;
-    let qs = q.as_array();
-    let src = "frame_jacobian_batch";
-    let n = batch_rows(src, "q", &qs, m.nq, None)?;
-    let nv = m.nv;
-    let out = py.detach(|| -> PyResult<Vec<f64>> {
-        check_rows(m, src, n, &qs, None, None, None)?;
-        Ok(par_rows(m, n, 6 * nv, |s, k, blk| {
-            load_row(&qs, k, &mut s.q);
-            kinematics::frame_jacobian(
-                m,
-                &mut s.data,
-                &s.q,
-                fid,
-                ReferenceFrame::LocalWorldAligned,
-                &mut s.jac,
-            );
-            for r in 0..6 {
-                for c in 0..nv {
-                    blk[r * nv + c] = s.jac[(r, c)];
-                }
+    let inputs = BatchInputs {
+        src: "frame_jacobian_batch",
+        q: q.as_array(),
+        v: None,
+        a: None,
+        second_is_tau: false,
+    };
+    run_batch(py, &model, &data, &inputs, &[6, m.nv], |s, blk| {
+        kinematics::frame_jacobian(
+            m,
+            &mut s.data,
+            &s.q,
+            fid,
+            ReferenceFrame::LocalWorldAligned,
+            &mut s.jac,
+        );
+        let nv = m.nv;
+        for (r, row) in blk.chunks_mut(nv).enumerate() {
+            for (c, o) in row.iter_mut().enumerate() {
+                *o = s.jac[(r, c)];
             }
-        }))
-    })?;
-    PyArray1::from_vec(py, out).reshape([n, 6, nv])
+        }
+    })
 }
 
 /// Registers the functions.

@@ -18,6 +18,7 @@ use pyo3::types::{PyDict, PyList};
 use pyo3::{IntoPyObjectExt, create_exception};
 
 mod analysis;
+mod chapter;
 mod dynamics;
 mod layout;
 mod model;
@@ -92,6 +93,7 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     dynamics::register(m)?;
     layout::register(m)?;
     analysis::register(m)?;
+    chapter::register(m)?;
     planning::register(m)?;
     sweep::register(m)?;
     Ok(())

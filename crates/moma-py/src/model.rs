@@ -6,7 +6,10 @@ use moma::io::urdf::{model_from_urdf_file, model_from_urdf_str};
 use moma::multibody::{Data, FrameIndex, Model, RootJoint, neutral};
 use nalgebra::{DVector, Matrix6xX};
 use numpy::ndarray::{ArrayView1, ArrayView2};
-use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, ToPyArray};
+use numpy::{
+    AllowTypeChange, IxDyn, PyArray1, PyArray2, PyArrayDyn, PyArrayLike1, PyArrayLike2,
+    PyArrayMethods, ToPyArray,
+};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -267,10 +270,17 @@ pub(crate) fn batch_rows(
     Ok(n)
 }
 
-/// Row `k` of a batch input into `out` (shapes checked by [`batch_rows`]).
+/// Row `k` of a batch input into `out` (shapes checked by [`batch_rows`]): one slice copy
+/// for a C-contiguous array, element by element otherwise.
 pub(crate) fn load_row(x: &ArrayView2<'_, f64>, k: usize, out: &mut DVector<f64>) {
-    for (o, v) in out.iter_mut().zip(x.row(k).iter()) {
-        *o = *v;
+    let w = out.len();
+    match x.as_slice() {
+        Some(s) => out.as_mut_slice().copy_from_slice(&s[k * w..(k + 1) * w]),
+        None => {
+            for (o, v) in out.iter_mut().zip(x.row(k).iter()) {
+                *o = *v;
+            }
+        }
     }
 }
 
@@ -327,33 +337,124 @@ impl Scratch {
 /// States per parallel task of the batch forms.
 const CHUNK: usize = 64;
 
-/// Evaluates `f(scratch, k, out_row)` for rows `k = 0..n` on all cores (rayon, one
-/// [`Scratch`] per task of [`CHUNK`] rows) into a row-major `n × width` array. Each row
-/// depends only on its own inputs, so the result does not depend on the thread count.
+/// Evaluates `f(scratch, k, out_row)` for every row `k` of the row-major `out` (rows of
+/// `width`), in place: on one thread with one [`Scratch`] when the batch is small or the
+/// pool has one thread, else on all cores (rayon, tasks of [`CHUNK`] rows, one
+/// [`Scratch`] per worker split). Each row depends only on its own inputs, so the result
+/// does not depend on the thread count.
 pub(crate) fn par_rows(
     m: &Model,
-    n: usize,
     width: usize,
+    out: &mut [f64],
     f: impl Fn(&mut Scratch, usize, &mut [f64]) + Sync,
-) -> Vec<f64> {
+) {
     use rayon::prelude::*;
-    let mut out = vec![0.0; n * width];
     if width == 0 {
-        return out;
+        return;
     }
-    out.par_chunks_mut(width * CHUNK)
-        .enumerate()
-        .for_each(|(c, block)| {
-            let mut s = Scratch::new(m);
+    let n = out.len() / width;
+    if n <= CHUNK || rayon::current_num_threads() == 1 {
+        let mut s = Scratch::new(m);
+        for (k, row) in out.chunks_mut(width).enumerate() {
+            f(&mut s, k, row);
+        }
+        return;
+    }
+    out.par_chunks_mut(width * CHUNK).enumerate().for_each_init(
+        || Scratch::new(m),
+        |s, (c, block)| {
             for (j, row) in block.chunks_mut(width).enumerate() {
-                f(&mut s, c * CHUNK + j, row);
+                f(s, c * CHUNK + j, row);
             }
-        });
-    out
+        },
+    );
+}
+
+/// The state inputs of a batch form, one state per row: `q` (n, nq) and, when given, `v`
+/// and a second velocity-sized input (`a`, or `tau` when `second_is_tau`), both (n, nv).
+/// Rows fill a [`Scratch`]'s `q`, `v` and `a`; an input not given stays zero there.
+pub(crate) struct BatchInputs<'a> {
+    pub(crate) src: &'static str,
+    pub(crate) q: ArrayView2<'a, f64>,
+    pub(crate) v: Option<ArrayView2<'a, f64>>,
+    pub(crate) a: Option<ArrayView2<'a, f64>>,
+    pub(crate) second_is_tau: bool,
+}
+
+impl BatchInputs<'_> {
+    /// Checks the shapes and returns the number of states.
+    pub(crate) fn rows(&self, m: &Model) -> PyResult<usize> {
+        let n = batch_rows(self.src, "q", &self.q, m.nq, None)?;
+        if let Some(x) = &self.v {
+            batch_rows(self.src, "v", x, m.nv, Some(n))?;
+        }
+        if let Some(x) = &self.a {
+            let name = if self.second_is_tau { "tau" } else { "a" };
+            batch_rows(self.src, name, x, m.nv, Some(n))?;
+        }
+        Ok(n)
+    }
+
+    /// The library's state check on every row (the error names the first bad row).
+    pub(crate) fn check(&self, m: &Model, n: usize) -> PyResult<()> {
+        let (a, tau) = if self.second_is_tau {
+            (None, self.a.as_ref())
+        } else {
+            (self.a.as_ref(), None)
+        };
+        check_rows(m, self.src, n, &self.q, self.v.as_ref(), a, tau)
+    }
+
+    /// Row `k` into `s.q`, `s.v` and `s.a`.
+    pub(crate) fn load(&self, k: usize, s: &mut Scratch) {
+        load_row(&self.q, k, &mut s.q);
+        if let Some(x) = &self.v {
+            load_row(x, k, &mut s.v);
+        }
+        if let Some(x) = &self.a {
+            load_row(x, k, &mut s.a);
+        }
+    }
+}
+
+/// The one shape of the batch forms: checks `data` and the inputs' shapes, makes the
+/// output array `(n, *row_shape)`, then, with the GIL released, checks every row and
+/// evaluates `f(scratch, out_row)` on each (after loading the row into the scratch)
+/// straight into the array, on all cores ([`par_rows`]).
+pub(crate) fn run_batch<'py>(
+    py: Python<'py>,
+    model: &PyModel,
+    data: &PyData,
+    inputs: &BatchInputs<'_>,
+    row_shape: &[usize],
+    f: impl Fn(&mut Scratch, &mut [f64]) + Sync,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let m = &model.inner;
+    model.check_data(data)?;
+    let n = inputs.rows(m)?;
+    let mut shape = Vec::with_capacity(row_shape.len() + 1);
+    shape.push(n);
+    shape.extend_from_slice(row_shape);
+    let width = row_shape.iter().product();
+    let out = PyArrayDyn::<f64>::zeros(py, IxDyn(&shape), false);
+    {
+        let mut rw = out.readwrite();
+        let buf = rw.as_slice_mut().map_err(err)?;
+        py.detach(|| -> PyResult<()> {
+            inputs.check(m, n)?;
+            par_rows(m, width, buf, |s, k, row| {
+                inputs.load(k, s);
+                f(s, row);
+            });
+            Ok(())
+        })?;
+    }
+    Ok(out)
 }
 
 /// Checks every row of a batch (finite values, unit base quaternion) before the parallel
-/// pass, so the error names the first bad row.
+/// pass, so the error names the first bad row. Without a free-flyer root, one pass over
+/// the arrays proves them finite and the per-row check runs only to name a bad row.
 pub(crate) fn check_rows(
     m: &Model,
     src: &str,
@@ -363,6 +464,11 @@ pub(crate) fn check_rows(
     a: Option<&ArrayView2<'_, f64>>,
     tau: Option<&ArrayView2<'_, f64>>,
 ) -> PyResult<()> {
+    let finite =
+        |x: Option<&ArrayView2<'_, f64>>| x.is_none_or(|x| x.iter().all(|y| y.is_finite()));
+    if m.root != RootJoint::FreeFlyer && finite(Some(q)) && finite(v) && finite(a) && finite(tau) {
+        return Ok(());
+    }
     let mut s = (
         DVector::zeros(m.nq),
         DVector::zeros(m.nv),

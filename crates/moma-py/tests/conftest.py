@@ -54,7 +54,7 @@ def assert_close(actual, expected, rtol=1e-9, atol=1e-9, path="$"):
         assert len(actual) == len(expected), f"{path}: length {len(actual)} != {len(expected)}"
         for i, (a, e) in enumerate(zip(actual, expected)):
             assert_close(a, e, rtol, atol, f"{path}[{i}]")
-    elif expected is None or isinstance(expected, bool):
+    elif expected is None or isinstance(expected, (bool, str)):
         assert actual == expected, f"{path}: {actual!r} != {expected!r}"
     elif isinstance(expected, int) and isinstance(actual, int):
         assert actual == expected, f"{path}: {actual} != {expected}"

@@ -6,13 +6,10 @@
 
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow};
-use moma::closed_form::cases::{DEFAULT_TOLERANCE, evaluate_document};
+use moma::closed_form::cases::{
+    DEFAULT_TOLERANCE, MAX_TOLERANCE as MAX_TOL, MIN_TOLERANCE as MIN_TOL, evaluate_document,
+};
 use std::path::PathBuf;
-
-/// Smallest `--tol`: a few units of f64's relative resolution (2.2e-16).
-const MIN_TOL: f64 = 1e-15;
-/// Largest `--tol`: beyond it a "trajectory" carries no digit.
-const MAX_TOL: f64 = 0.1;
 
 /// Arguments of `moma eval`.
 #[derive(clap::Args)]

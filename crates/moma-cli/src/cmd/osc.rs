@@ -6,7 +6,8 @@ use super::common::{load_model, parse_root};
 use crate::output::{print_json, write_json};
 use anyhow::{Context, Result, anyhow, bail};
 use moma::control::osc::{
-    MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, task_conditioning,
+    MIN_TASK_CONDITIONING, OscData, OscStateReport, osc_fixed_base, osc_to_pinocchio_layout,
+    task_conditioning,
 };
 use moma::ik::tasks::TaskRows;
 use moma::kinematics;
@@ -36,8 +37,9 @@ pub struct Args {
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-    /// Layout of the states' q (and v): moma or pinocchio (continuous joints as cos, sin;
-    /// the free-flyer is the same in both).
+    /// Layout of the states' q, v and null_torque and of the joint-space results (J̄, N, τ)
+    /// and the bias J̇v: moma or pinocchio (continuous joints as cos, sin; a planar root as
+    /// [x, y, cos θ, sin θ] with base-frame velocity; the free-flyer is the same in both).
     #[arg(long, value_enum, default_value_t = super::common::Layout::Moma)]
     pub layout: super::common::Layout,
 }
@@ -68,12 +70,11 @@ pub fn run(args: Args) -> Result<()> {
     let states = moma::io::states::parse_osc_states(&text, &args.states)?;
     let nv = model.nv;
     let conv = super::common::LayoutConv::new(&model, args.layout);
-    if conv.moves_velocities() {
-        bail!(
-            "--layout pinocchio: not supported by osc on a planar root (the task bias and \
-             torques depend on the layout's velocity frame); use --layout moma"
-        );
-    }
+    // On a planar root, Pinocchio's velocities are in the base frame: the states' v and
+    // null_torque come in through Tᵀ and the joint-space results go out through T.
+    let pin = conv
+        .moves_velocities()
+        .then(|| moma::io::pinocchio_layout::PinocchioLayout::new(&model));
     let mut data = Data::new(&model);
     let mut od = OscData::new(nv, &rows);
     let mut out = Vec::with_capacity(states.len());
@@ -83,11 +84,12 @@ pub fn run(args: Args) -> Result<()> {
         kinematics::check_state(&model, &src, Some(&q_in), s.v.as_deref(), None, None)?;
         let (a_des, tau0) = s.task_inputs(&rows, nv, k, &args.states)?;
         let a_des = DVector::from_vec(a_des);
-        let tau0 = DVector::from_vec(tau0);
+        let tau0 = DVector::from_vec(conv.v_in(&q_in, tau0));
         let q = DVector::from_column_slice(&q_in);
-        let v =
-            s.v.as_ref()
-                .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x));
+        let v = s.v.as_ref().map_or_else(
+            || DVector::zeros(nv),
+            |x| DVector::from_vec(conv.v_in(&q_in, x.clone())),
+        );
         let res = osc_fixed_base(&model, &mut data, &mut od, fid, &q, &v, &a_des, &tau0);
         // The conditioning is judged on J, filled before any factorisation can fail.
         let cond = task_conditioning(&od);
@@ -98,6 +100,9 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         res.map_err(|e| anyhow!("{src}: {e}"))?;
+        if let Some(p) = &pin {
+            osc_to_pinocchio_layout(p, q.as_slice(), v.as_slice(), &mut od);
+        }
         out.push(OscStateReport::new(&od, cond));
     }
     let output = Output {

@@ -141,8 +141,11 @@ def osc(
     task_acceleration: ArrayLike,
     null_torque: Optional[ArrayLike] = None,
     rows: str = "full",
+    *,
+    layout: Literal["moma", "pinocchio"] = "moma",
 ) -> dict[str, Any]:
-    """Operational-space quantities of one state: the dict of `moma osc`'s states[i]."""
+    """Operational-space quantities of one state: the dict of `moma osc`'s states[i]
+    (layout="pinocchio": q, v, null_torque and J-bar, N, tau, J-dot v in Pinocchio's)."""
 
 def load_map(path: Path, resolution: Optional[float] = None) -> Map:
     """Loads a ROS YAML, Moving AI .map or bare PGM/PNG map."""
@@ -197,8 +200,11 @@ def to_pinocchio(
     v: Optional[ArrayLike] = None,
     a: Optional[ArrayLike] = None,
     tau: Optional[ArrayLike] = None,
+    *,
+    mass_matrix: Optional[ArrayLike] = None,
+    jacobian: Optional[ArrayLike] = None,
 ) -> dict[str, F64]:
-    """moma's q (and v, a, tau) in Pinocchio's layout; a needs v."""
+    """moma's q (and v, a, tau, mass_matrix, jacobian) in Pinocchio's layout; a needs v."""
 
 def from_pinocchio(
     model: Model,
@@ -206,5 +212,19 @@ def from_pinocchio(
     v: Optional[ArrayLike] = None,
     a: Optional[ArrayLike] = None,
     tau: Optional[ArrayLike] = None,
+    *,
+    mass_matrix: Optional[ArrayLike] = None,
+    jacobian: Optional[ArrayLike] = None,
 ) -> dict[str, F64]:
-    """A Pinocchio q (and v, a, tau) in moma's layout; a needs v."""
+    """A Pinocchio q (and v, a, tau, mass_matrix, jacobian) in moma's layout; a needs v."""
+
+def eval_cases(
+    doc: Union[Path, Mapping[str, Any]], tol: float = 1e-12
+) -> dict[str, Any]:
+    """The chapter models on a case document (a path or the parsed dict), as `moma eval`."""
+
+def eval_case(model: str, case: Mapping[str, Any], tol: float = 1e-12) -> dict[str, Any]:
+    """One case of one chapter model (canonical name or alias m1..m6), outputs filled in."""
+
+def chapter_models() -> list[str]:
+    """Canonical names of the chapter models, with "unicycle_control"."""

@@ -400,6 +400,14 @@ pub const UNICYCLE_CONTROL: &str = "unicycle_control";
 /// Default integration tolerance (`rtol = atol`) for trajectories.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
 
+/// Smallest integration tolerance accepted from a user (`moma eval --tol`, the Python
+/// package's `eval_cases`): a few units of f64's relative resolution (2.2e-16).
+pub const MIN_TOLERANCE: f64 = 1e-15;
+
+/// Largest integration tolerance accepted from a user: beyond it a trajectory carries
+/// no digit.
+pub const MAX_TOLERANCE: f64 = 0.1;
+
 /// Evaluates a whole case document (`model`, `cases`, …); every other top-level field is
 /// preserved.
 pub fn evaluate_document(doc: &Value, tol: f64) -> Result<Value> {

@@ -28,6 +28,7 @@
 
 use crate::dynamics::{crba, nonlinear_effects};
 use crate::error::{Error, Result};
+use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
 use crate::linalg::cholesky_in_place;
 use crate::mobile::{
@@ -66,6 +67,8 @@ pub struct OscData {
     chol_l: DMatrix<f64>,
     jac6: Matrix6xX<f64>,
     tmp_m: DVector<f64>,
+    tmp_n: DVector<f64>,
+    tmp_n2: DVector<f64>,
 }
 
 impl OscData {
@@ -94,6 +97,8 @@ impl OscData {
             chol_l: DMatrix::zeros(m, m),
             jac6: Matrix6xX::zeros(n),
             tmp_m: DVector::zeros(m),
+            tmp_n: DVector::zeros(n),
+            tmp_n2: DVector::zeros(n),
         }
     }
 
@@ -315,6 +320,32 @@ pub fn osc_fixed_base(
         }
     }
     osc_from_terms(od, &data.mass_matrix, &data.nle, a_des, tau0)
+}
+
+/// Moves the results of an update in `od`, computed in moma's layout at `(q, v)` (moma's
+/// layout), into Pinocchio's (see [`crate::io::pinocchio_layout`]): with the velocity map
+/// `v_P = T v` of a planar root, `J_P = J Tᵀ`, `J̄_P = T J̄`, `N_P = T N Tᵀ` and
+/// `τ_P = T τ`, while the task quantities (world axes) Λ and F are unchanged. The bias
+/// changes because Pinocchio's J̇v is the task acceleration at `a_P = 0`, which is moma's
+/// `a = ω S v`: `(J̇v)_P = J̇v + J ω S v`. Feeding the null-space torque in Pinocchio's
+/// layout is the caller's part (`τ₀ = Tᵀ τ₀_P`,
+/// [`PinocchioLayout::tau_from_pinocchio`]). A model without a planar root is left as it
+/// is. No allocation.
+///
+/// # Panics
+/// If `q`, `v` or `od` do not fit the layout's model.
+pub fn osc_to_pinocchio_layout(layout: &PinocchioLayout, q: &[f64], v: &[f64], od: &mut OscData) {
+    assert_eq!(od.dofs(), layout.nv(), "OscData made for another model");
+    // J ω S v, with moma's J: the moma acceleration of a zero Pinocchio acceleration.
+    od.tmp_n2.fill(0.0);
+    layout.a_from_pinocchio(q, v, od.tmp_n2.as_slice(), od.tmp_n.as_mut_slice());
+    od.acceleration_bias.gemv(1.0, &od.jacobian, &od.tmp_n, 1.0);
+    layout.columns_to_pinocchio_in_place(q, &mut od.jacobian);
+    layout.rows_to_pinocchio_in_place(q, &mut od.dynamically_consistent_inverse);
+    layout.rows_to_pinocchio_in_place(q, &mut od.nullspace_projector);
+    layout.columns_to_pinocchio_in_place(q, &mut od.nullspace_projector);
+    od.tmp_n.copy_from(&od.torque);
+    layout.tau_to_pinocchio(q, od.tmp_n.as_slice(), od.torque.as_mut_slice());
 }
 
 /// σ_min/σ_max of the task Jacobian in `od` (filled by an update). Allocates (one SVD):

@@ -340,6 +340,32 @@ impl PinocchioLayout {
         self.columns(q, j_pin, out, true);
     }
 
+    /// `m ← T m` in place, for a matrix whose rows are velocity (or generalised-force)
+    /// coordinates and whose columns are not, such as the dynamically consistent inverse
+    /// J̄ (nv × m): `J̄_P = T J̄`.
+    ///
+    /// # Panics
+    /// If `m` does not have nv rows or `q` the model's nq.
+    pub fn rows_to_pinocchio_in_place(&self, q: &[f64], m: &mut DMatrix<f64>) {
+        assert_eq!(m.nrows(), self.nv, "matrix rows");
+        if let Some((c, s, iv)) = self.heading(q) {
+            rotate_rows(m, iv, c, s);
+        }
+    }
+
+    /// `m ← m Tᵀ` in place, for a matrix whose columns are velocity coordinates (a
+    /// Jacobian); with [`Self::rows_to_pinocchio_in_place`] it makes the congruence
+    /// `T m Tᵀ` of an nv × nv matrix (a mass matrix, a null-space projector).
+    ///
+    /// # Panics
+    /// If `m` does not have nv columns or `q` the model's nq.
+    pub fn columns_to_pinocchio_in_place(&self, q: &[f64], m: &mut DMatrix<f64>) {
+        assert_eq!(m.ncols(), self.nv, "matrix columns");
+        if let Some((c, s, iv)) = self.heading(q) {
+            rotate_cols(m, iv, c, s);
+        }
+    }
+
     fn columns(&self, q: &[f64], j: &DMatrix<f64>, out: &mut DMatrix<f64>, transpose: bool) {
         assert_eq!(j.ncols(), self.nv, "Jacobian columns");
         assert_eq!(out.shape(), j.shape(), "out size");
@@ -486,6 +512,29 @@ mod tests {
         l.matrix_from_pinocchio(&q, &hp, &mut hb);
         l.jacobian_from_pinocchio(&q, &jp, &mut jb);
         assert!((hb - h).norm() < 1e-14 && (jb - j).norm() < 1e-14);
+    }
+
+    #[test]
+    fn in_place_maps_equal_the_copying_ones() {
+        let l = layout();
+        let q = [0.0, 0.0, -0.7, 0.0, 0.0];
+        let h = DMatrix::from_fn(5, 5, |i, j| 1.0 / (1.0 + i as f64 + j as f64));
+        let jb = DMatrix::from_fn(5, 3, |i, j| (i * 3 + j) as f64 * 0.1 - 0.4);
+        let (mut hp, mut jt) = (DMatrix::zeros(5, 5), DMatrix::zeros(3, 5));
+        l.matrix_to_pinocchio(&q, &h, &mut hp);
+        l.jacobian_to_pinocchio(&q, &jb.transpose(), &mut jt);
+        let mut h2 = h.clone();
+        l.rows_to_pinocchio_in_place(&q, &mut h2);
+        l.columns_to_pinocchio_in_place(&q, &mut h2);
+        assert!((h2 - hp).norm() < 1e-15);
+        // T J̄ = (J̄ᵀ Tᵀ)ᵀ
+        let mut j2 = jb.clone();
+        l.rows_to_pinocchio_in_place(&q, &mut j2);
+        assert!((j2 - jt.transpose()).norm() < 1e-15);
+        assert!(
+            (jb[(0, 0)] - jt[(0, 0)]).abs() > 1e-3,
+            "the heading must act"
+        );
     }
 
     #[test]
