@@ -4,6 +4,7 @@
 
 use moma::control::unicycle::Kanayama;
 use moma::io::urdf::model_from_urdf_file;
+use moma::mission::planned::{PlannedPathRequest, plan_platform_reference};
 use moma::mobile::{DiffDrive, WheeledBase, WheeledModel};
 use moma::multibody::RootJoint;
 use moma::planning::trajectory::DiffDriveLimits;
@@ -11,7 +12,6 @@ use moma::planning::{MapKind, OccupancyGrid, load_map};
 use moma::sim::closed_loop::{ClosedLoopOptions, simulate_closed_loop};
 use moma::sim::feedback::{PlatformController, PlatformLaw, TrackingReference, VelocityServo};
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::planned::{PlannedPathRequest, plan_platform_reference};
 use moma::sim::scenario::IntegratorSettings;
 use moma::sim::wheeled_system::WheeledSystem;
 

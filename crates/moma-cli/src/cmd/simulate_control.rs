@@ -21,6 +21,7 @@ use moma::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipula
 use moma::control::pursuit::{PurePursuit, PurePursuitParams};
 use moma::control::task::Coupling;
 use moma::control::unicycle::{Aicardi, Astolfi, ConstantInputReference, Kanayama, Samson};
+use moma::mission::planned::{PlannedPath, PlannedPathRequest, plan_platform_reference};
 use moma::planning::load_map;
 use moma::planning::trajectory::{DiffDriveLimits, time_parameterize};
 use moma::sim::closed_loop::{
@@ -32,7 +33,6 @@ use moma::sim::feedback::{
     PointReference, SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
 };
 use moma::sim::fixed_base::FixedBaseSystem;
-use moma::sim::planned::{PlannedPath, PlannedPathRequest, plan_platform_reference};
 use moma::sim::scenario::IntegratorSettings;
 use moma::sim::wheeled::ReducedSystem;
 use serde::{Deserialize, Serialize};

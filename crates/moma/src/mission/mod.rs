@@ -22,6 +22,7 @@
 //! errors are [`crate::Error`]s.
 
 pub(crate) mod plan;
+pub mod planned;
 pub mod reference;
 mod run;
 pub mod scenario;

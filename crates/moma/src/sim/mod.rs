@@ -11,7 +11,6 @@ pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
 pub mod monitor;
-pub mod planned;
 pub mod recorder;
 pub mod scenario;
 pub mod stability_monitor;

@@ -7,10 +7,10 @@
 //! [`crate::mission`], with no tip-over bound — as a [`SampledTrajectory`] the platform
 //! laws of [`crate::sim::feedback`] track (Kanayama) or follow (pure pursuit, its path).
 
+use super::plan::Planner;
+use super::reference::{TimingStart, build_reference};
 use crate::control::unicycle::Pose;
 use crate::error::{Error, Result};
-use crate::mission::plan::Planner;
-use crate::mission::reference::{TimingStart, build_reference};
 use crate::planning::OccupancyGrid;
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, TrajectoryPoint};
 use crate::sim::feedback::SampledTrajectory;
