@@ -535,14 +535,26 @@ const M5_LAWS: [&str; 5] = [
 /// The plant and the law of a closed-loop scenario.
 type Loop = (Box<dyn ReducedSystem>, Box<dyn FeedbackLaw>, String);
 
-fn only_for(law: &str, c: &ControllerSpec, fields: &[(&str, bool)]) -> Result<()> {
+fn only_for(law: &str, fields: &[(&str, bool)]) -> Result<()> {
     for (name, present) in fields {
         if *present {
             bail!("controller.{name} does not apply to law {law}");
         }
     }
-    let _ = c;
     Ok(())
+}
+
+/// The `[controller]` keys of the platform servo that OSC (fixed base or on the platform)
+/// does not take, with whether the scenario gives them.
+fn not_for_osc(c: &ControllerSpec) -> [(&'static str, bool); 6] {
+    [
+        ("joints", c.joints.is_some()),
+        ("velocity_gain", c.velocity_gain.is_some()),
+        ("arm_kp", c.arm_kp.is_some()),
+        ("arm_kd", c.arm_kd.is_some()),
+        ("max_wheel_speed", c.max_wheel_speed.is_some()),
+        ("max_wheel_torque", c.max_wheel_torque.is_some()),
+    ]
 }
 
 fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop> {
@@ -564,18 +576,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
     if law == "osc"
         && let RobotSpec::FixedBase { urdf } = &sc.robot
     {
-        only_for(
-            law,
-            c,
-            &[
-                ("joints", c.joints.is_some()),
-                ("velocity_gain", c.velocity_gain.is_some()),
-                ("arm_kp", c.arm_kp.is_some()),
-                ("arm_kd", c.arm_kd.is_some()),
-                ("max_wheel_speed", c.max_wheel_speed.is_some()),
-                ("max_wheel_torque", c.max_wheel_torque.is_some()),
-            ],
-        )?;
+        only_for(law, &not_for_osc(c))?;
         let model = fixed_base_model(&base_dir.join(urdf), sc.gravity).context("robot")?;
         let q0 = sc.initial.q.clone().unwrap_or_else(|| vec![0.0; model.nq]);
         if q0.len() != model.nq {
@@ -646,7 +647,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
         let arm0: Vec<f64> = wm.arm_dofs().iter().map(|&d| q0[d]).collect();
         let name = format!("URDF {}", urdf.display());
         if law == "coordinated" {
-            only_for(law, c, &[("max_torque", c.max_torque.is_some())])?;
+            only_for(law, &[("max_torque", c.max_torque.is_some())])?;
             let all = ["K_E", "K_Y"];
             check_keys(law, &c.gains, &all)?;
             let gains = CoordinatedGains {
@@ -693,18 +694,7 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
             ));
         }
         if law == "osc" {
-            only_for(
-                law,
-                c,
-                &[
-                    ("joints", c.joints.is_some()),
-                    ("velocity_gain", c.velocity_gain.is_some()),
-                    ("arm_kp", c.arm_kp.is_some()),
-                    ("arm_kd", c.arm_kd.is_some()),
-                    ("max_wheel_speed", c.max_wheel_speed.is_some()),
-                    ("max_wheel_torque", c.max_wheel_torque.is_some()),
-                ],
-            )?;
+            only_for(law, &not_for_osc(c))?;
             let gains = osc_gains(law, &c.gains)?;
             let frame = c
                 .frame
@@ -734,7 +724,6 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
         }
         only_for(
             law,
-            c,
             &[
                 ("max_torque", c.max_torque.is_some()),
                 ("frame", c.frame.is_some()),
@@ -765,7 +754,6 @@ fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop
     if M5_LAWS.contains(&law) {
         only_for(
             law,
-            c,
             &[
                 ("velocity_gain", c.velocity_gain.is_some()),
                 ("arm_kp", c.arm_kp.is_some()),
