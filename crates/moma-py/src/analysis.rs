@@ -17,6 +17,7 @@ use moma::stability::{
     SupportAttachment, SupportPolygon, evaluate,
 };
 use nalgebra::{DVector, Vector2, Vector3};
+use numpy::ndarray::ArrayView1;
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -330,6 +331,99 @@ pub(crate) fn space_state<'py>(
     to_py(py, &st)
 }
 
+/// The `layout` argument of `osc`: `None` for moma's own, the converter for Pinocchio's.
+fn osc_layout(m: &Model, layout: &str) -> PyResult<Option<PinocchioLayout>> {
+    match layout {
+        "moma" => Ok(None),
+        "pinocchio" => Ok(Some(PinocchioLayout::new(m))),
+        other => Err(err(format!(
+            "osc layout: expected \"moma\" or \"pinocchio\", got \"{other}\""
+        ))),
+    }
+}
+
+/// Loads `osc`'s q and v (zero when not given) into `d` in moma's layout, converting
+/// from Pinocchio's when `pin` is given, and checks the state.
+fn load_osc_state(
+    m: &Model,
+    d: &mut PyData,
+    pin: Option<&PinocchioLayout>,
+    q: &Vec1<'_>,
+    v: Option<&Vec1<'_>>,
+) -> PyResult<()> {
+    let src = "osc";
+    match pin {
+        None => load(src, "q", q.as_array(), &mut d.q)?,
+        Some(l) => {
+            let qp: Vec<f64> = q.as_array().iter().copied().collect();
+            l.q_from_pinocchio(&qp, d.q.as_mut_slice())
+                .map_err(|e| err(format!("{src}: {e}")))?;
+        }
+    }
+    d.v.fill(0.0);
+    if let Some(v) = v {
+        load(src, "v", v.as_array(), &mut d.v)?;
+        if let Some(l) = pin {
+            d.a.copy_from(&d.v);
+            l.v_from_pinocchio(d.q.as_slice(), d.a.as_slice(), d.v.as_mut_slice());
+        }
+    }
+    check_state(
+        m,
+        || src.into(),
+        d.q.as_slice(),
+        Some(d.v.as_slice()),
+        None,
+        None,
+    )
+}
+
+/// `osc`'s desired task acceleration on the selected `rows`: given as 6 values (`[ẍ; ω̇]`)
+/// or one per selected row.
+fn osc_task_acceleration(ta: ArrayView1<'_, f64>, rows: &[usize]) -> PyResult<DVector<f64>> {
+    let src = "osc";
+    let nr = rows.len();
+    let a_des = if ta.len() == nr {
+        DVector::from_iterator(nr, ta.iter().copied())
+    } else if ta.len() == 6 {
+        DVector::from_iterator(nr, rows.iter().map(|&r| ta[r]))
+    } else {
+        return Err(err(format!(
+            "{src} task_acceleration: expected 6 values (or {nr}, one per selected row), got {}",
+            ta.len()
+        )));
+    };
+    if let Some(i) = a_des.iter().position(|x| !x.is_finite()) {
+        return Err(err(format!("{src} task_acceleration[{i}]: not finite")));
+    }
+    Ok(a_des)
+}
+
+/// `osc`'s null-space torque τ₀ in moma's layout (zero when not given).
+fn osc_null_torque(
+    d: &PyData,
+    pin: Option<&PinocchioLayout>,
+    null_torque: Option<&Vec1<'_>>,
+    nv: usize,
+) -> PyResult<DVector<f64>> {
+    let src = "osc";
+    let Some(t) = null_torque else {
+        return Ok(DVector::zeros(nv));
+    };
+    let t = vector(src, "null_torque", t.as_array(), nv)?;
+    if let Some(i) = t.iter().position(|x| !x.is_finite()) {
+        return Err(err(format!("{src} null_torque[{i}]: not finite")));
+    }
+    Ok(match pin {
+        None => t,
+        Some(l) => {
+            let mut tm = DVector::zeros(nv);
+            l.tau_from_pinocchio(d.q.as_slice(), t.as_slice(), tm.as_mut_slice());
+            tm
+        }
+    })
+}
+
 /// Khatib's operational-space quantities of `frame` at one state (fixed base), as the
 /// dict of `moma osc`'s `states[i]`: `task_inertia` Λ, `dynamically_consistent_inverse`
 /// J̄, `nullspace_projector` N (lists of rows), `acceleration_bias` J̇v, `task_force` F,
@@ -366,74 +460,13 @@ pub(crate) fn osc<'py>(
         .validate()
         .map_err(|e| err(format!("rows: {e}")))?;
     let rows = task_rows.indices();
-    let nr = rows.len();
     let nv = m.nv;
     let src = "osc";
-    let pin = match layout {
-        "moma" => None,
-        "pinocchio" => Some(PinocchioLayout::new(m)),
-        other => {
-            return Err(err(format!(
-                "{src} layout: expected \"moma\" or \"pinocchio\", got \"{other}\""
-            )));
-        }
-    };
+    let pin = osc_layout(m, layout)?;
     let d = &mut *data;
-    match &pin {
-        None => load(src, "q", q.as_array(), &mut d.q)?,
-        Some(l) => {
-            let qp: Vec<f64> = q.as_array().iter().copied().collect();
-            l.q_from_pinocchio(&qp, d.q.as_mut_slice())
-                .map_err(|e| err(format!("{src}: {e}")))?;
-        }
-    }
-    d.v.fill(0.0);
-    if let Some(v) = &v {
-        load(src, "v", v.as_array(), &mut d.v)?;
-        if let Some(l) = &pin {
-            d.a.copy_from(&d.v);
-            l.v_from_pinocchio(d.q.as_slice(), d.a.as_slice(), d.v.as_mut_slice());
-        }
-    }
-    check_state(
-        m,
-        || src.into(),
-        d.q.as_slice(),
-        Some(d.v.as_slice()),
-        None,
-        None,
-    )?;
-    let ta = task_acceleration.as_array();
-    let a_des = if ta.len() == nr {
-        DVector::from_iterator(nr, ta.iter().copied())
-    } else if ta.len() == 6 {
-        DVector::from_iterator(nr, rows.iter().map(|&r| ta[r]))
-    } else {
-        return Err(err(format!(
-            "{src} task_acceleration: expected 6 values (or {nr}, one per selected row), got {}",
-            ta.len()
-        )));
-    };
-    if let Some(i) = a_des.iter().position(|x| !x.is_finite()) {
-        return Err(err(format!("{src} task_acceleration[{i}]: not finite")));
-    }
-    let tau0 = match &null_torque {
-        Some(t) => {
-            let t = vector(src, "null_torque", t.as_array(), nv)?;
-            if let Some(i) = t.iter().position(|x| !x.is_finite()) {
-                return Err(err(format!("{src} null_torque[{i}]: not finite")));
-            }
-            match &pin {
-                None => t,
-                Some(l) => {
-                    let mut tm = DVector::zeros(nv);
-                    l.tau_from_pinocchio(d.q.as_slice(), t.as_slice(), tm.as_mut_slice());
-                    tm
-                }
-            }
-        }
-        None => DVector::zeros(nv),
-    };
+    load_osc_state(m, d, pin.as_ref(), &q, v.as_ref())?;
+    let a_des = osc_task_acceleration(task_acceleration.as_array(), &rows)?;
+    let tau0 = osc_null_torque(d, pin.as_ref(), null_torque.as_ref(), nv)?;
     let mut od = OscData::new(nv, &rows);
     let res = osc_fixed_base(m, &mut d.inner, &mut od, fid, &d.q, &d.v, &a_des, &tau0);
     let cond = task_conditioning(&od);

@@ -3,7 +3,7 @@
 use crate::model::{BatchInputs, Mat2, PyData, PyModel, Vec1, check_state, load, run_batch};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
-use numpy::{PyArray1, PyArray2, PyArrayDyn, ToPyArray};
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, ToPyArray};
 use pyo3::prelude::*;
 
 /// Inverse dynamics (recursive Newton-Euler): the joint torques
@@ -118,8 +118,9 @@ pub(crate) fn frame_jacobian<'py>(
 }
 
 /// `rnea` on every row: q (n, nq), v and a (n, nv) → tau (n, nv). Loops in Rust with
-/// the GIL released, on all cores (one workspace per worker; `data` is only checked),
-/// writing straight into the returned array.
+/// the GIL released, on all cores, with the library's multi-state kernel
+/// (`moma::dynamics::rnea_batch`, four states per pass) over each worker's rows, writing
+/// straight into the returned array; bit-for-bit the single calls' torques.
 #[pyfunction]
 pub(crate) fn rnea_batch<'py>(
     py: Python<'py>,
@@ -137,9 +138,84 @@ pub(crate) fn rnea_batch<'py>(
         a: Some(a.as_array()),
         second_is_tau: false,
     };
-    run_batch(py, &model, &data, &inputs, &[m.nv], |s, row| {
-        row.copy_from_slice(dynamics::rnea(m, &mut s.data, &s.q, &s.v, &s.a).as_slice());
-    })
+    model.check_data(&data)?;
+    let n = inputs.rows(m)?;
+    let out = PyArrayDyn::<f64>::zeros(py, numpy::ndarray::IxDyn(&[n, m.nv]), false);
+    {
+        let mut rw = out.readwrite();
+        let buf = rw.as_slice_mut().map_err(crate::err)?;
+        py.detach(|| -> PyResult<()> {
+            inputs.check(m, n)?;
+            // the kernel reads row-major slices: C-contiguous inputs as they are, others
+            // copied once (their size is the caller's own array's)
+            let (qa, va, aa) = (inputs.q, inputs.v.unwrap(), inputs.a.unwrap());
+            let owned = |x: &numpy::ndarray::ArrayView2<'_, f64>| {
+                if x.as_slice().is_some() {
+                    None
+                } else {
+                    Some(x.as_standard_layout().into_owned())
+                }
+            };
+            let (qo, vo, ao) = (owned(&qa), owned(&va), owned(&aa));
+            let (qs, vs, as_) = (
+                rows_slice(&qo, &qa),
+                rows_slice(&vo, &va),
+                rows_slice(&ao, &aa),
+            );
+            par_blocks(m, buf, |bd, first, block| {
+                let rows = block.len() / m.nv;
+                let (q0, v0) = (first * m.nq, first * m.nv);
+                dynamics::rnea_batch(
+                    m,
+                    bd,
+                    &qs[q0..q0 + rows * m.nq],
+                    &vs[v0..v0 + rows * m.nv],
+                    &as_[v0..v0 + rows * m.nv],
+                    block,
+                );
+            });
+            Ok(())
+        })?;
+    }
+    Ok(out)
+}
+
+/// The row-major values of `x`, or of its contiguous copy `o` when it has one.
+fn rows_slice<'s>(
+    o: &'s Option<numpy::ndarray::Array2<f64>>,
+    x: &'s numpy::ndarray::ArrayView2<'_, f64>,
+) -> &'s [f64] {
+    match o {
+        Some(a) => a.as_slice().unwrap_or(&[]),
+        None => x.as_slice().unwrap_or(&[]),
+    }
+}
+
+/// Rows per rayon task of [`par_blocks`] (a multiple of the kernel's four lanes).
+const BLOCK: usize = 256;
+
+/// Runs `f(workspace, first_row, out_rows)` over blocks of the row-major `out` (rows of
+/// nv): the whole batch at once on one thread, else blocks of [`BLOCK`] rows on all cores
+/// with one workspace per worker split. Each row depends only on its own inputs, so the
+/// result does not depend on the thread count.
+fn par_blocks(
+    m: &moma::multibody::Model,
+    out: &mut [f64],
+    f: impl Fn(&mut dynamics::BatchData, usize, &mut [f64]) + Sync,
+) {
+    use rayon::prelude::*;
+    if m.nv == 0 || out.is_empty() {
+        return;
+    }
+    let n = out.len() / m.nv;
+    if n <= BLOCK || rayon::current_num_threads() == 1 {
+        f(&mut dynamics::BatchData::new(m), 0, out);
+        return;
+    }
+    out.par_chunks_mut(m.nv * BLOCK).enumerate().for_each_init(
+        || dynamics::BatchData::new(m),
+        |bd, (c, block)| f(bd, c * BLOCK, block),
+    );
 }
 
 /// `aba` on every row: q (n, nq), v and tau (n, nv) → ddq (n, nv), on all cores with the GIL released.

@@ -452,6 +452,19 @@ pub(crate) fn run_batch<'py>(
     Ok(out)
 }
 
+/// True when every value of `x` is finite. On a contiguous array, blocks of 64 values
+/// are tested without an early exit inside the block, so the test is vectorised (it is
+/// a serial pass before the parallel one: at 1 ns a value it cost about a tenth of a
+/// Panda RNEA per state).
+fn all_finite(x: &ArrayView2<'_, f64>) -> bool {
+    match x.as_slice_memory_order() {
+        Some(s) => s
+            .chunks(64)
+            .all(|c| c.iter().fold(true, |ok, y| ok & y.is_finite())),
+        None => x.iter().all(|y| y.is_finite()),
+    }
+}
+
 /// Checks every row of a batch (finite values, unit base quaternion) before the parallel
 /// pass, so the error names the first bad row. Without a free-flyer root, one pass over
 /// the arrays proves them finite and the per-row check runs only to name a bad row.
@@ -464,8 +477,7 @@ pub(crate) fn check_rows(
     a: Option<&ArrayView2<'_, f64>>,
     tau: Option<&ArrayView2<'_, f64>>,
 ) -> PyResult<()> {
-    let finite =
-        |x: Option<&ArrayView2<'_, f64>>| x.is_none_or(|x| x.iter().all(|y| y.is_finite()));
+    let finite = |x: Option<&ArrayView2<'_, f64>>| x.is_none_or(all_finite);
     if m.root != RootJoint::FreeFlyer && finite(Some(q)) && finite(v) && finite(a) && finite(tau) {
         return Ok(());
     }

@@ -1,7 +1,8 @@
 //! Criterion benches of the rigid-body algorithms on Panda (fixed and planar base) and UR5:
 //! RNEA, CRBA, ABA, forward kinematics and one frame Jacobian (kinematics included), each
 //! over 100 seeded random states per iteration batch, as `moma bench` and Pinocchio's
-//! benchmark do.
+//! benchmark do; `rnea_batch` runs the multi-state RNEA kernel over the same 100 states
+//! (row-major), to set side by side with `rnea`'s loop of single calls.
 //!
 //! `cargo bench -p moma --bench dynamics` (add `RUSTFLAGS="-C target-cpu=native"` for the
 //! native build).
@@ -86,6 +87,17 @@ fn bench(cr: &mut Criterion) {
                 for i in 0..NSTATES {
                     black_box(dynamics::rnea(m, &mut data, &c.q[i], &c.v[i], &c.a[i])[0]);
                 }
+            });
+        });
+        let flat =
+            |x: &[DVector<f64>]| x.iter().flat_map(|r| r.iter().copied()).collect::<Vec<_>>();
+        let (qs, vs, accs) = (flat(&c.q), flat(&c.v), flat(&c.a));
+        let mut batch = dynamics::BatchData::new(m);
+        let mut out = vec![0.0; NSTATES * m.nv];
+        g.bench_function(BenchmarkId::new("rnea_batch", NSTATES), |b| {
+            b.iter(|| {
+                dynamics::rnea_batch(m, &mut batch, &qs, &vs, &accs, &mut out);
+                black_box(out[0]);
             });
         });
         g.bench_function(BenchmarkId::new("crba", NSTATES), |b| {

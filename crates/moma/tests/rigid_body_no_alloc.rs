@@ -18,7 +18,7 @@ mod counting_alloc;
 use counting_alloc::{ARMED, COUNT};
 
 /// Runs every rigid-body algorithm three times on `model` with the counter armed and
-/// returns the number of allocations.
+/// returns the number of allocations (`rnea_batch` after its `BatchData::new`).
 fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
     let mut data = Data::new(model);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
@@ -29,6 +29,12 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
     let mut v_out = v.clone();
     let mut jac = Matrix6xX::zeros(model.nv);
     let fid = frame;
+    // five states for the multi-state kernel (one full group of four and a padded tail)
+    let mut batch = dynamics::BatchData::new(model);
+    let qs: Vec<f64> = (0..5).flat_map(|_| q.iter().copied()).collect();
+    let vs: Vec<f64> = (0..5).flat_map(|_| v.iter().copied()).collect();
+    let accs: Vec<f64> = (0..5).flat_map(|_| a.iter().copied()).collect();
+    let mut taus = vec![0.0; 5 * model.nv];
 
     COUNT.store(0, Ordering::SeqCst);
     ARMED.store(true, Ordering::SeqCst);
@@ -51,6 +57,7 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
         kinematics::integrate(model, &q, &v, &mut q_out);
         kinematics::difference(model, &q, &q_out, &mut v_out);
         let _ = dynamics::rnea(model, &mut data, &q, &v, &a);
+        dynamics::rnea_batch(model, &mut batch, &qs, &vs, &accs, &mut taus);
         let _ = dynamics::crba(model, &mut data, &q);
         let _ = dynamics::aba(model, &mut data, &q, &v, &a);
         let _ = dynamics::nonlinear_effects(model, &mut data, &q, &v);

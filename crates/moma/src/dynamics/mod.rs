@@ -17,6 +17,7 @@ mod centroidal;
 mod coriolis;
 mod crba;
 mod rnea;
+mod rnea_batch;
 
 pub use aba::aba;
 pub use centroidal::{
@@ -26,3 +27,4 @@ pub use centroidal::{
 pub use coriolis::coriolis_matrix;
 pub use crba::crba;
 pub use rnea::{gravity_torque, nonlinear_effects, rnea};
+pub use rnea_batch::{BatchData, RNEA_LANES, rnea_batch};
