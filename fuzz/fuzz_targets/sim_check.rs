@@ -4,8 +4,17 @@
 //! checks, the integrator and the input profiles validated, the profiles evaluated at
 //! four times (a validated profile must give finite inputs), and, for a chapter model or
 //! a URDF robot (its path kept on the shipped robots), the system built and the initial
-//! state and inputs checked against its sizes (`Scenario::initial_state`). Nothing is
-//! simulated.
+//! state and inputs checked against its sizes (`Scenario::initial_state`).
+//!
+//! Then the same text is read with the command's own tables (`moma::simulate::Scenario`)
+//! and goes through the library's whole build (`moma::simulate::prepare`: the robot, the
+//! `[space]`, `[stability]`, `[controller]` and `[reference]` checks, the closed loop, the
+//! free-floating run, the stability monitor), its URDF and map paths kept on shipped
+//! files, and a run it builds is simulated over a horizon capped at 10 ms (skipped when
+//! the step, control period or recording interval would take more than a few hundred
+//! steps in it, or the adaptive tolerances are tighter than 1e-10) and with a step
+//! budget of 2,000 integrator steps for the whole run (`integrator.max_steps`), so an
+//! input stays around a millisecond.
 
 use std::path::{Path, PathBuf};
 
@@ -13,7 +22,8 @@ use moma::sim::scenario::{InputProfile, RobotSpec, Scenario, parse_scenario};
 use moma::sim::wheeled::ReducedSystem;
 
 /// The robots a fuzzed scenario may load, relative to `scenarios/`.
-const ROBOTS: [&str; 4] = [
+const ROBOTS: [&str; 5] = [
+    "robots/mobile_manipulator_mount.urdf",
     "robots/diffdrive_arm.urdf",
     "robots/brake_test_robot.urdf",
     "robots/mobile_manipulator.urdf",
@@ -33,47 +43,132 @@ fn urdf_path(p: &Path) -> PathBuf {
 }
 
 fn system(sc: &Scenario) -> Option<Box<dyn ReducedSystem>> {
-    use moma::multibody::RootJoint;
-    match &sc.robot {
-        RobotSpec::Chapter { model, params } => {
-            let json = serde_json::to_value(params).ok()?;
-            moma::sim::chapter_models::chapter_system(model, &json).ok()
+    // The command's own builder, on the robot with its URDF kept on a shipped file.
+    let mut spec = sc.robot.clone();
+    if let RobotSpec::Urdf { urdf, .. } | RobotSpec::FixedBase { urdf } = &mut spec {
+        *urdf = urdf_path(urdf);
+    }
+    moma::simulate::robot::build_robot(&spec, sc.gravity, Path::new("."))
+        .ok()
+        .map(|(sys, _)| sys)
+}
+
+/// The maps a fuzzed `planned` reference may load, relative to `scenarios/`.
+const MAPS: [&str; 3] = ["maps/depot.yaml", "maps/potential_trap.map", "maps/depot.pgm"];
+
+/// The longest simulated horizon of a fuzzed run (s).
+const HORIZON: f64 = 0.01;
+
+/// Most steps (integrator steps, control ticks, recorded samples) a fuzzed run may take.
+const MAX_STEPS: f64 = 400.0;
+
+/// The step budget of a fuzzed run (`integrator.max_steps`, capped).
+const FUZZ_MAX_STEPS: u64 = 2_000;
+
+/// A shipped map for a fuzzed map path.
+fn map_path(p: &Path) -> PathBuf {
+    let p = p.to_string_lossy();
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenarios")
+        .join(crate::files::pick(&p, &MAPS))
+}
+
+/// Keeps every file the scenario names on shipped files, and caps the horizon; `false`
+/// when the run would take too many steps to simulate here.
+fn confine(sc: &mut moma::simulate::Scenario) -> bool {
+    use moma::simulate::ReferenceSpec;
+    match &mut sc.robot {
+        RobotSpec::Urdf { urdf, .. }
+        | RobotSpec::FixedBase { urdf }
+        | RobotSpec::FreeFloating { urdf, .. } => *urdf = urdf_path(urdf),
+        RobotSpec::Chapter { .. } => {}
+    }
+    if let Some(ReferenceSpec::Planned { map, .. }) = &mut sc.reference {
+        *map = map_path(map);
+    }
+    sc.duration = sc.duration.min(HORIZON);
+    // One step budget for the whole run (every integrator step, over all recording
+    // intervals, control ticks and phases): a stiff loop stops at it with an error.
+    match &mut sc.integrator {
+        moma::sim::scenario::IntegratorSettings::Rk4 { max_steps, .. }
+        | moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } => {
+            *max_steps = Some(max_steps.unwrap_or(FUZZ_MAX_STEPS).clamp(1, FUZZ_MAX_STEPS));
         }
-        RobotSpec::Urdf {
-            urdf,
-            drive,
-            wheel_joints,
-            casters,
-        } => {
-            use moma::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
-            let model =
-                moma::io::urdf::model_from_urdf_file(&urdf_path(urdf), RootJoint::Planar).ok()?;
-            let base = WheeledBase {
-                drive: DiffDrive::new(drive.r_w, drive.b, drive.d).ok()?,
-                casters: casters
-                    .iter()
-                    .map(|c| Caster {
-                        name: c.name.clone(),
-                        position: c.position,
-                    })
-                    .collect(),
-                wheel_joints: wheel_joints.clone(),
-            };
-            let wm = WheeledModel::new(model, base).ok()?;
-            Some(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
+    }
+    let few = |step: f64| step.is_finite() && step > 0.0 && sc.duration / step <= MAX_STEPS;
+    let integrator = match sc.integrator {
+        moma::sim::scenario::IntegratorSettings::Rk4 { dt, .. } => few(dt),
+        moma::sim::scenario::IntegratorSettings::Adaptive { rtol, atol, .. } => {
+            rtol >= 1e-10 && atol >= 1e-10
         }
-        RobotSpec::FixedBase { urdf } => {
-            let model =
-                moma::io::urdf::model_from_urdf_file(&urdf_path(urdf), RootJoint::Fixed).ok()?;
-            Some(Box::new(
-                moma::sim::fixed_base::FixedBaseSystem::new(model).ok()?,
-            ))
+    };
+    let period = sc
+        .controller
+        .as_ref()
+        .and_then(|c| c.period)
+        .is_none_or(few);
+    integrator && period && few(sc.output.record_interval)
+}
+
+/// The library's whole build of a scenario with the command's tables, and a short run.
+fn build_and_run(text: &str) {
+    use moma::simulate::Run;
+    let path = Path::new("fuzz.toml");
+    let Ok(mut sc) = parse_scenario::<
+        moma::simulate::SpaceSpec,
+        moma::simulate::StabilitySpec,
+        moma::simulate::ControllerSpec,
+        moma::simulate::ReferenceSpec,
+    >(text, path) else {
+        return;
+    };
+    if sc.check_header(path).is_err() {
+        return;
+    }
+    let short = confine(&mut sc);
+    let Ok(run) = moma::simulate::prepare(&sc, path) else {
+        return;
+    };
+    if !short {
+        return;
+    }
+    match run {
+        Run::Open(mut ol) => {
+            let observer = ol
+                .monitor
+                .as_mut()
+                .map(|m| m as &mut dyn moma::sim::wheeled::SampleObserver);
+            let _ = moma::sim::wheeled::simulate_observed(
+                ol.system.as_mut(),
+                &ol.input,
+                &ol.q0,
+                &ol.v0,
+                &ol.options,
+                &mut |_| {},
+                observer,
+            );
         }
-        RobotSpec::FreeFloating { .. } => None,
+        Run::Closed(mut cl) => {
+            if let Ok(res) = moma::sim::closed_loop::simulate_closed_loop(
+                cl.system.as_mut(),
+                cl.law.as_mut(),
+                &cl.q0,
+                &cl.v0,
+                &cl.options,
+                &mut |_| {},
+            ) && let Some(spec) = &sc.stability
+            {
+                let _ = moma::simulate::replay(spec, &sc.robot, sc.gravity, Path::new("."), &res.recorder);
+            }
+        }
+        Run::Space(sr) => {
+            let _ = moma::sim::free_floating::run(&sr.model, &sr.q0, &sr.v0, &sr.settings);
+        }
     }
 }
 
 pub fn check(text: &str) {
+    build_and_run(text);
     let path = Path::new("fuzz.toml");
     let Ok(sc) = parse_scenario::<toml::Table, toml::Table, toml::Table, toml::Table>(text, path)
     else {

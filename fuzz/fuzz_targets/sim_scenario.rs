@@ -3,6 +3,7 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 
+mod files;
 mod sim_check;
 
 fuzz_target!(|data: &[u8]| {

@@ -5,9 +5,10 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 mod mutate;
+mod files;
 mod sim_check;
 
-const TEMPLATES: [&str; 8] = [
+const TEMPLATES: [&str; 15] = [
     include_str!("../../scenarios/default.toml"),
     include_str!("../../scenarios/m1_unicycle.toml"),
     include_str!("../../scenarios/m2_platform_arm.toml"),
@@ -16,6 +17,13 @@ const TEMPLATES: [&str; 8] = [
     include_str!("../../scenarios/space_resolved_rate.toml"),
     include_str!("../../scenarios/brake_arm_tucked.toml"),
     include_str!("../../scenarios/control_osc_panda_fixed.toml"),
+    include_str!("../../scenarios/control_kanayama.toml"),
+    include_str!("../../scenarios/control_kanayama_planned.toml"),
+    include_str!("../../scenarios/control_pure_pursuit.toml"),
+    include_str!("../../scenarios/control_coordinated.toml"),
+    include_str!("../../scenarios/control_osc_panda.toml"),
+    include_str!("../../scenarios/control_m5_pd_plus.toml"),
+    include_str!("../../scenarios/brake_arm_extended.toml"),
 ];
 
 #[derive(arbitrary::Arbitrary, Debug)]

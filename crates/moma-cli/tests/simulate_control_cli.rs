@@ -319,3 +319,62 @@ fn a_planned_reference_reaches_its_goal_and_an_unreachable_goal_is_an_error() {
     assert!(!out.exists());
     let _ = std::fs::remove_dir_all(&work);
 }
+
+/// The stiff m5 closed loop the fuzzer found (one damping gain of 2.3e8 under the
+/// adaptive integrator, the input CI replays from `fuzz/regressions/sim_scenario/`) ran
+/// for many minutes; it now stops at the run's default step budget within seconds, with
+/// status 1, one message naming the integrator, the budget, the time reached and what
+/// to change, and no output. A budget the scenario sets is named as its key, and one out
+/// of bounds is refused before the run.
+#[test]
+fn a_stiff_loop_stops_at_the_step_budget() {
+    let work = temp_dir("stiff");
+    let regression = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/regressions/sim_scenario/m5-computed-torque-stiff-kd.toml");
+    let text = std::fs::read_to_string(&regression).unwrap();
+    let cases = [
+        (
+            "default",
+            text.clone(),
+            vec!["step budget of 100000 steps", "the default"],
+        ),
+        (
+            "set",
+            text.replace("atol = 1e-9", "atol = 1e-9\nmax_steps = 5000"),
+            vec!["step budget of 5000 steps", "integrator.max_steps"],
+        ),
+    ];
+    for (tag, body, needles) in cases {
+        let file = work.join(format!("{tag}.toml"));
+        std::fs::write(&file, body).unwrap();
+        let out = work.join(format!("out-{tag}"));
+        let o = run(&file, &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{tag}: {err}");
+        assert!(
+            err.starts_with("error:") && !err.contains("panicked"),
+            "{err}"
+        );
+        for n in needles.iter().chain(&[
+            "Dormand-Prince 5(4)",
+            "ran out at t = ",
+            "of 4 s",
+            "method = \"rk4\"",
+            "smaller gains",
+        ]) {
+            assert!(err.contains(n), "{tag}: lacks {n}: {err}");
+        }
+        assert!(!out.exists(), "{tag}: output left behind");
+    }
+    let file = work.join("zero.toml");
+    std::fs::write(
+        &file,
+        text.replace("atol = 1e-9", "atol = 1e-9\nmax_steps = 0"),
+    )
+    .unwrap();
+    let o = run(&file, &work.join("out-zero"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("integrator.max_steps"), "{err}");
+    let _ = std::fs::remove_dir_all(&work);
+}

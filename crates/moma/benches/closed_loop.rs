@@ -67,7 +67,7 @@ fn bench_closed_loop(c: &mut Criterion) {
     let steps = 200;
     let options = ClosedLoopOptions {
         duration: 0.2,
-        integrator: IntegratorSettings::Rk4 { dt: 1e-3 },
+        integrator: IntegratorSettings::rk4(1e-3),
         control_period: Some(1e-3),
         record_interval: 0.1,
         limits: MonitorLimits::default(),

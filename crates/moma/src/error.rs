@@ -88,6 +88,12 @@ pub enum Error {
     /// A planning query is invalid (start/goal outside the map or in an obstacle, ...).
     #[error("planning: {0}")]
     Planning(String),
+
+    // ---- `moma simulate` scenarios --------------------------------------------------
+    /// A `moma simulate` scenario that cannot run as written (`crate::simulate`): the
+    /// message names the file, the table and the field, with the causes that led to it.
+    #[error("{0}")]
+    Scenario(String),
 }
 
 impl Error {

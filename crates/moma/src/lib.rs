@@ -51,6 +51,7 @@ pub mod multibody;
 pub mod ode;
 pub mod planning;
 pub mod sim;
+pub mod simulate;
 pub mod space;
 pub mod spatial;
 pub mod stability;

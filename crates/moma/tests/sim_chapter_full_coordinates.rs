@@ -254,11 +254,7 @@ fn check_model<S, const N: usize, const NV: usize, const NU: usize>(
         };
         let opts = SimulationOptions {
             duration: HORIZON,
-            integrator: IntegratorSettings::Adaptive {
-                rtol: 1e-12,
-                atol: 1e-12,
-                max_step: None,
-            },
+            integrator: IntegratorSettings::adaptive(1e-12, 1e-12),
             record_interval: RECORD,
             limits: MonitorLimits::default(),
         };

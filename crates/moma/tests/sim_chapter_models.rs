@@ -30,11 +30,7 @@ fn constant(u: &[f64]) -> InputProfile {
 }
 
 fn adaptive(tol: f64) -> IntegratorSettings {
-    IntegratorSettings::Adaptive {
-        rtol: tol,
-        atol: tol,
-        max_step: None,
-    }
+    IntegratorSettings::adaptive(tol, tol)
 }
 
 fn check_trajectories(file: &str, model: &str, tol_abs: f64) {
@@ -155,7 +151,7 @@ fn rk4_converges_at_fourth_order() {
         let mut sys = chapter_system("m2", &case["params"]).unwrap();
         let opts = SimulationOptions {
             duration: 1.0,
-            integrator: IntegratorSettings::Rk4 { dt },
+            integrator: IntegratorSettings::rk4(dt),
             record_interval: 0.5,
             limits: MonitorLimits::default(),
         };
@@ -185,7 +181,7 @@ fn bad_inputs_and_blow_up_are_reported() {
     let v0 = floats(&case["state"]["v"]);
     let opts = SimulationOptions {
         duration: 1.0,
-        integrator: IntegratorSettings::Rk4 { dt: 0.01 },
+        integrator: IntegratorSettings::rk4(0.01),
         record_interval: 0.1,
         limits: MonitorLimits {
             blowup: 10.0,

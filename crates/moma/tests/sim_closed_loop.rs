@@ -59,11 +59,7 @@ fn options(
 }
 
 fn adaptive(tol: f64) -> IntegratorSettings {
-    IntegratorSettings::Adaptive {
-        rtol: tol,
-        atol: tol,
-        max_step: None,
-    }
+    IntegratorSettings::adaptive(tol, tol)
 }
 
 fn m5_case() -> Value {
@@ -358,7 +354,7 @@ fn run_platform(
         &vec![0.0; nr],
         &ClosedLoopOptions {
             record_interval: 0.1,
-            ..options(duration, Some(0.01), IntegratorSettings::Rk4 { dt: 0.002 })
+            ..options(duration, Some(0.01), IntegratorSettings::rk4(0.002))
         },
         &mut |_| {},
     )

@@ -63,7 +63,7 @@ fn run(ctl: &mut CoordinatedController, duration: f64) -> ClosedLoopResult {
         &vec![0.0; nr],
         &ClosedLoopOptions {
             duration,
-            integrator: IntegratorSettings::Rk4 { dt: 0.002 },
+            integrator: IntegratorSettings::rk4(0.002),
             control_period: Some(0.01),
             record_interval: 0.02,
             limits: MonitorLimits::default(),

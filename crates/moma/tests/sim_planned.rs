@@ -99,7 +99,7 @@ fn kanayama_tracks_a_path_planned_across_the_depot_to_the_goal() {
         &[0.0; 5],
         &ClosedLoopOptions {
             duration,
-            integrator: IntegratorSettings::Rk4 { dt: 0.004 },
+            integrator: IntegratorSettings::rk4(0.004),
             control_period: Some(0.02),
             record_interval: 0.1,
             limits: MonitorLimits::default(),

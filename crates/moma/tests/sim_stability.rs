@@ -75,11 +75,7 @@ fn extended_q() -> Vec<f64> {
 fn options(duration: f64, record: f64) -> SimulationOptions {
     SimulationOptions {
         duration,
-        integrator: IntegratorSettings::Adaptive {
-            rtol: 1e-10,
-            atol: 1e-10,
-            max_step: None,
-        },
+        integrator: IntegratorSettings::adaptive(1e-10, 1e-10),
         record_interval: record,
         limits: Default::default(),
     }

@@ -246,11 +246,7 @@ fn settings(
         frame: model.frame_id("panda_hand_tcp").unwrap(),
         duration: 6.0,
         record_interval: 0.05,
-        integrator: moma::sim::scenario::IntegratorSettings::Adaptive {
-            rtol: 1e-10,
-            atol: 1e-10,
-            max_step: None,
-        },
+        integrator: moma::sim::scenario::IntegratorSettings::adaptive(1e-10, 1e-10),
         torque: Vec::new(),
         joint_damping: 0.0,
         control,
@@ -332,11 +328,7 @@ fn approach_capture_post_capture() {
     }
     let mut s = settings(&model, None);
     s.duration = 4.0;
-    s.integrator = moma::sim::scenario::IntegratorSettings::Adaptive {
-        rtol: 1e-12,
-        atol: 1e-12,
-        max_step: None,
-    };
+    s.integrator = moma::sim::scenario::IntegratorSettings::adaptive(1e-12, 1e-12);
     s.joint_damping = 0.5;
     s.capture = Some(free_floating::CaptureEvent {
         time: 1.5,
@@ -367,5 +359,42 @@ fn approach_capture_post_capture() {
         last.v.rows(6, 9).norm() < 0.15 * v.rows(6, 9).norm(),
         "{}",
         last.v.rows(6, 9).norm()
+    );
+}
+
+/// A free-floating run has one step budget for all its phases: the capture run whose
+/// two phases take `n` DOP853 steps in all stops inside its second phase when the
+/// budget is one step short of them.
+#[test]
+fn the_step_budget_spans_both_phases_of_a_capture() {
+    let model = load_model("pinocchio/urdf/panda.urdf");
+    let (q, v) = start(&model, &Force::zero());
+    let mut s = settings(&model, None);
+    s.duration = 2.0;
+    s.integrator = moma::sim::scenario::IntegratorSettings::adaptive(1e-8, 1e-8);
+    s.capture = Some(free_floating::CaptureEvent {
+        time: 0.5,
+        target: TargetBody {
+            mass: 4.0,
+            com_in_frame: Vector3::new(0.0, 0.0, 0.08),
+            inertia_com: Matrix3::from_diagonal(&Vector3::new(0.03, 0.03, 0.02)),
+            linear_velocity: Vector3::new(-0.1, 0.05, 0.0),
+            angular_velocity: Vector3::new(0.0, 0.2, 0.4),
+        },
+    });
+    let n = free_floating::run(&model, &q, &v, &s).unwrap().steps as u64;
+    let moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } = &mut s.integrator
+    else {
+        unreachable!()
+    };
+    *max_steps = Some(n - 1);
+    let err = free_floating::run(&model, &q, &v, &s).unwrap_err();
+    let moma::Error::Numerical { t, message } = &err else {
+        panic!("{err}")
+    };
+    assert!(*t > 0.5 && *t < 2.0, "{err}");
+    assert!(
+        message.contains("DOP853") && message.contains(&format!("step budget of {} steps", n - 1)),
+        "{err}"
     );
 }

@@ -9,13 +9,12 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
-use moma::closed_form::ChapterModel;
-use moma::sim::chapter_models::chapter_system;
+use anyhow::{Context, Result, bail};
 use moma::sim::recorder::Recorder;
-pub use moma::sim::scenario::{CasterSpec, DriveSpec, RobotSpec};
-use moma::sim::scenario::{InputProfile, IntegratorSettings};
-use moma::sim::wheeled::{ReducedSystem, SimulationOptions, SimulationResult, simulate_observed};
+use moma::sim::scenario::IntegratorSettings;
+pub use moma::sim::scenario::RobotSpec;
+use moma::sim::wheeled::{SimulationResult, simulate_observed};
+use moma::simulate::{OpenLoop, Run};
 use serde::Serialize;
 
 use crate::output::write_dir;
@@ -34,14 +33,9 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// A scenario file: the library's schema ([`moma::sim::scenario::Scenario`]) with this
-/// command's `[space]`, `[stability]`, `[controller]` and `[reference]` tables.
-pub type Scenario = moma::sim::scenario::Scenario<
-    super::simulate_space::SpaceSpec,
-    super::simulate_stability::StabilitySpec,
-    super::simulate_control::ControllerSpec,
-    super::simulate_control::ReferenceSpec,
->;
+/// A scenario file: the library's schema with this command's `[space]`, `[stability]`,
+/// `[controller]` and `[reference]` tables ([`moma::simulate::Scenario`]).
+pub use moma::simulate::Scenario;
 
 /// The summary written as `summary.json`.
 #[derive(Debug, Serialize)]
@@ -93,155 +87,7 @@ fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
 
 /// Parses a scenario file, with errors naming the file and the line/field.
 pub fn load_scenario(path: &Path) -> Result<Scenario> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read scenario file", path.display()))?;
-    Ok(moma::sim::scenario::parse_scenario(&text, path)?)
-}
-
-pub(super) fn ensure_finite(field: &str, xs: &[f64]) -> Result<()> {
-    if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
-        bail!("{field}[{i}] is not a finite number");
-    }
-    Ok(())
-}
-
-/// Builds the robot of a scenario; `base_dir` resolves relative URDF paths.
-pub(super) fn build_robot(
-    spec: &RobotSpec,
-    gravity: Option<f64>,
-    base_dir: &Path,
-) -> Result<(Box<dyn ReducedSystem>, String)> {
-    match spec {
-        RobotSpec::Chapter { model, params } => {
-            for (k, v) in params {
-                match v {
-                    toml::Value::Float(x) if !x.is_finite() => {
-                        bail!("robot.params.{k} is not a finite number ({x})")
-                    }
-                    toml::Value::Float(_) | toml::Value::Integer(_) => {}
-                    other => bail!(
-                        "robot.params.{k} must be a number, got {}",
-                        other.type_str()
-                    ),
-                }
-            }
-            let is_m5 = matches!(
-                ChapterModel::from_name(model),
-                Ok(ChapterModel::M5MobileManipulator)
-            );
-            if let Some(g) = gravity
-                && !is_m5
-            {
-                bail!(
-                    "gravity = {g}: chapter model {model} has no gravity term (it moves in \
-                     the horizontal plane or in free space); remove the top-level `gravity` \
-                     (only m5 uses it)"
-                );
-            }
-            let json = chapter_params_json(params, gravity, is_m5)?;
-            let sys = chapter_system(model, &json).context("robot")?;
-            Ok((sys, format!("chapter model {model}")))
-        }
-        RobotSpec::Urdf {
-            urdf,
-            drive,
-            wheel_joints,
-            casters,
-        } => {
-            let path = base_dir.join(urdf);
-            let sys = build_urdf_robot(&path, drive, wheel_joints.clone(), casters, gravity)?;
-            Ok((sys, format!("URDF {}", urdf.display())))
-        }
-        RobotSpec::FixedBase { urdf } => {
-            let model = fixed_base_model(&base_dir.join(urdf), gravity)?;
-            let sys = moma::sim::fixed_base::FixedBaseSystem::new(model)
-                .with_context(|| format!("{}", urdf.display()))?;
-            Ok((
-                Box::new(sys),
-                format!("URDF {} (fixed base)", urdf.display()),
-            ))
-        }
-        RobotSpec::FreeFloating { .. } => {
-            bail!("a free-floating robot is run by the space simulation")
-        }
-    }
-}
-
-/// A fixed-base URDF model under gravity `g` (default 9.81) along −z.
-pub(super) fn fixed_base_model(
-    path: &Path,
-    gravity: Option<f64>,
-) -> Result<moma::multibody::Model> {
-    let mut model = moma::io::urdf::model_from_urdf_file(path, moma::multibody::RootJoint::Fixed)?;
-    let g = gravity.unwrap_or(9.81);
-    if !g.is_finite() {
-        bail!("gravity is not a finite number");
-    }
-    model.gravity = nalgebra::Vector3::new(0.0, 0.0, -g);
-    Ok(model)
-}
-
-/// The chapter parameters as JSON, with the top-level gravity moved into `g` for m5.
-pub(super) fn chapter_params_json(
-    params: &toml::Table,
-    gravity: Option<f64>,
-    is_m5: bool,
-) -> Result<serde_json::Value> {
-    let mut json = serde_json::to_value(params).context("robot.params")?;
-    if let (Some(g), true) = (gravity, is_m5)
-        && let Some(obj) = json.as_object_mut()
-    {
-        if obj.contains_key("g") {
-            bail!("gravity is given twice: top-level `gravity` and robot.params.g");
-        }
-        obj.insert("g".into(), serde_json::json!(g));
-    }
-    Ok(json)
-}
-
-fn build_urdf_robot(
-    path: &Path,
-    drive: &DriveSpec,
-    wheel_joints: Option<[String; 2]>,
-    casters: &[CasterSpec],
-    gravity: Option<f64>,
-) -> Result<Box<dyn ReducedSystem>> {
-    let wm = build_wheeled_model(path, drive, wheel_joints, casters, gravity)?;
-    Ok(Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)))
-}
-
-/// The wheeled model of a URDF robot on a differential drive (also read by the stability
-/// monitor).
-pub(super) fn build_wheeled_model(
-    path: &Path,
-    drive: &DriveSpec,
-    wheel_joints: Option<[String; 2]>,
-    casters: &[CasterSpec],
-    gravity: Option<f64>,
-) -> Result<moma::mobile::WheeledModel> {
-    use moma::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
-    let dd = DiffDrive::new(drive.r_w, drive.b, drive.d).context("robot.drive")?;
-    for c in casters {
-        ensure_finite(&format!("robot.casters '{}' position", c.name), &c.position)?;
-    }
-    let base = WheeledBase {
-        drive: dd,
-        casters: casters
-            .iter()
-            .map(|c| Caster {
-                name: c.name.clone(),
-                position: c.position,
-            })
-            .collect(),
-        wheel_joints,
-    };
-    let mut model = moma::io::urdf::model_from_urdf_file(path, moma::multibody::RootJoint::Planar)?;
-    let g = gravity.unwrap_or(9.81);
-    if !g.is_finite() {
-        bail!("gravity is not a finite number");
-    }
-    model.gravity = nalgebra::Vector3::new(0.0, 0.0, -g);
-    WheeledModel::new(model, base).with_context(|| format!("{}", path.display()))
+    Ok(moma::simulate::load(path)?)
 }
 
 pub(super) fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {
@@ -458,20 +304,6 @@ pub(super) fn balance_plots(rec: &Recorder, files: &mut Vec<(String, Vec<u8>)>) 
     ));
 }
 
-/// The initial configuration, reduced velocity and input profile of a scenario, checked
-/// against the system's sizes (errors name the field and the expected channels).
-pub(super) fn initial_state(
-    sc: &Scenario,
-    system: &dyn ReducedSystem,
-    ctx: &dyn Fn(&str) -> String,
-) -> Result<(Vec<f64>, Vec<f64>, InputProfile)> {
-    sc.initial_state(system, Path::new(""))
-        .map_err(|e| match e {
-            moma::Error::Parse { message, .. } => anyhow!("{}", ctx(&message)),
-            e => e.into(),
-        })
-}
-
 /// A progress bar on standard error when it is a terminal.
 pub(super) fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
     if std::io::stderr().is_terminal() {
@@ -493,91 +325,27 @@ pub(super) fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
 pub fn run(args: Args) -> Result<()> {
     let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
-    let ctx = |what: &str| format!("{}: {what}", path.display());
     sc.check_header(&path)?;
-    let base_dir = path.parent().unwrap_or(Path::new("."));
-    if sc.controller.is_some() || sc.reference.is_some() {
-        if sc.stability.as_ref().is_some_and(|s| s.stop_at_tip) {
-            bail!(
-                "{}",
-                ctx(
-                    "stability.stop_at_tip is not available in closed-loop runs (their samples are evaluated after the run): remove it"
-                )
-            );
-        }
-        if sc.stability.is_some() && !matches!(sc.robot, RobotSpec::Urdf { .. }) {
-            bail!(
-                "{}",
-                ctx("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")")
-            );
-        }
-        return super::simulate_control::run(&path, &sc, base_dir, &args);
+    match moma::simulate::prepare(&sc, &path)? {
+        Run::Closed(cl) => super::simulate_control::run(&path, &sc, *cl, &args),
+        Run::Space(sr) => super::simulate_space::run(&path, &sc, *sr, &args),
+        Run::Open(ol) => run_open_loop(&path, &sc, *ol, &args),
     }
-    if let RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
-        if sc.stability.is_some() {
-            bail!(
-                "{}",
-                ctx("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")")
-            );
-        }
-        return super::simulate_space::run(&path, &sc, base_dir, urdf, frame, &args);
-    }
-    if sc.space.is_some() {
-        bail!(
-            "{}",
-            ctx("[space] is only for robot.kind = \"free_floating\"")
-        );
-    }
-    let (mut system, robot_name) =
-        build_robot(&sc.robot, sc.gravity, base_dir).with_context(|| ctx("robot"))?;
-    let mut monitor = match (&sc.stability, &sc.robot) {
-        (None, _) => None,
-        (
-            Some(spec),
-            RobotSpec::Urdf {
-                urdf,
-                drive,
-                wheel_joints,
-                casters,
-            },
-        ) => {
-            let wm = build_wheeled_model(
-                &base_dir.join(urdf),
-                drive,
-                wheel_joints.clone(),
-                casters,
-                sc.gravity,
-            )
-            .with_context(|| ctx("robot"))?;
-            Some(super::simulate_stability::monitor(spec, &wm).with_context(|| ctx("stability"))?)
-        }
-        (Some(_), _) => bail!(
-            "{}",
-            ctx("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")")
-        ),
-    };
-    let (q0, v0, input) = initial_state(&sc, system.as_ref(), &ctx)?;
-    sc.integrator
-        .validate()
-        .with_context(|| ctx("integrator"))?;
-    let options = SimulationOptions {
-        duration: sc.duration,
-        integrator: sc.integrator,
-        record_interval: sc.output.record_interval,
-        limits: sc.limits.unwrap_or_default(),
-    };
-    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
-    let bar = progress_bar(sc.duration);
-    let start = Instant::now();
-    let observer = monitor
+}
+
+/// Simulates an open-loop run with a progress bar on a terminal.
+fn simulate_with_progress(ol: &mut OpenLoop) -> moma::Result<SimulationResult> {
+    let bar = progress_bar(ol.options.duration);
+    let observer = ol
+        .monitor
         .as_mut()
         .map(|m| m as &mut dyn moma::sim::wheeled::SampleObserver);
     let result = simulate_observed(
-        system.as_mut(),
-        &input,
-        &q0,
-        &v0,
-        &options,
+        ol.system.as_mut(),
+        &ol.input,
+        &ol.q0,
+        &ol.v0,
+        &ol.options,
         &mut |t| {
             if let Some(pb) = &bar {
                 pb.set_position((t * 1000.0).round() as u64);
@@ -588,17 +356,26 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(pb) = &bar {
         pb.finish_and_clear();
     }
-    let result = result.with_context(|| ctx("simulation failed"))?;
-    let wall = start.elapsed().as_secs_f64();
+    result
+}
+
+/// The summary of a finished open-loop run (its file list is filled by [`render`]).
+fn summary(
+    path: &Path,
+    sc: &Scenario,
+    robot: String,
+    result: &SimulationResult,
+    wall: f64,
+) -> Summary {
     let rec = &result.recorder;
     let last = rec.len() - 1;
     let steps = result.stats.accepted;
-    let mut summary = Summary {
+    Summary {
         scenario: sc
             .name
             .clone()
             .unwrap_or_else(|| path.display().to_string()),
-        robot: robot_name,
+        robot,
         duration: sc.duration,
         samples: rec.len(),
         q_names: rec.q_names.clone(),
@@ -619,7 +396,18 @@ pub fn run(args: Args) -> Result<()> {
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
         stability: None,
-    };
+    }
+}
+
+/// Runs an open-loop scenario and writes its files.
+fn run_open_loop(path: &Path, sc: &Scenario, mut ol: OpenLoop, args: &Args) -> Result<()> {
+    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
+    let start = Instant::now();
+    let result = simulate_with_progress(&mut ol)
+        .with_context(|| format!("{}: simulation failed", path.display()))?;
+    let wall = start.elapsed().as_secs_f64();
+    let monitor = ol.monitor;
+    let mut summary = summary(path, sc, ol.robot_name, &result, wall);
     if let (Some(spec), Some(mon)) = (&sc.stability, &monitor) {
         summary.stability = Some(super::simulate_stability::summary(
             spec,
@@ -627,17 +415,10 @@ pub fn run(args: Args) -> Result<()> {
             result.stopped_at,
         ));
     }
-    let wheels = match &sc.robot {
-        RobotSpec::Urdf {
-            wheel_joints: Some(w),
-            ..
-        } => w.to_vec(),
-        _ => Vec::new(),
-    };
     let fixed = matches!(sc.robot, RobotSpec::FixedBase { .. });
     let files = render(
         fixed,
-        &wheels,
+        &moma::simulate::wheel_joints(sc),
         &result,
         &mut summary,
         sc.output.plots,

@@ -10,802 +10,18 @@
 //! `docs/simulate.md`.
 
 use super::simulate::{
-    Args, RobotSpec, Scenario, arm_plots, balance_plots, build_wheeled_model, chapter_params_json,
-    fixed_base_model, initial_state, motion_plots, progress_bar, series,
+    Args, RobotSpec, Scenario, arm_plots, balance_plots, motion_plots, progress_bar, series,
 };
 use crate::output::write_dir;
 use crate::svg_plots::line_chart;
-use anyhow::{Context, Result, anyhow, bail};
-use moma::closed_form::ChapterModel;
-use moma::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
-use moma::control::pursuit::{PurePursuit, PurePursuitParams};
-use moma::control::task::Coupling;
-use moma::control::unicycle::{Aicardi, Astolfi, ConstantInputReference, Kanayama, Samson};
-use moma::mission::planned::{PlannedPath, PlannedPathRequest, plan_platform_reference};
-use moma::planning::load_map;
-use moma::planning::trajectory::{DiffDriveLimits, time_parameterize};
-use moma::sim::closed_loop::{
-    ClosedLoopOptions, ClosedLoopResult, FeedbackLaw, simulate_closed_loop,
-};
-use moma::sim::coordinated::{CoordinatedController, CoordinatedGains};
-use moma::sim::feedback::{
-    FixedOscController, M5TaskController, OscController, OscGains, PlatformController, PlatformLaw,
-    PointReference, SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
-};
-use moma::sim::fixed_base::FixedBaseSystem;
+use anyhow::{Context, Result, anyhow};
+use moma::sim::closed_loop::{ClosedLoopResult, simulate_closed_loop};
 use moma::sim::scenario::IntegratorSettings;
-use moma::sim::wheeled::ReducedSystem;
-use serde::{Deserialize, Serialize};
+use moma::sim::stability_monitor::StabilityMonitor;
+use moma::simulate::{ClosedLoop, ControllerSpec};
+use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
-
-/// Most waypoints a reference may list.
-const MAX_WAYPOINTS: usize = 100_000;
-
-/// The `[controller]` table.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ControllerSpec {
-    /// `kanayama`, `samson`, `astolfi`, `aicardi`, `pure_pursuit`, `osc`, `pd_plus`,
-    /// `computed_torque`, `decoupled_naive`, `decoupled_feedforward`,
-    /// `decoupled_compensated`.
-    pub law: String,
-    /// Control period of the zero-order hold (s); absent: continuous feedback.
-    #[serde(default)]
-    pub period: Option<f64>,
-    /// The law's gains (names per law, docs/simulate.md).
-    #[serde(default)]
-    pub gains: toml::Table,
-    /// Inner velocity loop gain k_v (1/s) of the platform laws (default 20).
-    #[serde(default)]
-    pub velocity_gain: Option<f64>,
-    /// Arm posture stiffness of the platform laws' inner loop (1/s², default 100).
-    #[serde(default)]
-    pub arm_kp: Option<f64>,
-    /// Arm posture damping of the inner loop (1/s, default 20).
-    #[serde(default)]
-    pub arm_kd: Option<f64>,
-    /// Wheel-speed limit (rad/s), applied through the wheel map.
-    #[serde(default)]
-    pub max_wheel_speed: Option<f64>,
-    /// Wheel-torque limit (N·m).
-    #[serde(default)]
-    pub max_wheel_torque: Option<f64>,
-    /// Limit on every actuator input (`osc` and the m5 laws).
-    #[serde(default)]
-    pub max_torque: Option<f64>,
-    /// The controlled frame (`osc`, `coordinated`).
-    #[serde(default)]
-    pub frame: Option<String>,
-    /// The two arm joints coordinated with the platform (`coordinated`).
-    #[serde(default)]
-    pub joints: Option<[String; 2]>,
-    /// Null-space posture of the arm joints (`osc`), preferred posture (`coordinated`);
-    /// default: the initial configuration.
-    #[serde(default)]
-    pub posture: Option<Vec<f64>>,
-    /// Increase of V between samples tolerated as round-off (default 1e-9).
-    #[serde(default)]
-    pub lyapunov_tolerance: Option<f64>,
-    /// Largest final tracking-error norm counted as success (exit status 3 otherwise).
-    #[serde(default)]
-    pub goal_tolerance: Option<f64>,
-}
-
-/// Differential-drive limits of a time parameterisation.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TimingSpec {
-    /// Largest speed (m/s).
-    pub v_max: f64,
-    /// Largest turn rate (rad/s).
-    pub omega_max: f64,
-    /// Largest acceleration (m/s²).
-    pub a_max: f64,
-    /// Largest angular acceleration (rad/s²).
-    pub alpha_max: f64,
-    /// Sampling step (s, default 0.01).
-    #[serde(default)]
-    pub dt: Option<f64>,
-}
-
-/// The `[reference]` table.
-#[derive(Debug, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum ReferenceSpec {
-    /// Kanayama: the circle of constant `(v_r, ω_r)` from the origin heading +x.
-    Circle {
-        /// v_r (m/s).
-        vr: f64,
-        /// ω_r (rad/s).
-        wr: f64,
-    },
-    /// Kanayama: the line `x = v_r t` along +x.
-    Line {
-        /// v_r (m/s).
-        vr: f64,
-    },
-    /// Samson, Astolfi, Aicardi: the goal pose.
-    Pose {
-        /// `[x, y, θ]` of the axle midpoint.
-        goal: [f64; 3],
-    },
-    /// Pure pursuit: the polyline; Kanayama: the polyline time-parameterised under
-    /// `timing` (turn in place, then drive each segment, trapezoidal profiles).
-    Waypoints {
-        /// `[[x, y], …]` (m).
-        points: Vec<[f64; 2]>,
-        /// Limits of the time parameterisation (Kanayama).
-        #[serde(default)]
-        timing: Option<TimingSpec>,
-    },
-    /// `osc`: a straight end-effector line, quintic time scaling.
-    EeLine {
-        /// Start (m, world).
-        from: [f64; 3],
-        /// End (m, world).
-        to: [f64; 3],
-        /// Duration (s).
-        duration: f64,
-    },
-    /// `osc`: a horizontal end-effector circle.
-    EeCircle {
-        /// Centre (m, world).
-        center: [f64; 3],
-        /// Radius (m).
-        radius: f64,
-        /// Period (s).
-        period: f64,
-        /// Phase at t = 0 (rad).
-        #[serde(default)]
-        phase: f64,
-    },
-    /// `osc`: end-effector waypoints at given times.
-    EeWaypoints {
-        /// `[[x, y, z], …]` (m, world).
-        points: Vec<[f64; 3]>,
-        /// Times (s), strictly increasing.
-        times: Vec<f64>,
-    },
-    /// Kanayama, pure pursuit: a path planned on a map from `start` to `goal` for a disk
-    /// footprint (D* Lite on the configuration space, curvature-bounded smoothing, timing
-    /// under `timing`), as `moma mission` plans.
-    Planned {
-        /// The map (ROS YAML, Moving AI `.map` or image), relative to the scenario.
-        map: std::path::PathBuf,
-        /// Start pose `[x, y, θ]` of the axle midpoint (world).
-        start: [f64; 3],
-        /// Goal pose.
-        goal: [f64; 3],
-        /// Radius of the disk covering the footprint (m).
-        footprint_radius: f64,
-        /// Unknown cells are obstacles (default true).
-        #[serde(default)]
-        unknown_is_obstacle: Option<bool>,
-        /// Curvature bound of the smoothing (1/m, default 2).
-        #[serde(default)]
-        kappa_max: Option<f64>,
-        /// Platform limits of the timing.
-        timing: TimingSpec,
-    },
-    /// m5 laws: `x_d(t) = x_ref + amplitude ⊙ sin(omega ⊙ t)` in the task coordinates.
-    TaskSinusoid {
-        /// x_ref.
-        x_ref: [f64; 5],
-        /// Amplitudes.
-        amplitude: [f64; 5],
-        /// Angular frequencies (rad/s).
-        omega: [f64; 5],
-    },
-}
-
-impl ReferenceSpec {
-    fn kind(&self) -> &'static str {
-        match self {
-            Self::Circle { .. } => "circle",
-            Self::Line { .. } => "line",
-            Self::Pose { .. } => "pose",
-            Self::Waypoints { .. } => "waypoints",
-            Self::Planned { .. } => "planned",
-            Self::EeLine { .. } => "ee_line",
-            Self::EeCircle { .. } => "ee_circle",
-            Self::EeWaypoints { .. } => "ee_waypoints",
-            Self::TaskSinusoid { .. } => "task_sinusoid",
-        }
-    }
-}
-
-/// Checks that `gains` holds only `allowed` keys.
-fn check_keys(law: &str, gains: &toml::Table, allowed: &[&str]) -> Result<()> {
-    if let Some(k) = gains.keys().find(|k| !allowed.contains(&k.as_str())) {
-        bail!(
-            "controller.gains.{k}: unknown gain for law {law} (expected {})",
-            allowed.join(", ")
-        );
-    }
-    Ok(())
-}
-
-fn number(v: &toml::Value, field: &str) -> Result<f64> {
-    let x = match v {
-        toml::Value::Float(x) => *x,
-        toml::Value::Integer(i) => *i as f64,
-        other => bail!("{field} must be a number, got {}", other.type_str()),
-    };
-    if !x.is_finite() {
-        bail!("{field} is not a finite number ({x})");
-    }
-    Ok(x)
-}
-
-/// A required scalar gain.
-fn gain(law: &str, gains: &toml::Table, name: &str, all: &[&str]) -> Result<f64> {
-    let v = gains.get(name).ok_or_else(|| {
-        anyhow!(
-            "controller.gains.{name}: missing (law {law} needs {})",
-            all.join(", ")
-        )
-    })?;
-    number(v, &format!("controller.gains.{name}"))
-}
-
-/// An optional scalar gain.
-fn opt_gain(gains: &toml::Table, name: &str) -> Result<Option<f64>> {
-    gains
-        .get(name)
-        .map(|v| number(v, &format!("controller.gains.{name}")))
-        .transpose()
-}
-
-/// A required 5-vector gain (m5 laws).
-fn gain5(law: &str, gains: &toml::Table, name: &str) -> Result<[f64; 5]> {
-    let field = format!("controller.gains.{name}");
-    let v = gains
-        .get(name)
-        .ok_or_else(|| anyhow!("{field}: missing (law {law} needs Kp and Kd, 5 values each)"))?;
-    let arr = v
-        .as_array()
-        .ok_or_else(|| anyhow!("{field} must be an array of 5 numbers"))?;
-    if arr.len() != 5 {
-        bail!("{field}: expected 5 values, got {}", arr.len());
-    }
-    let mut out = [0.0; 5];
-    for (i, x) in arr.iter().enumerate() {
-        out[i] = number(x, &format!("{field}[{i}]"))?;
-    }
-    Ok(out)
-}
-
-fn wrong_reference(law: &str, r: &ReferenceSpec, want: &str) -> anyhow::Error {
-    anyhow!(
-        "reference.kind = \"{}\" does not fit law {law} (expected {want})",
-        r.kind()
-    )
-}
-
-fn bounded_points<T>(points: &[T]) -> Result<()> {
-    if points.is_empty() {
-        bail!("reference.points: need at least one point");
-    }
-    if points.len() > MAX_WAYPOINTS {
-        bail!(
-            "reference.points: {} points exceed the limit of {MAX_WAYPOINTS}",
-            points.len()
-        );
-    }
-    Ok(())
-}
-
-/// Kanayama's reference.
-fn tracking_reference(law: &str, r: &ReferenceSpec, base_dir: &Path) -> Result<TrackingReference> {
-    match r {
-        ReferenceSpec::Circle { vr, wr } => {
-            super::simulate::ensure_finite("reference (vr, wr)", &[*vr, *wr])?;
-            Ok(TrackingReference::Constant(ConstantInputReference {
-                vr: *vr,
-                wr: *wr,
-            }))
-        }
-        ReferenceSpec::Line { vr } => {
-            super::simulate::ensure_finite("reference.vr", &[*vr])?;
-            Ok(TrackingReference::Constant(ConstantInputReference {
-                vr: *vr,
-                wr: 0.0,
-            }))
-        }
-        ReferenceSpec::Waypoints { points, timing } => {
-            bounded_points(points)?;
-            let Some(tm) = timing else {
-                bail!(
-                    "reference.timing: law {law} tracks a time-parameterised path; give \
-                     timing = {{ v_max, omega_max, a_max, alpha_max }}"
-                );
-            };
-            let limits = DiffDriveLimits {
-                v_max: tm.v_max,
-                omega_max: tm.omega_max,
-                a_max: tm.a_max,
-                alpha_max: tm.alpha_max,
-            };
-            let traj = time_parameterize(points, None, &limits, tm.dt.unwrap_or(0.01))
-                .context("reference.timing")?;
-            Ok(TrackingReference::Sampled(SampledTrajectory::new(traj)?))
-        }
-        ReferenceSpec::Planned { .. } => Ok(TrackingReference::Sampled(
-            planned_reference(r, base_dir)?.trajectory,
-        )),
-        other => Err(wrong_reference(
-            law,
-            other,
-            "circle, line, waypoints or planned",
-        )),
-    }
-}
-
-/// Plans the `planned` reference on its map (the library's planner, as `moma mission`).
-fn planned_reference(r: &ReferenceSpec, base_dir: &Path) -> Result<PlannedPath> {
-    let ReferenceSpec::Planned {
-        map,
-        start,
-        goal,
-        footprint_radius,
-        unknown_is_obstacle,
-        kappa_max,
-        timing,
-    } = r
-    else {
-        unreachable!("planned_reference called for {}", r.kind());
-    };
-    let grid = load_map(&base_dir.join(map), None)
-        .with_context(|| format!("reference.map {}", map.display()))?
-        .grid;
-    let request = PlannedPathRequest {
-        start: *start,
-        goal: *goal,
-        footprint_radius: *footprint_radius,
-        unknown_is_obstacle: unknown_is_obstacle.unwrap_or(true),
-        limits: DiffDriveLimits {
-            v_max: timing.v_max,
-            omega_max: timing.omega_max,
-            a_max: timing.a_max,
-            alpha_max: timing.alpha_max,
-        },
-        kappa_max: kappa_max.unwrap_or(2.0),
-        dt: timing.dt.unwrap_or(0.02),
-    };
-    Ok(plan_platform_reference(&grid, &request)?)
-}
-
-fn goal_pose(law: &str, r: &ReferenceSpec) -> Result<[f64; 3]> {
-    match r {
-        ReferenceSpec::Pose { goal } => {
-            super::simulate::ensure_finite("reference.goal", goal)?;
-            Ok(*goal)
-        }
-        other => Err(wrong_reference(law, other, "pose")),
-    }
-}
-
-/// The platform law with its gains and reference.
-fn platform_law(
-    law: &str,
-    gains: &toml::Table,
-    r: &ReferenceSpec,
-    base_dir: &Path,
-) -> Result<PlatformLaw> {
-    let named = |all: &[&str]| -> Result<Vec<f64>> {
-        check_keys(law, gains, all)?;
-        all.iter().map(|n| gain(law, gains, n, all)).collect()
-    };
-    Ok(match law {
-        "kanayama" => {
-            let g = named(&["Kx", "Ky", "Kth"])?;
-            PlatformLaw::Kanayama(
-                Kanayama::new(g[0], g[1], g[2])?,
-                tracking_reference(law, r, base_dir)?,
-            )
-        }
-        "samson" => {
-            let g = named(&["k1", "k2", "k3"])?;
-            PlatformLaw::Samson(Samson::new(g[0], g[1], g[2])?, goal_pose(law, r)?)
-        }
-        "astolfi" => {
-            let g = named(&["k_rho", "k_alpha", "k_beta"])?;
-            let a = Astolfi::new(g[0], g[1], g[2])?;
-            if let Some(w) = a.warning() {
-                eprintln!("warning: {w}");
-            }
-            PlatformLaw::Astolfi(a, goal_pose(law, r)?)
-        }
-        "aicardi" => {
-            let g = named(&["gamma", "k", "h"])?;
-            PlatformLaw::Aicardi(Aicardi::new(g[0], g[1], g[2])?, goal_pose(law, r)?)
-        }
-        "pure_pursuit" => {
-            const NAMES: [&str; 8] = [
-                "desired_speed",
-                "lookahead_time",
-                "min_lookahead",
-                "max_lookahead",
-                "regulation_min_radius",
-                "approach_distance",
-                "min_approach_speed",
-                "goal_tolerance",
-            ];
-            check_keys(law, gains, &NAMES)?;
-            let mut p = PurePursuitParams::default();
-            let fields: [&mut f64; 8] = [
-                &mut p.desired_speed,
-                &mut p.lookahead_time,
-                &mut p.min_lookahead,
-                &mut p.max_lookahead,
-                &mut p.regulation_min_radius,
-                &mut p.approach_distance,
-                &mut p.min_approach_speed,
-                &mut p.goal_tolerance,
-            ];
-            for (name, f) in NAMES.iter().zip(fields) {
-                if let Some(x) = opt_gain(gains, name)? {
-                    *f = x;
-                }
-            }
-            if let ReferenceSpec::Planned { .. } = r {
-                let path = planned_reference(r, base_dir)?.path;
-                return Ok(PlatformLaw::PurePursuit(
-                    Box::new(PurePursuit::new(p).context("controller.gains")?),
-                    path,
-                ));
-            }
-            let ReferenceSpec::Waypoints { points, timing } = r else {
-                return Err(wrong_reference(law, r, "waypoints or planned"));
-            };
-            if timing.is_some() {
-                bail!("reference.timing: pure pursuit follows the path itself (remove timing)");
-            }
-            bounded_points(points)?;
-            for (i, p) in points.iter().enumerate() {
-                super::simulate::ensure_finite(&format!("reference.points[{i}]"), p)?;
-            }
-            PlatformLaw::PurePursuit(
-                Box::new(PurePursuit::new(p).context("controller.gains")?),
-                points.clone(),
-            )
-        }
-        _ => unreachable!("platform_law called for {law}"),
-    })
-}
-
-fn point_reference(law: &str, r: &ReferenceSpec) -> Result<PointReference> {
-    let p = match r {
-        ReferenceSpec::EeLine { from, to, duration } => PointReference::Line {
-            from: *from,
-            to: *to,
-            duration: *duration,
-        },
-        ReferenceSpec::EeCircle {
-            center,
-            radius,
-            period,
-            phase,
-        } => PointReference::Circle {
-            center: *center,
-            radius: *radius,
-            period: *period,
-            phase: *phase,
-        },
-        ReferenceSpec::EeWaypoints { points, times } => {
-            bounded_points(points)?;
-            PointReference::Waypoints {
-                points: points.clone(),
-                times: times.clone(),
-            }
-        }
-        other => {
-            return Err(wrong_reference(
-                law,
-                other,
-                "ee_line, ee_circle or ee_waypoints",
-            ));
-        }
-    };
-    p.validate()?;
-    Ok(p)
-}
-
-fn osc_gains(law: &str, gains: &toml::Table) -> Result<OscGains> {
-    let all = ["kp", "kv", "posture_kp", "posture_kd"];
-    check_keys(law, gains, &all)?;
-    Ok(OscGains {
-        kp: gain(law, gains, "kp", &all)?,
-        kv: gain(law, gains, "kv", &all)?,
-        posture_kp: opt_gain(gains, "posture_kp")?.unwrap_or(0.0),
-        posture_kd: opt_gain(gains, "posture_kd")?.unwrap_or(0.0),
-    })
-}
-
-const PLATFORM_LAWS: [&str; 5] = ["kanayama", "samson", "astolfi", "aicardi", "pure_pursuit"];
-const M5_LAWS: [&str; 5] = [
-    "pd_plus",
-    "computed_torque",
-    "decoupled_naive",
-    "decoupled_feedforward",
-    "decoupled_compensated",
-];
-
-/// The plant and the law of a closed-loop scenario.
-type Loop = (Box<dyn ReducedSystem>, Box<dyn FeedbackLaw>, String);
-
-fn only_for(law: &str, fields: &[(&str, bool)]) -> Result<()> {
-    for (name, present) in fields {
-        if *present {
-            bail!("controller.{name} does not apply to law {law}");
-        }
-    }
-    Ok(())
-}
-
-/// The `[controller]` keys of the platform servo that OSC (fixed base or on the platform)
-/// does not take, with whether the scenario gives them.
-fn not_for_osc(c: &ControllerSpec) -> [(&'static str, bool); 6] {
-    [
-        ("joints", c.joints.is_some()),
-        ("velocity_gain", c.velocity_gain.is_some()),
-        ("arm_kp", c.arm_kp.is_some()),
-        ("arm_kd", c.arm_kd.is_some()),
-        ("max_wheel_speed", c.max_wheel_speed.is_some()),
-        ("max_wheel_torque", c.max_wheel_torque.is_some()),
-    ]
-}
-
-fn build_loop(sc: &Scenario, base_dir: &Path, c: &ControllerSpec) -> Result<Loop> {
-    let law = c.law.as_str();
-    let Some(r) = &sc.reference else {
-        bail!("[reference] is missing: law {law} needs one");
-    };
-    let nonneg = |name: &str, x: Option<f64>| -> Result<()> {
-        if let Some(x) = x
-            && !(x.is_finite() && x > 0.0)
-        {
-            bail!("controller.{name} must be a positive finite number, got {x}");
-        }
-        Ok(())
-    };
-    nonneg("max_wheel_speed", c.max_wheel_speed)?;
-    nonneg("max_wheel_torque", c.max_wheel_torque)?;
-    nonneg("max_torque", c.max_torque)?;
-    if law == "osc"
-        && let RobotSpec::FixedBase { urdf } = &sc.robot
-    {
-        only_for(law, &not_for_osc(c))?;
-        let model = fixed_base_model(&base_dir.join(urdf), sc.gravity).context("robot")?;
-        let q0 = sc.initial.q.clone().unwrap_or_else(|| vec![0.0; model.nq]);
-        if q0.len() != model.nq {
-            bail!("initial.q: expected {} values, got {}", model.nq, q0.len());
-        }
-        let gains = osc_gains(law, &c.gains)?;
-        let frame = c
-            .frame
-            .as_deref()
-            .ok_or_else(|| anyhow!("controller.frame: missing (law osc needs the frame)"))?;
-        let posture = c.posture.clone().unwrap_or(q0);
-        if posture.len() != model.nv {
-            bail!(
-                "controller.posture: expected {} values (the joints), got {}",
-                model.nv,
-                posture.len()
-            );
-        }
-        let ctl = FixedOscController::new(
-            model.clone(),
-            frame,
-            point_reference(law, r)?,
-            gains,
-            posture,
-            c.max_torque,
-        )?;
-        let sys = FixedBaseSystem::new(model).context("robot")?;
-        return Ok((
-            Box::new(sys),
-            Box::new(ctl),
-            format!("URDF {} (fixed base)", urdf.display()),
-        ));
-    }
-    if PLATFORM_LAWS.contains(&law) || law == "osc" || law == "coordinated" {
-        let RobotSpec::Urdf {
-            urdf,
-            drive,
-            wheel_joints,
-            casters,
-        } = &sc.robot
-        else {
-            bail!(
-                "law {law} drives a URDF robot on a differential drive (robot.kind = \"urdf\"{})",
-                if law == "osc" {
-                    ", or \"fixed_base\""
-                } else {
-                    ""
-                }
-            );
-        };
-        let path = base_dir.join(urdf);
-        let wm = build_wheeled_model(&path, drive, wheel_joints.clone(), casters, sc.gravity)
-            .context("robot")?;
-        let nr = wm.nr();
-        let q0 = sc
-            .initial
-            .q
-            .clone()
-            .unwrap_or_else(|| vec![0.0; wm.model.nq]);
-        if q0.len() != wm.model.nq {
-            bail!(
-                "initial.q: expected {} values ({}), got {}",
-                wm.model.nq,
-                wm.q_names().join(", "),
-                q0.len()
-            );
-        }
-        let arm0: Vec<f64> = wm.arm_dofs().iter().map(|&d| q0[d]).collect();
-        let name = format!("URDF {}", urdf.display());
-        if law == "coordinated" {
-            only_for(law, &[("max_torque", c.max_torque.is_some())])?;
-            let all = ["K_E", "K_Y"];
-            check_keys(law, &c.gains, &all)?;
-            let gains = CoordinatedGains {
-                k_e: gain(law, &c.gains, "K_E", &all)?,
-                k_y: gain(law, &c.gains, "K_Y", &all)?,
-            };
-            let frame = c.frame.as_deref().ok_or_else(|| {
-                anyhow!("controller.frame: missing (law coordinated needs the end-effector frame)")
-            })?;
-            let joints = c.joints.as_ref().ok_or_else(|| {
-                anyhow!(
-                    "controller.joints: missing (law coordinated needs the two arm joints that \
-                     move the end effector in the horizontal plane)"
-                )
-            })?;
-            let posture = c.posture.clone().unwrap_or(arm0);
-            if posture.len() != nr - 2 {
-                bail!(
-                    "controller.posture: expected {} values (the arm joints), got {}",
-                    nr - 2,
-                    posture.len()
-                );
-            }
-            let servo = VelocityServo {
-                gain: c.velocity_gain.unwrap_or(20.0),
-                arm_kp: c.arm_kp.unwrap_or(100.0),
-                arm_kd: c.arm_kd.unwrap_or(20.0),
-            };
-            let ctl = CoordinatedController::new(
-                wm.clone(),
-                frame,
-                [joints[0].as_str(), joints[1].as_str()],
-                point_reference(law, r)?,
-                gains,
-                posture,
-                servo,
-                c.max_wheel_speed,
-                c.max_wheel_torque,
-            )?;
-            return Ok((
-                Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)),
-                Box::new(ctl),
-                name,
-            ));
-        }
-        if law == "osc" {
-            only_for(law, &not_for_osc(c))?;
-            let gains = osc_gains(law, &c.gains)?;
-            let frame = c
-                .frame
-                .as_deref()
-                .ok_or_else(|| anyhow!("controller.frame: missing (law osc needs the frame)"))?;
-            let posture = c.posture.clone().unwrap_or(arm0);
-            if posture.len() != nr - 2 {
-                bail!(
-                    "controller.posture: expected {} values (the arm joints), got {}",
-                    nr - 2,
-                    posture.len()
-                );
-            }
-            let law_obj = OscController::new(
-                wm.clone(),
-                frame,
-                point_reference(law, r)?,
-                gains,
-                posture,
-                c.max_torque,
-            )?;
-            return Ok((
-                Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)),
-                Box::new(law_obj),
-                name,
-            ));
-        }
-        only_for(
-            law,
-            &[
-                ("max_torque", c.max_torque.is_some()),
-                ("frame", c.frame.is_some()),
-                ("joints", c.joints.is_some()),
-                ("posture", c.posture.is_some()),
-            ],
-        )?;
-        let servo = VelocityServo {
-            gain: c.velocity_gain.unwrap_or(20.0),
-            arm_kp: c.arm_kp.unwrap_or(100.0),
-            arm_kd: c.arm_kd.unwrap_or(20.0),
-        };
-        let pl = platform_law(law, &c.gains, r, base_dir)?;
-        let ctl = PlatformController::new(
-            wm.clone(),
-            pl,
-            servo,
-            arm0,
-            c.max_wheel_speed,
-            c.max_wheel_torque,
-        )?;
-        return Ok((
-            Box::new(moma::sim::wheeled_system::WheeledSystem::new(wm)),
-            Box::new(ctl),
-            name,
-        ));
-    }
-    if M5_LAWS.contains(&law) {
-        only_for(
-            law,
-            &[
-                ("velocity_gain", c.velocity_gain.is_some()),
-                ("arm_kp", c.arm_kp.is_some()),
-                ("arm_kd", c.arm_kd.is_some()),
-                ("max_wheel_speed", c.max_wheel_speed.is_some()),
-                ("max_wheel_torque", c.max_wheel_torque.is_some()),
-                ("frame", c.frame.is_some()),
-                ("joints", c.joints.is_some()),
-                ("posture", c.posture.is_some()),
-            ],
-        )?;
-        let RobotSpec::Chapter { model, params } = &sc.robot else {
-            bail!("law {law} runs on the chapter model m5 (robot.kind = \"chapter\")");
-        };
-        if !matches!(
-            ChapterModel::from_name(model),
-            Ok(ChapterModel::M5MobileManipulator)
-        ) {
-            bail!("law {law} runs on the chapter model m5, not {model}");
-        }
-        let json = chapter_params_json(params, sc.gravity, true)?;
-        let p: MobileManipulatorParams =
-            moma::closed_form::parse_params("robot.params", &json).context("robot")?;
-        let mm = MobileManipulator::new(p).context("robot.params")?;
-        let sys = moma::sim::chapter_models::chapter_system(model, &json).context("robot")?;
-        check_keys(law, &c.gains, &["Kp", "Kd"])?;
-        let kp = gain5(law, &c.gains, "Kp")?;
-        let kd = gain5(law, &c.gains, "Kd")?;
-        let ReferenceSpec::TaskSinusoid {
-            x_ref,
-            amplitude,
-            omega,
-        } = r
-        else {
-            return Err(wrong_reference(law, r, "task_sinusoid"));
-        };
-        let tl = match law {
-            "pd_plus" => TaskLaw::PdPlus,
-            "computed_torque" => TaskLaw::ComputedTorque,
-            "decoupled_naive" => TaskLaw::Decoupled(Coupling::Naive),
-            "decoupled_feedforward" => TaskLaw::Decoupled(Coupling::DesiredAcceleration),
-            _ => TaskLaw::Decoupled(Coupling::Compensated),
-        };
-        let ctl = M5TaskController::new(mm, tl, *x_ref, *amplitude, *omega, kp, kd, c.max_torque)?;
-        return Ok((sys, Box::new(ctl), format!("chapter model {model}")));
-    }
-    bail!(
-        "controller.law = \"{law}\": unknown law (expected one of {}, osc, coordinated, {})",
-        PLATFORM_LAWS.join(", "),
-        M5_LAWS.join(", ")
-    )
-}
 
 #[derive(Debug, Serialize)]
 struct ViolationOut {
@@ -957,66 +173,15 @@ fn control_plots(res: &ClosedLoopResult, files: &mut Vec<(String, Vec<u8>)>) {
     }
 }
 
-/// Runs a closed-loop scenario.
-pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<()> {
-    let ctx = |what: &str| format!("{}: {what}", path.display());
-    let Some(c) = &sc.controller else {
-        bail!("{}", ctx("[reference] needs a [controller] table"));
-    };
-    if matches!(sc.robot, RobotSpec::FreeFloating { .. }) {
-        bail!(
-            "{}",
-            ctx(
-                "[controller] is for wheeled robots and m5; free-floating control is [space.control]"
-            )
-        );
-    }
-    if sc.inputs.is_some() {
-        bail!(
-            "{}",
-            ctx("[[inputs]] and [controller] exclude each other: the controller writes the inputs")
-        );
-    }
-    if sc.space.is_some() {
-        bail!(
-            "{}",
-            ctx("[space] is only for robot.kind = \"free_floating\"")
-        );
-    }
-    let (mut system, mut law, robot_name) =
-        build_loop(sc, base_dir, c).map_err(|e| anyhow!("{}: {e:#}", path.display()))?;
-    let (q0, v0, _) = initial_state(sc, system.as_ref(), &ctx)?;
-    sc.integrator
-        .validate()
-        .with_context(|| ctx("integrator"))?;
-    let tol = c.lyapunov_tolerance.unwrap_or(1e-9);
-    if let Some(g) = c.goal_tolerance
-        && !(g.is_finite() && g >= 0.0)
-    {
-        bail!(
-            "{}",
-            ctx(&format!(
-                "controller.goal_tolerance must be >= 0 and finite, got {g}"
-            ))
-        );
-    }
-    let options = ClosedLoopOptions {
-        duration: sc.duration,
-        integrator: sc.integrator,
-        control_period: c.period,
-        record_interval: sc.output.record_interval,
-        limits: sc.limits.unwrap_or_default(),
-        lyapunov_tolerance: tol,
-    };
-    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
-    let bar = progress_bar(sc.duration);
-    let start = Instant::now();
+/// Simulates the closed loop with a progress bar on a terminal.
+fn simulate_with_progress(cl: &mut ClosedLoop) -> moma::Result<ClosedLoopResult> {
+    let bar = progress_bar(cl.options.duration);
     let result = simulate_closed_loop(
-        system.as_mut(),
-        law.as_mut(),
-        &q0,
-        &v0,
-        &options,
+        cl.system.as_mut(),
+        cl.law.as_mut(),
+        &cl.q0,
+        &cl.v0,
+        &cl.options,
         &mut |t| {
             if let Some(pb) = &bar {
                 pb.set_position((t * 1000.0).round() as u64);
@@ -1026,22 +191,12 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
     if let Some(pb) = &bar {
         pb.finish_and_clear();
     }
-    let res =
-        result.map_err(|e| anyhow!("{}: closed-loop simulation failed: {e}", path.display()))?;
-    let wall = start.elapsed().as_secs_f64();
-    let rec = &res.recorder;
-    let last = rec.len() - 1;
-    let ne = res.error_names.len();
-    let final_error = res.error_row(last).to_vec();
-    let final_norm = final_error.iter().map(|e| e * e).sum::<f64>().sqrt();
-    let max_abs_error = (0..ne)
-        .map(|k| {
-            (0..rec.len())
-                .map(|i| res.error_row(i)[k].abs())
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    let lyapunov = res.lyapunov_report.as_ref().map(|r| LyapunovOut {
+    result
+}
+
+/// The Lyapunov section of the summary.
+fn lyapunov_out(res: &ClosedLoopResult, tol: f64) -> Option<LyapunovOut> {
+    res.lyapunov_report.as_ref().map(|r| LyapunovOut {
         v_first: r.v_first,
         v_last: r.v_last,
         monotone: r.monotone(),
@@ -1058,16 +213,38 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         max_integral_error: r.max_integral_error,
         max_rate_error: r.max_rate_error,
         tolerance: tol,
-    });
+    })
+}
+
+/// The summary of a finished closed-loop run (its file list is filled by [`files`]).
+fn control_summary(
+    path: &Path,
+    sc: &Scenario,
+    c: &ControllerSpec,
+    cl: &ClosedLoop,
+    res: &ClosedLoopResult,
+    wall: f64,
+) -> ControlSummary {
+    let rec = &res.recorder;
+    let last = rec.len() - 1;
+    let ne = res.error_names.len();
+    let final_error = res.error_row(last).to_vec();
+    let final_norm = final_error.iter().map(|e| e * e).sum::<f64>().sqrt();
+    let max_abs_error = (0..ne)
+        .map(|k| {
+            (0..rec.len())
+                .map(|i| res.error_row(i)[k].abs())
+                .fold(0.0, f64::max)
+        })
+        .collect();
     let s = res.saturation;
     let steps = res.stats.accepted;
-    let goal_reached = c.goal_tolerance.map(|g| final_norm <= g);
-    let mut summary = ControlSummary {
+    ControlSummary {
         scenario: sc
             .name
             .clone()
             .unwrap_or_else(|| path.display().to_string()),
-        robot: robot_name,
+        robot: cl.robot_name.clone(),
         law: c.law.clone(),
         reference: sc.reference.as_ref().map_or("", |r| r.kind()).to_string(),
         duration: sc.duration,
@@ -1084,8 +261,8 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         final_error_norm: final_norm,
         max_abs_error,
         goal_tolerance: c.goal_tolerance,
-        goal_reached,
-        lyapunov,
+        goal_reached: c.goal_tolerance.map(|g| final_norm <= g),
+        lyapunov: lyapunov_out(res, cl.options.lyapunov_tolerance),
         saturation: SaturationOut {
             evaluations: s.evaluations,
             speed_limited: s.speed,
@@ -1104,28 +281,22 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
         stability: None,
-    };
-    let monitor = match &sc.stability {
-        None => None,
-        Some(spec) => {
-            let mon = super::simulate_stability::replay(spec, &sc.robot, sc.gravity, base_dir, rec)
-                .with_context(|| ctx("stability"))?;
-            summary.stability = Some(super::simulate_stability::summary(spec, &mon, None));
-            Some(mon)
-        }
-    };
-    let wheels = match &sc.robot {
-        RobotSpec::Urdf {
-            wheel_joints: Some(w),
-            ..
-        } => w.to_vec(),
-        _ => Vec::new(),
-    };
+    }
+}
+
+/// Every output file in memory, `summary.json` last (its file list filled here).
+fn files(
+    sc: &Scenario,
+    res: &ClosedLoopResult,
+    monitor: Option<&StabilityMonitor>,
+    summary: &mut ControlSummary,
+) -> Result<Vec<(String, Vec<u8>)>> {
+    let rec = &res.recorder;
     let mut files = vec![
         ("trajectory.csv".to_string(), rec.to_csv().into_bytes()),
-        ("control.csv".to_string(), control_csv(&res).into_bytes()),
+        ("control.csv".to_string(), control_csv(res).into_bytes()),
     ];
-    if let Some(mon) = &monitor {
+    if let Some(mon) = monitor {
         files.push((
             "stability.csv".to_string(),
             super::simulate_stability::csv(mon).into_bytes(),
@@ -1135,11 +306,11 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         if matches!(sc.robot, RobotSpec::FixedBase { .. }) {
             arm_plots(rec, &mut files);
         } else {
-            motion_plots(&wheels, rec, &mut files);
+            motion_plots(&moma::simulate::wheel_joints(sc), rec, &mut files);
         }
         balance_plots(rec, &mut files);
-        control_plots(&res, &mut files);
-        if let Some(mon) = &monitor {
+        control_plots(res, &mut files);
+        if let Some(mon) = monitor {
             super::simulate_stability::plots(mon, &mut files);
         }
     }
@@ -1148,9 +319,42 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
         .map(|(n, _)| n.clone())
         .chain(std::iter::once("summary.json".to_string()))
         .collect();
-    let mut json = serde_json::to_string_pretty(&summary).context("serialising the summary")?;
+    let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
     json.push('\n');
     files.push(("summary.json".to_string(), json.into_bytes()));
+    Ok(files)
+}
+
+/// Runs a closed-loop scenario built by `moma::simulate::closed_loop` and writes its
+/// files; exit status 3 when it tips over under `require_stable` or misses
+/// `controller.goal_tolerance`.
+pub fn run(path: &Path, sc: &Scenario, mut cl: ClosedLoop, args: &Args) -> Result<()> {
+    let Some(c) = &sc.controller else {
+        return Err(anyhow!(
+            "{}: [reference] needs a [controller] table",
+            path.display()
+        ));
+    };
+    for w in &cl.warnings {
+        eprintln!("warning: {w}");
+    }
+    let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
+    let start = Instant::now();
+    let res = simulate_with_progress(&mut cl)
+        .map_err(|e| anyhow!("{}: closed-loop simulation failed: {e}", path.display()))?;
+    let wall = start.elapsed().as_secs_f64();
+    let mut summary = control_summary(path, sc, c, &cl, &res, wall);
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    let monitor = match &sc.stability {
+        None => None,
+        Some(spec) => {
+            let mon = moma::simulate::replay(spec, &sc.robot, sc.gravity, base_dir, &res.recorder)
+                .with_context(|| format!("{}: stability", path.display()))?;
+            summary.stability = Some(super::simulate_stability::summary(spec, &mon, None));
+            Some(mon)
+        }
+    };
+    let files = files(sc, &res, monitor.as_ref(), &mut summary)?;
     write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&summary)?;
@@ -1161,10 +365,11 @@ pub fn run(path: &Path, sc: &Scenario, base_dir: &Path, args: &Args) -> Result<(
     {
         return super::common::goal_not_reached(super::simulate_stability::tip_message(mon));
     }
-    if goal_reached == Some(false) {
+    if summary.goal_reached == Some(false) {
         return super::common::goal_not_reached(format!(
-            "{}: final tracking error {final_norm:e} exceeds controller.goal_tolerance = {}",
+            "{}: final tracking error {:e} exceeds controller.goal_tolerance = {}",
             path.display(),
+            summary.final_error_norm,
             c.goal_tolerance.unwrap_or_default()
         ));
     }

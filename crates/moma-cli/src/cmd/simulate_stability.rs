@@ -1,94 +1,15 @@
-//! The `[stability]` table of `moma simulate` scenarios: tip-over measures, wheel–ground
-//! loads and slip along a wheeled URDF run (schema and outputs in docs/simulate.md).
+//! The outputs of the `[stability]` table of `moma simulate` scenarios (tip-over
+//! measures, wheel–ground loads and slip along a wheeled URDF run): the summary section,
+//! `stability.csv` and the plots. The table and its monitor are built by the library
+//! (`moma::simulate::stability`); schema and outputs in docs/simulate.md.
 
-use anyhow::{Context, Result, bail};
-use moma::mobile::WheeledModel;
 use moma::sim::stability_monitor::{
-    Crossing, StabilityMonitor, StabilitySettings, StabilityTrace, first_crossing, first_slip,
+    Crossing, StabilityMonitor, StabilityTrace, first_crossing, first_slip,
 };
-use moma::stability::BodySet;
-use serde::{Deserialize, Serialize};
+use moma::simulate::StabilitySpec;
+use serde::Serialize;
 
 use crate::svg_plots::{Series, line_chart};
-
-/// The `[stability]` table.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StabilitySpec {
-    /// Coulomb friction coefficient of the driven wheels (optional: no slip check).
-    #[serde(default)]
-    pub mu: Option<f64>,
-    /// Moment-Height body set: `all`, `subtree:JOINT` or `links:A,B,…` (default all).
-    #[serde(default)]
-    pub bodies: Option<String>,
-    /// Ground height in the base frame (m); default from the tracked wheels, else 0.
-    #[serde(default)]
-    pub ground_z: Option<f64>,
-    /// End the run at the first sample that tips over.
-    #[serde(default)]
-    pub stop_at_tip: bool,
-    /// Declare "stays stable" a goal of the scenario: a tip-over gives exit status 3.
-    #[serde(default)]
-    pub require_stable: bool,
-}
-
-/// Builds the monitor of `spec` for `wm`; errors name the `stability.*` field.
-pub fn monitor(spec: &StabilitySpec, wm: &WheeledModel) -> Result<StabilityMonitor> {
-    let bodies: BodySet = match &spec.bodies {
-        None => BodySet::All,
-        Some(s) => s.parse().context("stability.bodies")?,
-    };
-    if let Some(mu) = spec.mu
-        && !(mu.is_finite() && mu > 0.0)
-    {
-        bail!("stability.mu must be a positive finite number, got {mu}");
-    }
-    if let Some(z) = spec.ground_z
-        && !z.is_finite()
-    {
-        bail!("stability.ground_z is not a finite number");
-    }
-    let settings = StabilitySettings {
-        mu: spec.mu,
-        bodies,
-        ground_z: spec.ground_z,
-        stop_at_tip: spec.stop_at_tip,
-    };
-    StabilityMonitor::new(wm, settings).context("stability")
-}
-
-/// Evaluates every recorded sample of a finished run (closed-loop runs, whose loop has no
-/// sample observer): the robot must be a URDF on a wheeled base.
-pub fn replay(
-    spec: &StabilitySpec,
-    robot: &super::simulate::RobotSpec,
-    gravity: Option<f64>,
-    base_dir: &std::path::Path,
-    rec: &moma::sim::recorder::Recorder,
-) -> Result<StabilityMonitor> {
-    let super::simulate::RobotSpec::Urdf {
-        urdf,
-        drive,
-        wheel_joints,
-        casters,
-    } = robot
-    else {
-        bail!("[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")");
-    };
-    let wm = super::simulate::build_wheeled_model(
-        &base_dir.join(urdf),
-        drive,
-        wheel_joints.clone(),
-        casters,
-        gravity,
-    )?;
-    let mut mon = monitor(spec, &wm)?;
-    for i in 0..rec.len() {
-        mon.sample(rec.times[i], rec.q_row(i), rec.v_row(i), rec.u_row(i))
-            .with_context(|| format!("sample at t = {}", rec.times[i]))?;
-    }
-    Ok(mon)
-}
 
 /// A named ground contact.
 #[derive(Debug, Serialize)]

@@ -198,6 +198,42 @@ impl AdaptiveOptions {
     }
 }
 
+/// The step budget of a whole run that may call `integrate_to` many times (once per
+/// recording interval or control tick) and several integrators (one per phase): every
+/// step taken, accepted or rejected, fixed or adaptive, is charged to it, so the run
+/// as a whole is bounded and not each call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepBudget {
+    /// Steps allowed in all.
+    pub limit: usize,
+    /// Steps taken so far.
+    pub used: usize,
+}
+
+impl StepBudget {
+    /// A fresh budget of `limit` steps.
+    #[must_use]
+    pub fn new(limit: usize) -> Self {
+        Self { limit, used: 0 }
+    }
+
+    /// Steps still allowed.
+    #[must_use]
+    pub fn remaining(&self) -> usize {
+        self.limit.saturating_sub(self.used)
+    }
+
+    /// Charges `n` fixed steps if they fit; `false` (nothing charged) when they do not.
+    pub fn take(&mut self, n: usize) -> bool {
+        if n <= self.remaining() {
+            self.used += n;
+            true
+        } else {
+            false
+        }
+    }
+}
+
 /// The tableau and error estimate of an embedded explicit Runge–Kutta pair with the
 /// first-same-as-last property, used by [`AdaptiveRk`].
 pub trait EmbeddedMethod {
@@ -618,10 +654,48 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
         x: &mut [f64],
         t_end: f64,
     ) -> Result<()> {
-        self.integrate_within(sys, t, x, t_end, self.options.max_steps)
+        if self.integrate_within(sys, t, x, t_end, self.options.max_steps)? {
+            Ok(())
+        } else {
+            Err(self.too_many_steps(*t, t_end))
+        }
     }
 
-    /// [`AdaptiveRk::integrate_to`] with at most `limit` steps (accepted + rejected).
+    /// [`AdaptiveRk::integrate_to`] charging every step (accepted or rejected) to
+    /// `budget`, the budget of a whole run that may span many calls and integrators;
+    /// [`AdaptiveOptions::max_steps`] is not applied. Returns `Ok(false)` when the budget
+    /// ran out before `t_end` (`*t` and `x` then hold the last accepted state), so that
+    /// the caller can say what ran out in its own terms.
+    ///
+    /// # Errors
+    /// As [`AdaptiveRk::integrate_to`], except the step limit.
+    pub fn integrate_to_within<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        budget: &mut StepBudget,
+    ) -> Result<bool> {
+        let before = self.stats.accepted + self.stats.rejected;
+        let reached = self.integrate_within(sys, t, x, t_end, budget.remaining());
+        budget.used += self.stats.accepted + self.stats.rejected - before;
+        reached
+    }
+
+    fn too_many_steps(&self, t: f64, t_end: f64) -> Error {
+        Error::Numerical {
+            t,
+            message: format!(
+                "{}: maximum number of steps ({}) exceeded before t = {t_end}",
+                M::NAME,
+                self.options.max_steps
+            ),
+        }
+    }
+
+    /// Integrates to `t_end` with at most `limit` steps (accepted + rejected); `Ok(false)`
+    /// when the limit is reached first.
     fn integrate_within<S: OdeSystem>(
         &mut self,
         sys: &mut S,
@@ -629,7 +703,7 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
         x: &mut [f64],
         t_end: f64,
         limit: usize,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         let n = self.y1.len();
         check_dim(sys, n, x)?;
         if !t_end.is_finite() || !t.is_finite() || t_end < *t {
@@ -640,7 +714,7 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
         }
         check_state(*t, x, self.options.blowup)?;
         if t_end == *t {
-            return Ok(());
+            return Ok(true);
         }
         if !self.fsal_valid {
             sys.rhs(*t, x, &mut self.k[0])?;
@@ -656,18 +730,11 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
         loop {
             let remaining = t_end - *t;
             if remaining <= 0.0 {
-                return Ok(());
+                return Ok(true);
             }
             steps += 1;
             if steps > limit {
-                return Err(Error::Numerical {
-                    t: *t,
-                    message: format!(
-                        "{}: maximum number of steps ({}) exceeded before t = {t_end}",
-                        M::NAME,
-                        self.options.max_steps
-                    ),
-                });
+                return Ok(false);
             }
             h = h.min(self.options.max_step);
             let last = h >= remaining * (1.0 - 1e-12);
@@ -705,7 +772,7 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
                 h = if last { h.max(hs * fac) } else { hs * fac };
                 self.h = Some(h);
                 if last {
-                    return Ok(());
+                    return Ok(true);
                 }
             } else {
                 self.stats.rejected += 1;
@@ -741,7 +808,9 @@ impl<M: EmbeddedMethod> AdaptiveRk<M> {
             }
             let used = self.stats.accepted + self.stats.rejected;
             let left = self.options.max_steps.saturating_sub(used);
-            self.integrate_within(sys, &mut t, &mut x, te, left)?;
+            if !self.integrate_within(sys, &mut t, &mut x, te, left)? {
+                return Err(self.too_many_steps(t, te));
+            }
             out.push(x.clone());
         }
         Ok(out)
@@ -772,6 +841,43 @@ mod tests {
         for (row, t) in out.iter().zip([0.5f64, 1.0, 2.0]) {
             assert!((row[0] - (-t).exp()).abs() < 1e-13);
         }
+    }
+
+    #[test]
+    fn a_step_budget_is_charged_across_calls() {
+        let mut dp = DormandPrince45::new(1, AdaptiveOptions::with_tolerance(1e-10)).unwrap();
+        let mut budget = StepBudget::new(usize::MAX);
+        let (mut t, mut x) = (0.0, [1.0]);
+        for k in 1..=10 {
+            assert!(
+                dp.integrate_to_within(&mut Decay, &mut t, &mut x, f64::from(k) * 0.1, &mut budget)
+                    .unwrap()
+            );
+        }
+        let all = budget.used;
+        assert_eq!(all, dp.stats.accepted + dp.stats.rejected);
+        assert!(all > 20, "{all}");
+        // half of it: each call needs only a tenth, but the ten calls share it
+        dp.reset();
+        let mut budget = StepBudget::new(all / 2);
+        let (mut t, mut x) = (0.0, [1.0]);
+        let mut reached = 0;
+        for k in 1..=10 {
+            let te = f64::from(k) * 0.1;
+            if !dp
+                .integrate_to_within(&mut Decay, &mut t, &mut x, te, &mut budget)
+                .unwrap()
+            {
+                break;
+            }
+            reached = k;
+        }
+        assert!((3..9).contains(&reached), "{reached}");
+        assert_eq!(budget.used, all / 2);
+        assert_eq!(budget.remaining(), 0);
+        // the state is the last accepted one
+        assert!((x[0] - (-t).exp()).abs() < 1e-9);
+        assert!(!budget.take(1));
     }
 
     #[test]

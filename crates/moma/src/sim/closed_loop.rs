@@ -25,8 +25,8 @@ use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::Recorder;
 use crate::sim::scenario::IntegratorSettings;
 use crate::sim::stepping::{
-    Grid, check_rk4_budget, integrate_on_grid, positive, record_plant_sample, start_recording,
-    validate_run_common,
+    Grid, check_rk4_budget, check_rk4_steps, integrate_on_grid, positive, record_plant_sample,
+    start_recording, validate_run_common,
 };
 use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem};
 
@@ -223,6 +223,34 @@ struct Rec {
 }
 
 impl Rec {
+    /// The recorder and monitors of a run of `n_samples` samples, for a law with `ne`
+    /// error components, `ns` signals and (if `has_v`) a Lyapunov function.
+    fn new(
+        system: &mut dyn ReducedSystem,
+        q0: &[f64],
+        v0: &[f64],
+        options: &ClosedLoopOptions,
+        n_samples: usize,
+        ne: usize,
+        ns: usize,
+        has_v: bool,
+    ) -> Result<Self> {
+        let (recorder, monitor) = start_recording(system, q0, v0, options.limits, n_samples)?;
+        let nk = system.nk();
+        Ok(Rec {
+            recorder,
+            monitor,
+            lyap: has_v
+                .then(|| LyapunovMonitor::with_capacity(n_samples, options.lyapunov_tolerance)),
+            errors: Vec::with_capacity(n_samples * ne),
+            err: vec![0.0; ne],
+            signals: Vec::with_capacity(n_samples * ns),
+            sig: vec![0.0; ns],
+            lambda: vec![0.0; nk],
+            rate: Vec::with_capacity(if has_v { n_samples } else { 0 }),
+        })
+    }
+
     fn record(&mut self, ode: &mut LoopOde<'_>, t: f64, x: &[f64]) -> Result<()> {
         let (nq, nv) = (ode.system.nq(), ode.system.nv());
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
@@ -262,7 +290,6 @@ impl Rec {
 ///
 /// # Panics
 /// If `law.nu()` differs from `system.nu()`.
-#[allow(clippy::too_many_lines)]
 pub fn simulate_closed_loop(
     system: &mut dyn ReducedSystem,
     law: &mut dyn FeedbackLaw,
@@ -291,62 +318,20 @@ pub fn simulate_closed_loop(
         ));
     }
     let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
-    // Tick and recording grid.
-    let (ticks, period, every) = match options.control_period {
-        Some(p) => {
-            positive("controller.period", p)?;
-            let n = (options.duration / p).round().max(1.0);
-            if n > MAX_CONTROL_TICKS {
-                return Err(Error::invalid(
-                    "controller.period",
-                    format!(
-                        "duration / period = {n:e} ticks exceeds the limit of {MAX_CONTROL_TICKS:e}"
-                    ),
-                ));
-            }
-            let h = options.duration / n;
-            let every = (options.record_interval / h).round().max(1.0);
-            (n as usize, h, every as usize)
-        }
-        None => {
-            let n = (options.duration / options.record_interval).ceil();
-            if n > MAX_RECORDED_SAMPLES {
-                return Err(Error::invalid(
-                    "record interval",
-                    format!(
-                        "duration / record interval = {n:e} samples exceeds the limit of {MAX_RECORDED_SAMPLES:e}"
-                    ),
-                ));
-            }
-            (n as usize, options.record_interval, 1)
-        }
-    };
-    let n_samples = ticks / every + 2;
-    if n_samples as f64 > MAX_RECORDED_SAMPLES {
-        return Err(Error::invalid(
-            "record interval",
-            format!("{n_samples} samples exceed the limit of {MAX_RECORDED_SAMPLES:e}"),
-        ));
-    }
+    let grid = TickGrid::new(options)?;
     check_rk4_budget(&options.integrator, options.duration)?;
-    let (recorder, monitor) = start_recording(system, q0, v0, options.limits, n_samples)?;
-    let nk = system.nk();
     let error_names = law.error_names();
-    let ne = error_names.len();
     let signal_names = law.signal_names();
-    let ns = signal_names.len();
-    let has_v = law.has_lyapunov();
-    let mut rec = Rec {
-        recorder,
-        monitor,
-        lyap: has_v.then(|| LyapunovMonitor::with_capacity(n_samples, options.lyapunov_tolerance)),
-        errors: Vec::with_capacity(n_samples * ne),
-        err: vec![0.0; ne],
-        signals: Vec::with_capacity(n_samples * ns),
-        sig: vec![0.0; ns],
-        lambda: vec![0.0; nk],
-        rate: Vec::with_capacity(if has_v { n_samples } else { 0 }),
-    };
+    let mut rec = Rec::new(
+        system,
+        q0,
+        v0,
+        options,
+        grid.n_samples,
+        error_names.len(),
+        signal_names.len(),
+        law.has_lyapunov(),
+    )?;
     let mut x = vec![0.0; nq + nv + 1];
     x[..nq].copy_from_slice(q0);
     x[nq..nq + nv].copy_from_slice(v0);
@@ -365,47 +350,14 @@ pub fn simulate_closed_loop(
         evaluations += 1;
     }
     rec.record(&mut ode, 0.0, &x)?;
-    // RK4: `sub` steps per tick (hold) or per recording interval (continuous)
-    let sub = match options.integrator {
-        IntegratorSettings::Rk4 { dt } => (period / dt).round().max(1.0) as usize,
-        IntegratorSettings::Adaptive { .. } => 1,
-    };
-    let h = period / sub as f64;
-    let end = |k: usize| {
-        if k + 1 == ticks {
-            options.duration
-        } else {
-            ((k + 1) as f64 * period).min(options.duration)
-        }
-    };
-    let steps = |_: usize| sub;
-    let grid = Grid {
-        n: ticks,
-        end: &end,
-        rk4: Some((h, &steps)),
-        switches: !continuous,
-        max_step_cap: period,
-    };
-    let stats = integrate_on_grid(
+    let stats = integrate_ticks(
         &mut ode,
+        &mut rec,
         &mut x,
-        options.integrator,
-        &options.limits,
+        options,
         &grid,
-        &mut |ode, k, t1, x| {
-            tick_end(
-                ode,
-                &mut rec,
-                &mut evaluations,
-                k,
-                ticks,
-                every,
-                t1,
-                x,
-                progress,
-            )?;
-            Ok(false)
-        },
+        &mut evaluations,
+        progress,
     )?;
     let control_ticks = if continuous {
         ode.saturation.evaluations
@@ -431,8 +383,117 @@ pub fn simulate_closed_loop(
         lyapunov_report,
         saturation: ode.saturation,
         control_ticks,
-        control_period: options.control_period.map(|_| period),
+        control_period: options.control_period.map(|_| grid.period),
     })
+}
+
+/// The segments a run is integrated over: control ticks under a hold, recording
+/// intervals with continuous feedback.
+struct TickGrid {
+    /// Number of segments.
+    ticks: usize,
+    /// Segment length (s): the control period actually used, or the recording interval.
+    period: f64,
+    /// Segments per recorded sample.
+    every: usize,
+    /// Samples recorded at most.
+    n_samples: usize,
+}
+
+impl TickGrid {
+    /// The grid of `options`, with the tick and sample counts bounded.
+    fn new(options: &ClosedLoopOptions) -> Result<Self> {
+        let (ticks, period, every) = match options.control_period {
+            Some(p) => {
+                positive("controller.period", p)?;
+                let n = (options.duration / p).round().max(1.0);
+                if n > MAX_CONTROL_TICKS {
+                    return Err(Error::invalid(
+                        "controller.period",
+                        format!(
+                            "duration / period = {n:e} ticks exceeds the limit of {MAX_CONTROL_TICKS:e}"
+                        ),
+                    ));
+                }
+                let h = options.duration / n;
+                let every = (options.record_interval / h).round().max(1.0);
+                (n as usize, h, every as usize)
+            }
+            None => {
+                let n = (options.duration / options.record_interval).ceil();
+                if n > MAX_RECORDED_SAMPLES {
+                    return Err(Error::invalid(
+                        "record interval",
+                        format!(
+                            "duration / record interval = {n:e} samples exceeds the limit of {MAX_RECORDED_SAMPLES:e}"
+                        ),
+                    ));
+                }
+                (n as usize, options.record_interval, 1)
+            }
+        };
+        let n_samples = ticks / every + 2;
+        if n_samples as f64 > MAX_RECORDED_SAMPLES {
+            return Err(Error::invalid(
+                "record interval",
+                format!("{n_samples} samples exceed the limit of {MAX_RECORDED_SAMPLES:e}"),
+            ));
+        }
+        Ok(Self {
+            ticks,
+            period,
+            every,
+            n_samples,
+        })
+    }
+}
+
+/// Integrates the loop from `x` over the tick grid (RK4: `sub` steps per segment),
+/// recording and (under a hold) sampling the law at every segment end.
+fn integrate_ticks(
+    ode: &mut LoopOde<'_>,
+    rec: &mut Rec,
+    x: &mut [f64],
+    options: &ClosedLoopOptions,
+    tg: &TickGrid,
+    evaluations: &mut usize,
+    progress: &mut dyn FnMut(f64),
+) -> Result<StepStats> {
+    let (ticks, period, every) = (tg.ticks, tg.period, tg.every);
+    // RK4: `sub` steps per tick (hold) or per recording interval (continuous)
+    let sub = match options.integrator {
+        IntegratorSettings::Rk4 { dt, .. } => (period / dt).round().max(1.0) as usize,
+        IntegratorSettings::Adaptive { .. } => 1,
+    };
+    // every tick takes `sub` steps (at least one, even with dt above the period)
+    check_rk4_steps(&options.integrator, ticks as f64 * sub as f64)?;
+    let h = period / sub as f64;
+    let end = |k: usize| {
+        if k + 1 == ticks {
+            options.duration
+        } else {
+            ((k + 1) as f64 * period).min(options.duration)
+        }
+    };
+    let steps = |_: usize| sub;
+    let grid = Grid {
+        n: ticks,
+        end: &end,
+        rk4: Some((h, &steps)),
+        switches: !ode.continuous,
+        max_step_cap: period,
+    };
+    integrate_on_grid(
+        ode,
+        x,
+        options.integrator,
+        &options.limits,
+        &grid,
+        &mut |ode, k, t1, x| {
+            tick_end(ode, rec, evaluations, k, ticks, every, t1, x, progress)?;
+            Ok(false)
+        },
+    )
 }
 
 /// End of tick `k` at time `t1`: record if due, then (under a hold) sample the law for

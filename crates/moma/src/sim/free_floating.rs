@@ -15,7 +15,8 @@ use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_jacobian};
 use crate::multibody::{Data, FrameIndex, Model};
 use crate::sim::scenario::{ChannelProfile, IntegratorSettings};
-use crate::sim::{AdaptiveOptions, Dop853, OdeSystem, Rk4};
+use crate::sim::stepping::{budget_exhausted, check_rk4_budget};
+use crate::sim::{AdaptiveOptions, Dop853, OdeSystem, Rk4, StepBudget};
 use crate::space::{self, SpaceData, check_free_flyer};
 use crate::spatial::{Force, Inertia, Motion, SE3};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6xX, UnitQuaternion, Vector3};
@@ -597,14 +598,41 @@ impl OdeSystem for KinematicOde<'_> {
     }
 }
 
+/// The step budget of a whole free-floating run (every phase, every recording
+/// interval), with what its error names.
+struct RunBudget {
+    budget: StepBudget,
+    integrator: IntegratorSettings,
+    duration: f64,
+}
+
+impl RunBudget {
+    fn new(settings: &FloatingSettings) -> Self {
+        Self {
+            budget: StepBudget::new(settings.integrator.step_budget()),
+            integrator: settings.integrator,
+            duration: settings.duration,
+        }
+    }
+
+    fn exhausted(&self, t: f64) -> Error {
+        let method = match self.integrator {
+            IntegratorSettings::Rk4 { .. } => "RK4",
+            IntegratorSettings::Adaptive { .. } => "DOP853",
+        };
+        budget_exhausted(method, &self.integrator, &self.budget, t, self.duration)
+    }
+}
+
 /// Integrates `sys` from `(t, x)` to `te`: RK4 in equal steps no longer than dt (then
-/// the quaternion projection), or DOP853.
+/// the quaternion projection), or DOP853; every step is charged to the run's `budget`.
 fn advance<S: OdeSystem>(
     sys: &mut S,
     integ: &mut Integrator,
     t: &mut f64,
     x: &mut [f64],
     te: f64,
+    budget: &mut RunBudget,
 ) -> Result<()> {
     match integ {
         Integrator::Rk4(rk, dt) => {
@@ -612,7 +640,11 @@ fn advance<S: OdeSystem>(
             if span <= 0.0 {
                 return Ok(());
             }
+            // (a float too large for usize saturates, and no budget takes it)
             let steps = (span / *dt - 1e-9).ceil().max(1.0) as usize;
+            if !budget.budget.take(steps) {
+                return Err(budget.exhausted(*t));
+            }
             let h = span / steps as f64;
             for k in 0..steps {
                 rk.step(sys, *t + k as f64 * h, x, h)?;
@@ -621,7 +653,13 @@ fn advance<S: OdeSystem>(
             *t = te;
             Ok(())
         }
-        Integrator::Adaptive(dp) => dp.integrate_to(sys, t, x, te),
+        Integrator::Adaptive(dp) => {
+            if dp.integrate_to_within(sys, t, x, te, &mut budget.budget)? {
+                Ok(())
+            } else {
+                Err(budget.exhausted(*t))
+            }
+        }
     }
 }
 
@@ -634,11 +672,12 @@ impl Integrator {
     fn new(settings: &IntegratorSettings, n: usize) -> Result<Self> {
         settings.validate()?;
         Ok(match *settings {
-            IntegratorSettings::Rk4 { dt } => Integrator::Rk4(Rk4::new(n), dt),
+            IntegratorSettings::Rk4 { dt, .. } => Integrator::Rk4(Rk4::new(n), dt),
             IntegratorSettings::Adaptive {
                 rtol,
                 atol,
                 max_step,
+                ..
             } => {
                 let mut o = AdaptiveOptions::with_tolerance(rtol);
                 o.atol = atol;
@@ -685,10 +724,39 @@ pub fn run(
     settings: &FloatingSettings,
 ) -> Result<FloatingRun> {
     check_free_flyer(model)?;
+    check_initial_state(model, q0, v0)?;
+    let nrec = check_run_length(settings)?;
+    check_drive(model, settings)?;
+    let times = record_times(settings, nrec);
+    let mut run = FloatingRun {
+        samples: Vec::with_capacity(times.len()),
+        frame_positions: Vec::with_capacity(times.len()),
+        drift: Vec::new(),
+        capture: None,
+        steps: 0,
+        rhs_evals: 0,
+    };
+    let mut q = q0.clone();
+    normalize_base_quaternion(q.as_mut_slice());
+    let mut budget = RunBudget::new(settings);
+    match &settings.control {
+        Some(ctl) => run_controlled(model, &q, v0, ctl, settings, &times, &mut run, &mut budget)?,
+        None => run_torque_driven(model, &q, v0, settings, &times, &mut run, &mut budget)?,
+    }
+    Ok(run)
+}
+
+/// The initial state's lengths and finiteness.
+fn check_initial_state(model: &Model, q0: &DVector<f64>, v0: &DVector<f64>) -> Result<()> {
     crate::error::ensure_len("initial.q", model.nq, q0.len())?;
     crate::error::ensure_len("initial.v", model.nv, v0.len())?;
     crate::error::ensure_finite("initial.q", q0.iter())?;
-    crate::error::ensure_finite("initial.v", v0.iter())?;
+    crate::error::ensure_finite("initial.v", v0.iter())
+}
+
+/// Checks the duration, the recording interval and the step budget; returns the number
+/// of recording intervals, `⌈duration / record_interval⌉`.
+fn check_run_length(settings: &FloatingSettings) -> Result<f64> {
     let (dur, dt_rec) = (settings.duration, settings.record_interval);
     if !(dur.is_finite() && dur > 0.0) {
         return Err(Error::invalid("duration", "must be positive and finite"));
@@ -706,12 +774,16 @@ pub fn run(
             format!("{nrec} samples exceed 1e7"),
         ));
     }
-    if let IntegratorSettings::Rk4 { dt } = settings.integrator
-        && dt > 0.0
-        && dur / dt > 1e8
-    {
-        return Err(Error::invalid("integrator.dt", "more than 1e8 RK4 steps"));
+    if matches!(settings.integrator, IntegratorSettings::Rk4 { dt, .. } if dt > 0.0) {
+        check_rk4_budget(&settings.integrator, dur)?;
     }
+    Ok(nrec)
+}
+
+/// Checks what drives the run: the torque profiles, the joint damping, the capture
+/// (inside the run, not with control) and the control gains.
+fn check_drive(model: &Model, settings: &FloatingSettings) -> Result<()> {
+    let dur = settings.duration;
     if !settings.torque.is_empty() {
         crate::error::ensure_len("inputs", model.nv - 6, settings.torque.len())?;
         for (k, p) in settings.torque.iter().enumerate() {
@@ -746,115 +818,174 @@ pub fn run(
             "gain must be positive, damping not negative",
         ));
     }
-    let times: Vec<f64> = (0..=nrec as usize)
-        .map(|k| (k as f64 * dt_rec).min(dur))
-        .collect();
-    let mut run = FloatingRun {
-        samples: Vec::with_capacity(times.len()),
-        frame_positions: Vec::with_capacity(times.len()),
-        drift: Vec::new(),
-        capture: None,
-        steps: 0,
-        rhs_evals: 0,
-    };
+    Ok(())
+}
+
+/// The recording times `k · record_interval` (k = 0 ..= nrec), the last clamped to the
+/// duration.
+fn record_times(settings: &FloatingSettings, nrec: f64) -> Vec<f64> {
+    (0..=nrec as usize)
+        .map(|k| (k as f64 * settings.record_interval).min(settings.duration))
+        .collect()
+}
+
+/// A kinematic run under resolved-rate control from the normalised `q`: the momentum
+/// of `(q, v0)` is kept, and every sample records the commanded velocity.
+fn run_controlled(
+    model: &Model,
+    q: &DVector<f64>,
+    v0: &DVector<f64>,
+    ctl: &ResolvedRateControl,
+    settings: &FloatingSettings,
+    times: &[f64],
+    run: &mut FloatingRun,
+    budget: &mut RunBudget,
+) -> Result<()> {
     let mut data = Data::new(model);
-    let mut q = q0.clone();
-    normalize_base_quaternion(q.as_mut_slice());
-    if let Some(ctl) = &settings.control {
-        let h = space::momentum(model, &mut data, &q, v0);
-        let mut ode = KinematicOde {
-            model,
-            data: Data::new(model),
-            sd: SpaceData::new(model)?,
-            q: q.clone(),
-            frame: settings.frame,
-            ctl: ctl.clone(),
-            h,
-        };
-        let mut integ = Integrator::new(&settings.integrator, model.nq)?;
-        let mut x: Vec<f64> = q.iter().copied().collect();
-        let mut t = 0.0;
-        let mut sd = SpaceData::new(model)?;
-        for &te in &times {
-            advance(&mut ode, &mut integ, &mut t, &mut x, te)?;
-            // the recorded velocity is the commanded one
-            let mut qn = DVector::from_column_slice(&x);
-            normalize_base_quaternion(qn.as_mut_slice());
-            let qd = control_rates(model, &mut data, &mut sd, &qn, settings.frame, ctl, &h)?;
-            space::base_velocity(model, &mut data, &mut sd, &qn, qd.as_slice(), &h)?;
-            let xs: Vec<f64> = x.iter().chain(sd.v.iter()).copied().collect();
-            record(model, &mut data, settings.frame, te, &xs, &mut run);
-        }
-        run.drift
-            .push(momentum_drift(&run.samples, model.total_mass()));
-        (run.steps, run.rhs_evals) = integ.stats();
-        return Ok(run);
+    let h = space::momentum(model, &mut data, q, v0);
+    let mut ode = KinematicOde {
+        model,
+        data: Data::new(model),
+        sd: SpaceData::new(model)?,
+        q: q.clone(),
+        frame: settings.frame,
+        ctl: ctl.clone(),
+        h,
+    };
+    let mut integ = Integrator::new(&settings.integrator, model.nq)?;
+    let mut x: Vec<f64> = q.iter().copied().collect();
+    let mut t = 0.0;
+    let mut sd = SpaceData::new(model)?;
+    for &te in times {
+        advance(&mut ode, &mut integ, &mut t, &mut x, te, budget)?;
+        // the recorded velocity is the commanded one
+        let mut qn = DVector::from_column_slice(&x);
+        normalize_base_quaternion(qn.as_mut_slice());
+        let qd = control_rates(model, &mut data, &mut sd, &qn, settings.frame, ctl, &h)?;
+        space::base_velocity(model, &mut data, &mut sd, &qn, qd.as_slice(), &h)?;
+        let xs: Vec<f64> = x.iter().chain(sd.v.iter()).copied().collect();
+        record(model, &mut data, settings.frame, te, &xs, run);
     }
+    run.drift
+        .push(momentum_drift(&run.samples, model.total_mass()));
+    (run.steps, run.rhs_evals) = integ.stats();
+    Ok(())
+}
+
+/// One torque-driven phase of a run (before the capture, or after it with the target
+/// joined to the model).
+struct Phase {
+    /// The model of this phase.
+    model: Model,
+    /// Index of the phase's first sample in the run.
+    first_sample: usize,
+}
+
+/// A torque-driven run from the normalised `q`, in one phase, or in two split at the
+/// capture.
+fn run_torque_driven(
+    model: &Model,
+    q: &DVector<f64>,
+    v0: &DVector<f64>,
+    settings: &FloatingSettings,
+    times: &[f64],
+    run: &mut FloatingRun,
+    budget: &mut RunBudget,
+) -> Result<()> {
     let mut x: Vec<f64> = q.iter().chain(v0.iter()).copied().collect();
     let mut t = 0.0;
     let split = settings.capture.as_ref().map(|c| c.time);
-    let mut phase_model: Model = model.clone();
-    let mut phase_start = 0usize;
+    let mut phase = Phase {
+        model: model.clone(),
+        first_sample: 0,
+    };
     let mut k = 0usize;
     loop {
-        let mut ode = FreeFloatingOde::new(&phase_model)?;
-        ode.profiles = settings.torque.clone();
-        ode.joint_damping = settings.joint_damping;
-        let mut integ = Integrator::new(&settings.integrator, x.len())?;
-        let mut pdata = Data::new(&phase_model);
         let end = match (split, run.capture.is_none()) {
             (Some(tc), true) => tc,
-            _ => dur,
+            _ => settings.duration,
         };
-        while k < times.len() && times[k] <= end {
-            advance(&mut ode, &mut integ, &mut t, &mut x, times[k])?;
-            record(
-                &phase_model,
-                &mut pdata,
-                settings.frame,
-                times[k],
-                &x,
-                &mut run,
-            );
-            k += 1;
-        }
-        advance(&mut ode, &mut integ, &mut t, &mut x, end)?;
-        let (s, r) = integ.stats();
-        run.steps += s;
-        run.rhs_evals += r;
-        run.drift.push(momentum_drift(
-            &run.samples[phase_start..],
-            phase_model.total_mass(),
-        ));
+        integrate_phase(
+            &phase, settings, times, &mut k, end, &mut t, &mut x, run, budget,
+        )?;
         match (&settings.capture, run.capture.is_none()) {
-            (Some(c), true) => {
-                let nq = phase_model.nq;
-                let mut qc = DVector::from_column_slice(&x[..nq]);
-                normalize_base_quaternion(qc.as_mut_slice());
-                let vc = DVector::from_column_slice(&x[nq..]);
-                let cap = capture(&phase_model, &qc, &vc, settings.frame, &c.target)?;
-                x[..nq].copy_from_slice(qc.as_slice());
-                x[nq..].copy_from_slice(cap.v.as_slice());
-                phase_model = cap.model.clone();
-                phase_start = run.samples.len();
-                // the state just after the capture starts the second phase's record
-                record(
-                    &phase_model,
-                    &mut Data::new(&phase_model),
-                    settings.frame,
-                    t,
-                    &x,
-                    &mut run,
-                );
-                run.capture = Some(CaptureReport {
-                    time: c.time,
-                    momentum_before: cap.momentum_before,
-                    momentum_after: cap.momentum_after,
-                    model: cap.model,
-                });
-            }
+            (Some(c), true) => phase = capture_phase(&phase.model, settings, c, t, &mut x, run)?,
             _ => break,
         }
     }
-    Ok(run)
+    Ok(())
+}
+
+/// Integrates `phase` from `(t, x)` to `end`, recording at the times `times[*k..]` that
+/// are not after `end`, and adds its step counts and momentum drift to `run`.
+fn integrate_phase(
+    phase: &Phase,
+    settings: &FloatingSettings,
+    times: &[f64],
+    k: &mut usize,
+    end: f64,
+    t: &mut f64,
+    x: &mut [f64],
+    run: &mut FloatingRun,
+    budget: &mut RunBudget,
+) -> Result<()> {
+    let mut ode = FreeFloatingOde::new(&phase.model)?;
+    ode.profiles = settings.torque.clone();
+    ode.joint_damping = settings.joint_damping;
+    let mut integ = Integrator::new(&settings.integrator, x.len())?;
+    let mut pdata = Data::new(&phase.model);
+    while *k < times.len() && times[*k] <= end {
+        advance(&mut ode, &mut integ, t, x, times[*k], budget)?;
+        record(&phase.model, &mut pdata, settings.frame, times[*k], x, run);
+        *k += 1;
+    }
+    advance(&mut ode, &mut integ, t, x, end, budget)?;
+    let (s, r) = integ.stats();
+    run.steps += s;
+    run.rhs_evals += r;
+    run.drift.push(momentum_drift(
+        &run.samples[phase.first_sample..],
+        phase.model.total_mass(),
+    ));
+    Ok(())
+}
+
+/// The capture `c` at time `t` on the state `x` of a run on `model`: `x` jumps to the
+/// post-capture state, which starts the record of the returned second phase, and the
+/// capture is reported in `run`.
+fn capture_phase(
+    model: &Model,
+    settings: &FloatingSettings,
+    c: &CaptureEvent,
+    t: f64,
+    x: &mut [f64],
+    run: &mut FloatingRun,
+) -> Result<Phase> {
+    let nq = model.nq;
+    let mut qc = DVector::from_column_slice(&x[..nq]);
+    normalize_base_quaternion(qc.as_mut_slice());
+    let vc = DVector::from_column_slice(&x[nq..]);
+    let cap = capture(model, &qc, &vc, settings.frame, &c.target)?;
+    x[..nq].copy_from_slice(qc.as_slice());
+    x[nq..].copy_from_slice(cap.v.as_slice());
+    let phase = Phase {
+        model: cap.model.clone(),
+        first_sample: run.samples.len(),
+    };
+    // the state just after the capture starts the second phase's record
+    record(
+        &phase.model,
+        &mut Data::new(&phase.model),
+        settings.frame,
+        t,
+        x,
+        run,
+    );
+    run.capture = Some(CaptureReport {
+        time: c.time,
+        momentum_before: cap.momentum_before,
+        momentum_after: cap.momentum_after,
+        model: cap.model,
+    });
+    Ok(phase)
 }

@@ -20,5 +20,6 @@ pub mod wheeled_system;
 
 #[doc(no_inline)]
 pub use crate::ode::{
-    AdaptiveOptions, AdaptiveRk, Dop853, DormandPrince45, EmbeddedMethod, OdeSystem, Rk4, StepStats,
+    AdaptiveOptions, AdaptiveRk, Dop853, DormandPrince45, EmbeddedMethod, OdeSystem, Rk4,
+    StepBudget, StepStats,
 };

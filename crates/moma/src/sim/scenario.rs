@@ -126,6 +126,16 @@ impl InputProfile {
     }
 }
 
+/// The step budget of a whole run when the scenario sets none (`integrator.max_steps`):
+/// every step of every integration the run makes (fixed RK4 steps, accepted and
+/// rejected adaptive steps, over all recording intervals, control ticks and phases)
+/// counts against it. A million steps is a few hundred times what any shipped scenario
+/// takes and keeps the costliest plants of the shipped set well under a minute.
+pub const DEFAULT_MAX_STEPS: u64 = 100_000;
+
+/// The largest step budget a scenario may ask for (`integrator.max_steps`).
+pub const MAX_STEP_BUDGET: u64 = 100_000_000;
+
 /// Integrator choice.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
@@ -134,6 +144,10 @@ pub enum IntegratorSettings {
     Rk4 {
         /// Step (s).
         dt: f64,
+        /// Step budget of the whole run (1 ..= [`MAX_STEP_BUDGET`]); default
+        /// [`DEFAULT_MAX_STEPS`].
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max_steps: Option<u64>,
     },
     /// Adaptive Dormand–Prince 5(4) with relative and absolute tolerances.
     Adaptive {
@@ -144,6 +158,10 @@ pub enum IntegratorSettings {
         /// Largest step (s); default: unlimited.
         #[serde(default)]
         max_step: Option<f64>,
+        /// Step budget of the whole run, accepted and rejected steps
+        /// (1 ..= [`MAX_STEP_BUDGET`]); default [`DEFAULT_MAX_STEPS`].
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max_steps: Option<u64>,
     },
 }
 
@@ -161,19 +179,78 @@ impl IntegratorSettings {
             }
         };
         match *self {
-            IntegratorSettings::Rk4 { dt } => pos("dt", dt),
+            IntegratorSettings::Rk4 { dt, .. } => pos("dt", dt)?,
             IntegratorSettings::Adaptive {
                 rtol,
                 atol,
                 max_step,
+                ..
             } => {
                 pos("rtol", rtol)?;
                 pos("atol", atol)?;
                 if let Some(m) = max_step {
                     pos("max_step", m)?;
                 }
-                Ok(())
             }
+        }
+        if let Some(n) = self.max_steps()
+            && !(1..=MAX_STEP_BUDGET).contains(&n)
+        {
+            return Err(Error::invalid(
+                "integrator.max_steps",
+                format!("must be between 1 and {MAX_STEP_BUDGET:e} steps, got {n}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// RK4 with step `dt` and the default step budget.
+    #[must_use]
+    pub fn rk4(dt: f64) -> Self {
+        IntegratorSettings::Rk4 {
+            dt,
+            max_steps: None,
+        }
+    }
+
+    /// Adaptive Dormand–Prince 5(4) at `rtol`, `atol` with no step cap and the default
+    /// step budget.
+    #[must_use]
+    pub fn adaptive(rtol: f64, atol: f64) -> Self {
+        IntegratorSettings::Adaptive {
+            rtol,
+            atol,
+            max_step: None,
+            max_steps: None,
+        }
+    }
+
+    /// The step budget the scenario set (`integrator.max_steps`), if any.
+    #[must_use]
+    pub fn max_steps(&self) -> Option<u64> {
+        match *self {
+            IntegratorSettings::Rk4 { max_steps, .. }
+            | IntegratorSettings::Adaptive { max_steps, .. } => max_steps,
+        }
+    }
+
+    /// The step budget of a run: `integrator.max_steps`, or [`DEFAULT_MAX_STEPS`]
+    /// (clamped to [`MAX_STEP_BUDGET`]; [`IntegratorSettings::validate`] refuses more).
+    #[must_use]
+    pub fn step_budget(&self) -> usize {
+        let n = self
+            .max_steps()
+            .unwrap_or(DEFAULT_MAX_STEPS)
+            .min(MAX_STEP_BUDGET);
+        usize::try_from(n).unwrap_or(usize::MAX)
+    }
+
+    /// The name of the integrator in messages.
+    #[must_use]
+    pub fn method_name(&self) -> &'static str {
+        match self {
+            IntegratorSettings::Rk4 { .. } => "RK4",
+            IntegratorSettings::Adaptive { .. } => "Dormand-Prince 5(4)",
         }
     }
 }
@@ -237,7 +314,7 @@ pub struct Scenario<
 }
 
 /// The robot of a scenario.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum RobotSpec {
     /// A URDF model on a differential-drive base.
@@ -276,7 +353,7 @@ pub enum RobotSpec {
 }
 
 /// Differential-drive geometry.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DriveSpec {
     /// Wheel radius (m).
@@ -288,7 +365,7 @@ pub struct DriveSpec {
 }
 
 /// A passive caster.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CasterSpec {
     /// Name.
@@ -492,10 +569,38 @@ mod tests {
                 .validate("u[2]")
                 .is_err()
         );
-        assert!(IntegratorSettings::Rk4 { dt: 0.0 }.validate().is_err());
+        assert!(IntegratorSettings::rk4(0.0).validate().is_err());
         let t: IntegratorSettings =
             toml::from_str("method = \"adaptive\"\nrtol = 1e-9\natol = 1e-12").unwrap();
         t.validate().unwrap();
+        assert_eq!(t.step_budget(), DEFAULT_MAX_STEPS as usize);
+        // an unset budget is not written (summaries stay as they were)
+        assert!(!serde_json::to_string(&t).unwrap().contains("max_steps"));
+        let t: IntegratorSettings =
+            toml::from_str("method = \"rk4\"\ndt = 1e-3\nmax_steps = 5000").unwrap();
+        t.validate().unwrap();
+        assert_eq!(t.step_budget(), 5000);
+        assert!(
+            serde_json::to_string(&t)
+                .unwrap()
+                .contains("\"max_steps\":5000")
+        );
+        for n in [0, MAX_STEP_BUDGET + 1] {
+            let t = IntegratorSettings::Rk4 {
+                dt: 1e-3,
+                max_steps: Some(n),
+            };
+            assert!(
+                t.validate()
+                    .unwrap_err()
+                    .to_string()
+                    .contains("integrator.max_steps")
+            );
+        }
+        assert!(
+            toml::from_str::<IntegratorSettings>("method = \"rk4\"\ndt = 1e-3\nmax_steps = -1")
+                .is_err()
+        );
     }
 
     /// The schema and its checks on the shipped m1 scenario and on edits of it: every

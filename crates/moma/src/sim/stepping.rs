@@ -4,11 +4,11 @@
 //! (recording times, or control ticks), stopping there to record or to sample the law.
 
 use crate::error::{Error, Result};
-use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepStats};
+use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepBudget, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::{Recorder, Sample};
-use crate::sim::scenario::IntegratorSettings;
-use crate::sim::wheeled::{MAX_RK4_STEPS, ReducedSystem};
+use crate::sim::scenario::{DEFAULT_MAX_STEPS, IntegratorSettings, MAX_STEP_BUDGET};
+use crate::sim::wheeled::ReducedSystem;
 
 /// Where a run stops: `n` segment ends `end(k)`, k = 0..n; with RK4, segment k takes
 /// `steps(k)` steps of `h` from the previous end.
@@ -30,10 +30,12 @@ pub(crate) struct Grid<'a> {
 pub(crate) type SegmentEnd<'a, O> = dyn FnMut(&mut O, usize, f64, &[f64]) -> Result<bool> + 'a;
 
 /// Integrates `x` over `grid` with `integrator`, calling `at_end(ode, k, t_k, x)` at every
-/// segment end; stops early when it returns true.
+/// segment end; stops early when it returns true. The whole run has one step budget,
+/// [`IntegratorSettings::step_budget`], shared by all segments.
 ///
 /// # Errors
-/// The integrator's errors (blow-up, step-size underflow) and those of `at_end`.
+/// The integrator's errors (blow-up, step-size underflow), the step budget running out
+/// ([`budget_exhausted`]) and those of `at_end`.
 pub(crate) fn integrate_on_grid<O: OdeSystem>(
     ode: &mut O,
     x: &mut [f64],
@@ -42,6 +44,15 @@ pub(crate) fn integrate_on_grid<O: OdeSystem>(
     grid: &Grid<'_>,
     at_end: &mut SegmentEnd<'_, O>,
 ) -> Result<StepStats> {
+    let mut budget = StepBudget::new(integrator.step_budget());
+    let duration = if grid.n == 0 {
+        0.0
+    } else {
+        (grid.end)(grid.n - 1)
+    };
+    let exhausted = |budget: &StepBudget, t: f64| {
+        budget_exhausted(integrator.method_name(), &integrator, budget, t, duration)
+    };
     match integrator {
         IntegratorSettings::Rk4 { .. } => {
             let (h, steps) = grid.rk4.expect("RK4 grid without a step");
@@ -49,6 +60,9 @@ pub(crate) fn integrate_on_grid<O: OdeSystem>(
             rk.blowup = limits.blowup;
             let mut t0 = 0.0;
             for k in 0..grid.n {
+                if !budget.take(steps(k)) {
+                    return Err(exhausted(&budget, t0));
+                }
                 for s in 0..steps(k) {
                     rk.step(ode, t0 + s as f64 * h, x, h)?;
                 }
@@ -64,20 +78,22 @@ pub(crate) fn integrate_on_grid<O: OdeSystem>(
             rtol,
             atol,
             max_step,
+            ..
         } => {
             let opts = AdaptiveOptions {
                 rtol,
                 atol,
                 blowup: limits.blowup,
                 max_step: max_step.unwrap_or(f64::INFINITY).min(grid.max_step_cap),
-                max_steps: 50_000_000,
                 ..AdaptiveOptions::default()
             };
             let mut dp = DormandPrince45::new(x.len(), opts)?;
             let mut t = 0.0;
             for k in 0..grid.n {
                 let t1 = (grid.end)(k);
-                dp.integrate_to(ode, &mut t, x, t1)?;
+                if !dp.integrate_to_within(ode, &mut t, x, t1, &mut budget)? {
+                    return Err(exhausted(&budget, t));
+                }
                 if at_end(ode, k, t1, x)? {
                     break;
                 }
@@ -87,6 +103,35 @@ pub(crate) fn integrate_on_grid<O: OdeSystem>(
             }
             Ok(dp.stats)
         }
+    }
+}
+
+/// The error of a run whose step budget ran out (`method` names the integrator) at simulated time `t` of `duration`:
+/// it names the integrator, the budget, the time reached and what to change.
+pub(crate) fn budget_exhausted(
+    method: &str,
+    integrator: &IntegratorSettings,
+    budget: &StepBudget,
+    t: f64,
+    duration: f64,
+) -> Error {
+    let set = budget_origin(integrator, "the default");
+    let advice = match integrator {
+        IntegratorSettings::Adaptive { .. } => {
+            "the adaptive integrator's steps are this short when the closed loop or the \
+             plant is stiff (large gains, a very light or very stiff body): such a run needs \
+             the fixed-step integrator (method = \"rk4\" with a dt below its fastest time \
+             constant) or smaller gains"
+        }
+        IntegratorSettings::Rk4 { .. } => "a larger dt or a shorter duration needs fewer steps",
+    };
+    Error::Numerical {
+        t,
+        message: format!(
+            "{method}: the run's step budget of {} steps ({set}, at most {MAX_STEP_BUDGET:e}) \
+             ran out at t = {t} s of {duration} s: {advice}",
+            budget.limit,
+        ),
     }
 }
 
@@ -124,23 +169,50 @@ pub(crate) fn validate_run_common(
     positive("record interval", record_interval)
 }
 
-/// The RK4 step budget of a run (checked after the sample budget, so that the first
-/// bound a run exceeds is named).
+/// Where the run's step budget comes from, for messages: the scenario's key, or
+/// `default` and the key that sets it.
+fn budget_origin(integrator: &IntegratorSettings, default: &str) -> String {
+    if integrator.max_steps().is_some() {
+        "integrator.max_steps".to_string()
+    } else {
+        format!("{default}; integrator.max_steps sets it")
+    }
+}
+
+/// The RK4 step budget of a run, checked before it starts: `steps` fixed steps against
+/// [`IntegratorSettings::step_budget`] (checked after the sample budget, so that the
+/// first bound a run exceeds is named).
 ///
 /// # Errors
-/// More than [`MAX_RK4_STEPS`] steps.
-pub(crate) fn check_rk4_budget(integrator: &IntegratorSettings, duration: f64) -> Result<()> {
-    if let IntegratorSettings::Rk4 { dt } = integrator {
-        let steps = (duration / dt).round();
-        if steps > MAX_RK4_STEPS {
-            return Err(Error::invalid(
-                "integrator.dt",
-                format!("duration / dt = {steps:e} steps exceeds the limit of {MAX_RK4_STEPS:e}"),
-            ));
-        }
+/// More steps than the budget, naming `integrator.dt`.
+pub(crate) fn check_rk4_steps(integrator: &IntegratorSettings, steps: f64) -> Result<()> {
+    let budget = integrator.step_budget();
+    if matches!(integrator, IntegratorSettings::Rk4 { .. }) && steps > budget as f64 {
+        let set = budget_origin(integrator, "the default budget");
+        return Err(Error::invalid(
+            "integrator.dt",
+            format!(
+                "duration / dt = {steps:e} RK4 steps exceed the run's step budget of {budget} \
+                 ({set}, at most {MAX_STEP_BUDGET:e}): a larger dt or a shorter duration \
+                 needs fewer"
+            ),
+        ));
     }
     Ok(())
 }
+
+/// [`check_rk4_steps`] for a run of `duration / dt` steps.
+///
+/// # Errors
+/// As [`check_rk4_steps`].
+pub(crate) fn check_rk4_budget(integrator: &IntegratorSettings, duration: f64) -> Result<()> {
+    if let IntegratorSettings::Rk4 { dt, .. } = integrator {
+        check_rk4_steps(integrator, (duration / dt).round())?;
+    }
+    Ok(())
+}
+
+const _: () = assert!(DEFAULT_MAX_STEPS <= MAX_STEP_BUDGET);
 
 /// A recorder for `system` (names, units, multiplier names) with room for `n_samples`,
 /// and the energy monitor started at `(q0, v0)`.

@@ -23,9 +23,11 @@ use crate::sim::stepping::{
 /// beyond it the recorder's buffers would exhaust memory before the first step.
 pub const MAX_RECORDED_SAMPLES: f64 = 10_000_000.0;
 
-/// Largest number of fixed RK4 steps [`simulate`] accepts (`duration / dt`): beyond it a
-/// run would not finish in any useful time.
-pub const MAX_RK4_STEPS: f64 = 100_000_000.0;
+/// Largest number of fixed RK4 steps [`simulate`] accepts (`duration / dt`) with the
+/// largest step budget a scenario may set
+/// ([`crate::sim::scenario::MAX_STEP_BUDGET`]); the default budget,
+/// [`crate::sim::scenario::DEFAULT_MAX_STEPS`], is smaller.
+pub const MAX_RK4_STEPS: f64 = crate::sim::scenario::MAX_STEP_BUDGET as f64;
 
 /// A constrained mechanical system in reduced coordinates `q̇ = N_C(q) v`,
 /// `Mr v̇ + Cr v + Gr = Qr`.
@@ -194,7 +196,7 @@ pub fn simulate_observed<'a>(
     // RK4: the step rounded to divide the duration, a sample every `every` steps and at
     // the end; adaptive: a stop at every recording time and at the end.
     let (steps, h, every) = match options.integrator {
-        IntegratorSettings::Rk4 { dt } => {
+        IntegratorSettings::Rk4 { dt, .. } => {
             let steps = (d / dt).round().max(1.0) as usize;
             let h = d / steps as f64;
             (steps, h, ((ri / h).round() as usize).max(1))

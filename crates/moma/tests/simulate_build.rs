@@ -1,0 +1,158 @@
+//! `moma::simulate`: every shipped `moma simulate` scenario builds into the run its tables
+//! ask for, and a scenario that cannot run gets the message that names its file and field.
+
+use std::path::{Path, PathBuf};
+
+use moma::simulate::{Run, Scenario, load, prepare};
+
+fn scenarios() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
+}
+
+fn kind(run: &Run) -> &'static str {
+    match run {
+        Run::Open(_) => "open",
+        Run::Closed(_) => "closed",
+        Run::Space(_) => "space",
+    }
+}
+
+#[test]
+fn every_shipped_scenario_builds_its_run() {
+    let mut seen = 0;
+    for entry in std::fs::read_dir(scenarios()).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if !name.ends_with(".toml") || name.starts_with("mission") {
+            continue;
+        }
+        let sc: Scenario = load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        sc.check_header(&path).unwrap();
+        let run = prepare(&sc, &path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let want = if name.starts_with("control_") {
+            "closed"
+        } else if name.starts_with("space_") {
+            "space"
+        } else {
+            "open"
+        };
+        assert_eq!(kind(&run), want, "{name}");
+        match &run {
+            Run::Open(ol) => {
+                assert_eq!(ol.q0.len(), ol.system.nq(), "{name}");
+                assert_eq!(ol.monitor.is_some(), sc.stability.is_some(), "{name}");
+            }
+            Run::Closed(cl) => {
+                assert_eq!(cl.v0.len(), cl.system.nv(), "{name}");
+                assert!(cl.options.lyapunov_tolerance > 0.0, "{name}");
+            }
+            Run::Space(sr) => assert_eq!(sr.v0.len(), sr.model.nv, "{name}"),
+        }
+        seen += 1;
+    }
+    assert!(seen >= 25, "only {seen} simulate scenarios found");
+}
+
+fn edited(file: &str, from: &str, to: &str) -> (Scenario, PathBuf) {
+    let path = scenarios().join(file);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains(from), "{file} has no {from:?}");
+    let text = text.replacen(from, to, 1);
+    let sc = moma::sim::scenario::parse_scenario(&text, &path).unwrap();
+    (sc, path)
+}
+
+fn message(file: &str, from: &str, to: &str) -> String {
+    let (sc, path) = edited(file, from, to);
+    match prepare(&sc, &path) {
+        Ok(_) => panic!("{file} with {to:?} built"),
+        Err(e) => {
+            assert!(matches!(e, moma::Error::Scenario(_)), "{e:?}");
+            e.to_string()
+        }
+    }
+}
+
+#[test]
+fn errors_name_the_file_and_the_field() {
+    let m = message(
+        "control_kanayama.toml",
+        "[controller]",
+        "[controller]\nmax_torque = -1.0",
+    );
+    assert!(
+        m.contains(
+            "control_kanayama.toml: controller.max_torque must be a positive finite number, got -1"
+        ),
+        "{m}"
+    );
+    let m = message(
+        "control_kanayama.toml",
+        "law = \"kanayama\"",
+        "law = \"nope\"",
+    );
+    assert!(m.contains("controller.law = \"nope\": unknown law"), "{m}");
+    let m = message("brake_arm_tucked.toml", "mu = 0.9", "mu = 0.0");
+    assert!(
+        m.contains(
+            "brake_arm_tucked.toml: stability: stability.mu must be a positive finite number, got 0"
+        ),
+        "{m}"
+    );
+    let m = message(
+        "space_capture.toml",
+        "inertia_diagonal = [0.03",
+        "inertia_diagonal = [-0.03",
+    );
+    assert!(
+        m.ends_with("space_capture.toml: space.capture.inertia_diagonal must not be negative"),
+        "{m}"
+    );
+}
+
+/// The stiff closed loop the fuzzer found (the m5 computed-torque law with one damping
+/// gain of 2.3e8 under the adaptive integrator; `fuzz/regressions/sim_scenario/`): its
+/// Dormand–Prince steps are near 1e-8 s, so the run stops at its step budget, shared by
+/// all recording intervals, with an error naming the integrator, the budget, the time
+/// reached and the fixed-step integrator, instead of running for many minutes.
+#[test]
+fn a_stiff_closed_loop_stops_at_the_step_budget_of_the_whole_run() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/regressions/sim_scenario/m5-computed-torque-stiff-kd.toml");
+    let mut sc: Scenario = load(&path).unwrap();
+    sc.check_header(&path).unwrap();
+    // a small budget keeps the test short; the default one is exercised by the CLI test
+    let moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } = &mut sc.integrator
+    else {
+        panic!("the regression runs the adaptive integrator")
+    };
+    *max_steps = Some(5_000);
+    let Run::Closed(mut cl) = prepare(&sc, &path).unwrap() else {
+        panic!("a closed loop")
+    };
+    let err = moma::sim::closed_loop::simulate_closed_loop(
+        cl.system.as_mut(),
+        cl.law.as_mut(),
+        &cl.q0,
+        &cl.v0,
+        &cl.options,
+        &mut |_| {},
+    )
+    .unwrap_err();
+    let moma::Error::Numerical { t, message } = &err else {
+        panic!("{err}")
+    };
+    // steps near 1e-8 s: 5,000 of them reach well under a millisecond (the first
+    // recording interval is 10 ms)
+    assert!(*t > 0.0 && *t < 1e-3, "{err}");
+    for needle in [
+        "Dormand-Prince 5(4)",
+        "step budget of 5000 steps",
+        "integrator.max_steps",
+        "of 4 s",
+        "method = \"rk4\"",
+        "smaller gains",
+    ] {
+        assert!(message.contains(needle), "lacks {needle}: {err}");
+    }
+}
