@@ -19,7 +19,7 @@
 use moma::dynamics;
 use moma::io::urdf::model_from_urdf_file;
 use moma::kinematics::{self, ReferenceFrame};
-use moma::multibody::{Data, FrameIndex, RootJoint};
+use moma::multibody::{Data, FrameIndex, Model, RootJoint};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use serde_json::{Value, json};
 
@@ -59,6 +59,132 @@ fn vecf(v: &Value, what: &str) -> Result<DVector<f64>, String> {
         .ok_or_else(|| format!("{what}: expected numbers"))
 }
 
+/// One state of the input file, checked against the model.
+struct State {
+    q: DVector<f64>,
+    v: DVector<f64>,
+    a: DVector<f64>,
+    tau: DVector<f64>,
+    q1: DVector<f64>,
+}
+
+/// Reads `states[k]` (`tag` names it in errors) and checks its sizes and values.
+fn read_state(model: &Model, s: &Value, tag: &str) -> Result<State, String> {
+    let q = vecf(&s["q"], &format!("{tag}.q"))?;
+    let v = vecf(&s["v"], &format!("{tag}.v"))?;
+    let a = vecf(&s["a"], &format!("{tag}.a"))?;
+    let tau = vecf(&s["tau"], &format!("{tag}.tau"))?;
+    let q1 = vecf(&s["q1"], &format!("{tag}.q1"))?;
+    kinematics::check_state(
+        model,
+        tag,
+        Some(q.as_slice()),
+        Some(v.as_slice()),
+        Some(a.as_slice()),
+        Some(tau.as_slice()),
+    )
+    .map_err(|e| e.to_string())?;
+    kinematics::check_state(model, tag, Some(q1.as_slice()), None, None, None)
+        .map_err(|e| e.to_string())?;
+    Ok(State { q, v, a, tau, q1 })
+}
+
+/// Every whole-model output for one state, and the frames' ones under `frames`.
+fn dump_state(model: &Model, data: &mut Data, st: &State) -> Value {
+    let (q, v, a, tau) = (&st.q, &st.v, &st.a, &st.tau);
+    let rnea = dynamics::rnea(model, data, q, v, a).clone();
+    let crba = dynamics::crba(model, data, q).clone();
+    let aba: Vec<Option<f64>> = dynamics::aba(model, data, q, v, tau)
+        .iter()
+        .map(|x| x.is_finite().then_some(*x))
+        .collect();
+    let nle = dynamics::nonlinear_effects(model, data, q, v).clone();
+    let grav = dynamics::gravity_torque(model, data, q).clone();
+    let coriolis = dynamics::coriolis_matrix(model, data, q, v).clone();
+    let com = dynamics::center_of_mass(model, data, q);
+    let ag = dynamics::centroidal_momentum_matrix(model, data, q).clone();
+    let ke = dynamics::kinetic_energy(model, data, q, v);
+    let pe = dynamics::potential_energy(model, data, q);
+    let mut q_next = DVector::zeros(model.nq);
+    kinematics::integrate(model, q, v, &mut q_next);
+    let mut dq = DVector::zeros(model.nv);
+    kinematics::difference(model, q, &st.q1, &mut dq);
+    let mut frames = Vec::with_capacity(model.nframes());
+    let mut jac = Matrix6xX::zeros(model.nv);
+    for f in 0..model.nframes() {
+        frames.push(dump_frame(model, data, st, FrameIndex(f), &mut jac));
+    }
+    json!({
+        "rnea_tau": rnea.as_slice(),
+        "crba_M": rows(&crba),
+        "aba_ddq": aba,
+        "nle": nle.as_slice(),
+        "gravity_torque": grav.as_slice(),
+        "coriolis_C": rows(&coriolis),
+        "com": [com.x, com.y, com.z],
+        "centroidal_map_Ag": rows6(&ag),
+        "kinetic_energy": ke,
+        "potential_energy": pe,
+        "integrate_q_v": q_next.as_slice(),
+        "difference_q_q1": dq.as_slice(),
+        "frames": frames,
+    })
+}
+
+/// The reference frames each frame output is given in, with their names in the JSON.
+const RFS: [(&str, ReferenceFrame); 3] = [
+    ("local_world_aligned", ReferenceFrame::LocalWorldAligned),
+    ("world", ReferenceFrame::World),
+    ("local", ReferenceFrame::Local),
+];
+
+/// One frame's outputs: Jacobians, placement, acceleration biases, velocities (in the
+/// three reference frames) and its spatial acceleration in its own axes (`jac` is
+/// scratch space).
+fn dump_frame(
+    model: &Model,
+    data: &mut Data,
+    st: &State,
+    fid: FrameIndex,
+    jac: &mut Matrix6xX<f64>,
+) -> Value {
+    let (q, v) = (&st.q, &st.v);
+    let mut fr = serde_json::Map::new();
+    for (name, rf) in RFS {
+        kinematics::frame_jacobian(model, data, q, fid, rf, jac);
+        fr.insert(format!("jacobian_{name}"), rows6(jac));
+    }
+    let m = kinematics::update_frame_placement(model, data, fid);
+    let r = m.rotation;
+    fr.insert(
+        "position".into(),
+        json!([m.translation.x, m.translation.y, m.translation.z]),
+    );
+    fr.insert(
+        "rotation".into(),
+        json!([
+            [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+            [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+            [r[(2, 0)], r[(2, 1)], r[(2, 2)]]
+        ]),
+    );
+    for (name, rf) in RFS {
+        let b = kinematics::frame_acceleration_bias(model, data, q, v, fid, rf);
+        fr.insert(format!("bias_{name}"), motion(&b));
+    }
+    kinematics::forward_kinematics_second_order(model, data, q, v, &st.a);
+    for (name, rf) in RFS {
+        let w = kinematics::frame_velocity(model, data, fid, rf);
+        fr.insert(format!("velocity_{name}"), motion(&w));
+    }
+    let frame = &model.frames[fid.0];
+    let acc = frame
+        .placement
+        .inverse_act_motion(&data.a[frame.parent_joint.0]);
+    fr.insert("acceleration_local".into(), motion(&acc));
+    Value::Object(fr)
+}
+
 fn run() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let [_, urdf, root, states] = args.as_slice() else {
@@ -79,104 +205,15 @@ fn run() -> Result<(), String> {
         model.gravity = nalgebra::Vector3::new(g[0], g[1], g[2]);
     }
     let mut data = Data::new(&model);
-    let nv = model.nv;
     let mut out = Vec::new();
     for (k, s) in list.iter().enumerate() {
-        let tag = format!("{states}: states[{k}]");
-        let q = vecf(&s["q"], &format!("{tag}.q"))?;
-        let v = vecf(&s["v"], &format!("{tag}.v"))?;
-        let a = vecf(&s["a"], &format!("{tag}.a"))?;
-        let tau = vecf(&s["tau"], &format!("{tag}.tau"))?;
-        let q1 = vecf(&s["q1"], &format!("{tag}.q1"))?;
-        kinematics::check_state(
-            &model,
-            &tag,
-            Some(q.as_slice()),
-            Some(v.as_slice()),
-            Some(a.as_slice()),
-            Some(tau.as_slice()),
-        )
-        .map_err(|e| e.to_string())?;
-        let rnea = dynamics::rnea(&model, &mut data, &q, &v, &a).clone();
-        let crba = dynamics::crba(&model, &mut data, &q).clone();
-        let aba: Vec<Option<f64>> = dynamics::aba(&model, &mut data, &q, &v, &tau)
-            .iter()
-            .map(|x| x.is_finite().then_some(*x))
-            .collect();
-        let nle = dynamics::nonlinear_effects(&model, &mut data, &q, &v).clone();
-        let grav = dynamics::gravity_torque(&model, &mut data, &q).clone();
-        let coriolis = dynamics::coriolis_matrix(&model, &mut data, &q, &v).clone();
-        let com = dynamics::center_of_mass(&model, &mut data, &q);
-        let ag = dynamics::centroidal_momentum_matrix(&model, &mut data, &q).clone();
-        let ke = dynamics::kinetic_energy(&model, &mut data, &q, &v);
-        let pe = dynamics::potential_energy(&model, &mut data, &q);
-        let mut q_next = DVector::zeros(model.nq);
-        kinematics::integrate(&model, &q, &v, &mut q_next);
-        kinematics::check_state(&model, &tag, Some(q1.as_slice()), None, None, None)
-            .map_err(|e| e.to_string())?;
-        let mut dq = DVector::zeros(nv);
-        kinematics::difference(&model, &q, &q1, &mut dq);
-        const RFS: [(&str, ReferenceFrame); 3] = [
-            ("local_world_aligned", ReferenceFrame::LocalWorldAligned),
-            ("world", ReferenceFrame::World),
-            ("local", ReferenceFrame::Local),
-        ];
-        let mut frames = Vec::with_capacity(model.nframes());
-        let mut jac = Matrix6xX::zeros(nv);
-        for f in 0..model.nframes() {
-            let fid = FrameIndex(f);
-            let mut fr = serde_json::Map::new();
-            for (name, rf) in RFS {
-                kinematics::frame_jacobian(&model, &mut data, &q, fid, rf, &mut jac);
-                fr.insert(format!("jacobian_{name}"), rows6(&jac));
-            }
-            let m = kinematics::update_frame_placement(&model, &mut data, fid);
-            let r = m.rotation;
-            fr.insert(
-                "position".into(),
-                json!([m.translation.x, m.translation.y, m.translation.z]),
-            );
-            fr.insert(
-                "rotation".into(),
-                json!([
-                    [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
-                    [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
-                    [r[(2, 0)], r[(2, 1)], r[(2, 2)]]
-                ]),
-            );
-            for (name, rf) in RFS {
-                let b = kinematics::frame_acceleration_bias(&model, &mut data, &q, &v, fid, rf);
-                fr.insert(format!("bias_{name}"), motion(&b));
-            }
-            kinematics::forward_kinematics_second_order(&model, &mut data, &q, &v, &a);
-            for (name, rf) in RFS {
-                let w = kinematics::frame_velocity(&model, &data, fid, rf);
-                fr.insert(format!("velocity_{name}"), motion(&w));
-            }
-            let frame = &model.frames[f];
-            let acc = frame
-                .placement
-                .inverse_act_motion(&data.a[frame.parent_joint.0]);
-            fr.insert("acceleration_local".into(), motion(&acc));
-            frames.push(Value::Object(fr));
-        }
-        out.push(json!({
-            "rnea_tau": rnea.as_slice(),
-            "crba_M": rows(&crba),
-            "aba_ddq": aba,
-            "nle": nle.as_slice(),
-            "gravity_torque": grav.as_slice(),
-            "coriolis_C": rows(&coriolis),
-            "com": [com.x, com.y, com.z],
-            "centroidal_map_Ag": rows6(&ag),
-            "kinetic_energy": ke,
-            "potential_energy": pe,
-            "integrate_q_v": q_next.as_slice(),
-            "difference_q_q1": dq.as_slice(),
-            "frames": frames,
-        }));
+        let st = read_state(&model, s, &format!("{states}: states[{k}]"))?;
+        out.push(dump_state(&model, &mut data, &st));
     }
-    println!("{}", json!({ "nq": model.nq, "nv": nv, "states": out }));
+    println!(
+        "{}",
+        json!({ "nq": model.nq, "nv": model.nv, "states": out })
+    );
     Ok(())
 }
 

@@ -425,3 +425,80 @@ fn a_goal_heading_no_smooth_path_ends_with_is_taken_by_a_turn_in_place() {
     assert!(turned > 2.0, "turned {turned} rad at the goal");
     assert!((q0[0] - q1[0]).hypot(q0[1] - q1[1]) < 0.15);
 }
+
+/// A loader that counts its calls and records what it was asked for, delegating to the
+/// file system (or refusing every map).
+struct Counting {
+    calls: std::cell::RefCell<Vec<String>>,
+    refuse_maps: bool,
+}
+
+impl moma::mission::scenario::Loader for Counting {
+    fn map(&self, path: &Path, resolution: Option<f64>) -> moma::Result<moma::planning::LoadedMap> {
+        self.calls
+            .borrow_mut()
+            .push(format!("map {}", path.display()));
+        if self.refuse_maps {
+            return Err(moma::Error::invalid("map", "refused by the test loader"));
+        }
+        moma::mission::scenario::FileSystem.map(path, resolution)
+    }
+    fn urdf(
+        &self,
+        path: &Path,
+        root: moma::multibody::RootJoint,
+    ) -> moma::Result<moma::multibody::Model> {
+        self.calls
+            .borrow_mut()
+            .push(format!("urdf {} {root:?}", path.display()));
+        moma::mission::scenario::FileSystem.urdf(path, root)
+    }
+}
+
+#[test]
+fn a_mission_reads_its_map_and_robot_through_the_loader_it_is_given() {
+    use moma::mission::scenario::from_file_with;
+    let text = mission_text(GOAL, "");
+    let file: MissionFile = toml::from_str(&text).unwrap();
+    let l = Counting {
+        calls: Default::default(),
+        refuse_maps: false,
+    };
+    let path = scenarios().join("test.toml");
+    let m = from_file_with(file.clone(), &path, &scenarios(), &l).unwrap();
+    // one call each, with the paths resolved against the base and the planar root
+    let calls = l.calls.borrow().clone();
+    assert_eq!(
+        calls,
+        [
+            format!("map {}", scenarios().join("maps/depot.yaml").display()),
+            format!(
+                "urdf {} Planar",
+                scenarios().join("robots/mobile_manipulator.urdf").display()
+            ),
+        ]
+    );
+    // the same mission as the file system's path gives
+    let direct = parse(&text).unwrap();
+    assert_eq!(m.map, direct.map);
+    assert_eq!(m.robot.model.nq, direct.robot.model.nq);
+    assert_eq!(m.ee_frame, direct.ee_frame);
+    assert_eq!(m.transport, direct.transport);
+    // a loader's error is the mission's error, naming the field
+    let refusing = Counting {
+        calls: Default::default(),
+        refuse_maps: true,
+    };
+    let e = from_file_with(file, &path, &scenarios(), &refusing)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("map.file") && e.contains("refused by the test loader"),
+        "{e}"
+    );
+    assert_eq!(
+        refusing.calls.borrow().len(),
+        1,
+        "no robot loaded after the map failed"
+    );
+}

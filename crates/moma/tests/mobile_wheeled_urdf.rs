@@ -252,11 +252,7 @@ fn unforced_run(track: bool, d: f64) {
     let nu = sys.robot.nu();
     let opts = SimulationOptions {
         duration: 10.0,
-        integrator: IntegratorSettings::Adaptive {
-            rtol: 1e-12,
-            atol: 1e-12,
-            max_step: None,
-        },
+        integrator: IntegratorSettings::adaptive(1e-12, 1e-12),
         record_interval: 0.05,
         limits: MonitorLimits::default(),
     };
@@ -361,7 +357,7 @@ fn driven_run_balances_energy_with_input_work() {
     };
     let opts = SimulationOptions {
         duration: 2.0,
-        integrator: IntegratorSettings::Rk4 { dt: 1e-3 },
+        integrator: IntegratorSettings::rk4(1e-3),
         record_interval: 0.01,
         limits: MonitorLimits::default(),
     };
@@ -484,11 +480,7 @@ fn reduced_simulation_agrees_with_the_full_coordinate_dae() {
         };
         let opts = SimulationOptions {
             duration: 1.0,
-            integrator: IntegratorSettings::Adaptive {
-                rtol: 1e-12,
-                atol: 1e-12,
-                max_step: None,
-            },
+            integrator: IntegratorSettings::adaptive(1e-12, 1e-12),
             record_interval: 1.0,
             limits: MonitorLimits::default(),
         };

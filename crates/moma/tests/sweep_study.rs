@@ -405,3 +405,35 @@ fn a_mission_row_is_the_mission_run_with_the_point_applied() {
         .to_string();
     assert!(e.contains("parameters.wobble"), "{e}");
 }
+
+/// Counts the robots a sweep asks its loader for, delegating to the file system.
+struct CountingLoader(std::cell::RefCell<Vec<(PathBuf, RootJoint)>>);
+
+impl moma::mission::scenario::Loader for CountingLoader {
+    fn map(&self, path: &Path, resolution: Option<f64>) -> moma::Result<moma::planning::LoadedMap> {
+        moma::mission::scenario::FileSystem.map(path, resolution)
+    }
+    fn urdf(&self, path: &Path, root: RootJoint) -> moma::Result<moma::multibody::Model> {
+        self.0.borrow_mut().push((path.to_path_buf(), root));
+        moma::mission::scenario::FileSystem.urdf(path, root)
+    }
+}
+
+#[test]
+fn a_sweep_loads_its_robot_through_the_loader_it_is_given() {
+    let text = stability_toml(
+        "mode = \"grid\"",
+        "posture = [\"forward\", \"tucked\"]\npayload = [0.0, 2.0]",
+    );
+    let l = CountingLoader(Default::default());
+    let s = Sweep::from_toml_str_with(&text, Path::new("test.toml"), Path::new("."), &l).unwrap();
+    assert_eq!(*l.0.borrow(), [(tiago(), RootJoint::Planar)]);
+    // the same rows as the file system's path (all but the last column, eval_time_s)
+    let direct = sweep(&text).unwrap();
+    assert_eq!(s.len(), direct.len());
+    assert_eq!(s.columns().last().unwrap(), "eval_time_s");
+    for i in 0..s.len() {
+        let (a, b) = (s.evaluate(i).unwrap(), direct.evaluate(i).unwrap());
+        assert_eq!(a[..a.len() - 1], b[..b.len() - 1]);
+    }
+}

@@ -13,112 +13,90 @@ const MR: f64 = 230.0;
 
 /// Every figure, in a fixed order.
 pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
-    let s = &r.samples;
     // the same samples as the page: a few thousand, extremes kept
-    let idx = decimate_indices(s.t.len(), MAX_SAMPLES, &kept_samples(r));
+    let idx = decimate_indices(r.samples.t.len(), MAX_SAMPLES, &kept_samples(r));
+    let mut out = vec![("top_view.svg".to_string(), top_view(r, &idx))];
+    out.extend(time_plots(r, &idx));
+    out
+}
+
+/// One named series over the times `x`.
+fn series<'a>(name: &'a str, x: &'a [f64], y: Vec<f64>) -> Series<'a> {
+    Series { name, x, y }
+}
+
+/// The time plots of the samples `idx`: speed, turn rate, ZMP margin, Force-Angle
+/// measure, tracking error and clearance, and the joint torques when there are any.
+fn time_plots(r: &MissionReport, idx: &[usize]) -> Vec<(String, String)> {
+    let s = &r.samples;
     let pick = |v: &[f64]| -> Vec<f64> { idx.iter().map(|&i| v[i]).collect() };
     let opt =
         |v: &[Option<f64>]| -> Vec<f64> { idx.iter().map(|&i| v[i].unwrap_or(f64::NAN)).collect() };
-    let mut out = vec![("top_view.svg".to_string(), top_view(r, &idx))];
     let t = &pick(&s.t);
     let chart = |title: &str, ylabel: &str, series: Vec<Series<'_>>| -> String {
         line_chart(&format!("{}\n{title}", r.title), "t [s]", ylabel, &series)
     };
-    out.push((
-        "speed.svg".into(),
-        chart(
-            "forward speed: executed and reference",
-            "v [m/s]",
-            vec![
-                Series {
-                    name: "v",
-                    x: t,
-                    y: pick(&s.v),
-                },
-                Series {
-                    name: "v reference",
-                    x: t,
-                    y: pick(&s.v_ref),
-                },
-            ],
+    let mut out = vec![
+        (
+            "speed.svg".into(),
+            chart(
+                "forward speed: executed and reference",
+                "v [m/s]",
+                vec![
+                    series("v", t, pick(&s.v)),
+                    series("v reference", t, pick(&s.v_ref)),
+                ],
+            ),
         ),
-    ));
-    out.push((
-        "turn_rate.svg".into(),
-        chart(
-            "turn rate: executed and reference",
-            "ω [rad/s]",
-            vec![
-                Series {
-                    name: "ω",
-                    x: t,
-                    y: pick(&s.omega),
-                },
-                Series {
-                    name: "ω reference",
-                    x: t,
-                    y: pick(&s.omega_ref),
-                },
-            ],
+        (
+            "turn_rate.svg".into(),
+            chart(
+                "turn rate: executed and reference",
+                "ω [rad/s]",
+                vec![
+                    series("ω", t, pick(&s.omega)),
+                    series("ω reference", t, pick(&s.omega_ref)),
+                ],
+            ),
         ),
-    ));
-    out.push((
-        "zmp_margin.svg".into(),
-        chart(
-            "ZMP margin to the support polygon's edge (gaps: undefined)",
-            "margin [m]",
-            vec![Series {
-                name: "ZMP margin",
-                x: t,
-                y: opt(&s.zmp_margin),
-            }],
+        (
+            "zmp_margin.svg".into(),
+            chart(
+                "ZMP margin to the support polygon's edge (gaps: undefined)",
+                "margin [m]",
+                vec![series("ZMP margin", t, opt(&s.zmp_margin))],
+            ),
         ),
-    ));
-    out.push((
-        "force_angle.svg".into(),
-        chart(
-            "Force-Angle measure, minimum over the tip-over axes",
-            "angle [rad]",
-            vec![Series {
-                name: "FA minimum",
-                x: t,
-                y: opt(&s.force_angle_min),
-            }],
+        (
+            "force_angle.svg".into(),
+            chart(
+                "Force-Angle measure, minimum over the tip-over axes",
+                "angle [rad]",
+                vec![series("FA minimum", t, opt(&s.force_angle_min))],
+            ),
         ),
-    ));
-    out.push((
-        "tracking.svg".into(),
-        chart(
-            "tracking error and clearance to the nearest obstacle",
-            "distance [m]",
-            vec![
-                Series {
-                    name: "tracking error",
-                    x: t,
-                    y: pick(&s.tracking_error),
-                },
-                Series {
-                    name: "clearance",
-                    x: t,
-                    y: pick(&s.clearance),
-                },
-            ],
+        (
+            "tracking.svg".into(),
+            chart(
+                "tracking error and clearance to the nearest obstacle",
+                "distance [m]",
+                vec![
+                    series("tracking error", t, pick(&s.tracking_error)),
+                    series("clearance", t, pick(&s.clearance)),
+                ],
+            ),
         ),
-    ));
+    ];
     if !s.torque_names.is_empty() {
-        let series = s
+        let torques = s
             .torque_names
             .iter()
             .zip(&s.torques)
-            .map(|(n, c)| Series {
-                name: n,
-                x: t,
-                y: pick(c),
-            })
+            .map(|(n, c)| series(n, t, pick(c)))
             .collect();
         out.push((
             "torques.svg".into(),
-            chart("joint torques", "τ [N·m]", series),
+            chart("joint torques", "τ [N·m]", torques),
         ));
     }
     out
@@ -130,12 +108,9 @@ pub(crate) fn render(r: &MissionReport) -> Vec<(String, String)> {
 fn top_view(r: &MissionReport, idx: &[usize]) -> String {
     let view = map::view_region(r);
     let img = map::encode(&r.map, view);
-    let (vw, vh) = (view[2] - view[0], view[3] - view[1]);
-    let scale = 700.0 / vw.max(vh);
-    let (pw, ph) = (vw * scale, vh * scale);
+    let c = Canvas::new(view);
+    let (pw, ph) = (c.pw, c.ph);
     let (tw, th) = (ML + pw + MR, MT + ph + MB);
-    let px = |x: f64| ML + (x - view[0]) * scale;
-    let py = |y: f64| MT + (view[3] - y) * scale;
     let mut o = String::new();
     let _ = writeln!(
         o,
@@ -155,27 +130,87 @@ fn top_view(r: &MissionReport, idx: &[usize]) -> String {
         let _ = writeln!(
             o,
             r#"<image x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}" style="image-rendering:pixelated" preserveAspectRatio="none" xlink:href="{}"/>"#,
-            px(img.x0),
-            py(img.y1),
-            (img.x1 - img.x0) * scale,
-            (img.y1 - img.y0) * scale,
+            c.px(img.x0),
+            c.py(img.y1),
+            (img.x1 - img.x0) * c.scale,
+            (img.y1 - img.y0) * c.scale,
             img.data_uri
         );
     }
-    let poly = |pts: &mut dyn Iterator<Item = (f64, f64)>| -> String {
+    plans_and_obstacles(&mut o, &c, r);
+    executed_path(&mut o, &c, r, idx);
+    c.pose(&mut o, r, &r.start, "#2ca02c");
+    c.pose(&mut o, r, &r.goal, "#9467bd");
+    o.push_str("</g>\n");
+    axes(&mut o, &c);
+    legend(&mut o, ML + pw + 16.0);
+    o.push_str("</svg>\n");
+    o
+}
+
+/// Where the top view's map region lies on the figure: world metres to pixels.
+struct Canvas {
+    /// The region shown, `[x0, y0, x1, y1]` (m).
+    view: [f64; 4],
+    /// Pixels per metre.
+    scale: f64,
+    /// The plot's width and height (pixels).
+    pw: f64,
+    ph: f64,
+}
+
+impl Canvas {
+    fn new(view: [f64; 4]) -> Self {
+        let (vw, vh) = (view[2] - view[0], view[3] - view[1]);
+        let scale = 700.0 / vw.max(vh);
+        Canvas {
+            view,
+            scale,
+            pw: vw * scale,
+            ph: vh * scale,
+        }
+    }
+
+    fn px(&self, x: f64) -> f64 {
+        ML + (x - self.view[0]) * self.scale
+    }
+
+    fn py(&self, y: f64) -> f64 {
+        MT + (self.view[3] - y) * self.scale
+    }
+
+    /// The `points` attribute of a polyline through the finite points of `pts`.
+    fn points(&self, pts: &mut dyn Iterator<Item = (f64, f64)>) -> String {
         let mut s = String::new();
         for (x, y) in pts.filter(|(x, y)| x.is_finite() && y.is_finite()) {
-            let _ = write!(s, "{:.1},{:.1} ", px(x), py(y));
+            let _ = write!(s, "{:.1},{:.1} ", self.px(x), self.py(y));
         }
         s.trim_end().to_string()
-    };
+    }
+
+    /// A pose `[x, y, θ]`: the footprint circle (at least 4 px) and a heading line.
+    fn pose(&self, o: &mut String, r: &MissionReport, p: &[f64; 3], colour: &str) {
+        let (x, y) = (self.px(p[0]), self.py(p[1]));
+        let rr = (r.footprint_radius * self.scale).max(4.0);
+        let _ = writeln!(
+            o,
+            r#"<circle cx="{x:.1}" cy="{y:.1}" r="{rr:.1}" fill="none" stroke="{colour}" stroke-width="2"/><line x1="{x:.1}" y1="{y:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="2"/>"#,
+            x + rr * p[2].cos(),
+            y - rr * p[2].sin()
+        );
+    }
+}
+
+/// Every plan (earlier ones dashed and light, the last one solid) and the obstacles with
+/// the times they appear.
+fn plans_and_obstacles(o: &mut String, c: &Canvas, r: &MissionReport) {
     let n = r.plans.len();
     for (i, p) in r.plans.iter().enumerate() {
         let last = i + 1 == n;
         let _ = writeln!(
             o,
             r##"<polyline points="{}" fill="none" stroke="{}" stroke-width="{}" {}/>"##,
-            poly(&mut p.points.iter().map(|q| (q[0], q[1]))),
+            c.points(&mut p.points.iter().map(|q| (q[0], q[1]))),
             if last { "#1f77b4" } else { "#9bbbd8" },
             if last { 2.2 } else { 1.6 },
             if last {
@@ -189,20 +224,25 @@ fn top_view(r: &MissionReport, idx: &[usize]) -> String {
         let _ = writeln!(
             o,
             r##"<circle cx="{:.1}" cy="{:.1}" r="{:.1}" fill="#ff7f0e" fill-opacity="0.55" stroke="#b35300"/><text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">t = {} s</text>"##,
-            px(ob.center[0]),
-            py(ob.center[1]),
-            ob.radius * scale,
-            px(ob.center[0]),
-            py(ob.center[1]) - ob.radius * scale - 4.0,
+            c.px(ob.center[0]),
+            c.py(ob.center[1]),
+            ob.radius * c.scale,
+            c.px(ob.center[0]),
+            c.py(ob.center[1]) - ob.radius * c.scale - 4.0,
             fmt_tick(ob.t)
         );
     }
+}
+
+/// The executed path (the samples `idx`) and a marker where the robot was at each
+/// re-plan.
+fn executed_path(o: &mut String, c: &Canvas, r: &MissionReport, idx: &[usize]) {
     let s = &r.samples;
     if s.t.len() > 1 {
         let _ = writeln!(
             o,
             r##"<polyline points="{}" fill="none" stroke="#d62728" stroke-width="2"/>"##,
-            poly(&mut idx.iter().map(|&i| (s.x[i], s.y[i])))
+            c.points(&mut idx.iter().map(|&i| (s.x[i], s.y[i])))
         );
     }
     for p in r.plans.iter().skip(1) {
@@ -210,7 +250,7 @@ fn top_view(r: &MissionReport, idx: &[usize]) -> String {
             break;
         }
         let i = s.t.partition_point(|&x| x < p.t).min(s.t.len() - 1);
-        let (x, y) = (px(s.x[i]), py(s.y[i]));
+        let (x, y) = (c.px(s.x[i]), c.py(s.y[i]));
         let _ = writeln!(
             o,
             r##"<path d="M{:.1},{:.1} l6,6 l-6,6 l-6,-6 z" fill="#9467bd" stroke="black" stroke-width="0.6"/>"##,
@@ -218,25 +258,17 @@ fn top_view(r: &MissionReport, idx: &[usize]) -> String {
             y - 6.0
         );
     }
-    let pose = |o: &mut String, p: &[f64; 3], colour: &str| {
-        let (x, y) = (px(p[0]), py(p[1]));
-        let rr = (r.footprint_radius * scale).max(4.0);
-        let _ = writeln!(
-            o,
-            r#"<circle cx="{x:.1}" cy="{y:.1}" r="{rr:.1}" fill="none" stroke="{colour}" stroke-width="2"/><line x1="{x:.1}" y1="{y:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="2"/>"#,
-            x + rr * p[2].cos(),
-            y - rr * p[2].sin()
-        );
-    };
-    pose(&mut o, &r.start, "#2ca02c");
-    pose(&mut o, &r.goal, "#9467bd");
-    o.push_str("</g>\n");
+}
+
+/// The frame around the plot, the ticks of both axes (metres) and the axis labels.
+fn axes(o: &mut String, c: &Canvas) {
+    let (view, pw, ph) = (c.view, c.pw, c.ph);
     let _ = writeln!(
         o,
         r##"<rect x="{ML}" y="{MT}" width="{pw:.2}" height="{ph:.2}" fill="none" stroke="#333"/>"##
     );
     for t in ticks(view[0], view[2]) {
-        let x = px(t);
+        let x = c.px(t);
         let _ = writeln!(
             o,
             r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#333"/><text x="{x:.1}" y="{:.1}" text-anchor="middle">{}</text>"##,
@@ -247,7 +279,7 @@ fn top_view(r: &MissionReport, idx: &[usize]) -> String {
         );
     }
     for t in ticks(view[1], view[3]) {
-        let y = py(t);
+        let y = c.py(t);
         let _ = writeln!(
             o,
             r##"<line x1="{:.1}" y1="{y:.1}" x2="{ML}" y2="{y:.1}" stroke="#333"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
@@ -265,9 +297,6 @@ fn top_view(r: &MissionReport, idx: &[usize]) -> String {
         MT + ph / 2.0,
         MT + ph / 2.0
     );
-    legend(&mut o, ML + pw + 16.0);
-    o.push_str("</svg>\n");
-    o
 }
 
 fn legend(o: &mut String, x: f64) {

@@ -498,36 +498,23 @@ impl<'m> Runner<'m> {
         }
     }
 
-    #[allow(clippy::too_many_lines)]
     fn run(mut self) -> Result<MissionResult> {
-        let m = self.m;
-        let f = &m.file;
-        let wm = self.wm;
-        let model = &wm.model;
-        let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
-        let arm = wm.arm_dofs().to_vec();
-        let na = arm.len();
-        let grid = &m.map.grid;
-        let res = grid.resolution;
-        let r_foot = f.robot.footprint_radius;
-        let goal = f.goal.pose;
-        // the unicycle point the platform is planned and tracked by: the driven-axle
-        // midpoint, `d` behind the base frame origin
-        let d = wm.base.drive.d;
-        let goal_axle = axle_pose(goal, d);
+        let mut x = initial_state(self.m);
+        self.first_plan();
+        let (time_limit, rec_every) = self.run_length()?;
+        let mut ws = Workspace::new(self.wm)?;
+        let act = Actuators::new(self.wm, &x, &mut ws)?;
+        let c = Controller::new(&self, act, time_limit, rec_every)?;
+        let mut st = LoopState::new(&self);
+        let sim_clock = Instant::now();
+        while let Flow::Next | Flow::Retry = self.step(&c, &mut ws, &mut st, &mut x) {}
+        self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
+        Ok(self.finish(&st, &x))
+    }
 
-        // initial state
-        let mut x = vec![0.0; nq + nr + 1];
-        x[..3].copy_from_slice(&f.start.pose);
-        for (k, &i) in arm.iter().enumerate() {
-            x[i] = m.q_arm0[k];
-        }
-        let mut q_t = DVector::zeros(nq);
-        for (k, &i) in arm.iter().enumerate() {
-            q_t[i] = m.transport[k];
-        }
-
-        // the first plan
+    /// The plan at t = 0 (or the reason there is none: a posture that tips at rest, an
+    /// unreachable goal, a path that cannot be timed).
+    fn first_plan(&mut self) {
         if self.timing_accel.is_none() {
             let why = if self.tip.forward.is_none() || self.tip.backward.is_none() {
                 "the transport posture tips the robot at rest (its ZMP lies outside the support \
@@ -537,70 +524,779 @@ impl<'m> Runner<'m> {
                  support, so every motion would tip the robot"
             };
             self.fail(0.0, why.to_string());
-        } else {
-            match self.first_path.take() {
-                None => self.fail(
-                    0.0,
-                    "the goal is unreachable: no collision-free path from the start on the \
-                     configuration space"
-                        .to_string(),
-                ),
-                Some(cells) => {
-                    let start = TimingStart {
-                        t0: 0.0,
-                        pose: axle_pose(f.start.pose, d),
-                        v: 0.0,
-                    };
-                    let search = self.first_search;
-                    if self.make_reference(cells, start, "start", search) {
-                        let d = self.plans[0].duration;
-                        self.event(0.0, "plan", format!("first plan: {d:.2} s"));
-                    }
+            return;
+        }
+        match self.first_path.take() {
+            None => self.fail(
+                0.0,
+                "the goal is unreachable: no collision-free path from the start on the \
+                 configuration space"
+                    .to_string(),
+            ),
+            Some(cells) => {
+                let start = TimingStart {
+                    t0: 0.0,
+                    pose: axle_pose(self.m.file.start.pose, self.wm.base.drive.d),
+                    v: 0.0,
+                };
+                let search = self.first_search;
+                if self.make_reference(cells, start, "start", search) {
+                    let d = self.plans[0].duration;
+                    self.event(0.0, "plan", format!("first plan: {d:.2} s"));
                 }
             }
         }
+    }
 
-        let h = f.simulation.dt;
-        let time_limit = f
-            .simulation
+    /// The simulated time limit (s) and the record interval in control steps.
+    fn run_length(&self) -> Result<(f64, usize)> {
+        let sim = &self.m.file.simulation;
+        let h = sim.dt;
+        let time_limit = sim
             .time_limit
             .unwrap_or_else(|| self.plans.first().map_or(10.0, |p| 3.0 * p.duration + 30.0));
-        if time_limit / h > MAX_STEPS || time_limit / f.simulation.record_interval > MAX_SAMPLES {
+        if time_limit / h > MAX_STEPS || time_limit / sim.record_interval > MAX_SAMPLES {
             return Err(Error::invalid(
                 "simulation.time_limit",
                 format!("a run of {time_limit} s needs too many steps or samples"),
             ));
         }
-        let rec_every = ((f.simulation.record_interval / h).round() as usize).max(1);
+        let rec_every = ((sim.record_interval / h).round() as usize).max(1);
+        Ok((time_limit, rec_every))
+    }
 
-        // workspaces
-        let mut sys = WheeledSystem::new(wm.clone());
-        let mut cwd = WheeledData::new(wm);
-        let mut mwd = WheeledData::new(wm);
-        let mut data = Data::new(model);
+    /// One control step: obstacle arrivals (and re-plans), the phase, the control law,
+    /// the torques, the record with its monitors, one integration step.
+    fn step(
+        &mut self,
+        c: &Controller,
+        ws: &mut Workspace,
+        st: &mut LoopState,
+        x: &mut [f64],
+    ) -> Flow {
+        let (nq, nr) = (c.nq, c.nr);
+        let t = st.k as f64 * c.h;
+        st.t = t;
+        ws.qv.copy_from_slice(&x[..nq]);
+        ws.vv.copy_from_slice(&x[nq..nq + nr]);
+        let pose = [x[0], x[1], x[2]];
+        let axle = axle_pose(pose, c.d);
+        let (v, w) = (x[nq], x[nq + 1]);
+
+        self.obstacle_arrivals(c, st, t, axle, v);
+
+        // reduced dynamics at the state (controller's model)
+        let step_ok =
+            reduced_forward_dynamics_crba(self.wm, &mut ws.cwd, &ws.qv, &ws.vv, &ws.zero_u);
+        if let Err(e) = step_ok {
+            self.fail(t, format!("the dynamics became singular: {e}"));
+            st.phase = Phase::Done;
+        }
+
+        self.phase_transitions(c, st, t, pose, v, w);
+
+        // end-effector kinematics in reduced coordinates (for the reach phase and the
+        // record)
+        let need_ee = st.phase == Phase::Reach || st.k.is_multiple_of(c.rec_every);
+        let ee = if need_ee {
+            end_effector_kinematics(self.m, ws)
+        } else {
+            EeState::default()
+        };
+
+        // control law: desired reduced accelerations
+        let speed_clip = match st.phase {
+            Phase::Drive | Phase::Arrive => {
+                let reference = if st.phase == Phase::Drive {
+                    Some(
+                        self.reference
+                            .as_ref()
+                            .expect("drive has a reference")
+                            .at(t),
+                    )
+                } else {
+                    None
+                };
+                let (r, clip) = c.platform_law(reference, t, axle, v, w, ws);
+                st.cur_ref = r;
+                clip
+            }
+            Phase::Reach => {
+                if !self.reach(c, st, ws, &ee, t, v, w) {
+                    // record the state on the next pass, in phase `done`
+                    return Flow::Retry;
+                }
+                false
+            }
+            Phase::Done => {
+                c.hold(v, w, ws);
+                false
+            }
+        };
+
+        let torque_clip = c.act.computed_torque(&ws.cwd, &ws.a_des, &mut ws.u);
+        self.saturation_events(st, t, torque_clip, speed_clip);
+
+        let last = st.phase == Phase::Done;
+        if st.k.is_multiple_of(c.rec_every) || last {
+            self.record_and_check(c, ws, st, t, ee.p);
+        }
+        if last {
+            return Flow::Finished;
+        }
+
+        // actuator energy over the step (rates at its start)
+        st.energy += c.act.absolute_power(&ws.u, &ws.vv, v, w) * c.h;
+
+        // integrate one step
+        let mut plant = Plant {
+            sys: &mut ws.sys,
+            u: &ws.u,
+            nq,
+            nr,
+        };
+        if let Err(e) = ws.rk.step(&mut plant, t, x, c.h) {
+            self.fail(t, format!("the simulation failed: {e}"));
+            st.phase = Phase::Done;
+            // record the state reached before the failure on the next pass
+            return Flow::Retry;
+        }
+        st.k += 1;
+        Flow::Next
+    }
+
+    /// The obstacles whose time has come appear in the map, each re-planning the drive
+    /// if it blocks the rest of the reference.
+    fn obstacle_arrivals(
+        &mut self,
+        c: &Controller,
+        st: &mut LoopState,
+        t: f64,
+        axle: [f64; 3],
+        v: f64,
+    ) {
+        while st.phase != Phase::Done
+            && st.next_obstacle < c.obstacles.len()
+            && c.obstacles[st.next_obstacle].1 <= t + 1e-12
+        {
+            let (oi, ot) = c.obstacles[st.next_obstacle];
+            st.next_obstacle += 1;
+            if !self.obstacle_appears(st, oi, ot, t, axle, v) {
+                break;
+            }
+        }
+    }
+
+    /// Adds obstacle `oi` (due at `ot`) to the planner at time `t`; `false` when the run
+    /// ends with it.
+    fn obstacle_appears(
+        &mut self,
+        st: &mut LoopState,
+        oi: usize,
+        ot: f64,
+        t: f64,
+        axle: [f64; 3],
+        v: f64,
+    ) -> bool {
+        let m = self.m;
+        let grid = &m.map.grid;
+        let o = m.file.obstacles[oi];
+        let clock = Instant::now();
+        let c = grid.world_to_cell_f(o.center[0], o.center[1]);
+        let [fx, fy] = grid.world_to_cell_f(axle[0], axle[1]);
+        let rc = (
+            (fx.floor().max(0.0) as usize).min(grid.width - 1),
+            (fy.floor().max(0.0) as usize).min(grid.height - 1),
+        );
+        let added = self.planner.add_disk(c, o.radius / grid.resolution, rc);
+        self.event(
+            ot,
+            "obstacle",
+            format!(
+                "obstacle {oi} appears at ({:.2}, {:.2}), radius {:.2} m",
+                o.center[0], o.center[1], o.radius
+            ),
+        );
+        let (newly, s_time) = match added {
+            Ok(a) => a,
+            Err(e) => {
+                self.fail(t, format!("re-planning failed: {e}"));
+                st.phase = Phase::Done;
+                return false;
+            }
+        };
+        if newly.contains(&self.planner.goal_cell) && st.phase == Phase::Drive {
+            self.wall.planning_s += s_time;
+            st.excluded += clock.elapsed().as_secs_f64();
+            self.fail(
+                t,
+                format!(
+                    "obstacle {oi} (t = {ot} s) seals the goal: the footprint no \
+                     longer fits at the goal pose"
+                ),
+            );
+            st.phase = Phase::Done;
+            return false;
+        }
+        let affected = st.phase == Phase::Drive
+            && self.reference.as_ref().is_some_and(|r| {
+                r.samples.iter().filter(|s| s.t >= t).any(|s| {
+                    let [cx, cy] = grid.world_to_cell_f(s.x, s.y);
+                    self.planner.blocked_at(cx, cy)
+                })
+            });
+        if affected {
+            self.replan_after_obstacle(st, oi, ot, t, axle, v, s_time);
+        } else {
+            self.wall.planning_s += s_time;
+        }
+        st.excluded += clock.elapsed().as_secs_f64();
+        true
+    }
+
+    /// Re-plans from the current axle pose and speed after obstacle `oi` blocked the
+    /// reference (`s_time`: the wall time its map update took).
+    #[allow(clippy::too_many_arguments)]
+    fn replan_after_obstacle(
+        &mut self,
+        st: &mut LoopState,
+        oi: usize,
+        ot: f64,
+        t: f64,
+        axle: [f64; 3],
+        v: f64,
+        s_time: f64,
+    ) {
+        let (path, mut timing) = self.planner.replan();
+        timing.search_s += s_time;
+        self.wall.planning_s += timing.search_s;
+        let Some(cells) = path else {
+            self.fail(
+                t,
+                format!(
+                    "obstacle {oi} (t = {ot} s) seals the goal: no \
+                     collision-free path remains"
+                ),
+            );
+            st.phase = Phase::Done;
+            return;
+        };
+        let start = TimingStart {
+            t0: t,
+            pose: axle,
+            v,
+        };
+        if self.make_reference(cells, start, &format!("obstacle {oi}"), timing) {
+            let p = self.plans.last().expect("just pushed");
+            let text = format!(
+                "re-plan after obstacle {oi}: D* Lite expanded {} cells, \
+                 new path {:.2} m, {:.2} s to go from {:.2} m/s",
+                p.search.expanded,
+                path_length(&p.path),
+                p.duration,
+                p.v_start
+            );
+            self.event(t, "replan", text);
+        } else {
+            st.phase = Phase::Done;
+        }
+    }
+
+    /// Drive → arrive at the end of the reference; arrive → reach (or done) once the
+    /// base settles on the goal pose, or failure after the arrival timeout; the time
+    /// limit.
+    fn phase_transitions(
+        &mut self,
+        c: &Controller,
+        st: &mut LoopState,
+        t: f64,
+        pose: [f64; 3],
+        v: f64,
+        w: f64,
+    ) {
+        let m = self.m;
+        let g = &m.file.goal;
+        if st.phase == Phase::Drive {
+            let r = self.reference.as_ref().expect("drive has a reference");
+            if t >= r.t_end() {
+                st.phase = Phase::Arrive;
+                st.phase_t0 = t;
+            }
+        }
+        if st.phase == Phase::Arrive {
+            let goal = c.goal;
+            let pe = (pose[0] - goal[0]).hypot(pose[1] - goal[1]);
+            let he = wrap_angle(goal[2] - pose[2]).abs();
+            let settled = v.abs() < 0.02 && w.abs() < 0.05;
+            if pe <= g.position_tolerance && he <= g.heading_tolerance && settled {
+                self.event(
+                    t,
+                    "arrived",
+                    format!("base at the goal: {pe:.3} m, {he:.3} rad off"),
+                );
+                if g.end_effector.is_some() {
+                    st.phase = Phase::Reach;
+                    st.phase_t0 = t;
+                } else {
+                    st.time_to_goal = Some(t);
+                    st.phase = Phase::Done;
+                }
+            } else if t - st.phase_t0 > ARRIVE_TIMEOUT {
+                self.fail(
+                    t,
+                    format!(
+                        "the base stopped {pe:.3} m and {he:.3} rad from the goal pose \
+                         (tolerances {} m, {} rad)",
+                        g.position_tolerance, g.heading_tolerance
+                    ),
+                );
+                st.phase = Phase::Done;
+            }
+        }
+        if t >= c.time_limit && st.phase != Phase::Done {
+            self.fail(t, format!("time limit of {:.1} s reached", c.time_limit));
+            st.phase = Phase::Done;
+        }
+    }
+
+    /// The reach phase: the platform holds, the arm tracks a minimum-jerk segment to the
+    /// target; reached or failed once it ends. `false` when the arm is singular (the run
+    /// ends).
+    #[allow(clippy::too_many_arguments)]
+    fn reach(
+        &mut self,
+        c: &Controller,
+        st: &mut LoopState,
+        ws: &mut Workspace,
+        ee: &EeState,
+        t: f64,
+        v: f64,
+        w: f64,
+    ) -> bool {
+        let m = self.m;
+        let g = &m.file.goal;
+        let target = Vector3::from(g.end_effector.expect("reach has a target"));
+        let traj = *st.ee_traj.get_or_insert_with(|| {
+            let dist = (target - ee.p).norm();
+            EeTrajectory {
+                t0: t,
+                duration: (1.875 * dist / 0.25).max(1.5),
+                from: ee.p,
+                to: target,
+            }
+        });
+        st.cur_ref = c.goal_sample(t);
+        if !c.reach_law(&traj, ee, t, v, w, ws) {
+            self.fail(t, "the arm is singular at the goal".to_string());
+            st.phase = Phase::Done;
+            return false;
+        }
+        let err = (target - ee.p).norm();
+        if t >= traj.t0 + traj.duration && err <= g.end_effector_tolerance && ee.dp.norm() < 0.01 {
+            self.event(
+                t,
+                "reached",
+                format!("end effector at its target: {:.4} m off", err),
+            );
+            st.time_to_goal = Some(t);
+            st.phase = Phase::Done;
+        } else if t > traj.t0 + traj.duration + REACH_SETTLE {
+            self.fail(
+                t,
+                format!(
+                    "the end effector stopped {err:.3} m from its target \
+                     (tolerance {} m)",
+                    g.end_effector_tolerance
+                ),
+            );
+            st.phase = Phase::Done;
+        }
+        true
+    }
+
+    /// Counts the clipped steps; an event at the first of each kind.
+    fn saturation_events(&mut self, st: &mut LoopState, t: f64, torque: bool, speed: bool) {
+        if torque {
+            st.torque_sat += 1;
+            if st.first_torque_sat {
+                st.first_torque_sat = false;
+                self.event(t, "torque_limit", "first torque saturation");
+            }
+        }
+        if speed {
+            st.speed_sat += 1;
+            if st.first_speed_sat {
+                st.first_speed_sat = false;
+                self.event(t, "speed_limit", "first speed-command saturation");
+            }
+        }
+    }
+
+    /// Records a sample, then the first slip and the first contact as events (a contact
+    /// ends the run as a collision).
+    fn record_and_check(
+        &mut self,
+        c: &Controller,
+        ws: &mut Workspace,
+        st: &mut LoopState,
+        t: f64,
+        ee: Vector3<f64>,
+    ) {
+        let Some((slip, clear)) = self.record(c, ws, st, t, ee) else {
+            return;
+        };
+        if st.first_slip && slip.is_some_and(|s| s > 1.0) {
+            st.first_slip = false;
+            self.event(t, "slip", "lateral wheel force exceeds μ N");
+        }
+        if st.first_contact && clear < 0.0 {
+            st.first_contact = false;
+            self.event(
+                t,
+                "contact",
+                format!("footprint overlaps an obstacle by {:.3} m", -clear),
+            );
+            if st.phase != Phase::Done {
+                self.fail(
+                    t,
+                    format!(
+                        "collision: the footprint overlaps an obstacle by {:.3} m",
+                        -clear
+                    ),
+                );
+                st.phase = Phase::Done;
+            }
+        }
+    }
+
+    /// The smallest ZMP margin of the recorded samples as an event.
+    fn min_zmp_event(&mut self) {
+        if let Some((i, mz)) = self
+            .samples
+            .zmp_margin
+            .iter()
+            .enumerate()
+            .filter_map(|(i, z)| z.map(|z| (i, z)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+        {
+            let ti = self.samples.t[i];
+            self.event(
+                ti,
+                "min_zmp_margin",
+                format!("smallest ZMP margin {mz:.4} m"),
+            );
+        }
+    }
+
+    /// The result of the finished loop.
+    fn finish(mut self, st: &LoopState, x: &[f64]) -> MissionResult {
+        self.min_zmp_event();
+        self.events.sort_by(|a, b| a.t.total_cmp(&b.t));
+        let reached = self.failure.is_none() && st.time_to_goal.is_some();
+        let reason = if reached {
+            None
+        } else {
+            Some(
+                self.failure
+                    .clone()
+                    .unwrap_or_else(|| "the mission ended before the goal".into()),
+            )
+        };
+        let wm = self.wm;
+        let model = &wm.model;
+        let arm_names = wm
+            .arm_dofs()
+            .iter()
+            .map(|&i| model.names[model.joint_of_dof[i].0].clone())
+            .collect();
+        MissionResult {
+            reached,
+            reason,
+            time_to_goal: if reached { st.time_to_goal } else { None },
+            duration: st.t,
+            tip_limits: self.tip,
+            timing_acceleration: self.timing_accel.map(|a| [a.forward, a.backward]),
+            plans: self.plans,
+            events: self.events,
+            samples: self.samples,
+            q_names: wm.q_names(),
+            u_names: wm.u_names(),
+            arm_names,
+            torque_saturated_steps: st.torque_sat,
+            speed_saturated_steps: st.speed_sat,
+            steps: st.k,
+            input_work: x[model.nq + wm.nr()],
+            wall: self.wall,
+        }
+    }
+
+    /// Records one sample; returns (slip ratio, clearance) for the event checks, `None`
+    /// if the monitors could not be evaluated (the sample is still recorded).
+    fn record(
+        &mut self,
+        c: &Controller,
+        ws: &mut Workspace,
+        st: &LoopState,
+        t: f64,
+        ee: Vector3<f64>,
+    ) -> Option<(Option<f64>, f64)> {
+        let mon = self.monitors(ws);
+        let side = arm_side(&self.wm.model, ws, &c.chain, ee);
+        let (q, r) = (&ws.qv, &st.cur_ref);
+        let res = c.res;
+        let [fx, fy] = self.m.map.grid.world_to_cell_f(q[0], q[1]);
+        let clearance = self
+            .planner
+            .obstacle_distance(fx, fy, (c.r_foot + EXACT_CLEARANCE) / res)
+            .map_or(f64::INFINITY, |d| d * res - c.r_foot);
+        let te = (q[0] - r.x).hypot(q[1] - r.y);
+        let m = mon.unwrap_or_default();
+        let s = &mut self.samples;
+        s.t.push(t);
+        s.q.push(q.as_slice().to_vec());
+        s.v.push(ws.vv[0]);
+        s.omega.push(ws.vv[1]);
+        s.v_ref.push(r.v);
+        s.omega_ref.push(r.omega);
+        s.ref_xy.push([r.x, r.y]);
+        s.zmp_margin.push(m.zmp);
+        s.force_angle_min.push(m.force_angle);
+        s.mhs_min.push(m.mhs);
+        s.clearance.push(clearance);
+        s.tracking_error.push(te);
+        s.slip_ratio.push(m.slip);
+        s.u.push(ws.u.clone());
+        s.ee.push([ee.x, ee.y, ee.z]);
+        s.arm_side.push(side);
+        s.energy.push(st.energy);
+        s.phase.push(st.phase.name());
+        mon.map(|m| (m.slip, clearance))
+    }
+
+    /// The stability and slip monitors at the sample's state; `None` if its reduced
+    /// dynamics fail.
+    fn monitors(&self, ws: &mut Workspace) -> Option<Monitors> {
+        let wm = self.wm;
+        let (q, v, u) = (&ws.qv, &ws.vv, &ws.u);
+        reduced_forward_dynamics(wm, &mut ws.mwd, q, v, u).ok()?;
+        let lam = lagrange_multipliers(wm, &mut ws.mwd, q).ok().map(|l| {
+            let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
+            ([at(0), at(1), at(2)], l.len())
+        });
+        let rep = crate::stability::evaluate(
+            &wm.model,
+            &mut ws.data,
+            &ws.sm,
+            &mut ws.sd,
+            q,
+            &ws.mwd.qdot,
+            &ws.mwd.reduced.qddot,
+            &ExternalLoads::default(),
+        );
+        let (zmp, force_angle, mhs) = (rep.zmp_margin, rep.force_angle_min, rep.mhs_min);
+        let slip = lam.and_then(|(lam, nk)| self.slip_ratio(ws, lam, nk));
+        Some(Monitors {
+            zmp,
+            force_angle,
+            mhs,
+            slip,
+        })
+    }
+
+    /// The larger drive-wheel slip ratio from the constraint multipliers `lam` (`nk` of
+    /// them) and the support wrench just evaluated; `None` if it cannot be formed.
+    fn slip_ratio(&self, ws: &mut Workspace, lam: [f64; 3], nk: usize) -> Option<f64> {
+        let wm = self.wm;
+        let (q, u) = (&ws.qv, &ws.u);
+        // contacts in the world, loads from the wrench (stability::loads)
+        let (sn, cs) = q[2].sin_cos();
+        for (w, p) in ws.contacts.iter_mut().zip(&ws.support_pts) {
+            *w = Vector2::new(q[0] + cs * p.x - sn * p.y, q[1] + sn * p.x + cs * p.y);
+        }
+        let ground = ws.sm.support.ground_z();
+        contact_normal_loads(&ws.contacts, ground, &ws.sd.wrench, &mut ws.loads).ok()?;
+        // longitudinal wheel forces: the rolling multipliers of tracked wheels, else the
+        // wheel torques over the radius
+        let long = if nk == 3 {
+            [lam[1], lam[2]]
+        } else {
+            let r = wm.base.drive.wheel_radius;
+            [u[0] / r, u[1] / r]
+        };
+        let fr = driven_wheel_friction(
+            -lam[0],
+            long,
+            [ws.loads[0], ws.loads[1]],
+            self.m.file.limits.mu,
+        )
+        .ok()?;
+        fr.iter()
+            .map(|w| w.slip_ratio.unwrap_or(f64::INFINITY))
+            .reduce(f64::max)
+            .filter(|x| x.is_finite())
+    }
+}
+
+/// How a control step ends.
+enum Flow {
+    /// The step was taken.
+    Next,
+    /// The run just ended: the same step is taken again in phase `done` (recorded).
+    Retry,
+    /// The last sample is recorded.
+    Finished,
+}
+
+/// The state the loop carries from step to step (besides the plant state).
+struct LoopState {
+    k: usize,
+    t: f64,
+    phase: Phase,
+    phase_t0: f64,
+    ee_traj: Option<EeTrajectory>,
+    energy: f64,
+    torque_sat: usize,
+    speed_sat: usize,
+    first_torque_sat: bool,
+    first_speed_sat: bool,
+    first_slip: bool,
+    first_contact: bool,
+    time_to_goal: Option<f64>,
+    cur_ref: RefSample,
+    /// Planning wall time spent inside the loop (s).
+    excluded: f64,
+    next_obstacle: usize,
+}
+
+impl LoopState {
+    fn new(r: &Runner<'_>) -> Self {
+        let start = r.m.file.start.pose;
+        Self {
+            k: 0,
+            t: 0.0,
+            phase: if r.failure.is_some() {
+                Phase::Done
+            } else {
+                Phase::Drive
+            },
+            phase_t0: 0.0,
+            ee_traj: None,
+            energy: 0.0,
+            torque_sat: 0,
+            speed_sat: 0,
+            first_torque_sat: true,
+            first_speed_sat: true,
+            first_slip: true,
+            first_contact: true,
+            time_to_goal: None,
+            cur_ref: RefSample {
+                t: 0.0,
+                x: start[0],
+                y: start[1],
+                theta: start[2],
+                v: 0.0,
+                omega: 0.0,
+                a: 0.0,
+                alpha: 0.0,
+            },
+            excluded: 0.0,
+            next_obstacle: 0,
+        }
+    }
+}
+
+/// The plant state at the start: the start pose, the start arm posture, at rest (the
+/// last entry integrates the input work).
+fn initial_state(m: &Mission) -> Vec<f64> {
+    let model = &m.robot.model;
+    let mut x = vec![0.0; model.nq + m.robot.nr() + 1];
+    x[..3].copy_from_slice(&m.file.start.pose);
+    for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
+        x[i] = m.q_arm0[k];
+    }
+    x
+}
+
+/// The workspaces of the loop, allocated once before it.
+struct Workspace {
+    sys: WheeledSystem,
+    /// The controller's reduced dynamics.
+    cwd: WheeledData,
+    /// The monitors' reduced dynamics.
+    mwd: WheeledData,
+    data: Data,
+    sm: StabilityModel,
+    sd: StabilityData,
+    support_pts: Vec<Vector2<f64>>,
+    contacts: Vec<Vector2<f64>>,
+    loads: Vec<f64>,
+    rk: Rk4,
+    qv: DVector<f64>,
+    vv: DVector<f64>,
+    u: Vec<f64>,
+    zero_u: Vec<f64>,
+    a_des: DVector<f64>,
+    jac: Matrix6xX<f64>,
+    ndot: DMatrix<f64>,
+    ndv: DVector<f64>,
+    /// Reduced end-effector Jacobian (position rows).
+    jr: DMatrix<f64>,
+}
+
+impl Workspace {
+    fn new(wm: &WheeledModel) -> Result<Self> {
+        let model = &wm.model;
+        let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
         let support = SupportPolygon::from_wheeled_base(&wm.base)?;
         let sm = StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
-        let mut sd = StabilityData::new(&sm);
+        let sd = StabilityData::new(&sm);
         let support_pts = wm.base.support_points();
-        let mut contacts = support_pts.clone();
-        let mut loads = vec![0.0; support_pts.len()];
-        let mut rk = Rk4::new(nq + nr + 1);
-        let mut qv = DVector::zeros(nq);
-        let mut vv = DVector::zeros(nr);
-        let mut u = vec![0.0; nu];
-        let zero_u = vec![0.0; nu];
-        let mut a_des = DVector::zeros(nr);
-        let mut smat = DMatrix::zeros(model.nv, nu);
-        let mut jac = Matrix6xX::zeros(model.nv);
-        let mut ndot = DMatrix::zeros(model.nv, nr);
-        let mut ndv = DVector::zeros(model.nv);
-        let mut jr = DMatrix::zeros(3, nr);
+        Ok(Self {
+            sys: WheeledSystem::new(wm.clone()),
+            cwd: WheeledData::new(wm),
+            mwd: WheeledData::new(wm),
+            data: Data::new(model),
+            sm,
+            sd,
+            contacts: support_pts.clone(),
+            loads: vec![0.0; support_pts.len()],
+            support_pts,
+            rk: Rk4::new(nq + nr + 1),
+            qv: DVector::zeros(nq),
+            vv: DVector::zeros(nr),
+            u: vec![0.0; nu],
+            zero_u: vec![0.0; nu],
+            a_des: DVector::zeros(nr),
+            jac: Matrix6xX::zeros(model.nv),
+            ndot: DMatrix::zeros(model.nv, nr),
+            ndv: DVector::zeros(model.nv),
+            jr: DMatrix::zeros(3, nr),
+        })
+    }
+}
 
+/// The actuators: the platform block of the input map and the limits.
+struct Actuators {
+    /// Inverse of the platform block of N_Cᵀ S (Qr[0..2] = B u[0..2]).
+    b_inv: Matrix2<f64>,
+    wheel_tau: [f64; 2],
+    wheel_speed: f64,
+    arm_tau: Vec<f64>,
+    /// Platform speeds (v, ω) to wheel rates.
+    w_inv: Matrix2<f64>,
+}
+
+impl Actuators {
+    /// Forms the input map at the initial state `x` (leaves the admissible-velocity basis
+    /// at `x` in the controller's workspace).
+    fn new(wm: &WheeledModel, x: &[f64], ws: &mut Workspace) -> Result<Self> {
+        let model = &wm.model;
+        let mut smat = DMatrix::zeros(model.nv, wm.nu());
         // the platform block of N_Cᵀ S: Qr[0..2] = B u[0..2]
-        qv.copy_from_slice(&x[..nq]);
-        admissible_velocity_basis(wm, &qv, &mut cwd.basis);
-        actuation_matrix(wm, &qv, &mut smat);
-        let b_full = cwd.basis.transpose() * &smat;
+        ws.qv.copy_from_slice(&x[..model.nq]);
+        admissible_velocity_basis(wm, &ws.qv, &mut ws.cwd.basis);
+        actuation_matrix(wm, &ws.qv, &mut smat);
+        let b_full = ws.cwd.basis.transpose() * &smat;
         let b_pp = Matrix2::new(
             b_full[(0, 0)],
             b_full[(0, 1)],
@@ -611,7 +1307,6 @@ impl<'m> Runner<'m> {
             what: "wheel actuation map".into(),
             detail: None,
         })?;
-
         // limits of the actuators
         let lim = |i: usize, v: &DVector<f64>| {
             let x = v[i];
@@ -631,23 +1326,124 @@ impl<'m> Runner<'m> {
             ),
             None => ([f64::INFINITY; 2], f64::INFINITY),
         };
-        let arm_tau: Vec<f64> = arm.iter().map(|&i| lim(i, &model.effort_limit)).collect();
-        let w_inv = wm.base.drive.platform_to_wheel();
+        let arm_tau = wm
+            .arm_dofs()
+            .iter()
+            .map(|&i| lim(i, &model.effort_limit))
+            .collect();
+        Ok(Self {
+            b_inv,
+            wheel_tau,
+            wheel_speed,
+            arm_tau,
+            w_inv: wm.base.drive.platform_to_wheel(),
+        })
+    }
 
+    /// The actuators' absolute power Σ |u_j · rate_j| at the inputs `u`, the reduced
+    /// velocities `vv` and the platform speeds (`v`, `w`).
+    fn absolute_power(&self, u: &[f64], vv: &DVector<f64>, v: f64, w: f64) -> f64 {
+        let wrates = self.w_inv * Vector2::new(v, w);
+        let mut p_abs = (u[0] * wrates[0]).abs() + (u[1] * wrates[1]).abs();
+        for k2 in 0..self.arm_tau.len() {
+            p_abs += (u[2 + k2] * vv[2 + k2]).abs();
+        }
+        p_abs
+    }
+
+    /// Computed torque through the reduced model, Qr = Mr a + (cr + Gr), mapped to the
+    /// inputs `u` and clipped at the torque limits; `true` if any was clipped.
+    fn computed_torque(&self, cwd: &WheeledData, a_des: &DVector<f64>, u: &mut [f64]) -> bool {
+        let mr = &cwd.reduced.mass_matrix;
+        let bias = &cwd.reduced.velocity_terms;
+        let nr = a_des.len();
+        let mut qr = [0.0f64; 2];
+        for (i, qri) in qr.iter_mut().enumerate() {
+            let mut s = bias[i];
+            for j in 0..nr {
+                s += mr[(i, j)] * a_des[j];
+            }
+            *qri = s;
+        }
+        let up = self.b_inv * Vector2::new(qr[0], qr[1]);
+        let mut torque_clip = false;
+        for s in 0..2 {
+            let tau = up[s];
+            u[s] = if tau.abs() > self.wheel_tau[s] {
+                torque_clip = true;
+                self.wheel_tau[s].copysign(tau)
+            } else {
+                tau
+            };
+        }
+        for (k2, &limit) in self.arm_tau.iter().enumerate() {
+            let i = 2 + k2;
+            let mut s = bias[i];
+            for j in 0..nr {
+                s += mr[(i, j)] * a_des[j];
+            }
+            u[i] = if s.abs() > limit {
+                torque_clip = true;
+                limit.copysign(s)
+            } else {
+                s
+            };
+        }
+        torque_clip
+    }
+}
+
+/// What the loop needs of the mission, fixed for the run: sizes, the goal, the gains and
+/// guards of the control laws, the actuators, the obstacle schedule.
+struct Controller {
+    nq: usize,
+    nr: usize,
+    na: usize,
+    h: f64,
+    time_limit: f64,
+    rec_every: usize,
+    res: f64,
+    r_foot: f64,
+    /// The base frame's goal pose.
+    goal: [f64; 3],
+    /// The unicycle point the platform is planned and tracked by: the driven-axle
+    /// midpoint, `d` behind the base frame origin.
+    d: f64,
+    goal_axle: [f64; 3],
+    arm: Vec<usize>,
+    /// The transport posture as a full configuration.
+    q_t: DVector<f64>,
+    kan: Kanayama,
+    kx: f64,
+    ks: f64,
+    wn: f64,
+    wt: f64,
+    v_max: f64,
+    omega_max: f64,
+    a_guard_f: f64,
+    a_guard_b: f64,
+    alpha_guard: f64,
+    act: Actuators,
+    chain: Vec<usize>,
+    /// (index, time) of the obstacles in the order they appear.
+    obstacles: Vec<(usize, f64)>,
+}
+
+impl Controller {
+    fn new(r: &Runner<'_>, act: Actuators, time_limit: f64, rec_every: usize) -> Result<Self> {
+        let (m, wm, f) = (r.m, r.wm, &r.m.file);
+        let model = &wm.model;
+        let arm = wm.arm_dofs().to_vec();
+        let mut q_t = DVector::zeros(model.nq);
+        for (k, &i) in arm.iter().enumerate() {
+            q_t[i] = m.transport[k];
+        }
         let c = &f.control;
         let kan = Kanayama::new(c.kx, c.ky, c.kth)?;
-        let ks = c.speed_gain;
-        let wn = c.arm_frequency;
-        let wt = c.task_frequency;
-        let (tip_f, tip_b) = match (self.tip.forward, self.tip.backward) {
+        let (tip_f, tip_b) = match (r.tip.forward, r.tip.backward) {
             (Some(a), Some(b)) => (a, b),
             _ => (0.0, 0.0),
         };
-        let a_guard_f = (2.0 * f.limits.a_max).min(0.95 * tip_f);
-        let a_guard_b = (2.0 * f.limits.a_max).min(0.95 * tip_b);
-        let alpha_guard = 2.0 * f.limits.alpha_max;
-        let chain = arm_chain(m);
-
         let mut obstacles: Vec<(usize, f64)> = f
             .obstacles
             .iter()
@@ -655,698 +1451,272 @@ impl<'m> Runner<'m> {
             .map(|(k, o)| (k, o.t))
             .collect();
         obstacles.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-        let mut next_obstacle = 0usize;
+        let d = wm.base.drive.d;
+        Ok(Self {
+            nq: model.nq,
+            nr: wm.nr(),
+            na: arm.len(),
+            h: f.simulation.dt,
+            time_limit,
+            rec_every,
+            res: m.map.grid.resolution,
+            r_foot: f.robot.footprint_radius,
+            goal: f.goal.pose,
+            d,
+            goal_axle: axle_pose(f.goal.pose, d),
+            arm,
+            q_t,
+            kan,
+            kx: c.kx,
+            ks: c.speed_gain,
+            wn: c.arm_frequency,
+            wt: c.task_frequency,
+            v_max: f.limits.v_max,
+            omega_max: f.limits.omega_max,
+            a_guard_f: (2.0 * f.limits.a_max).min(0.95 * tip_f),
+            a_guard_b: (2.0 * f.limits.a_max).min(0.95 * tip_b),
+            alpha_guard: 2.0 * f.limits.alpha_max,
+            act,
+            chain: arm_chain(m),
+            obstacles,
+        })
+    }
 
-        let mut phase = if self.failure.is_some() {
-            Phase::Done
-        } else {
-            Phase::Drive
-        };
-        let mut phase_t0 = 0.0;
-        let mut ee_traj: Option<EeTrajectory> = None;
-        let mut energy = 0.0;
-        let mut torque_sat = 0usize;
-        let mut speed_sat = 0usize;
-        let mut first_torque_sat = true;
-        let mut first_speed_sat = true;
-        let mut first_slip = true;
-        let mut first_contact = true;
-        let mut time_to_goal = None;
-        let mut cur_ref = RefSample {
-            t: 0.0,
-            x: f.start.pose[0],
-            y: f.start.pose[1],
-            theta: f.start.pose[2],
+    /// The reference sample of the goal pose at rest.
+    fn goal_sample(&self, t: f64) -> RefSample {
+        RefSample {
+            t,
+            x: self.goal[0],
+            y: self.goal[1],
+            theta: self.goal[2],
             v: 0.0,
             omega: 0.0,
             a: 0.0,
             alpha: 0.0,
-        };
-        let sim_clock = Instant::now();
-        let mut excluded = 0.0; // planning time spent inside the loop
-        let mut k = 0usize;
-        let mut t;
-        loop {
-            t = k as f64 * h;
-            qv.copy_from_slice(&x[..nq]);
-            vv.copy_from_slice(&x[nq..nq + nr]);
-            let pose = [x[0], x[1], x[2]];
-            let axle = axle_pose(pose, d);
-            let (v, w) = (x[nq], x[nq + 1]);
-
-            // obstacles that appear now
-            while phase != Phase::Done
-                && next_obstacle < obstacles.len()
-                && obstacles[next_obstacle].1 <= t + 1e-12
-            {
-                let (oi, ot) = obstacles[next_obstacle];
-                next_obstacle += 1;
-                let o = f.obstacles[oi];
-                let clock = Instant::now();
-                let c = grid.world_to_cell_f(o.center[0], o.center[1]);
-                let [fx, fy] = grid.world_to_cell_f(axle[0], axle[1]);
-                let rc = (
-                    (fx.floor().max(0.0) as usize).min(grid.width - 1),
-                    (fy.floor().max(0.0) as usize).min(grid.height - 1),
-                );
-                let added = self.planner.add_disk(c, o.radius / res, rc);
-                self.event(
-                    ot,
-                    "obstacle",
-                    format!(
-                        "obstacle {oi} appears at ({:.2}, {:.2}), radius {:.2} m",
-                        o.center[0], o.center[1], o.radius
-                    ),
-                );
-                let (newly, s_time) = match added {
-                    Ok(a) => a,
-                    Err(e) => {
-                        self.fail(t, format!("re-planning failed: {e}"));
-                        phase = Phase::Done;
-                        break;
-                    }
-                };
-                if newly.contains(&self.planner.goal_cell) && phase == Phase::Drive {
-                    self.wall.planning_s += s_time;
-                    excluded += clock.elapsed().as_secs_f64();
-                    self.fail(
-                        t,
-                        format!(
-                            "obstacle {oi} (t = {ot} s) seals the goal: the footprint no \
-                             longer fits at the goal pose"
-                        ),
-                    );
-                    phase = Phase::Done;
-                    break;
-                }
-                let affected = phase == Phase::Drive
-                    && self.reference.as_ref().is_some_and(|r| {
-                        r.samples.iter().filter(|s| s.t >= t).any(|s| {
-                            let [cx, cy] = grid.world_to_cell_f(s.x, s.y);
-                            self.planner.blocked_at(cx, cy)
-                        })
-                    });
-                if affected {
-                    let (path, mut timing) = self.planner.replan();
-                    timing.search_s += s_time;
-                    self.wall.planning_s += timing.search_s;
-                    match path {
-                        None => {
-                            self.fail(
-                                t,
-                                format!(
-                                    "obstacle {oi} (t = {ot} s) seals the goal: no \
-                                     collision-free path remains"
-                                ),
-                            );
-                            phase = Phase::Done;
-                        }
-                        Some(cells) => {
-                            let start = TimingStart {
-                                t0: t,
-                                pose: axle,
-                                v,
-                            };
-                            if self.make_reference(cells, start, &format!("obstacle {oi}"), timing)
-                            {
-                                let p = self.plans.last().expect("just pushed");
-                                let text = format!(
-                                    "re-plan after obstacle {oi}: D* Lite expanded {} cells, \
-                                     new path {:.2} m, {:.2} s to go from {:.2} m/s",
-                                    p.search.expanded,
-                                    path_length(&p.path),
-                                    p.duration,
-                                    p.v_start
-                                );
-                                self.event(t, "replan", text);
-                            } else {
-                                phase = Phase::Done;
-                            }
-                        }
-                    }
-                } else {
-                    self.wall.planning_s += s_time;
-                }
-                excluded += clock.elapsed().as_secs_f64();
-            }
-
-            // reduced dynamics at the state (controller's model)
-            let step_ok = reduced_forward_dynamics_crba(wm, &mut cwd, &qv, &vv, &zero_u);
-            if let Err(e) = step_ok {
-                self.fail(t, format!("the dynamics became singular: {e}"));
-                phase = Phase::Done;
-            }
-
-            // phase transitions
-            if phase == Phase::Drive {
-                let r = self.reference.as_ref().expect("drive has a reference");
-                if t >= r.t_end() {
-                    phase = Phase::Arrive;
-                    phase_t0 = t;
-                }
-            }
-            if phase == Phase::Arrive {
-                let pe = (pose[0] - goal[0]).hypot(pose[1] - goal[1]);
-                let he = wrap_angle(goal[2] - pose[2]).abs();
-                let settled = v.abs() < 0.02 && w.abs() < 0.05;
-                if pe <= f.goal.position_tolerance && he <= f.goal.heading_tolerance && settled {
-                    self.event(
-                        t,
-                        "arrived",
-                        format!("base at the goal: {pe:.3} m, {he:.3} rad off"),
-                    );
-                    if f.goal.end_effector.is_some() {
-                        phase = Phase::Reach;
-                        phase_t0 = t;
-                    } else {
-                        time_to_goal = Some(t);
-                        phase = Phase::Done;
-                    }
-                } else if t - phase_t0 > ARRIVE_TIMEOUT {
-                    self.fail(
-                        t,
-                        format!(
-                            "the base stopped {pe:.3} m and {he:.3} rad from the goal pose \
-                             (tolerances {} m, {} rad)",
-                            f.goal.position_tolerance, f.goal.heading_tolerance
-                        ),
-                    );
-                    phase = Phase::Done;
-                }
-            }
-            if t >= time_limit && phase != Phase::Done {
-                self.fail(t, format!("time limit of {time_limit:.1} s reached"));
-                phase = Phase::Done;
-            }
-
-            // end-effector kinematics in reduced coordinates (for the reach phase and the
-            // record)
-            let mut ee_p = Vector3::zeros();
-            let mut ee_dp = Vector3::zeros();
-            let mut ee_bias = Vector3::zeros();
-            let need_ee = phase == Phase::Reach || k.is_multiple_of(rec_every);
-            if need_ee {
-                let qd = &cwd.qdot;
-                let acc = frame_acceleration_bias(
-                    model,
-                    &mut data,
-                    &qv,
-                    qd,
-                    m.ee_frame,
-                    ReferenceFrame::LocalWorldAligned,
-                );
-                ee_p = data.world_from_frame[m.ee_frame.0].translation;
-                frame_jacobian_from_kinematics(
-                    model,
-                    &mut data,
-                    m.ee_frame,
-                    ReferenceFrame::LocalWorldAligned,
-                    &mut jac,
-                );
-                admissible_velocity_basis_dot(wm, &qv, qd[2], &mut ndot);
-                ndot.mul_to(&vv, &mut ndv);
-                for r in 0..3 {
-                    let mut b = acc.linear[r];
-                    for cc in 0..model.nv {
-                        b += jac[(r, cc)] * ndv[cc];
-                    }
-                    ee_bias[r] = b;
-                    for j in 0..nr {
-                        let mut s = 0.0;
-                        for l in 0..model.nv {
-                            s += jac[(r, l)] * cwd.basis[(l, j)];
-                        }
-                        jr[(r, j)] = s;
-                    }
-                    let mut s = 0.0;
-                    for j in 0..nr {
-                        s += jr[(r, j)] * vv[j];
-                    }
-                    ee_dp[r] = s;
-                }
-            }
-
-            // control law: desired reduced accelerations
-            let mut speed_clip = false;
-            match phase {
-                Phase::Drive | Phase::Arrive => {
-                    let (mut cmd, r) = if phase == Phase::Drive {
-                        let r = self
-                            .reference
-                            .as_ref()
-                            .expect("drive has a reference")
-                            .at(t);
-                        let rs = ReferenceSample {
-                            pose: [r.x, r.y, r.theta],
-                            v: r.v,
-                            w: r.omega,
-                        };
-                        (kan.inputs(&axle, &rs), base_reference(r, d))
-                    } else {
-                        let rs = ReferenceSample {
-                            pose: goal_axle,
-                            v: 0.0,
-                            w: 0.0,
-                        };
-                        let [ex, _, eth] = Kanayama::error(&axle, &rs);
-                        let r = RefSample {
-                            t,
-                            x: goal[0],
-                            y: goal[1],
-                            theta: goal[2],
-                            v: 0.0,
-                            omega: 0.0,
-                            a: 0.0,
-                            alpha: 0.0,
-                        };
-                        ([c.kx * ex, 2.0 * eth], r)
-                    };
-                    cur_ref = r;
-                    if cmd[0].abs() > f.limits.v_max {
-                        cmd[0] = f.limits.v_max.copysign(cmd[0]);
-                        speed_clip = true;
-                    }
-                    if cmd[1].abs() > f.limits.omega_max {
-                        cmd[1] = f.limits.omega_max.copysign(cmd[1]);
-                        speed_clip = true;
-                    }
-                    let wr = w_inv * Vector2::new(cmd[0], cmd[1]);
-                    let peak = wr.amax();
-                    if peak > wheel_speed {
-                        let s = wheel_speed / peak;
-                        cmd[0] *= s;
-                        cmd[1] *= s;
-                        speed_clip = true;
-                    }
-                    a_des[0] = (r.a + ks * (cmd[0] - v)).clamp(-a_guard_b, a_guard_f);
-                    a_des[1] = (r.alpha + ks * (cmd[1] - w)).clamp(-alpha_guard, alpha_guard);
-                    for (k2, &i) in arm.iter().enumerate() {
-                        a_des[2 + k2] = wn * wn * (q_t[i] - qv[i]) - 2.0 * wn * vv[2 + k2];
-                    }
-                }
-                Phase::Reach => {
-                    let target = Vector3::from(f.goal.end_effector.expect("reach has a target"));
-                    let traj = *ee_traj.get_or_insert_with(|| {
-                        let dist = (target - ee_p).norm();
-                        EeTrajectory {
-                            t0: t,
-                            duration: (1.875 * dist / 0.25).max(1.5),
-                            from: ee_p,
-                            to: target,
-                        }
-                    });
-                    cur_ref = RefSample {
-                        t,
-                        x: goal[0],
-                        y: goal[1],
-                        theta: goal[2],
-                        v: 0.0,
-                        omega: 0.0,
-                        a: 0.0,
-                        alpha: 0.0,
-                    };
-                    // platform holds: speeds to zero
-                    a_des[0] = -ks * v;
-                    a_des[1] = -ks * w;
-                    let (xd, dxd, ddxd) = traj.at(t);
-                    let mut rhs =
-                        ddxd + (dxd - ee_dp) * (2.0 * wt) + (xd - ee_p) * (wt * wt) - ee_bias;
-                    for r in 0..3 {
-                        rhs[r] -= jr[(r, 0)] * a_des[0] + jr[(r, 1)] * a_des[1];
-                    }
-                    // damped least squares on the arm block, null-space damping
-                    let mut jjt = Matrix3::zeros();
-                    for r in 0..3 {
-                        for s in 0..3 {
-                            let mut acc = 0.0;
-                            for j in 2..nr {
-                                acc += jr[(r, j)] * jr[(s, j)];
-                            }
-                            jjt[(r, s)] = acc;
-                        }
-                        jjt[(r, r)] += 1e-6;
-                    }
-                    let Some(jinv) = jjt.try_inverse() else {
-                        self.fail(t, "the arm is singular at the goal".to_string());
-                        phase = Phase::Done;
-                        continue;
-                    };
-                    let y = jinv * rhs;
-                    // null-space motion: damp the joint rates
-                    let mut q0 = vec![0.0; na];
-                    for (k2, q0k) in q0.iter_mut().enumerate() {
-                        *q0k = -2.0 * wn * vv[2 + k2];
-                    }
-                    // J q0
-                    let mut jq0 = Vector3::zeros();
-                    for r in 0..3 {
-                        for (k2, q0k) in q0.iter().enumerate() {
-                            jq0[r] += jr[(r, 2 + k2)] * q0k;
-                        }
-                    }
-                    let z = jinv * jq0;
-                    for k2 in 0..na {
-                        let mut acc = q0[k2];
-                        for r in 0..3 {
-                            acc += jr[(r, 2 + k2)] * (y[r] - z[r]);
-                        }
-                        a_des[2 + k2] = acc;
-                    }
-                    let err = (target - ee_p).norm();
-                    if t >= traj.t0 + traj.duration
-                        && err <= f.goal.end_effector_tolerance
-                        && ee_dp.norm() < 0.01
-                    {
-                        self.event(
-                            t,
-                            "reached",
-                            format!("end effector at its target: {:.4} m off", err),
-                        );
-                        time_to_goal = Some(t);
-                        phase = Phase::Done;
-                    } else if t > traj.t0 + traj.duration + REACH_SETTLE {
-                        self.fail(
-                            t,
-                            format!(
-                                "the end effector stopped {err:.3} m from its target \
-                                 (tolerance {} m)",
-                                f.goal.end_effector_tolerance
-                            ),
-                        );
-                        phase = Phase::Done;
-                    }
-                }
-                Phase::Done => {
-                    a_des[0] = -ks * v;
-                    a_des[1] = -ks * w;
-                    for k2 in 0..na {
-                        a_des[2 + k2] = -2.0 * wn * vv[2 + k2];
-                    }
-                }
-            }
-
-            // computed torque through the reduced model: Qr = Mr a + (cr + Gr)
-            let mr = &cwd.reduced.mass_matrix;
-            let bias = &cwd.reduced.velocity_terms;
-            let mut qr = [0.0f64; 2];
-            for (i, qri) in qr.iter_mut().enumerate() {
-                let mut s = bias[i];
-                for j in 0..nr {
-                    s += mr[(i, j)] * a_des[j];
-                }
-                *qri = s;
-            }
-            let up = b_inv * Vector2::new(qr[0], qr[1]);
-            let mut torque_clip = false;
-            for s in 0..2 {
-                let tau = up[s];
-                u[s] = if tau.abs() > wheel_tau[s] {
-                    torque_clip = true;
-                    wheel_tau[s].copysign(tau)
-                } else {
-                    tau
-                };
-            }
-            for k2 in 0..na {
-                let i = 2 + k2;
-                let mut s = bias[i];
-                for j in 0..nr {
-                    s += mr[(i, j)] * a_des[j];
-                }
-                u[i] = if s.abs() > arm_tau[k2] {
-                    torque_clip = true;
-                    arm_tau[k2].copysign(s)
-                } else {
-                    s
-                };
-            }
-            if torque_clip {
-                torque_sat += 1;
-                if first_torque_sat {
-                    first_torque_sat = false;
-                    self.event(t, "torque_limit", "first torque saturation");
-                }
-            }
-            if speed_clip {
-                speed_sat += 1;
-                if first_speed_sat {
-                    first_speed_sat = false;
-                    self.event(t, "speed_limit", "first speed-command saturation");
-                }
-            }
-
-            // record
-            let last = phase == Phase::Done;
-            if k.is_multiple_of(rec_every) || last {
-                let rec = self.record(
-                    &mut RecordCtx {
-                        mwd: &mut mwd,
-                        data: &mut data,
-                        sm: &sm,
-                        sd: &mut sd,
-                        support_pts: &support_pts,
-                        contacts: &mut contacts,
-                        loads: &mut loads,
-                        chain: &chain,
-                    },
-                    t,
-                    &qv,
-                    &vv,
-                    &u,
-                    &cur_ref,
-                    ee_p,
-                    energy,
-                    phase,
-                    res,
-                    r_foot,
-                );
-                if let Some((slip, clear)) = rec {
-                    if first_slip && slip.is_some_and(|s| s > 1.0) {
-                        first_slip = false;
-                        self.event(t, "slip", "lateral wheel force exceeds μ N");
-                    }
-                    if first_contact && clear < 0.0 {
-                        first_contact = false;
-                        self.event(
-                            t,
-                            "contact",
-                            format!("footprint overlaps an obstacle by {:.3} m", -clear),
-                        );
-                        if phase != Phase::Done {
-                            self.fail(
-                                t,
-                                format!(
-                                    "collision: the footprint overlaps an obstacle by {:.3} m",
-                                    -clear
-                                ),
-                            );
-                            phase = Phase::Done;
-                        }
-                    }
-                }
-            }
-            if last {
-                break;
-            }
-
-            // actuator energy over the step (rates at its start)
-            let wrates = w_inv * Vector2::new(v, w);
-            let mut p_abs = (u[0] * wrates[0]).abs() + (u[1] * wrates[1]).abs();
-            for k2 in 0..na {
-                p_abs += (u[2 + k2] * vv[2 + k2]).abs();
-            }
-            energy += p_abs * h;
-
-            // integrate one step
-            let mut plant = Plant {
-                sys: &mut sys,
-                u: &u,
-                nq,
-                nr,
-            };
-            if let Err(e) = rk.step(&mut plant, t, &mut x, h) {
-                self.fail(t, format!("the simulation failed: {e}"));
-                phase = Phase::Done;
-                // record the state reached before the failure on the next pass
-                continue;
-            }
-            k += 1;
         }
-        self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - excluded).max(0.0);
-
-        // the minimum ZMP margin as an event
-        if let Some((i, mz)) = self
-            .samples
-            .zmp_margin
-            .iter()
-            .enumerate()
-            .filter_map(|(i, z)| z.map(|z| (i, z)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-        {
-            let ti = self.samples.t[i];
-            self.event(
-                ti,
-                "min_zmp_margin",
-                format!("smallest ZMP margin {mz:.4} m"),
-            );
-        }
-        self.events.sort_by(|a, b| a.t.total_cmp(&b.t));
-        let reached = self.failure.is_none() && time_to_goal.is_some();
-        let reason = if reached {
-            None
-        } else {
-            Some(
-                self.failure
-                    .clone()
-                    .unwrap_or_else(|| "the mission ended before the goal".into()),
-            )
-        };
-        let arm_names = arm
-            .iter()
-            .map(|&i| model.names[model.joint_of_dof[i].0].clone())
-            .collect();
-        Ok(MissionResult {
-            reached,
-            reason,
-            time_to_goal: if reached { time_to_goal } else { None },
-            duration: t,
-            tip_limits: self.tip,
-            timing_acceleration: self.timing_accel.map(|a| [a.forward, a.backward]),
-            plans: self.plans,
-            events: self.events,
-            samples: self.samples,
-            q_names: wm.q_names(),
-            u_names: wm.u_names(),
-            arm_names,
-            torque_saturated_steps: torque_sat,
-            speed_saturated_steps: speed_sat,
-            steps: k,
-            input_work: x[nq + nr],
-            wall: self.wall,
-        })
     }
 
-    /// Records one sample; returns (slip ratio, clearance) for the event checks, `None`
-    /// if the monitors could not be evaluated (the sample is still recorded).
-    #[allow(clippy::too_many_arguments)]
-    fn record(
-        &mut self,
-        ctx: &mut RecordCtx<'_>,
+    /// Drive and arrive: Kanayama tracking of the axle reference sample `reference`
+    /// (arrive: `None`, a proportional law onto the goal), speed commands clipped at the
+    /// limits, accelerations within the tip-over guards, the arm held at the transport
+    /// posture. Writes the desired accelerations; returns the base frame's reference and
+    /// whether a speed command was clipped.
+    fn platform_law(
+        &self,
+        reference: Option<RefSample>,
         t: f64,
-        q: &DVector<f64>,
-        v: &DVector<f64>,
-        u: &[f64],
-        r: &RefSample,
-        ee: Vector3<f64>,
-        energy: f64,
-        phase: Phase,
-        res: f64,
-        r_foot: f64,
-    ) -> Option<(Option<f64>, f64)> {
-        let wm = self.wm;
-        let model = &wm.model;
-        let grid = &self.m.map.grid;
-        let s = &mut self.samples;
-        let ok = reduced_forward_dynamics(wm, ctx.mwd, q, v, u).is_ok();
-        let (mut zmp, mut fa, mut mhs, mut slip) = (None, None, None, None);
-        if ok {
-            let lam = lagrange_multipliers(wm, ctx.mwd, q).ok().map(|l| {
-                let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
-                ([at(0), at(1), at(2)], l.len())
-            });
-            let rep = crate::stability::evaluate(
-                model,
-                ctx.data,
-                ctx.sm,
-                ctx.sd,
-                q,
-                &ctx.mwd.qdot,
-                &ctx.mwd.reduced.qddot,
-                &ExternalLoads::default(),
-            );
-            zmp = rep.zmp_margin;
-            fa = rep.force_angle_min;
-            mhs = rep.mhs_min;
-            if let Some((lam, nk)) = lam {
-                // contacts in the world, loads from the wrench (stability::loads)
-                let (sn, cs) = q[2].sin_cos();
-                for (w, p) in ctx.contacts.iter_mut().zip(ctx.support_pts) {
-                    *w = Vector2::new(q[0] + cs * p.x - sn * p.y, q[1] + sn * p.x + cs * p.y);
+        axle: [f64; 3],
+        v: f64,
+        w: f64,
+        ws: &mut Workspace,
+    ) -> (RefSample, bool) {
+        let (mut cmd, r) = match reference {
+            Some(r) => {
+                let rs = ReferenceSample {
+                    pose: [r.x, r.y, r.theta],
+                    v: r.v,
+                    w: r.omega,
+                };
+                (self.kan.inputs(&axle, &rs), base_reference(r, self.d))
+            }
+            None => {
+                let rs = ReferenceSample {
+                    pose: self.goal_axle,
+                    v: 0.0,
+                    w: 0.0,
+                };
+                let [ex, _, eth] = Kanayama::error(&axle, &rs);
+                ([self.kx * ex, 2.0 * eth], self.goal_sample(t))
+            }
+        };
+        let mut speed_clip = false;
+        if cmd[0].abs() > self.v_max {
+            cmd[0] = self.v_max.copysign(cmd[0]);
+            speed_clip = true;
+        }
+        if cmd[1].abs() > self.omega_max {
+            cmd[1] = self.omega_max.copysign(cmd[1]);
+            speed_clip = true;
+        }
+        let wr = self.act.w_inv * Vector2::new(cmd[0], cmd[1]);
+        let peak = wr.amax();
+        if peak > self.act.wheel_speed {
+            let s = self.act.wheel_speed / peak;
+            cmd[0] *= s;
+            cmd[1] *= s;
+            speed_clip = true;
+        }
+        let (ks, wn) = (self.ks, self.wn);
+        let a_des = &mut ws.a_des;
+        a_des[0] = (r.a + ks * (cmd[0] - v)).clamp(-self.a_guard_b, self.a_guard_f);
+        a_des[1] = (r.alpha + ks * (cmd[1] - w)).clamp(-self.alpha_guard, self.alpha_guard);
+        for (k2, &i) in self.arm.iter().enumerate() {
+            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.qv[i]) - 2.0 * wn * ws.vv[2 + k2];
+        }
+        (r, speed_clip)
+    }
+
+    /// Reach: the platform's speeds to zero, the end effector on `traj` by damped least
+    /// squares on the arm block, the joint rates damped in its null space. Writes the
+    /// desired accelerations; `false` if the arm block is singular.
+    fn reach_law(
+        &self,
+        traj: &EeTrajectory,
+        ee: &EeState,
+        t: f64,
+        v: f64,
+        w: f64,
+        ws: &mut Workspace,
+    ) -> bool {
+        let (nr, na, wn, wt) = (self.nr, self.na, self.wn, self.wt);
+        let (jr, vv, a_des) = (&ws.jr, &ws.vv, &mut ws.a_des);
+        // platform holds: speeds to zero
+        a_des[0] = -self.ks * v;
+        a_des[1] = -self.ks * w;
+        let (xd, dxd, ddxd) = traj.at(t);
+        let mut rhs = ddxd + (dxd - ee.dp) * (2.0 * wt) + (xd - ee.p) * (wt * wt) - ee.bias;
+        for r in 0..3 {
+            rhs[r] -= jr[(r, 0)] * a_des[0] + jr[(r, 1)] * a_des[1];
+        }
+        // damped least squares on the arm block, null-space damping
+        let mut jjt = Matrix3::zeros();
+        for r in 0..3 {
+            for s in 0..3 {
+                let mut acc = 0.0;
+                for j in 2..nr {
+                    acc += jr[(r, j)] * jr[(s, j)];
                 }
-                let ground = ctx.sm.support.ground_z();
-                if contact_normal_loads(ctx.contacts, ground, &ctx.sd.wrench, ctx.loads).is_ok() {
-                    // longitudinal wheel forces: the rolling multipliers of tracked wheels,
-                    // else the wheel torques over the radius
-                    let long = if nk == 3 {
-                        [lam[1], lam[2]]
-                    } else {
-                        let r = wm.base.drive.wheel_radius;
-                        [u[0] / r, u[1] / r]
-                    };
-                    if let Ok(fr) = driven_wheel_friction(
-                        -lam[0],
-                        long,
-                        [ctx.loads[0], ctx.loads[1]],
-                        self.m.file.limits.mu,
-                    ) {
-                        slip = fr
-                            .iter()
-                            .map(|w| w.slip_ratio.unwrap_or(f64::INFINITY))
-                            .reduce(f64::max)
-                            .filter(|x| x.is_finite());
-                    }
-                }
+                jjt[(r, s)] = acc;
+            }
+            jjt[(r, r)] += 1e-6;
+        }
+        let Some(jinv) = jjt.try_inverse() else {
+            return false;
+        };
+        let y = jinv * rhs;
+        // null-space motion: damp the joint rates
+        let mut q0 = vec![0.0; na];
+        for (k2, q0k) in q0.iter_mut().enumerate() {
+            *q0k = -2.0 * wn * vv[2 + k2];
+        }
+        // J q0
+        let mut jq0 = Vector3::zeros();
+        for r in 0..3 {
+            for (k2, q0k) in q0.iter().enumerate() {
+                jq0[r] += jr[(r, 2 + k2)] * q0k;
             }
         }
-        // arm chain in the base x–z plane
-        crate::kinematics::forward_kinematics(model, ctx.data, q);
-        let (sn, cs) = q[2].sin_cos();
-        let to_base = |p: &Vector3<f64>| {
-            let dx = p.x - q[0];
-            let dy = p.y - q[1];
-            [cs * dx + sn * dy, p.z]
-        };
-        let mut side: Vec<[f64; 2]> = ctx
-            .chain
-            .iter()
-            .map(|&j| to_base(&ctx.data.world_from_joint[j].translation))
-            .collect();
-        side.push(to_base(&ee));
-        let [fx, fy] = grid.world_to_cell_f(q[0], q[1]);
-        let clearance = self
-            .planner
-            .obstacle_distance(fx, fy, (r_foot + EXACT_CLEARANCE) / res)
-            .map_or(f64::INFINITY, |d| d * res - r_foot);
-        let te = (q[0] - r.x).hypot(q[1] - r.y);
-        s.t.push(t);
-        s.q.push(q.as_slice().to_vec());
-        s.v.push(v[0]);
-        s.omega.push(v[1]);
-        s.v_ref.push(r.v);
-        s.omega_ref.push(r.omega);
-        s.ref_xy.push([r.x, r.y]);
-        s.zmp_margin.push(zmp);
-        s.force_angle_min.push(fa);
-        s.mhs_min.push(mhs);
-        s.clearance.push(clearance);
-        s.tracking_error.push(te);
-        s.slip_ratio.push(slip);
-        s.u.push(u.to_vec());
-        s.ee.push([ee.x, ee.y, ee.z]);
-        s.arm_side.push(side);
-        s.energy.push(energy);
-        s.phase.push(phase.name());
-        ok.then_some((slip, clearance))
+        let z = jinv * jq0;
+        for k2 in 0..na {
+            let mut acc = q0[k2];
+            for r in 0..3 {
+                acc += jr[(r, 2 + k2)] * (y[r] - z[r]);
+            }
+            a_des[2 + k2] = acc;
+        }
+        true
+    }
+
+    /// Done: the platform's speeds and the joint rates damped to zero.
+    fn hold(&self, v: f64, w: f64, ws: &mut Workspace) {
+        let a_des = &mut ws.a_des;
+        a_des[0] = -self.ks * v;
+        a_des[1] = -self.ks * w;
+        for k2 in 0..self.na {
+            a_des[2 + k2] = -2.0 * self.wn * ws.vv[2 + k2];
+        }
     }
 }
 
-struct RecordCtx<'a> {
-    mwd: &'a mut WheeledData,
-    data: &'a mut Data,
-    sm: &'a StabilityModel,
-    sd: &'a mut StabilityData,
-    support_pts: &'a [Vector2<f64>],
-    contacts: &'a mut [Vector2<f64>],
-    loads: &'a mut [f64],
-    chain: &'a [usize],
+/// End-effector position, velocity and acceleration bias in reduced coordinates.
+#[derive(Clone, Copy, Default)]
+struct EeState {
+    p: Vector3<f64>,
+    dp: Vector3<f64>,
+    bias: Vector3<f64>,
+}
+
+/// The end effector's position, velocity and acceleration bias at the workspace's state,
+/// with its reduced position Jacobian in `ws.jr` (needs the controller's reduced
+/// dynamics at the state).
+fn end_effector_kinematics(m: &Mission, ws: &mut Workspace) -> EeState {
+    let (wm, ee_frame) = (&m.robot, m.ee_frame);
+    let model = &wm.model;
+    let nr = wm.nr();
+    let qd = &ws.cwd.qdot;
+    let acc = frame_acceleration_bias(
+        model,
+        &mut ws.data,
+        &ws.qv,
+        qd,
+        ee_frame,
+        ReferenceFrame::LocalWorldAligned,
+    );
+    let mut ee = EeState {
+        p: ws.data.world_from_frame[ee_frame.0].translation,
+        ..EeState::default()
+    };
+    frame_jacobian_from_kinematics(
+        model,
+        &mut ws.data,
+        ee_frame,
+        ReferenceFrame::LocalWorldAligned,
+        &mut ws.jac,
+    );
+    admissible_velocity_basis_dot(wm, &ws.qv, qd[2], &mut ws.ndot);
+    ws.ndot.mul_to(&ws.vv, &mut ws.ndv);
+    let (jac, jr, vv) = (&ws.jac, &mut ws.jr, &ws.vv);
+    for r in 0..3 {
+        let mut b = acc.linear[r];
+        for cc in 0..model.nv {
+            b += jac[(r, cc)] * ws.ndv[cc];
+        }
+        ee.bias[r] = b;
+        for j in 0..nr {
+            let mut s = 0.0;
+            for l in 0..model.nv {
+                s += jac[(r, l)] * ws.cwd.basis[(l, j)];
+            }
+            jr[(r, j)] = s;
+        }
+        let mut s = 0.0;
+        for j in 0..nr {
+            s += jr[(r, j)] * vv[j];
+        }
+        ee.dp[r] = s;
+    }
+    ee
+}
+
+/// The stability and slip monitors of one sample.
+#[derive(Clone, Copy, Default)]
+struct Monitors {
+    zmp: Option<f64>,
+    force_angle: Option<f64>,
+    mhs: Option<f64>,
+    slip: Option<f64>,
+}
+
+/// The arm chain (joint origins, then the end effector `ee`) in the base x–z plane, from
+/// the forward kinematics at the workspace's configuration.
+fn arm_side(
+    model: &crate::multibody::Model,
+    ws: &mut Workspace,
+    chain: &[usize],
+    ee: Vector3<f64>,
+) -> Vec<[f64; 2]> {
+    let q = &ws.qv;
+    crate::kinematics::forward_kinematics(model, &mut ws.data, q);
+    let (sn, cs) = q[2].sin_cos();
+    let to_base = |p: &Vector3<f64>| {
+        let dx = p.x - q[0];
+        let dy = p.y - q[1];
+        [cs * dx + sn * dy, p.z]
+    };
+    let mut side: Vec<[f64; 2]> = chain
+        .iter()
+        .map(|&j| to_base(&ws.data.world_from_joint[j].translation))
+        .collect();
+    side.push(to_base(&ee));
+    side
 }

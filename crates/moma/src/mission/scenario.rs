@@ -301,13 +301,53 @@ pub struct Mission {
 /// A file that cannot be read or parsed (naming the file, and the key for unknown or
 /// missing keys), an invalid value (naming the field), a map or URDF that does not load.
 pub fn load(path: &Path) -> Result<Mission> {
+    load_with(path, &FileSystem)
+}
+
+/// As [`load`], with the map and robot read through `files`.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_with(path: &Path, files: &dyn Loader) -> Result<Mission> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
         path: path.to_path_buf(),
         source: e,
     })?;
     let file = parse_file(&text, path)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    from_file(file, path, base)
+    from_file_with(file, path, base, files)
+}
+
+/// Where the map and robot files a mission (or a sweep) names are parsed from: the
+/// normal path reads them from the file system ([`FileSystem`], what [`load`],
+/// [`from_file`] and `Sweep::from_toml_str` use). A caller that loads the same few
+/// files over and over (a fuzzer feeding thousands of variants of one mission) may hand
+/// in files it parsed once, provided it returns exactly what [`FileSystem`] would for
+/// the same path and arguments.
+pub trait Loader {
+    /// The map at `path` ([`crate::planning::load_map`]).
+    ///
+    /// # Errors
+    /// As [`crate::planning::load_map`].
+    fn map(&self, path: &Path, resolution: Option<f64>) -> Result<LoadedMap>;
+    /// The robot at `path` ([`crate::io::urdf::model_from_urdf_file`]).
+    ///
+    /// # Errors
+    /// As [`crate::io::urdf::model_from_urdf_file`].
+    fn urdf(&self, path: &Path, root: RootJoint) -> Result<crate::multibody::Model>;
+}
+
+/// The file system: every call parses the file anew.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FileSystem;
+
+impl Loader for FileSystem {
+    fn map(&self, path: &Path, resolution: Option<f64>) -> Result<LoadedMap> {
+        crate::planning::load_map(path, resolution)
+    }
+    fn urdf(&self, path: &Path, root: RootJoint) -> Result<crate::multibody::Model> {
+        crate::io::urdf::model_from_urdf_file(path, root)
+    }
 }
 
 /// Parses the text of a mission file (`path` names it in errors) without validating it
@@ -363,6 +403,47 @@ fn positive(path: &Path, field: &str, x: f64) -> Result<()> {
 /// # Errors
 /// As [`load`].
 pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission> {
+    from_file_with(file, path, base, &FileSystem)
+}
+
+/// As [`from_file`], with the map and robot read through `files`.
+///
+/// # Errors
+/// As [`load`].
+pub fn from_file_with(
+    file: MissionFile,
+    path: &Path,
+    base: &Path,
+    files: &dyn Loader,
+) -> Result<Mission> {
+    check_limits_and_gains(&file, path)?;
+    check_simulation(&file, path)?;
+    check_obstacles_and_robot(&file, path)?;
+    let map = load_mission_map(&file, path, base, files)?;
+    let (robot, ee_frame) = load_robot(&file, path, base, files)?;
+    let (transport, q_arm0) = arm_postures(&file, &robot, path)?;
+    let name = file.name.clone().unwrap_or_else(|| {
+        path.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "mission".into())
+    });
+    let output_dir = lexical_clean(&base.join(&file.output.dir));
+    Ok(Mission {
+        name,
+        path: path.to_path_buf(),
+        file,
+        map,
+        robot,
+        ee_frame,
+        transport,
+        q_arm0,
+        output_dir,
+    })
+}
+
+/// The limits, the control gains and the start and goal poses are positive or finite as
+/// each must be.
+fn check_limits_and_gains(file: &MissionFile, path: &Path) -> Result<()> {
     let l = &file.limits;
     for (n, x) in [
         ("limits.v_max", l.v_max),
@@ -411,6 +492,12 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
     if let Some(ee) = &file.goal.end_effector {
         finite(path, "goal.end_effector", ee)?;
     }
+    Ok(())
+}
+
+/// The simulation's step, record interval and time limit, and the step and sample counts
+/// they imply, are bounded.
+fn check_simulation(file: &MissionFile, path: &Path) -> Result<()> {
     if let Some(tl) = file.simulation.time_limit {
         positive(path, "simulation.time_limit", tl)?;
         if tl / file.simulation.dt > MAX_STEPS {
@@ -454,6 +541,11 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
             ),
         ));
     }
+    Ok(())
+}
+
+/// The obstacles (count, centres, times, radii), the caster positions and the gravity.
+fn check_obstacles_and_robot(file: &MissionFile, path: &Path) -> Result<()> {
     if file.obstacles.len() > MAX_OBSTACLES {
         return Err(field_err(
             path,
@@ -482,13 +574,23 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
     if let Some(g) = file.robot.gravity {
         positive(path, "robot.gravity", g)?;
     }
+    Ok(())
+}
 
-    // map
+/// Loads the map (`map.file`, `map.resolution`) and checks that the footprint is not
+/// larger than the whole map.
+fn load_mission_map(
+    file: &MissionFile,
+    path: &Path,
+    base: &Path,
+    files: &dyn Loader,
+) -> Result<LoadedMap> {
     let map_path = base.join(&file.map.file);
     if let Some(r) = file.map.resolution {
         positive(path, "map.resolution", r)?;
     }
-    let map = crate::planning::load_map(&map_path, file.map.resolution)
+    let map = files
+        .map(&map_path, file.map.resolution)
         .map_err(|e| field_err(path, "map.file", e))?;
     let grid = &map.grid;
     // A footprint larger than the map itself fits nowhere.
@@ -503,10 +605,20 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
             ),
         ));
     }
+    Ok(map)
+}
 
-    // robot
+/// Loads the robot (URDF with a planar root, drive, casters, support polygon) and finds
+/// its end-effector frame.
+fn load_robot(
+    file: &MissionFile,
+    path: &Path,
+    base: &Path,
+    files: &dyn Loader,
+) -> Result<(WheeledModel, FrameIndex)> {
     let urdf_path = base.join(&file.robot.urdf);
-    let mut model = crate::io::urdf::model_from_urdf_file(&urdf_path, RootJoint::Planar)
+    let mut model = files
+        .urdf(&urdf_path, RootJoint::Planar)
         .map_err(|e| field_err(path, "robot.urdf", e))?;
     model.gravity = nalgebra::Vector3::new(0.0, 0.0, -file.robot.gravity.unwrap_or(9.81));
     let drive = DiffDrive::new(file.robot.drive.r_w, file.robot.drive.b, file.robot.drive.d)
@@ -534,6 +646,16 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
             .map_err(|e| field_err(path, "robot.end_effector", e))?,
         None => robot.model.last_link_frame(),
     };
+    Ok((robot, ee_frame))
+}
+
+/// The transport posture and the start arm posture (each checked against the arm's size
+/// and joint limits; defaults: each other, else zero).
+fn arm_postures(
+    file: &MissionFile,
+    robot: &WheeledModel,
+    path: &Path,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let na = robot.arm_dofs().len();
     let check_arm = |field: &str, q: &[f64]| -> Result<()> {
         if q.len() != na {
@@ -577,23 +699,7 @@ pub fn from_file(file: MissionFile, path: &Path, base: &Path) -> Result<Mission>
         .q_arm
         .clone()
         .unwrap_or_else(|| transport.clone());
-    let name = file.name.clone().unwrap_or_else(|| {
-        path.file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "mission".into())
-    });
-    let output_dir = lexical_clean(&base.join(&file.output.dir));
-    Ok(Mission {
-        name,
-        path: path.to_path_buf(),
-        file,
-        map,
-        robot,
-        ee_frame,
-        transport,
-        q_arm0,
-        output_dir,
-    })
+    Ok((transport, q_arm0))
 }
 
 /// `path` with `.` components dropped and each `..` cancelling the component before it

@@ -30,6 +30,44 @@ pub const MOUNT_ROOT_JOINT_NAME: &str = "root_joint";
 /// `RootJoint::Fixed`, the mount is not a rigid transform, or `arm` already has a joint
 /// named [`MOUNT_ROOT_JOINT_NAME`].
 pub fn mount_on_root(arm: &Model, root: RootJoint, mount: &SE3) -> Result<Model> {
+    let root_type = mount_root_type(arm, root, mount)?;
+    let (rq, rv) = (root_type.nq(), root_type.nv());
+    let joints = MountedJoints::new(arm, root_type, mount);
+    let mut inertias = vec![
+        crate::spatial::Inertia::zero(),
+        arm.inertias[0].transformed(mount),
+    ];
+    inertias.extend(arm.inertias.iter().skip(1).copied());
+    let mut joint_of_dof = vec![JointIndex(1); rv];
+    joint_of_dof.extend(arm.joint_of_dof.iter().map(|&j| shift_joint(j)));
+    Ok(Model {
+        name: arm.name.clone(),
+        nq: arm.nq + rq,
+        nv: arm.nv + rv,
+        njoints: arm.njoints + 1,
+        names: joints.names,
+        parents: joints.parents,
+        joint_types: joints.joint_types,
+        idx_q: joints.idx_q,
+        idx_v: joints.idx_v,
+        nqs: joints.nqs,
+        nvs: joints.nvs,
+        joint_placements: joints.joint_placements,
+        inertias,
+        frames: mounted_frames(arm, mount),
+        gravity: arm.gravity,
+        lower_position_limit: prepend(f64::NEG_INFINITY, rq, &arm.lower_position_limit),
+        upper_position_limit: prepend(f64::INFINITY, rq, &arm.upper_position_limit),
+        velocity_limit: prepend(f64::INFINITY, rv, &arm.velocity_limit),
+        effort_limit: prepend(f64::INFINITY, rv, &arm.effort_limit),
+        joint_of_dof,
+        root,
+        last_link: shift_frame(arm.last_link),
+    })
+}
+
+/// The checks of [`mount_on_root`]'s inputs; the type of the new root joint.
+fn mount_root_type(arm: &Model, root: RootJoint, mount: &SE3) -> Result<JointType> {
     if arm.root != RootJoint::Fixed {
         return Err(Error::invalid(
             "mounted model",
@@ -67,44 +105,88 @@ pub fn mount_on_root(arm: &Model, root: RootJoint, mount: &SE3) -> Result<Model>
             "this name is reserved for the root joint of the mounted model",
         ));
     }
-    let (rq, rv) = (root_type.nq(), root_type.nv());
-    let shift_joint = |j: JointIndex| JointIndex(j.0 + 1);
-    let shift_frame = |f: FrameIndex| FrameIndex(if f.0 == 0 { 1 } else { f.0 + 1 });
+    Ok(root_type)
+}
 
-    let mut names = vec![arm.names[0].clone(), MOUNT_ROOT_JOINT_NAME.to_string()];
-    names.extend(arm.names.iter().skip(1).cloned());
-    let mut parents = vec![JointIndex(0), JointIndex(0)];
-    parents.extend(arm.parents.iter().skip(1).map(|&p| shift_joint(p)));
-    let mut joint_types = vec![arm.joint_types[0], root_type];
-    joint_types.extend(arm.joint_types.iter().skip(1).copied());
-    let mut idx_q = vec![0, 0];
-    idx_q.extend(arm.idx_q.iter().skip(1).map(|i| i + rq));
-    let mut idx_v = vec![0, 0];
-    idx_v.extend(arm.idx_v.iter().skip(1).map(|i| i + rv));
-    let mut nqs = vec![0, rq];
-    nqs.extend(arm.nqs.iter().skip(1).copied());
-    let mut nvs = vec![0, rv];
-    nvs.extend(arm.nvs.iter().skip(1).copied());
-    let mut joint_placements = vec![SE3::identity(), SE3::identity()];
-    joint_placements.extend(
-        arm.joint_placements
-            .iter()
-            .enumerate()
-            .skip(1)
-            .map(|(i, p)| {
-                if arm.parents[i].0 == 0 {
-                    mount.compose(p)
-                } else {
-                    *p
-                }
-            }),
-    );
-    let mut inertias = vec![
-        crate::spatial::Inertia::zero(),
-        arm.inertias[0].transformed(mount),
-    ];
-    inertias.extend(arm.inertias.iter().skip(1).copied());
+/// Joint `j` of the arm in the mounted model.
+fn shift_joint(j: JointIndex) -> JointIndex {
+    JointIndex(j.0 + 1)
+}
 
+/// Frame `f` of the arm in the mounted model (the universe's frame stays; the new root
+/// joint's frame is frame 1).
+fn shift_frame(f: FrameIndex) -> FrameIndex {
+    FrameIndex(if f.0 == 0 { 1 } else { f.0 + 1 })
+}
+
+/// `n` copies of `head` followed by `tail`.
+fn prepend(head: f64, n: usize, tail: &DVector<f64>) -> DVector<f64> {
+    DVector::from_iterator(
+        n + tail.len(),
+        std::iter::repeat_n(head, n).chain(tail.iter().copied()),
+    )
+}
+
+/// The per-joint tables of the mounted model: the universe, the new root joint, then the
+/// arm's joints, the ones that hung from the universe placed by `mount`.
+struct MountedJoints {
+    names: Vec<String>,
+    parents: Vec<JointIndex>,
+    joint_types: Vec<JointType>,
+    idx_q: Vec<usize>,
+    idx_v: Vec<usize>,
+    nqs: Vec<usize>,
+    nvs: Vec<usize>,
+    joint_placements: Vec<SE3>,
+}
+
+impl MountedJoints {
+    fn new(arm: &Model, root_type: JointType, mount: &SE3) -> Self {
+        let (rq, rv) = (root_type.nq(), root_type.nv());
+        let mut names = vec![arm.names[0].clone(), MOUNT_ROOT_JOINT_NAME.to_string()];
+        names.extend(arm.names.iter().skip(1).cloned());
+        let mut parents = vec![JointIndex(0), JointIndex(0)];
+        parents.extend(arm.parents.iter().skip(1).map(|&p| shift_joint(p)));
+        let mut joint_types = vec![arm.joint_types[0], root_type];
+        joint_types.extend(arm.joint_types.iter().skip(1).copied());
+        let mut idx_q = vec![0, 0];
+        idx_q.extend(arm.idx_q.iter().skip(1).map(|i| i + rq));
+        let mut idx_v = vec![0, 0];
+        idx_v.extend(arm.idx_v.iter().skip(1).map(|i| i + rv));
+        let mut nqs = vec![0, rq];
+        nqs.extend(arm.nqs.iter().skip(1).copied());
+        let mut nvs = vec![0, rv];
+        nvs.extend(arm.nvs.iter().skip(1).copied());
+        let mut joint_placements = vec![SE3::identity(), SE3::identity()];
+        joint_placements.extend(
+            arm.joint_placements
+                .iter()
+                .enumerate()
+                .skip(1)
+                .map(|(i, p)| {
+                    if arm.parents[i].0 == 0 {
+                        mount.compose(p)
+                    } else {
+                        *p
+                    }
+                }),
+        );
+        MountedJoints {
+            names,
+            parents,
+            joint_types,
+            idx_q,
+            idx_v,
+            nqs,
+            nvs,
+            joint_placements,
+        }
+    }
+}
+
+/// The frames of the mounted model: the universe's, the new root joint's, then the
+/// arm's, renumbered, the ones fixed to the arm's world placed by `mount`.
+fn mounted_frames(arm: &Model, mount: &SE3) -> Vec<Frame> {
     let mut frames = vec![
         arm.frames[0].clone(),
         Frame {
@@ -126,37 +208,5 @@ pub fn mount_on_root(arm: &Model, root: RootJoint, mount: &SE3) -> Result<Model>
         },
         kind: f.kind,
     }));
-
-    let prepend = |head: f64, n: usize, tail: &DVector<f64>| {
-        DVector::from_iterator(
-            n + tail.len(),
-            std::iter::repeat_n(head, n).chain(tail.iter().copied()),
-        )
-    };
-    let mut joint_of_dof = vec![JointIndex(1); rv];
-    joint_of_dof.extend(arm.joint_of_dof.iter().map(|&j| shift_joint(j)));
-    Ok(Model {
-        name: arm.name.clone(),
-        nq: arm.nq + rq,
-        nv: arm.nv + rv,
-        njoints: arm.njoints + 1,
-        names,
-        parents,
-        joint_types,
-        idx_q,
-        idx_v,
-        nqs,
-        nvs,
-        joint_placements,
-        inertias,
-        frames,
-        gravity: arm.gravity,
-        lower_position_limit: prepend(f64::NEG_INFINITY, rq, &arm.lower_position_limit),
-        upper_position_limit: prepend(f64::INFINITY, rq, &arm.upper_position_limit),
-        velocity_limit: prepend(f64::INFINITY, rv, &arm.velocity_limit),
-        effort_limit: prepend(f64::INFINITY, rv, &arm.effort_limit),
-        joint_of_dof,
-        root,
-        last_link: shift_frame(arm.last_link),
-    })
+    frames
 }

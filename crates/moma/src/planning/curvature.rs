@@ -905,6 +905,59 @@ pub fn smooth_diff_drive(
     goal: [f64; 3],
     opts: &SmoothOptions,
 ) -> Result<SmoothPath> {
+    check_smooth_inputs(cspace, frame, cells, start, goal, opts)?;
+    let (sxy, gxy) = ([start[0], start[1]], [goal[0], goal[1]]);
+    if dist(sxy, gxy) < 1e-9 {
+        let pivot = wrap(goal[2] - start[2]);
+        return finish(
+            vec![],
+            sxy,
+            start[2] + pivot,
+            pivot,
+            start[2],
+            opts,
+            frame,
+            cspace,
+        );
+    }
+    check_cells_inside(cspace, cells)?;
+    let dense = dense_points(frame, cells, sxy, gxy);
+    // Clearance of the C-space over the path's bounding box plus the margin wanted.
+    let margin_cells = (opts.clearance / frame.resolution).min(1e4);
+    let problem = SmoothProblem {
+        sp: clearance_window(cspace, frame, &dense, margin_cells),
+        dense,
+        start,
+        goal,
+        sxy,
+        gxy,
+        r: 1.0 / opts.kappa_max,
+        opts,
+    };
+    let mut last_err = String::new();
+    for margin in clearance_margins(margin_cells) {
+        match problem.smooth_with_margin(margin) {
+            Ok(p) => return Ok(p),
+            Err(e) => last_err = e,
+        }
+    }
+    Err(Error::Planning(format!(
+        "no feasible smooth path for kappa_max = {} 1/m: {last_err}",
+        opts.kappa_max
+    )))
+}
+
+/// The checks of [`smooth_diff_drive`]'s inputs made before the start = goal case: the
+/// options, finite poses, a non-empty path, a frame of the C-space's size, and start and
+/// goal on free cells of the map.
+fn check_smooth_inputs(
+    cspace: &SearchGrid,
+    frame: &OccupancyGrid,
+    cells: &[(usize, usize)],
+    start: [f64; 3],
+    goal: [f64; 3],
+    opts: &SmoothOptions,
+) -> Result<()> {
     opts.validate()?;
     crate::error::ensure_finite("start pose", start.iter())?;
     crate::error::ensure_finite("goal pose", goal.iter())?;
@@ -927,20 +980,11 @@ pub fn smooth_diff_drive(
         let c = frame.world_to_cell(what, p[0], p[1])?;
         cspace.check_cell(what, c)?;
     }
-    let (sxy, gxy) = ([start[0], start[1]], [goal[0], goal[1]]);
-    if dist(sxy, gxy) < 1e-9 {
-        let pivot = wrap(goal[2] - start[2]);
-        return finish(
-            vec![],
-            sxy,
-            start[2] + pivot,
-            pivot,
-            start[2],
-            opts,
-            frame,
-            cspace,
-        );
-    }
+    Ok(())
+}
+
+/// Every cell of the grid path lies inside the map.
+fn check_cells_inside(cspace: &SearchGrid, cells: &[(usize, usize)]) -> Result<()> {
     for &(x, y) in cells {
         if x >= cspace.width() || y >= cspace.height() {
             return Err(Error::invalid(
@@ -953,7 +997,17 @@ pub fn smooth_diff_drive(
             ));
         }
     }
-    // Dense points: start, interior cell centres, goal.
+    Ok(())
+}
+
+/// The dense points of the path: the exact start, the interior cell centres, the exact
+/// goal.
+fn dense_points(
+    frame: &OccupancyGrid,
+    cells: &[(usize, usize)],
+    sxy: [f64; 2],
+    gxy: [f64; 2],
+) -> Vec<[f64; 2]> {
     let mut dense = Vec::with_capacity(cells.len().max(2));
     dense.push(sxy);
     if cells.len() > 2 {
@@ -962,12 +1016,20 @@ pub fn smooth_diff_drive(
         }
     }
     dense.push(gxy);
-    // Clearance of the C-space over the path's bounding box plus the margin wanted.
-    let res = frame.resolution;
-    let margin_cells = (opts.clearance / res).min(1e4);
+    dense
+}
+
+/// The C-space's clearance over the bounding box of `dense` padded by the margin wanted
+/// (`margin_cells`) plus three cells, clipped to the map.
+fn clearance_window<'a>(
+    cspace: &'a SearchGrid,
+    frame: &'a OccupancyGrid,
+    dense: &[[f64; 2]],
+    margin_cells: f64,
+) -> Space<'a> {
     let pad = margin_cells.ceil() as i64 + 3;
     let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
-    for p in &dense {
+    for p in dense {
         let c = frame.world_to_cell_f(p[0], p[1]);
         x0 = x0.min(c[0].floor() as i64);
         y0 = y0.min(c[1].floor() as i64);
@@ -984,17 +1046,17 @@ pub fn smooth_diff_drive(
             obst.push(!cspace.is_free(x, y));
         }
     }
-    let sp = Space {
+    Space {
         cs: cspace,
         frame,
         dist: distance_transform(&obst, ww, wh),
         win: (wx0, wy0, ww, wh),
-    };
-    let clear_of = |p: [f64; 2]| {
-        let c = frame.world_to_cell_f(p[0], p[1]);
-        sp.clearance_at(c[0].floor() as i64, c[1].floor() as i64)
-    };
-    let r = 1.0 / opts.kappa_max;
+    }
+}
+
+/// The clearance margins tried in turn (cells): the one wanted, halved while at least one
+/// cell, then none.
+fn clearance_margins(margin_cells: f64) -> Vec<f32> {
     let mut margins = vec![];
     let mut m = margin_cells as f32;
     while m >= 1.0 {
@@ -1002,144 +1064,200 @@ pub fn smooth_diff_drive(
         m *= 0.5;
     }
     margins.push(0.0);
-    let mut last_err = String::new();
-    for &margin in &margins {
-        // Plain shortcut first: decides whether stubs and a pivot are needed.
-        let clear: Vec<f32> = dense.iter().map(|&p| clear_of(p)).collect();
-        let Ok(plain) = shortcut(&sp, &dense, &clear, margin) else {
-            last_err = "the grid path is not free in the configuration space".into();
-            continue;
+    margins
+}
+
+/// What [`smooth_diff_drive`] works on once its inputs are checked.
+struct SmoothProblem<'a> {
+    sp: Space<'a>,
+    /// Start, interior cell centres, goal (world metres).
+    dense: Vec<[f64; 2]>,
+    start: [f64; 3],
+    goal: [f64; 3],
+    sxy: [f64; 2],
+    gxy: [f64; 2],
+    /// The smallest turning radius, 1 / κ_max.
+    r: f64,
+    opts: &'a SmoothOptions,
+}
+
+/// Which stubs (straight runs along the start and goal headings) an attempt uses, and
+/// how long they are (indices into [`STUBS`]).
+struct StubChoice {
+    /// The plain path leaves the start off its heading, within the allowed start turn.
+    need_start: bool,
+    /// The path arrives at the goal off its heading.
+    need_goal: bool,
+    /// Turn in place toward the path instead of a start stub.
+    pivot_mode: bool,
+    is: usize,
+    ig: usize,
+}
+
+impl StubChoice {
+    /// The next choice after an attempt failed at `end` with `msg`, or the margin's final
+    /// error when no choice is left (`goal_heading` for its message).
+    fn after_failure(&mut self, end: End, msg: String, goal_heading: f64) -> Result<(), String> {
+        match end {
+            End::Start => {
+                self.is += 1;
+                if self.is == STUBS.len() {
+                    // No forward start: turn in place toward the path instead.
+                    self.pivot_mode = true;
+                }
+                Ok(())
+            }
+            End::Goal => {
+                self.ig += 1;
+                if self.ig == STUBS.len() {
+                    return Err(format!(
+                        "the goal heading {goal_heading:.3} rad cannot be reached driving \
+                         forwards: {msg}"
+                    ));
+                }
+                Ok(())
+            }
+            End::Other => Err(msg),
+        }
+    }
+}
+
+/// The outcome of one attempt with a given choice of stubs.
+enum Attempt {
+    /// Blended pieces and the heading of the first one.
+    Pieces(Vec<Piece>, f64),
+    /// The start stub changed the last segment: the goal needs a stub too.
+    NeedGoalStub,
+    /// The attempt failed; the end it is blamed on and why.
+    Failed(End, String),
+}
+
+impl SmoothProblem<'_> {
+    /// The clearance (cells) of the C-space at the world point `p`.
+    fn clearance_of(&self, p: [f64; 2]) -> f32 {
+        let c = self.sp.frame.world_to_cell_f(p[0], p[1]);
+        self.sp
+            .clearance_at(c[0].floor() as i64, c[1].floor() as i64)
+    }
+
+    /// Smoothing with the clearance `margin` (cells): the plain shortcut decides whether
+    /// stubs and a pivot are needed, then stub lengths are tried until one blends and
+    /// samples free. The error is the last failure's message.
+    fn smooth_with_margin(&self, margin: f32) -> Result<SmoothPath, String> {
+        let (start, goal) = (self.start, self.goal);
+        let clear: Vec<f32> = self.dense.iter().map(|&p| self.clearance_of(p)).collect();
+        let Ok(plain) = shortcut(&self.sp, &self.dense, &clear, margin) else {
+            return Err("the grid path is not free in the configuration space".into());
         };
         let d0 = wrap(dir(plain[0], plain[1]) - start[2]);
-        let need_goal_stub = wrap(dir(plain[plain.len() - 2], gxy) - goal[2]).abs() > 1e-9;
-        let mut need_goal_stub = need_goal_stub;
-        let mut pivot_mode = d0.abs() > opts.max_start_turn;
-        let need_start_stub = d0.abs() > 1e-9 && !pivot_mode;
-        let (mut is, mut ig) = (0usize, 0usize);
+        let pivot_mode = d0.abs() > self.opts.max_start_turn;
+        let mut stubs = StubChoice {
+            need_start: d0.abs() > 1e-9 && !pivot_mode,
+            need_goal: wrap(dir(plain[plain.len() - 2], self.gxy) - goal[2]).abs() > 1e-9,
+            pivot_mode,
+            is: 0,
+            ig: 0,
+        };
         loop {
-            let use_start_stub = need_start_stub && !pivot_mode;
-            let e_s = if use_start_stub { STUBS[is] * r } else { 0.0 };
-            let e_g = if need_goal_stub { STUBS[ig] * r } else { 0.0 };
-            let s_stub = [sxy[0] + e_s * start[2].cos(), sxy[1] + e_s * start[2].sin()];
-            let g_stub = [gxy[0] - e_g * goal[2].cos(), gxy[1] - e_g * goal[2].sin()];
-            let attempt = if use_start_stub && !sp.segment_free(sxy, s_stub, 0.0) {
-                Err((
-                    End::Start,
-                    "the straight stub along the start heading crosses an obstacle".to_string(),
-                ))
-            } else if need_goal_stub && !sp.segment_free(g_stub, gxy, 0.0) {
-                Err((
-                    End::Goal,
-                    "the straight stub along the goal heading crosses an obstacle".to_string(),
-                ))
-            } else {
-                let mut d = dense.clone();
-                let mut c = clear.clone();
-                if use_start_stub {
-                    d[0] = s_stub;
-                    c[0] = clear_of(s_stub);
+            match self.attempt(&stubs, &clear, margin) {
+                Attempt::Pieces(pieces, th0) => {
+                    let (sp, opts) = (&self.sp, self.opts);
+                    let (sxy, s0) = (self.sxy, start[2]);
+                    return finish(pieces, sxy, th0, th0 - s0, s0, opts, sp.frame, sp.cs)
+                        .map_err(|e| e.to_string());
                 }
-                if need_goal_stub {
-                    let k = d.len() - 1;
-                    d[k] = g_stub;
-                    c[k] = clear_of(g_stub);
-                }
-                match shortcut(&sp, &d, &c, margin) {
-                    Err(i) => Err((
-                        if i == 0 && use_start_stub {
-                            End::Start
-                        } else if need_goal_stub {
-                            End::Goal
-                        } else {
-                            End::Other
-                        },
-                        "no straight line of sight from a stub's end to the grid path".to_string(),
-                    )),
-                    Ok(mut poly) => {
-                        if use_start_stub {
-                            poly.insert(0, sxy);
-                        }
-                        if need_goal_stub {
-                            poly.push(gxy);
-                        } else if wrap(dir(poly[poly.len() - 2], gxy) - goal[2]).abs() > 1e-9 {
-                            // The start stub changed the last segment: the goal needs a stub.
-                            need_goal_stub = true;
-                            continue;
-                        }
-                        // The first segment runs along the start heading (a stub, or the
-                        // plain path already aligned), or along the pivot's heading.
-                        let th0 = if pivot_mode {
-                            start[2] + wrap(dir(poly[0], poly[1]) - start[2])
-                        } else {
-                            start[2]
-                        };
-                        let last = poly.len() - 2;
-                        blend_polyline(&sp, &poly, th0, opts)
-                            .map(|p| (p, th0))
-                            .map_err(|f| {
-                                let s = use_start_stub && f.corner == 1;
-                                let g = need_goal_stub && f.corner == last;
-                                let end = match (s, g) {
-                                    (true, true) if is <= ig => End::Start,
-                                    (true, true) | (false, true) => End::Goal,
-                                    (true, false) => End::Start,
-                                    (false, false) => End::Other,
-                                };
-                                (end, f.message)
-                            })
-                    }
-                }
-            };
-            match attempt {
-                Ok((pieces, th0)) => {
-                    match finish(
-                        pieces,
-                        sxy,
-                        th0,
-                        th0 - start[2],
-                        start[2],
-                        opts,
-                        frame,
-                        cspace,
-                    ) {
-                        Ok(p) => return Ok(p),
-                        Err(e) => {
-                            last_err = e.to_string();
-                            break;
-                        }
-                    }
-                }
-                Err((end, msg)) => {
-                    last_err = msg;
-                    match end {
-                        End::Start => {
-                            is += 1;
-                            if is == STUBS.len() {
-                                // No forward start: turn in place toward the path instead.
-                                pivot_mode = true;
-                            }
-                        }
-                        End::Goal => {
-                            ig += 1;
-                            if ig == STUBS.len() {
-                                last_err = format!(
-                                    "the goal heading {:.3} rad cannot be reached driving \
-                                     forwards: {last_err}",
-                                    goal[2]
-                                );
-                                break;
-                            }
-                        }
-                        End::Other => break,
-                    }
-                }
+                Attempt::NeedGoalStub => stubs.need_goal = true,
+                Attempt::Failed(end, msg) => stubs.after_failure(end, msg, goal[2])?,
             }
         }
     }
-    Err(Error::Planning(format!(
-        "no feasible smooth path for kappa_max = {} 1/m: {last_err}",
-        opts.kappa_max
-    )))
+
+    /// One attempt: the stubs of `stubs` checked free, the shortcut of the dense points
+    /// from the stubs' ends, and its polyline blended.
+    fn attempt(&self, stubs: &StubChoice, clear: &[f32], margin: f32) -> Attempt {
+        let (sxy, gxy, start, goal) = (self.sxy, self.gxy, self.start, self.goal);
+        let use_start_stub = stubs.need_start && !stubs.pivot_mode;
+        let need_goal_stub = stubs.need_goal;
+        let e_s = if use_start_stub {
+            STUBS[stubs.is] * self.r
+        } else {
+            0.0
+        };
+        let e_g = if need_goal_stub {
+            STUBS[stubs.ig] * self.r
+        } else {
+            0.0
+        };
+        let s_stub = [sxy[0] + e_s * start[2].cos(), sxy[1] + e_s * start[2].sin()];
+        let g_stub = [gxy[0] - e_g * goal[2].cos(), gxy[1] - e_g * goal[2].sin()];
+        if use_start_stub && !self.sp.segment_free(sxy, s_stub, 0.0) {
+            return Attempt::Failed(
+                End::Start,
+                "the straight stub along the start heading crosses an obstacle".to_string(),
+            );
+        }
+        if need_goal_stub && !self.sp.segment_free(g_stub, gxy, 0.0) {
+            return Attempt::Failed(
+                End::Goal,
+                "the straight stub along the goal heading crosses an obstacle".to_string(),
+            );
+        }
+        let mut d = self.dense.clone();
+        let mut c = clear.to_vec();
+        if use_start_stub {
+            d[0] = s_stub;
+            c[0] = self.clearance_of(s_stub);
+        }
+        if need_goal_stub {
+            let k = d.len() - 1;
+            d[k] = g_stub;
+            c[k] = self.clearance_of(g_stub);
+        }
+        let mut poly = match shortcut(&self.sp, &d, &c, margin) {
+            Ok(poly) => poly,
+            Err(i) => {
+                let end = if i == 0 && use_start_stub {
+                    End::Start
+                } else if need_goal_stub {
+                    End::Goal
+                } else {
+                    End::Other
+                };
+                let msg = "no straight line of sight from a stub's end to the grid path";
+                return Attempt::Failed(end, msg.to_string());
+            }
+        };
+        if use_start_stub {
+            poly.insert(0, sxy);
+        }
+        if need_goal_stub {
+            poly.push(gxy);
+        } else if wrap(dir(poly[poly.len() - 2], gxy) - goal[2]).abs() > 1e-9 {
+            return Attempt::NeedGoalStub;
+        }
+        // The first segment runs along the start heading (a stub, or the plain path
+        // already aligned), or along the pivot's heading.
+        let th0 = if stubs.pivot_mode {
+            start[2] + wrap(dir(poly[0], poly[1]) - start[2])
+        } else {
+            start[2]
+        };
+        let last = poly.len() - 2;
+        match blend_polyline(&self.sp, &poly, th0, self.opts) {
+            Ok(pieces) => Attempt::Pieces(pieces, th0),
+            Err(f) => {
+                let s = use_start_stub && f.corner == 1;
+                let g = need_goal_stub && f.corner == last;
+                let end = match (s, g) {
+                    (true, true) if stubs.is <= stubs.ig => End::Start,
+                    (true, true) | (false, true) => End::Goal,
+                    (true, false) => End::Start,
+                    (false, false) => End::Other,
+                };
+                Attempt::Failed(end, f.message)
+            }
+        }
+    }
 }
 
 /// Samples the pieces and checks them once more against the C-space.

@@ -7,7 +7,7 @@
 //! `|v̇| ≤ a_max`, `|ω̇| ≤ α_max` and the non-holonomic constraint (the velocity always
 //! points along the heading), so a tracking controller can follow it.
 
-use super::curvature::SmoothPath;
+use super::curvature::{PathSample, SmoothPath};
 use crate::{Error, Result};
 
 /// Velocity and acceleration limits of a differential drive.
@@ -174,54 +174,21 @@ pub fn time_parameterize_directional(
     dt: f64,
 ) -> Result<Vec<TrajectoryPoint>> {
     limits.validate()?;
-    let (a_up, a_down) = match accel {
-        Some(d) => {
-            for (n, v) in [("forward", d.forward), ("backward", d.backward)] {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(Error::invalid(
-                        format!("acceleration limit {n}"),
-                        format!("must be finite and > 0, got {v}"),
-                    ));
-                }
-            }
-            (d.forward.min(limits.a_max), d.backward.min(limits.a_max))
-        }
-        None => (limits.a_max, limits.a_max),
-    };
+    let (a_up, a_down) = straight_accelerations(limits, accel)?;
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::invalid(
             "dt",
             format!("must be finite and > 0, got {dt}"),
         ));
     }
-    if waypoints.is_empty() {
-        return Err(Error::invalid("waypoints", "the path is empty"));
-    }
-    crate::error::ensure_finite("waypoints", waypoints.iter().flatten())?;
-    let mut pts = vec![waypoints[0]];
-    for w in &waypoints[1..] {
-        let last = pts.last().expect("non-empty");
-        if (w[0] - last[0]).hypot(w[1] - last[1]) > 1e-12 {
-            pts.push(*w);
-        }
-    }
+    let pts = distinct_waypoints(waypoints)?;
     let first_dir = if pts.len() > 1 {
         (pts[1][1] - pts[0][1]).atan2(pts[1][0] - pts[0][0])
     } else {
         0.0
     };
     let mut theta = wrap(initial_heading.unwrap_or(first_dir));
-    let (samples, duration) = sample_count(&pts, theta, limits, (a_up, a_down), dt);
-    if samples.is_nan() || samples > MAX_TRAJECTORY_SAMPLES as f64 {
-        return Err(Error::invalid(
-            "trajectory samples",
-            format!(
-                "a {duration:.3e} s trajectory sampled every dt = {dt:e} s needs {samples:.3e} \
-                 samples, more than the limit of {MAX_TRAJECTORY_SAMPLES}; use a larger dt or \
-                 larger velocity and acceleration limits"
-            ),
-        ));
-    }
+    check_sample_count(&pts, theta, limits, (a_up, a_down), dt)?;
     let mut t0 = 0.0;
     let mut out = vec![TrajectoryPoint {
         t: 0.0,
@@ -231,17 +198,6 @@ pub fn time_parameterize_directional(
         v: 0.0,
         omega: 0.0,
     }];
-    let push_phase =
-        |out: &mut Vec<TrajectoryPoint>, t0: f64, dur: f64, f: &dyn Fn(f64) -> TrajectoryPoint| {
-            let n = (dur / dt).floor() as usize;
-            for k in 1..=n {
-                let tau = k as f64 * dt;
-                if tau < dur - 1e-12 {
-                    out.push(f(tau).with_time(t0 + tau));
-                }
-            }
-            out.push(f(dur).with_time(t0 + dur));
-        };
     for seg in pts.windows(2) {
         let (a, b) = (seg[0], seg[1]);
         let heading = (b[1] - a[1]).atan2(b[0] - a[0]);
@@ -249,7 +205,7 @@ pub fn time_parameterize_directional(
         if turn.abs() > 1e-12 {
             let prof = Trapezoid::new(turn.abs(), limits.omega_max, limits.alpha_max);
             let (th0, sgn) = (theta, turn.signum());
-            push_phase(&mut out, t0, prof.duration(), &|tau| {
+            push_phase(&mut out, t0, prof.duration(), dt, &|tau| {
                 let (s, w) = prof.at(tau);
                 TrajectoryPoint {
                     t: 0.0,
@@ -266,7 +222,7 @@ pub fn time_parameterize_directional(
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
         let prof = Trapezoid::asymmetric(len, limits.v_max, a_up, a_down);
         let (c, s) = (heading.cos(), heading.sin());
-        push_phase(&mut out, t0, prof.duration(), &|tau| {
+        push_phase(&mut out, t0, prof.duration(), dt, &|tau| {
             let (d, v) = prof.at(tau);
             TrajectoryPoint {
                 t: 0.0,
@@ -280,6 +236,86 @@ pub fn time_parameterize_directional(
         t0 += prof.duration();
     }
     Ok(out)
+}
+
+/// The straight segments' acceleration limits (speeding up, braking): the directional
+/// limits, each at most `a_max`, or `a_max` both ways without them.
+fn straight_accelerations(
+    limits: &DiffDriveLimits,
+    accel: Option<&DirectionalAcceleration>,
+) -> Result<(f64, f64)> {
+    let Some(d) = accel else {
+        return Ok((limits.a_max, limits.a_max));
+    };
+    for (n, v) in [("forward", d.forward), ("backward", d.backward)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::invalid(
+                format!("acceleration limit {n}"),
+                format!("must be finite and > 0, got {v}"),
+            ));
+        }
+    }
+    Ok((d.forward.min(limits.a_max), d.backward.min(limits.a_max)))
+}
+
+/// The waypoints without consecutive repeats (closer than 1e-12 m), after checking that
+/// there is one and that all are finite.
+fn distinct_waypoints(waypoints: &[[f64; 2]]) -> Result<Vec<[f64; 2]>> {
+    if waypoints.is_empty() {
+        return Err(Error::invalid("waypoints", "the path is empty"));
+    }
+    crate::error::ensure_finite("waypoints", waypoints.iter().flatten())?;
+    let mut pts = vec![waypoints[0]];
+    for w in &waypoints[1..] {
+        let last = pts.last().expect("non-empty");
+        if (w[0] - last[0]).hypot(w[1] - last[1]) > 1e-12 {
+            pts.push(*w);
+        }
+    }
+    Ok(pts)
+}
+
+/// The sample count of the trajectory bounded by [`MAX_TRAJECTORY_SAMPLES`] before any
+/// sample is allocated.
+fn check_sample_count(
+    pts: &[[f64; 2]],
+    theta: f64,
+    limits: &DiffDriveLimits,
+    accel: (f64, f64),
+    dt: f64,
+) -> Result<()> {
+    let (samples, duration) = sample_count(pts, theta, limits, accel, dt);
+    if samples.is_nan() || samples > MAX_TRAJECTORY_SAMPLES as f64 {
+        return Err(Error::invalid(
+            "trajectory samples",
+            format!(
+                "a {duration:.3e} s trajectory sampled every dt = {dt:e} s needs {samples:.3e} \
+                 samples, more than the limit of {MAX_TRAJECTORY_SAMPLES}; use a larger dt or \
+                 larger velocity and acceleration limits"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Appends the samples of one phase of duration `dur` starting at `t0`, every `dt` and
+/// at its end (`f(τ)` is the point τ into the phase).
+#[inline]
+fn push_phase(
+    out: &mut Vec<TrajectoryPoint>,
+    t0: f64,
+    dur: f64,
+    dt: f64,
+    f: &dyn Fn(f64) -> TrajectoryPoint,
+) {
+    let n = (dur / dt).floor() as usize;
+    for k in 1..=n {
+        let tau = k as f64 * dt;
+        if tau < dur - 1e-12 {
+            out.push(f(tau).with_time(t0 + tau));
+        }
+    }
+    out.push(f(dur).with_time(t0 + dur));
 }
 
 /// The number of samples and the duration [`time_parameterize`] produces for the
@@ -685,29 +721,77 @@ pub fn time_parameterize_curve(
             ));
         }
     }
-    let smp = path.samples();
-    let pivot = if path.pivot() != 0.0 {
-        if v_start > 0.0 {
-            return Err(Error::invalid(
-                "v_start",
-                format!(
-                    "the path starts with a turn in place ({:.3} rad), so it must start at \
-                     rest, got {v_start} m/s",
-                    path.pivot()
-                ),
-            ));
-        }
-        Some(PivotProfile {
-            prof: Trapezoid::new(path.pivot().abs(), limits.omega_max, limits.alpha_max),
-            sign: path.pivot().signum(),
-            theta0: path.start_heading(),
-            xy: [smp[0].x, smp[0].y],
-        })
-    } else {
-        None
-    };
+    let pivot = pivot_profile(path, limits, v_start)?;
     let t_p = pivot.map_or(0.0, |p| p.prof.duration());
-    // The grid: the path's samples, subdivided to at least 16 intervals.
+    let (s, kappa) = profile_grid(path.samples());
+    let n = s.len();
+    if n == 1 {
+        return Ok(TimedPath {
+            path: path.clone(),
+            pivot,
+            s,
+            kappa,
+            t: vec![t_p],
+            v: vec![v_start],
+            acc: vec![],
+            overspeed_until: None,
+        });
+    }
+    let cap = speed_caps(&kappa, limits, tip);
+    let mut cons = Vec::with_capacity(20);
+    let kmax = controllable_speeds(&s, &kappa, &cap, limits, tip, v_end, &mut cons);
+    let limits_along = ProfileLimits {
+        s: &s,
+        kappa: &kappa,
+        cap: &cap,
+        kmax: &kmax,
+    };
+    let (u, overspeed_until) = limits_along.forward_pass(limits, tip, v_start, &mut cons);
+    let v: Vec<f64> = u.iter().map(|&x| x.sqrt()).collect();
+    let (t, acc) = times_and_accelerations(&s, &u, &v, t_p)?;
+    Ok(TimedPath {
+        path: path.clone(),
+        pivot,
+        s,
+        kappa,
+        t,
+        v,
+        acc,
+        overspeed_until,
+    })
+}
+
+/// The turn in place before `path` (`None` without a pivot), which needs `v_start = 0`.
+fn pivot_profile(
+    path: &SmoothPath,
+    limits: &DiffDriveLimits,
+    v_start: f64,
+) -> Result<Option<PivotProfile>> {
+    if path.pivot() == 0.0 {
+        return Ok(None);
+    }
+    if v_start > 0.0 {
+        return Err(Error::invalid(
+            "v_start",
+            format!(
+                "the path starts with a turn in place ({:.3} rad), so it must start at \
+                 rest, got {v_start} m/s",
+                path.pivot()
+            ),
+        ));
+    }
+    let smp = path.samples();
+    Ok(Some(PivotProfile {
+        prof: Trapezoid::new(path.pivot().abs(), limits.omega_max, limits.alpha_max),
+        sign: path.pivot().signum(),
+        theta0: path.start_heading(),
+        xy: [smp[0].x, smp[0].y],
+    }))
+}
+
+/// The profile's grid of arc lengths and curvatures: the path's samples, subdivided
+/// (linearly) to at least 16 intervals.
+fn profile_grid(smp: &[PathSample]) -> (Vec<f64>, Vec<f64>) {
     let intervals = smp.len() - 1;
     let split = if intervals == 0 {
         1
@@ -725,21 +809,17 @@ pub fn time_parameterize_curve(
             kappa.push(w[0].kappa + f * (w[1].kappa - w[0].kappa));
         }
     }
-    let n = s.len();
-    if n == 1 {
-        return Ok(TimedPath {
-            path: path.clone(),
-            pivot,
-            s,
-            kappa,
-            t: vec![t_p],
-            v: vec![v_start],
-            acc: vec![],
-            overspeed_until: None,
-        });
-    }
-    // Static caps on u = v².
-    let cap: Vec<f64> = kappa
+    (s, kappa)
+}
+
+/// The static caps on u = v² at every grid point: `v_max`, `ω_max / |κ|` and, with `tip`,
+/// the lateral tip-over limit on κ v².
+fn speed_caps(
+    kappa: &[f64],
+    limits: &DiffDriveLimits,
+    tip: Option<&TipOverAcceleration>,
+) -> Vec<f64> {
+    kappa
         .iter()
         .map(|&k| {
             let mut c = limits.v_max * limits.v_max;
@@ -752,59 +832,116 @@ pub fn time_parameterize_curve(
             }
             c
         })
-        .collect();
-    // Backward pass: the largest controllable u at every grid point.
+        .collect()
+}
+
+/// The backward pass: the largest controllable u at every grid point (from which the
+/// rest of the path can still be driven within the limits, ending at most at `v_end`).
+fn controllable_speeds(
+    s: &[f64],
+    kappa: &[f64],
+    cap: &[f64],
+    limits: &DiffDriveLimits,
+    tip: Option<&TipOverAcceleration>,
+    v_end: f64,
+    cons: &mut Vec<Lin>,
+) -> Vec<f64> {
+    let n = s.len();
     let mut kmax = vec![0.0; n];
     kmax[n - 1] = cap[n - 1].min(v_end * v_end);
-    let mut cons = Vec::with_capacity(20);
     for i in (0..n - 1).rev() {
         let h = s[i + 1] - s[i];
-        interval_constraints(h, kappa[i], kappa[i + 1], limits, tip, &mut cons);
+        interval_constraints(h, kappa[i], kappa[i + 1], limits, tip, cons);
         let ok = |u0: f64| {
-            let (lo, hi) = u1_range(&cons, u0, kmax[i + 1].min(cap[i + 1]));
+            let (lo, hi) = u1_range(cons, u0, kmax[i + 1].min(cap[i + 1]));
             feasible(lo, hi)
         };
         kmax[i] = if ok(cap[i]) {
             cap[i]
         } else {
-            let (mut a, mut b) = (0.0, cap[i]);
-            for _ in 0..60 {
-                let m = 0.5 * (a + b);
-                if ok(m) {
-                    a = m;
-                } else {
-                    b = m;
-                }
-                if b - a <= 1e-14 * b {
-                    break;
-                }
-            }
-            a
+            largest_feasible(cap[i], ok)
         };
     }
-    // Forward pass: the largest admissible u at every step.
-    let mut u = vec![0.0; n];
-    u[0] = v_start * v_start;
-    let mut overspeed_until = None;
-    let brake = tip.map_or(limits.a_max, |t| t.backward.min(limits.a_max));
-    for i in 0..n - 1 {
-        let h = s[i + 1] - s[i];
-        if u[i] > kmax[i] * (1.0 + 1e-9) + 1e-12 {
-            // Faster than the path allows: brake as hard as the tangential limits allow.
-            let braked = (u[i] - 2.0 * h * brake).max(0.0);
-            u[i + 1] = if braked < kmax[i + 1] {
-                kmax[i + 1].min(u[i])
-            } else {
-                braked
-            };
-            overspeed_until = Some(s[i + 1]);
-            continue;
+    kmax
+}
+
+/// The largest u0 in `[0, hi]` with `ok(u0)` (`ok(0)` assumed), by bisection to a
+/// relative 1e-14 or 60 halvings.
+#[inline]
+fn largest_feasible(hi: f64, ok: impl Fn(f64) -> bool) -> f64 {
+    let (mut a, mut b) = (0.0, hi);
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if ok(m) {
+            a = m;
+        } else {
+            b = m;
         }
-        interval_constraints(h, kappa[i], kappa[i + 1], limits, tip, &mut cons);
-        let (lo, hi) = u1_range(&cons, u[i].min(kmax[i]), kmax[i + 1].min(cap[i + 1]));
-        u[i + 1] = hi.max(lo.min(hi)).max(0.0);
+        if b - a <= 1e-14 * b {
+            break;
+        }
     }
-    let v: Vec<f64> = u.iter().map(|&x| x.sqrt()).collect();
+    a
+}
+
+/// The grid and the per-point limits of the profile (arc lengths, curvatures, static
+/// caps, controllable squared speeds).
+struct ProfileLimits<'a> {
+    s: &'a [f64],
+    kappa: &'a [f64],
+    cap: &'a [f64],
+    kmax: &'a [f64],
+}
+
+impl ProfileLimits<'_> {
+    /// The forward pass from u = `v_start`²: the largest admissible u at every step,
+    /// braking (and reporting up to which arc length) while faster than the path allows.
+    fn forward_pass(
+        &self,
+        limits: &DiffDriveLimits,
+        tip: Option<&TipOverAcceleration>,
+        v_start: f64,
+        cons: &mut Vec<Lin>,
+    ) -> (Vec<f64>, Option<f64>) {
+        let (s, kappa, cap, kmax) = (self.s, self.kappa, self.cap, self.kmax);
+        let n = s.len();
+        let mut u = vec![0.0; n];
+        u[0] = v_start * v_start;
+        let mut overspeed_until = None;
+        let brake = tip.map_or(limits.a_max, |t| t.backward.min(limits.a_max));
+        for i in 0..n - 1 {
+            let h = s[i + 1] - s[i];
+            if u[i] > kmax[i] * (1.0 + 1e-9) + 1e-12 {
+                // Faster than the path allows: brake as hard as the tangential limits allow.
+                let braked = (u[i] - 2.0 * h * brake).max(0.0);
+                u[i + 1] = if braked < kmax[i + 1] {
+                    kmax[i + 1].min(u[i])
+                } else {
+                    braked
+                };
+                overspeed_until = Some(s[i + 1]);
+                continue;
+            }
+            interval_constraints(h, kappa[i], kappa[i + 1], limits, tip, cons);
+            let (lo, hi) = u1_range(cons, u[i].min(kmax[i]), kmax[i + 1].min(cap[i + 1]));
+            u[i + 1] = hi.max(lo.min(hi)).max(0.0);
+        }
+        (u, overspeed_until)
+    }
+}
+
+/// The times (from `t_p`, the pivot's duration) and the per-interval accelerations of
+/// the squared-speed profile `u` (`v` = √u) on the grid `s`.
+///
+/// # Errors
+/// A zero speed at both ends of an interval: the path cannot be driven.
+fn times_and_accelerations(
+    s: &[f64],
+    u: &[f64],
+    v: &[f64],
+    t_p: f64,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let n = s.len();
     let mut t = vec![t_p; n];
     let mut acc = vec![0.0; n - 1];
     for i in 0..n - 1 {
@@ -819,14 +956,5 @@ pub fn time_parameterize_curve(
         t[i + 1] = t[i] + 2.0 * h / vs;
         acc[i] = (u[i + 1] - u[i]) / (2.0 * h);
     }
-    Ok(TimedPath {
-        path: path.clone(),
-        pivot,
-        s,
-        kappa,
-        t,
-        v,
-        acc,
-        overspeed_until,
-    })
+    Ok((t, acc))
 }

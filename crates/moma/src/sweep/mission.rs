@@ -10,6 +10,7 @@ use serde::Deserialize;
 
 use super::{Parameter, Value, file_error, num, require_numbers, resolve};
 use crate::error::Result;
+use crate::mission::scenario::Loader;
 use crate::mission::{self, MissionFile};
 
 /// Result columns of the mission study (the summary's fields).
@@ -77,12 +78,13 @@ impl MissionStudy {
         dir: &Path,
         section: toml::Value,
         params: &[Parameter],
+        files: &dyn Loader,
     ) -> Result<Self> {
         let spec: Spec = section
             .try_into()
             .map_err(|e: toml::de::Error| file_error(path, "mission", e.message()))?;
         let scenario = resolve(dir, &spec.scenario);
-        let m = mission::load(&scenario)?;
+        let m = mission::scenario::load_with(&scenario, files)?;
         let mut slots = Vec::with_capacity(params.len());
         for p in params {
             let slot = match p.name.as_str() {

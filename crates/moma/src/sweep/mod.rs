@@ -214,40 +214,8 @@ pub(crate) fn file_error(path: &Path, field: &str, message: impl std::fmt::Displ
 
 fn parse_values(path: &Path, name: &str, v: &toml::Value) -> Result<Values> {
     let field = format!("parameters.{name}");
-    let scalar = |x: &toml::Value, at: String| -> Result<Value> {
-        match x {
-            toml::Value::Float(f) if f.is_finite() => Ok(Value::Float(*f)),
-            toml::Value::Float(_) => Err(file_error(path, &at, "must be finite")),
-            toml::Value::Integer(i) => Ok(Value::Float(*i as f64)),
-            toml::Value::String(s) => Ok(Value::Text(s.clone())),
-            toml::Value::Boolean(b) => Ok(Value::Bool(*b)),
-            other => Err(file_error(
-                path,
-                &at,
-                format!("expected a number or a name, got {}", other.type_str()),
-            )),
-        }
-    };
-    let list = |a: &[toml::Value], at: &str| -> Result<Values> {
-        if a.is_empty() {
-            return Err(file_error(path, at, "needs at least one value"));
-        }
-        if a.len() > MAX_VALUES {
-            return Err(file_error(
-                path,
-                at,
-                format!("more than {MAX_VALUES} values"),
-            ));
-        }
-        let vals = a
-            .iter()
-            .enumerate()
-            .map(|(k, x)| scalar(x, format!("{at}[{k}]")))
-            .collect::<Result<Vec<_>>>()?;
-        Ok(Values::List(vals))
-    };
     match v {
-        toml::Value::Array(a) => list(a, &field),
+        toml::Value::Array(a) => parse_list(path, a, &field),
         toml::Value::Table(t) => {
             if let Some(k) = t.keys().find(|k| *k != "linspace" && *k != "values") {
                 return Err(file_error(
@@ -257,46 +225,10 @@ fn parse_values(path: &Path, name: &str, v: &toml::Value) -> Result<Values> {
                 ));
             }
             match (t.get("linspace"), t.get("values")) {
-                (Some(l), None) => {
-                    let at = format!("{field}.linspace");
-                    let a = l
-                        .as_array()
-                        .filter(|a| a.len() == 3)
-                        .ok_or_else(|| file_error(path, &at, "expected [lo, hi, n]"))?;
-                    let num = |x: &toml::Value, what: &str| -> Result<f64> {
-                        let f = x
-                            .as_float()
-                            .or_else(|| x.as_integer().map(|i| i as f64))
-                            .ok_or_else(|| {
-                                file_error(path, &at, format!("{what} must be a number"))
-                            })?;
-                        if f.is_finite() {
-                            Ok(f)
-                        } else {
-                            Err(file_error(path, &at, format!("{what} must be finite")))
-                        }
-                    };
-                    let (lo, hi) = (num(&a[0], "lo")?, num(&a[1], "hi")?);
-                    let n = a[2]
-                        .as_integer()
-                        .filter(|&n| n >= 1 && n as u64 <= MAX_VALUES as u64)
-                        .ok_or_else(|| {
-                            file_error(
-                                path,
-                                &at,
-                                format!("n must be an integer from 1 to {MAX_VALUES}"),
-                            )
-                        })? as usize;
-                    if hi < lo {
-                        return Err(file_error(
-                            path,
-                            &at,
-                            format!("needs lo <= hi, got {lo} > {hi}"),
-                        ));
-                    }
-                    Ok(Values::Linspace { lo, hi, n })
+                (Some(l), None) => parse_linspace(path, l, &format!("{field}.linspace")),
+                (None, Some(toml::Value::Array(a))) => {
+                    parse_list(path, a, &format!("{field}.values"))
                 }
-                (None, Some(toml::Value::Array(a))) => list(a, &format!("{field}.values")),
                 (None, Some(_)) => Err(file_error(
                     path,
                     &format!("{field}.values"),
@@ -310,10 +242,208 @@ fn parse_values(path: &Path, name: &str, v: &toml::Value) -> Result<Values> {
             }
         }
         other => {
-            let one = scalar(other, field.clone())?;
+            let one = parse_scalar(path, other, field.clone())?;
             Ok(Values::List(vec![one]))
         }
     }
+}
+
+/// One listed value (field `at`): a finite number, a name or a boolean.
+fn parse_scalar(path: &Path, x: &toml::Value, at: String) -> Result<Value> {
+    match x {
+        toml::Value::Float(f) if f.is_finite() => Ok(Value::Float(*f)),
+        toml::Value::Float(_) => Err(file_error(path, &at, "must be finite")),
+        toml::Value::Integer(i) => Ok(Value::Float(*i as f64)),
+        toml::Value::String(s) => Ok(Value::Text(s.clone())),
+        toml::Value::Boolean(b) => Ok(Value::Bool(*b)),
+        other => Err(file_error(
+            path,
+            &at,
+            format!("expected a number or a name, got {}", other.type_str()),
+        )),
+    }
+}
+
+/// A list of 1 to [`MAX_VALUES`] values (field `at`).
+fn parse_list(path: &Path, a: &[toml::Value], at: &str) -> Result<Values> {
+    if a.is_empty() {
+        return Err(file_error(path, at, "needs at least one value"));
+    }
+    if a.len() > MAX_VALUES {
+        return Err(file_error(
+            path,
+            at,
+            format!("more than {MAX_VALUES} values"),
+        ));
+    }
+    let vals = a
+        .iter()
+        .enumerate()
+        .map(|(k, x)| parse_scalar(path, x, format!("{at}[{k}]")))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Values::List(vals))
+}
+
+/// `linspace = [lo, hi, n]` (field `at`): finite `lo <= hi`, `n` from 1 to [`MAX_VALUES`].
+fn parse_linspace(path: &Path, l: &toml::Value, at: &str) -> Result<Values> {
+    let a = l
+        .as_array()
+        .filter(|a| a.len() == 3)
+        .ok_or_else(|| file_error(path, at, "expected [lo, hi, n]"))?;
+    let num = |x: &toml::Value, what: &str| -> Result<f64> {
+        let f = x
+            .as_float()
+            .or_else(|| x.as_integer().map(|i| i as f64))
+            .ok_or_else(|| file_error(path, at, format!("{what} must be a number")))?;
+        if f.is_finite() {
+            Ok(f)
+        } else {
+            Err(file_error(path, at, format!("{what} must be finite")))
+        }
+    };
+    let (lo, hi) = (num(&a[0], "lo")?, num(&a[1], "hi")?);
+    let n = a[2]
+        .as_integer()
+        .filter(|&n| n >= 1 && n as u64 <= MAX_VALUES as u64)
+        .ok_or_else(|| {
+            file_error(
+                path,
+                at,
+                format!("n must be an integer from 1 to {MAX_VALUES}"),
+            )
+        })? as usize;
+    if hi < lo {
+        return Err(file_error(
+            path,
+            at,
+            format!("needs lo <= hi, got {lo} > {hi}"),
+        ));
+    }
+    Ok(Values::Linspace { lo, hi, n })
+}
+
+/// The `[sample]` table: a grid (no count or seed), or a random sample with both.
+fn parse_sampling(path: &Path, sample: &SampleSpec) -> Result<Sampling> {
+    match sample.mode.as_deref().unwrap_or("grid") {
+        "grid" => {
+            if sample.count.is_some() || sample.seed.is_some() {
+                return Err(file_error(
+                    path,
+                    "sample",
+                    "count and seed belong to mode = \"random\"",
+                ));
+            }
+            Ok(Sampling::Grid)
+        }
+        "random" => {
+            let count = sample.count.ok_or_else(|| {
+                file_error(path, "sample.count", "mode = \"random\" needs a count")
+            })?;
+            let seed = sample
+                .seed
+                .ok_or_else(|| file_error(path, "sample.seed", "mode = \"random\" needs a seed"))?;
+            Ok(Sampling::Random { count, seed })
+        }
+        other => Err(file_error(
+            path,
+            "sample.mode",
+            format!("unknown mode '{other}' (expected grid or random)"),
+        )),
+    }
+}
+
+/// The number of points, from 1 to [`MAX_POINTS`]: the grid's product of value counts
+/// or the random count.
+fn point_count(path: &Path, sampling: Sampling, parameters: &[Parameter]) -> Result<u64> {
+    let len = match sampling {
+        Sampling::Grid => parameters.iter().try_fold(1u64, |acc, p| {
+            acc.checked_mul(p.values.len() as u64)
+                .filter(|&n| n <= MAX_POINTS)
+        }),
+        Sampling::Random { count, .. } => Some(count).filter(|&n| n <= MAX_POINTS),
+    }
+    .ok_or_else(|| {
+        file_error(
+            path,
+            if sampling == Sampling::Grid {
+                "parameters"
+            } else {
+                "sample.count"
+            },
+            format!("more than {MAX_POINTS} points"),
+        )
+    })?;
+    if len == 0 {
+        return Err(file_error(path, "sample.count", "must be at least 1"));
+    }
+    Ok(len)
+}
+
+/// Prepares the study the file names from its own section; a section of another study
+/// is an error.
+fn prepare_study(
+    path: &Path,
+    dir: &Path,
+    spec: &FileSpec,
+    parameters: &[Parameter],
+    files: &dyn crate::mission::scenario::Loader,
+) -> Result<Study> {
+    let section = |name: &str, v: &Option<toml::Value>| -> Result<toml::Value> {
+        v.clone().ok_or_else(|| {
+            file_error(
+                path,
+                name,
+                format!("study = \"{name}\" needs a [{name}] section"),
+            )
+        })
+    };
+    let other_sections = [
+        ("stability", &spec.stability),
+        ("placement", &spec.placement),
+        ("mission", &spec.mission),
+    ];
+    for (name, v) in other_sections {
+        if v.is_some() && name != spec.study {
+            return Err(file_error(
+                path,
+                name,
+                format!(
+                    "section [{name}] does not belong to study = \"{}\"",
+                    spec.study
+                ),
+            ));
+        }
+    }
+    Ok(match spec.study.as_str() {
+        "stability" => Study::Stability(Box::new(stability::StabilityStudy::new(
+            path,
+            dir,
+            section("stability", &spec.stability)?,
+            parameters,
+            files,
+        )?)),
+        "placement" => Study::Placement(placement::PlacementStudy::new(
+            path,
+            dir,
+            section("placement", &spec.placement)?,
+            parameters,
+            files,
+        )?),
+        "mission" => Study::Mission(Box::new(mission::MissionStudy::new(
+            path,
+            dir,
+            section("mission", &spec.mission)?,
+            parameters,
+            files,
+        )?)),
+        other => {
+            return Err(file_error(
+                path,
+                "study",
+                format!("unknown study '{other}' (expected stability, placement or mission)"),
+            ));
+        }
+    })
 }
 
 impl Sweep {
@@ -347,6 +477,22 @@ impl Sweep {
     /// # Errors
     /// As [`Sweep::from_file`].
     pub fn from_toml_str(text: &str, path: &Path, dir: &Path) -> Result<Self> {
+        Self::from_toml_str_with(text, path, dir, &crate::mission::scenario::FileSystem)
+    }
+
+    /// As [`Sweep::from_toml_str`], with the study's robot (and a mission study's map and
+    /// robot) read through `files` (see [`crate::mission::scenario::Loader`]). A mission
+    /// study's points still load their mission's files from the file system when they
+    /// are evaluated.
+    ///
+    /// # Errors
+    /// As [`Sweep::from_file`].
+    pub fn from_toml_str_with(
+        text: &str,
+        path: &Path,
+        dir: &Path,
+        files: &dyn crate::mission::scenario::Loader,
+    ) -> Result<Self> {
         let spec: FileSpec = toml::from_str(text)
             .map_err(|e| Error::parse(path, format!("invalid sweep file: {e}")))?;
         let mut entries: Vec<_> = spec.parameters.iter().collect();
@@ -359,108 +505,9 @@ impl Sweep {
                 values: parse_values(path, name, v)?,
             });
         }
-        let sampling = match spec.sample.mode.as_deref().unwrap_or("grid") {
-            "grid" => {
-                if spec.sample.count.is_some() || spec.sample.seed.is_some() {
-                    return Err(file_error(
-                        path,
-                        "sample",
-                        "count and seed belong to mode = \"random\"",
-                    ));
-                }
-                Sampling::Grid
-            }
-            "random" => {
-                let count = spec.sample.count.ok_or_else(|| {
-                    file_error(path, "sample.count", "mode = \"random\" needs a count")
-                })?;
-                let seed = spec.sample.seed.ok_or_else(|| {
-                    file_error(path, "sample.seed", "mode = \"random\" needs a seed")
-                })?;
-                Sampling::Random { count, seed }
-            }
-            other => {
-                return Err(file_error(
-                    path,
-                    "sample.mode",
-                    format!("unknown mode '{other}' (expected grid or random)"),
-                ));
-            }
-        };
-        let len = match sampling {
-            Sampling::Grid => parameters.iter().try_fold(1u64, |acc, p| {
-                acc.checked_mul(p.values.len() as u64)
-                    .filter(|&n| n <= MAX_POINTS)
-            }),
-            Sampling::Random { count, .. } => Some(count).filter(|&n| n <= MAX_POINTS),
-        }
-        .ok_or_else(|| {
-            file_error(
-                path,
-                if sampling == Sampling::Grid {
-                    "parameters"
-                } else {
-                    "sample.count"
-                },
-                format!("more than {MAX_POINTS} points"),
-            )
-        })?;
-        if len == 0 {
-            return Err(file_error(path, "sample.count", "must be at least 1"));
-        }
-        let section = |name: &str, v: &Option<toml::Value>| -> Result<toml::Value> {
-            v.clone().ok_or_else(|| {
-                file_error(
-                    path,
-                    name,
-                    format!("study = \"{name}\" needs a [{name}] section"),
-                )
-            })
-        };
-        let other_sections = [
-            ("stability", &spec.stability),
-            ("placement", &spec.placement),
-            ("mission", &spec.mission),
-        ];
-        for (name, v) in other_sections {
-            if v.is_some() && name != spec.study {
-                return Err(file_error(
-                    path,
-                    name,
-                    format!(
-                        "section [{name}] does not belong to study = \"{}\"",
-                        spec.study
-                    ),
-                ));
-            }
-        }
-        let study = match spec.study.as_str() {
-            "stability" => Study::Stability(Box::new(stability::StabilityStudy::new(
-                path,
-                dir,
-                section("stability", &spec.stability)?,
-                &parameters,
-            )?)),
-            "placement" => Study::Placement(placement::PlacementStudy::new(
-                path,
-                dir,
-                section("placement", &spec.placement)?,
-                &parameters,
-            )?),
-            "mission" => Study::Mission(Box::new(mission::MissionStudy::new(
-                path,
-                dir,
-                section("mission", &spec.mission)?,
-                &parameters,
-            )?)),
-            other => {
-                return Err(file_error(
-                    path,
-                    "study",
-                    format!("unknown study '{other}' (expected stability, placement or mission)"),
-                ));
-            }
-        };
+        let sampling = parse_sampling(path, &spec.sample)?;
+        let len = point_count(path, sampling, &parameters)?;
+        let study = prepare_study(path, dir, &spec, &parameters, files)?;
         Ok(Self {
             source: path.to_path_buf(),
             study_name: spec.study,

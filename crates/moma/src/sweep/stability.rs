@@ -19,7 +19,7 @@ use serde::Deserialize;
 
 use super::{Parameter, Value, Values, file_error, num, require_names, require_numbers, resolve};
 use crate::error::Result;
-use crate::io::urdf::model_from_urdf_file;
+use crate::mission::scenario::Loader;
 use crate::mobile::{Caster, DiffDrive, WheeledBase};
 use crate::multibody::{Data, FrameIndex, JointIndex, Model, RootJoint, neutral};
 use crate::spatial::Inertia;
@@ -128,18 +128,158 @@ fn joint_coordinate(model: &Model, path: &Path, field: &str, name: &str) -> Resu
     Ok(model.idx_q[id.0])
 }
 
+/// The support polygon: the listed `support` points, or else the wheel contacts of the
+/// drive and the casters.
+fn support_polygon(path: &Path, spec: &Spec, drive: DiffDrive) -> Result<SupportPolygon> {
+    let points: Vec<Vector2<f64>> = match &spec.support {
+        Some(s) => s.iter().map(|p| Vector2::new(p[0], p[1])).collect(),
+        None => {
+            let mut wb = WheeledBase::new(drive);
+            for (k, c) in spec.base.casters.iter().enumerate() {
+                wb.casters.push(Caster {
+                    name: format!("caster{k}"),
+                    position: *c,
+                });
+            }
+            wb.support_points()
+        }
+    };
+    let field = if spec.support.is_some() {
+        "stability.support"
+    } else {
+        "stability.base"
+    };
+    SupportPolygon::from_points(&points).map_err(|e| file_error(path, field, e))
+}
+
+/// Where the payload sits: the joint of the body that `payload_frame` (default the last
+/// link's frame) belongs to, and the frame's origin in that joint's frame.
+fn payload_attachment(
+    path: &Path,
+    model: &Model,
+    payload_frame: Option<&str>,
+) -> Result<(JointIndex, Vector3<f64>)> {
+    let frame: FrameIndex = match payload_frame {
+        Some(n) => model
+            .frame_id(n)
+            .map_err(|e| file_error(path, "stability.payload_frame", e))?,
+        None => model.last_link_frame(),
+    };
+    let fr = &model.frames[frame.0];
+    if fr.parent_joint.0 == 0 {
+        return Err(file_error(
+            path,
+            "stability.payload_frame",
+            format!("frame '{}' is not on a moving body", fr.name),
+        ));
+    }
+    Ok((fr.parent_joint, fr.placement.translation))
+}
+
+/// The named postures: the neutral configuration with the listed joints set.
+fn parse_postures(
+    path: &Path,
+    model: &Model,
+    specs: &[PostureSpec],
+) -> Result<(Vec<String>, Vec<DVector<f64>>)> {
+    let mut posture_names = Vec::with_capacity(specs.len());
+    let mut postures = Vec::with_capacity(specs.len());
+    for (k, p) in specs.iter().enumerate() {
+        let at = format!("stability.postures[{k}]");
+        if posture_names.contains(&p.name) {
+            return Err(file_error(
+                path,
+                &at,
+                format!("posture '{}' named twice", p.name),
+            ));
+        }
+        let mut q = neutral(model);
+        for (joint, x) in &p.q {
+            let f = format!("{at}.q.{joint}");
+            let iq = joint_coordinate(model, path, &f, joint)?;
+            q[iq] = x
+                .as_float()
+                .or_else(|| x.as_integer().map(|i| i as f64))
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| file_error(path, &f, "expected a finite number"))?;
+        }
+        posture_names.push(p.name.clone());
+        postures.push(q);
+    }
+    Ok((posture_names, postures))
+}
+
+/// The study slot of every sweep parameter, with its values checked (names of the
+/// file's `posture_names`, numbers otherwise, a payload not negative).
+fn parameter_slots(
+    path: &Path,
+    model: &Model,
+    params: &[Parameter],
+    posture_names: &[String],
+) -> Result<Vec<Slot>> {
+    let mut slots = Vec::with_capacity(params.len());
+    for p in params {
+        let slot = match p.name.as_str() {
+            "posture" => {
+                if posture_names.is_empty() {
+                    return Err(file_error(
+                        path,
+                        "parameters.posture",
+                        "needs [[stability.postures]] entries",
+                    ));
+                }
+                require_names(path, p, posture_names)?;
+                Slot::Posture
+            }
+            "accel" => Slot::Accel,
+            "speed" => Slot::Speed,
+            "yaw_rate" => Slot::YawRate,
+            "yaw_accel" => Slot::YawAccel,
+            "payload" => Slot::Payload,
+            n if n.starts_with("q.") => Slot::Joint(joint_coordinate(
+                model,
+                path,
+                &format!("parameters.\"{n}\""),
+                &n[2..],
+            )?),
+            n => {
+                return Err(file_error(
+                    path,
+                    &format!("parameters.{n}"),
+                    format!("unknown parameter of the stability study (expected {NAMES})"),
+                ));
+            }
+        };
+        if !matches!(slot, Slot::Posture) {
+            require_numbers(path, p)?;
+        }
+        if matches!(slot, Slot::Payload) {
+            let negative = match &p.values {
+                Values::Linspace { lo, .. } => *lo < 0.0,
+                Values::List(v) => v.iter().any(|x| num(x) < 0.0),
+            };
+            if negative {
+                return Err(file_error(path, "parameters.payload", "must be >= 0 kg"));
+            }
+        }
+        slots.push(slot);
+    }
+    Ok(slots)
+}
+
 impl StabilityStudy {
     pub(super) fn new(
         path: &Path,
         dir: &Path,
         section: toml::Value,
         params: &[Parameter],
+        files: &dyn Loader,
     ) -> Result<Self> {
         let spec: Spec = section
             .try_into()
             .map_err(|e: toml::de::Error| file_error(path, "stability", e.message()))?;
         let robot = resolve(dir, &spec.robot);
-        let mut model = model_from_urdf_file(&robot, RootJoint::Planar)?;
+        let mut model = files.urdf(&robot, RootJoint::Planar)?;
         if let Some(g) = spec.gravity {
             crate::error::ensure_finite("stability.gravity", &g)
                 .map_err(|e| file_error(path, "stability.gravity", e))?;
@@ -147,25 +287,7 @@ impl StabilityStudy {
         }
         let drive = DiffDrive::new(spec.base.r_w, spec.base.b, spec.base.d)
             .map_err(|e| file_error(path, "stability.base", e))?;
-        let points: Vec<Vector2<f64>> = match &spec.support {
-            Some(s) => s.iter().map(|p| Vector2::new(p[0], p[1])).collect(),
-            None => {
-                let mut wb = WheeledBase::new(drive);
-                for (k, c) in spec.base.casters.iter().enumerate() {
-                    wb.casters.push(Caster {
-                        name: format!("caster{k}"),
-                        position: *c,
-                    });
-                }
-                wb.support_points()
-            }
-        };
-        let field = if spec.support.is_some() {
-            "stability.support"
-        } else {
-            "stability.base"
-        };
-        let poly = SupportPolygon::from_points(&points).map_err(|e| file_error(path, field, e))?;
+        let poly = support_polygon(path, &spec, drive)?;
         let bodies: BodySet = spec
             .mhs_bodies
             .as_deref()
@@ -174,92 +296,10 @@ impl StabilityStudy {
             .map_err(|e| file_error(path, "stability.mhs_bodies", e))?;
         let sm = StabilityModel::new(&model, poly, SupportAttachment::Base, &bodies)
             .map_err(|e| file_error(path, "stability.mhs_bodies", e))?;
-        let frame: FrameIndex = match &spec.payload_frame {
-            Some(n) => model
-                .frame_id(n)
-                .map_err(|e| file_error(path, "stability.payload_frame", e))?,
-            None => model.last_link_frame(),
-        };
-        let fr = &model.frames[frame.0];
-        if fr.parent_joint.0 == 0 {
-            return Err(file_error(
-                path,
-                "stability.payload_frame",
-                format!("frame '{}' is not on a moving body", fr.name),
-            ));
-        }
-        let (payload_joint, payload_at) = (fr.parent_joint, fr.placement.translation);
-        let mut posture_names = Vec::with_capacity(spec.postures.len());
-        let mut postures = Vec::with_capacity(spec.postures.len());
-        for (k, p) in spec.postures.iter().enumerate() {
-            let at = format!("stability.postures[{k}]");
-            if posture_names.contains(&p.name) {
-                return Err(file_error(
-                    path,
-                    &at,
-                    format!("posture '{}' named twice", p.name),
-                ));
-            }
-            let mut q = neutral(&model);
-            for (joint, x) in &p.q {
-                let f = format!("{at}.q.{joint}");
-                let iq = joint_coordinate(&model, path, &f, joint)?;
-                q[iq] = x
-                    .as_float()
-                    .or_else(|| x.as_integer().map(|i| i as f64))
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| file_error(path, &f, "expected a finite number"))?;
-            }
-            posture_names.push(p.name.clone());
-            postures.push(q);
-        }
-        let mut slots = Vec::with_capacity(params.len());
-        for p in params {
-            let slot = match p.name.as_str() {
-                "posture" => {
-                    if postures.is_empty() {
-                        return Err(file_error(
-                            path,
-                            "parameters.posture",
-                            "needs [[stability.postures]] entries",
-                        ));
-                    }
-                    require_names(path, p, &posture_names)?;
-                    Slot::Posture
-                }
-                "accel" => Slot::Accel,
-                "speed" => Slot::Speed,
-                "yaw_rate" => Slot::YawRate,
-                "yaw_accel" => Slot::YawAccel,
-                "payload" => Slot::Payload,
-                n if n.starts_with("q.") => Slot::Joint(joint_coordinate(
-                    &model,
-                    path,
-                    &format!("parameters.\"{n}\""),
-                    &n[2..],
-                )?),
-                n => {
-                    return Err(file_error(
-                        path,
-                        &format!("parameters.{n}"),
-                        format!("unknown parameter of the stability study (expected {NAMES})"),
-                    ));
-                }
-            };
-            if !matches!(slot, Slot::Posture) {
-                require_numbers(path, p)?;
-            }
-            if matches!(slot, Slot::Payload) {
-                let negative = match &p.values {
-                    Values::Linspace { lo, .. } => *lo < 0.0,
-                    Values::List(v) => v.iter().any(|x| num(x) < 0.0),
-                };
-                if negative {
-                    return Err(file_error(path, "parameters.payload", "must be >= 0 kg"));
-                }
-            }
-            slots.push(slot);
-        }
+        let (payload_joint, payload_at) =
+            payload_attachment(path, &model, spec.payload_frame.as_deref())?;
+        let (mut posture_names, mut postures) = parse_postures(path, &model, &spec.postures)?;
+        let slots = parameter_slots(path, &model, params, &posture_names)?;
         if postures.is_empty() {
             postures.push(neutral(&model));
             posture_names.push("neutral".into());
