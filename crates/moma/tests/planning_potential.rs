@@ -116,6 +116,18 @@ fn bad_parameters_are_rejected() {
         influence: 5.0,
     };
     assert!(potential_field(&g, (34, 12), GoalTerm::Euclidean, &nan).is_err());
+    // A finite weight whose product with a goal distance overflows is named, not turned
+    // into an infinite ("unreachable") potential.
+    for term in [GoalTerm::Euclidean, GoalTerm::Geodesic] {
+        let huge = PotentialParams {
+            goal_weight: 1e308,
+            influence: 5.0,
+        };
+        let e = potential_field(&g, (34, 12), term, &huge)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("goal weight") && e.contains("overflows"), "{e}");
+    }
     assert!(
         potential_field(
             &g,

@@ -169,7 +169,16 @@ pub fn potential_field(
                     ((x as f64 - goal.0 as f64).powi(2) + (y as f64 - goal.1 as f64).powi(2)).sqrt()
                 }
             };
-            values[i] = w * gdist - (clearance[i] as f64).min(params.influence);
+            let value = w * gdist - (clearance[i] as f64).min(params.influence);
+            if gdist.is_finite() && !value.is_finite() {
+                return Err(Error::invalid(
+                    "goal weight",
+                    format!(
+                        "w = {w:e} times the goal distance {gdist:.1} at cell ({x}, {y}) overflows a double"
+                    ),
+                ));
+            }
+            values[i] = value;
         }
     }
     Ok(PotentialField {
