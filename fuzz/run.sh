@@ -2,6 +2,10 @@
 # Runs fuzz targets one after another (never two at once from one call).
 #   fuzz/run.sh SECONDS [TARGET...]        long runs (default: every target)
 #   fuzz/run.sh --ci SECONDS [TARGET...]   CI's reproducible short run
+#   fuzz/run.sh --checked [--ci] SECONDS [TARGET...]
+#                                          the same with debug assertions and overflow
+#                                          checks (cargo fuzz build -a), built into its own
+#                                          target/checked so it never replaces the plain build
 # Both build every target once (FUZZ_NO_BUILD=1 skips it, for a second call running
 # next to a first), then run each target's binary directly, so a later edit of the
 # library cannot rebuild a target in the middle of a series.
@@ -16,22 +20,33 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 ci=0
+checked=0
+if [ "${1:-}" = "--checked" ]; then
+  checked=1
+  shift
+fi
 if [ "${1:-}" = "--ci" ]; then
   ci=1
   shift
 fi
-secs=${1:?usage: fuzz/run.sh [--ci] SECONDS [TARGET...]}
+secs=${1:?usage: fuzz/run.sh [--checked] [--ci] SECONDS [TARGET...]}
 shift
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   targets=(urdf ros_yaml map_image movingai_2d movingai_3d sim_scenario states_json states_struct
     eval_json eval_cases sim_scenario_struct mission_toml mission_struct sweep_toml sweep_struct)
 fi
+build=(cargo fuzz build -s none -O)
+tdir=target
+if [ $checked = 1 ]; then
+  tdir=target/checked
+  build+=(-a --target-dir "$tdir")
+fi
 if [ "${FUZZ_NO_BUILD:-0}" != "1" ]; then
-  cargo fuzz build -s none -O
+  "${build[@]}"
 fi
 host=$(rustc -vV | sed -n 's/^host: //p')
-bins=target/$host/release
+bins=$tdir/$host/release
 limits=(-rss_limit_mb=2048 -timeout=10)
 failed=()
 for t in "${targets[@]}"; do

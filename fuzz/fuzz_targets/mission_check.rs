@@ -1,5 +1,6 @@
 //! What the mission targets do with one parsed mission file: keep its paths on shipped
-//! files ([`files`]), validate it and load its map and robot (`mission::scenario::from_file`),
+//! files ([`files`]), validate it and load its map and robot (`mission::scenario::from_file_with`, the
+//! shipped files parsed once per process: [`files::Cached`]),
 //! then the one cheap evaluation the loaded mission offers, the transport posture's
 //! tip-over limits. A mission is never run (seconds per input).
 
@@ -15,7 +16,8 @@ pub fn check(mut file: MissionFile) {
     let urdf = file.robot.urdf.to_string_lossy().into_owned();
     file.robot.urdf = PathBuf::from(files::pick(&urdf, &files::MISSION_FILES));
     let base = files::scenarios();
-    let Ok(m) = mission::scenario::from_file(file, Path::new("fuzz.toml"), &base) else {
+    let Ok(m) = mission::scenario::from_file_with(file, Path::new("fuzz.toml"), &base, &files::Cached)
+    else {
         return;
     };
     if let Ok(l) = mission::transport_tip_limits(&m) {

@@ -1,6 +1,7 @@
 //! What the sweep targets do with one sweep file: keep the paths it names on shipped
-//! files ([`files`]), read and validate it (`Sweep::from_toml_str`, which loads the
-//! study's robot or mission), then the cheap parts of a run: the columns, the parameter
+//! files ([`files`]), read and validate it (`Sweep::from_toml_str_with`, which loads the
+//! study's robot or mission, the shipped files parsed once per process:
+//! [`files::Cached`]), then the cheap parts of a run: the columns, the parameter
 //! values of the first, middle and last points (and the refusal of one past the end), and
 //! for a stability study, or a placement study with a small IK budget, the evaluation of
 //! the first and last points. A mission study's point runs a whole mission (seconds), so
@@ -68,7 +69,7 @@ pub fn check(text: &str) {
         // malformed TOML never gets as far as reading a file
         Err(_) => (text.to_string(), None),
     };
-    let Ok(s) = Sweep::from_toml_str(&text, path, &dir) else {
+    let Ok(s) = Sweep::from_toml_str_with(&text, path, &dir, &files::Cached) else {
         return;
     };
     let n = s.len();
