@@ -2,6 +2,10 @@
 //!
 //! * `whole_body/jacobian_and_measures`: frame Jacobian (6 × 12) → whole-body J̄ (6 × 11)
 //!   → SVD and every measure, one seeded configuration per call;
+//! * `svd/{jacobi,nalgebra}_{3x7,6x7,6x11}`: the decomposition behind every measure
+//!   (`JacobianSvd::new`, one-sided Jacobi) beside nalgebra's SVD with left vectors (what
+//!   it replaced: wrong on some rank-deficient matrices), on Panda's position rows, arm
+//!   Jacobian and whole-body J̄ over the same 64 configurations;
 //! * `ik/panda_100_targets`: DLS/LM IK to 1e-6 (full pose) on 100 seeded reachable targets
 //!   (FK of random configurations) from the neutral configuration;
 //! * `placement/panda_100x100x8`: a 100 × 100 × 8 base-placement map (position target).
@@ -14,7 +18,7 @@ use moma::ik::placement::{ArmReachEvaluator, MeasureScope, PlacementGrid, placem
 use moma::ik::tasks::{FrameKinematics, PoseTask, TaskRows};
 use moma::ik::{IkOptions, IkWorkspace, solve_with_restarts};
 use moma::io::urdf::model_from_urdf_file;
-use moma::manipulability::{Measure, report};
+use moma::manipulability::{JacobianSvd, Measure, report};
 use moma::mobile::DiffDrive;
 use moma::mobile::whole_body::{BaseInputs, compose_jacobian};
 use moma::multibody::RootJoint;
@@ -62,6 +66,48 @@ fn bench_whole_body(c: &mut Criterion) {
             black_box(report(&jbar, Some(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0])).unwrap());
         })
     });
+}
+
+fn bench_svd(c: &mut Criterion) {
+    let mut kin = panda(RootJoint::Planar);
+    let model = kin.model().clone();
+    let drive = DiffDrive::new(0.08, 0.27, 0.12).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let mut pose = Isometry3::identity();
+    let mut j6 = DMatrix::zeros(6, model.nv);
+    let mut jbar = DMatrix::zeros(6, model.nv - 1);
+    let mut shapes: [(&str, Vec<DMatrix<f64>>); 3] = [
+        ("3x7", Vec::new()),
+        ("6x7", Vec::new()),
+        ("6x11", Vec::new()),
+    ];
+    for _ in 0..64 {
+        let q = moma::kinematics::random_configuration(&model, &mut rng);
+        kin.pose_and_jacobian(&q, &mut pose, &mut j6).unwrap();
+        compose_jacobian(&drive, BaseInputs::Wheels, q[2], &j6, &mut jbar).unwrap();
+        // arm columns: after the planar root's 3 and before the 2 fingers
+        shapes[0].1.push(j6.view((0, 3), (3, 7)).into_owned());
+        shapes[1].1.push(j6.view((0, 3), (6, 7)).into_owned());
+        shapes[2].1.push(jbar.clone());
+    }
+    for (name, js) in &shapes {
+        let mut i = 0;
+        c.bench_function(&format!("svd/jacobi_{name}"), |b| {
+            b.iter(|| {
+                i += 1;
+                black_box(JacobianSvd::new(&js[i % js.len()]).unwrap())
+            })
+        });
+        c.bench_function(&format!("svd/nalgebra_{name}"), |b| {
+            b.iter(|| {
+                i += 1;
+                let j = js[i % js.len()].clone();
+                let mut svd = nalgebra::SVD::try_new(j, true, false, f64::EPSILON, 10_000).unwrap();
+                svd.sort_by_singular_values();
+                black_box(svd)
+            })
+        });
+    }
 }
 
 fn ik_targets(kin: &ModelFrame, n: usize) -> Vec<Isometry3<f64>> {
@@ -142,5 +188,11 @@ fn bench_placement(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_whole_body, bench_ik, bench_placement);
+criterion_group!(
+    benches,
+    bench_whole_body,
+    bench_svd,
+    bench_ik,
+    bench_placement
+);
 criterion_main!(benches);

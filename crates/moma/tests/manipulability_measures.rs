@@ -474,3 +474,62 @@ fn invariance_scaling_and_ellipsoid_properties() {
         }
     }
 }
+
+/// At singular postures the Jacobian is rank deficient, the case where nalgebra 0.35's
+/// SVD with vectors returned wrong values and axes (random rank-r products of every shape
+/// up to 7 × 9; about one in seven failed before). The measures and the ellipsoid must
+/// stay exact there: `J Jᵀ uᵢ = σᵢ² uᵢ` with orthonormal axes, the values equal to the
+/// square roots of the eigenvalues of `J Jᵀ`, and the rank equal to r.
+#[test]
+fn rank_deficient_jacobians_keep_exact_values_and_axes() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1172);
+    for trial in 0..500 {
+        let m = rng.random_range(2..=7usize);
+        let n = rng.random_range(2..=9usize);
+        let r = rng.random_range(1..m.min(n));
+        let a = DMatrix::from_fn(m, r, |_, _| rng.random_range(-1.0..1.0));
+        let b = DMatrix::from_fn(r, n, |_, _| rng.random_range(-1.0..1.0));
+        let j = a * b;
+        let svd = JacobianSvd::new(&j).unwrap();
+        assert_eq!(
+            svd.rank(),
+            r,
+            "trial {trial}: rank of a {m} x {n} product of rank {r}"
+        );
+        let jjt = &j * j.transpose();
+        let mut eig: Vec<f64> = jjt
+            .clone()
+            .symmetric_eigenvalues()
+            .iter()
+            .copied()
+            .collect();
+        eig.sort_by(|x, y| y.total_cmp(x));
+        let axes = svd.ellipsoid().axes;
+        let gram = axes.transpose() * &axes;
+        for i in 0..svd.singular_values.len() {
+            let s = svd.singular_values[i];
+            assert!(
+                (s * s - eig[i]).abs() < 1e-10,
+                "trial {trial}: σ{i}² = λ{i}"
+            );
+            let u = axes.column(i);
+            let residual = (&jjt * u - u * (s * s)).amax();
+            assert!(
+                residual < 1e-10,
+                "trial {trial}: J Jᵀ u{i} = σ{i}² u{i} ({residual:e})"
+            );
+            for k in 0..svd.singular_values.len() {
+                let want = if i == k { 1.0 } else { 0.0 };
+                assert!(
+                    (gram[(i, k)] - want).abs() < 1e-12,
+                    "trial {trial}: axes orthonormal"
+                );
+            }
+        }
+        // the velocity ellipsoid's support along an axis is its semi-axis length
+        let u0: Vec<f64> = axes.column(0).iter().copied().collect();
+        let support = svd.velocity_support(&u0).unwrap();
+        assert!((support - svd.singular_values[0]).abs() < 1e-10);
+    }
+}

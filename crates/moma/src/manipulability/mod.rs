@@ -189,22 +189,18 @@ impl JacobianSvd {
             ));
         }
         ensure_finite("jacobian", jacobian.iter())?;
-        let svd = nalgebra::SVD::try_new(jacobian.clone(), true, false, f64::EPSILON, 10_000)
-            .ok_or_else(|| Error::Numerical {
-                t: 0.0,
-                message: "singular value decomposition did not converge".into(),
-            })?;
-        let mut svd = svd;
-        svd.sort_by_singular_values();
-        let u = svd.u.ok_or_else(|| Error::Numerical {
+        // one-sided Jacobi on the rows (crate::linalg): nalgebra's SVD with vectors is
+        // wrong on some rank-deficient matrices, i.e. at singular postures
+        let svd = crate::linalg::row_jacobi_svd(jacobian).ok_or_else(|| Error::Numerical {
             t: 0.0,
-            message: "singular value decomposition returned no U".into(),
+            message: "singular value decomposition did not converge".into(),
         })?;
+        let r = m.min(n);
         Ok(Self {
             rows: m,
             cols: n,
-            singular_values: svd.singular_values,
-            u,
+            singular_values: svd.sigma.rows(0, r).into_owned(),
+            u: svd.u.columns(0, r).into_owned(),
         })
     }
 

@@ -525,12 +525,10 @@ pub fn control_rates(
             })?;
             Ok(m.transpose() * c.inverse())
         } else {
-            m.clone()
-                .pseudo_inverse(1e-12)
-                .map_err(|e| Error::Singular {
-                    what: "J* pseudo-inverse".into(),
-                    detail: Some(e.to_string()),
-                })
+            crate::linalg::pseudo_inverse(m, 1e-12).ok_or_else(|| Error::Singular {
+                what: "J* pseudo-inverse".into(),
+                detail: Some("singular value decomposition did not converge".into()),
+            })
         }
     };
     let jp = pinv(&jm, ctl.damping)?;
