@@ -109,9 +109,12 @@ pub(crate) struct RowJacobiSvd {
 /// rotations `G` make the rows of `G A` orthogonal; `U = Gᵀ`, `σᵢ` are the row norms.
 /// Small singular values come out to high relative accuracy and zero rows stay zero, so
 /// rank-deficient input is handled like any other. The input is scaled by its largest
-/// magnitude first, so entries near the overflow limit work too. `None` if the rotations
-/// have not converged after 60 sweeps (not seen on any input).
+/// magnitude first, so entries near the overflow limit work too. `None` for a non-finite
+/// entry, or if the rotations have not converged after 60 sweeps (not seen on any input).
 pub(crate) fn row_jacobi_svd(a: &DMatrix<f64>) -> Option<RowJacobiSvd> {
+    if a.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
     let (m, n) = a.shape();
     let scale = a.amax();
     let mut w = a.transpose();

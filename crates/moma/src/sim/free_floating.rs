@@ -527,7 +527,9 @@ pub fn control_rates(
         } else {
             crate::linalg::pseudo_inverse(m, 1e-12).ok_or_else(|| Error::Singular {
                 what: "J* pseudo-inverse".into(),
-                detail: Some("singular value decomposition did not converge".into()),
+                detail: Some(
+                    "not finite, or its singular value decomposition did not converge".into(),
+                ),
             })
         }
     };
