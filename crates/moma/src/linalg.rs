@@ -208,8 +208,8 @@ pub(crate) fn pseudo_inverse(a: &DMatrix<f64>, rel_tol: f64) -> Option<DMatrix<f
     for i in 0..m {
         let s = svd.sigma[i];
         if s > cut {
-            // vᵢ / σᵢ = wᵢ / σᵢ²
-            out += svd.w.column(i) * svd.u.column(i).transpose() / (s * s);
+            // vᵢ / σᵢ = wᵢ / σᵢ², added as a rank-one update (no temporary matrices)
+            out.ger(1.0 / (s * s), &svd.w.column(i), &svd.u.column(i), 1.0);
         }
     }
     Some(out)
