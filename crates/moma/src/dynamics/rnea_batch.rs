@@ -9,12 +9,12 @@
 //! (joint kind, parent, indices) is paid once for the four.
 //!
 //! Each lane performs exactly the floating-point operations of the scalar
-//! [`rnea`](super::rnea), in the same order (the same `sin_cos` per lane, the same
+//! [`rnea`](super::rnea), in the same order (the same [`trig::sin_cos`] per lane, the same
 //! products and sums, no fused multiply–add), so the torques are bit-for-bit those of the
 //! scalar call on every state.
 
 use crate::multibody::{JointType, Model};
-use crate::spatial::Force;
+use crate::spatial::{Force, trig};
 #[cfg(test)]
 use crate::spatial::Motion;
 
@@ -545,8 +545,15 @@ fn revolute_pose(
     let t = placement.translation;
     let mut s = ZERO;
     let mut c = ZERO;
+    // `trig::sin_cos` lane by lane: the branch-free body on all lanes (SIMD), then the
+    // platform's values for any angle beyond its range
     for k in 0..L {
-        (s[k], c[k]) = q[k].sin_cos();
+        (s[k], c[k]) = trig::sin_cos_reduced(q[k]);
+    }
+    for k in 0..L {
+        if q[k].is_nan() || q[k].abs() >= trig::REDUCED_RANGE {
+            (s[k], c[k]) = q[k].sin_cos();
+        }
     }
     out.r[keep] = splat(col(keep));
     out.t = splat([t.x, t.y, t.z]);

@@ -53,7 +53,7 @@ pub(crate) fn update_joint_placement(model: &Model, data: &mut Data, i: usize, q
     if matches!(jt, crate::multibody::JointType::Planar) {
         // S = [[c, −s, 0; 0], [s, c, 0; 0], [0; e_z]] (the third column is constant)
         let iv = model.idx_v[i];
-        let (s, c) = qi[2].sin_cos();
+        let (s, c) = crate::spatial::trig::sin_cos(qi[2]);
         data.s[iv].linear = nalgebra::Vector3::new(c, -s, 0.0);
         data.s[iv + 1].linear = nalgebra::Vector3::new(s, c, 0.0);
     }

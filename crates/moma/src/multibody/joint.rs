@@ -187,7 +187,7 @@ impl JointType {
         let r = &placement.rotation;
         match *self {
             JointType::RevoluteX => {
-                let (s, c) = q[0].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[0]);
                 let c1 = r.column(1) * c + r.column(2) * s;
                 let c2 = r.column(2) * c - r.column(1) * s;
                 SE3::new(
@@ -196,7 +196,7 @@ impl JointType {
                 )
             }
             JointType::RevoluteY => {
-                let (s, c) = q[0].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[0]);
                 let c0 = r.column(0) * c - r.column(2) * s;
                 let c2 = r.column(0) * s + r.column(2) * c;
                 SE3::new(
@@ -205,7 +205,7 @@ impl JointType {
                 )
             }
             JointType::RevoluteZ => {
-                let (s, c) = q[0].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[0]);
                 let c0 = r.column(0) * c + r.column(1) * s;
                 let c1 = r.column(1) * c - r.column(0) * s;
                 SE3::new(
@@ -223,7 +223,7 @@ impl JointType {
                 SE3::new(*r, placement.translation + r * (axis * q[0]))
             }
             JointType::Planar => {
-                let (s, c) = q[2].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[2]);
                 let rz = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
                 placement.compose(&SE3::new(rz, Vector3::new(q[0], q[1], 0.0)))
             }
@@ -246,7 +246,7 @@ impl JointType {
             JointType::PrismaticZ => Motion::new(Vector3::new(0.0, 0.0, v[0]), z),
             JointType::PrismaticUnaligned { axis } => Motion::new(axis * v[0], z),
             JointType::Planar => {
-                let (s, c) = q[2].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[2]);
                 Motion::new(
                     Vector3::new(c * v[0] + s * v[1], -s * v[0] + c * v[1], 0.0),
                     Vector3::new(0.0, 0.0, v[2]),
@@ -266,7 +266,7 @@ impl JointType {
     pub fn bias(&self, q: &[f64], v: &[f64]) -> Motion {
         match *self {
             JointType::Planar => {
-                let (s, c) = q[2].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[2]);
                 let vx = c * v[0] + s * v[1];
                 let vy = -s * v[0] + c * v[1];
                 // −ω × v_local with ω = θ̇ ẑ
@@ -289,7 +289,7 @@ impl JointType {
     pub fn subspace_column(&self, q: &[f64], k: usize) -> Motion {
         match *self {
             JointType::Planar => {
-                let (s, c) = q[2].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[2]);
                 match k {
                     0 => Motion::new(Vector3::new(c, -s, 0.0), Vector3::zeros()),
                     1 => Motion::new(Vector3::new(s, c, 0.0), Vector3::zeros()),
@@ -331,7 +331,7 @@ impl JointType {
     pub fn project_force(&self, q: &[f64], f: &Force, out: &mut [f64]) {
         match *self {
             JointType::Planar => {
-                let (s, c) = q[2].sin_cos();
+                let (s, c) = crate::spatial::trig::sin_cos(q[2]);
                 out[0] = c * f.linear.x - s * f.linear.y;
                 out[1] = s * f.linear.x + c * f.linear.y;
                 out[2] = f.angular.z;
@@ -352,7 +352,7 @@ impl JointType {
 /// Rotation of angle `theta` about the unit `axis` (Rodrigues).
 #[must_use]
 pub fn axis_rotation(axis: &Vector3<f64>, theta: f64) -> Matrix3<f64> {
-    let (s, c) = theta.sin_cos();
+    let (s, c) = crate::spatial::trig::sin_cos(theta);
     let k = crate::spatial::skew(axis);
     Matrix3::identity() + k * s + k * k * (1.0 - c)
 }

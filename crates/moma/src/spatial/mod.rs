@@ -8,6 +8,7 @@
 mod inertia;
 mod motion;
 mod se3;
+pub mod trig;
 
 pub use inertia::Inertia;
 pub use motion::{Force, Motion};
