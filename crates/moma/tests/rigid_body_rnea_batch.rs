@@ -2,13 +2,14 @@
 //! by state and bit for bit, on Panda and UR5 (fixed base), TIAGo (planar root), ANYmal C
 //! (free-flyer root, unaligned axes) and the synthetic edge-case robot (prismatic,
 //! unaligned and continuous joints), for batch lengths 0, 1, L − 1, L and 3L + 1 of seeded
-//! random states; and against Pinocchio's RNEA on the shared reference dumps.
+//! random states, on every instruction set this CPU runs (portable, AVX2, AVX-512); and
+//! against Pinocchio's RNEA on the shared reference dumps.
 
 // shared with the Pinocchio cross-checks; this file uses only part of it
 #[allow(dead_code)]
 mod pinocchio_common;
 
-use moma::dynamics::{self, BatchData, RNEA_LANES as L};
+use moma::dynamics::{self, BatchData, BatchIsa, RNEA_LANES as L};
 use moma::io::urdf::model_from_urdf_file;
 use moma::multibody::{Data, JointType, Model, RootJoint};
 use nalgebra::DVector;
@@ -19,13 +20,20 @@ fn load(urdf: &str, root: RootJoint) -> Model {
     model_from_urdf_file(data_dir().join("urdf").join(urdf), root).unwrap()
 }
 
-/// `n` seeded random states (row-major q, v, a); free-flyer quaternions are random unit
-/// quaternions.
-fn random_states(model: &Model, n: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+/// `n` seeded random states (row-major q in ±`q_range`, v, a); free-flyer quaternions are
+/// random unit quaternions.
+fn random_states(
+    model: &Model,
+    n: usize,
+    seed: u64,
+    q_range: f64,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let mut qs = Vec::new();
     for _ in 0..n {
-        let mut q: Vec<f64> = (0..model.nq).map(|_| rng.random_range(-3.0..3.0)).collect();
+        let mut q: Vec<f64> = (0..model.nq)
+            .map(|_| rng.random_range(-q_range..q_range))
+            .collect();
         for i in 1..model.njoints {
             if matches!(model.joint_types[i], JointType::FreeFlyer) {
                 let quat = &mut q[model.idx_q[i] + 3..model.idx_q[i] + 7];
@@ -42,17 +50,26 @@ fn random_states(model: &Model, n: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec
     (qs, vs, accs)
 }
 
-/// Runs the batch kernel on `n` random states and asserts every torque equals the scalar
-/// RNEA's exactly.
+/// Runs the batch kernel on `n` random states, compiled for every instruction set this
+/// CPU has, and asserts every torque equals the scalar RNEA's exactly.
 fn same_as_scalar(model: &Model, what: &str) {
+    for isa in BatchIsa::available() {
+        same_as_scalar_on(isa, model, &format!("{what} ({isa:?})"), 3.0);
+        // angles up to 2e5 rad: about half beyond `trig::REDUCED_RANGE`, where both the
+        // lanes and the scalar joint take the platform's sine and cosine
+        same_as_scalar_on(isa, model, &format!("{what} ({isa:?}, far angles)"), 2e5);
+    }
+}
+
+fn same_as_scalar_on(isa: BatchIsa, model: &Model, what: &str, q_range: f64) {
     let (nq, nv) = (model.nq, model.nv);
     let mut batch = BatchData::new(model);
     let mut data = Data::new(model);
     for (seed, n) in [0, 1, L - 1, L, 3 * L + 1].into_iter().enumerate() {
-        let (qs, vs, accs) = random_states(model, n, seed as u64 + 7);
+        let (qs, vs, accs) = random_states(model, n, seed as u64 + 7, q_range);
         // a stale output must be overwritten everywhere
         let mut out = vec![f64::NAN; n * nv];
-        dynamics::rnea_batch(model, &mut batch, &qs, &vs, &accs, &mut out);
+        dynamics::rnea_batch_isa(isa, model, &mut batch, &qs, &vs, &accs, &mut out);
         for r in 0..n {
             let q = DVector::from_column_slice(&qs[r * nq..(r + 1) * nq]);
             let v = DVector::from_column_slice(&vs[r * nv..(r + 1) * nv]);

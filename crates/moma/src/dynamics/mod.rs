@@ -27,4 +27,4 @@ pub use centroidal::{
 pub use coriolis::coriolis_matrix;
 pub use crba::crba;
 pub use rnea::{gravity_torque, nonlinear_effects, rnea};
-pub use rnea_batch::{BatchData, RNEA_LANES, rnea_batch};
+pub use rnea_batch::{BatchData, BatchIsa, RNEA_LANES, rnea_batch, rnea_batch_isa};

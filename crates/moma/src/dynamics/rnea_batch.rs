@@ -3,10 +3,13 @@
 //!
 //! Every scalar of the pass (a twist component, a rotation entry, a torque) is stored as
 //! `[f64; RNEA_LANES]`, one entry per state, and every arithmetic step is a loop over the
-//! lanes that LLVM turns into SIMD instructions (two SSE2 registers per lane group on the
-//! portable x86-64 build, one AVX2 register with `-C target-cpu=native`). One walk over the
-//! model's joints thus does the arithmetic of four states, and the per-joint bookkeeping
-//! (joint kind, parent, indices) is paid once for the four.
+//! lanes that LLVM turns into SIMD instructions. The pass is compiled three times and the
+//! widest copy the CPU runs is chosen at run time ([`BatchIsa`]): the portable baseline
+//! (four SSE2 registers per lane group on x86-64), AVX2 (two registers) and AVX-512F (one
+//! register). One walk over the model's joints thus does the arithmetic of eight states,
+//! whose independent operations also keep the core's pipelines full where one state's
+//! chain of dependent steps would stall them, and the per-joint bookkeeping (joint kind,
+//! parent, indices) is paid once for the eight.
 //!
 //! Each lane performs exactly the floating-point operations of the scalar
 //! [`rnea`](super::rnea), in the same order (the same [`trig::sin_cos`] per lane, the same
@@ -14,12 +17,12 @@
 //! scalar call on every state.
 
 use crate::multibody::{JointType, Model};
-use crate::spatial::{Force, trig};
 #[cfg(test)]
 use crate::spatial::Motion;
+use crate::spatial::{Force, trig};
 
 /// Number of states one pass of [`rnea_batch`] processes together.
-pub const RNEA_LANES: usize = 4;
+pub const RNEA_LANES: usize = 8;
 
 const L: usize = RNEA_LANES;
 type Lane = [f64; L];
@@ -203,11 +206,10 @@ impl Pose {
     /// `Rᵀ · v` in nalgebra's order (`tr_mul`): one dot product per column.
     #[inline(always)]
     fn rot_tr_mul(&self, v: &V3) -> V3 {
-        let dot = |c: &V3| add(add(mul(c.x, v.x), mul(c.y, v.y)), mul(c.z, v.z));
         V3 {
-            x: dot(&self.r[0]),
-            y: dot(&self.r[1]),
-            z: dot(&self.r[2]),
+            x: dot(&self.r[0], v),
+            y: dot(&self.r[1], v),
+            z: dot(&self.r[2], v),
         }
     }
 
@@ -240,6 +242,18 @@ impl Pose {
         self.t.y[k] = m.translation.y;
         self.t.z[k] = m.translation.z;
     }
+}
+
+/// `c · v` in nalgebra's order: `(x·x' + y·y') + z·z'`.
+#[inline(always)]
+fn dot(c: &V3, v: &V3) -> Lane {
+    add(add(mul(c.x, v.x), mul(c.y, v.y)), mul(c.z, v.z))
+}
+
+/// Column `c` of a rotation matrix.
+#[inline(always)]
+fn col(r: &nalgebra::Matrix3<f64>, c: usize) -> [f64; 3] {
+    [r[(0, c)], r[(1, c)], r[(2, c)]]
 }
 
 /// A body's spatial inertia, constant over the lanes.
@@ -378,6 +392,20 @@ pub fn rnea_batch(
     as_: &[f64],
     out: &mut [f64],
 ) {
+    let n = checked_rows(model, data, qs, vs, as_, out);
+    run_groups(BatchIsa::detected(), model, data, qs, vs, as_, out, n);
+}
+
+/// The number of states of [`rnea_batch`]'s slices, after checking their lengths and the
+/// workspace (panics as documented there).
+fn checked_rows(
+    model: &Model,
+    data: &BatchData,
+    qs: &[f64],
+    vs: &[f64],
+    as_: &[f64],
+    out: &[f64],
+) -> usize {
     let (nq, nv) = (model.nq, model.nv);
     assert!(
         data.njoints == model.njoints && data.nq == nq && data.nv == nv,
@@ -399,27 +427,136 @@ pub fn rnea_batch(
             "rnea_batch: {name} has {len} values, expected {n} × {nv}"
         );
     }
+    n
+}
+
+/// The instruction sets [`rnea_batch`] is compiled for. It picks the widest one the CPU
+/// has ([`BatchIsa::detected`]); [`rnea_batch_isa`] runs a given one, so that tests and
+/// benchmarks can compare them. Every one performs the same floating-point operations in
+/// the same order (no fused multiply–add: Rust never contracts `a * b + c`), so all give
+/// the same bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BatchIsa {
+    /// The build's baseline (SSE2 on x86-64): two lanes per register.
+    Portable,
+    /// AVX2 (x86-64): four lanes per register.
+    Avx2,
+    /// AVX-512F (x86-64): one 512-bit register per group of eight lanes.
+    Avx512,
+}
+
+impl BatchIsa {
+    /// Whether this CPU can run `self`.
+    #[must_use]
+    pub fn is_supported(self) -> bool {
+        match self {
+            BatchIsa::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            BatchIsa::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            BatchIsa::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    /// The instruction sets this CPU can run, baseline first.
+    #[must_use]
+    pub fn available() -> Vec<BatchIsa> {
+        [BatchIsa::Portable, BatchIsa::Avx2, BatchIsa::Avx512]
+            .into_iter()
+            .filter(|i| i.is_supported())
+            .collect()
+    }
+
+    /// The widest instruction set this CPU can run (what [`rnea_batch`] uses).
+    #[must_use]
+    pub fn detected() -> BatchIsa {
+        [BatchIsa::Avx512, BatchIsa::Avx2]
+            .into_iter()
+            .find(|i| i.is_supported())
+            .unwrap_or(BatchIsa::Portable)
+    }
+}
+
+/// [`rnea_batch`] compiled for the instruction set `isa` rather than the detected one.
+///
+/// # Panics
+/// As [`rnea_batch`], and if this CPU lacks `isa` (see [`BatchIsa::available`]).
+pub fn rnea_batch_isa(
+    isa: BatchIsa,
+    model: &Model,
+    data: &mut BatchData,
+    qs: &[f64],
+    vs: &[f64],
+    as_: &[f64],
+    out: &mut [f64],
+) {
+    assert!(
+        isa.is_supported(),
+        "rnea_batch_isa: this CPU cannot run {isa:?}"
+    );
+    let n = checked_rows(model, data, qs, vs, as_, out);
+    run_groups(isa, model, data, qs, vs, as_, out, n);
+}
+
+/// Runs [`groups`] compiled for `isa`, which the caller has checked this CPU supports.
+#[allow(clippy::too_many_arguments)]
+fn run_groups(
+    isa: BatchIsa,
+    model: &Model,
+    data: &mut BatchData,
+    qs: &[f64],
+    vs: &[f64],
+    as_: &[f64],
+    out: &mut [f64],
+    n: usize,
+) {
     if n == 0 {
         return;
     }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        #[allow(unsafe_code)]
-        // SAFETY: `groups_avx2` only requires AVX2, detected on this CPU just above.
-        unsafe {
-            groups_avx2(model, data, qs, vs, as_, out, n);
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        BatchIsa::Avx512 => {
+            #[allow(unsafe_code)]
+            // SAFETY: `groups_avx512` only requires AVX-512F, which the callers detected.
+            unsafe {
+                groups_avx512(model, data, qs, vs, as_, out, n);
+            }
         }
-        return;
+        #[cfg(target_arch = "x86_64")]
+        BatchIsa::Avx2 => {
+            #[allow(unsafe_code)]
+            // SAFETY: `groups_avx2` only requires AVX2, which the callers detected.
+            unsafe {
+                groups_avx2(model, data, qs, vs, as_, out, n);
+            }
+        }
+        _ => groups(model, data, qs, vs, as_, out, n),
     }
-    groups(model, data, qs, vs, as_, out, n);
 }
 
-/// [`groups`] compiled for AVX2 (one 256-bit register per lane group), chosen at run
+/// [`groups`] compiled for AVX2 (two 256-bit registers per lane group), chosen at run
 /// time by [`rnea_batch`]. The floating-point operations are the same (no fused
 /// multiply–add: Rust never contracts `a * b + c`), so the torques are too.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn groups_avx2(
+    model: &Model,
+    data: &mut BatchData,
+    qs: &[f64],
+    vs: &[f64],
+    as_: &[f64],
+    out: &mut [f64],
+    n: usize,
+) {
+    groups(model, data, qs, vs, as_, out, n);
+}
+
+/// [`groups`] compiled for AVX-512F (one 512-bit register per lane group of eight).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn groups_avx512(
     model: &Model,
     data: &mut BatchData,
     qs: &[f64],
@@ -511,22 +648,26 @@ fn splat(v: [f64; 3]) -> V3 {
 /// `r.column(i) * c + r.column(j) * s`.
 #[inline(always)]
 fn comb(a: [f64; 3], cs: &Lane, b: [f64; 3], sn: &Lane, minus: bool) -> V3 {
-    let f = |ai: f64, bi: f64| {
-        let mut o = ZERO;
-        for k in 0..L {
-            o[k] = if minus {
-                ai * cs[k] - bi * sn[k]
-            } else {
-                ai * cs[k] + bi * sn[k]
-            };
-        }
-        o
-    };
     V3 {
-        x: f(a[0], b[0]),
-        y: f(a[1], b[1]),
-        z: f(a[2], b[2]),
+        x: comb1(a[0], cs, b[0], sn, minus),
+        y: comb1(a[1], cs, b[1], sn, minus),
+        z: comb1(a[2], cs, b[2], sn, minus),
     }
+}
+
+/// One component of [`comb`] (a function, not a closure: a closure is not always inlined
+/// into the AVX copies of the pass, and then runs as scalar code).
+#[inline(always)]
+fn comb1(ai: f64, cs: &Lane, bi: f64, sn: &Lane, minus: bool) -> Lane {
+    let mut o = ZERO;
+    for k in 0..L {
+        o[k] = if minus {
+            ai * cs[k] - bi * sn[k]
+        } else {
+            ai * cs[k] + bi * sn[k]
+        };
+    }
+    o
 }
 
 /// `parent_from_joint` of a revolute joint over the lanes: columns `i` and `j` of the
@@ -541,7 +682,6 @@ fn revolute_pose(
     sign_first: bool,
 ) {
     let r = &placement.rotation;
-    let col = |c: usize| [r[(0, c)], r[(1, c)], r[(2, c)]];
     let t = placement.translation;
     let mut s = ZERO;
     let mut c = ZERO;
@@ -555,17 +695,33 @@ fn revolute_pose(
             (s[k], c[k]) = q[k].sin_cos();
         }
     }
-    out.r[keep] = splat(col(keep));
+    out.r[keep] = splat(col(r, keep));
     out.t = splat([t.x, t.y, t.z]);
+    let (ri, rj) = (col(r, i), col(r, j));
     if sign_first {
         // X and Z: c_i = r_i c + r_j s, c_j = r_j c − r_i s
-        out.r[i] = comb(col(i), &c, col(j), &s, false);
-        out.r[j] = comb(col(j), &c, col(i), &s, true);
+        out.r[i] = comb(ri, &c, rj, &s, false);
+        out.r[j] = comb(rj, &c, ri, &s, true);
     } else {
         // Y: c_0 = r_0 c − r_2 s, c_2 = r_0 s + r_2 c
-        out.r[i] = comb(col(i), &c, col(j), &s, true);
-        out.r[j] = comb(col(i), &s, col(j), &c, false);
+        out.r[i] = comb(ri, &c, rj, &s, true);
+        out.r[j] = comb(ri, &s, rj, &c, false);
     }
+}
+
+/// `parent_from_joint` of a prismatic joint on frame axis `axis` over the lanes:
+/// translation + (column `axis`) · q, component by component.
+#[inline(always)]
+fn prismatic_pose(placement: &crate::spatial::SE3, q: Lane, out: &mut Pose, axis: usize) {
+    let r = &placement.rotation;
+    let t = placement.translation;
+    out.r = [splat(col(r, 0)), splat(col(r, 1)), splat(col(r, 2))];
+    let a = col(r, axis);
+    out.t = V3 {
+        x: add([t.x; L], scale(q, a[0])),
+        y: add([t.y; L], scale(q, a[1])),
+        z: add([t.z; L], scale(q, a[2])),
+    };
 }
 
 /// `parent_from_joint` over the lanes for the kinds [`aligned_motion`] covers, in the
@@ -573,29 +729,18 @@ fn revolute_pose(
 #[inline(always)]
 fn aligned_pose(jt: &JointType, placement: &crate::spatial::SE3, q: Lane, out: &mut Pose) -> bool {
     let r = &placement.rotation;
-    let col = |c: usize| [r[(0, c)], r[(1, c)], r[(2, c)]];
     let t = placement.translation;
     let tr = [t.x, t.y, t.z];
-    // translation + (column `axis`) · q, component by component
-    let prismatic = |out: &mut Pose, axis: usize| {
-        out.r = [splat(col(0)), splat(col(1)), splat(col(2))];
-        let a = col(axis);
-        out.t = V3 {
-            x: add([tr[0]; L], scale(q, a[0])),
-            y: add([tr[1]; L], scale(q, a[1])),
-            z: add([tr[2]; L], scale(q, a[2])),
-        };
-    };
     match jt {
         JointType::RevoluteX => revolute_pose(placement, &q, out, [0, 1, 2], true),
         JointType::RevoluteY => revolute_pose(placement, &q, out, [1, 0, 2], false),
         JointType::RevoluteZ => revolute_pose(placement, &q, out, [2, 0, 1], true),
-        JointType::PrismaticX => prismatic(out, 0),
-        JointType::PrismaticY => prismatic(out, 1),
-        JointType::PrismaticZ => prismatic(out, 2),
+        JointType::PrismaticX => prismatic_pose(placement, q, out, 0),
+        JointType::PrismaticY => prismatic_pose(placement, q, out, 1),
+        JointType::PrismaticZ => prismatic_pose(placement, q, out, 2),
         JointType::PrismaticUnaligned { axis } => {
             // translation + R · (axis · q), R · w in nalgebra's order
-            out.r = [splat(col(0)), splat(col(1)), splat(col(2))];
+            out.r = [splat(col(r, 0)), splat(col(r, 1)), splat(col(r, 2))];
             let w = V3 {
                 x: scale(q, axis.x),
                 y: scale(q, axis.y),
