@@ -119,7 +119,7 @@ pub(crate) fn frame_jacobian<'py>(
 
 /// `rnea` on every row: q (n, nq), v and a (n, nv) → tau (n, nv). Loops in Rust with
 /// the GIL released, on all cores, with the library's multi-state kernel
-/// (`moma::dynamics::rnea_batch`, four states per pass) over each worker's rows, writing
+/// (`moma::dynamics::rnea_batch`, eight states per pass) over each worker's rows, writing
 /// straight into the returned array; bit-for-bit the single calls' torques.
 #[pyfunction]
 pub(crate) fn rnea_batch<'py>(
@@ -145,7 +145,15 @@ pub(crate) fn rnea_batch<'py>(
         let mut rw = out.readwrite();
         let buf = rw.as_slice_mut().map_err(crate::err)?;
         py.detach(|| -> PyResult<()> {
-            inputs.check(m, n)?;
+            // a free-flyer's quaternions are checked row by row first; otherwise each block
+            // checks its own rows are finite just before computing them (while they are in
+            // cache, and on all cores), and a bad block sends the batch to the row-by-row
+            // check, which names the first bad row
+            let per_block = m.root != moma::multibody::RootJoint::FreeFlyer;
+            if !per_block {
+                inputs.check(m, n)?;
+            }
+            let bad = std::sync::atomic::AtomicBool::new(false);
             // the kernel reads row-major slices: C-contiguous inputs as they are, others
             // copied once (their size is the caller's own array's)
             let (qa, va, aa) = (inputs.q, inputs.v.unwrap(), inputs.a.unwrap());
@@ -165,15 +173,25 @@ pub(crate) fn rnea_batch<'py>(
             par_blocks(m, buf, |bd, first, block| {
                 let rows = block.len() / m.nv;
                 let (q0, v0) = (first * m.nq, first * m.nv);
-                dynamics::rnea_batch(
-                    m,
-                    bd,
+                let (q, v, a) = (
                     &qs[q0..q0 + rows * m.nq],
                     &vs[v0..v0 + rows * m.nv],
                     &as_[v0..v0 + rows * m.nv],
-                    block,
                 );
+                if per_block
+                    && !(crate::model::slice_finite(q)
+                        && crate::model::slice_finite(v)
+                        && crate::model::slice_finite(a))
+                {
+                    bad.store(true, std::sync::atomic::Ordering::Relaxed);
+                    return;
+                }
+                dynamics::rnea_batch(m, bd, q, v, a, block);
             });
+            if bad.into_inner() {
+                inputs.check(m, n)?;
+                return Err(crate::err("rnea_batch: a state has a non-finite value"));
+            }
             Ok(())
         })?;
     }
@@ -191,31 +209,74 @@ fn rows_slice<'s>(
     }
 }
 
-/// Rows per rayon task of [`par_blocks`] (a multiple of the kernel's four lanes).
-const BLOCK: usize = 256;
+/// Rows per claim of [`par_blocks`] (a multiple of the kernel's eight lanes): about 10 µs
+/// of Panda RNEA, so the thread that takes the last block keeps the other waiting little.
+const BLOCK: usize = 64;
 
-/// Runs `f(workspace, first_row, out_rows)` over blocks of the row-major `out` (rows of
-/// nv): the whole batch at once on one thread, else blocks of [`BLOCK`] rows on all cores
-/// with one workspace per worker split. Each row depends only on its own inputs, so the
-/// result does not depend on the thread count.
+/// Batches below this many rows run on the calling thread alone: waking an idle worker
+/// can cost a millisecond on a virtual machine, more than such a batch takes.
+const PAR_MIN_ROWS: usize = 2048;
+
+/// Counts one block of [`par_blocks`] as finished when dropped, also when `f` unwinds, so
+/// the caller's wait for running blocks always ends (the scope then re-raises the panic).
+struct Finished<'a>(&'a std::sync::atomic::AtomicUsize);
+
+impl Drop for Finished<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Release);
+    }
+}
+
+/// Runs `f(workspace, first_row, out_rows)` over blocks of [`BLOCK`] rows of the
+/// row-major `out` (rows of nv). The calling thread starts on the first block at once
+/// and the pool's other workers join as they wake, each claiming the next unclaimed block
+/// until none is left, with one workspace per thread; small batches, or a pool of one
+/// thread, run on the caller alone. Each row depends only on its own inputs, so the result
+/// does not depend on which thread computed it.
 fn par_blocks(
     m: &moma::multibody::Model,
     out: &mut [f64],
     f: impl Fn(&mut dynamics::BatchData, usize, &mut [f64]) + Sync,
 ) {
-    use rayon::prelude::*;
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicUsize, Ordering};
     if m.nv == 0 || out.is_empty() {
         return;
     }
     let n = out.len() / m.nv;
-    if n <= BLOCK || rayon::current_num_threads() == 1 {
+    let threads = rayon::current_num_threads();
+    if n < PAR_MIN_ROWS || threads == 1 {
         f(&mut dynamics::BatchData::new(m), 0, out);
         return;
     }
-    out.par_chunks_mut(m.nv * BLOCK).enumerate().for_each_init(
-        || dynamics::BatchData::new(m),
-        |bd, (c, block)| f(bd, c * BLOCK, block),
-    );
+    let nblocks = n.div_ceil(BLOCK);
+    let blocks = Mutex::new(out.chunks_mut(m.nv * BLOCK).enumerate());
+    let finished = AtomicUsize::new(0);
+    let work = || {
+        let mut bd = None;
+        loop {
+            // a panic in `f` poisons nothing this loop relies on: the iterator is intact
+            let next = blocks.lock().unwrap_or_else(|e| e.into_inner()).next();
+            let Some((c, block)) = next else { break };
+            let _done = Finished(&finished);
+            f(
+                bd.get_or_insert_with(|| dynamics::BatchData::new(m)),
+                c * BLOCK,
+                block,
+            );
+        }
+    };
+    rayon::in_place_scope(|s| {
+        for _ in 1..threads {
+            s.spawn(|_| work());
+        }
+        work();
+        // every block is claimed; wait for the ones still running without going to sleep
+        // (a sleeping caller is woken late), at most one block's time
+        while finished.load(Ordering::Acquire) < nblocks {
+            std::hint::spin_loop();
+        }
+    });
 }
 
 /// `aba` on every row: q (n, nq), v and tau (n, nv) → ddq (n, nv), on all cores with the GIL released.

@@ -458,11 +458,15 @@ pub(crate) fn run_batch<'py>(
 /// Panda RNEA per state).
 fn all_finite(x: &ArrayView2<'_, f64>) -> bool {
     match x.as_slice_memory_order() {
-        Some(s) => s
-            .chunks(64)
-            .all(|c| c.iter().fold(true, |ok, y| ok & y.is_finite())),
+        Some(s) => slice_finite(s),
         None => x.iter().all(|y| y.is_finite()),
     }
+}
+
+/// Whether every value of `s` is finite (chunks without early exit, which vectorise).
+pub(crate) fn slice_finite(s: &[f64]) -> bool {
+    s.chunks(64)
+        .all(|c| c.iter().fold(true, |ok, y| ok & y.is_finite()))
 }
 
 /// Checks every row of a batch (finite values, unit base quaternion) before the parallel

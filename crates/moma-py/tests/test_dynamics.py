@@ -72,6 +72,20 @@ def test_batches_equal_loops(urdf, root):
         assert np.array_equal(j[k], moma.frame_jacobian(model, data, q[k], frame))
 
 
+def test_parallel_batch_equals_loop_and_names_the_first_bad_row():
+    # above the size at which the batch shares its blocks between the caller and the pool
+    model = moma.Model.from_urdf(URDF / "panda.urdf")
+    data = model.create_data()
+    q, v, a = random_states(model, 5000, 11)
+    tau = moma.rnea_batch(model, data, q, v, a)
+    for k in range(0, 5000, 7):
+        assert np.array_equal(tau[k], moma.rnea(model, data, q[k], v[k], a[k]))
+    v[4321, 0] = np.nan
+    a[3000, 2] = -np.inf
+    with pytest.raises(moma.MomaError, match=r"^non-finite value in rnea_batch row 3000 a\[2\]$"):
+        moma.rnea_batch(model, data, q, v, a)
+
+
 def test_inputs_accept_lists_and_non_contiguous_arrays():
     model = moma.Model.from_urdf(URDF / "panda.urdf")
     data = model.create_data()
