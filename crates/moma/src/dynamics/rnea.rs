@@ -1,7 +1,7 @@
 //! Recursive Newton–Euler algorithm and its special cases.
 
 use crate::kinematics::{assert_nv, assert_sizes, update_joint_placement};
-use crate::multibody::{Data, Model};
+use crate::multibody::{Data, JointType, Model};
 use crate::spatial::Motion;
 use nalgebra::DVector;
 
@@ -29,16 +29,29 @@ pub(crate) fn rnea_impl(
         let (nqi, nvi) = (model.nqs[i], model.nvs[i]);
         let qi = &qs[iq..iq + nqi];
         let m = data.parent_from_joint[i];
+        let slot = axis_slot(jt);
         let mut acc = m.inverse_act_motion(&data.a[p]);
         if let Some(a) = as_ {
-            acc += jt.motion(qi, &a[iv..iv + nvi]);
+            match slot {
+                Some(k) => add_to_slot(&mut acc, k, a[iv]),
+                None => acc += jt.motion(qi, &a[iv..iv + nvi]),
+            }
         }
         let inertia = &model.inertias[i];
         if let Some(v) = vs {
             let vi = &v[iv..iv + nvi];
-            let vj = jt.motion(qi, vi);
-            let vel = m.inverse_act_motion(&data.v[p]) + vj;
-            acc += vel.cross_motion(&vj);
+            let mut vel = m.inverse_act_motion(&data.v[p]);
+            match slot {
+                Some(k) => {
+                    add_to_slot(&mut vel, k, vi[0]);
+                    acc += cross_slot(&vel, k, vi[0]);
+                }
+                None => {
+                    let vj = jt.motion(qi, vi);
+                    vel += vj;
+                    acc += vel.cross_motion(&vj);
+                }
+            }
             if jt.has_bias() {
                 acc += jt.bias(qi, vi);
             }
@@ -69,6 +82,59 @@ pub(crate) fn rnea_impl(
             let fp = data.parent_from_joint[i].act_force(&fi);
             data.f[p] += fp;
         }
+    }
+}
+
+/// The one coordinate of a twist `[v; ω]` (0–2 linear, 3–5 angular) that the motion
+/// subspace of an axis-aligned prismatic or revolute joint spans; `None` for other kinds.
+/// RNEA adds and crosses such a joint's twist `S·q̇ = q̇·e_k` by that coordinate alone: the
+/// same values as the full products, except that terms which are exactly zero are not
+/// added (at most the sign of a zero result differs).
+#[inline]
+pub(crate) fn axis_slot(jt: &JointType) -> Option<usize> {
+    match jt {
+        JointType::PrismaticX => Some(0),
+        JointType::PrismaticY => Some(1),
+        JointType::PrismaticZ => Some(2),
+        JointType::RevoluteX => Some(3),
+        JointType::RevoluteY => Some(4),
+        JointType::RevoluteZ => Some(5),
+        _ => None,
+    }
+}
+
+/// `m += x·e_k`.
+#[inline]
+fn add_to_slot(m: &mut Motion, k: usize, x: f64) {
+    if k < 3 {
+        m.linear[k] += x;
+    } else {
+        m.angular[k - 3] += x;
+    }
+}
+
+/// `a × (w·e_j)` for a 3-vector `a` and axis `j`, without the products by zero.
+#[inline]
+fn cross_axis(a: &nalgebra::Vector3<f64>, j: usize, w: f64) -> nalgebra::Vector3<f64> {
+    match j {
+        0 => nalgebra::Vector3::new(0.0, a.z * w, -(a.y * w)),
+        1 => nalgebra::Vector3::new(-(a.z * w), 0.0, a.x * w),
+        _ => nalgebra::Vector3::new(a.y * w, -(a.x * w), 0.0),
+    }
+}
+
+/// `vel × (w·e_k)` (`Motion::cross_motion` with the joint twist of [`axis_slot`] `k`).
+#[inline]
+fn cross_slot(vel: &Motion, k: usize, w: f64) -> Motion {
+    if k < 3 {
+        // [ω × w e_k; 0]
+        Motion::new(cross_axis(&vel.angular, k, w), nalgebra::Vector3::zeros())
+    } else {
+        // [v × w e_k; ω × w e_k]
+        Motion::new(
+            cross_axis(&vel.linear, k - 3, w),
+            cross_axis(&vel.angular, k - 3, w),
+        )
     }
 }
 

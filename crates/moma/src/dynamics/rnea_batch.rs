@@ -57,6 +57,15 @@ fn mul(a: Lane, b: Lane) -> Lane {
 }
 
 #[inline(always)]
+fn neg(a: Lane) -> Lane {
+    let mut r = ZERO;
+    for k in 0..L {
+        r[k] = -a[k];
+    }
+    r
+}
+
+#[inline(always)]
 fn scale(a: Lane, s: f64) -> Lane {
     let mut r = ZERO;
     for k in 0..L {
@@ -108,6 +117,29 @@ impl V3 {
         }
     }
 
+    /// `self × (w·e_j)` without the products by zero (as the scalar `rnea`'s
+    /// `cross_axis`).
+    #[inline(always)]
+    fn cross_axis(&self, j: usize, w: &Lane) -> V3 {
+        match j {
+            0 => V3 {
+                x: ZERO,
+                y: mul(self.z, *w),
+                z: neg(mul(self.y, *w)),
+            },
+            1 => V3 {
+                x: neg(mul(self.z, *w)),
+                y: ZERO,
+                z: mul(self.x, *w),
+            },
+            _ => V3 {
+                x: mul(self.y, *w),
+                y: neg(mul(self.x, *w)),
+                z: ZERO,
+            },
+        }
+    }
+
     /// The cross product with a vector constant over the lanes (`c × self` when
     /// `left`, as nalgebra's `c.cross(&self)`).
     #[inline(always)]
@@ -156,6 +188,36 @@ impl S6 {
         S6 {
             lin: self.ang.cross(&f.lin),
             ang: self.ang.cross(&f.ang).add(&self.lin.cross(&f.lin)),
+        }
+    }
+
+    /// `self += x·e_k` (as the scalar `rnea`'s `add_to_slot`: 0–2 linear, 3–5 angular).
+    #[inline(always)]
+    fn add_to_slot(&mut self, k: usize, x: &Lane) {
+        let c = match k {
+            0 => &mut self.lin.x,
+            1 => &mut self.lin.y,
+            2 => &mut self.lin.z,
+            3 => &mut self.ang.x,
+            4 => &mut self.ang.y,
+            _ => &mut self.ang.z,
+        };
+        *c = add(*c, *x);
+    }
+
+    /// `self × (w·e_k)` (as the scalar `rnea`'s `cross_slot`).
+    #[inline(always)]
+    fn cross_slot(&self, k: usize, w: &Lane) -> S6 {
+        if k < 3 {
+            S6 {
+                lin: self.ang.cross_axis(k, w),
+                ang: V3::ZERO,
+            }
+        } else {
+            S6 {
+                lin: self.lin.cross_axis(k - 3, w),
+                ang: self.ang.cross_axis(k - 3, w),
+            }
         }
     }
 
@@ -811,6 +873,19 @@ fn project_by_lanes(model: &Model, d: &mut BatchData, i: usize) {
     }
 }
 
+/// Body twist and acceleration of a joint with full twists `vj`, `aj` (and bias), in the
+/// operations of the scalar `rnea`.
+#[inline(always)]
+fn general_twists(pose: &Pose, vp: &S6, ap: &S6, vj: &S6, aj: &S6, bias: Option<&S6>) -> (S6, S6) {
+    let acc = pose.inverse_act_motion(ap).add(aj);
+    let vel = pose.inverse_act_motion(vp).add(vj);
+    let mut acc = acc.add(&vel.cross_motion(vj));
+    if let Some(c) = bias {
+        acc = acc.add(c);
+    }
+    (vel, acc)
+}
+
 /// One RNEA pass over the lanes' states held in `d.q`, `d.qd`, `d.qdd`, into `d.tau`.
 #[inline(always)]
 fn pass(model: &Model, d: &mut BatchData) {
@@ -826,23 +901,29 @@ fn pass(model: &Model, d: &mut BatchData) {
         let jt = &model.joint_types[i];
         let p = model.parents[i].0;
         let (iq, iv) = (model.idx_q[i], model.idx_v[i]);
-        let (vj, aj, cj) = if aligned_pose(jt, &model.joint_placements[i], d.q[iq], &mut d.poses[i])
-        {
-            (
-                aligned_motion(jt, d.qd[iv]).unwrap_or(S6::ZERO),
-                aligned_motion(jt, d.qdd[iv]).unwrap_or(S6::ZERO),
-                S6::ZERO,
-            )
-        } else {
-            joint_by_lanes(model, d, i)
+        let aligned = aligned_pose(jt, &model.joint_placements[i], d.q[iq], &mut d.poses[i]);
+        let (vel, acc) = match (aligned, super::rnea::axis_slot(jt)) {
+            // as the scalar `rnea`: the joint twist q̇·e_k added and crossed by its slot
+            (true, Some(k)) => {
+                let pose = &d.poses[i];
+                let mut acc = pose.inverse_act_motion(&d.a[p]);
+                acc.add_to_slot(k, &d.qdd[iv]);
+                let mut vel = pose.inverse_act_motion(&d.v[p]);
+                vel.add_to_slot(k, &d.qd[iv]);
+                let acc = acc.add(&vel.cross_slot(k, &d.qd[iv]));
+                (vel, acc)
+            }
+            (true, None) => {
+                let vj = aligned_motion(jt, d.qd[iv]).unwrap_or(S6::ZERO);
+                let aj = aligned_motion(jt, d.qdd[iv]).unwrap_or(S6::ZERO);
+                general_twists(&d.poses[i], &d.v[p], &d.a[p], &vj, &aj, None)
+            }
+            (false, _) => {
+                let (vj, aj, cj) = joint_by_lanes(model, d, i);
+                let bias = jt.has_bias().then_some(&cj);
+                general_twists(&d.poses[i], &d.v[p], &d.a[p], &vj, &aj, bias)
+            }
         };
-        let pose = &d.poses[i];
-        let acc = pose.inverse_act_motion(&d.a[p]).add(&aj);
-        let vel = pose.inverse_act_motion(&d.v[p]).add(&vj);
-        let mut acc = acc.add(&vel.cross_motion(&vj));
-        if jt.has_bias() {
-            acc = acc.add(&cj);
-        }
         let inertia = &d.inertias[i];
         d.f[i] = inertia
             .mul_motion(&acc)
