@@ -58,11 +58,16 @@ def main():
     print("| Panda, ns per call / per state | " + " | ".join(head) + " |")
     print("| --- |" + " ---: |" * len(configs))
     label = {"moma.rnea": "`moma.rnea`", "pinocchio.rnea": "`pinocchio.rnea`",
-             "loop": "Python loop of `moma.rnea`", "moma.rnea_batch": f"`moma.rnea_batch` ({args.batch} states)"}
+             "loop": "Python loop of `moma.rnea`", "moma.rnea_batch": f"`moma.rnea_batch` ({args.batch} states)",
+             "moma.rnea_batch out": "the same with `out=` a reused array"}
     for k in keys:
         print(f"| {label[k]} | " + " | ".join(f"{med(x[k] for x in results[c]):.0f}" for c in configs) + " |")
     print("| batch speed-up over the loop | " + " | ".join(
         f"{med(x['loop'] for x in results[c]) / med(x['moma.rnea_batch'] for x in results[c]):.1f}×" for c in configs) + " |")
+    if all("moma.rnea_batch out" in x for c in configs for x in results[c]):
+        print(f"| {label['moma.rnea_batch out']} | " + " | ".join(f"{med(x['moma.rnea_batch out'] for x in results[c]):.0f}" for c in configs) + " |")
+        print("| speed-up with `out=` | " + " | ".join(
+            f"{med(x['loop'] for x in results[c]) / med(x['moma.rnea_batch out'] for x in results[c]):.1f}×" for c in configs) + " |")
     print("| `moma.rnea` / `pinocchio.rnea` | " + " | ".join(
         f"{med(x['moma.rnea'] for x in results[c]) / med(x['pinocchio.rnea'] for x in results[c]):.2f}" for c in configs) + " |")
 

@@ -88,13 +88,23 @@ def main():
     ba = rng.normal(size=(nb, model.nv))
     assert np.array_equal(moma.rnea_batch(model, data, bq[:5], bv[:5], ba[:5])[3], moma.rnea(model, data, bq[3], bv[3], ba[3]))
 
-    t_m, t_p, t_batch, t_loop = [], [], [], []
+    out = np.empty((nb, model.nv))
+    t_m, t_p, t_batch, t_out, t_loop = [], [], [], [], []
     for _ in range(args.rounds):
         t_m.append(per_call(m_rnea, states, args.calls))
         t_p.append(per_call(p_rnea, states, args.calls))
         t0 = CLOCK()
         moma.rnea_batch(model, data, bq, bv, ba)
         t_batch.append((CLOCK() - t0) / nb)
+        # the same batch into a reused output array (after the Pinocchio loop again, so
+        # that it starts as cold as the first)
+        per_call(p_rnea, states, args.calls // 4)
+        t0 = CLOCK()
+        try:
+            moma.rnea_batch(model, data, bq, bv, ba, out=out)
+            t_out.append((CLOCK() - t0) / nb)
+        except TypeError:  # a build from before `out=`
+            pass
         t0 = CLOCK()
         for i in range(nb):
             moma.rnea(model, data, bq[i], bv[i], ba[i])
@@ -107,6 +117,8 @@ def main():
     print(f"  pinocchio.rnea       {med(t_p):8.0f}")
     print(f"  ratio moma/pinocchio {med(t_m) / med(t_p):8.3f}")
     print(f"  moma.rnea_batch      {med(t_batch):8.0f}   ({nb} states per call)")
+    if t_out:
+        print(f"  moma.rnea_batch(out=) {med(t_out):7.0f}   (into a reused array)")
     print(f"  Python loop of moma.rnea over the same states {med(t_loop):8.0f}")
     print(f"  batch speed-up       {med(t_loop) / med(t_batch):8.1f}x")
     if args.json:
@@ -118,6 +130,7 @@ def main():
                     "moma.rnea": med(t_m),
                     "pinocchio.rnea": med(t_p),
                     "moma.rnea_batch": med(t_batch),
+                    **({"moma.rnea_batch out": med(t_out)} if t_out else {}),
                     "loop": med(t_loop),
                 },
                 f,

@@ -3,7 +3,7 @@
 use crate::model::{BatchInputs, Mat2, PyData, PyModel, Vec1, check_state, load, run_batch};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
-use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, ToPyArray};
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods, ToPyArray};
 use pyo3::prelude::*;
 
 /// Inverse dynamics (recursive Newton-Euler): the joint torques
@@ -120,8 +120,12 @@ pub(crate) fn frame_jacobian<'py>(
 /// `rnea` on every row: q (n, nq), v and a (n, nv) → tau (n, nv). Loops in Rust with
 /// the GIL released, on all cores, with the library's multi-state kernel
 /// (`moma::dynamics::rnea_batch`, eight states per pass) over each worker's rows, writing
-/// straight into the returned array; bit-for-bit the single calls' torques.
+/// straight into the returned array; bit-for-bit the single calls' torques. `out`, when
+/// given, is a writeable C-contiguous float64 array of shape (n, nv), distinct from the
+/// inputs, that receives the torques and is returned (reusing it across calls saves the
+/// allocation and the first touch of fresh pages); after an error it holds NaN.
 #[pyfunction]
+#[pyo3(signature = (model, data, q, v, a, out = None))]
 pub(crate) fn rnea_batch<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
@@ -129,6 +133,7 @@ pub(crate) fn rnea_batch<'py>(
     q: Mat2<'py>,
     v: Mat2<'py>,
     a: Mat2<'py>,
+    out: Option<Bound<'py, PyArrayDyn<f64>>>,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let m = &model.inner;
     let inputs = BatchInputs {
@@ -140,11 +145,33 @@ pub(crate) fn rnea_batch<'py>(
     };
     model.check_data(&data)?;
     let n = inputs.rows(m)?;
-    let out = PyArrayDyn::<f64>::zeros(py, numpy::ndarray::IxDyn(&[n, m.nv]), false);
+    let given = out.is_some();
+    let out = match out {
+        Some(o) => {
+            if o.shape() != [n, m.nv] {
+                return Err(crate::err(format!(
+                    "rnea_batch out: expected shape ({n}, {}), got {:?}",
+                    m.nv,
+                    o.shape()
+                )));
+            }
+            if !o.is_c_contiguous() {
+                return Err(crate::err("rnea_batch out: expected a C-contiguous array"));
+            }
+            o
+        }
+        None => PyArrayDyn::<f64>::zeros(py, numpy::ndarray::IxDyn(&[n, m.nv]), false),
+    };
     {
-        let mut rw = out.readwrite();
-        let buf = rw.as_slice_mut().map_err(crate::err)?;
-        py.detach(|| -> PyResult<()> {
+        let mut rw = out.try_readwrite().map_err(|e| {
+            crate::err(format!(
+                "rnea_batch out: not writeable, or shares memory with an input ({e})"
+            ))
+        })?;
+        let buf = rw
+            .as_slice_mut()
+            .map_err(|_| crate::err("rnea_batch out: expected a C-contiguous array"))?;
+        let result = py.detach(|| -> PyResult<()> {
             // a free-flyer's quaternions are checked row by row first; otherwise each block
             // checks its own rows are finite just before computing them (while they are in
             // cache, and on all cores), and a bad block sends the batch to the row-by-row
@@ -193,7 +220,11 @@ pub(crate) fn rnea_batch<'py>(
                 return Err(crate::err("rnea_batch: a state has a non-finite value"));
             }
             Ok(())
-        })?;
+        });
+        if result.is_err() && given {
+            buf.fill(f64::NAN);
+        }
+        result?;
     }
     Ok(out)
 }

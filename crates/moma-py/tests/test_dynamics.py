@@ -86,6 +86,30 @@ def test_parallel_batch_equals_loop_and_names_the_first_bad_row():
         moma.rnea_batch(model, data, q, v, a)
 
 
+def test_rnea_batch_writes_into_out():
+    model = moma.Model.from_urdf(URDF / "panda.urdf")
+    data = model.create_data()
+    q, v, a = random_states(model, 3000, 12)
+    want = moma.rnea_batch(model, data, q, v, a)
+    out = np.full((3000, model.nv), 7.0)
+    got = moma.rnea_batch(model, data, q, v, a, out=out)
+    assert got is out and np.array_equal(out, want)
+    with pytest.raises(moma.MomaError, match=r"^rnea_batch out: expected shape \(3000, 9\), got \[3000, 8\]$"):
+        moma.rnea_batch(model, data, q, v, a, out=np.zeros((3000, 8)))
+    with pytest.raises(moma.MomaError, match=r"^rnea_batch out: not writeable, or shares memory with an input"):
+        moma.rnea_batch(model, data, q, v, v, out=v)
+    frozen = np.zeros((3000, 9))
+    frozen.flags.writeable = False
+    with pytest.raises(moma.MomaError, match=r"^rnea_batch out: not writeable"):
+        moma.rnea_batch(model, data, q, v, a, out=frozen)
+    with pytest.raises(moma.MomaError, match=r"^rnea_batch out: expected a C-contiguous array$"):
+        moma.rnea_batch(model, data, q, v, a, out=np.zeros((9, 3000)).T)
+    v[2500, 3] = np.nan
+    with pytest.raises(moma.MomaError, match=r"^non-finite value in rnea_batch row 2500 v\[3\]$"):
+        moma.rnea_batch(model, data, q, v, a, out=out)
+    assert np.isnan(out).all()
+
+
 def test_inputs_accept_lists_and_non_contiguous_arrays():
     model = moma.Model.from_urdf(URDF / "panda.urdf")
     data = model.create_data()

@@ -83,8 +83,10 @@ def aba(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) ->
 def frame_jacobian(model: Model, data: Data, q: ArrayLike, frame: str) -> F64:
     """6 x nv Jacobian of a frame, LOCAL_WORLD_ALIGNED ([p_dot; omega], world axes)."""
 
-def rnea_batch(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
-    """rnea per row: q (n, nq), v and a (n, nv) -> (n, nv); GIL released."""
+def rnea_batch(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike, out: F64 | None = None) -> F64:
+    """rnea per row: q (n, nq), v and a (n, nv) -> (n, nv); GIL released. `out`: a
+    writeable C-contiguous float64 (n, nv) array, not an input, that receives the torques
+    and is returned (NaN after an error)."""
 
 def aba_batch(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> F64:
     """aba per row -> (n, nv); GIL released."""
