@@ -168,9 +168,7 @@ pub(crate) fn rnea_batch<'py>(
                 "rnea_batch out: not writeable, or shares memory with an input ({e})"
             ))
         })?;
-        let buf = rw
-            .as_slice_mut()
-            .map_err(|_| crate::err("rnea_batch out: expected a C-contiguous array"))?;
+        let buf = rw.as_slice_mut().map_err(crate::err)?;
         let result = py.detach(|| -> PyResult<()> {
             // a free-flyer's quaternions are checked row by row first; otherwise each block
             // checks its own rows are finite just before computing them (while they are in

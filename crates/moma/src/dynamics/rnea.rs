@@ -1,7 +1,7 @@
 //! Recursive Newton–Euler algorithm and its special cases.
 
 use crate::kinematics::{assert_nv, assert_sizes, update_joint_placement};
-use crate::multibody::{Data, JointType, Model};
+use crate::multibody::{Data, Model};
 use crate::spatial::Motion;
 use nalgebra::DVector;
 
@@ -29,7 +29,7 @@ pub(crate) fn rnea_impl(
         let (nqi, nvi) = (model.nqs[i], model.nvs[i]);
         let qi = &qs[iq..iq + nqi];
         let m = data.parent_from_joint[i];
-        let slot = axis_slot(jt);
+        let slot = jt.axis_slot();
         let mut acc = m.inverse_act_motion(&data.a[p]);
         if let Some(a) = as_ {
             match slot {
@@ -85,24 +85,6 @@ pub(crate) fn rnea_impl(
     }
 }
 
-/// The one coordinate of a twist `[v; ω]` (0–2 linear, 3–5 angular) that the motion
-/// subspace of an axis-aligned prismatic or revolute joint spans; `None` for other kinds.
-/// RNEA adds and crosses such a joint's twist `S·q̇ = q̇·e_k` by that coordinate alone: the
-/// same values as the full products, except that terms which are exactly zero are not
-/// added (at most the sign of a zero result differs).
-#[inline]
-pub(crate) fn axis_slot(jt: &JointType) -> Option<usize> {
-    match jt {
-        JointType::PrismaticX => Some(0),
-        JointType::PrismaticY => Some(1),
-        JointType::PrismaticZ => Some(2),
-        JointType::RevoluteX => Some(3),
-        JointType::RevoluteY => Some(4),
-        JointType::RevoluteZ => Some(5),
-        _ => None,
-    }
-}
-
 /// `m += x·e_k`.
 #[inline]
 fn add_to_slot(m: &mut Motion, k: usize, x: f64) {
@@ -123,7 +105,7 @@ fn cross_axis(a: &nalgebra::Vector3<f64>, j: usize, w: f64) -> nalgebra::Vector3
     }
 }
 
-/// `vel × (w·e_k)` (`Motion::cross_motion` with the joint twist of [`axis_slot`] `k`).
+/// `vel × (w·e_k)` (`Motion::cross_motion` with the joint twist of axis slot `k`).
 #[inline]
 fn cross_slot(vel: &Motion, k: usize, w: f64) -> Motion {
     if k < 3 {

@@ -191,17 +191,24 @@ impl S6 {
         }
     }
 
-    /// `self += x·e_k` (as the scalar `rnea`'s `add_to_slot`: 0–2 linear, 3–5 angular).
+    /// Coordinate `k` of `[lin; ang]` (0–2 linear, 3–5 angular, as
+    /// [`JointType::axis_slot`]).
     #[inline(always)]
-    fn add_to_slot(&mut self, k: usize, x: &Lane) {
-        let c = match k {
+    fn slot_mut(&mut self, k: usize) -> &mut Lane {
+        match k {
             0 => &mut self.lin.x,
             1 => &mut self.lin.y,
             2 => &mut self.lin.z,
             3 => &mut self.ang.x,
             4 => &mut self.ang.y,
             _ => &mut self.ang.z,
-        };
+        }
+    }
+
+    /// `self += x·e_k` (as the scalar `rnea`'s `add_to_slot`).
+    #[inline(always)]
+    fn add_to_slot(&mut self, k: usize, x: &Lane) {
+        let c = self.slot_mut(k);
         *c = add(*c, *x);
     }
 
@@ -671,29 +678,18 @@ fn load_lane(dst: &mut [Lane], row: &[f64], k: usize) {
     }
 }
 
-/// The joint's twist `S(q)·x` over the lanes, for a one-degree-of-freedom revolute joint
-/// on a frame axis or prismatic joint (`None` for the kinds computed lane by lane).
+/// The twist `axis · x` over the lanes of an unaligned prismatic joint, component by
+/// component as `axis * v`.
 #[inline(always)]
-fn aligned_motion(jt: &JointType, x: Lane) -> Option<S6> {
-    let mut m = S6::ZERO;
-    match jt {
-        JointType::RevoluteX => m.ang.x = x,
-        JointType::RevoluteY => m.ang.y = x,
-        JointType::RevoluteZ => m.ang.z = x,
-        JointType::PrismaticX => m.lin.x = x,
-        JointType::PrismaticY => m.lin.y = x,
-        JointType::PrismaticZ => m.lin.z = x,
-        // `axis * v` component by component
-        JointType::PrismaticUnaligned { axis } => {
-            m.lin = V3 {
-                x: scale(x, axis.x),
-                y: scale(x, axis.y),
-                z: scale(x, axis.z),
-            }
-        }
-        _ => return None,
+fn prismatic_motion(axis: &nalgebra::Vector3<f64>, x: Lane) -> S6 {
+    S6 {
+        lin: V3 {
+            x: scale(x, axis.x),
+            y: scale(x, axis.y),
+            z: scale(x, axis.z),
+        },
+        ang: V3::ZERO,
     }
-    Some(m)
 }
 
 /// A vector constant over the lanes.
@@ -753,7 +749,7 @@ fn revolute_pose(
         (s[k], c[k]) = trig::sin_cos_reduced(q[k]);
     }
     for k in 0..L {
-        if q[k].is_nan() || q[k].abs() >= trig::REDUCED_RANGE {
+        if !trig::in_reduced_range(q[k]) {
             (s[k], c[k]) = q[k].sin_cos();
         }
     }
@@ -786,7 +782,8 @@ fn prismatic_pose(placement: &crate::spatial::SE3, q: Lane, out: &mut Pose, axis
     };
 }
 
-/// `parent_from_joint` over the lanes for the kinds [`aligned_motion`] covers, in the
+/// `parent_from_joint` over the lanes for the revolute and prismatic kinds on a frame axis
+/// and the unaligned prismatic one, in the
 /// operations of `JointType::parent_from_joint`; `false` for the other kinds.
 #[inline(always)]
 fn aligned_pose(jt: &JointType, placement: &crate::spatial::SE3, q: Lane, out: &mut Pose) -> bool {
@@ -902,9 +899,9 @@ fn pass(model: &Model, d: &mut BatchData) {
         let p = model.parents[i].0;
         let (iq, iv) = (model.idx_q[i], model.idx_v[i]);
         let aligned = aligned_pose(jt, &model.joint_placements[i], d.q[iq], &mut d.poses[i]);
-        let (vel, acc) = match (aligned, super::rnea::axis_slot(jt)) {
+        let (vel, acc) = match (aligned, jt.axis_slot(), jt) {
             // as the scalar `rnea`: the joint twist q̇·e_k added and crossed by its slot
-            (true, Some(k)) => {
+            (true, Some(k), _) => {
                 let pose = &d.poses[i];
                 let mut acc = pose.inverse_act_motion(&d.a[p]);
                 acc.add_to_slot(k, &d.qdd[iv]);
@@ -913,12 +910,12 @@ fn pass(model: &Model, d: &mut BatchData) {
                 let acc = acc.add(&vel.cross_slot(k, &d.qd[iv]));
                 (vel, acc)
             }
-            (true, None) => {
-                let vj = aligned_motion(jt, d.qd[iv]).unwrap_or(S6::ZERO);
-                let aj = aligned_motion(jt, d.qdd[iv]).unwrap_or(S6::ZERO);
+            (true, None, JointType::PrismaticUnaligned { axis }) => {
+                let vj = prismatic_motion(axis, d.qd[iv]);
+                let aj = prismatic_motion(axis, d.qdd[iv]);
                 general_twists(&d.poses[i], &d.v[p], &d.a[p], &vj, &aj, None)
             }
-            (false, _) => {
+            _ => {
                 let (vj, aj, cj) = joint_by_lanes(model, d, i);
                 let bias = jt.has_bias().then_some(&cj);
                 general_twists(&d.poses[i], &d.v[p], &d.a[p], &vj, &aj, bias)
@@ -934,15 +931,10 @@ fn pass(model: &Model, d: &mut BatchData) {
     for i in (1..model.njoints).rev() {
         let jt = &model.joint_types[i];
         let iv = model.idx_v[i];
-        match jt {
-            JointType::RevoluteX => d.tau[iv] = d.f[i].ang.x,
-            JointType::RevoluteY => d.tau[iv] = d.f[i].ang.y,
-            JointType::RevoluteZ => d.tau[iv] = d.f[i].ang.z,
-            JointType::PrismaticX => d.tau[iv] = d.f[i].lin.x,
-            JointType::PrismaticY => d.tau[iv] = d.f[i].lin.y,
-            JointType::PrismaticZ => d.tau[iv] = d.f[i].lin.z,
+        match (jt.axis_slot(), jt) {
+            (Some(k), _) => d.tau[iv] = *d.f[i].slot_mut(k),
             // `axis.dot(f.linear)`: nalgebra's 3-vector dot is (x·x' + y·y') + z·z'
-            JointType::PrismaticUnaligned { axis } => {
+            (None, JointType::PrismaticUnaligned { axis }) => {
                 let f = &d.f[i].lin;
                 d.tau[iv] = add(
                     add(scale(f.x, axis.x), scale(f.y, axis.y)),

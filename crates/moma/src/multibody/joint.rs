@@ -179,6 +179,25 @@ impl JointType {
         }
     }
 
+    /// The one coordinate of a twist `[v; ω]` (0–2 linear, 3–5 angular) that the motion
+    /// subspace of an axis-aligned prismatic or revolute joint spans; `None` for the other
+    /// kinds. RNEA (one state or many) adds and crosses such a joint's twist `q̇·e_k` by
+    /// that coordinate alone: the values of the full products, except that exactly-zero
+    /// terms are not added (at most the sign of a zero result differs).
+    #[inline]
+    #[must_use]
+    pub fn axis_slot(&self) -> Option<usize> {
+        match self {
+            JointType::PrismaticX => Some(0),
+            JointType::PrismaticY => Some(1),
+            JointType::PrismaticZ => Some(2),
+            JointType::RevoluteX => Some(3),
+            JointType::RevoluteY => Some(4),
+            JointType::RevoluteZ => Some(5),
+            _ => None,
+        }
+    }
+
     /// `parent_from_joint = placement · J(q)`: the joint placement (in its parent joint's
     /// frame) composed with the joint's own motion for configuration `q` (its nq entries).
     #[inline]

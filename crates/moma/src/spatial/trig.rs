@@ -52,11 +52,20 @@ const C6: f64 = f64::from_bits(0xBDA8FAE9BE8838D4); // -1.13596475577881948265e-
 #[inline]
 #[must_use]
 pub fn sin_cos(x: f64) -> (f64, f64) {
-    if x.abs() < REDUCED_RANGE {
+    if in_reduced_range(x) {
         sin_cos_reduced(x)
     } else {
         x.sin_cos()
     }
+}
+
+/// Whether [`sin_cos`] takes [`sin_cos_reduced`] for `x` (|x| < [`REDUCED_RANGE`]; false
+/// for NaN): the one test for a caller that runs the reduced body on many angles at once
+/// and must fall back where [`sin_cos`] does.
+#[inline(always)]
+#[must_use]
+pub fn in_reduced_range(x: f64) -> bool {
+    x.abs() < REDUCED_RANGE
 }
 
 /// `(sin x, cos x)` for |x| < [`REDUCED_RANGE`], branch-free (see the module
