@@ -74,7 +74,8 @@ for f in glob.glob(os.path.join(out, "moma_*.json")):
     for algo, ns in d["median_ns"].items():
         moma[(variant, d["robot"], algo)] = ns
 robots = ["panda", "panda_planar", "panda_freeflyer", "ur5", "tiago", "tiago_no_hand_planar"]
-algos = ["rnea", "crba", "aba", "fk", "frame_jacobian", "osc"]
+# rows appear once `moma bench --json` reports the algorithm under the same key
+algos = ["rnea", "crba", "aba", "fk", "frame_jacobian", "osc", "rnea_derivatives", "aba_derivatives"]
 rows = ["| robot | algorithm | Pinocchio (ns, faster variant) | moma portable (ns) | ratio | moma native (ns) | ratio |",
         "| --- | --- | ---: | ---: | ---: | ---: | ---: |"]
 worst = 0.0
