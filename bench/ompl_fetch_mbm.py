@@ -318,7 +318,25 @@ def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20):
         f"default_rng({seed}), 30 per scene draw, up to {tries} draws) within the URDF limits (continuous joints "
         "in [-pi, pi]) to 1e-5 m / 1e-4 rad; the first collision-free solution (exact meshes: SRDF-enabled self "
         "pairs and every link x scene object pair) is kept; the other joints stay at MotionBenchMaker's "
-        "default state (default_state). Written by bench/ompl_fetch_mbm.py.")
+        "default state (default_state). start_q / goal_q: the same states over every joint in joint_order "
+        "(one coordinate per joint, continuous joints as angles). Written by bench/ompl_fetch_mbm.py.")
+    return add_full_states(goals, fetch)
+
+
+def add_full_states(goals, fetch):
+    """Full-model states for `--start` / `--goal-state` files: `joint_order` (the model's joints,
+    Pinocchio's order), and per query `start_q` / `goal_q` with one coordinate per joint (moma's
+    layout: a continuous joint as its angle), the joints outside the group at default_state."""
+    model = fetch.model
+    names = [model.names[j] for j in range(1, model.njoints)]
+    goals["joint_order"] = names
+    for qe in goals["queries"]:
+        for key, state in (("start_q", (qe.get("start") or {}).get("state")), ("goal_q", qe.get("goal_state"))):
+            if state is None:
+                qe[key] = None
+                continue
+            full = dict(goals["default_state"], **state)
+            qe[key] = [float(full.get(n, 0.0)) for n in names]
     return goals
 
 
@@ -362,6 +380,10 @@ def main():
     ou.RNG.setSeed(args.seed)  # before any sampling, or OMPL ignores it
     ou.setLogLevel(ou.LogLevel.LOG_ERROR)
 
+    for path in (os.path.join(args.fetch, "fetch_description", "robots", "fetch.urdf"),
+                 os.path.join(args.mbm, "configs", "problems")):
+        if not os.path.exists(path):
+            sys.exit(f"ompl_fetch_mbm.py: {path} not found (give --fetch / --mbm)")
     fetch = Fetch(args.fetch)
     if os.path.exists(args.goals) and not args.recompute_goals:
         with open(args.goals) as f:

@@ -415,7 +415,7 @@ int main(int argc, char **argv) {
       const std::string vlabel = "fetch+" + scene_label + "_voxels";
       int ncv = 0;
       for (const VectorXd &q : Q) ncv += pinocchio::computeCollisions(model, data, gv, gvd, q, true);
-      std::printf("# %s: %zu voxels of %.6f m (coal::OcTree, %zu octree leaves), %zu link-octree pairs, random "
+      std::printf("# %s: %zu voxels of %.9f m (coal::OcTree, %zu octree leaves), %zu link-octree pairs, random "
                   "states in collision %d/%d\n",
                   vlabel.c_str(), cells.size(), r, (std::size_t)tree->getTree()->getNumLeafNodes(),
                   gv.collisionPairs.size(), ncv, NSTATES);
