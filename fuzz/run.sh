@@ -34,7 +34,8 @@ shift
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   targets=(urdf ros_yaml map_image movingai_2d movingai_3d sim_scenario states_json states_struct
-    eval_json eval_cases sim_scenario_struct mission_toml mission_struct sweep_toml sweep_struct)
+    eval_json eval_cases sim_scenario_struct mission_toml mission_struct sweep_toml sweep_struct
+    collision_mesh collision_text)
 fi
 build=(cargo fuzz build -s none -O)
 tdir=target

@@ -31,6 +31,8 @@ enum Command {
     Inspect(cmd::inspect::Args),
     /// Evaluate rigid-body dynamics (RNEA, CRBA, ABA, ...) on a list of states.
     Dynamics(cmd::dynamics::Args),
+    /// Signed distances between the robot's links and against a scene, per state.
+    Collision(cmd::collision::Args),
     /// Time the rigid-body algorithms (median ns per call) on seeded random states.
     Bench(cmd::bench::Args),
     /// Evaluate the chapter's closed-form models (m1–m6) on a case file.
@@ -73,6 +75,7 @@ fn main() {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Dynamics(a) => cmd::dynamics::run(a),
         Command::Bench(a) => cmd::bench::run(a),
+        Command::Collision(a) => cmd::collision::run(a),
         Command::Eval(a) => cmd::eval::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::MapInfo(a) => cmd::map_info::run(a),

@@ -19,6 +19,7 @@ use pyo3::{IntoPyObjectExt, create_exception};
 
 mod analysis;
 mod chapter;
+mod collision;
 mod dynamics;
 mod layout;
 mod model;
@@ -94,6 +95,7 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     layout::register(m)?;
     analysis::register(m)?;
     chapter::register(m)?;
+    collision::register(m)?;
     planning::register(m)?;
     sweep::register(m)?;
     Ok(())

@@ -37,6 +37,7 @@
 //! | J·N_C | whole-body Jacobian | `mobile::whole_body_jacobian` |
 
 pub mod closed_form;
+pub mod collision;
 pub mod control;
 pub mod dynamics;
 pub mod error;

@@ -25,7 +25,7 @@ const LAYERS: &[&[&str]] = &[
     &["spatial", "ode", "linalg", "planning"],
     &["multibody"],
     &["io", "kinematics"],
-    &["dynamics"],
+    &["dynamics", "collision"],
     &["mobile", "space"],
     &["stability", "manipulability"],
     &["ik"],

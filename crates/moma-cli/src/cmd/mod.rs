@@ -2,6 +2,7 @@
 //! `common` holds what several of them share (model and states loading, option parsing).
 
 pub mod bench;
+pub mod collision;
 pub mod common;
 pub mod dynamics;
 pub mod eval;

@@ -9,9 +9,11 @@ functions take one state per row and loop in Rust with the GIL released.
 
 from ._moma import (
     Data,
+    GeometryModel,
     Map,
     Model,
     MomaError,
+    Scene,
     Sweep,
     Table,
     __version__,
@@ -20,6 +22,7 @@ from ._moma import (
     chapter_models,
     crba,
     crba_batch,
+    distances,
     eval_case,
     eval_cases,
     frame_jacobian,
@@ -40,9 +43,11 @@ from . import sweep
 
 __all__ = [
     "Data",
+    "GeometryModel",
     "Map",
     "Model",
     "MomaError",
+    "Scene",
     "Sweep",
     "Table",
     "__version__",
@@ -51,6 +56,7 @@ __all__ = [
     "chapter_models",
     "crba",
     "crba_batch",
+    "distances",
     "eval_case",
     "eval_cases",
     "frame_jacobian",

@@ -71,6 +71,31 @@ class Map:
     @property
     def cells(self) -> npt.NDArray[np.int8]: ...
 
+class GeometryModel:
+    """A robot's collision geometry (URDF <collision>, meshes as convex hulls)."""
+    @staticmethod
+    def from_urdf(
+        model: Model, path: Path, srdf: Optional[Path] = None, package_dirs: Sequence[Path] = ()
+    ) -> GeometryModel: ...
+    @property
+    def links(self) -> list[str]: ...
+    @property
+    def pairs_enabled(self) -> list[tuple[str, str]]: ...
+
+class Scene:
+    """Scene objects from a MoveIt planning-scene YAML (MotionBenchMaker)."""
+    @staticmethod
+    def from_yaml(
+        path: Path, world_frames: Sequence[str] = ("world",), package_dirs: Sequence[Path] = ()
+    ) -> Scene: ...
+    @property
+    def ids(self) -> list[str]: ...
+
+def distances(
+    model: Model, geom: GeometryModel, q: ArrayLike, scene: Optional[Scene] = None, all_pairs: bool = False
+) -> dict[str, Any]:
+    """Signed distances: keys pairs, distance (n,), witness_a, witness_b (n, 3), min_distance, in_collision, closest."""
+
 def rnea(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
     """Inverse dynamics: tau = M(q) a + C(q, v) v + g(q) (nv)."""
 

@@ -1,0 +1,287 @@
+//! `moma collision ROBOT.urdf --root R [--srdf FILE] [--package-dir DIR]... [--scene
+//! SCENE.yaml] --states STATES.json [--layout moma|pinocchio] [--all-pairs]
+//! [--output OUT.json] [--svg FIG.svg]`: signed distances between the robot's links (and
+//! against the scene's objects) for each state. Schema: `docs/cli.md`.
+
+use super::common::{Layout, LayoutConv, load_model, parse_root, read_states};
+use anyhow::{Context, Result};
+use moma::collision::{
+    GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection, Scene, SceneData,
+    SceneOptions, compute_distances, compute_scene_distances, outline_points, read_scene,
+    update_geometry_placements,
+};
+use moma::kinematics;
+use moma::multibody::{Data, FrameKind, RootJoint};
+use nalgebra::{DVector, Vector3};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// Arguments of `moma collision`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The robot description (URDF); its `<collision>` elements are the geometry (meshes
+    /// as their convex hulls).
+    pub urdf: PathBuf,
+    /// Root joint: fixed, planar (q = [x, y, θ]) or free-flyer.
+    #[arg(long, value_parser = parse_root)]
+    pub root: RootJoint,
+    /// SRDF whose `<disable_collisions>` pairs are not checked.
+    #[arg(long)]
+    pub srdf: Option<PathBuf>,
+    /// Folder against which `package://PKG/...` mesh URIs resolve, as DIR/PKG/... (or
+    /// DIR/... when DIR is named PKG); repeatable; ROS_PACKAGE_PATH is searched after.
+    #[arg(long = "package-dir")]
+    pub package_dirs: Vec<PathBuf>,
+    /// MoveIt planning-scene YAML (MotionBenchMaker's schema); poses in `world` or, with a
+    /// fixed root, in the robot's root link.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// States file (as `moma dynamics`): `{"states": [{"q": [..]}, ..]}`.
+    #[arg(long)]
+    pub states: PathBuf,
+    /// State layout of the states file: moma (continuous joints as one angle) or
+    /// pinocchio (continuous joints as cos, sin; planar root [x, y, cos θ, sin θ]).
+    #[arg(long, value_enum, default_value_t = Layout::Moma)]
+    pub layout: Layout,
+    /// List and check every link pair, not only the enabled ones (not adjacent, not
+    /// fixed to each other, not disabled by the SRDF).
+    #[arg(long)]
+    pub all_pairs: bool,
+    /// Write the JSON here (atomically) instead of standard output.
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Draw the robot's geometry (in the first state) and the scene, side and top views,
+    /// into this SVG file.
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct PairOut {
+    a: String,
+    b: String,
+    distance: f64,
+    witness_a: [f64; 3],
+    witness_b: [f64; 3],
+}
+
+#[derive(Serialize)]
+struct StateOut {
+    min_distance: f64,
+    in_collision: bool,
+    closest: [String; 2],
+    pairs: Vec<PairOut>,
+}
+
+#[derive(Serialize)]
+struct Output {
+    robot: String,
+    source: String,
+    root: String,
+    layout: &'static str,
+    pairs_enabled: Vec<[String; 2]>,
+    scene_objects: Vec<String>,
+    states: Vec<StateOut>,
+}
+
+fn v3(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+fn pair_out(a: &str, b: &str, r: &PairDistance) -> PairOut {
+    PairOut {
+        a: a.to_string(),
+        b: b.to_string(),
+        distance: r.distance,
+        witness_a: v3(&r.witness_a),
+        witness_b: v3(&r.witness_b),
+    }
+}
+
+/// Runs `moma collision`.
+pub fn run(args: Args) -> Result<()> {
+    let model = load_model(&args.urdf, args.root)?;
+    let gm = GeometryModel::from_urdf(
+        &model,
+        &args.urdf,
+        &GeometryOptions {
+            package_dirs: args.package_dirs.clone(),
+            srdf: args.srdf.clone(),
+        },
+    )?;
+    let scene = match &args.scene {
+        Some(path) => {
+            let mut world_frames = vec!["world".to_string()];
+            if args.root == RootJoint::Fixed
+                && let Some(f) = model.frames.iter().find(|f| f.kind == FrameKind::Body)
+            {
+                world_frames.push(f.name.clone());
+            }
+            read_scene(
+                path,
+                &SceneOptions {
+                    world_frames,
+                    package_dirs: args.package_dirs.clone(),
+                },
+            )?
+        }
+        None => Scene::default(),
+    };
+    let mut states = read_states(&args.states, &["q"])?;
+    let conv = LayoutConv::new(&model, args.layout);
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    let mut sd = SceneData::new(&gm, &scene);
+    let which = if args.all_pairs {
+        PairSelection::All
+    } else {
+        PairSelection::Enabled
+    };
+    let mut first_placements = None;
+    let mut out_states = Vec::with_capacity(states.len());
+    for (k, s) in states.iter_mut().enumerate() {
+        let src = format!("{}: states[{k}]", args.states.display());
+        conv.state_in(s, &src)?;
+        kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
+        let q = DVector::from_column_slice(&s.q);
+        kinematics::forward_kinematics(&model, &mut data, &q);
+        update_geometry_placements(&gm, &data, &mut gd);
+        if first_placements.is_none() {
+            first_placements = Some(gd.placements.clone());
+        }
+        compute_distances(&gm, &mut gd, which);
+        compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
+        let mut pairs = Vec::new();
+        for (p, &[a, b]) in gm.pairs.iter().enumerate() {
+            if args.all_pairs || gm.enabled[p] {
+                pairs.push(pair_out(
+                    &gm.links[a].name,
+                    &gm.links[b].name,
+                    &gd.results[p],
+                ));
+            }
+        }
+        let no = scene.objects.len();
+        for (l, link) in gm.links.iter().enumerate() {
+            for (o, obj) in scene.objects.iter().enumerate() {
+                pairs.push(pair_out(&link.name, &obj.id, &sd.results[l * no + o]));
+            }
+        }
+        let closest = pairs
+            .iter()
+            .min_by(|x, y| x.distance.total_cmp(&y.distance))
+            .map(|p| (p.distance, [p.a.clone(), p.b.clone()]));
+        let (min_distance, closest) =
+            closest.unwrap_or((f64::INFINITY, [String::new(), String::new()]));
+        if !min_distance.is_finite() {
+            anyhow::bail!(
+                "{src}: no pair to check (the robot has fewer than two links with enabled pairs and no scene is given)"
+            );
+        }
+        out_states.push(StateOut {
+            min_distance,
+            in_collision: min_distance < 0.0,
+            closest,
+            pairs,
+        });
+    }
+    let out = Output {
+        robot: model.name.clone(),
+        source: args.urdf.display().to_string(),
+        root: model.root.to_string(),
+        layout: match args.layout {
+            Layout::Moma => "moma",
+            Layout::Pinocchio => "pinocchio",
+        },
+        pairs_enabled: gm
+            .pairs
+            .iter()
+            .zip(&gm.enabled)
+            .filter(|(_, e)| **e)
+            .map(|(&[a, b], _)| [gm.links[a].name.clone(), gm.links[b].name.clone()])
+            .collect(),
+        scene_objects: scene.objects.iter().map(|o| o.id.clone()).collect(),
+        states: out_states,
+    };
+    let json = serde_json::to_vec_pretty(&out).context("serialising the output")?;
+    let mut files = Vec::new();
+    if let Some(svg) = &args.svg {
+        let placements = first_placements.unwrap_or_else(|| gd.placements.clone());
+        files.push((svg.clone(), draw(&gm, &placements, &scene).into_bytes()));
+    }
+    match &args.output {
+        Some(p) => {
+            files.push((p.clone(), json));
+            crate::output::write_all_atomic(&files)
+        }
+        None => {
+            crate::output::write_all_atomic(&files)?;
+            crate::output::print_json(&out)
+        }
+    }
+}
+
+/// Side (x–z) and top (x–y) views of the robot's shapes (blue) and the scene's (grey),
+/// each shape drawn as the convex hull of its projection.
+fn draw(gm: &GeometryModel, placements: &[moma::spatial::SE3], scene: &Scene) -> String {
+    let mut shapes: Vec<(bool, Vec<Vector3<f64>>)> = Vec::new();
+    for (o, pose) in gm.objects.iter().zip(placements) {
+        let mut pts = Vec::new();
+        outline_points(&o.shape, pose, &mut pts);
+        shapes.push((true, pts));
+    }
+    for obj in &scene.objects {
+        for s in obj.shapes.iter().take(20_000) {
+            let mut pts = Vec::new();
+            outline_points(&s.shape, &s.pose, &mut pts);
+            shapes.push((false, pts));
+        }
+    }
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for (_, pts) in &shapes {
+        for p in pts {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+    }
+    let span = (hi - lo).max().max(1e-3);
+    let size = 400.0;
+    let scale = size / span;
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\">\n\
+         <text x=\"10\" y=\"16\" font-family=\"sans-serif\" font-size=\"13\">side view (x right, z up)</text>\n\
+         <text x=\"{t}\" y=\"16\" font-family=\"sans-serif\" font-size=\"13\">top view (x right, y up)</text>\n",
+        w = 2.0 * size + 60.0,
+        h = size + 40.0,
+        t = size + 50.0
+    );
+    for (x0, axis) in [(10.0, 2usize), (size + 50.0, 1usize)] {
+        for (robot, pts) in &shapes {
+            let poly = moma::collision::footprint::hull_2d(
+                pts.iter().map(|p| nalgebra::Vector2::new(p.x, p[axis])),
+            );
+            let coords: Vec<String> = poly
+                .iter()
+                .map(|p| {
+                    format!(
+                        "{:.1},{:.1}",
+                        x0 + (p.x - lo.x) * scale,
+                        30.0 + (hi[axis] - p.y) * scale
+                    )
+                })
+                .collect();
+            let style = if *robot {
+                "fill=\"#4477aa\" fill-opacity=\"0.35\" stroke=\"#224466\" stroke-width=\"0.6\""
+            } else {
+                "fill=\"#999999\" fill-opacity=\"0.35\" stroke=\"#555555\" stroke-width=\"0.6\""
+            };
+            svg.push_str(&format!(
+                "<polygon points=\"{}\" {style}/>\n",
+                coords.join(" ")
+            ));
+        }
+    }
+    svg.push_str("</svg>\n");
+    svg
+}

@@ -1,0 +1,192 @@
+//! Convex shapes and their support functions in their own frame.
+//!
+//! A shape is a *core* (a hull, a box, a cylinder, a point or a segment) plus a *margin*
+//! (the radius of a sphere or capsule): the shape is the core's Minkowski sum with a ball
+//! of that radius. The distance code runs on the cores and subtracts the margins, which is
+//! exact and converges in a few steps where a round support map would need many.
+
+use nalgebra::Vector3;
+
+/// A convex shape in its own frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Convex {
+    /// The convex hull of a point set (a mesh's hull), with hull-edge adjacency used to
+    /// climb to the support vertex from the last one found.
+    Hull {
+        /// Hull vertices.
+        vertices: Vec<Vector3<f64>>,
+        /// Neighbours of each vertex along hull edges; empty lists if the climb cannot
+        /// be trusted (then every vertex is scanned).
+        neighbours: Vec<Vec<usize>>,
+    },
+    /// A box centred on the origin with these half side lengths.
+    Box {
+        /// Half side lengths along x, y, z.
+        half: Vector3<f64>,
+    },
+    /// A cylinder along z, centred on the origin.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Half of the height.
+        half_height: f64,
+    },
+    /// A sphere centred on the origin (core: the origin; margin: the radius).
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// A capsule along z centred on the origin (core: the segment; margin: the radius).
+    Capsule {
+        /// Radius.
+        radius: f64,
+        /// Half of the segment's length (the cylindrical part).
+        half_length: f64,
+    },
+}
+
+/// Hulls with more vertices than this climb along edges; smaller ones are scanned.
+const CLIMB_ABOVE: usize = 24;
+
+impl Convex {
+    /// The radius added around the core.
+    #[must_use]
+    pub fn margin(&self) -> f64 {
+        match self {
+            Convex::Sphere { radius } | Convex::Capsule { radius, .. } => *radius,
+            _ => 0.0,
+        }
+    }
+
+    /// A point of the core that maximises `d · p`; `hint` is the hull vertex to start the
+    /// climb from (updated to the one found), unused by the other shapes.
+    #[must_use]
+    pub fn core_support(&self, d: &Vector3<f64>, hint: &mut usize) -> Vector3<f64> {
+        match self {
+            Convex::Hull {
+                vertices,
+                neighbours,
+            } => {
+                let climb = vertices.len() > CLIMB_ABOVE && !neighbours[0].is_empty();
+                let best = if climb {
+                    climb_support(vertices, neighbours, d, (*hint).min(vertices.len() - 1))
+                } else {
+                    scan_support(vertices, d)
+                };
+                *hint = best;
+                vertices[best]
+            }
+            Convex::Box { half } => Vector3::new(
+                half.x.copysign(d.x),
+                half.y.copysign(d.y),
+                half.z.copysign(d.z),
+            ),
+            Convex::Cylinder {
+                radius,
+                half_height,
+            } => {
+                let r = d.x.hypot(d.y);
+                let z = half_height.copysign(d.z);
+                if r > 0.0 {
+                    Vector3::new(radius * d.x / r, radius * d.y / r, z)
+                } else {
+                    Vector3::new(0.0, 0.0, z)
+                }
+            }
+            Convex::Sphere { .. } => Vector3::zeros(),
+            Convex::Capsule { half_length, .. } => {
+                Vector3::new(0.0, 0.0, half_length.copysign(d.z))
+            }
+        }
+    }
+
+    /// Radius of a ball about the origin that holds the whole shape (margin included).
+    #[must_use]
+    pub fn bounding_radius(&self) -> f64 {
+        match self {
+            Convex::Hull { vertices, .. } => vertices.iter().map(|v| v.norm()).fold(0.0, f64::max),
+            Convex::Box { half } => half.norm(),
+            Convex::Cylinder {
+                radius,
+                half_height,
+            } => radius.hypot(*half_height),
+            Convex::Sphere { radius } => *radius,
+            Convex::Capsule {
+                radius,
+                half_length,
+            } => radius + half_length,
+        }
+    }
+
+    /// Half extents of the shape's axis-aligned bounding box in its own frame, about
+    /// `centre`: `(centre, half)`.
+    #[must_use]
+    pub fn local_aabb(&self) -> (Vector3<f64>, Vector3<f64>) {
+        match self {
+            Convex::Hull { vertices, .. } => {
+                let mut lo = Vector3::repeat(f64::INFINITY);
+                let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+                for v in vertices {
+                    lo = lo.inf(v);
+                    hi = hi.sup(v);
+                }
+                ((lo + hi) / 2.0, (hi - lo) / 2.0)
+            }
+            Convex::Box { half } => (Vector3::zeros(), *half),
+            Convex::Cylinder {
+                radius,
+                half_height,
+            } => (
+                Vector3::zeros(),
+                Vector3::new(*radius, *radius, *half_height),
+            ),
+            Convex::Sphere { radius } => (Vector3::zeros(), Vector3::repeat(*radius)),
+            Convex::Capsule {
+                radius,
+                half_length,
+            } => (
+                Vector3::zeros(),
+                Vector3::new(*radius, *radius, radius + half_length),
+            ),
+        }
+    }
+}
+
+fn scan_support(vertices: &[Vector3<f64>], d: &Vector3<f64>) -> usize {
+    let mut best = 0;
+    let mut best_dot = f64::NEG_INFINITY;
+    for (i, v) in vertices.iter().enumerate() {
+        let s = v.dot(d);
+        if s > best_dot {
+            best_dot = s;
+            best = i;
+        }
+    }
+    best
+}
+
+/// Hill climb along hull edges: on a convex polytope a vertex no neighbour improves on
+/// is a global maximiser of `d · p`.
+fn climb_support(
+    vertices: &[Vector3<f64>],
+    neighbours: &[Vec<usize>],
+    d: &Vector3<f64>,
+    start: usize,
+) -> usize {
+    let mut best = start;
+    let mut best_dot = vertices[best].dot(d);
+    loop {
+        let mut moved = false;
+        for &n in &neighbours[best] {
+            let s = vertices[n].dot(d);
+            if s > best_dot {
+                best_dot = s;
+                best = n;
+                moved = true;
+            }
+        }
+        if !moved {
+            return best;
+        }
+    }
+}

@@ -1,0 +1,619 @@
+//! The robot's world: MoveIt planning-scene YAML (MotionBenchMaker's schema), 3-D
+//! occupancy grids and point clouds binned into voxels, as named scene objects with a
+//! bounding-volume tree each; and the link–object distance queries.
+
+use super::convex::Convex;
+use super::geometry_data::GeometryData;
+use super::geometry_model::GeometryModel;
+use super::gjk::{PairDistance, WarmStart, overlaps, signed_distance};
+use super::mesh::{convex_hull_vertices, read_mesh};
+use super::urdf_geometry::resolve_uri;
+use crate::planning::grid3::Grid3;
+use crate::spatial::SE3;
+use crate::{Error, Result};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// One shape of a scene object, placed in the world.
+#[derive(Clone, Debug)]
+pub struct SceneShape {
+    /// World placement.
+    pub pose: SE3,
+    /// The shape.
+    pub shape: Convex,
+    /// World-axis-aligned bounding box (min, max).
+    pub aabb: (Vector3<f64>, Vector3<f64>),
+}
+
+/// A named scene object: its shapes and a bounding-volume tree over them.
+#[derive(Clone, Debug)]
+pub struct SceneObject {
+    /// The object's `id`.
+    pub id: String,
+    /// Its shapes, in the tree's leaf order.
+    pub shapes: Vec<SceneShape>,
+    /// The tree: node `k` has box `nodes[k]`; leaves hold a range of `shapes`.
+    nodes: Vec<BvhNode>,
+}
+
+#[derive(Clone, Debug)]
+struct BvhNode {
+    lo: Vector3<f64>,
+    hi: Vector3<f64>,
+    /// Leaf: `Some((first, count))` into the shapes; inner: children `left`, `left + 1`
+    /// are stored at `child`.
+    leaf: Option<(usize, usize)>,
+    child: usize,
+}
+
+/// Most shapes one scene object may hold (about 0.8 GB): bounds the memory a voxel grid
+/// or point cloud can claim.
+pub const MAX_SCENE_SHAPES: usize = 4_000_000;
+
+/// Shapes per BVH leaf.
+const LEAF_SIZE: usize = 4;
+
+impl SceneObject {
+    /// An object from world-placed shapes (builds its tree).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the object when it has no shape.
+    pub fn new(id: impl Into<String>, shapes: Vec<(SE3, Convex)>) -> Result<Self> {
+        let id = id.into();
+        if shapes.is_empty() {
+            return Err(Error::invalid(
+                format!("scene object '{id}'"),
+                "has no shape",
+            ));
+        }
+        if shapes.len() > MAX_SCENE_SHAPES {
+            return Err(Error::invalid(
+                format!("scene object '{id}'"),
+                format!("{} shapes, more than {MAX_SCENE_SHAPES}", shapes.len()),
+            ));
+        }
+        let mut shapes: Vec<SceneShape> = shapes
+            .into_iter()
+            .map(|(pose, shape)| SceneShape {
+                aabb: world_aabb(&shape, &pose),
+                pose,
+                shape,
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * shapes.len() / LEAF_SIZE + 2);
+        nodes.push(BvhNode {
+            lo: Vector3::zeros(),
+            hi: Vector3::zeros(),
+            leaf: None,
+            child: 0,
+        });
+        build(&mut shapes, 0, 0, &mut nodes);
+        Ok(SceneObject { id, shapes, nodes })
+    }
+
+    /// World bounding box of the whole object.
+    #[must_use]
+    pub fn aabb(&self) -> (Vector3<f64>, Vector3<f64>) {
+        (self.nodes[0].lo, self.nodes[0].hi)
+    }
+}
+
+fn world_aabb(shape: &Convex, pose: &SE3) -> (Vector3<f64>, Vector3<f64>) {
+    let (c, h) = shape.local_aabb();
+    let centre = pose.act_point(&c);
+    let r = pose.rotation.abs() * h;
+    (centre - r, centre + r)
+}
+
+/// Builds node `k` over `shapes[first..]` (median split on the longest axis).
+fn build(shapes: &mut [SceneShape], first: usize, k: usize, nodes: &mut Vec<BvhNode>) {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for s in shapes.iter() {
+        lo = lo.inf(&s.aabb.0);
+        hi = hi.sup(&s.aabb.1);
+    }
+    nodes[k].lo = lo;
+    nodes[k].hi = hi;
+    if shapes.len() <= LEAF_SIZE {
+        nodes[k].leaf = Some((first, shapes.len()));
+        return;
+    }
+    let axis = (hi - lo).imax();
+    let mid = shapes.len() / 2;
+    shapes.select_nth_unstable_by(mid, |a, b| {
+        let ca = a.aabb.0[axis] + a.aabb.1[axis];
+        let cb = b.aabb.0[axis] + b.aabb.1[axis];
+        ca.total_cmp(&cb)
+    });
+    let child = nodes.len();
+    nodes[k].child = child;
+    for _ in 0..2 {
+        nodes.push(BvhNode {
+            lo,
+            hi,
+            leaf: None,
+            child: 0,
+        });
+    }
+    let (left, right) = shapes.split_at_mut(mid);
+    build(left, first, child, nodes);
+    build(right, first + mid, child + 1, nodes);
+}
+
+/// Distance from a ball to a box (0 inside), a lower bound on any shape in the box.
+fn ball_box_gap(c: &Vector3<f64>, r: f64, lo: &Vector3<f64>, hi: &Vector3<f64>) -> f64 {
+    let d = (lo - c).sup(&(c - hi)).sup(&Vector3::zeros());
+    d.norm() - r
+}
+
+/// The robot's world: scene objects.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// The objects, in file order.
+    pub objects: Vec<SceneObject>,
+}
+
+/// Workspace of the scene queries: results per (link, object) pair and warm starts.
+#[derive(Clone, Debug)]
+pub struct SceneData {
+    /// Result per (link, object): `results[link * n_objects + object]`.
+    pub results: Vec<PairDistance>,
+    /// Index into `results` of the closest pair of the last `compute_scene_distances`.
+    pub closest: Option<usize>,
+    warm: Vec<WarmStart>,
+    /// Branch-and-bound stack.
+    stack: Vec<usize>,
+}
+
+impl SceneData {
+    /// A workspace for `gm` against `scene`.
+    #[must_use]
+    pub fn new(gm: &GeometryModel, scene: &Scene) -> Self {
+        let n = gm.links.len() * scene.objects.len();
+        let depth = scene
+            .objects
+            .iter()
+            .map(|o| o.nodes.len())
+            .max()
+            .unwrap_or(1);
+        SceneData {
+            results: vec![
+                PairDistance {
+                    distance: f64::INFINITY,
+                    witness_a: Vector3::zeros(),
+                    witness_b: Vector3::zeros(),
+                    normal: Vector3::z(),
+                };
+                n
+            ],
+            closest: None,
+            warm: vec![WarmStart::default(); n],
+            stack: Vec::with_capacity(depth),
+        }
+    }
+}
+
+/// Signed distances between every link and every scene object (after
+/// `update_geometry_placements`), into `sd.results`; returns the minimum. Each
+/// link–object distance is a nearest search in the object's tree: subtrees whose box is
+/// farther from the link's bounding balls than the best distance found are skipped.
+pub fn compute_scene_distances(
+    gm: &GeometryModel,
+    gd: &mut GeometryData,
+    scene: &Scene,
+    sd: &mut SceneData,
+) -> f64 {
+    let no = scene.objects.len();
+    let mut min = f64::INFINITY;
+    sd.closest = None;
+    for (l, link) in gm.links.iter().enumerate() {
+        for (o, obj) in scene.objects.iter().enumerate() {
+            let k = l * no + o;
+            let mut best = PairDistance {
+                distance: f64::INFINITY,
+                witness_a: Vector3::zeros(),
+                witness_b: Vector3::zeros(),
+                normal: Vector3::z(),
+            };
+            for i in link.first..link.first + link.count {
+                let go = &gm.objects[i];
+                let pose = gd.placements[i];
+                let c = pose.act_point(&go.bounding_centre);
+                sd.stack.clear();
+                sd.stack.push(0);
+                while let Some(n) = sd.stack.pop() {
+                    let node = &obj.nodes[n];
+                    if ball_box_gap(&c, go.bounding_radius, &node.lo, &node.hi) >= best.distance {
+                        continue;
+                    }
+                    match node.leaf {
+                        Some((first, count)) => {
+                            for s in &obj.shapes[first..first + count] {
+                                if ball_box_gap(&c, go.bounding_radius, &s.aabb.0, &s.aabb.1)
+                                    >= best.distance
+                                {
+                                    continue;
+                                }
+                                let r = signed_distance(
+                                    &go.shape,
+                                    &pose,
+                                    &s.shape,
+                                    &s.pose,
+                                    &mut sd.warm[k],
+                                    &mut gd.epa,
+                                );
+                                if r.distance < best.distance {
+                                    best = r;
+                                }
+                            }
+                        }
+                        None => {
+                            // Nearer child last, so it is searched first.
+                            let (a, b) = (node.child, node.child + 1);
+                            let ga = ball_box_gap(&c, 0.0, &obj.nodes[a].lo, &obj.nodes[a].hi);
+                            let gb = ball_box_gap(&c, 0.0, &obj.nodes[b].lo, &obj.nodes[b].hi);
+                            if ga < gb {
+                                sd.stack.extend([b, a]);
+                            } else {
+                                sd.stack.extend([a, b]);
+                            }
+                        }
+                    }
+                }
+            }
+            sd.results[k] = best;
+            if best.distance < min {
+                min = best.distance;
+                sd.closest = Some(k);
+            }
+        }
+    }
+    min
+}
+
+/// Whether some link overlaps some scene object, stopping at the first overlap: the
+/// `(link, object)` indices.
+pub fn scene_collision(
+    gm: &GeometryModel,
+    gd: &GeometryData,
+    scene: &Scene,
+    sd: &mut SceneData,
+) -> Option<(usize, usize)> {
+    let no = scene.objects.len();
+    for (l, link) in gm.links.iter().enumerate() {
+        for (o, obj) in scene.objects.iter().enumerate() {
+            let k = l * no + o;
+            for i in link.first..link.first + link.count {
+                let go = &gm.objects[i];
+                let pose = gd.placements[i];
+                let c = pose.act_point(&go.bounding_centre);
+                sd.stack.clear();
+                sd.stack.push(0);
+                while let Some(n) = sd.stack.pop() {
+                    let node = &obj.nodes[n];
+                    if ball_box_gap(&c, go.bounding_radius, &node.lo, &node.hi) > 0.0 {
+                        continue;
+                    }
+                    match node.leaf {
+                        Some((first, count)) => {
+                            for s in &obj.shapes[first..first + count] {
+                                if ball_box_gap(&c, go.bounding_radius, &s.aabb.0, &s.aabb.1) <= 0.0
+                                    && overlaps(
+                                        &go.shape,
+                                        &pose,
+                                        &s.shape,
+                                        &s.pose,
+                                        &mut sd.warm[k],
+                                    )
+                                {
+                                    return Some((l, o));
+                                }
+                            }
+                        }
+                        None => sd.stack.extend([node.child, node.child + 1]),
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
+// ---- MoveIt planning-scene YAML ------------------------------------------------------
+
+#[derive(Deserialize)]
+struct RawScene {
+    world: Option<RawWorld>,
+}
+
+#[derive(Deserialize)]
+struct RawWorld {
+    #[serde(default)]
+    collision_objects: Vec<RawObject>,
+}
+
+#[derive(Deserialize)]
+struct RawHeader {
+    frame_id: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct RawPose {
+    position: Vec<f64>,
+    orientation: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+struct RawPrimitive {
+    #[serde(rename = "type")]
+    kind: String,
+    dimensions: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+struct RawMesh {
+    resource: String,
+}
+
+#[derive(Deserialize)]
+struct RawObject {
+    header: Option<RawHeader>,
+    id: String,
+    #[serde(default)]
+    primitives: Vec<RawPrimitive>,
+    #[serde(default)]
+    primitive_poses: Vec<RawPose>,
+    #[serde(default)]
+    meshes: Vec<RawMesh>,
+    #[serde(default)]
+    mesh_poses: Vec<RawPose>,
+}
+
+/// Where scene poses may be expressed: frame names that mean the world.
+#[derive(Clone, Debug)]
+pub struct SceneOptions {
+    /// Frame names taken as the world frame (the robot's root link with a fixed base,
+    /// `world`, `map`...). A pose in any other frame is an error naming it.
+    pub world_frames: Vec<String>,
+    /// Folders against which `package://` mesh URIs resolve.
+    pub package_dirs: Vec<PathBuf>,
+}
+
+/// Reads a MoveIt planning-scene YAML file (MotionBenchMaker's `scene_*.yaml`).
+///
+/// # Errors
+/// [`Error::Io`] if unreadable; [`Error::Parse`] naming the file and the object (by its
+/// `id` and position) for malformed YAML, an unknown primitive type, a wrong number or a
+/// non-positive dimension, a malformed pose, an unknown frame, or a mesh that does not
+/// resolve or load.
+pub fn read_scene(path: &Path, opts: &SceneOptions) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    scene_from_str(&text, path, opts)
+}
+
+/// Parses planning-scene YAML text; `path` names it in errors and anchors relative mesh
+/// URIs.
+///
+/// # Errors
+/// As [`read_scene`].
+pub fn scene_from_str(text: &str, path: &Path, opts: &SceneOptions) -> Result<Scene> {
+    let raw: RawScene = serde_saphyr::from_str(text)
+        .map_err(|e| Error::parse(path, format!("malformed planning-scene YAML: {e}")))?;
+    let mut scene = Scene::default();
+    let dir = path.parent().unwrap_or(Path::new("."));
+    for (k, o) in raw
+        .world
+        .map(|w| w.collision_objects)
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+    {
+        let at = |m: String| {
+            Error::parse(
+                path,
+                format!("world.collision_objects[{k}] (id '{}'): {m}", o.id),
+            )
+        };
+        let frame = o
+            .header
+            .as_ref()
+            .and_then(|h| h.frame_id.clone())
+            .unwrap_or_else(|| "world".into());
+        if !opts.world_frames.contains(&frame) {
+            return Err(at(format!(
+                "unknown frame '{frame}' (known: {})",
+                opts.world_frames.join(", ")
+            )));
+        }
+        if o.primitives.len() != o.primitive_poses.len() {
+            return Err(at(format!(
+                "{} primitives but {} primitive_poses",
+                o.primitives.len(),
+                o.primitive_poses.len()
+            )));
+        }
+        if o.meshes.len() != o.mesh_poses.len() {
+            return Err(at(format!(
+                "{} meshes but {} mesh_poses",
+                o.meshes.len(),
+                o.mesh_poses.len()
+            )));
+        }
+        let mut shapes = Vec::new();
+        for (i, (p, pose)) in o.primitives.iter().zip(&o.primitive_poses).enumerate() {
+            let pose = parse_pose(pose).map_err(|m| at(format!("primitive_poses[{i}]: {m}")))?;
+            let shape = primitive(p).map_err(|m| at(format!("primitives[{i}]: {m}")))?;
+            shapes.push((pose, shape));
+        }
+        for (i, (m, pose)) in o.meshes.iter().zip(&o.mesh_poses).enumerate() {
+            let pose = parse_pose(pose).map_err(|e| at(format!("mesh_poses[{i}]: {e}")))?;
+            let file = resolve_uri(&m.resource, &o.id, dir, &opts.package_dirs)
+                .map_err(|e| at(format!("meshes[{i}]: {e}")))?;
+            let mesh = read_mesh(&file, [1.0; 3]).map_err(|e| at(format!("meshes[{i}]: {e}")))?;
+            let hull = convex_hull_vertices(&mesh.vertices);
+            shapes.push((
+                pose,
+                Convex::Hull {
+                    vertices: hull.vertices,
+                    neighbours: hull.neighbours,
+                },
+            ));
+        }
+        if shapes.is_empty() {
+            return Err(at("has no primitive and no mesh".into()));
+        }
+        scene.objects.push(SceneObject::new(o.id.clone(), shapes)?);
+    }
+    Ok(scene)
+}
+
+fn parse_pose(p: &RawPose) -> std::result::Result<SE3, String> {
+    let (Ok(t), Ok(q)) = (
+        <[f64; 3]>::try_from(p.position.as_slice()),
+        <[f64; 4]>::try_from(p.orientation.as_slice()),
+    ) else {
+        return Err("position must be [x, y, z] and orientation [x, y, z, w]".into());
+    };
+    if t.iter().chain(&q).any(|x| !x.is_finite()) {
+        return Err("pose is not finite".into());
+    }
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-3 {
+        return Err(format!(
+            "orientation {q:?} is not a unit quaternion (norm {norm})"
+        ));
+    }
+    let r = UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2]));
+    Ok(SE3::new(
+        r.to_rotation_matrix().into_inner(),
+        Vector3::from(t),
+    ))
+}
+
+fn primitive(p: &RawPrimitive) -> std::result::Result<Convex, String> {
+    let d = &p.dimensions;
+    let need = |n: usize| {
+        if d.len() != n {
+            return Err(format!("{} needs {n} dimensions, got {}", p.kind, d.len()));
+        }
+        if let Some(x) = d.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
+            return Err(format!("{} dimension {x} must be finite and > 0", p.kind));
+        }
+        Ok(())
+    };
+    Ok(match p.kind.as_str() {
+        "box" => {
+            need(3)?;
+            Convex::Box {
+                half: Vector3::new(d[0], d[1], d[2]) / 2.0,
+            }
+        }
+        "cylinder" => {
+            need(2)?;
+            Convex::Cylinder {
+                radius: d[1],
+                half_height: d[0] / 2.0,
+            }
+        }
+        "sphere" => {
+            need(1)?;
+            Convex::Sphere { radius: d[0] }
+        }
+        other => {
+            return Err(format!(
+                "unsupported primitive type '{other}' (box, cylinder, sphere)"
+            ));
+        }
+    })
+}
+
+// ---- voxels ----------------------------------------------------------------------------
+
+/// A scene object of the blocked cells of a 3-D occupancy grid: one box per cell, cell
+/// `(x, y, z)` centred at `origin + (x + ½, y + ½, z + ½)·resolution`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for a non-positive or non-finite resolution, a non-finite
+/// origin, or a grid with no blocked cell.
+pub fn voxel_object(
+    id: &str,
+    grid: &Grid3,
+    resolution: f64,
+    origin: Vector3<f64>,
+) -> Result<SceneObject> {
+    if !(resolution.is_finite() && resolution > 0.0) || origin.iter().any(|x| !x.is_finite()) {
+        return Err(Error::invalid(
+            format!("scene object '{id}'"),
+            format!("resolution {resolution} must be > 0 and the origin finite"),
+        ));
+    }
+    if grid.blocked_count() > MAX_SCENE_SHAPES {
+        return Err(Error::invalid(
+            format!("scene object '{id}'"),
+            format!(
+                "{} blocked voxels, more than {MAX_SCENE_SHAPES}",
+                grid.blocked_count()
+            ),
+        ));
+    }
+    let half = Vector3::repeat(resolution / 2.0);
+    let mut shapes = Vec::with_capacity(grid.blocked_count());
+    for z in 0..grid.nz {
+        for y in 0..grid.ny {
+            for x in 0..grid.nx {
+                if grid.is_blocked(x as i64, y as i64, z as i64) {
+                    let c = origin
+                        + Vector3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * resolution;
+                    shapes.push((SE3::from_translation(c), Convex::Box { half }));
+                }
+            }
+        }
+    }
+    SceneObject::new(id, shapes)
+}
+
+/// A scene object of the voxels (edge `resolution`, on the grid anchored at the world
+/// origin) that hold at least one of `points` (a point cloud binned into voxels).
+///
+/// # Errors
+/// [`Error::InvalidInput`] for a non-positive resolution, a non-finite point (naming its
+/// index) or no point.
+pub fn point_cloud_object(
+    id: &str,
+    points: &[Vector3<f64>],
+    resolution: f64,
+) -> Result<SceneObject> {
+    if !(resolution.is_finite() && resolution > 0.0) {
+        return Err(Error::invalid(
+            format!("scene object '{id}'"),
+            format!("resolution {resolution} must be > 0"),
+        ));
+    }
+    if let Some(i) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+        return Err(Error::invalid(
+            format!("scene object '{id}' point {i}"),
+            "not finite",
+        ));
+    }
+    let mut cells: Vec<[i64; 3]> = points
+        .iter()
+        .map(|p| [0, 1, 2].map(|k| (p[k] / resolution).floor() as i64))
+        .collect();
+    cells.sort_unstable();
+    cells.dedup();
+    let half = Vector3::repeat(resolution / 2.0);
+    let shapes = cells
+        .iter()
+        .map(|c| {
+            let centre =
+                Vector3::new(c[0] as f64 + 0.5, c[1] as f64 + 0.5, c[2] as f64 + 0.5) * resolution;
+            (SE3::from_translation(centre), Convex::Box { half })
+        })
+        .collect();
+    SceneObject::new(id, shapes)
+}

@@ -1,0 +1,214 @@
+//! Fetch's self-distances against coal 3.0.3 (through Pinocchio 4.1.0): every link pair of
+//! every state of `tests/data/collision/fetch_self_public.json` (see its SOURCES.md), the
+//! distance between convex hulls to 1e-6 m, unique witness points to 1e-5 m, the enabled
+//! pairs and the in-collision verdicts exactly.
+
+use moma::collision::{
+    GeometryData, GeometryModel, GeometryOptions, PairSelection, compute_collision,
+    compute_distances, update_geometry_placements,
+};
+use moma::kinematics::forward_kinematics;
+use moma::multibody::{Data, Model, RootJoint};
+use nalgebra::DVector;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn data_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
+
+pub fn fetch() -> (Model, GeometryModel) {
+    let dir = data_dir().join("robots/fetch");
+    let urdf = dir.join("fetch_description/robots/fetch.urdf");
+    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
+    let opts = GeometryOptions {
+        package_dirs: vec![dir.clone()],
+        srdf: Some(dir.join("fetch.srdf")),
+    };
+    let gm = GeometryModel::from_urdf(&model, &urdf, &opts).unwrap();
+    (model, gm)
+}
+
+fn q_of(model: &Model, state: &Value) -> DVector<f64> {
+    let mut q = DVector::zeros(model.nq);
+    for (name, v) in state["q_by_joint"].as_object().unwrap() {
+        let j = model.joint_id(name).unwrap();
+        q[model.idx_q[j.0]] = v.as_f64().unwrap();
+    }
+    q
+}
+
+fn vec3(v: &Value) -> [f64; 3] {
+    let a = v.as_array().unwrap();
+    [0, 1, 2].map(|i| a[i].as_f64().unwrap())
+}
+
+#[test]
+fn fetch_self_distances_match_coal() {
+    let text =
+        std::fs::read_to_string(data_dir().join("collision/fetch_self_public.json")).unwrap();
+    let r: Value = serde_json::from_str(&text).unwrap();
+    let (model, gm) = fetch();
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    // The pairs: same links, and the enabled set equals the reference's.
+    let pairs = r["pairs"].as_array().unwrap();
+    assert_eq!(gm.pairs.len(), pairs.len());
+    let index: Vec<usize> = pairs
+        .iter()
+        .map(|p| {
+            let a = gm.link_index(p[0].as_str().unwrap()).unwrap();
+            let b = gm.link_index(p[1].as_str().unwrap()).unwrap();
+            gm.pairs
+                .iter()
+                .position(|x| *x == [a.min(b), a.max(b)])
+                .unwrap()
+        })
+        .collect();
+    let swapped: Vec<bool> = pairs
+        .iter()
+        .zip(&index)
+        .map(|(p, &k)| gm.links[gm.pairs[k][0]].name != p[0].as_str().unwrap())
+        .collect();
+    for (k, e) in r["pair_enabled"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(
+            gm.enabled[index[k]],
+            e.as_bool().unwrap(),
+            "pair {:?}",
+            pairs[k]
+        );
+    }
+    let (mut worst_d, mut worst_w, mut checked_w) = (0.0f64, 0.0f64, 0);
+    for s in r["states"].as_array().unwrap() {
+        let q = q_of(&model, s);
+        forward_kinematics(&model, &mut data, &q);
+        update_geometry_placements(&gm, &data, &mut gd);
+        compute_distances(&gm, &mut gd, PairSelection::All);
+        let label = s["label"].as_str().unwrap();
+        for (k, p) in pairs.iter().enumerate() {
+            let got = gd.results[index[k]];
+            let want = s["distance_convex"][k].as_f64().unwrap();
+            let err = (got.distance - want).abs();
+            worst_d = worst_d.max(err);
+            assert!(err <= 1e-6, "{label} {p}: {} vs coal {want}", got.distance);
+            if s["witness_unique"][k].as_bool() == Some(true) {
+                let (wa, wb) = if swapped[k] {
+                    (got.witness_b, got.witness_a)
+                } else {
+                    (got.witness_a, got.witness_b)
+                };
+                for (mine, theirs) in [(wa, &s["witness_a"][k]), (wb, &s["witness_b"][k])] {
+                    let t = vec3(theirs);
+                    for i in 0..3 {
+                        let e = (mine[i] - t[i]).abs();
+                        worst_w = worst_w.max(e);
+                        assert!(e <= 1e-5, "{label} {p}: witness {mine:?} vs coal {t:?}");
+                    }
+                }
+                checked_w += 1;
+            }
+        }
+        // The minimum and the verdict over the enabled pairs.
+        let min = compute_distances(&gm, &mut gd, PairSelection::Enabled);
+        let want_min = s["min_enabled_convex"].as_f64().unwrap();
+        assert!(
+            (min - want_min).abs() <= 1e-6,
+            "{label}: min {min} vs {want_min}"
+        );
+        let hit = compute_collision(&gm, &mut gd).is_some();
+        if want_min.abs() > 1e-6 {
+            assert_eq!(hit, s["in_collision_enabled"].as_bool().unwrap(), "{label}");
+        }
+    }
+    assert!(checked_w > 1000, "{checked_w} witness pairs checked");
+    eprintln!(
+        "worst distance error {worst_d:e} m, worst witness error {worst_w:e} m over {checked_w} unique pairs"
+    );
+}
+
+#[test]
+fn fetch_scene_distances_match_coal() {
+    use moma::collision::{
+        SceneData, SceneOptions, compute_scene_distances, read_scene, scene_collision,
+    };
+    let text =
+        std::fs::read_to_string(data_dir().join("collision/fetch_scene_public.json")).unwrap();
+    let r: Value = serde_json::from_str(&text).unwrap();
+    let (model, gm) = fetch();
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    let opts = SceneOptions {
+        world_frames: vec!["base_link".into(), "world".into()],
+        package_dirs: vec![],
+    };
+    let (mut worst_d, mut checked) = (0.0f64, 0);
+    for (name, sc) in r["scenes"].as_object().unwrap() {
+        let yaml = data_dir()
+            .join("scenes/motion_bench_maker")
+            .join(sc["scene_yaml"].as_str().unwrap());
+        let scene = read_scene(&yaml, &opts).unwrap();
+        let mut sd = SceneData::new(&gm, &scene);
+        let pairs = sc["pairs"].as_array().unwrap();
+        let index: Vec<usize> = pairs
+            .iter()
+            .map(|p| {
+                let l = gm.link_index(p[0].as_str().unwrap()).unwrap();
+                let o = scene
+                    .objects
+                    .iter()
+                    .position(|o| o.id == p[1].as_str().unwrap())
+                    .unwrap();
+                l * scene.objects.len() + o
+            })
+            .collect();
+        assert_eq!(pairs.len(), gm.links.len() * scene.objects.len(), "{name}");
+        for s in r["states"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["scene"] == name.as_str())
+        {
+            let q = q_of(&model, s);
+            forward_kinematics(&model, &mut data, &q);
+            update_geometry_placements(&gm, &data, &mut gd);
+            let min = compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
+            let label = format!("{name} {}", s["label"].as_str().unwrap());
+            for (k, p) in pairs.iter().enumerate() {
+                let got = sd.results[index[k]];
+                let want = s["distance_convex"][k].as_f64().unwrap();
+                worst_d = worst_d.max((got.distance - want).abs());
+                assert!(
+                    (got.distance - want).abs() <= 1e-6,
+                    "{label} {p}: {} vs coal {want}",
+                    got.distance
+                );
+                if s["witness_unique"][k].as_bool() == Some(true) {
+                    for (mine, theirs) in [
+                        (got.witness_a, &s["witness_a"][k]),
+                        (got.witness_b, &s["witness_b"][k]),
+                    ] {
+                        let t = vec3(theirs);
+                        for i in 0..3 {
+                            assert!(
+                                (mine[i] - t[i]).abs() <= 1e-5,
+                                "{label} {p}: witness {mine:?} vs coal {t:?}"
+                            );
+                        }
+                    }
+                    checked += 1;
+                }
+            }
+            let want_min = s["min_distance"].as_f64().unwrap();
+            assert!(
+                (min - want_min).abs() <= 1e-6,
+                "{label}: min {min} vs {want_min}"
+            );
+            if want_min.abs() > 1e-6 {
+                let hit = scene_collision(&gm, &gd, &scene, &mut sd).is_some();
+                assert_eq!(hit, s["in_collision"].as_bool().unwrap(), "{label}");
+            }
+        }
+    }
+    assert!(checked > 1000, "{checked}");
+    eprintln!("scenes: worst distance error {worst_d:e} m, {checked} unique witness pairs");
+}
