@@ -7,13 +7,13 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 use super::plan::{Planner, SearchTiming};
 use super::reference::{RefSample, Reference, TimingStart, build_reference};
 use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
-use crate::control::unicycle::{Kanayama, ReferenceSample};
+use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
 use crate::mobile::wheeled::{
     actuation_matrix, admissible_velocity_basis, admissible_velocity_basis_dot,
-    lagrange_multipliers, reduced_forward_dynamics_crba,
+    lagrange_multipliers, reduced_forward_dynamics_crba, wheel_longitudinal_forces,
 };
 use crate::mobile::{WheeledData, WheeledModel, reduced_forward_dynamics};
 use crate::multibody::{Data, JointType};
@@ -311,7 +311,7 @@ pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
     }
     let mut data = Data::new(model);
     let com = crate::dynamics::center_of_mass(model, &mut data, &q);
-    let support = SupportPolygon::from_wheeled_base(&m.robot.base)?;
+    let support = SupportPolygon::from_wheeled_model(&m.robot)?;
     Ok(crate::stability::acceleration_limits(
         model.total_mass(),
         &com,
@@ -548,20 +548,61 @@ impl<'m> Runner<'m> {
         }
     }
 
-    /// The simulated time limit (s) and the record interval in control steps.
+    /// The simulated time limit (s) and the record interval in control steps. A run too
+    /// long is an error naming the field the user set: `simulation.time_limit` when given,
+    /// else `simulation.dt` (steps) or `simulation.record_interval` (samples) against the
+    /// default time limit.
     fn run_length(&self) -> Result<(f64, usize)> {
         let sim = &self.m.file.simulation;
-        let h = sim.dt;
+        let (h, ri) = (sim.dt, sim.record_interval);
+        let planned = self.plans.first().map(|p| p.duration);
         let time_limit = sim
             .time_limit
-            .unwrap_or_else(|| self.plans.first().map_or(10.0, |p| 3.0 * p.duration + 30.0));
-        if time_limit / h > MAX_STEPS || time_limit / sim.record_interval > MAX_SAMPLES {
-            return Err(Error::invalid(
-                "simulation.time_limit",
-                format!("a run of {time_limit} s needs too many steps or samples"),
-            ));
+            .unwrap_or_else(|| planned.map_or(10.0, |p| 3.0 * p + 30.0));
+        let default_limit = || match planned {
+            Some(p) => format!(
+                "the default time limit of {time_limit} s (3 × the first plan's {p} s + 30 s)"
+            ),
+            None => format!("the default time limit of {time_limit} s"),
+        };
+        let too_long =
+            |field: &str, what: String| Err(Error::parse(&self.m.path, format!("{field}: {what}")));
+        let (steps, samples) = (time_limit / h, time_limit / ri);
+        if steps > MAX_STEPS {
+            return match sim.time_limit {
+                Some(_) => too_long(
+                    "simulation.time_limit",
+                    format!(
+                        "{time_limit} s at simulation.dt = {h} s is {steps:e} steps, more than {MAX_STEPS:e}"
+                    ),
+                ),
+                None => too_long(
+                    "simulation.dt",
+                    format!(
+                        "{h} s over {} is {steps:e} steps, more than {MAX_STEPS:e}: raise simulation.dt or set a shorter simulation.time_limit",
+                        default_limit()
+                    ),
+                ),
+            };
         }
-        let rec_every = ((sim.record_interval / h).round() as usize).max(1);
+        if samples > MAX_SAMPLES {
+            return match sim.time_limit {
+                Some(_) => too_long(
+                    "simulation.time_limit",
+                    format!(
+                        "{time_limit} s at simulation.record_interval = {ri} s is {samples:e} samples, more than {MAX_SAMPLES:e}"
+                    ),
+                ),
+                None => too_long(
+                    "simulation.record_interval",
+                    format!(
+                        "{ri} s over {} is {samples:e} samples, more than {MAX_SAMPLES:e}: raise simulation.record_interval or set a shorter simulation.time_limit",
+                        default_limit()
+                    ),
+                ),
+            };
+        }
+        let rec_every = ((ri / h).round() as usize).max(1);
         Ok((time_limit, rec_every))
     }
 
@@ -628,16 +669,16 @@ impl<'m> Runner<'m> {
                 }
                 false
             }
-            Phase::Done => {
-                c.hold(v, w, ws);
-                false
-            }
+            // the run ends at this sample: no step follows, so no torque is computed and
+            // the record shows the input the plant last had (zero at t = 0)
+            Phase::Done => false,
         };
 
-        let torque_clip = c.act.computed_torque(&ws.cwd, &ws.a_des, &mut ws.u);
-        self.saturation_events(st, t, torque_clip, speed_clip);
-
         let last = st.phase == Phase::Done;
+        if !last {
+            let torque_clip = c.act.computed_torque(&ws.cwd, &ws.a_des, &mut ws.u);
+            self.saturation_events(st, t, torque_clip, speed_clip);
+        }
         if st.k.is_multiple_of(c.rec_every) || last {
             self.record_and_check(c, ws, st, t, ee.p);
         }
@@ -1115,14 +1156,7 @@ impl<'m> Runner<'m> {
         }
         let ground = ws.sm.support.ground_z();
         contact_normal_loads(&ws.contacts, ground, &ws.sd.wrench, &mut ws.loads).ok()?;
-        // longitudinal wheel forces: the rolling multipliers of tracked wheels, else the
-        // wheel torques over the radius
-        let long = if nk == 3 {
-            [lam[1], lam[2]]
-        } else {
-            let r = wm.base.drive.wheel_radius;
-            [u[0] / r, u[1] / r]
-        };
+        let long = wheel_longitudinal_forces(wm, &lam[..nk], u);
         let fr = driven_wheel_friction(
             -lam[0],
             long,
@@ -1247,7 +1281,7 @@ impl Workspace {
     fn new(wm: &WheeledModel) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
-        let support = SupportPolygon::from_wheeled_base(&wm.base)?;
+        let support = SupportPolygon::from_wheeled_model(wm)?;
         let sm = StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
         let sd = StabilityData::new(&sm);
         let support_pts = wm.base.support_points();
@@ -1414,6 +1448,10 @@ struct Controller {
     /// The transport posture as a full configuration.
     q_t: DVector<f64>,
     kan: Kanayama,
+    /// The arrive phase's posture law onto the axle's goal pose.
+    arrive: Aicardi,
+    /// The goal's position tolerance (m).
+    pos_tol: f64,
     kx: f64,
     ks: f64,
     wn: f64,
@@ -1467,6 +1505,8 @@ impl Controller {
             arm,
             q_t,
             kan,
+            arrive: Aicardi::new(c.kx, 2.0, 1.0)?,
+            pos_tol: f.goal.position_tolerance,
             kx: c.kx,
             ks: c.speed_gain,
             wn: c.arm_frequency,
@@ -1519,15 +1559,10 @@ impl Controller {
                 };
                 (self.kan.inputs(&axle, &rs), base_reference(r, self.d))
             }
-            None => {
-                let rs = ReferenceSample {
-                    pose: self.goal_axle,
-                    v: 0.0,
-                    w: 0.0,
-                };
-                let [ex, _, eth] = Kanayama::error(&axle, &rs);
-                ([self.kx * ex, 2.0 * eth], self.goal_sample(t))
-            }
+            None => (
+                arrive_command(&self.arrive, self.kx, self.pos_tol, axle, self.goal_axle),
+                self.goal_sample(t),
+            ),
         };
         let mut speed_clip = false;
         if cmd[0].abs() > self.v_max {
@@ -1616,16 +1651,30 @@ impl Controller {
         }
         true
     }
+}
 
-    /// Done: the platform's speeds and the joint rates damped to zero.
-    fn hold(&self, v: f64, w: f64, ws: &mut Workspace) {
-        let a_des = &mut ws.a_des;
-        a_des[0] = -self.ks * v;
-        a_des[1] = -self.ks * w;
-        for k2 in 0..self.na {
-            a_des[2 + k2] = -2.0 * self.wn * ws.vv[2 + k2];
-        }
+/// The arrive phase's speed commands `[v, ω]` for the axle pose `axle` onto its goal pose
+/// `goal`: while the position is more than `position_tolerance` off, Aicardi's polar law
+/// `law` (it closes a lateral offset too, which no smooth law of the pose error alone
+/// can, by Brockett's condition); within it, `[kx·eₓ, 2·e_θ]`, a turn onto the goal
+/// heading.
+fn arrive_command(
+    law: &Aicardi,
+    kx: f64,
+    position_tolerance: f64,
+    axle: [f64; 3],
+    goal: [f64; 3],
+) -> [f64; 2] {
+    if (axle[0] - goal[0]).hypot(axle[1] - goal[1]) > position_tolerance {
+        return law.inputs(&axle, &goal);
     }
+    let rs = ReferenceSample {
+        pose: goal,
+        v: 0.0,
+        w: 0.0,
+    };
+    let [ex, _, eth] = Kanayama::error(&axle, &rs);
+    [kx * ex, 2.0 * eth]
 }
 
 /// End-effector position, velocity and acceleration bias in reduced coordinates.
@@ -1719,4 +1768,50 @@ fn arm_side(
         .collect();
     side.push(to_base(&ee));
     side
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The arrive law on the kinematic unicycle with the mission's speed limits, from
+    /// `start` onto the origin: the pose error after 8 s (the arrive phase's time-out).
+    fn arrive_from(start: [f64; 3]) -> (f64, f64) {
+        let law = Aicardi::new(2.0, 2.0, 1.0).unwrap();
+        let (mut p, h) = (start, 1e-3);
+        for _ in 0..8000 {
+            let [v, w] = arrive_command(&law, 2.0, 0.1, p, [0.0; 3]);
+            let (v, w) = (v.clamp(-1.0, 1.0), w.clamp(-1.0, 1.0));
+            p = [
+                p[0] + h * v * p[2].cos(),
+                p[1] + h * v * p[2].sin(),
+                p[2] + h * w,
+            ];
+        }
+        (p[0].hypot(p[1]), wrap_angle(p[2]).abs())
+    }
+
+    #[test]
+    fn arrive_closes_a_sideways_offset_within_its_time_out() {
+        for start in [
+            [0.0, 0.3, 0.0],
+            [0.0, -0.5, 0.0],
+            [-0.2, 0.25, 0.1],
+            [0.4, 0.0, 0.0],
+        ] {
+            let (pe, he) = arrive_from(start);
+            assert!(
+                pe <= 0.1 && he <= 0.1,
+                "from {start:?}: {pe} m, {he} rad off"
+            );
+        }
+    }
+
+    #[test]
+    fn the_heading_law_alone_never_closes_a_sideways_offset() {
+        // the law the arrive phase had before: [kx·eₓ, 2·e_θ] everywhere
+        let law = Aicardi::new(2.0, 2.0, 1.0).unwrap();
+        let [v, w] = arrive_command(&law, 2.0, f64::INFINITY, [0.0, 0.3, 0.0], [0.0; 3]);
+        assert_eq!([v, w], [0.0, 0.0]);
+    }
 }
