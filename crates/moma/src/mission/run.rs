@@ -618,8 +618,8 @@ impl<'m> Runner<'m> {
         let (nq, nr) = (c.nq, c.nr);
         let t = st.k as f64 * c.h;
         st.t = t;
-        ws.qv.copy_from_slice(&x[..nq]);
-        ws.vv.copy_from_slice(&x[nq..nq + nr]);
+        ws.q_now.copy_from_slice(&x[..nq]);
+        ws.v_now.copy_from_slice(&x[nq..nq + nr]);
         let pose = [x[0], x[1], x[2]];
         let axle = axle_pose(pose, c.d);
         let (v, w) = (x[nq], x[nq + 1]);
@@ -627,8 +627,13 @@ impl<'m> Runner<'m> {
         self.obstacle_arrivals(c, st, t, axle, v);
 
         // reduced dynamics at the state (controller's model)
-        let step_ok =
-            reduced_forward_dynamics_crba(self.wm, &mut ws.cwd, &ws.qv, &ws.vv, &ws.zero_u);
+        let step_ok = reduced_forward_dynamics_crba(
+            self.wm,
+            &mut ws.control_dynamics,
+            &ws.q_now,
+            &ws.v_now,
+            &ws.zero_u,
+        );
         if let Err(e) = step_ok {
             self.fail(t, format!("the dynamics became singular: {e}"));
             st.phase = Phase::Done;
@@ -676,7 +681,9 @@ impl<'m> Runner<'m> {
 
         let last = st.phase == Phase::Done;
         if !last {
-            let torque_clip = c.act.computed_torque(&ws.cwd, &ws.a_des, &mut ws.u);
+            let torque_clip = c
+                .act
+                .computed_torque(&ws.control_dynamics, &ws.a_des, &mut ws.u);
             self.saturation_events(st, t, torque_clip, speed_clip);
         }
         if st.k.is_multiple_of(c.rec_every) || last {
@@ -687,7 +694,7 @@ impl<'m> Runner<'m> {
         }
 
         // actuator energy over the step (rates at its start)
-        st.energy += c.act.absolute_power(&ws.u, &ws.vv, v, w) * c.h;
+        st.energy += c.act.absolute_power(&ws.u, &ws.v_now, v, w) * c.h;
 
         // integrate one step
         let mut plant = Plant {
@@ -1083,7 +1090,7 @@ impl<'m> Runner<'m> {
     ) -> Option<(Option<f64>, f64)> {
         let mon = self.monitors(ws);
         let side = arm_side(&self.wm.model, ws, &c.chain, ee);
-        let (q, r) = (&ws.qv, &st.cur_ref);
+        let (q, r) = (&ws.q_now, &st.cur_ref);
         let res = c.res;
         let [fx, fy] = self.m.map.grid.world_to_cell_f(q[0], q[1]);
         let clearance = self
@@ -1095,8 +1102,8 @@ impl<'m> Runner<'m> {
         let s = &mut self.samples;
         s.t.push(t);
         s.q.push(q.as_slice().to_vec());
-        s.v.push(ws.vv[0]);
-        s.omega.push(ws.vv[1]);
+        s.v.push(ws.v_now[0]);
+        s.omega.push(ws.v_now[1]);
         s.v_ref.push(r.v);
         s.omega_ref.push(r.omega);
         s.ref_xy.push([r.x, r.y]);
@@ -1118,20 +1125,22 @@ impl<'m> Runner<'m> {
     /// dynamics fail.
     fn monitors(&self, ws: &mut Workspace) -> Option<Monitors> {
         let wm = self.wm;
-        let (q, v, u) = (&ws.qv, &ws.vv, &ws.u);
-        reduced_forward_dynamics(wm, &mut ws.mwd, q, v, u).ok()?;
-        let lam = lagrange_multipliers(wm, &mut ws.mwd, q).ok().map(|l| {
-            let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
-            ([at(0), at(1), at(2)], l.len())
-        });
+        let (q, v, u) = (&ws.q_now, &ws.v_now, &ws.u);
+        reduced_forward_dynamics(wm, &mut ws.monitor_dynamics, q, v, u).ok()?;
+        let lam = lagrange_multipliers(wm, &mut ws.monitor_dynamics, q)
+            .ok()
+            .map(|l| {
+                let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
+                ([at(0), at(1), at(2)], l.len())
+            });
         let rep = crate::stability::evaluate(
             &wm.model,
             &mut ws.data,
-            &ws.sm,
-            &mut ws.sd,
+            &ws.stability_model,
+            &mut ws.stability_data,
             q,
-            &ws.mwd.qdot,
-            &ws.mwd.reduced.qddot,
+            &ws.monitor_dynamics.qdot,
+            &ws.monitor_dynamics.reduced.qddot,
             &ExternalLoads::default(),
         );
         let (zmp, force_angle, mhs) = (rep.zmp_margin, rep.force_angle_min, rep.mhs_min);
@@ -1148,14 +1157,20 @@ impl<'m> Runner<'m> {
     /// them) and the support wrench just evaluated; `None` if it cannot be formed.
     fn slip_ratio(&self, ws: &mut Workspace, lam: [f64; 3], nk: usize) -> Option<f64> {
         let wm = self.wm;
-        let (q, u) = (&ws.qv, &ws.u);
+        let (q, u) = (&ws.q_now, &ws.u);
         // contacts in the world, loads from the wrench (stability::loads)
         let (sn, cs) = q[2].sin_cos();
         for (w, p) in ws.contacts.iter_mut().zip(&ws.support_pts) {
             *w = Vector2::new(q[0] + cs * p.x - sn * p.y, q[1] + sn * p.x + cs * p.y);
         }
-        let ground = ws.sm.support.ground_z();
-        contact_normal_loads(&ws.contacts, ground, &ws.sd.wrench, &mut ws.loads).ok()?;
+        let ground = ws.stability_model.support.ground_z();
+        contact_normal_loads(
+            &ws.contacts,
+            ground,
+            &ws.stability_data.wrench,
+            &mut ws.loads,
+        )
+        .ok()?;
         let long = wheel_longitudinal_forces(wm, &lam[..nk], u);
         let fr = driven_wheel_friction(
             -lam[0],
@@ -1253,28 +1268,44 @@ fn initial_state(m: &Mission) -> Vec<f64> {
 
 /// The workspaces of the loop, allocated once before it.
 struct Workspace {
+    /// The plant.
     sys: WheeledSystem,
-    /// The controller's reduced dynamics.
-    cwd: WheeledData,
-    /// The monitors' reduced dynamics.
-    mwd: WheeledData,
+    /// The control law's reduced dynamics (Mr, cr + Gr, N_C) at the step's state, under
+    /// zero input.
+    control_dynamics: WheeledData,
+    /// The monitors' reduced dynamics at a recorded state under the applied input (v̇,
+    /// q̈, the multipliers λ).
+    monitor_dynamics: WheeledData,
+    /// Kinematics workspace (end effector, arm side view, stability).
     data: Data,
-    sm: StabilityModel,
-    sd: StabilityData,
+    /// The support and body set of the stability measures.
+    stability_model: StabilityModel,
+    /// Their workspace (the gravito-inertial wrench of the last evaluation).
+    stability_data: StabilityData,
+    /// The contacts (drive wheels, casters) in the base frame.
     support_pts: Vec<Vector2<f64>>,
+    /// The same in the world at the recorded state.
     contacts: Vec<Vector2<f64>>,
+    /// Their normal loads (N).
     loads: Vec<f64>,
     rk: Rk4,
-    qv: DVector<f64>,
-    vv: DVector<f64>,
+    /// The configuration q of the step's state.
+    q_now: DVector<f64>,
+    /// The reduced velocity v = [v, ω, q̇_arm] of the step's state.
+    v_now: DVector<f64>,
+    /// The actuator inputs (wheel torques, then arm torques), held over the step.
     u: Vec<f64>,
     zero_u: Vec<f64>,
+    /// The law's desired reduced accelerations.
     a_des: DVector<f64>,
+    /// The end effector's frame Jacobian (full velocity coordinates).
     jac: Matrix6xX<f64>,
+    /// Ṅ_C.
     ndot: DMatrix<f64>,
-    ndv: DVector<f64>,
-    /// Reduced end-effector Jacobian (position rows).
-    jr: DMatrix<f64>,
+    /// Ṅ_C v.
+    ndot_v: DVector<f64>,
+    /// The end effector's reduced position Jacobian J N_C (3 × nr).
+    ee_jacobian: DMatrix<f64>,
 }
 
 impl Workspace {
@@ -1282,29 +1313,30 @@ impl Workspace {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
         let support = SupportPolygon::from_wheeled_model(wm)?;
-        let sm = StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
-        let sd = StabilityData::new(&sm);
+        let stability_model =
+            StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
+        let stability_data = StabilityData::new(&stability_model);
         let support_pts = wm.base.support_points();
         Ok(Self {
             sys: WheeledSystem::new(wm.clone()),
-            cwd: WheeledData::new(wm),
-            mwd: WheeledData::new(wm),
+            control_dynamics: WheeledData::new(wm),
+            monitor_dynamics: WheeledData::new(wm),
             data: Data::new(model),
-            sm,
-            sd,
+            stability_model,
+            stability_data,
             contacts: support_pts.clone(),
             loads: vec![0.0; support_pts.len()],
             support_pts,
             rk: Rk4::new(nq + nr + 1),
-            qv: DVector::zeros(nq),
-            vv: DVector::zeros(nr),
+            q_now: DVector::zeros(nq),
+            v_now: DVector::zeros(nr),
             u: vec![0.0; nu],
             zero_u: vec![0.0; nu],
             a_des: DVector::zeros(nr),
             jac: Matrix6xX::zeros(model.nv),
             ndot: DMatrix::zeros(model.nv, nr),
-            ndv: DVector::zeros(model.nv),
-            jr: DMatrix::zeros(3, nr),
+            ndot_v: DVector::zeros(model.nv),
+            ee_jacobian: DMatrix::zeros(3, nr),
         })
     }
 }
@@ -1327,10 +1359,10 @@ impl Actuators {
         let model = &wm.model;
         let mut smat = DMatrix::zeros(model.nv, wm.nu());
         // the platform block of N_Cᵀ S: Qr[0..2] = B u[0..2]
-        ws.qv.copy_from_slice(&x[..model.nq]);
-        admissible_velocity_basis(wm, &ws.qv, &mut ws.cwd.basis);
-        actuation_matrix(wm, &ws.qv, &mut smat);
-        let b_full = ws.cwd.basis.transpose() * &smat;
+        ws.q_now.copy_from_slice(&x[..model.nq]);
+        admissible_velocity_basis(wm, &ws.q_now, &mut ws.control_dynamics.basis);
+        actuation_matrix(wm, &ws.q_now, &mut smat);
+        let b_full = ws.control_dynamics.basis.transpose() * &smat;
         let b_pp = Matrix2::new(
             b_full[(0, 0)],
             b_full[(0, 1)],
@@ -1375,21 +1407,26 @@ impl Actuators {
     }
 
     /// The actuators' absolute power Σ |u_j · rate_j| at the inputs `u`, the reduced
-    /// velocities `vv` and the platform speeds (`v`, `w`).
-    fn absolute_power(&self, u: &[f64], vv: &DVector<f64>, v: f64, w: f64) -> f64 {
+    /// velocities `v_now` and the platform speeds (`v`, `w`).
+    fn absolute_power(&self, u: &[f64], v_now: &DVector<f64>, v: f64, w: f64) -> f64 {
         let wrates = self.w_inv * Vector2::new(v, w);
         let mut p_abs = (u[0] * wrates[0]).abs() + (u[1] * wrates[1]).abs();
         for k2 in 0..self.arm_tau.len() {
-            p_abs += (u[2 + k2] * vv[2 + k2]).abs();
+            p_abs += (u[2 + k2] * v_now[2 + k2]).abs();
         }
         p_abs
     }
 
     /// Computed torque through the reduced model, Qr = Mr a + (cr + Gr), mapped to the
     /// inputs `u` and clipped at the torque limits; `true` if any was clipped.
-    fn computed_torque(&self, cwd: &WheeledData, a_des: &DVector<f64>, u: &mut [f64]) -> bool {
-        let mr = &cwd.reduced.mass_matrix;
-        let bias = &cwd.reduced.velocity_terms;
+    fn computed_torque(
+        &self,
+        control_dynamics: &WheeledData,
+        a_des: &DVector<f64>,
+        u: &mut [f64],
+    ) -> bool {
+        let mr = &control_dynamics.reduced.mass_matrix;
+        let bias = &control_dynamics.reduced.velocity_terms;
         let nr = a_des.len();
         let mut qr = [0.0f64; 2];
         for (i, qri) in qr.iter_mut().enumerate() {
@@ -1586,7 +1623,7 @@ impl Controller {
         a_des[0] = (r.a + ks * (cmd[0] - v)).clamp(-self.a_guard_b, self.a_guard_f);
         a_des[1] = (r.alpha + ks * (cmd[1] - w)).clamp(-self.alpha_guard, self.alpha_guard);
         for (k2, &i) in self.arm.iter().enumerate() {
-            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.qv[i]) - 2.0 * wn * ws.vv[2 + k2];
+            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.q_now[i]) - 2.0 * wn * ws.v_now[2 + k2];
         }
         (r, speed_clip)
     }
@@ -1604,14 +1641,14 @@ impl Controller {
         ws: &mut Workspace,
     ) -> bool {
         let (nr, na, wn, wt) = (self.nr, self.na, self.wn, self.wt);
-        let (jr, vv, a_des) = (&ws.jr, &ws.vv, &mut ws.a_des);
+        let (ee_jacobian, v_now, a_des) = (&ws.ee_jacobian, &ws.v_now, &mut ws.a_des);
         // platform holds: speeds to zero
         a_des[0] = -self.ks * v;
         a_des[1] = -self.ks * w;
         let (xd, dxd, ddxd) = traj.at(t);
         let mut rhs = ddxd + (dxd - ee.dp) * (2.0 * wt) + (xd - ee.p) * (wt * wt) - ee.bias;
         for r in 0..3 {
-            rhs[r] -= jr[(r, 0)] * a_des[0] + jr[(r, 1)] * a_des[1];
+            rhs[r] -= ee_jacobian[(r, 0)] * a_des[0] + ee_jacobian[(r, 1)] * a_des[1];
         }
         // damped least squares on the arm block, null-space damping
         let mut jjt = Matrix3::zeros();
@@ -1619,7 +1656,7 @@ impl Controller {
             for s in 0..3 {
                 let mut acc = 0.0;
                 for j in 2..nr {
-                    acc += jr[(r, j)] * jr[(s, j)];
+                    acc += ee_jacobian[(r, j)] * ee_jacobian[(s, j)];
                 }
                 jjt[(r, s)] = acc;
             }
@@ -1632,20 +1669,20 @@ impl Controller {
         // null-space motion: damp the joint rates
         let mut q0 = vec![0.0; na];
         for (k2, q0k) in q0.iter_mut().enumerate() {
-            *q0k = -2.0 * wn * vv[2 + k2];
+            *q0k = -2.0 * wn * v_now[2 + k2];
         }
         // J q0
         let mut jq0 = Vector3::zeros();
         for r in 0..3 {
             for (k2, q0k) in q0.iter().enumerate() {
-                jq0[r] += jr[(r, 2 + k2)] * q0k;
+                jq0[r] += ee_jacobian[(r, 2 + k2)] * q0k;
             }
         }
         let z = jinv * jq0;
         for k2 in 0..na {
             let mut acc = q0[k2];
             for r in 0..3 {
-                acc += jr[(r, 2 + k2)] * (y[r] - z[r]);
+                acc += ee_jacobian[(r, 2 + k2)] * (y[r] - z[r]);
             }
             a_des[2 + k2] = acc;
         }
@@ -1686,17 +1723,17 @@ struct EeState {
 }
 
 /// The end effector's position, velocity and acceleration bias at the workspace's state,
-/// with its reduced position Jacobian in `ws.jr` (needs the controller's reduced
+/// with its reduced position Jacobian in `ws.ee_jacobian` (needs the controller's reduced
 /// dynamics at the state).
 fn end_effector_kinematics(m: &Mission, ws: &mut Workspace) -> EeState {
     let (wm, ee_frame) = (&m.robot, m.ee_frame);
     let model = &wm.model;
     let nr = wm.nr();
-    let qd = &ws.cwd.qdot;
+    let qd = &ws.control_dynamics.qdot;
     let acc = frame_acceleration_bias(
         model,
         &mut ws.data,
-        &ws.qv,
+        &ws.q_now,
         qd,
         ee_frame,
         ReferenceFrame::LocalWorldAligned,
@@ -1712,25 +1749,25 @@ fn end_effector_kinematics(m: &Mission, ws: &mut Workspace) -> EeState {
         ReferenceFrame::LocalWorldAligned,
         &mut ws.jac,
     );
-    admissible_velocity_basis_dot(wm, &ws.qv, qd[2], &mut ws.ndot);
-    ws.ndot.mul_to(&ws.vv, &mut ws.ndv);
-    let (jac, jr, vv) = (&ws.jac, &mut ws.jr, &ws.vv);
+    admissible_velocity_basis_dot(wm, &ws.q_now, qd[2], &mut ws.ndot);
+    ws.ndot.mul_to(&ws.v_now, &mut ws.ndot_v);
+    let (jac, ee_jacobian, v_now) = (&ws.jac, &mut ws.ee_jacobian, &ws.v_now);
     for r in 0..3 {
         let mut b = acc.linear[r];
         for cc in 0..model.nv {
-            b += jac[(r, cc)] * ws.ndv[cc];
+            b += jac[(r, cc)] * ws.ndot_v[cc];
         }
         ee.bias[r] = b;
         for j in 0..nr {
             let mut s = 0.0;
             for l in 0..model.nv {
-                s += jac[(r, l)] * ws.cwd.basis[(l, j)];
+                s += jac[(r, l)] * ws.control_dynamics.basis[(l, j)];
             }
-            jr[(r, j)] = s;
+            ee_jacobian[(r, j)] = s;
         }
         let mut s = 0.0;
         for j in 0..nr {
-            s += jr[(r, j)] * vv[j];
+            s += ee_jacobian[(r, j)] * v_now[j];
         }
         ee.dp[r] = s;
     }
@@ -1754,7 +1791,7 @@ fn arm_side(
     chain: &[usize],
     ee: Vector3<f64>,
 ) -> Vec<[f64; 2]> {
-    let q = &ws.qv;
+    let q = &ws.q_now;
     crate::kinematics::forward_kinematics(model, &mut ws.data, q);
     let (sn, cs) = q[2].sin_cos();
     let to_base = |p: &Vector3<f64>| {
