@@ -163,6 +163,13 @@ fn polyline(svg: &mut String, f: &Frame, x: &[f64], y: &[f64], color: &str) {
     );
 }
 
+/// The width the legend takes right of the plot (px): its 14 px gap, the 28 px sample
+/// line, the longest name at 12 px sans-serif (at most 7.5 px a character) and a margin.
+fn legend_width(names: &[&str]) -> f64 {
+    let longest = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
+    14.0 + 28.0 + 7.5 * longest as f64 + 10.0
+}
+
 fn legend(svg: &mut String, names: &[&str]) {
     for (i, n) in names.iter().enumerate() {
         let y = MT + 14.0 + 18.0 * i as f64;
@@ -191,14 +198,17 @@ pub fn line_chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series<'_>]
         pw: W - ML - MR,
         ph: H - MT - MB,
     };
+    // the figure widens so that the longest legend entry fits right of the plot
+    let names: Vec<&str> = series.iter().map(|s| s.name).collect();
+    let width = W.max(W - MR + legend_width(&names));
     let mut svg = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif">"#
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{H}" viewBox="0 0 {width} {H}" font-family="sans-serif">"#
     );
     axes(&mut svg, &f, title, xlabel, ylabel);
     for (i, s) in series.iter().enumerate() {
         polyline(&mut svg, &f, s.x, &s.y, COLORS[i % COLORS.len()]);
     }
-    legend(&mut svg, &series.iter().map(|s| s.name).collect::<Vec<_>>());
+    legend(&mut svg, &names);
     svg.push_str("</svg>\n");
     svg
 }
@@ -266,6 +276,44 @@ pub fn path_chart(title: &str, x: &[f64], y: &[f64]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The joint torques' legend (long joint names) stays inside the figure: the figure
+    /// is as wide as the longest entry needs at 7.5 px a character.
+    #[test]
+    fn a_long_legend_entry_fits_inside_the_figure() {
+        let (x, y) = ([0.0, 1.0], [0.0, 1.0]);
+        let name = "tau_shoulder_lift_joint_with_a_long_name";
+        let svg = line_chart(
+            "t",
+            "t [s]",
+            "τ",
+            &[Series {
+                name,
+                x: &x,
+                y: y.to_vec(),
+            }],
+        );
+        let width: f64 = svg
+            .split("width=\"")
+            .nth(1)
+            .and_then(|r| r.split('"').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        let text_start: f64 = svg
+            .split(&format!(">{name}<"))
+            .next()
+            .and_then(|head| head.rsplit("<text x=\"").next())
+            .and_then(|r| r.split('"').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            text_start + 7.5 * name.len() as f64 <= width,
+            "legend text from {text_start} px, {} chars, figure {width} px",
+            name.len()
+        );
+    }
 
     #[test]
     fn charts_are_well_formed_svg() {

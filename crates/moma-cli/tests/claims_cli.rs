@@ -56,7 +56,7 @@ fn readme_commands() -> Vec<String> {
             in_sh = !in_sh && t == "```sh";
             continue;
         }
-        if in_sh && t.starts_with("moma ") {
+        if in_sh && (t.starts_with("moma ") || t.starts_with("mkdir -p ")) {
             out.push(t.to_string());
         }
     }
@@ -103,6 +103,10 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         std::os::unix::fs::symlink(repo().join(d), root.join(d)).unwrap();
     }
     for cmd in &cmds {
+        if let Some(dir) = cmd.strip_prefix("mkdir -p ") {
+            std::fs::create_dir_all(root.join(dir)).unwrap();
+            continue;
+        }
         // the README quotes arguments that hold a `;` (support polygons): no argument
         // has a space, so removing the quotes is what the shell does
         let args: Vec<&str> = cmd
@@ -121,23 +125,35 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
         assert_eq!(o.status.code(), Some(0), "`{cmd}` failed: {}", stderr(&o));
     }
     for f in [
-        "dynamics.json",
-        "m5.json",
+        "out/dynamics.json",
+        "out/m5.json",
         "out/m5/summary.json",
-        "reach.svg",
-        "reach.json",
-        "path.json",
-        "path.svg",
-        "trap.svg",
-        "results.csv",
-        "stability.json",
-        "stability-map/margin_map.svg",
-        "unicycle.json",
-        "osc.json",
+        "out/reach.svg",
+        "out/reach.json",
+        "out/path.json",
+        "out/path.svg",
+        "out/trap.svg",
+        "out/results.csv",
+        "out/sweep.csv",
+        "out/stability.json",
+        "out/stability-map/margin_map.svg",
+        "out/unicycle.json",
+        "out/osc.json",
         "simulation-output/default/summary.json",
         "mission-output/summary.json",
     ] {
         assert!(root.join(f).is_file(), "README example did not write {f}");
+    }
+    // every output lands in a folder git ignores: nothing untracked in the root
+    let ignored = std::fs::read_to_string(repo().join(".gitignore")).unwrap();
+    for e in entries(&root) {
+        if ["crates", "scenarios", "docs"].contains(&e.as_str()) {
+            continue;
+        }
+        assert!(
+            ignored.lines().any(|l| l.trim_matches('/') == e.as_str()),
+            "README example left {e} in the repository root, not ignored by .gitignore"
+        );
     }
 }
 

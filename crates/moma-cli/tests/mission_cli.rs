@@ -230,3 +230,35 @@ fn input_errors_exit_1_with_no_output() {
     }
     let _ = std::fs::remove_dir_all(&work);
 }
+
+#[test]
+fn the_default_mission_run_elsewhere_writes_to_the_current_directory_and_says_where() {
+    let work = temp_dir("elsewhere");
+    let run = moma().current_dir(&work).arg("mission").output().unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    let out = work.join("mission-output");
+    for f in OUTPUTS {
+        assert!(out.join(f).is_file(), "missing {f} in {}", out.display());
+    }
+    assert!(
+        err.contains("to mission-output; report: mission-output/report.html"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_mission_file_that_cannot_be_read_gives_the_os_reason() {
+    let work = temp_dir("nope");
+    let run = moma()
+        .current_dir(&work)
+        .args(["mission", "nope.toml"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("nope.toml: cannot read file: No such file or directory"),
+        "{err}"
+    );
+}

@@ -287,8 +287,14 @@ fn mission() -> Value {
             "reached": true, "time_to_goal": t_arrive, "replans": 1, "min_zmp_margin": min_zmp,
             "min_clearance": min_clear, "max_tracking_error": max_err,
             "final_pose_error": [0.004, 0.01], "end_effector_error": 0.002,
-            "wall_time_s": 0.4, "reason": null, "duration": t_end,
-            "timing": { "planning_s": 0.01, "simulation_s": 0.3 },
+            "wall_time_s": 0.4, "reason": null, "simulated_time": t_end,
+            "tip_over_limits": { "forward": 3.1, "backward": 2.2, "left": 4.0, "right": 4.0 },
+            "replan_timing": [{
+                "t": OBSTACLE.2, "trigger": "obstacle 0", "dstar_lite_ms": 0.8,
+                "expanded": 412, "smoothing_timing_ms": 2.5, "v_start": 0.7, "duration": 6.2,
+            }],
+            "wall_time": { "planning_s": 0.01, "smoothing_timing_s": 0.02, "simulation_s": 0.3, "report_s": 0.05 },
+            "files": ["summary.json", "report.html", "torques.svg"],
         },
     })
 }
@@ -586,6 +592,31 @@ fn report_plays_in_headless_chromium() {
         late.contains("re-plan 1"),
         "the 'now' table names the re-plan"
     );
+    // the summary table: human labels with units, no raw key or JSON, every value shown
+    let table = late
+        .split("<table id=\"summary\">")
+        .nth(1)
+        .and_then(|r| r.split("</table>").next())
+        .expect("the summary table");
+    for label in [
+        "smallest ZMP margin [m]",
+        "tip-over acceleration limit, backward [m/s²]",
+        "wall time, report [s]",
+        "files written",
+        "summary.json, report.html, torques.svg",
+        "D* Lite 0.8 ms, 412 cells expanded",
+    ] {
+        assert!(
+            table.contains(label),
+            "no {label:?} in the summary table: {table}"
+        );
+    }
+    for raw in ["{", "_s", "min zmp", "tip_over", "[]"] {
+        assert!(
+            !table.contains(raw),
+            "raw {raw:?} in the summary table: {table}"
+        );
+    }
     let shot = |ms: u32, name: &str| -> Vec<u8> {
         let file = dir.join(name);
         chromium(

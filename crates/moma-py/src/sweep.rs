@@ -190,23 +190,50 @@ impl PyTable {
 
 /// Runs a mission file end to end (plan, timed reference, closed-loop simulation with
 /// re-planning, end-effector reach, monitors), GIL released, and returns its summary
-/// dict (the keys of `moma mission`'s summary.json that do not concern files and wall
-/// times: `mission`, `reached`, `reason`, `time_to_goal`, `simulated_time`, `replans`,
+/// dict (the keys of `moma mission`'s summary.json that do not concern files or the
+/// report: `mission`, `reached`, `reason`, `time_to_goal`, `simulated_time`, `replans`,
 /// the stability, clearance, tracking and slip extremes, `final_pose_error`,
-/// `end_effector_error`, saturation counts, energies, `tip_over_limits`, `samples`).
-/// Writes no file. A mission that runs but does not reach its goal returns
-/// `reached=False` with the reason; invalid input raises MomaError.
+/// `end_effector_error`, saturation counts, energies, `tip_over_limits`, `samples`, and
+/// the wall times: `wall_time_s` (load and run) and `wall_time` with `planning_s`,
+/// `smoothing_timing_s`, `simulation_s`). Writes no file. A mission that runs but does
+/// not reach its goal returns `reached=False` with the reason; invalid input raises
+/// MomaError, its message naming the file once, with the OS reason of a file that cannot
+/// be read.
 #[pyfunction]
 fn run_mission<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+    let clock = std::time::Instant::now();
     let (m, r) = py
         .detach(|| -> moma::Result<_> {
             let m = moma::mission::load(&path)?;
             let r = moma::mission::run(&m)?;
             Ok((m, r))
         })
-        .map_err(|e| err(format!("{}: {e}", path.display())))?;
-    let doc = serde_json::Value::Object(moma::mission::summary(&m, &r));
-    json_to_py(py, &doc)
+        .map_err(|e| {
+            let mut text = e.to_string();
+            let mut cause = std::error::Error::source(&e);
+            while let Some(c) = cause {
+                text = format!("{text}: {c}");
+                cause = c.source();
+            }
+            let file = path.display().to_string();
+            if text.contains(&file) {
+                err(text)
+            } else {
+                err(format!("{file}: {text}"))
+            }
+        })?;
+    let wall = clock.elapsed().as_secs_f64();
+    let mut doc = moma::mission::summary(&m, &r);
+    doc.insert("wall_time_s".into(), serde_json::json!(wall));
+    doc.insert(
+        "wall_time".into(),
+        serde_json::json!({
+            "planning_s": r.wall.planning_s,
+            "smoothing_timing_s": r.wall.smoothing_timing_s,
+            "simulation_s": r.wall.simulation_s,
+        }),
+    );
+    json_to_py(py, &serde_json::Value::Object(doc))
 }
 
 /// Registers the classes and functions.

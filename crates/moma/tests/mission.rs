@@ -502,3 +502,133 @@ fn a_mission_reads_its_map_and_robot_through_the_loader_it_is_given() {
         "no robot loaded after the map failed"
     );
 }
+
+#[test]
+fn a_mission_that_cannot_finish_records_no_brake_it_never_made() {
+    // the goal is sealed at t = 1 s: the run ends there, and its last sample shows the
+    // torques the plant last had, not a brake that no step applied
+    let extra = "[[obstacles]]\nt = 1.0\ncenter = [5.5, 3.5]\nradius = 0.8";
+    let r = mission(&mission_text(GOAL, extra));
+    assert!(!r.reached);
+    let end = r.duration;
+    let late: Vec<&str> = r
+        .events
+        .iter()
+        .filter(|e| e.t >= end - 1e-9)
+        .map(|e| e.kind.as_str())
+        .collect();
+    for kind in ["torque_limit", "slip", "min_zmp_margin"] {
+        assert!(
+            !late.contains(&kind),
+            "{kind} event at the end: {:#?}",
+            r.events
+        );
+    }
+    let u = r.samples.u.last().unwrap();
+    assert!(
+        u[0].abs() < 40.0 && u[1].abs() < 40.0,
+        "last wheel torques {u:?}"
+    );
+    let zmp = r.min_zmp_margin().unwrap();
+    assert!(zmp > 0.0, "min ZMP margin {zmp}");
+    assert_eq!(r.torque_saturated_steps, 0);
+}
+
+/// The shipped robot with its root frame raised `h` (every origin on the root lowered by
+/// `h`: the same physical robot, its root no longer on the ground).
+fn raised_root_urdf(h: f64, tag: &str) -> PathBuf {
+    let text = std::fs::read_to_string(scenarios().join("robots/mobile_manipulator.urdf"))
+        .expect("shipped URDF");
+    let mut out = String::new();
+    let (mut in_base, mut base_child) = (false, false);
+    for line in text.lines() {
+        let l = line.trim_start();
+        if l.starts_with("<link name=\"base_link\"") {
+            in_base = true;
+        } else if l.starts_with("</link>") {
+            in_base = false;
+        } else if l.starts_with("<joint ") || l.starts_with("</joint>") {
+            base_child = false;
+        } else if l.starts_with("<parent link=\"base_link\"") {
+            base_child = true;
+        }
+        if l.starts_with("<origin ") && (in_base || base_child) {
+            let (head, rest) = line.split_once("xyz=\"").unwrap();
+            let (xyz, tail) = rest.split_once('"').unwrap();
+            let v: Vec<f64> = xyz.split_whitespace().map(|s| s.parse().unwrap()).collect();
+            out.push_str(&format!(
+                "{head}xyz=\"{} {} {}\"{tail}",
+                v[0],
+                v[1],
+                v[2] - h
+            ));
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    let dir = std::env::temp_dir().join(format!("moma-mission-z-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("raised.urdf");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+#[test]
+fn a_root_at_axle_height_gets_the_ground_from_the_wheels() {
+    // the same robot described from its axle (root 0.1 m above the ground): the ground
+    // height comes from the wheel joints and the radius, so the tip-over limits and the
+    // monitored ZMP margins are those of the robot described from the ground
+    let urdf = raised_root_urdf(0.1, "axle");
+    let raised = mission_text(GOAL, "").replace(
+        "urdf = \"robots/mobile_manipulator.urdf\"",
+        &format!("urdf = {:?}", urdf.to_str().unwrap()),
+    );
+    let (a, b) = (
+        parse(&mission_text(GOAL, "")).unwrap(),
+        parse(&raised).unwrap(),
+    );
+    let (la, lb) = (
+        moma::mission::transport_tip_limits(&a).unwrap(),
+        moma::mission::transport_tip_limits(&b).unwrap(),
+    );
+    for (x, y) in [
+        (la.forward, lb.forward),
+        (la.backward, lb.backward),
+        (la.left, lb.left),
+        (la.right, lb.right),
+    ] {
+        let (x, y) = (x.unwrap(), y.unwrap());
+        assert!((x - y).abs() < 1e-9 * x.abs(), "tip limit {x} vs {y}");
+    }
+    let (ra, rb) = (run(&a).unwrap(), run(&b).unwrap());
+    let (za, zb) = (ra.min_zmp_margin().unwrap(), rb.min_zmp_margin().unwrap());
+    assert!((za - zb).abs() < 1e-6, "min ZMP margin {za} vs {zb}");
+}
+
+#[test]
+fn a_run_length_error_names_the_field_the_user_set() {
+    let err = |extra: &str| {
+        parse(&mission_text(GOAL, extra))
+            .and_then(|m| run(&m).map(|_| ()))
+            .unwrap_err()
+            .to_string()
+    };
+    // only dt set: the default time limit is not the user's field
+    let e = err("[simulation]\ndt = 1e-9\nrecord_interval = 1.0");
+    assert!(
+        e.contains("test.toml: simulation.dt: 0.000000001 s over the default time limit"),
+        "{e}"
+    );
+    assert!(e.contains("more than 5e7"), "{e}");
+    // only the record interval set (at dt): the samples bound names it
+    let e = err("[simulation]\ndt = 1e-5\nrecord_interval = 1e-5");
+    assert!(
+        e.contains("test.toml: simulation.record_interval: 0.00001 s over the default"),
+        "{e}"
+    );
+    assert!(e.contains("more than 2e6"), "{e}");
+    // the time limit set: it is the field named
+    let e = err("[simulation]\ndt = 1e-9\ntime_limit = 60.0");
+    assert!(e.contains("test.toml: simulation.time_limit: 60 s"), "{e}");
+}

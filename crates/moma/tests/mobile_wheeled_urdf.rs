@@ -10,7 +10,7 @@ use moma::mobile::reduced_forward_dynamics;
 use moma::mobile::wheeled::{
     WheeledBase, WheeledData, WheeledModel, actuation_matrix, admissible_velocity_basis,
     admissible_velocity_basis_dot, center_of_mass_velocity, constraint_matrix,
-    lagrange_multipliers, platform_point_velocity,
+    lagrange_multipliers, platform_point_velocity, wheel_longitudinal_forces,
 };
 use moma::mobile::{Caster, DiffDrive};
 use moma::multibody::RootJoint;
@@ -528,4 +528,36 @@ fn reduced_simulation_agrees_with_the_full_coordinate_dae() {
             );
         }
     }
+}
+
+/// Equal positive wheel torques from rest drive the robot forward: the ground pushes each
+/// tracked wheel forward (traction, +) by less than τ/r (part of the torque spins the
+/// wheel up). The opposite sign, which the mission's own slip monitor once used, fails.
+#[test]
+fn traction_from_rest_is_a_positive_longitudinal_force() {
+    let wm = robot(true, 0.0);
+    let mut wd = WheeledData::new(&wm);
+    let q = DVector::zeros(wm.model.nq);
+    let v = DVector::zeros(wm.nr());
+    let mut u = vec![0.0; wm.nu()];
+    u[0] = 2.0;
+    u[1] = 2.0;
+    reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u).unwrap();
+    assert!(wd.reduced.vdot[0] > 0.0, "v̇ = {}", wd.reduced.vdot[0]);
+    let lam = lagrange_multipliers(&wm, &mut wd, &q).unwrap().clone();
+    let f = wheel_longitudinal_forces(&wm, lam.as_slice(), &u);
+    let r = wm.base.drive.wheel_radius;
+    for (side, fi) in f.iter().enumerate() {
+        assert!(
+            *fi > 0.0 && *fi < u[side] / r,
+            "wheel {side}: {fi} N (τ/r = {})",
+            u[side] / r
+        );
+    }
+    // untracked (massless) wheels: the whole torque over the radius
+    let wm = robot(false, 0.0);
+    assert_eq!(
+        wheel_longitudinal_forces(&wm, &[0.0], &u),
+        [2.0 / r, 2.0 / r]
+    );
 }

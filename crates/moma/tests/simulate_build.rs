@@ -156,3 +156,29 @@ fn a_stiff_closed_loop_stops_at_the_step_budget_of_the_whole_run() {
         assert!(message.contains(needle), "lacks {needle}: {err}");
     }
 }
+
+/// A run too long to record names the field the user set (`duration`) and the bound it
+/// breaks, for every kind of run, before any buffer is sized.
+#[test]
+fn a_run_too_long_to_record_names_duration_and_the_bound() {
+    for (file, from) in [
+        ("default.toml", "duration = 5.0"),
+        ("control_kanayama.toml", "duration = "),
+        ("space_capture.toml", "duration = "),
+    ] {
+        let path = scenarios().join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(from))
+            .unwrap_or_else(|| panic!("{file} has no {from:?}"))
+            .to_string();
+        let m = message(file, &line, "duration = 1e12");
+        assert!(
+            m.contains(&format!("{file}: duration = 1e12 s"))
+                && m.contains("output.record_interval")
+                && m.contains("1e7"),
+            "{m}"
+        );
+    }
+}

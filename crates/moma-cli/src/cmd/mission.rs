@@ -3,7 +3,9 @@
 //! end-effector target at the goal, and write the whole output set at once.
 //!
 //! Without an argument `scenarios/mission.toml` runs (looked up in the current
-//! directory, then next to the source tree this binary was built from). The schema and
+//! directory, then next to the source tree this binary was built from; that built-in
+//! default writes to `mission-output/` in the current directory, never into the source
+//! tree). The schema and
 //! the outputs are documented in `docs/mission.md`; the page and its figures come from
 //! [`crate::report`]. Exit status: 0 reached, 1 input error
 //! (nothing written), 3 the mission ran but did not reach its goal (every output written,
@@ -22,10 +24,13 @@ use crate::output::write_dir;
 /// Arguments of `moma mission`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Mission file (TOML). Default: scenarios/mission.toml.
+    /// Mission file (TOML). Default: scenarios/mission.toml in the current directory, else
+    /// the one shipped with the source tree (its outputs then go to mission-output/ in the
+    /// current directory).
     pub scenario: Option<PathBuf>,
-    /// Output directory (overrides the mission's `output.dir`; relative to the current
-    /// directory).
+    /// Output directory (overrides the mission's `output.dir`, which is relative to the
+    /// mission file; this one is relative to the current directory). The folder and the
+    /// report's path are printed on standard error.
     #[arg(long, short)]
     pub output: Option<PathBuf>,
     /// Do not print the summary on standard output.
@@ -33,22 +38,35 @@ pub struct Args {
     pub quiet: bool,
 }
 
-fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
+/// The mission file to run, and whether it is the built-in default found next to the
+/// source tree (whose outputs then go to the current directory, not into that tree).
+fn resolve_scenario(arg: Option<PathBuf>) -> Result<(PathBuf, bool)> {
     if let Some(p) = arg {
-        return Ok(p);
+        return Ok((p, false));
     }
     let local = PathBuf::from("scenarios/mission.toml");
     if local.is_file() {
-        return Ok(local);
+        return Ok((local, false));
     }
     let bundled = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/mission.toml");
     if bundled.is_file() {
-        return Ok(bundled);
+        return Ok((bundled, true));
     }
     bail!(
         "no mission given and no scenarios/mission.toml found in the current directory or at {}",
         bundled.display()
     )
+}
+
+/// Where the outputs go: `--output` (relative to the current directory), else the
+/// mission's `output.dir` (relative to the mission file), except for the built-in
+/// default run from elsewhere: `mission-output/` in the current directory.
+fn output_dir(arg: Option<PathBuf>, m: &Mission, bundled: bool) -> PathBuf {
+    match arg {
+        Some(d) => d,
+        None if bundled => PathBuf::from("mission-output"),
+        None => m.output_dir.clone(),
+    }
 }
 
 /// The summary object (`summary.json`).
@@ -173,8 +191,9 @@ fn trajectory_csv(r: &MissionResult) -> String {
 /// Runs `moma mission`.
 pub fn run(args: Args) -> Result<()> {
     let clock = Instant::now();
-    let path = resolve_scenario(args.scenario)?;
-    let m = moma::mission::load(&path).map_err(|e| anyhow!("{e}"))?;
+    let (path, bundled) = resolve_scenario(args.scenario)?;
+    // the error keeps its causes (the OS reason a file cannot be read)
+    let m = moma::mission::load(&path)?;
     let result = moma::mission::run(&m).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     // everything but the page and the figures, with the summary as of now (the page's
     // summary table shows the wall times up to the report)
@@ -190,14 +209,18 @@ pub fn run(args: Args) -> Result<()> {
         "trajectory.csv".into(),
         trajectory_csv(&result).into_bytes(),
     ));
+    // The page shows summary.json as it is written: the report is rendered once to time
+    // it and to list its figures, then the page again with the final summary (its own
+    // second rendering is the only time summary.json does not count).
     let report_clock = Instant::now();
     let pre = summary(&m, &result, clock.elapsed().as_secs_f64(), 0.0, &[]);
-    let report = mission_report(&m, &result, &pre);
+    let mut report = mission_report(&m, &result, &pre);
     report
         .check()
         .map_err(|e| anyhow!("{}: the report data is malformed: {e}", path.display()))?;
-    let html = crate::report::render_html(&report);
+    let _ = crate::report::render_html(&report);
     let figures = crate::report::render_svgs(&report);
+    let report_s = report_clock.elapsed().as_secs_f64();
     let mut names: Vec<String> = [
         "summary.json",
         "trajectory.csv",
@@ -208,20 +231,29 @@ pub fn run(args: Args) -> Result<()> {
     .map(|s| (*s).to_string())
     .collect();
     names.extend(figures.iter().map(|(n, _)| n.clone()));
-    files.push(("report.html".into(), html.into_bytes()));
+    let wall = clock.elapsed().as_secs_f64();
+    let sum = summary(&m, &result, wall, report_s, &names);
+    report.summary = sum.clone();
+    files.push((
+        "report.html".into(),
+        crate::report::render_html(&report).into_bytes(),
+    ));
     for (n, svg) in figures {
         files.push((n, svg.into_bytes()));
     }
-    let report_s = report_clock.elapsed().as_secs_f64();
-    let wall = clock.elapsed().as_secs_f64();
-    let sum = summary(&m, &result, wall, report_s, &names);
     let mut sum_text = serde_json::to_vec_pretty(&sum)?;
     sum_text.push(b'\n');
     files.push(("summary.json".into(), sum_text));
-    let dir = args.output.unwrap_or_else(|| m.output_dir.clone());
+    let dir = output_dir(args.output, &m, bundled);
     write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&sum)?;
+        eprintln!(
+            "wrote {} files to {}; report: {}",
+            files.len(),
+            dir.display(),
+            dir.join("report.html").display()
+        );
     }
     if !result.reached {
         return crate::cmd::common::goal_not_reached(format!(

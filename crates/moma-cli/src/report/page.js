@@ -233,8 +233,6 @@
       disk(g, x, y, r);
       g.fillStyle = 'rgba(255,140,26,0.75)'; g.fill();
       g.strokeStyle = '#b35300'; g.lineWidth = 1.5; g.stroke();
-      g.font = FONT; g.fillStyle = '#8a4000'; g.textAlign = 'center'; g.textBaseline = 'bottom';
-      g.fillText('t = ' + fmt(o.t) + ' s', x, y - r - 3);
       const age = time - o.t;
       if (age < 1.5) { // a ring that widens and fades: "this just appeared"
         disk(g, x, y, r + 6 + 30 * age);
@@ -270,6 +268,21 @@
     }
     const p = poseAt(time);
     poseMarker(g, [p.x, p.y, p.th], C.robot, 'rgba(42,157,143,0.35)');
+    // the obstacles' labels last, on a white halo, so the robot never hides them; a label
+    // the robot's footprint would cover goes below its obstacle instead
+    g.font = FONT; g.textAlign = 'center'; g.lineJoin = 'round';
+    const rx = top.px(p.x), ry = top.py(p.y), rr = D.footprint_radius * top.s + 4;
+    for (const o of D.obstacles) {
+      if (o.t > time) continue;
+      const x = top.px(o.c[0]), y = top.py(o.c[1]), r = Math.max(2, o.r * top.s);
+      const above = y - r - 3;
+      const covered = Math.abs(x - rx) < rr + 30 && above - 14 < ry + rr && above > ry - rr;
+      const ty = covered ? y + r + 3 : above;
+      g.textBaseline = covered ? 'top' : 'bottom';
+      const text = 't = ' + fmt(o.t) + ' s';
+      g.strokeStyle = 'rgba(255,255,255,0.9)'; g.lineWidth = 4; g.strokeText(text, x, ty);
+      g.fillStyle = '#8a4000'; g.fillText(text, x, ty);
+    }
     g.restore();
   }
   function topLegend() {
@@ -330,9 +343,20 @@
     g.strokeStyle = '#8a94a6'; g.setLineDash([4, 4]); g.lineWidth = 1;
     g.beginPath(); g.moveTo(side.box[0], side.pz(0)); g.lineTo(side.box[0] + side.box[2], side.pz(0)); g.stroke();
     g.setLineDash([]);
-    g.fillStyle = 'rgba(42,157,143,0.35)'; g.strokeStyle = C.robot;
-    g.fillRect(side.px(-R), side.pz(0), side.px(R) - side.px(-R), 8);
-    g.strokeRect(side.px(-R), side.pz(0), side.px(R) - side.px(-R), 8);
+    // the base: the footprint's extent along x, from the ground (z = 0) up to the arm's
+    // mount (the lowest first joint of the run), so the arm stands on it
+    let mount = null;
+    for (const a of S.arm) if (a && a.length >= 2 && a[1] !== null) mount = mount === null ? a[1] : Math.min(mount, a[1]);
+    const mountZ = mount === null ? 0 : Math.max(mount, 0);
+    g.fillStyle = 'rgba(42,157,143,0.35)'; g.strokeStyle = C.robot; g.lineWidth = 1.5;
+    const bh = Math.max(side.pz(0) - side.pz(mountZ), 8);
+    g.fillRect(side.px(-R), side.pz(0) - bh, side.px(R) - side.px(-R), bh);
+    g.strokeRect(side.px(-R), side.pz(0) - bh, side.px(R) - side.px(-R), bh);
+    // the ground
+    g.strokeStyle = '#555'; g.lineWidth = 2;
+    g.beginPath(); g.moveTo(side.box[0], side.pz(0)); g.lineTo(side.box[0] + side.box[2], side.pz(0)); g.stroke();
+    g.fillStyle = C.text; g.textAlign = 'left'; g.textBaseline = 'bottom';
+    g.fillText('base', side.px(-R) + 4, side.pz(0) - 3);
     side.layer = L.c;
   }
   function drawSide(time, frame) {
@@ -388,7 +412,7 @@
     legendItem(box, 'ring', C.arm, 'joint origins');
     legendItem(box, 'disk', C.ee, 'end effector');
     legendItem(box, 'line', 'rgba(255,127,14,0.6)', 'its trace');
-    legendItem(box, 'disk', 'rgba(42,157,143,0.6)', 'footprint extent at z = 0');
+    legendItem(box, 'disk', 'rgba(42,157,143,0.6)', 'base (footprint extent, ground to arm mount)');
     if (D.ee_target) legendItem(box, 'disk', C.target, 'target (projected)');
   }
 
@@ -529,32 +553,70 @@
   }
 
   // ---------- tables ----------
-  const UNITS = {
-    time_to_goal: 's', min_zmp_margin: 'm', min_clearance: 'm', max_tracking_error: 'm',
-    final_pose_error: 'm, rad', end_effector_error: 'm', wall_time_s: 's', min_force_angle: 'rad',
+  // every summary.json key with a human label and its unit ('' for none); a key the page
+  // does not know is shown as it is, so no value is ever hidden
+  const LABELS = {
+    mission: ['mission', ''], reached: ['goal reached', ''], reason: ['why not', ''],
+    time_to_goal: ['time to goal', 's'], simulated_time: ['simulated time', 's'],
+    replans: ['re-plans', ''], min_zmp_margin: ['smallest ZMP margin', 'm'],
+    min_force_angle: ['smallest Force-Angle measure', 'rad'],
+    min_moment_height: ['smallest Moment-Height measure', ''],
+    min_clearance: ['smallest clearance', 'm'], max_tracking_error: ['largest tracking error', 'm'],
+    final_pose_error: ['final pose error (position, heading)', 'm, rad'],
+    end_effector_error: ['end-effector error', 'm'], max_slip_ratio: ['largest wheel slip ratio', ''],
+    torque_saturated_steps: ['control steps at a torque limit', ''],
+    speed_saturated_steps: ['control steps at a speed limit', ''], control_steps: ['control steps', ''],
+    actuator_energy: ['actuator energy ∫Σ|τ q̇| dt', 'J'], input_work: ['net input work', 'J'],
+    'tip_over_limits.forward': ['tip-over acceleration limit, forward', 'm/s²'],
+    'tip_over_limits.backward': ['tip-over acceleration limit, backward', 'm/s²'],
+    'tip_over_limits.left': ['tip-over acceleration limit, left', 'm/s²'],
+    'tip_over_limits.right': ['tip-over acceleration limit, right', 'm/s²'],
+    timing_acceleration: ['accelerations of the timing (forward, backward)', 'm/s²'],
+    samples: ['recorded samples', ''], wall_time_s: ['wall time, total', 's'],
+    'wall_time.planning_s': ['wall time, planning', 's'],
+    'wall_time.smoothing_timing_s': ['wall time, smoothing and timing', 's'],
+    'wall_time.simulation_s': ['wall time, simulation', 's'],
+    'wall_time.report_s': ['wall time, report', 's'],
+    real_time_factor: ['real-time factor (simulated / wall time)', ''],
+    files: ['files written', ''], replan_timing: ['re-plan timing', ''],
   };
   function cellText(v) {
     if (v === null || v === undefined) return '—';
     if (typeof v === 'number') return fmt(v, 5);
     if (typeof v === 'boolean') return v ? 'yes' : 'no';
-    if (Array.isArray(v)) return '[' + v.map(cellText).join(', ') + ']';
-    if (typeof v === 'object') return JSON.stringify(v);
+    if (Array.isArray(v)) return v.map(cellText).join(', ');
+    if (typeof v === 'object') return Object.keys(v).map(function (k) { return k + ' ' + cellText(v[k]); }).join(', ');
     return String(v);
+  }
+  // one re-plan's timing as a sentence (summary.json's replan_timing entries)
+  function replanText(p) {
+    return 't = ' + fmt(p.t) + ' s (' + p.trigger + '): D* Lite ' + fmt(p.dstar_lite_ms, 3) + ' ms, ' +
+      p.expanded + ' cells expanded; smoothing and timing ' + fmt(p.smoothing_timing_ms, 3) + ' ms; ' +
+      fmt(p.duration) + ' s to go from ' + fmt(p.v_start) + ' m/s';
   }
   function summaryTable() {
     const tab = document.getElementById('summary');
+    function row(label, text, cls) {
+      const tr = el('tr');
+      tr.appendChild(el('th', null, label));
+      const td = el('td', null, text);
+      if (cls) td.className = cls;
+      tr.appendChild(td);
+      tab.appendChild(tr);
+    }
     function rows(obj, prefix) {
       for (const k of Object.keys(obj)) {
         const v = obj[k];
         const name = prefix + k;
         if (v && typeof v === 'object' && !Array.isArray(v)) { rows(v, name + '.'); continue; }
-        const tr = el('tr');
-        const label = name.replace(/_/g, ' ').replace(/\bzmp\b/g, 'ZMP');
-        tr.appendChild(el('th', null, label + (UNITS[k] ? ' [' + UNITS[k] + ']' : '')));
-        const td = el('td', null, cellText(v));
-        if (typeof v === 'boolean') td.className = v ? 'yes' : 'no';
-        tr.appendChild(td);
-        tab.appendChild(tr);
+        const lu = LABELS[name] || [name, ''];
+        const label = lu[0] + (lu[1] ? ' [' + lu[1] + ']' : '');
+        if (name === 'replan_timing' && Array.isArray(v)) {
+          if (!v.length) row(label, 'none');
+          v.forEach(function (p, i) { row('re-plan ' + (i + 1), replanText(p)); });
+          continue;
+        }
+        row(label, cellText(v), typeof v === 'boolean' ? (v ? 'yes' : 'no') : null);
       }
     }
     if (D.summary && typeof D.summary === 'object' && !Array.isArray(D.summary)) {

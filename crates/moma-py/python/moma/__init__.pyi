@@ -219,7 +219,8 @@ class Sweep:
     def __len__(self) -> int: ...
 
 def run_mission(path: Path) -> dict[str, Any]:
-    """Runs a mission file end to end; the summary dict (no files written)."""
+    """Runs a mission file end to end; the summary dict with the run's wall times
+    (`wall_time_s`, `wall_time`), no files written."""
 
 def to_pinocchio(
     model: Model,

@@ -7,13 +7,13 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 use super::plan::{Planner, SearchTiming};
 use super::reference::{RefSample, Reference, TimingStart, build_reference};
 use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
-use crate::control::unicycle::{Kanayama, ReferenceSample};
+use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
 use crate::mobile::wheeled::{
     actuation_matrix, admissible_velocity_basis, admissible_velocity_basis_dot,
-    lagrange_multipliers, reduced_forward_dynamics_crba,
+    lagrange_multipliers, reduced_forward_dynamics_crba, wheel_longitudinal_forces,
 };
 use crate::mobile::{WheeledData, WheeledModel, reduced_forward_dynamics};
 use crate::multibody::{Data, JointType};
@@ -311,7 +311,7 @@ pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
     }
     let mut data = Data::new(model);
     let com = crate::dynamics::center_of_mass(model, &mut data, &q);
-    let support = SupportPolygon::from_wheeled_base(&m.robot.base)?;
+    let support = SupportPolygon::from_wheeled_model(&m.robot)?;
     Ok(crate::stability::acceleration_limits(
         model.total_mass(),
         &com,
@@ -548,20 +548,61 @@ impl<'m> Runner<'m> {
         }
     }
 
-    /// The simulated time limit (s) and the record interval in control steps.
+    /// The simulated time limit (s) and the record interval in control steps. A run too
+    /// long is an error naming the field the user set: `simulation.time_limit` when given,
+    /// else `simulation.dt` (steps) or `simulation.record_interval` (samples) against the
+    /// default time limit.
     fn run_length(&self) -> Result<(f64, usize)> {
         let sim = &self.m.file.simulation;
-        let h = sim.dt;
+        let (h, ri) = (sim.dt, sim.record_interval);
+        let planned = self.plans.first().map(|p| p.duration);
         let time_limit = sim
             .time_limit
-            .unwrap_or_else(|| self.plans.first().map_or(10.0, |p| 3.0 * p.duration + 30.0));
-        if time_limit / h > MAX_STEPS || time_limit / sim.record_interval > MAX_SAMPLES {
-            return Err(Error::invalid(
-                "simulation.time_limit",
-                format!("a run of {time_limit} s needs too many steps or samples"),
-            ));
+            .unwrap_or_else(|| planned.map_or(10.0, |p| 3.0 * p + 30.0));
+        let default_limit = || match planned {
+            Some(p) => format!(
+                "the default time limit of {time_limit} s (3 × the first plan's {p} s + 30 s)"
+            ),
+            None => format!("the default time limit of {time_limit} s"),
+        };
+        let too_long =
+            |field: &str, what: String| Err(Error::parse(&self.m.path, format!("{field}: {what}")));
+        let (steps, samples) = (time_limit / h, time_limit / ri);
+        if steps > MAX_STEPS {
+            return match sim.time_limit {
+                Some(_) => too_long(
+                    "simulation.time_limit",
+                    format!(
+                        "{time_limit} s at simulation.dt = {h} s is {steps:e} steps, more than {MAX_STEPS:e}"
+                    ),
+                ),
+                None => too_long(
+                    "simulation.dt",
+                    format!(
+                        "{h} s over {} is {steps:e} steps, more than {MAX_STEPS:e}: raise simulation.dt or set a shorter simulation.time_limit",
+                        default_limit()
+                    ),
+                ),
+            };
         }
-        let rec_every = ((sim.record_interval / h).round() as usize).max(1);
+        if samples > MAX_SAMPLES {
+            return match sim.time_limit {
+                Some(_) => too_long(
+                    "simulation.time_limit",
+                    format!(
+                        "{time_limit} s at simulation.record_interval = {ri} s is {samples:e} samples, more than {MAX_SAMPLES:e}"
+                    ),
+                ),
+                None => too_long(
+                    "simulation.record_interval",
+                    format!(
+                        "{ri} s over {} is {samples:e} samples, more than {MAX_SAMPLES:e}: raise simulation.record_interval or set a shorter simulation.time_limit",
+                        default_limit()
+                    ),
+                ),
+            };
+        }
+        let rec_every = ((ri / h).round() as usize).max(1);
         Ok((time_limit, rec_every))
     }
 
@@ -577,8 +618,8 @@ impl<'m> Runner<'m> {
         let (nq, nr) = (c.nq, c.nr);
         let t = st.k as f64 * c.h;
         st.t = t;
-        ws.qv.copy_from_slice(&x[..nq]);
-        ws.vv.copy_from_slice(&x[nq..nq + nr]);
+        ws.q_now.copy_from_slice(&x[..nq]);
+        ws.v_now.copy_from_slice(&x[nq..nq + nr]);
         let pose = [x[0], x[1], x[2]];
         let axle = axle_pose(pose, c.d);
         let (v, w) = (x[nq], x[nq + 1]);
@@ -586,8 +627,13 @@ impl<'m> Runner<'m> {
         self.obstacle_arrivals(c, st, t, axle, v);
 
         // reduced dynamics at the state (controller's model)
-        let step_ok =
-            reduced_forward_dynamics_crba(self.wm, &mut ws.cwd, &ws.qv, &ws.vv, &ws.zero_u);
+        let step_ok = reduced_forward_dynamics_crba(
+            self.wm,
+            &mut ws.control_dynamics,
+            &ws.q_now,
+            &ws.v_now,
+            &ws.zero_u,
+        );
         if let Err(e) = step_ok {
             self.fail(t, format!("the dynamics became singular: {e}"));
             st.phase = Phase::Done;
@@ -628,16 +674,18 @@ impl<'m> Runner<'m> {
                 }
                 false
             }
-            Phase::Done => {
-                c.hold(v, w, ws);
-                false
-            }
+            // the run ends at this sample: no step follows, so no torque is computed and
+            // the record shows the input the plant last had (zero at t = 0)
+            Phase::Done => false,
         };
 
-        let torque_clip = c.act.computed_torque(&ws.cwd, &ws.a_des, &mut ws.u);
-        self.saturation_events(st, t, torque_clip, speed_clip);
-
         let last = st.phase == Phase::Done;
+        if !last {
+            let torque_clip = c
+                .act
+                .computed_torque(&ws.control_dynamics, &ws.a_des, &mut ws.u);
+            self.saturation_events(st, t, torque_clip, speed_clip);
+        }
         if st.k.is_multiple_of(c.rec_every) || last {
             self.record_and_check(c, ws, st, t, ee.p);
         }
@@ -646,7 +694,7 @@ impl<'m> Runner<'m> {
         }
 
         // actuator energy over the step (rates at its start)
-        st.energy += c.act.absolute_power(&ws.u, &ws.vv, v, w) * c.h;
+        st.energy += c.act.absolute_power(&ws.u, &ws.v_now, v, w) * c.h;
 
         // integrate one step
         let mut plant = Plant {
@@ -1042,7 +1090,7 @@ impl<'m> Runner<'m> {
     ) -> Option<(Option<f64>, f64)> {
         let mon = self.monitors(ws);
         let side = arm_side(&self.wm.model, ws, &c.chain, ee);
-        let (q, r) = (&ws.qv, &st.cur_ref);
+        let (q, r) = (&ws.q_now, &st.cur_ref);
         let res = c.res;
         let [fx, fy] = self.m.map.grid.world_to_cell_f(q[0], q[1]);
         let clearance = self
@@ -1054,8 +1102,8 @@ impl<'m> Runner<'m> {
         let s = &mut self.samples;
         s.t.push(t);
         s.q.push(q.as_slice().to_vec());
-        s.v.push(ws.vv[0]);
-        s.omega.push(ws.vv[1]);
+        s.v.push(ws.v_now[0]);
+        s.omega.push(ws.v_now[1]);
         s.v_ref.push(r.v);
         s.omega_ref.push(r.omega);
         s.ref_xy.push([r.x, r.y]);
@@ -1077,20 +1125,22 @@ impl<'m> Runner<'m> {
     /// dynamics fail.
     fn monitors(&self, ws: &mut Workspace) -> Option<Monitors> {
         let wm = self.wm;
-        let (q, v, u) = (&ws.qv, &ws.vv, &ws.u);
-        reduced_forward_dynamics(wm, &mut ws.mwd, q, v, u).ok()?;
-        let lam = lagrange_multipliers(wm, &mut ws.mwd, q).ok().map(|l| {
-            let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
-            ([at(0), at(1), at(2)], l.len())
-        });
+        let (q, v, u) = (&ws.q_now, &ws.v_now, &ws.u);
+        reduced_forward_dynamics(wm, &mut ws.monitor_dynamics, q, v, u).ok()?;
+        let lam = lagrange_multipliers(wm, &mut ws.monitor_dynamics, q)
+            .ok()
+            .map(|l| {
+                let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
+                ([at(0), at(1), at(2)], l.len())
+            });
         let rep = crate::stability::evaluate(
             &wm.model,
             &mut ws.data,
-            &ws.sm,
-            &mut ws.sd,
+            &ws.stability_model,
+            &mut ws.stability_data,
             q,
-            &ws.mwd.qdot,
-            &ws.mwd.reduced.qddot,
+            &ws.monitor_dynamics.qdot,
+            &ws.monitor_dynamics.reduced.qddot,
             &ExternalLoads::default(),
         );
         let (zmp, force_angle, mhs) = (rep.zmp_margin, rep.force_angle_min, rep.mhs_min);
@@ -1107,22 +1157,21 @@ impl<'m> Runner<'m> {
     /// them) and the support wrench just evaluated; `None` if it cannot be formed.
     fn slip_ratio(&self, ws: &mut Workspace, lam: [f64; 3], nk: usize) -> Option<f64> {
         let wm = self.wm;
-        let (q, u) = (&ws.qv, &ws.u);
+        let (q, u) = (&ws.q_now, &ws.u);
         // contacts in the world, loads from the wrench (stability::loads)
         let (sn, cs) = q[2].sin_cos();
         for (w, p) in ws.contacts.iter_mut().zip(&ws.support_pts) {
             *w = Vector2::new(q[0] + cs * p.x - sn * p.y, q[1] + sn * p.x + cs * p.y);
         }
-        let ground = ws.sm.support.ground_z();
-        contact_normal_loads(&ws.contacts, ground, &ws.sd.wrench, &mut ws.loads).ok()?;
-        // longitudinal wheel forces: the rolling multipliers of tracked wheels, else the
-        // wheel torques over the radius
-        let long = if nk == 3 {
-            [lam[1], lam[2]]
-        } else {
-            let r = wm.base.drive.wheel_radius;
-            [u[0] / r, u[1] / r]
-        };
+        let ground = ws.stability_model.support.ground_z();
+        contact_normal_loads(
+            &ws.contacts,
+            ground,
+            &ws.stability_data.wrench,
+            &mut ws.loads,
+        )
+        .ok()?;
+        let long = wheel_longitudinal_forces(wm, &lam[..nk], u);
         let fr = driven_wheel_friction(
             -lam[0],
             long,
@@ -1219,58 +1268,75 @@ fn initial_state(m: &Mission) -> Vec<f64> {
 
 /// The workspaces of the loop, allocated once before it.
 struct Workspace {
+    /// The plant.
     sys: WheeledSystem,
-    /// The controller's reduced dynamics.
-    cwd: WheeledData,
-    /// The monitors' reduced dynamics.
-    mwd: WheeledData,
+    /// The control law's reduced dynamics (Mr, cr + Gr, N_C) at the step's state, under
+    /// zero input.
+    control_dynamics: WheeledData,
+    /// The monitors' reduced dynamics at a recorded state under the applied input (v̇,
+    /// q̈, the multipliers λ).
+    monitor_dynamics: WheeledData,
+    /// Kinematics workspace (end effector, arm side view, stability).
     data: Data,
-    sm: StabilityModel,
-    sd: StabilityData,
+    /// The support and body set of the stability measures.
+    stability_model: StabilityModel,
+    /// Their workspace (the gravito-inertial wrench of the last evaluation).
+    stability_data: StabilityData,
+    /// The contacts (drive wheels, casters) in the base frame.
     support_pts: Vec<Vector2<f64>>,
+    /// The same in the world at the recorded state.
     contacts: Vec<Vector2<f64>>,
+    /// Their normal loads (N).
     loads: Vec<f64>,
     rk: Rk4,
-    qv: DVector<f64>,
-    vv: DVector<f64>,
+    /// The configuration q of the step's state.
+    q_now: DVector<f64>,
+    /// The reduced velocity v = [v, ω, q̇_arm] of the step's state.
+    v_now: DVector<f64>,
+    /// The actuator inputs (wheel torques, then arm torques), held over the step.
     u: Vec<f64>,
     zero_u: Vec<f64>,
+    /// The law's desired reduced accelerations.
     a_des: DVector<f64>,
+    /// The end effector's frame Jacobian (full velocity coordinates).
     jac: Matrix6xX<f64>,
+    /// Ṅ_C.
     ndot: DMatrix<f64>,
-    ndv: DVector<f64>,
-    /// Reduced end-effector Jacobian (position rows).
-    jr: DMatrix<f64>,
+    /// Ṅ_C v.
+    ndot_v: DVector<f64>,
+    /// The end effector's reduced position Jacobian J N_C (3 × nr).
+    ee_jacobian: DMatrix<f64>,
 }
 
 impl Workspace {
     fn new(wm: &WheeledModel) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
-        let support = SupportPolygon::from_wheeled_base(&wm.base)?;
-        let sm = StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
-        let sd = StabilityData::new(&sm);
+        let support = SupportPolygon::from_wheeled_model(wm)?;
+        let stability_model =
+            StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
+        let stability_data = StabilityData::new(&stability_model);
         let support_pts = wm.base.support_points();
         Ok(Self {
             sys: WheeledSystem::new(wm.clone()),
-            cwd: WheeledData::new(wm),
-            mwd: WheeledData::new(wm),
+            control_dynamics: WheeledData::new(wm),
+            monitor_dynamics: WheeledData::new(wm),
             data: Data::new(model),
-            sm,
-            sd,
+            stability_model,
+            stability_data,
             contacts: support_pts.clone(),
             loads: vec![0.0; support_pts.len()],
             support_pts,
             rk: Rk4::new(nq + nr + 1),
-            qv: DVector::zeros(nq),
-            vv: DVector::zeros(nr),
+            q_now: DVector::zeros(nq),
+            v_now: DVector::zeros(nr),
             u: vec![0.0; nu],
             zero_u: vec![0.0; nu],
             a_des: DVector::zeros(nr),
             jac: Matrix6xX::zeros(model.nv),
             ndot: DMatrix::zeros(model.nv, nr),
-            ndv: DVector::zeros(model.nv),
-            jr: DMatrix::zeros(3, nr),
+            ndot_v: DVector::zeros(model.nv),
+            ee_jacobian: DMatrix::zeros(3, nr),
         })
     }
 }
@@ -1293,10 +1359,10 @@ impl Actuators {
         let model = &wm.model;
         let mut smat = DMatrix::zeros(model.nv, wm.nu());
         // the platform block of N_Cᵀ S: Qr[0..2] = B u[0..2]
-        ws.qv.copy_from_slice(&x[..model.nq]);
-        admissible_velocity_basis(wm, &ws.qv, &mut ws.cwd.basis);
-        actuation_matrix(wm, &ws.qv, &mut smat);
-        let b_full = ws.cwd.basis.transpose() * &smat;
+        ws.q_now.copy_from_slice(&x[..model.nq]);
+        admissible_velocity_basis(wm, &ws.q_now, &mut ws.control_dynamics.basis);
+        actuation_matrix(wm, &ws.q_now, &mut smat);
+        let b_full = ws.control_dynamics.basis.transpose() * &smat;
         let b_pp = Matrix2::new(
             b_full[(0, 0)],
             b_full[(0, 1)],
@@ -1341,21 +1407,26 @@ impl Actuators {
     }
 
     /// The actuators' absolute power Σ |u_j · rate_j| at the inputs `u`, the reduced
-    /// velocities `vv` and the platform speeds (`v`, `w`).
-    fn absolute_power(&self, u: &[f64], vv: &DVector<f64>, v: f64, w: f64) -> f64 {
+    /// velocities `v_now` and the platform speeds (`v`, `w`).
+    fn absolute_power(&self, u: &[f64], v_now: &DVector<f64>, v: f64, w: f64) -> f64 {
         let wrates = self.w_inv * Vector2::new(v, w);
         let mut p_abs = (u[0] * wrates[0]).abs() + (u[1] * wrates[1]).abs();
         for k2 in 0..self.arm_tau.len() {
-            p_abs += (u[2 + k2] * vv[2 + k2]).abs();
+            p_abs += (u[2 + k2] * v_now[2 + k2]).abs();
         }
         p_abs
     }
 
     /// Computed torque through the reduced model, Qr = Mr a + (cr + Gr), mapped to the
     /// inputs `u` and clipped at the torque limits; `true` if any was clipped.
-    fn computed_torque(&self, cwd: &WheeledData, a_des: &DVector<f64>, u: &mut [f64]) -> bool {
-        let mr = &cwd.reduced.mass_matrix;
-        let bias = &cwd.reduced.velocity_terms;
+    fn computed_torque(
+        &self,
+        control_dynamics: &WheeledData,
+        a_des: &DVector<f64>,
+        u: &mut [f64],
+    ) -> bool {
+        let mr = &control_dynamics.reduced.mass_matrix;
+        let bias = &control_dynamics.reduced.velocity_terms;
         let nr = a_des.len();
         let mut qr = [0.0f64; 2];
         for (i, qri) in qr.iter_mut().enumerate() {
@@ -1414,6 +1485,10 @@ struct Controller {
     /// The transport posture as a full configuration.
     q_t: DVector<f64>,
     kan: Kanayama,
+    /// The arrive phase's posture law onto the axle's goal pose.
+    arrive: Aicardi,
+    /// The goal's position tolerance (m).
+    pos_tol: f64,
     kx: f64,
     ks: f64,
     wn: f64,
@@ -1467,6 +1542,8 @@ impl Controller {
             arm,
             q_t,
             kan,
+            arrive: Aicardi::new(c.kx, 2.0, 1.0)?,
+            pos_tol: f.goal.position_tolerance,
             kx: c.kx,
             ks: c.speed_gain,
             wn: c.arm_frequency,
@@ -1519,15 +1596,10 @@ impl Controller {
                 };
                 (self.kan.inputs(&axle, &rs), base_reference(r, self.d))
             }
-            None => {
-                let rs = ReferenceSample {
-                    pose: self.goal_axle,
-                    v: 0.0,
-                    w: 0.0,
-                };
-                let [ex, _, eth] = Kanayama::error(&axle, &rs);
-                ([self.kx * ex, 2.0 * eth], self.goal_sample(t))
-            }
+            None => (
+                arrive_command(&self.arrive, self.kx, self.pos_tol, axle, self.goal_axle),
+                self.goal_sample(t),
+            ),
         };
         let mut speed_clip = false;
         if cmd[0].abs() > self.v_max {
@@ -1551,7 +1623,7 @@ impl Controller {
         a_des[0] = (r.a + ks * (cmd[0] - v)).clamp(-self.a_guard_b, self.a_guard_f);
         a_des[1] = (r.alpha + ks * (cmd[1] - w)).clamp(-self.alpha_guard, self.alpha_guard);
         for (k2, &i) in self.arm.iter().enumerate() {
-            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.qv[i]) - 2.0 * wn * ws.vv[2 + k2];
+            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.q_now[i]) - 2.0 * wn * ws.v_now[2 + k2];
         }
         (r, speed_clip)
     }
@@ -1569,14 +1641,14 @@ impl Controller {
         ws: &mut Workspace,
     ) -> bool {
         let (nr, na, wn, wt) = (self.nr, self.na, self.wn, self.wt);
-        let (jr, vv, a_des) = (&ws.jr, &ws.vv, &mut ws.a_des);
+        let (ee_jacobian, v_now, a_des) = (&ws.ee_jacobian, &ws.v_now, &mut ws.a_des);
         // platform holds: speeds to zero
         a_des[0] = -self.ks * v;
         a_des[1] = -self.ks * w;
         let (xd, dxd, ddxd) = traj.at(t);
         let mut rhs = ddxd + (dxd - ee.dp) * (2.0 * wt) + (xd - ee.p) * (wt * wt) - ee.bias;
         for r in 0..3 {
-            rhs[r] -= jr[(r, 0)] * a_des[0] + jr[(r, 1)] * a_des[1];
+            rhs[r] -= ee_jacobian[(r, 0)] * a_des[0] + ee_jacobian[(r, 1)] * a_des[1];
         }
         // damped least squares on the arm block, null-space damping
         let mut jjt = Matrix3::zeros();
@@ -1584,7 +1656,7 @@ impl Controller {
             for s in 0..3 {
                 let mut acc = 0.0;
                 for j in 2..nr {
-                    acc += jr[(r, j)] * jr[(s, j)];
+                    acc += ee_jacobian[(r, j)] * ee_jacobian[(s, j)];
                 }
                 jjt[(r, s)] = acc;
             }
@@ -1597,35 +1669,49 @@ impl Controller {
         // null-space motion: damp the joint rates
         let mut q0 = vec![0.0; na];
         for (k2, q0k) in q0.iter_mut().enumerate() {
-            *q0k = -2.0 * wn * vv[2 + k2];
+            *q0k = -2.0 * wn * v_now[2 + k2];
         }
         // J q0
         let mut jq0 = Vector3::zeros();
         for r in 0..3 {
             for (k2, q0k) in q0.iter().enumerate() {
-                jq0[r] += jr[(r, 2 + k2)] * q0k;
+                jq0[r] += ee_jacobian[(r, 2 + k2)] * q0k;
             }
         }
         let z = jinv * jq0;
         for k2 in 0..na {
             let mut acc = q0[k2];
             for r in 0..3 {
-                acc += jr[(r, 2 + k2)] * (y[r] - z[r]);
+                acc += ee_jacobian[(r, 2 + k2)] * (y[r] - z[r]);
             }
             a_des[2 + k2] = acc;
         }
         true
     }
+}
 
-    /// Done: the platform's speeds and the joint rates damped to zero.
-    fn hold(&self, v: f64, w: f64, ws: &mut Workspace) {
-        let a_des = &mut ws.a_des;
-        a_des[0] = -self.ks * v;
-        a_des[1] = -self.ks * w;
-        for k2 in 0..self.na {
-            a_des[2 + k2] = -2.0 * self.wn * ws.vv[2 + k2];
-        }
+/// The arrive phase's speed commands `[v, ω]` for the axle pose `axle` onto its goal pose
+/// `goal`: while the position is more than `position_tolerance` off, Aicardi's polar law
+/// `law` (it closes a lateral offset too, which no smooth law of the pose error alone
+/// can, by Brockett's condition); within it, `[kx·eₓ, 2·e_θ]`, a turn onto the goal
+/// heading.
+fn arrive_command(
+    law: &Aicardi,
+    kx: f64,
+    position_tolerance: f64,
+    axle: [f64; 3],
+    goal: [f64; 3],
+) -> [f64; 2] {
+    if (axle[0] - goal[0]).hypot(axle[1] - goal[1]) > position_tolerance {
+        return law.inputs(&axle, &goal);
     }
+    let rs = ReferenceSample {
+        pose: goal,
+        v: 0.0,
+        w: 0.0,
+    };
+    let [ex, _, eth] = Kanayama::error(&axle, &rs);
+    [kx * ex, 2.0 * eth]
 }
 
 /// End-effector position, velocity and acceleration bias in reduced coordinates.
@@ -1637,17 +1723,17 @@ struct EeState {
 }
 
 /// The end effector's position, velocity and acceleration bias at the workspace's state,
-/// with its reduced position Jacobian in `ws.jr` (needs the controller's reduced
+/// with its reduced position Jacobian in `ws.ee_jacobian` (needs the controller's reduced
 /// dynamics at the state).
 fn end_effector_kinematics(m: &Mission, ws: &mut Workspace) -> EeState {
     let (wm, ee_frame) = (&m.robot, m.ee_frame);
     let model = &wm.model;
     let nr = wm.nr();
-    let qd = &ws.cwd.qdot;
+    let qd = &ws.control_dynamics.qdot;
     let acc = frame_acceleration_bias(
         model,
         &mut ws.data,
-        &ws.qv,
+        &ws.q_now,
         qd,
         ee_frame,
         ReferenceFrame::LocalWorldAligned,
@@ -1663,25 +1749,25 @@ fn end_effector_kinematics(m: &Mission, ws: &mut Workspace) -> EeState {
         ReferenceFrame::LocalWorldAligned,
         &mut ws.jac,
     );
-    admissible_velocity_basis_dot(wm, &ws.qv, qd[2], &mut ws.ndot);
-    ws.ndot.mul_to(&ws.vv, &mut ws.ndv);
-    let (jac, jr, vv) = (&ws.jac, &mut ws.jr, &ws.vv);
+    admissible_velocity_basis_dot(wm, &ws.q_now, qd[2], &mut ws.ndot);
+    ws.ndot.mul_to(&ws.v_now, &mut ws.ndot_v);
+    let (jac, ee_jacobian, v_now) = (&ws.jac, &mut ws.ee_jacobian, &ws.v_now);
     for r in 0..3 {
         let mut b = acc.linear[r];
         for cc in 0..model.nv {
-            b += jac[(r, cc)] * ws.ndv[cc];
+            b += jac[(r, cc)] * ws.ndot_v[cc];
         }
         ee.bias[r] = b;
         for j in 0..nr {
             let mut s = 0.0;
             for l in 0..model.nv {
-                s += jac[(r, l)] * ws.cwd.basis[(l, j)];
+                s += jac[(r, l)] * ws.control_dynamics.basis[(l, j)];
             }
-            jr[(r, j)] = s;
+            ee_jacobian[(r, j)] = s;
         }
         let mut s = 0.0;
         for j in 0..nr {
-            s += jr[(r, j)] * vv[j];
+            s += ee_jacobian[(r, j)] * v_now[j];
         }
         ee.dp[r] = s;
     }
@@ -1705,7 +1791,7 @@ fn arm_side(
     chain: &[usize],
     ee: Vector3<f64>,
 ) -> Vec<[f64; 2]> {
-    let q = &ws.qv;
+    let q = &ws.q_now;
     crate::kinematics::forward_kinematics(model, &mut ws.data, q);
     let (sn, cs) = q[2].sin_cos();
     let to_base = |p: &Vector3<f64>| {
@@ -1719,4 +1805,50 @@ fn arm_side(
         .collect();
     side.push(to_base(&ee));
     side
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The arrive law on the kinematic unicycle with the mission's speed limits, from
+    /// `start` onto the origin: the pose error after 8 s (the arrive phase's time-out).
+    fn arrive_from(start: [f64; 3]) -> (f64, f64) {
+        let law = Aicardi::new(2.0, 2.0, 1.0).unwrap();
+        let (mut p, h) = (start, 1e-3);
+        for _ in 0..8000 {
+            let [v, w] = arrive_command(&law, 2.0, 0.1, p, [0.0; 3]);
+            let (v, w) = (v.clamp(-1.0, 1.0), w.clamp(-1.0, 1.0));
+            p = [
+                p[0] + h * v * p[2].cos(),
+                p[1] + h * v * p[2].sin(),
+                p[2] + h * w,
+            ];
+        }
+        (p[0].hypot(p[1]), wrap_angle(p[2]).abs())
+    }
+
+    #[test]
+    fn arrive_closes_a_sideways_offset_within_its_time_out() {
+        for start in [
+            [0.0, 0.3, 0.0],
+            [0.0, -0.5, 0.0],
+            [-0.2, 0.25, 0.1],
+            [0.4, 0.0, 0.0],
+        ] {
+            let (pe, he) = arrive_from(start);
+            assert!(
+                pe <= 0.1 && he <= 0.1,
+                "from {start:?}: {pe} m, {he} rad off"
+            );
+        }
+    }
+
+    #[test]
+    fn the_heading_law_alone_never_closes_a_sideways_offset() {
+        // the law the arrive phase had before: [kx·eₓ, 2·e_θ] everywhere
+        let law = Aicardi::new(2.0, 2.0, 1.0).unwrap();
+        let [v, w] = arrive_command(&law, 2.0, f64::INFINITY, [0.0, 0.3, 0.0], [0.0; 3]);
+        assert_eq!([v, w], [0.0, 0.0]);
+    }
 }

@@ -233,6 +233,20 @@ impl WheeledModel {
         self.wheel_dofs
     }
 
+    /// The ground's height in the root (base) frame (m): the tracked left wheel's axle
+    /// height minus the wheel radius, so a root described at axle height puts the ground
+    /// at `−r_w`; 0 (the root on the ground) without tracked wheel joints.
+    #[must_use]
+    pub fn ground_z(&self) -> f64 {
+        match self.wheel_dofs {
+            Some([left, _]) => {
+                let j = self.model.joint_of_dof[left];
+                self.model.joint_placements[j.0].translation.z - self.base.drive.wheel_radius
+            }
+            None => 0.0,
+        }
+    }
+
     /// Names of the configuration coordinates `[x, y, theta, <joint names>…]`.
     pub fn q_names(&self) -> Vec<String> {
         let mut names = vec!["x".to_string(), "y".into(), "theta".into()];
@@ -571,6 +585,22 @@ pub fn reduced_dynamics(
     }
     wd.reduced.compute_multipliers(&terms, &wd.constraint)?;
     Ok(())
+}
+
+/// The longitudinal ground forces `[left, right]` on the driven wheels (N, along the
+/// heading: traction +, braking −) for the multipliers `lambda` of
+/// [`lagrange_multipliers`] and the inputs `u`. With tracked wheels they are the rolling
+/// rows' share of the constraint force −Cᵀλ: each rolling row is the contact's forward
+/// velocity minus r φ̇, so the ground pushes the base forward by −λ₁ (left) and −λ₂
+/// (right); without tracked wheels (massless wheels), the wheel torques over the radius.
+#[must_use]
+pub fn wheel_longitudinal_forces(wm: &WheeledModel, lambda: &[f64], u: &[f64]) -> [f64; 2] {
+    if wm.wheel_dofs().is_some() {
+        [-lambda[1], -lambda[2]]
+    } else {
+        let r = wm.base.drive.wheel_radius;
+        [u[0] / r, u[1] / r]
+    }
 }
 
 /// Lagrange multipliers λ (k) for the state and input of the last

@@ -230,19 +230,10 @@ impl StabilityMonitor {
                 format!("must be a positive finite number, got {mu}"),
             ));
         }
-        let ground_z = match settings.ground_z {
-            Some(z) => {
-                crate::error::ensure_finite("stability.ground_z", [z].iter())?;
-                z
-            }
-            None => match &robot.base.wheel_joints {
-                Some([left, _]) => {
-                    let j = robot.model.joint_id(left)?;
-                    robot.model.joint_placements[j.0].translation.z - robot.base.drive.wheel_radius
-                }
-                None => 0.0,
-            },
-        };
+        if let Some(z) = settings.ground_z {
+            crate::error::ensure_finite("stability.ground_z", [z].iter())?;
+        }
+        let ground_z = settings.ground_z.unwrap_or_else(|| robot.ground_z());
         let contacts_base = robot.base.support_points();
         let support = SupportPolygon::from_wheeled_base(&robot.base).map_err(|e| {
             Error::invalid(
@@ -433,12 +424,8 @@ impl StabilityMonitor {
         tr.normal_loads.extend_from_slice(&self.loads);
         if let Some(mu) = self.settings.mu {
             let lam = &wd.reduced.lambda;
-            let longitudinal = if robot.wheel_dofs().is_some() {
-                [-lam[1], -lam[2]]
-            } else {
-                let r = robot.base.drive.wheel_radius;
-                [u[0] / r, u[1] / r]
-            };
+            let longitudinal =
+                crate::mobile::wheeled::wheel_longitudinal_forces(robot, lam.as_slice(), u);
             let f =
                 driven_wheel_friction(-lam[0], longitudinal, [self.loads[0], self.loads[1]], mu)?;
             tr.wheels.push(f);

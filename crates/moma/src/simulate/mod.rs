@@ -17,7 +17,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::sim::scenario::InputProfile;
 use crate::sim::stability_monitor::StabilityMonitor;
-use crate::sim::wheeled::{ReducedSystem, SimulationOptions};
+use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem, SimulationOptions};
 
 pub mod control;
 pub mod robot;
@@ -155,6 +155,21 @@ const STABILITY_NEEDS_URDF: &str =
 /// [`Error::Scenario`] naming the file and the field at fault.
 pub fn prepare(sc: &Scenario, path: &Path) -> Result<Run> {
     let base_dir = path.parent().unwrap_or(Path::new("."));
+    let (duration, interval) = (sc.duration, sc.output.record_interval);
+    let samples = (duration / interval).ceil();
+    if interval > 0.0 && samples > MAX_RECORDED_SAMPLES {
+        bail!(
+            "{}",
+            at(
+                path,
+                &format!(
+                    "duration = {duration:e} s at output.record_interval = {interval} s \
+                     records {samples:e} samples, more than {MAX_RECORDED_SAMPLES:e}: \
+                     shorten duration or raise output.record_interval"
+                )
+            )
+        );
+    }
     if sc.controller.is_some() || sc.reference.is_some() {
         if sc.stability.as_ref().is_some_and(|s| s.stop_at_tip) {
             bail!(

@@ -111,6 +111,16 @@ impl SupportPolygon {
         Self::from_points(&base.support_points())
     }
 
+    /// The support of a wheeled robot: [`SupportPolygon::from_wheeled_base`] on the
+    /// ground of [`crate::mobile::WheeledModel::ground_z`] (derived from the wheel
+    /// geometry, so a URDF rooted at axle height gets the right ZMP and tip limits).
+    ///
+    /// # Errors
+    /// As [`SupportPolygon::from_points`].
+    pub fn from_wheeled_model(robot: &crate::mobile::WheeledModel) -> Result<Self> {
+        Self::from_points_at_height(&robot.base.support_points(), robot.ground_z())
+    }
+
     /// The two-contact support of a model moving in one vertical plane (the chapter's
     /// cart): contacts `a` and `b` on `z = ground_z`. The two tip-over axes pass through
     /// the contacts, perpendicular to the segment and horizontal; edge 0 is at the contact
