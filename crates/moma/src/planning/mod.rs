@@ -6,6 +6,11 @@
 //! ([`astar()`], [`dstar_lite::DStarLite`] for re-planning, [`potential`] fields), then
 //! turn the path into motion ([`smooth`], [`trajectory::time_parameterize`]).
 //! 3-D voxel maps: [`Grid3`] and [`astar3d`].
+//!
+//! Arm motion in joint space, robot-independent (the planner sees only joint vectors and a
+//! caller's [`StateValidity`] check): a [`JointSpace`] (joint-limit box, weighted norm,
+//! segment-check resolution), [`rrt_connect()`], [`shortcut()`], then
+//! [`time_optimal()`] (circular blends, velocity and acceleration limits).
 
 pub mod astar;
 pub mod costmap;
@@ -14,21 +19,31 @@ pub mod dstar_lite;
 pub mod edt;
 pub mod grid;
 pub mod grid3;
+pub mod joint_space;
 pub mod movingai;
 pub mod potential;
 pub mod render;
 pub mod rosmap;
+pub mod rrt_connect;
+pub mod shortcut;
 pub mod smooth;
+pub mod time_optimal;
 pub mod trajectory;
 
 pub use astar::{AstarWorkspace, GridPath, SearchGrid, astar, astar_with, octile, wavefront};
 pub use edt::{EdtWorkspace, distance_transform, distance_transform_into};
 pub use grid::{CellCounts, MapKind, OccupancyGrid};
 pub use grid3::{Astar3Workspace, Grid3, Path3, astar3d, astar3d_with};
+pub use joint_space::{JointPath, JointSpace, StateValidity};
 pub use movingai::{
     MovingAiScenario, Scen3Problem, ScenProblem, load_3dmap, load_3dscen, load_movingai_map,
 };
 pub use rosmap::{MapMode, RosMapMeta, load_image_map, load_ros_map};
+pub use rrt_connect::{
+    PlanLimit, PlanStats, Planned, RrtConnectOptions, RrtConnectWorkspace, rrt_connect,
+};
+pub use shortcut::{ShortcutOptions, shortcut};
+pub use time_optimal::{JointLimits, JointTrajectory, TimingOptions, time_optimal};
 
 use crate::{Error, Result};
 use std::path::Path;

@@ -1,0 +1,340 @@
+//! RRT-Connect (Kuffner and LaValle, ICRA 2000) in a [`JointSpace`]: two trees, one rooted
+//! at the start and one at the goal; each iteration draws a uniform sample in the box,
+//! *extends* one tree one step towards it, then greedily *connects* the other tree to the
+//! new node (repeated steps until it is reached or blocked), and the trees swap roles.
+//!
+//! * **Steps** are at most [`RrtConnectOptions::max_step`] long in the weighted norm, and
+//!   every step is a segment checked at the space's resolution ([`JointSpace`]), so the
+//!   returned path (start, the tree nodes, goal) is valid at that resolution throughout.
+//! * **Nearest neighbour** is a linear scan over the tree's flat node array in the same
+//!   weighted norm (the tree sizes of arm queries keep it fast: see `benches/motion.rs`).
+//! * **Determinism**: the samples come from ChaCha8 seeded with
+//!   [`RrtConnectOptions::seed`], so the same query gives the same path, unless the time
+//!   limit ends it.
+//! * **Limits**: an iteration limit and a time limit (checked once per iteration); reaching
+//!   either returns [`Planned::NotSolved`] with the counts.
+//! * **Allocation**: the trees live in a [`RrtConnectWorkspace`] that keeps its capacity
+//!   between queries; a query allocates only its returned path.
+
+use super::joint_space::{JointPath, JointSpace, StateValidity};
+use crate::{Error, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::time::{Duration, Instant};
+
+/// The options of a query.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RrtConnectOptions {
+    /// The longest step (weighted norm); `None`: 0.2 × the box diagonal (OMPL's default).
+    pub max_step: Option<f64>,
+    /// The most iterations (samples drawn).
+    pub max_iterations: usize,
+    /// The longest planning time.
+    pub time_limit: Duration,
+    /// The seed of the sampler.
+    pub seed: u64,
+}
+
+impl Default for RrtConnectOptions {
+    fn default() -> Self {
+        RrtConnectOptions {
+            max_step: None,
+            max_iterations: 100_000,
+            time_limit: Duration::from_secs(1),
+            seed: 0,
+        }
+    }
+}
+
+/// What a query cost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanStats {
+    /// Iterations run (samples drawn).
+    pub iterations: usize,
+    /// Nodes in both trees, roots included.
+    pub nodes: usize,
+    /// Calls of the validity check.
+    pub checks: u64,
+    /// Wall-clock time of the query.
+    pub elapsed: Duration,
+}
+
+/// The limit that ended an unsolved query.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlanLimit {
+    /// [`RrtConnectOptions::max_iterations`].
+    Iterations,
+    /// [`RrtConnectOptions::time_limit`].
+    Time,
+}
+
+/// The outcome of a query.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Planned {
+    /// A path from the start to the goal, valid at the space's resolution.
+    Solved {
+        /// The path.
+        path: JointPath,
+        /// The counts.
+        stats: PlanStats,
+    },
+    /// No path was found before a limit.
+    NotSolved {
+        /// The limit reached.
+        limit: PlanLimit,
+        /// The counts.
+        stats: PlanStats,
+    },
+}
+
+impl Planned {
+    /// The counts, solved or not.
+    pub fn stats(&self) -> &PlanStats {
+        match self {
+            Planned::Solved { stats, .. } | Planned::NotSolved { stats, .. } => stats,
+        }
+    }
+
+    /// The path, if solved.
+    pub fn path(&self) -> Option<&JointPath> {
+        match self {
+            Planned::Solved { path, .. } => Some(path),
+            Planned::NotSolved { .. } => None,
+        }
+    }
+}
+
+/// One tree: node states stored flat, each node's parent index (the root's is itself).
+#[derive(Debug, Clone, Default)]
+struct Tree {
+    states: Vec<f64>,
+    parents: Vec<u32>,
+}
+
+impl Tree {
+    fn reset(&mut self, root: &[f64]) {
+        self.states.clear();
+        self.parents.clear();
+        self.states.extend_from_slice(root);
+        self.parents.push(0);
+    }
+
+    fn len(&self) -> usize {
+        self.parents.len()
+    }
+
+    fn state(&self, i: usize, dim: usize) -> &[f64] {
+        &self.states[i * dim..(i + 1) * dim]
+    }
+
+    fn push(&mut self, q: &[f64], parent: usize) -> usize {
+        self.states.extend_from_slice(q);
+        self.parents.push(parent as u32);
+        self.parents.len() - 1
+    }
+
+    /// The node nearest to `q` in the weighted norm (linear scan).
+    fn nearest(&self, space: &JointSpace, q: &[f64]) -> usize {
+        let dim = space.dim();
+        let mut best = (0, f64::INFINITY);
+        for (i, node) in self.states.chunks_exact(dim).enumerate() {
+            let d = space.distance_squared(node, q);
+            if d < best.1 {
+                best = (i, d);
+            }
+        }
+        best.0
+    }
+}
+
+/// The reusable storage of RRT-Connect queries (both trees and scratch states).
+#[derive(Debug, Clone, Default)]
+pub struct RrtConnectWorkspace {
+    trees: [Tree; 2],
+    sample: Vec<f64>,
+    step: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+impl RrtConnectWorkspace {
+    /// An empty workspace; it grows to the largest query it serves.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// The result of one extension step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Extend {
+    /// The target itself was added.
+    Reached(usize),
+    /// A node one step towards the target was added.
+    Advanced(usize),
+    /// The step was invalid; nothing added.
+    Trapped,
+}
+
+/// Plans from `start` to `goal` (both checked: length, finite, in the box, valid).
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `start`, `goal` or an option when one is malformed, out
+/// of the box or invalid, [`Error::WrongLength`] / [`Error::NonFinite`] for the states.
+pub fn rrt_connect(
+    space: &JointSpace,
+    validity: &mut impl StateValidity,
+    start: &[f64],
+    goal: &[f64],
+    options: &RrtConnectOptions,
+    ws: &mut RrtConnectWorkspace,
+) -> Result<Planned> {
+    let began = Instant::now();
+    space.check_state("start", start)?;
+    space.check_state("goal", goal)?;
+    let max_step = options.max_step.unwrap_or(0.2 * space.diagonal());
+    if !(max_step.is_finite() && max_step > 0.0) {
+        return Err(Error::invalid(
+            "max_step",
+            format!("{max_step} is not a positive finite length"),
+        ));
+    }
+    let mut checks = 0u64;
+    checks += 1;
+    if !validity.is_valid(start) {
+        return Err(Error::invalid("start", "the start state is not valid"));
+    }
+    checks += 1;
+    if !validity.is_valid(goal) {
+        return Err(Error::invalid("goal", "the goal state is not valid"));
+    }
+    let dim = space.dim();
+    let [t0, t1] = &mut ws.trees;
+    t0.reset(start);
+    t1.reset(goal);
+    let stats = |iterations, trees: &[Tree; 2], checks| PlanStats {
+        iterations,
+        nodes: trees[0].len() + trees[1].len(),
+        checks,
+        elapsed: began.elapsed(),
+    };
+    // The straight segment first: many queries need nothing else.
+    if space.segment_valid(validity, start, goal, &mut ws.scratch, &mut checks) {
+        let path = JointPath::from_flat(dim, [start, goal].concat());
+        return Ok(Planned::Solved {
+            path,
+            stats: stats(0, &ws.trees, checks),
+        });
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    ws.sample.resize(dim, 0.0);
+    // `a` is the tree that extends this iteration; the start tree is tree 0.
+    let mut a = 0;
+    for iteration in 0..options.max_iterations {
+        if began.elapsed() >= options.time_limit {
+            return Ok(Planned::NotSolved {
+                limit: PlanLimit::Time,
+                stats: stats(iteration, &ws.trees, checks),
+            });
+        }
+        for (s, (lo, hi)) in ws
+            .sample
+            .iter_mut()
+            .zip(space.lower().iter().zip(space.upper()))
+        {
+            *s = lo + (hi - lo) * rng.random::<f64>();
+        }
+        let new = match extend(space, validity, ws, a, max_step, &mut checks) {
+            Extend::Trapped => {
+                a = 1 - a;
+                continue;
+            }
+            Extend::Reached(i) | Extend::Advanced(i) => i,
+        };
+        // Connect the other tree to the new node.
+        let b = 1 - a;
+        ws.sample.clear();
+        ws.sample.extend_from_slice(ws.trees[a].state(new, dim));
+        loop {
+            match extend(space, validity, ws, b, max_step, &mut checks) {
+                Extend::Advanced(_) => continue,
+                Extend::Trapped => break,
+                Extend::Reached(joined) => {
+                    let (from_start, from_goal) =
+                        if a == 0 { (new, joined) } else { (joined, new) };
+                    let path = join(&ws.trees, dim, from_start, from_goal);
+                    return Ok(Planned::Solved {
+                        path,
+                        stats: stats(iteration + 1, &ws.trees, checks),
+                    });
+                }
+            }
+        }
+        a = b;
+    }
+    Ok(Planned::NotSolved {
+        limit: PlanLimit::Iterations,
+        stats: stats(options.max_iterations, &ws.trees, checks),
+    })
+}
+
+/// Extends tree `t` one step of at most `max_step` towards `ws.sample`.
+fn extend(
+    space: &JointSpace,
+    validity: &mut impl StateValidity,
+    ws: &mut RrtConnectWorkspace,
+    t: usize,
+    max_step: f64,
+    checks: &mut u64,
+) -> Extend {
+    let dim = space.dim();
+    let tree = &mut ws.trees[t];
+    let near = tree.nearest(space, &ws.sample);
+    let from = tree.state(near, dim);
+    let d = space.distance(from, &ws.sample);
+    let reached = d <= max_step;
+    ws.step.clear();
+    if reached {
+        ws.step.extend_from_slice(&ws.sample);
+    } else {
+        let f = max_step / d;
+        ws.step
+            .extend(from.iter().zip(&ws.sample).map(|(x, y)| x + f * (y - x)));
+    }
+    if !space.segment_valid(validity, from, &ws.step, &mut ws.scratch, checks) {
+        return Extend::Trapped;
+    }
+    let i = tree.push(&ws.step, near);
+    if reached {
+        Extend::Reached(i)
+    } else {
+        Extend::Advanced(i)
+    }
+}
+
+/// The path root(0) → … → `from_start` then `from_goal` → … → root(1). The two nodes hold
+/// the same state, which appears once.
+fn join(trees: &[Tree; 2], dim: usize, from_start: usize, from_goal: usize) -> JointPath {
+    let mut points = Vec::new();
+    let mut i = from_start;
+    loop {
+        points.push(i);
+        if i == 0 {
+            break;
+        }
+        i = trees[0].parents[i] as usize;
+    }
+    let mut flat = Vec::with_capacity(dim * (points.len() + 8));
+    for &i in points.iter().rev() {
+        flat.extend_from_slice(trees[0].state(i, dim));
+    }
+    let mut i = trees[1].parents[from_goal] as usize;
+    if from_goal != 0 {
+        loop {
+            flat.extend_from_slice(trees[1].state(i, dim));
+            if i == 0 {
+                break;
+            }
+            i = trees[1].parents[i] as usize;
+        }
+    }
+    JointPath::from_flat(dim, flat)
+}

@@ -1,0 +1,148 @@
+//! Path shortcutting in a [`JointSpace`]: random shortcuts, then removal of redundant
+//! waypoints.
+//!
+//! 1. **Random shortcuts** (seeded ChaCha8): two arc-length positions `s1 < s2` are drawn
+//!    uniformly along the path; their points `a`, `b` lie on segments `i` and `j > i`. The
+//!    candidate replaces everything between waypoint `i` and waypoint `j + 1` by
+//!    `waypoint i → a → b → waypoint j + 1`; it is taken when all three segments are valid
+//!    at the space's resolution and it is strictly shorter in the weighted norm.
+//! 2. **Redundant waypoints**: in one pass, a waypoint whose neighbours are joined by a
+//!    valid segment is dropped (the triangle inequality makes that never longer).
+//!
+//! Every segment of the result was checked at the resolution, so a valid input path gives
+//! a valid output path no longer than the input.
+
+use super::joint_space::{JointPath, JointSpace, StateValidity};
+use crate::{Error, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// The options of [`shortcut`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShortcutOptions {
+    /// Random shortcut attempts.
+    pub attempts: usize,
+    /// The seed of the attempts.
+    pub seed: u64,
+}
+
+impl Default for ShortcutOptions {
+    fn default() -> Self {
+        ShortcutOptions {
+            attempts: 100,
+            seed: 0,
+        }
+    }
+}
+
+/// The most shortcut attempts accepted (each costs at most three segment checks).
+pub const MAX_SHORTCUT_ATTEMPTS: usize = 10_000_000;
+
+/// Shortens `path` (see the module docs); returns the new path and adds the validity
+/// checks made to `checks`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for `path` when its dimension is not the space's or a waypoint
+/// lies outside the box, or for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`].
+pub fn shortcut(
+    space: &JointSpace,
+    validity: &mut impl StateValidity,
+    path: &JointPath,
+    options: &ShortcutOptions,
+    checks: &mut u64,
+) -> Result<JointPath> {
+    if path.dim() != space.dim() {
+        return Err(Error::invalid(
+            "path",
+            format!("{} joints, the space has {}", path.dim(), space.dim()),
+        ));
+    }
+    for i in 0..path.len() {
+        space.check_state(&format!("path waypoint {i}"), path.waypoint(i))?;
+    }
+    if options.attempts > MAX_SHORTCUT_ATTEMPTS {
+        return Err(Error::invalid(
+            "attempts",
+            format!("{} is above {MAX_SHORTCUT_ATTEMPTS}", options.attempts),
+        ));
+    }
+    let dim = space.dim();
+    let mut points: Vec<f64> = path.as_flat().to_vec();
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    let mut cumulative = Vec::new();
+    let (mut a, mut b, mut scratch) = (vec![0.0; dim], vec![0.0; dim], Vec::new());
+    let wp = |i: usize| i * dim..(i + 1) * dim;
+    for _ in 0..options.attempts {
+        let n = points.len() / dim;
+        if n < 3 {
+            break;
+        }
+        cumulative.clear();
+        cumulative.push(0.0);
+        for i in 1..n {
+            let d = space.distance(&points[wp(i - 1)], &points[wp(i)]);
+            cumulative.push(cumulative[i - 1] + d);
+        }
+        let total = cumulative[n - 1];
+        let (mut s1, mut s2) = (rng.random::<f64>() * total, rng.random::<f64>() * total);
+        if s1 > s2 {
+            std::mem::swap(&mut s1, &mut s2);
+        }
+        let i = segment_at(&cumulative, s1);
+        let j = segment_at(&cumulative, s2);
+        if j <= i {
+            continue;
+        }
+        point_on(&points, dim, &cumulative, i, s1, &mut a);
+        point_on(&points, dim, &cumulative, j, s2, &mut b);
+        let (wi, wj) = (&points[wp(i)], &points[wp(j + 1)]);
+        let new_len = space.distance(wi, &a) + space.distance(&a, &b) + space.distance(&b, wj);
+        if new_len >= cumulative[j + 1] - cumulative[i] {
+            continue;
+        }
+        let valid = space.segment_valid(validity, wi, &a, &mut scratch, checks)
+            && space.segment_valid(validity, &a, &b, &mut scratch, checks)
+            && space.segment_valid(validity, &b, wj, &mut scratch, checks);
+        if valid {
+            points.splice((i + 1) * dim..(j + 1) * dim, a.iter().chain(&b).copied());
+        }
+    }
+    // Drop redundant waypoints in one pass.
+    let mut kept: Vec<f64> = Vec::with_capacity(points.len());
+    let n = points.len() / dim;
+    for k in 0..n {
+        let here = &points[wp(k)];
+        if k > 0 && k + 1 < n {
+            let last = &kept[kept.len() - dim..];
+            let next = &points[wp(k + 1)];
+            if space.segment_valid(validity, last, next, &mut scratch, checks) {
+                continue;
+            }
+        }
+        kept.extend_from_slice(here);
+    }
+    Ok(JointPath::from_flat(dim, kept))
+}
+
+/// The segment `i` (from waypoint `i` to `i + 1`) holding arc length `s`.
+fn segment_at(cumulative: &[f64], s: f64) -> usize {
+    let n = cumulative.len();
+    cumulative[1..n - 1].partition_point(|c| *c <= s).min(n - 2)
+}
+
+/// The point at arc length `s` on segment `i`.
+fn point_on(points: &[f64], dim: usize, cumulative: &[f64], i: usize, s: f64, out: &mut [f64]) {
+    let len = cumulative[i + 1] - cumulative[i];
+    let f = if len > 0.0 {
+        ((s - cumulative[i]) / len).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (p, q) = (
+        &points[i * dim..(i + 1) * dim],
+        &points[(i + 1) * dim..(i + 2) * dim],
+    );
+    for ((o, x), y) in out.iter_mut().zip(p).zip(q) {
+        *o = x + f * (y - x);
+    }
+}
