@@ -31,6 +31,9 @@ enum Command {
     Inspect(cmd::inspect::Args),
     /// Evaluate rigid-body dynamics (RNEA, CRBA, ABA, ...) on a list of states.
     Dynamics(cmd::dynamics::Args),
+    /// Analytical derivatives of inverse and forward dynamics (dτ/dq, dτ/dv, M; dq̈/dq,
+    /// dq̈/dv, M⁻¹) on a list of states.
+    Derivatives(cmd::derivatives::Args),
     /// Time the rigid-body algorithms (median ns per call) on seeded random states.
     Bench(cmd::bench::Args),
     /// Evaluate the chapter's closed-form models (m1–m6) on a case file.
@@ -72,6 +75,7 @@ fn main() {
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Dynamics(a) => cmd::dynamics::run(a),
+        Command::Derivatives(a) => cmd::derivatives::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Eval(a) => cmd::eval::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),

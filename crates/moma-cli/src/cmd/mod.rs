@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod common;
+pub mod derivatives;
 pub mod dynamics;
 pub mod eval;
 pub mod ik;
