@@ -287,6 +287,15 @@ fn finite_differences_tiago() {
     }
 }
 
+/// moma's synthetic edge cases: unaligned and negative axes, a continuous joint with
+/// limits, a zero-mass link, rotated fixed-joint chains.
+#[test]
+fn finite_differences_edge_cases() {
+    for root in [RootJoint::Fixed, RootJoint::Planar, RootJoint::FreeFlyer] {
+        finite_differences("edge_general.urdf", root, 14);
+    }
+}
+
 /// The inverse chain rule undoes the forward one (the library uses the inverse, the CLI
 /// the forward).
 #[test]

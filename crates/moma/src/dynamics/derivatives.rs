@@ -39,13 +39,13 @@
 //!
 //! Forward dynamics follows from the implicit function theorem: with q̈ = ABA(q, v, τ),
 //! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H⁻¹ comes from a
-//! Cholesky factorisation of H; the products `H⁻¹ ∂τ/∂x` are Cholesky solves, not
-//! products with the explicit inverse.
+//! Cholesky factorisation of H (one solve per column, then symmetrised), and the products
+//! with it are dense, as Pinocchio's.
 
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{assert_nv, update_joint_placement};
-use crate::linalg::{cholesky_in_place, cholesky_solve};
+use crate::linalg::cholesky_in_place;
 use crate::multibody::{Data, JointType, Model};
 use crate::spatial::{SE3, skew};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
@@ -227,22 +227,7 @@ pub fn aba_derivatives(
         });
     }
     let nv = model.nv;
-    for j in 0..nv {
-        dd.column.fill(0.0);
-        dd.column[j] = 1.0;
-        cholesky_solve(&dd.chol, &mut dd.column);
-        dd.daba_dtau.set_column(j, &dd.column);
-        for (src, dst) in [
-            (&dd.drnea_dq, &mut dd.daba_dq),
-            (&dd.drnea_dv, &mut dd.daba_dv),
-        ] {
-            dd.column.copy_from(&src.column(j));
-            cholesky_solve(&dd.chol, &mut dd.column);
-            for r in 0..nv {
-                dst[(r, j)] = -dd.column[r];
-            }
-        }
-    }
+    cholesky_inverse(&dd.chol, &mut dd.daba_dtau);
     // H⁻¹ symmetric to the last bit
     for j in 0..nv {
         for r in j + 1..nv {
@@ -251,7 +236,62 @@ pub fn aba_derivatives(
             dd.daba_dtau[(j, r)] = m;
         }
     }
+    neg_product(&dd.daba_dtau, &dd.drnea_dq, &mut dd.daba_dq);
+    neg_product(&dd.daba_dtau, &dd.drnea_dv, &mut dd.daba_dv);
     Ok(())
+}
+
+/// `out = (L Lᵀ)⁻¹` from the Cholesky factor `l` (lower triangle), one column of the
+/// identity at a time: forward substitution by axpys on L's contiguous columns (starting
+/// at the column's one, above which it stays zero), then back substitution by dot
+/// products with them.
+fn cholesky_inverse(l: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    let n = l.nrows();
+    let (l, o) = (l.as_slice(), out.as_mut_slice());
+    for j in 0..n {
+        let x = &mut o[j * n..(j + 1) * n];
+        x.fill(0.0);
+        x[j] = 1.0;
+        // L y = e_j
+        for k in j..n {
+            let col = &l[k * n..(k + 1) * n];
+            let yk = x[k] / col[k];
+            x[k] = yk;
+            for (d, s) in x[k + 1..].iter_mut().zip(&col[k + 1..]) {
+                *d -= s * yk;
+            }
+        }
+        // Lᵀ x = y
+        for k in (0..n).rev() {
+            let col = &l[k * n..(k + 1) * n];
+            let dot: f64 = x[k + 1..]
+                .iter()
+                .zip(&col[k + 1..])
+                .map(|(a, b)| a * b)
+                .sum();
+            x[k] = (x[k] - dot) / col[k];
+        }
+    }
+}
+
+/// `out = −a b` for square matrices of one size, column by column as sums of `a`'s
+/// columns (contiguous, so the inner loop vectorises; nalgebra's dynamic product would
+/// allocate its packing buffers).
+fn neg_product(a: &DMatrix<f64>, b: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    let n = a.nrows();
+    let (a, b, o) = (a.as_slice(), b.as_slice(), out.as_mut_slice());
+    for j in 0..n {
+        let oj = &mut o[j * n..(j + 1) * n];
+        oj.fill(0.0);
+        for k in 0..n {
+            let x = -b[j * n + k];
+            if x != 0.0 {
+                for (d, s) in oj.iter_mut().zip(&a[k * n..(k + 1) * n]) {
+                    *d += s * x;
+                }
+            }
+        }
+    }
 }
 
 /// Column `k` of joint `i`'s motion subspace in its own frame, constant for every kind
@@ -424,8 +464,9 @@ fn velocity_variation(inertia: &Matrix6<f64>, v: &Vector6<f64>, h: &Vector6<f64>
     crm.fixed_view_mut::<3, 3>(0, 0).copy_from(&wx);
     crm.fixed_view_mut::<3, 3>(0, 3).copy_from(&vx);
     crm.fixed_view_mut::<3, 3>(3, 3).copy_from(&wx);
-    // v×* = −(v×)ᵀ, so v×* I − I v× = −(crmᵀ I + I crm)
-    let mut b = -(crm.tr_mul(inertia) + inertia * crm);
+    // v×* = −(v×)ᵀ and I = Iᵀ, so v×* I − I v× = −(crmᵀ I + I crm) = −(Y + Yᵀ), Y = I crm
+    let y = inertia * crm;
+    let mut b = -(y + y.transpose());
     let (hlx, hax): (Matrix3<f64>, Matrix3<f64>) = (skew(&hl), skew(&ha));
     // x ×* h = [x_ω × h_l; x_l × h_l + x_ω × h_ω] = [−h_l× x_ω; −h_l× x_l − h_ω× x_ω]
     let mut top_right = b.fixed_view_mut::<3, 3>(0, 3);
