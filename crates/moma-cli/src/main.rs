@@ -33,6 +33,9 @@ enum Command {
     Dynamics(cmd::dynamics::Args),
     /// Signed distances between the robot's links and against a scene, per state.
     Collision(cmd::collision::Args),
+    /// Analytical derivatives of inverse and forward dynamics (dτ/dq, dτ/dv, M; dq̈/dq,
+    /// dq̈/dv, M⁻¹) on a list of states.
+    Derivatives(cmd::derivatives::Args),
     /// Time the rigid-body algorithms (median ns per call) on seeded random states.
     Bench(cmd::bench::Args),
     /// Evaluate the chapter's closed-form models (m1–m6) on a case file.
@@ -74,6 +77,7 @@ fn main() {
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Dynamics(a) => cmd::dynamics::run(a),
+        Command::Derivatives(a) => cmd::derivatives::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Collision(a) => cmd::collision::run(a),
         Command::Eval(a) => cmd::eval::run(a),

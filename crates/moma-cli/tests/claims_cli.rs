@@ -70,6 +70,7 @@ fn every_readme_example_runs_as_written_from_the_repository_root() {
     for sub in [
         "inspect",
         "dynamics",
+        "derivatives",
         "bench",
         "eval",
         "simulate",

@@ -1,4 +1,5 @@
-//! Rigid-body algorithms: RNEA, CRBA, ABA, frame Jacobians, one state or a batch.
+//! Rigid-body algorithms: RNEA, CRBA, ABA, their derivatives, frame Jacobians, one state
+//! or a batch.
 
 use crate::model::{BatchInputs, Mat2, PyData, PyModel, Vec1, check_state, load, run_batch};
 use moma::dynamics;
@@ -81,6 +82,93 @@ pub(crate) fn aba<'py>(
     )?;
     let ddq = dynamics::aba(m, &mut d.inner, &d.q, &d.v, &d.a);
     Ok(PyArray1::from_slice(py, ddq.as_slice()))
+}
+
+/// Three nv × nv matrices.
+type Matrices3<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+/// The analytical derivatives of inverse dynamics tau = RNEA(q, v, a):
+/// `(dtau_dq, dtau_dv, dtau_da)`, nv × nv each (`dtau_da` = M(q)); q is perturbed along
+/// the tangent `q ⊕ dq` (moma's layout: planar root in world axes).
+///
+/// Raises MomaError on a wrong length, a non-finite value or another model's data.
+#[pyfunction]
+pub(crate) fn rnea_derivatives<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    mut data: PyRefMut<'py, PyData>,
+    q: Vec1<'py>,
+    v: Vec1<'py>,
+    a: Vec1<'py>,
+) -> PyResult<Matrices3<'py>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let d = &mut *data;
+    let src = "rnea_derivatives";
+    load(src, "q", q.as_array(), &mut d.q)?;
+    load(src, "v", v.as_array(), &mut d.v)?;
+    load(src, "a", a.as_array(), &mut d.a)?;
+    check_state(
+        m,
+        || src.into(),
+        d.q.as_slice(),
+        Some(d.v.as_slice()),
+        Some(d.a.as_slice()),
+        None,
+    )?;
+    let dd = d
+        .derivatives
+        .get_or_insert_with(|| Box::new(dynamics::DerivativeData::new(m)));
+    dynamics::rnea_derivatives(m, dd, &d.q, &d.v, &d.a);
+    Ok((
+        dd.drnea_dq.to_pyarray(py),
+        dd.drnea_dv.to_pyarray(py),
+        dd.drnea_da.to_pyarray(py),
+    ))
+}
+
+/// The analytical derivatives of forward dynamics ddq = ABA(q, v, tau):
+/// `(dddq_dq, dddq_dv, dddq_dtau)`, nv × nv each (`dddq_dtau` = M(q)⁻¹).
+///
+/// Raises MomaError on a wrong length, a non-finite value, another model's data or a
+/// mass matrix that is not positive definite.
+#[pyfunction]
+pub(crate) fn aba_derivatives<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    mut data: PyRefMut<'py, PyData>,
+    q: Vec1<'py>,
+    v: Vec1<'py>,
+    tau: Vec1<'py>,
+) -> PyResult<Matrices3<'py>> {
+    let m = &model.inner;
+    model.check_data(&data)?;
+    let d = &mut *data;
+    let src = "aba_derivatives";
+    load(src, "q", q.as_array(), &mut d.q)?;
+    load(src, "v", v.as_array(), &mut d.v)?;
+    load(src, "tau", tau.as_array(), &mut d.a)?;
+    check_state(
+        m,
+        || src.into(),
+        d.q.as_slice(),
+        Some(d.v.as_slice()),
+        None,
+        Some(d.a.as_slice()),
+    )?;
+    let dd = d
+        .derivatives
+        .get_or_insert_with(|| Box::new(dynamics::DerivativeData::new(m)));
+    dynamics::aba_derivatives(m, dd, &d.q, &d.v, &d.a).map_err(crate::err)?;
+    Ok((
+        dd.daba_dq.to_pyarray(py),
+        dd.daba_dv.to_pyarray(py),
+        dd.daba_dtau.to_pyarray(py),
+    ))
 }
 
 /// The Jacobian of frame `frame` (6 × nv, rows `[ṗ; ω]` of the frame origin in world
@@ -403,6 +491,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rnea, m)?)?;
     m.add_function(wrap_pyfunction!(crba, m)?)?;
     m.add_function(wrap_pyfunction!(aba, m)?)?;
+    m.add_function(wrap_pyfunction!(rnea_derivatives, m)?)?;
+    m.add_function(wrap_pyfunction!(aba_derivatives, m)?)?;
     m.add_function(wrap_pyfunction!(frame_jacobian, m)?)?;
     m.add_function(wrap_pyfunction!(rnea_batch, m)?)?;
     m.add_function(wrap_pyfunction!(aba_batch, m)?)?;

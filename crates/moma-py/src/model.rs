@@ -177,6 +177,8 @@ pub struct PyData {
     pub(crate) v: DVector<f64>,
     pub(crate) a: DVector<f64>,
     pub(crate) jac: Matrix6xX<f64>,
+    /// The workspace of `rnea_derivatives` / `aba_derivatives`, made on their first call.
+    pub(crate) derivatives: Option<Box<moma::dynamics::DerivativeData>>,
 }
 
 impl PyData {
@@ -189,6 +191,7 @@ impl PyData {
             v: DVector::zeros(m.nv),
             a: DVector::zeros(m.nv),
             jac: Matrix6xX::zeros(m.nv),
+            derivatives: None,
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The rigid-body algorithms allocate nothing after `Data::new`: a counting global
-//! allocator wraps the system one and every algorithm is called with the counter armed,
+//! allocator wraps the system one and every algorithm (the analytical derivatives of RNEA and ABA
+//! after their `DerivativeData::new`) is called with the counter armed,
 //! on Panda (fixed, planar and free-flyer root) and on a tree whose joints are not in
 //! depth-first order (the ancestor-walk variants), with each root.
 
@@ -35,6 +36,7 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
     let vs: Vec<f64> = (0..5).flat_map(|_| v.iter().copied()).collect();
     let accs: Vec<f64> = (0..5).flat_map(|_| a.iter().copied()).collect();
     let mut taus = vec![0.0; 5 * model.nv];
+    let mut derivatives = dynamics::DerivativeData::new(model);
 
     COUNT.store(0, Ordering::SeqCst);
     ARMED.store(true, Ordering::SeqCst);
@@ -68,6 +70,8 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
         let _ = dynamics::center_of_mass(model, &mut data, &q);
         let _ = dynamics::centroidal_momentum_matrix(model, &mut data, &q);
         let _ = dynamics::centroidal_momentum(model, &mut data, &q, &v);
+        dynamics::rnea_derivatives(model, &mut derivatives, &q, &v, &a);
+        dynamics::aba_derivatives(model, &mut derivatives, &q, &v, &a).unwrap();
     }
     ARMED.store(false, Ordering::SeqCst);
     COUNT.load(Ordering::SeqCst)

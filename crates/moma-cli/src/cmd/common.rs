@@ -216,6 +216,38 @@ impl LayoutConv {
         }
     }
 
+    /// RNEA's derivatives (∂τ/∂q, ∂τ/∂v, H, moma's layout, at moma's `(q, v, a)` with
+    /// `tau` = RNEA there) turned, in place, into the command's layout.
+    pub fn rnea_derivatives_out(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        tau: &[f64],
+        m: &mut [nalgebra::DMatrix<f64>; 3],
+    ) {
+        if let Some(map) = &self.map {
+            let [dq, dv, h] = m;
+            map.rnea_derivatives_to_pinocchio(q, v, a, tau, dq, dv, h);
+        }
+    }
+
+    /// ABA's derivatives (∂q̈/∂q, ∂q̈/∂v, H⁻¹, moma's layout, at moma's `(q, v, tau)` with
+    /// `ddq` = ABA there) turned, in place, into the command's layout.
+    pub fn aba_derivatives_out(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        ddq: &[f64],
+        m: &mut [nalgebra::DMatrix<f64>; 3],
+    ) {
+        if let Some(map) = &self.map {
+            let [dq, dv, minv] = m;
+            map.aba_derivatives_to_pinocchio(q, v, tau, ddq, dq, dv, minv);
+        }
+    }
+
     /// A Jacobian (any rows, nv columns) in the command's layout.
     pub fn jacobian_out(&self, q: &[f64], j: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
         match &self.map {

@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod collision;
 pub mod common;
+pub mod derivatives;
 pub mod dynamics;
 pub mod eval;
 pub mod ik;

@@ -105,6 +105,14 @@ def crba(model: Model, data: Data, q: ArrayLike) -> F64:
 def aba(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> F64:
     """Forward dynamics: ddq (nv)."""
 
+def rnea_derivatives(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> tuple[F64, F64, F64]:
+    """Analytical derivatives of tau = RNEA(q, v, a): (dtau_dq, dtau_dv, M), nv x nv
+    each; dq along the tangent q (+) dq (moma's layout)."""
+
+def aba_derivatives(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> tuple[F64, F64, F64]:
+    """Analytical derivatives of ddq = ABA(q, v, tau): (dddq_dq, dddq_dv, M^-1), nv x nv
+    each (moma's layout)."""
+
 def frame_jacobian(model: Model, data: Data, q: ArrayLike, frame: str) -> F64:
     """6 x nv Jacobian of a frame, LOCAL_WORLD_ALIGNED ([p_dot; omega], world axes)."""
 

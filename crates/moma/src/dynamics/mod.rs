@@ -1,6 +1,7 @@
 //! Rigid-body dynamics: inverse dynamics ([`rnea`]), the mass matrix ([`crba`]), forward
 //! dynamics ([`aba`]), gravity and nonlinear effects, a Christoffel-consistent Coriolis
-//! matrix, energies, centre of mass and centroidal momentum.
+//! matrix, energies, centre of mass and centroidal momentum, and the analytical
+//! derivatives of inverse and forward dynamics ([`rnea_derivatives`], [`aba_derivatives`]).
 //!
 //! Every algorithm is a free function `f(&model, &mut data, q, …)` over a
 //! [`Model`](crate::multibody::Model) and its [`Data`](crate::multibody::Data); inputs are
@@ -16,6 +17,7 @@ pub(crate) use aba::{aba_forward_pass, accelerate_one_dof, condense_one_dof};
 mod centroidal;
 mod coriolis;
 mod crba;
+mod derivatives;
 mod rnea;
 mod rnea_batch;
 
@@ -26,5 +28,6 @@ pub use centroidal::{
 };
 pub use coriolis::coriolis_matrix;
 pub use crba::crba;
+pub use derivatives::{DerivativeData, aba_derivatives, rnea_derivatives};
 pub use rnea::{gravity_torque, nonlinear_effects, rnea};
 pub use rnea_batch::{BatchData, BatchIsa, RNEA_LANES, rnea_batch, rnea_batch_isa};

@@ -366,6 +366,134 @@ impl PinocchioLayout {
         }
     }
 
+    /// Pinocchio's derivatives of τ = RNEA(q, v, a), in place, from moma's `dq = ∂τ/∂q`,
+    /// `dv = ∂τ/∂v` and `m = ∂τ/∂a = H` at moma's `(q, v, a)` with `tau` = RNEA(q, v, a).
+    ///
+    /// Pinocchio's τ_P(q_P, v_P, a_P) = T τ(q, Tᵀ v_P, Tᵀ a_P + ω Ŝ Tᵀ v_P) (module
+    /// docs), its q perturbation is in the base frame (`dq_moma = Tᵀ δq_P`), and T turns
+    /// with θ (`dT/dθ = −T Ŝ`), where Ŝ is the nv × nv matrix with `[[0, −1], [1, 0]]` on
+    /// the base's (x, y) block. The chain rule gives
+    ///
+    /// * `H_P = T H Tᵀ`,
+    /// * `∂τ_P/∂v_P = T (∂τ/∂v + H (ω Ŝ + Ŝ v e_ωᵀ)) Tᵀ`,
+    /// * `∂τ_P/∂q_P = T (∂τ/∂q + (∂τ/∂v Ŝ v + H Ŝ a − Ŝ τ) e_θᵀ) Tᵀ`,
+    ///
+    /// with `e_θ = e_ω` the heading's velocity coordinate. Nothing changes without a
+    /// planar root. Does not allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn rnea_derivatives_to_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        tau: &[f64],
+        dq: &mut DMatrix<f64>,
+        dv: &mut DMatrix<f64>,
+        m: &mut DMatrix<f64>,
+    ) {
+        self.check_derivative_sizes(&[v, a, tau], &[dq, dv, m]);
+        if let Some((c, s, iv)) = self.heading(q) {
+            let it = iv + 2;
+            for r in 0..self.nv {
+                dq[(r, it)] +=
+                    skew_mul(dv, r, iv, v) + skew_mul(m, r, iv, a) - skew_vec(tau, r, iv);
+            }
+            add_heading_rate_terms(dv, m, v, iv, 1.0);
+            for x in [dq, dv, m] {
+                rotate_rows(x, iv, c, s);
+                rotate_cols(x, iv, c, s);
+            }
+        }
+    }
+
+    /// The inverse of [`Self::rnea_derivatives_to_pinocchio`]: moma's `∂τ/∂q`, `∂τ/∂v`
+    /// and H, in place, from Pinocchio's, at moma's `(q, v, a)` with moma's `tau` =
+    /// RNEA(q, v, a). Does not allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn rnea_derivatives_from_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        tau: &[f64],
+        dq: &mut DMatrix<f64>,
+        dv: &mut DMatrix<f64>,
+        m: &mut DMatrix<f64>,
+    ) {
+        self.check_derivative_sizes(&[v, a, tau], &[dq, dv, m]);
+        if let Some((c, s, iv)) = self.heading(q) {
+            for x in [&mut *dq, &mut *dv, &mut *m] {
+                rotate_rows(x, iv, c, -s);
+                rotate_cols(x, iv, c, -s);
+            }
+            add_heading_rate_terms(dv, m, v, iv, -1.0);
+            let it = iv + 2;
+            for r in 0..self.nv {
+                dq[(r, it)] -=
+                    skew_mul(dv, r, iv, v) + skew_mul(m, r, iv, a) - skew_vec(tau, r, iv);
+            }
+        }
+    }
+
+    /// Pinocchio's derivatives of q̈ = ABA(q, v, τ), in place, from moma's `dq = ∂q̈/∂q`,
+    /// `dv = ∂q̈/∂v` and `minv = H⁻¹` at moma's `(q, v, τ)` with `ddq` = ABA(q, v, τ).
+    ///
+    /// With q̈_P = T (q̈ − ω Ŝ v) and the same T, Ŝ as
+    /// [`Self::rnea_derivatives_to_pinocchio`]:
+    ///
+    /// * `H_P⁻¹ = T H⁻¹ Tᵀ`,
+    /// * `∂q̈_P/∂v_P = T (∂q̈/∂v − ω Ŝ − Ŝ v e_ωᵀ) Tᵀ`,
+    /// * `∂q̈_P/∂q_P = T (∂q̈/∂q + (∂q̈/∂v Ŝ v − Ŝ q̈ + H⁻¹ Ŝ τ) e_θᵀ) Tᵀ`.
+    ///
+    /// Does not allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn aba_derivatives_to_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        ddq: &[f64],
+        dq: &mut DMatrix<f64>,
+        dv: &mut DMatrix<f64>,
+        minv: &mut DMatrix<f64>,
+    ) {
+        self.check_derivative_sizes(&[v, tau, ddq], &[dq, dv, minv]);
+        if let Some((c, s, iv)) = self.heading(q) {
+            let (it, w) = (iv + 2, v[iv + 2]);
+            for r in 0..self.nv {
+                dq[(r, it)] +=
+                    skew_mul(dv, r, iv, v) - skew_vec(ddq, r, iv) + skew_mul(minv, r, iv, tau);
+            }
+            // − ω Ŝ − Ŝ v e_ωᵀ
+            dv[(iv, iv + 1)] += w;
+            dv[(iv + 1, iv)] -= w;
+            dv[(iv, it)] += v[iv + 1];
+            dv[(iv + 1, it)] -= v[iv];
+            for x in [dq, dv, minv] {
+                rotate_rows(x, iv, c, s);
+                rotate_cols(x, iv, c, s);
+            }
+        }
+    }
+
+    fn check_derivative_sizes(&self, vectors: &[&[f64]], matrices: &[&DMatrix<f64>]) {
+        for x in vectors {
+            assert_eq!(x.len(), self.nv, "vector length");
+        }
+        for m in matrices {
+            assert_eq!(m.shape(), (self.nv, self.nv), "matrix size");
+        }
+    }
+
     fn columns(&self, q: &[f64], j: &DMatrix<f64>, out: &mut DMatrix<f64>, transpose: bool) {
         assert_eq!(j.ncols(), self.nv, "Jacobian columns");
         assert_eq!(out.shape(), j.shape(), "out size");
@@ -373,6 +501,41 @@ impl PinocchioLayout {
         if let Some((c, s, iv)) = self.heading(q) {
             rotate_cols(out, iv, c, if transpose { -s } else { s });
         }
+    }
+}
+
+/// Row `r` of `m Ŝ x`, Ŝ acting on the base's (x, y) coordinates `iv, iv + 1`:
+/// `−m[r, iv] x[iv + 1] + m[r, iv + 1] x[iv]`.
+fn skew_mul(m: &DMatrix<f64>, r: usize, iv: usize, x: &[f64]) -> f64 {
+    -m[(r, iv)] * x[iv + 1] + m[(r, iv + 1)] * x[iv]
+}
+
+/// Entry `r` of `Ŝ x`.
+fn skew_vec(x: &[f64], r: usize, iv: usize) -> f64 {
+    if r == iv {
+        -x[iv + 1]
+    } else if r == iv + 1 {
+        x[iv]
+    } else {
+        0.0
+    }
+}
+
+/// `dv += sign · m (ω Ŝ + Ŝ v e_ωᵀ)` with ω = v[iv + 2]: the terms of ∂τ/∂v that the
+/// base-frame velocity adds through the acceleration map.
+fn add_heading_rate_terms(
+    dv: &mut DMatrix<f64>,
+    m: &DMatrix<f64>,
+    v: &[f64],
+    iv: usize,
+    sign: f64,
+) {
+    let w = v[iv + 2];
+    for r in 0..m.nrows() {
+        let (m0, m1) = (m[(r, iv)], m[(r, iv + 1)]);
+        dv[(r, iv)] += sign * w * m1;
+        dv[(r, iv + 1)] -= sign * w * m0;
+        dv[(r, iv + 2)] += sign * (-m0 * v[iv + 1] + m1 * v[iv]);
     }
 }
 

@@ -1,0 +1,479 @@
+//! Analytical derivatives of inverse dynamics (RNEA) and forward dynamics (ABA) with
+//! respect to q, v and a (or τ), after Carpentier and Mansard (RSS 2018): what Pinocchio's
+//! `computeRNEADerivatives` and `computeABADerivatives` compute.
+//!
+//! Derivatives with respect to q are taken along the tangent perturbation of the
+//! configuration, `q ⊕ δq` with [`crate::kinematics::integrate`], so every matrix is
+//! nv × nv, for every root and joint kind.
+//!
+//! # The algorithm
+//!
+//! Everything is expressed in the world frame. Joint `j`'s motion-subspace columns are
+//! `J_j` (its columns of the world Jacobian), body velocities and accelerations (with the
+//! fictitious −g) `v_i`, `a_i`, body inertias `I_i`, and `F_i` is the force the subtree of
+//! `i` transmits through joint `i`, so `τ_i = J_iᵀ F_i`. Perturbing `q_j` moves the subtree
+//! of `j` rigidly, which rotates every world quantity attached to it (`δm = J_j × m` for a
+//! motion, `J_j ×* f` for a force) and, on top of that, changes it "intrinsically":
+//! `δv_k = v_λ(j) × J_j` and `δa_k = a_λ(j) × J_j + (v_λ(j) × J_j) × (v_k − v_λ(j))` for
+//! every body `k` below `j` (λ the parent), and inertias not at all. The rotation cancels in
+//! `J_iᵀ F_i` whenever it moves both, i.e. for `j` an ancestor of `i` or `i` itself. With
+//! `w_j = v_λ × J_j`, `u_j = a_λ × J_j + v_λ × w_j`, the composite inertia `Ic_i` and the
+//! composite of `B_k = v_k×* I_k − I_k v_k× + (· ×* I_k v_k)` (the derivative of
+//! `f_k = I_k a_k + v_k ×* I_k v_k` through the velocity that is not in `I_k δa_k`):
+//!
+//! * `j` ancestor of `i` or `i`: `∂τ_i/∂q_j = (Ic_i J_i)ᵀ u_j + (Bc_iᵀ J_i)ᵀ w_j`,
+//!   `∂τ_i/∂v_j = (Ic_i J_i)ᵀ (v_λ + v_j) × J_j + (Bc_iᵀ J_i)ᵀ J_j`, `H_ij = (Ic_i J_i)ᵀ J_j`;
+//! * `j` below `i`: `J_iᵀ` of `J_j ×* F_j + Ic_j u_j + Bc_j w_j`, of
+//!   `Ic_j (v_λ + v_j) × J_j + Bc_j J_j` and of `Ic_j J_j`.
+//!
+//! One forward pass computes the per-dof 6-vectors; one backward pass accumulates the
+//! composites and writes each row of a joint against its ancestors' columns, and each
+//! column against its ancestors' rows (Pinocchio's one forward and one backward pass with
+//! 6 × nv column blocks).
+//!
+//! The pass runs with a constant joint-frame motion subspace for every joint, which is
+//! Pinocchio's planar joint (base-frame velocity); moma's planar root (world-axes velocity)
+//! is brought there and back by the chain rule of
+//! [`PinocchioLayout::rnea_derivatives_from_pinocchio`]. Continuous joints have the same
+//! tangent space in both layouts.
+//!
+//! Forward dynamics follows from the implicit function theorem: with q̈ = ABA(q, v, τ),
+//! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H⁻¹ comes from a
+//! Cholesky factorisation of H (one solve per column, then symmetrised), and the products
+//! with it are dense, as Pinocchio's.
+
+use crate::error::{Error, Result};
+use crate::io::pinocchio_layout::PinocchioLayout;
+use crate::kinematics::{assert_nv, update_joint_placement};
+use crate::linalg::cholesky_in_place;
+use crate::multibody::{Data, JointType, Model};
+use crate::spatial::{SE3, skew};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
+
+/// The workspace and the results of [`rnea_derivatives`] and [`aba_derivatives`], sized
+/// once for a model by [`DerivativeData::new`]; neither function allocates after that.
+///
+/// All matrices are nv × nv, entry `(i, j)` = ∂out_i/∂in_j.
+#[derive(Clone, Debug)]
+pub struct DerivativeData {
+    /// ∂τ/∂q of the last [`rnea_derivatives`] (or of RNEA at a = q̈ after
+    /// [`aba_derivatives`]).
+    pub drnea_dq: DMatrix<f64>,
+    /// ∂τ/∂v.
+    pub drnea_dv: DMatrix<f64>,
+    /// ∂τ/∂a = H(q), the joint-space inertia matrix (full symmetric).
+    pub drnea_da: DMatrix<f64>,
+    /// τ = RNEA(q, v, a) at the point of the last [`rnea_derivatives`].
+    pub tau: DVector<f64>,
+    /// ∂q̈/∂q of the last [`aba_derivatives`].
+    pub daba_dq: DMatrix<f64>,
+    /// ∂q̈/∂v.
+    pub daba_dv: DMatrix<f64>,
+    /// ∂q̈/∂τ = H(q)⁻¹ (full symmetric).
+    pub daba_dtau: DMatrix<f64>,
+    /// q̈ = ABA(q, v, τ) of the last [`aba_derivatives`].
+    pub ddq: DVector<f64>,
+    /// Joint placements and ABA.
+    data: Data,
+    /// The planar root's chain rule (identity without one).
+    layout: PinocchioLayout,
+    /// Velocity and acceleration in the pass's convention (planar: base frame).
+    v_local: DVector<f64>,
+    a_local: DVector<f64>,
+    /// Per joint, world frame: placement, twist, acceleration (with −g).
+    world_from_joint: Vec<SE3>,
+    vel: Vec<Vector6<f64>>,
+    acc: Vec<Vector6<f64>>,
+    /// Per joint: composite inertia, composite B, subtree force (world frame).
+    ic: Vec<Matrix6<f64>>,
+    bc: Vec<Matrix6<f64>>,
+    force: Vec<Vector6<f64>>,
+    /// Per dof: world motion-subspace column J, w = v_λ × J, u = a_λ × J + v_λ × w and
+    /// (v_λ + v_j) × J.
+    jac: Vec<Vector6<f64>>,
+    w: Vec<Vector6<f64>>,
+    u: Vec<Vector6<f64>>,
+    dadv: Vec<Vector6<f64>>,
+    /// The Cholesky factor of H and one column of scratch.
+    chol: DMatrix<f64>,
+    column: DVector<f64>,
+}
+
+impl DerivativeData {
+    /// Allocates every buffer for `model`.
+    #[must_use]
+    pub fn new(model: &Model) -> Self {
+        let (n, nv) = (model.njoints, model.nv);
+        let m = || DMatrix::zeros(nv, nv);
+        Self {
+            drnea_dq: m(),
+            drnea_dv: m(),
+            drnea_da: m(),
+            tau: DVector::zeros(nv),
+            daba_dq: m(),
+            daba_dv: m(),
+            daba_dtau: m(),
+            ddq: DVector::zeros(nv),
+            data: Data::new(model),
+            layout: PinocchioLayout::new(model),
+            v_local: DVector::zeros(nv),
+            a_local: DVector::zeros(nv),
+            world_from_joint: vec![SE3::identity(); n],
+            vel: vec![Vector6::zeros(); n],
+            acc: vec![Vector6::zeros(); n],
+            ic: vec![Matrix6::zeros(); n],
+            bc: vec![Matrix6::zeros(); n],
+            force: vec![Vector6::zeros(); n],
+            jac: vec![Vector6::zeros(); nv],
+            w: vec![Vector6::zeros(); nv],
+            u: vec![Vector6::zeros(); nv],
+            dadv: vec![Vector6::zeros(); nv],
+            chol: m(),
+            column: DVector::zeros(nv),
+        }
+    }
+
+    /// True if this workspace was sized for `model`.
+    #[must_use]
+    pub fn fits(&self, model: &Model) -> bool {
+        self.data.fits(model) && self.jac.len() == model.nv
+    }
+}
+
+/// Derivatives of inverse dynamics τ = RNEA(q, v, a): writes ∂τ/∂q, ∂τ/∂v and
+/// ∂τ/∂a = H(q) into `dd.drnea_dq`, `dd.drnea_dv`, `dd.drnea_da`, and τ into `dd.tau`.
+///
+/// In moma's layout (planar root: world-axes velocity; see
+/// [`crate::io::pinocchio_layout`] for Pinocchio's, and
+/// [`PinocchioLayout::rnea_derivatives_to_pinocchio`] to convert).
+///
+/// # Panics
+/// If q, v, a have the wrong length or `dd` was not made for `model`.
+///
+/// # References
+/// J. Carpentier, N. Mansard, "Analytical Derivatives of Rigid Body Dynamics Algorithms",
+/// Robotics: Science and Systems, 2018, doi:10.15607/RSS.2018.XIV.038.
+pub fn rnea_derivatives(
+    model: &Model,
+    dd: &mut DerivativeData,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    a: &DVector<f64>,
+) {
+    assert!(dd.fits(model), "DerivativeData was not made for this model");
+    assert_eq!(
+        q.len(),
+        model.nq,
+        "q has {} entries, the model nq = {}",
+        q.len(),
+        model.nq
+    );
+    assert_nv(model, v, "v");
+    assert_nv(model, a, "a");
+    let (qs, vs, as_) = (q.as_slice(), v.as_slice(), a.as_slice());
+    dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
+    dd.layout
+        .a_to_pinocchio(qs, vs, as_, dd.a_local.as_mut_slice());
+    forward_pass(model, dd, qs);
+    backward_pass(model, dd);
+    // τ computed in the pass's convention → moma's, then the matrices
+    dd.column.copy_from(&dd.tau);
+    dd.layout
+        .tau_from_pinocchio(qs, dd.column.as_slice(), dd.tau.as_mut_slice());
+    dd.layout.rnea_derivatives_from_pinocchio(
+        qs,
+        vs,
+        as_,
+        dd.tau.as_slice(),
+        &mut dd.drnea_dq,
+        &mut dd.drnea_dv,
+        &mut dd.drnea_da,
+    );
+}
+
+/// Derivatives of forward dynamics q̈ = ABA(q, v, τ): writes ∂q̈/∂q, ∂q̈/∂v and
+/// ∂q̈/∂τ = H(q)⁻¹ into `dd.daba_dq`, `dd.daba_dv`, `dd.daba_dtau`, and q̈ into `dd.ddq`
+/// (in moma's layout). `dd.drnea_*` are left holding the RNEA derivatives at a = q̈.
+///
+/// # Errors
+/// [`Error::Singular`] when H(q) is not positive definite (e.g. a joint that moves only
+/// massless links); the outputs are then NaN.
+///
+/// # Panics
+/// If q, v, τ have the wrong length or `dd` was not made for `model`.
+pub fn aba_derivatives(
+    model: &Model,
+    dd: &mut DerivativeData,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    tau: &DVector<f64>,
+) -> Result<()> {
+    assert!(dd.fits(model), "DerivativeData was not made for this model");
+    assert_nv(model, tau, "tau");
+    let ddq = super::aba(model, &mut dd.data, q, v, tau);
+    dd.ddq.copy_from(ddq);
+    // a moved-out vector is put back below: no allocation
+    let ddq = std::mem::take(&mut dd.ddq);
+    rnea_derivatives(model, dd, q, v, &ddq);
+    dd.ddq = ddq;
+    dd.chol.copy_from(&dd.drnea_da);
+    if let Err(k) = cholesky_in_place(&mut dd.chol, 0.0) {
+        for m in [&mut dd.daba_dq, &mut dd.daba_dv, &mut dd.daba_dtau] {
+            m.fill(f64::NAN);
+        }
+        return Err(Error::Singular {
+            what: "joint-space inertia H(q)".into(),
+            detail: Some(format!("Cholesky pivot {k} is not positive")),
+        });
+    }
+    let nv = model.nv;
+    cholesky_inverse(&dd.chol, &mut dd.daba_dtau);
+    // H⁻¹ symmetric to the last bit
+    for j in 0..nv {
+        for r in j + 1..nv {
+            let m = 0.5 * (dd.daba_dtau[(r, j)] + dd.daba_dtau[(j, r)]);
+            dd.daba_dtau[(r, j)] = m;
+            dd.daba_dtau[(j, r)] = m;
+        }
+    }
+    neg_product(&dd.daba_dtau, &dd.drnea_dq, &mut dd.daba_dq);
+    neg_product(&dd.daba_dtau, &dd.drnea_dv, &mut dd.daba_dv);
+    Ok(())
+}
+
+/// `out = (L Lᵀ)⁻¹` from the Cholesky factor `l` (lower triangle), one column of the
+/// identity at a time: forward substitution by axpys on L's contiguous columns (starting
+/// at the column's one, above which it stays zero), then back substitution by dot
+/// products with them.
+fn cholesky_inverse(l: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    let n = l.nrows();
+    let (l, o) = (l.as_slice(), out.as_mut_slice());
+    for j in 0..n {
+        let x = &mut o[j * n..(j + 1) * n];
+        x.fill(0.0);
+        x[j] = 1.0;
+        // L y = e_j
+        for k in j..n {
+            let col = &l[k * n..(k + 1) * n];
+            let yk = x[k] / col[k];
+            x[k] = yk;
+            for (d, s) in x[k + 1..].iter_mut().zip(&col[k + 1..]) {
+                *d -= s * yk;
+            }
+        }
+        // Lᵀ x = y
+        for k in (0..n).rev() {
+            let col = &l[k * n..(k + 1) * n];
+            let dot: f64 = x[k + 1..]
+                .iter()
+                .zip(&col[k + 1..])
+                .map(|(a, b)| a * b)
+                .sum();
+            x[k] = (x[k] - dot) / col[k];
+        }
+    }
+}
+
+/// `out = −a b` for square matrices of one size, column by column as sums of `a`'s
+/// columns (contiguous, so the inner loop vectorises; nalgebra's dynamic product would
+/// allocate its packing buffers).
+fn neg_product(a: &DMatrix<f64>, b: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    let n = a.nrows();
+    let (a, b, o) = (a.as_slice(), b.as_slice(), out.as_mut_slice());
+    for j in 0..n {
+        let oj = &mut o[j * n..(j + 1) * n];
+        oj.fill(0.0);
+        for k in 0..n {
+            let x = -b[j * n + k];
+            if x != 0.0 {
+                for (d, s) in oj.iter_mut().zip(&a[k * n..(k + 1) * n]) {
+                    *d += s * x;
+                }
+            }
+        }
+    }
+}
+
+/// Column `k` of joint `i`'s motion subspace in its own frame, constant for every kind
+/// (the planar joint's in its base-frame velocity convention).
+#[inline]
+fn local_column(jt: &JointType, k: usize) -> Vector6<f64> {
+    match jt {
+        JointType::Planar => {
+            let mut s = Vector6::zeros();
+            s[[0, 1, 5][k]] = 1.0;
+            s
+        }
+        JointType::FreeFlyer => {
+            let mut s = Vector6::zeros();
+            s[k] = 1.0;
+            s
+        }
+        JointType::RevoluteUnaligned { axis } => {
+            Vector6::new(0.0, 0.0, 0.0, axis.x, axis.y, axis.z)
+        }
+        JointType::PrismaticUnaligned { axis } => {
+            Vector6::new(axis.x, axis.y, axis.z, 0.0, 0.0, 0.0)
+        }
+        aligned => {
+            let mut s = Vector6::zeros();
+            s[aligned.axis_slot().expect("aligned joint")] = 1.0;
+            s
+        }
+    }
+}
+
+/// The world placement, twist and acceleration of every joint, the per-dof vectors and
+/// each body's inertia, B and force (the composites' starting values).
+fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
+    let gravity = Vector6::new(
+        -model.gravity.x,
+        -model.gravity.y,
+        -model.gravity.z,
+        0.0,
+        0.0,
+        0.0,
+    );
+    for i in 1..model.njoints {
+        update_joint_placement(model, &mut dd.data, i, qs);
+        let p = model.parents[i].0;
+        let local = dd.data.parent_from_joint[i];
+        let (omi, v_parent, a_parent) = if p == 0 {
+            (local, Vector6::zeros(), gravity)
+        } else {
+            (dd.world_from_joint[p].compose(&local), dd.vel[p], dd.acc[p])
+        };
+        let jt = &model.joint_types[i];
+        let iv = model.idx_v[i];
+        let mut vel = v_parent;
+        let mut acc = a_parent;
+        for k in iv..iv + model.nvs[i] {
+            let jk = act_motion(&omi, &local_column(jt, k - iv));
+            dd.jac[k] = jk;
+            vel += jk * dd.v_local[k];
+            acc += jk * dd.a_local[k];
+        }
+        acc += cross_motion(&vel, &(vel - v_parent));
+        let v_sum = v_parent + vel;
+        for k in iv..iv + model.nvs[i] {
+            let jk = dd.jac[k];
+            let w = cross_motion(&v_parent, &jk);
+            dd.u[k] = cross_motion(&a_parent, &jk) + cross_motion(&v_parent, &w);
+            dd.w[k] = w;
+            dd.dadv[k] = cross_motion(&v_sum, &jk);
+        }
+        let inertia = omi.act_inertia(&model.inertias[i]).to_matrix();
+        let h = inertia * vel;
+        dd.force[i] = inertia * acc + cross_force(&vel, &h);
+        dd.bc[i] = velocity_variation(&inertia, &vel, &h);
+        dd.ic[i] = inertia;
+        dd.world_from_joint[i] = omi;
+        dd.vel[i] = vel;
+        dd.acc[i] = acc;
+    }
+}
+
+/// Accumulates the composites from the leaves up and writes τ and the three matrices (in
+/// the pass's convention).
+fn backward_pass(model: &Model, dd: &mut DerivativeData) {
+    dd.drnea_dq.fill(0.0);
+    dd.drnea_dv.fill(0.0);
+    dd.drnea_da.fill(0.0);
+    for i in (1..model.njoints).rev() {
+        let (ic, bc, f) = (dd.ic[i], dd.bc[i], dd.force[i]);
+        let iv = model.idx_v[i];
+        let p = model.parents[i].0;
+        for k in iv..iv + model.nvs[i] {
+            let jk = dd.jac[k];
+            dd.tau[k] = jk.dot(&f);
+            let y1 = ic * jk;
+            let y2 = bc.tr_mul(&jk);
+            // row k against the columns of i and of its ancestors
+            let mut a = i;
+            while a > 0 {
+                for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
+                    dd.drnea_dq[(k, m)] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
+                    dd.drnea_dv[(k, m)] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
+                    dd.drnea_da[(k, m)] = y1.dot(&dd.jac[m]);
+                }
+                a = model.parents[a].0;
+            }
+            // column k against the rows of the strict ancestors
+            let phi_q = cross_force(&jk, &f) + ic * dd.u[k] + bc * dd.w[k];
+            let phi_v = ic * dd.dadv[k] + bc * jk;
+            let mut a = p;
+            while a > 0 {
+                for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
+                    let jr = &dd.jac[r];
+                    dd.drnea_dq[(r, k)] = jr.dot(&phi_q);
+                    dd.drnea_dv[(r, k)] = jr.dot(&phi_v);
+                    dd.drnea_da[(r, k)] = jr.dot(&y1);
+                }
+                a = model.parents[a].0;
+            }
+        }
+        if p > 0 {
+            dd.ic[p] += ic;
+            dd.bc[p] += bc;
+            dd.force[p] += f;
+        }
+    }
+}
+
+#[inline]
+fn split(x: &Vector6<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    (
+        Vector3::new(x[0], x[1], x[2]),
+        Vector3::new(x[3], x[4], x[5]),
+    )
+}
+
+#[inline]
+fn join(l: Vector3<f64>, a: Vector3<f64>) -> Vector6<f64> {
+    Vector6::new(l.x, l.y, l.z, a.x, a.y, a.z)
+}
+
+/// `m` moved by `x` into its parent frame (`X m`).
+#[inline]
+fn act_motion(x: &SE3, m: &Vector6<f64>) -> Vector6<f64> {
+    let (l, a) = split(m);
+    let ra = x.rotation * a;
+    join(x.rotation * l + x.translation.cross(&ra), ra)
+}
+
+/// `v × m` (motion cross product, `[ω × m_l + v_l × m_ω; ω × m_ω]`).
+#[inline]
+fn cross_motion(v: &Vector6<f64>, m: &Vector6<f64>) -> Vector6<f64> {
+    let ((vl, va), (ml, ma)) = (split(v), split(m));
+    join(va.cross(&ml) + vl.cross(&ma), va.cross(&ma))
+}
+
+/// `v ×* f` (force cross product, `[ω × f_l; v_l × f_l + ω × f_ω]`).
+#[inline]
+fn cross_force(v: &Vector6<f64>, f: &Vector6<f64>) -> Vector6<f64> {
+    let ((vl, va), (fl, fa)) = (split(v), split(f));
+    join(va.cross(&fl), vl.cross(&fl) + va.cross(&fa))
+}
+
+/// `B = v×* I − I v× + (x ↦ x ×* h)` with `h = I v`: the derivative of
+/// `I a + v ×* I v` through the velocity, beside `I δa`.
+fn velocity_variation(inertia: &Matrix6<f64>, v: &Vector6<f64>, h: &Vector6<f64>) -> Matrix6<f64> {
+    let ((vl, va), (hl, ha)) = (split(v), split(h));
+    let (wx, vx) = (skew(&va), skew(&vl));
+    let mut crm = Matrix6::zeros();
+    crm.fixed_view_mut::<3, 3>(0, 0).copy_from(&wx);
+    crm.fixed_view_mut::<3, 3>(0, 3).copy_from(&vx);
+    crm.fixed_view_mut::<3, 3>(3, 3).copy_from(&wx);
+    // v×* = −(v×)ᵀ and I = Iᵀ, so v×* I − I v× = −(crmᵀ I + I crm) = −(Y + Yᵀ), Y = I crm
+    let y = inertia * crm;
+    let mut b = -(y + y.transpose());
+    let (hlx, hax): (Matrix3<f64>, Matrix3<f64>) = (skew(&hl), skew(&ha));
+    // x ×* h = [x_ω × h_l; x_l × h_l + x_ω × h_ω] = [−h_l× x_ω; −h_l× x_l − h_ω× x_ω]
+    let mut top_right = b.fixed_view_mut::<3, 3>(0, 3);
+    top_right -= hlx;
+    let mut bottom_left = b.fixed_view_mut::<3, 3>(3, 0);
+    bottom_left -= hlx;
+    let mut bottom_right = b.fixed_view_mut::<3, 3>(3, 3);
+    bottom_right -= hax;
+    b
+}
