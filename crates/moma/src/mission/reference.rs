@@ -110,8 +110,11 @@ pub(crate) struct TimingStart {
 /// (`planning::curvature::smooth_diff_drive`), then the near time-optimal time
 /// parameterisation under the platform limits and the tip-over accelerations
 /// (`planning::trajectory::time_parameterize_curve`), continuing from the current speed.
-/// A path that must begin with a turn in place cannot start moving: it is then timed
-/// from rest (the robot brakes onto it; the caller's reference starts with `v = 0`).
+/// A path that must begin with a turn in place cannot start moving, and a path that
+/// allows less than the current speed at its start cannot continue from it within the
+/// limits: both are then timed from rest (the robot brakes onto it; the caller's
+/// reference starts with `v = 0`), so every sample keeps v, ω, a, α and the tip-over
+/// limits.
 /// When no smooth path ends at the goal pose with `kappa_max`, tighter bounds (2x, 4x)
 /// are tried, then the heading the cell path arrives with (see [`Reference`]).
 /// `start`, `goal` and `cspace` are those of the axle midpoint; `d` places the base frame
@@ -160,7 +163,14 @@ pub(crate) fn build_reference(
     } else {
         start.v.max(0.0)
     };
-    let timed = time_parameterize_curve(&path, limits, Some(tip), v0, 0.0)?;
+    let mut timed = time_parameterize_curve(&path, limits, Some(tip), v0, 0.0)?;
+    if timed.overspeed_until().is_some() {
+        // Faster than the new path allows at its start (its curvature asks for more than
+        // ω_max, or the tip-over limits for less speed): continuing from that speed would
+        // break a limit while braking, so the reference is timed from rest, as after a
+        // turn in place, and every sample keeps every limit.
+        timed = time_parameterize_curve(&path, limits, Some(tip), 0.0, 0.0)?;
+    }
     let samples = timed
         .samples(dt)?
         .iter()

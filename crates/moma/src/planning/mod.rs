@@ -33,6 +33,13 @@ pub use rosmap::{MapMode, RosMapMeta, load_image_map, load_ros_map};
 use crate::{Error, Result};
 use std::path::Path;
 
+/// Most samples a timed trajectory or a sampled smooth path holds
+/// ([`trajectory::time_parameterize`], [`trajectory::TimedPath::samples`],
+/// [`curvature::SmoothPath`]; 48 bytes each: 480 MB). The count follows from the path
+/// length, the limits and `dt`, all user input, so it is checked before anything is
+/// allocated.
+pub const MAX_TRAJECTORY_SAMPLES: usize = 10_000_000;
+
 /// A loaded map with its ROS parameters (`None` for Moving AI maps).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoadedMap {
