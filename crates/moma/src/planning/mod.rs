@@ -15,6 +15,7 @@ pub mod edt;
 pub mod grid;
 pub mod grid3;
 pub mod movingai;
+pub mod pipeline;
 pub mod potential;
 pub mod render;
 pub mod rosmap;
