@@ -1,7 +1,7 @@
 //! The mission's timed reference keeps the platform limits on every sample of every plan,
 //! re-plans included: a re-plan made while driving at speed onto a path that turns
-//! sooner than that speed allows is timed from rest (the robot brakes onto it) rather
-//! than from the current speed, which would break ω_max while braking (it reached
+//! sooner than that speed allows starts at the fastest speed it admits (the robot brakes
+//! onto it) rather than at the current speed, which would break ω_max while braking (it reached
 //! 1.218 rad/s with ω_max = 1 on the shipped mission before).
 
 use std::path::Path;
