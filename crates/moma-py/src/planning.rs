@@ -1,9 +1,8 @@
 //! Maps and grid planning: `moma.load_map`, `moma.Map`, `moma.plan`.
 
 use crate::err;
-use moma::planning::costmap;
-use moma::planning::smooth::smooth;
-use moma::planning::{MapKind, OccupancyGrid, SearchGrid, astar, load_map as load};
+use moma::planning::pipeline::{self, PlanRequest, PlanStatus, RobotFootprint, Search};
+use moma::planning::{MapKind, OccupancyGrid, load_map as load};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -19,38 +18,6 @@ pub struct PyMap {
 impl PyMap {
     fn world(&self) -> bool {
         self.grid.kind == MapKind::Ros
-    }
-
-    /// `(x, y) m (cell (i, j))` on a ROS map, `cell (i, j)` on a Moving AI map.
-    fn describe(&self, c: (usize, usize)) -> String {
-        if self.world() {
-            let [x, y] = self.grid.cell_to_world(c.0 as f64, c.1 as f64);
-            format!("({x:.3}, {y:.3}) m (cell ({}, {}))", c.0, c.1)
-        } else {
-            format!("cell ({}, {})", c.0, c.1)
-        }
-    }
-
-    /// The cell of a point in the map's frame.
-    fn cell_of(&self, what: &str, p: [f64; 2]) -> PyResult<(usize, usize)> {
-        let g = &self.grid;
-        let [x, y] = p;
-        if self.world() {
-            return g.world_to_cell(what, x, y).map_err(err);
-        }
-        if x < 0.0
-            || y < 0.0
-            || x.fract() != 0.0
-            || y.fract() != 0.0
-            || x >= g.width as f64
-            || y >= g.height as f64
-        {
-            return Err(err(format!(
-                "{what} ({x}, {y}) must be a cell of the {} x {} map (integers from 0)",
-                g.width, g.height
-            )));
-        }
-        Ok((x as usize, y as usize))
     }
 }
 
@@ -118,8 +85,9 @@ fn load_map(py: Python<'_>, path: PathBuf, resolution: Option<f64>) -> PyResult<
 }
 
 /// Plans a path from `start` to `goal` (`[x, y]`: world metres on ROS maps, cells on
-/// Moving AI maps) for a disk robot of `radius` (same units): A* (octile, no corner
-/// cutting) on the map's obstacles dilated by the disk, then shortcut smoothing
+/// Moving AI maps) for a disk robot of `radius` (same units) through the library's
+/// planning pipeline, as `moma plan`: A* (octile, no corner cutting) on the map's
+/// obstacles dilated by the disk, then shortcut smoothing
 /// (`smooth=False` returns every cell of the A* path). Returns the waypoints as an
 /// (n, 2) array in the map's frame (cell centres), or None when the goal cannot be
 /// reached. Unknown cells are obstacles unless `unknown="free"`. The GIL is released.
@@ -146,70 +114,33 @@ fn plan<'py>(
             )));
         }
     };
-    if !(radius.is_finite() && radius >= 0.0) {
-        return Err(err(format!(
-            "radius must be a finite non-negative number, got {radius}"
-        )));
-    }
-    let mf = &*grid;
-    let (w, h) = (mf.grid.width, mf.grid.height);
-    let s = mf.cell_of("start", start)?;
-    let g = mf.cell_of("goal", goal)?;
-    let obst = mf.grid.obstacle_mask(100, unknown_is_obstacle);
-    for (what, c) in [("start", s), ("goal", g)] {
-        if obst[c.1 * w + c.0] {
-            let kind = if mf.grid.cells[c.1 * w + c.0] < 0 {
-                "an unknown cell (use unknown=\"free\" to allow)"
-            } else {
-                "an obstacle"
-            };
-            return Err(err(format!("{what} at {} lies in {kind}", mf.describe(c))));
-        }
-    }
-    let radius_cells = if mf.world() {
-        radius / mf.grid.resolution
-    } else {
-        radius
+    let request = PlanRequest {
+        start,
+        start_yaw: None,
+        goal,
+        unknown_is_obstacle,
+        footprint: RobotFootprint::Disk(radius),
+        search: Search::Astar,
+        turn_cost: 1.0,
+        smooth,
+        timing: None,
     };
-    let units = if mf.world() { "m" } else { "cells" };
-    let found = py.detach(|| -> PyResult<Option<Vec<[f64; 2]>>> {
-        let cspace = costmap::inflate(&obst, w, h, radius_cells).map_err(err)?;
-        let sg = SearchGrid::from_obstacles(&cspace, w, h).map_err(err)?;
-        for (what, c) in [("start", s), ("goal", g)] {
-            if !sg.is_free(c.0 as i64, c.1 as i64) {
-                return Err(err(format!(
-                    "{what} at {} is closer than the robot radius {radius} {units} to an obstacle (inside the configuration-space obstacle)",
-                    mf.describe(c)
-                )));
-            }
-        }
-        let Some(path) = astar(&sg, s, g).map_err(err)? else {
-            return Ok(None);
-        };
-        let cells = if smooth {
-            smooth_cells(&sg, &path.cells)
-        } else {
-            path.cells
-        };
-        Ok(Some(
-            cells
-                .iter()
-                .map(|c| mf.grid.cell_to_world(c.0 as f64, c.1 as f64))
-                .collect(),
-        ))
-    })?;
-    match found {
-        None => Ok(None),
-        Some(pts) => {
-            let n = pts.len();
-            let flat: Vec<f64> = pts.into_iter().flatten().collect();
-            Ok(Some(PyArray1::from_vec(py, flat).reshape([n, 2])?))
-        }
+    let grid = &grid.grid;
+    let found = py.detach(|| pipeline::plan(grid, &request)).map_err(err)?;
+    if found.status == PlanStatus::Unreachable {
+        return Ok(None);
     }
-}
-
-fn smooth_cells(sg: &SearchGrid, cells: &[(usize, usize)]) -> Vec<(usize, usize)> {
-    smooth(sg, cells)
+    let cells = if smooth {
+        &found.smoothed
+    } else {
+        &found.cells
+    };
+    let n = cells.len();
+    let flat: Vec<f64> = cells
+        .iter()
+        .flat_map(|c| grid.cell_to_world(c.0 as f64, c.1 as f64))
+        .collect();
+    Ok(Some(PyArray1::from_vec(py, flat).reshape([n, 2])?))
 }
 
 /// Registers the class and functions.

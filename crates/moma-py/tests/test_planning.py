@@ -59,7 +59,7 @@ def test_plan_unreachable_is_none(tmp_path):
 
 def test_plan_errors(tmp_path):
     grid = moma.load_map(write_split_map(tmp_path / "split.map"))
-    with pytest.raises(moma.MomaError, match=r"^goal at cell \(4, 1\) lies in an obstacle$"):
+    with pytest.raises(moma.MomaError, match=r"^planning: goal at cell \(4, 1\) lies in an obstacle$"):
         moma.plan(grid, [0, 1], [4, 1])
     with pytest.raises(moma.MomaError, match=r"must be a cell of the 9 x 3 map"):
         moma.plan(grid, [0.5, 1], [3, 1])

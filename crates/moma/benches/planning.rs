@@ -23,6 +23,9 @@
 //!   transform, the smoothing and the timing of the new path (checked to give the
 //!   mission's path) are timed separately ([`MissionReplan`]).
 //!
+//! * `moma plan`'s pipeline ([`planning::pipeline::plan`]) against the primitives it
+//!   calls composed by hand (`MOMA_BENCH_PIPELINE_ONLY=1` runs this group alone).
+//!
 //! Run: `cargo bench -p moma --bench planning` (add `RUSTFLAGS="-C target-cpu=native"`
 //! for a native build).
 
@@ -1046,7 +1049,108 @@ fn bench_mission(cr: &mut Criterion, c: &MissionReplan) {
     grp.finish();
 }
 
+/// `moma plan`'s work on the README's example (turtlebot3 map, disk of 0.1 m, A*, shortcut
+/// smoothing, stop-and-turn timing) and on a polygon (the same ends, an 0.24 m x 0.16 m
+/// rectangle over 8 headings): [`planning::pipeline::plan`] against the primitives it
+/// calls composed by hand, as `moma plan` composed them before the pipeline existed (the
+/// map loaded once, outside the timing).
+fn bench_pipeline(c: &mut Criterion) {
+    use planning::pipeline::{PlanRequest, RobotFootprint, Search, Timing, plan};
+    use planning::smooth::smooth;
+    use planning::trajectory::time_parameterize;
+    let grid = load_map(&data(PIPELINE_MAP), None).unwrap().grid;
+    let limits = DiffDriveLimits {
+        v_max: 0.5,
+        omega_max: 1.0,
+        a_max: 0.5,
+        alpha_max: 2.0,
+    };
+    let polygon = costmap::Footprint::parse("-0.12,-0.08;0.12,-0.08;0.12,0.08;-0.12,0.08").unwrap();
+    let request = |footprint| PlanRequest {
+        start: [-2.0, -0.5],
+        start_yaw: None,
+        goal: [1.5, 0.5],
+        unknown_is_obstacle: true,
+        footprint,
+        search: Search::Astar,
+        turn_cost: 1.0,
+        smooth: true,
+        timing: Some(Timing { limits, dt: 0.1 }),
+    };
+    let disk = request(RobotFootprint::Disk(0.1));
+    let poly = request(RobotFootprint::Polygon(polygon.clone()));
+    // the composition of `moma plan` before the pipeline (disk: inflate, A*, smooth, time)
+    let by_hand_disk = || {
+        let (w, h) = (grid.width, grid.height);
+        let obst = grid.obstacle_mask(100, true);
+        SearchGrid::from_obstacles(&obst, w, h).unwrap();
+        let s = grid.world_to_cell("start", -2.0, -0.5).unwrap();
+        let g = grid.world_to_cell("goal", 1.5, 0.5).unwrap();
+        let cs = costmap::inflate(&obst, w, h, 0.1 / grid.resolution).unwrap();
+        let sg = SearchGrid::from_obstacles(&cs, w, h).unwrap();
+        let p = planning::astar(&sg, s, g).unwrap().unwrap();
+        let cells = smooth(&sg, &p.cells);
+        let wp: Vec<[f64; 2]> = cells
+            .iter()
+            .map(|c| grid.cell_to_world(c.0 as f64, c.1 as f64))
+            .collect();
+        time_parameterize(&wp, None, &limits, 0.1).unwrap()
+    };
+    let by_hand_polygon = || {
+        let (w, h) = (grid.width, grid.height);
+        let obst = grid.obstacle_mask(100, true);
+        SearchGrid::from_obstacles(&obst, w, h).unwrap();
+        let s = grid.world_to_cell("start", -2.0, -0.5).unwrap();
+        let g = grid.world_to_cell("goal", 1.5, 0.5).unwrap();
+        let cs = costmap::inflate(&obst, w, h, 0.0).unwrap();
+        SearchGrid::from_obstacles(&cs, w, h).unwrap();
+        let r = grid.resolution;
+        let fp = costmap::Footprint::new(
+            polygon
+                .vertices
+                .iter()
+                .map(|v| [v[0] / r, v[1] / r])
+                .collect(),
+        )
+        .unwrap();
+        let fcs = costmap::footprint_cspace(&obst, w, h, 1.0, &fp, 8).unwrap();
+        let all_free = fcs.slices.iter().fold(vec![true; w * h], |acc, s| {
+            acc.iter().zip(s).map(|(a, b)| *a && *b).collect()
+        });
+        SearchGrid::from_obstacles(&all_free, w, h).unwrap();
+        let p = costmap::astar_footprint(&fcs, (s.0, s.1, 0), g, 1.0)
+            .unwrap()
+            .unwrap();
+        p.states.len()
+    };
+    // same products
+    let planned = plan(&grid, &disk).unwrap();
+    assert_eq!(planned.trajectory, by_hand_disk());
+    assert_eq!(plan(&grid, &poly).unwrap().cells.len(), by_hand_polygon());
+    let mut grp = c.benchmark_group("pipeline");
+    grp.bench_function("turtlebot3_disk/pipeline", |b| {
+        b.iter(|| black_box(plan(&grid, &disk).unwrap()))
+    });
+    grp.bench_function("turtlebot3_disk/by_hand", |b| {
+        b.iter(|| black_box(by_hand_disk()))
+    });
+    grp.bench_function("turtlebot3_polygon/pipeline", |b| {
+        b.iter(|| black_box(plan(&grid, &poly).unwrap()))
+    });
+    grp.bench_function("turtlebot3_polygon/by_hand", |b| {
+        b.iter(|| black_box(by_hand_polygon()))
+    });
+    grp.finish();
+}
+
+/// The README's `moma plan` map.
+const PIPELINE_MAP: &str = "rosmaps/turtlebot3/map.yaml";
+
 fn all(c: &mut Criterion) {
+    if std::env::var_os("MOMA_BENCH_PIPELINE_ONLY").is_some() {
+        bench_pipeline(c);
+        return;
+    }
     let mission = mission_replan_case();
     mission_table(&mission);
     let disk = disk_cases();
@@ -1072,6 +1176,7 @@ fn all(c: &mut Criterion) {
     bench_dstar(c, &replan_sets);
     bench_mission(c, &mission);
     bench_disk(c, &disk);
+    bench_pipeline(c);
 }
 
 criterion_group!(benches, all);

@@ -349,9 +349,13 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 fn source_files() -> Vec<(PathBuf, String)> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    files_under(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"))
+}
+
+/// Every `.rs` file under `src`, with its path relative to `src`.
+fn files_under(src: &Path) -> Vec<(PathBuf, String)> {
     let mut paths = Vec::new();
-    rust_files(&src, &mut paths);
+    rust_files(src, &mut paths);
     assert!(
         paths.len() > 20,
         "expected the library's sources under {}",
@@ -362,9 +366,154 @@ fn source_files() -> Vec<(PathBuf, String)> {
         .map(|p| {
             let text =
                 std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-            (p.strip_prefix(&src).expect("under src").to_path_buf(), text)
+            (p.strip_prefix(src).expect("under src").to_path_buf(), text)
         })
         .collect()
+}
+
+/// The identifiers that start the paths of a `use` tree at `j` (a name, or a `{…}` group
+/// whose items are read recursively, e.g. `{a::X, b}` gives `a` and `b`).
+fn first_segments(c: &[char], j: usize) -> Vec<String> {
+    let is_ident = |ch: char| ch.is_alphanumeric() || ch == '_';
+    let mut j = j;
+    while j < c.len() && c[j].is_whitespace() {
+        j += 1;
+    }
+    if c.get(j) == Some(&'{') {
+        let mut out = Vec::new();
+        let (mut depth, mut item_start) = (0usize, j + 1);
+        for k in j..c.len() {
+            match c[k] {
+                '{' => depth += 1,
+                '}' | ',' if depth == 1 => {
+                    out.extend(first_segments(c, item_start).into_iter().take(1));
+                    item_start = k + 1;
+                    if c[k] == '}' {
+                        break;
+                    }
+                }
+                '}' => depth -= 1,
+                _ => {}
+            }
+        }
+        return out;
+    }
+    let mut k = j;
+    while k < c.len() && is_ident(c[k]) {
+        k += 1;
+    }
+    if k > j {
+        vec![c[j..k].iter().collect()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// The files of its own module that a file uses: `super::NAME` and `crate::MODULE::NAME`
+/// (also inside `{…}` groups), where `NAME.rs` is a file of the module's folder. A
+/// module's `mod.rs` is left out on both ends: it declares the files and re-exports their
+/// items, the module's face rather than a concept of its own, so what the files share
+/// lives there.
+fn sibling_uses(rel: &Path, text: &str, siblings: &BTreeSet<String>) -> BTreeSet<String> {
+    let Some(me) = module_of(rel) else {
+        return BTreeSet::new();
+    };
+    let own = rel.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+    let code = blank_non_code(text);
+    let c: Vec<char> = code.chars().collect();
+    let is_ident = |ch: char| ch.is_alphanumeric() || ch == '_';
+    let mut used = BTreeSet::new();
+    // `(prefix, starts of the names after it)` for every `super::` and `crate::me::`
+    let mut i = 0;
+    while i < c.len() {
+        if i > 0 && (is_ident(c[i - 1]) || c[i - 1] == ':') || !is_ident(c[i]) {
+            i += 1;
+            continue;
+        }
+        let word_end = (i..c.len()).find(|&k| !is_ident(c[k])).unwrap_or(c.len());
+        let word: String = c[i..word_end].iter().collect();
+        let after =
+            |k: usize| (c.get(k) == Some(&':') && c.get(k + 1) == Some(&':')).then_some(k + 2);
+        let names = match (word.as_str(), after(word_end)) {
+            ("super", Some(j)) => first_segments(&c, j),
+            ("crate", Some(j)) => first_segments(&c, j)
+                .into_iter()
+                .filter(|m| *m == me)
+                .flat_map(|_| {
+                    let m_end = j + me.len();
+                    after(m_end).map_or_else(Vec::new, |k| first_segments(&c, k))
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
+        used.extend(
+            names
+                .into_iter()
+                .filter(|n| n != own && siblings.contains(n)),
+        );
+        i = word_end;
+    }
+    used
+}
+
+/// Every set of files of one module that import each other in a cycle (the strongly
+/// connected components of the files' use graph with more than one file), each as the
+/// sorted list of its files, `mod.rs` files left out (see [`sibling_uses`]).
+fn file_cycles(files: &[(PathBuf, String)]) -> Vec<Vec<String>> {
+    let concept = |p: &Path| {
+        module_of(p).is_some()
+            && p.file_name().is_some_and(|f| f != "mod.rs")
+            && p.components().count() == 2
+    };
+    let mut by_dir: BTreeMap<PathBuf, BTreeSet<String>> = BTreeMap::new();
+    for (rel, _) in files.iter().filter(|(p, _)| concept(p)) {
+        let stem = rel.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+        by_dir
+            .entry(rel.parent().unwrap_or(Path::new("")).to_path_buf())
+            .or_default()
+            .insert(stem.to_string());
+    }
+    let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (rel, text) in files.iter().filter(|(p, _)| concept(p)) {
+        let dir = rel.parent().unwrap_or(Path::new("")).to_path_buf();
+        let name = |stem: &str| dir.join(format!("{stem}.rs")).display().to_string();
+        graph.insert(
+            rel.display().to_string(),
+            sibling_uses(rel, text, &by_dir[&dir])
+                .iter()
+                .map(|s| name(s))
+                .collect(),
+        );
+    }
+    // files that reach each other lie on one cycle
+    let reach = |from: &String| {
+        let mut seen = BTreeSet::new();
+        let mut stack = vec![from.clone()];
+        while let Some(f) = stack.pop() {
+            for g in graph.get(&f).into_iter().flatten() {
+                if seen.insert(g.clone()) {
+                    stack.push(g.clone());
+                }
+            }
+        }
+        seen
+    };
+    let reaches: BTreeMap<&String, BTreeSet<String>> =
+        graph.keys().map(|f| (f, reach(f))).collect();
+    let mut cycles: Vec<Vec<String>> = Vec::new();
+    for (f, r) in &reaches {
+        if !r.contains(*f) || cycles.iter().any(|c| c.contains(f)) {
+            continue;
+        }
+        let mut cycle: Vec<String> = r
+            .iter()
+            .filter(|g| reaches.get(g).is_some_and(|rg| rg.contains(*f)))
+            .cloned()
+            .collect();
+        cycle.sort();
+        cycles.push(cycle);
+    }
+    cycles
 }
 
 /// The rows of ARCHITECTURE.md's module table: module → listed dependencies.
@@ -405,6 +554,74 @@ fn modules_use_only_lower_layers() {
         errors.is_empty(),
         "layering violations:\n{}",
         errors.join("\n")
+    );
+}
+
+/// Cycles being removed on the `loop` branch (the simulator's chapter models, scenario,
+/// stepping and wheeled files; the CLI's `simulate` commands); delete this list when that branch is
+/// merged.
+const CYCLES_BEING_REMOVED: &[&[&str]] = &[
+    &[
+        "sim/chapter_models.rs",
+        "sim/scenario.rs",
+        "sim/stepping.rs",
+        "sim/wheeled.rs",
+    ],
+    &[
+        "cmd/simulate.rs",
+        "cmd/simulate_control.rs",
+        "cmd/simulate_space.rs",
+    ],
+];
+
+/// The library's files and the CLI's (`crates/moma-cli/src`), each crate on its own.
+#[test]
+fn no_file_imports_a_file_that_imports_it_back() {
+    let cli = Path::new(env!("CARGO_MANIFEST_DIR")).join("../moma-cli/src");
+    let cycles: Vec<Vec<String>> = file_cycles(&source_files())
+        .into_iter()
+        .chain(file_cycles(&files_under(&cli)))
+        .filter(|c| !CYCLES_BEING_REMOVED.iter().any(|k| *k == c.as_slice()))
+        .collect();
+    assert!(
+        cycles.is_empty(),
+        "files that import each other in a cycle (move what they share into one of them \
+         or into a lower file):\n{}",
+        cycles
+            .iter()
+            .map(|c| c.join(" <-> "))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
+#[test]
+fn file_cycle_checker_finds_cycles_through_super_crate_paths_and_groups() {
+    let files: Vec<(PathBuf, String)> = [
+        ("planning/a.rs", "use super::b::X;\n// super::c::Y\n"),
+        (
+            "planning/b.rs",
+            "fn f() { crate::planning::{c::Z, grid}::g(); }",
+        ),
+        ("planning/c.rs", "use super::{a, mod_item};"),
+        (
+            "planning/d.rs",
+            "use super::a::X; use crate::planning::mod_item;",
+        ),
+        ("planning/mod.rs", "pub mod a; pub use a::X;"),
+        ("sim/e.rs", "use crate::sim::f;"),
+        ("sim/f.rs", "use crate::planning::d;"),
+    ]
+    .iter()
+    .map(|(p, t)| (PathBuf::from(p), t.to_string()))
+    .collect();
+    assert_eq!(
+        file_cycles(&files),
+        vec![vec![
+            "planning/a.rs".to_string(),
+            "planning/b.rs".to_string(),
+            "planning/c.rs".to_string()
+        ]]
     );
 }
 

@@ -372,6 +372,41 @@ fn replan_continues_from_the_current_speed() {
 }
 
 #[test]
+fn a_speed_limit_above_any_reachable_speed_times_like_no_limit() {
+    // On a 5 m line from rest under a_max = 0.5 no profile exceeds √(2 a_max L) ≈ 2.24 m/s,
+    // so v_max = 3, 1e100 and 1e300 (whose square overflows) give the same profile: the
+    // rest-to-rest bang-bang one, 2 √(L / a_max).
+    let p = SmoothPath::from_curvature([0.0, 0.0, 0.0], &[(5.0, 0.0, 0.0)], 0.02).unwrap();
+    let reference = {
+        let mut lim = limits();
+        lim.v_max = 3.0;
+        time_parameterize_curve(&p, &lim, None, 0.0, 0.0).unwrap()
+    };
+    let bang_bang = 2.0 * (5.0 / limits().a_max).sqrt();
+    assert!(
+        (reference.duration() - bang_bang).abs() < 1e-2 * bang_bang,
+        "{} vs {bang_bang}",
+        reference.duration()
+    );
+    for v_max in [1e100, 1e300, f64::MAX] {
+        let mut lim = limits();
+        lim.v_max = v_max;
+        let tp = time_parameterize_curve(&p, &lim, None, 0.0, 0.0)
+            .unwrap_or_else(|e| panic!("v_max = {v_max}: {e}"));
+        check_timing(&tp, &lim, None);
+        assert!(
+            (tp.duration() - reference.duration()).abs() < 1e-9,
+            "v_max = {v_max}: {} s vs {} s",
+            tp.duration(),
+            reference.duration()
+        );
+    }
+    // a start speed whose square overflows names v_start
+    let e = time_parameterize_curve(&p, &limits(), None, 1e200, 0.0).unwrap_err();
+    assert!(e.to_string().contains("v_start"), "{e}");
+}
+
+#[test]
 fn errors_are_reported() {
     let m = map("nav2/tb3_sandbox.yaml");
     let cs = cspace(&m, 0.12);

@@ -5,13 +5,13 @@
 //! returns the same document with every case's `outputs` and `trajectory` filled in (all
 //! other fields preserved). Nothing is returned unless every case succeeds.
 
-use super::fixed_vector;
 use super::m1_unicycle::{Unicycle, UnicycleParams};
 use super::m2_platform_arm::{PlatformArm, PlatformArmParams};
 use super::m3_diffdrive::{DiffDriveKinematics, DiffDriveKinematicsParams};
 use super::m4_cart_two_link::{CartTwoLink, CartTwoLinkParams};
 use super::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams, TaskController};
 use super::m6_space_manipulator::{SpaceManipulator, SpaceManipulatorParams};
+use super::{MAX_CASE_TIME, check_horizon, fixed_vector};
 use crate::error::{Error, Result};
 use nalgebra::{SMatrix, SVector};
 use serde::Serialize;
@@ -84,25 +84,6 @@ fn times(case: &Value) -> Result<Option<Vec<f64>>> {
             check_horizon("trajectory.t", &t)?;
             Ok(Some(t))
         }
-    }
-}
-
-/// Longest simulated time a case may reach (s): the last of `trajectory.t`, of an m6
-/// `trajectories.NAME.t`, and m6's `joint_loop.period`. The reference cases span about a
-/// second; an unbounded horizon let one number (1e9 s) keep the integrator busy without
-/// end (found by fuzzing, first on an m2 case, then on an m6 run).
-pub const MAX_CASE_TIME: f64 = 1000.0;
-
-/// Refuses a time list whose last entry is past [`MAX_CASE_TIME`], naming `field[i]`.
-pub(crate) fn check_horizon(field: &str, t: &[f64]) -> Result<()> {
-    match t.last() {
-        Some(&t_end) if t_end > MAX_CASE_TIME => Err(Error::invalid(
-            format!("{field}[{}]", t.len() - 1),
-            format!(
-                "{t_end} s is past the longest case horizon, {MAX_CASE_TIME} s (longer runs belong in `moma simulate`)"
-            ),
-        )),
-        _ => Ok(()),
     }
 }
 

@@ -134,7 +134,7 @@ fn times(case: &Value) -> Result<Vec<f64>> {
         }
         out.push(x);
     }
-    super::cases::check_horizon("trajectory.t", &out)?;
+    super::check_horizon("trajectory.t", &out)?;
     Ok(out)
 }
 

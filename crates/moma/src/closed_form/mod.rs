@@ -220,6 +220,25 @@ pub(crate) fn finite(name: &str, x: f64) -> Result<()> {
     }
 }
 
+/// Longest simulated time a case may reach (s): the last of `trajectory.t`, of an m6
+/// `trajectories.NAME.t`, and m6's `joint_loop.period`. The reference cases span about a
+/// second; an unbounded horizon let one number (1e9 s) keep the integrator busy without
+/// end (found by fuzzing, first on an m2 case, then on an m6 run).
+pub const MAX_CASE_TIME: f64 = 1000.0;
+
+/// Refuses a time list whose last entry is past [`MAX_CASE_TIME`], naming `field[i]`.
+pub(crate) fn check_horizon(field: &str, t: &[f64]) -> Result<()> {
+    match t.last() {
+        Some(&t_end) if t_end > MAX_CASE_TIME => Err(Error::invalid(
+            format!("{field}[{}]", t.len() - 1),
+            format!(
+                "{t_end} s is past the longest case horizon, {MAX_CASE_TIME} s (longer runs belong in `moma simulate`)"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Converts a slice of user input into a fixed-size vector, checking length and finiteness.
 pub fn fixed_vector<const K: usize>(field: &str, x: &[f64]) -> Result<SVector<f64, K>> {
     crate::error::ensure_len(field, K, x.len())?;

@@ -331,7 +331,17 @@ mod tests {
         let path = [[0.0, 0.0], [0.0, 2.0]];
         let mut u = [0.0; 2];
         pp.actuation(0.0, &[0.0, 0.0, 0.0], &path, &mut u).unwrap();
-        assert!(u[0] < 0.5 && u[1] > 0.0, "{u:?}");
+        // By hand, from nav2's regulated pure pursuit: lookahead L = 0.5 m/s · 1.5 s =
+        // 0.75 m, so the carrot is (0, 0.75) straight to the left; curvature 2 y / L² =
+        // 2 / 0.75, radius 0.375 m < r_min = 0.9 m, so the speed is scaled to
+        // 0.5 · 0.375 / 0.9 = 0.2083 m/s; ω = v κ.
+        let (v, kappa) = (0.5 * 0.375 / 0.9, 2.0 / 0.75);
+        assert!((u[0] - v).abs() < 1e-9, "{u:?} vs v = {v}");
+        assert!(
+            (u[1] - v * kappa).abs() < 1e-9,
+            "{u:?} vs ω = {}",
+            v * kappa
+        );
         assert!(
             PurePursuit::new(PurePursuitParams {
                 max_lookahead: 0.1,

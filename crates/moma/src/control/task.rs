@@ -177,4 +177,44 @@ mod tests {
         );
         assert!((full - naive).norm() > 1e-2);
     }
+
+    /// The feed-forward of the other block's desired acceleration is exact when that
+    /// block tracks perfectly: at zero error it equals full computed torque; with an error
+    /// in the platform block only, the platform rows (fed the arm's exact commanded
+    /// acceleration, which is its desired one) still equal full computed torque and the
+    /// arm rows (fed the platform's desired instead of its commanded acceleration) do not.
+    #[test]
+    fn desired_acceleration_feed_forward_is_exact_only_for_a_perfectly_tracking_block() {
+        let lambda = Matrix3::new(2.0, 0.3, 0.2, 0.3, 1.5, 0.1, 0.2, 0.1, 1.0);
+        let cx = Matrix3::new(0.1, -0.2, 0.3, 0.4, 0.0, -0.1, 0.2, 0.5, 0.05);
+        let p = Vector3::new(0.0, 0.1, 9.0);
+        let xdot = Vector3::new(0.2, -0.1, 0.3);
+        let xdd = Vector3::new(0.5, 0.0, -1.0);
+        let kp = Matrix3::from_diagonal(&Vector3::new(25.0, 16.0, 9.0));
+        let kv = Matrix3::from_diagonal(&Vector3::new(10.0, 8.0, 6.0));
+        let law = |e: &Vector3<f64>, ed: &Vector3<f64>| {
+            let full = computed_torque(&lambda, &(cx * xdot), &p, e, ed, &xdd, &kp, &kv);
+            let ff = decoupled::<3, 1>(
+                &lambda,
+                &cx,
+                &p,
+                &xdot,
+                e,
+                ed,
+                &xdd,
+                &kp,
+                &kv,
+                Coupling::DesiredAcceleration,
+            );
+            (full, ff)
+        };
+        let (full, ff) = law(&Vector3::zeros(), &Vector3::zeros());
+        assert!((full - ff).norm() < 1e-13, "{full} vs {ff}");
+        // platform (row 0) error only
+        let (full, ff) = law(&Vector3::new(0.1, 0.0, 0.0), &Vector3::new(-0.2, 0.0, 0.0));
+        assert!((full[0] - ff[0]).abs() < 1e-13, "{full} vs {ff}");
+        for arm_row in 1..3 {
+            assert!((full[arm_row] - ff[arm_row]).abs() > 1e-2, "{full} vs {ff}");
+        }
+    }
 }

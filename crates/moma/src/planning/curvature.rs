@@ -46,10 +46,10 @@
 //! Curvature is continuous, so the time parameterisation
 //! ([`super::trajectory::time_parameterize_curve`]) never has to stop at a corner.
 
+use super::MAX_TRAJECTORY_SAMPLES;
 use super::astar::SearchGrid;
 use super::edt::distance_transform;
 use super::grid::OccupancyGrid;
-use super::trajectory::MAX_TRAJECTORY_SAMPLES;
 use crate::{Error, Result};
 use std::f64::consts::PI;
 

@@ -21,6 +21,7 @@ pub mod grid;
 pub mod grid3;
 pub mod joint_space;
 pub mod movingai;
+pub mod pipeline;
 pub mod potential;
 pub mod render;
 pub mod rosmap;
@@ -47,6 +48,13 @@ pub use time_optimal::{JointLimits, JointTrajectory, TimingOptions, time_optimal
 
 use crate::{Error, Result};
 use std::path::Path;
+
+/// Most samples a timed trajectory or a sampled smooth path holds
+/// ([`trajectory::time_parameterize`], [`trajectory::TimedPath::samples`],
+/// [`curvature::SmoothPath`]; 48 bytes each: 480 MB). The count follows from the path
+/// length, the limits and `dt`, all user input, so it is checked before anything is
+/// allocated.
+pub const MAX_TRAJECTORY_SAMPLES: usize = 10_000_000;
 
 /// A loaded map with its ROS parameters (`None` for Moving AI maps).
 #[derive(Debug, Clone, PartialEq)]

@@ -7,6 +7,7 @@
 //! `|v̇| ≤ a_max`, `|ω̇| ≤ α_max` and the non-holonomic constraint (the velocity always
 //! points along the heading), so a tracking controller can follow it.
 
+use super::MAX_TRAJECTORY_SAMPLES;
 use super::curvature::{PathSample, SmoothPath};
 use crate::{Error, Result};
 
@@ -134,11 +135,6 @@ fn wrap(a: f64) -> f64 {
     }
     a
 }
-
-/// Most samples [`time_parameterize`] returns (48 bytes each: 480 MB). The count follows
-/// from the path length, the limits and `dt`, all user input, so it is checked before
-/// anything is allocated.
-pub const MAX_TRAJECTORY_SAMPLES: usize = 10_000_000;
 
 /// Time-parameterises the polyline `waypoints` (world coordinates, metres) for a
 /// differential drive starting at rest with heading `initial_heading` (defaults to the
@@ -737,7 +733,8 @@ pub fn time_parameterize_curve(
             overspeed_until: None,
         });
     }
-    let cap = speed_caps(&kappa, limits, tip);
+    let u_max = squared_speed_bound(limits, v_start, s[n - 1] - s[0])?;
+    let cap = speed_caps(&kappa, u_max, limits, tip);
     let mut cons = Vec::with_capacity(20);
     let kmax = controllable_speeds(&s, &kappa, &cap, limits, tip, v_end, &mut cons);
     let limits_along = ProfileLimits {
@@ -812,17 +809,48 @@ fn profile_grid(smp: &[PathSample]) -> (Vec<f64>, Vec<f64>) {
     (s, kappa)
 }
 
-/// The static caps on u = v² at every grid point: `v_max`, `ω_max / |κ|` and, with `tip`,
-/// the lateral tip-over limit on κ v².
+/// The bound on u = v² along a path of `length` (m): `v_max²`, or the square of the
+/// fastest speed any profile reaches, `v_start² + 2 a_max · length`, when that is lower.
+/// The second bound changes no profile (no admissible one exceeds it); it keeps u finite
+/// when `v_max` is so large (above about 1.3e154 m/s) that its square overflows.
+///
+/// # Errors
+/// `v_start` whose square overflows; `v_max` and `a_max · length` both too large for a
+/// finite squared speed.
+fn squared_speed_bound(limits: &DiffDriveLimits, v_start: f64, length: f64) -> Result<f64> {
+    let u_start = v_start * v_start;
+    if !u_start.is_finite() {
+        return Err(Error::invalid(
+            "v_start",
+            format!("must be below 1e150 m/s (its square must be finite), got {v_start}"),
+        ));
+    }
+    let u_max = (limits.v_max * limits.v_max).min(u_start + 2.0 * limits.a_max * length);
+    if !u_max.is_finite() {
+        return Err(Error::invalid(
+            "v_max",
+            format!(
+                "{} m/s with a_max = {} m/s² on a {length} m path: the squared speed \
+                 overflows; v_max must be below 1e150 m/s",
+                limits.v_max, limits.a_max
+            ),
+        ));
+    }
+    Ok(u_max)
+}
+
+/// The static caps on u = v² at every grid point: `u_max` (the squared speed bound),
+/// `ω_max / |κ|` and, with `tip`, the lateral tip-over limit on κ v².
 fn speed_caps(
     kappa: &[f64],
+    u_max: f64,
     limits: &DiffDriveLimits,
     tip: Option<&TipOverAcceleration>,
 ) -> Vec<f64> {
     kappa
         .iter()
         .map(|&k| {
-            let mut c = limits.v_max * limits.v_max;
+            let mut c = u_max;
             if k != 0.0 {
                 c = c.min((limits.omega_max / k).powi(2));
                 if let Some(tp) = tip {

@@ -210,22 +210,50 @@ pub fn evaluate_measures(
 mod tests {
     use super::*;
 
-    /// Theory 1.8 item 7: the couple force `f_ni` at the CoM has the moment `n_i` about the
-    /// axis, `(−l_i) × f_ni = n_i`.
+    /// Theory 1.8 item 7: with the moment couple, the Force-Angle of an axis crosses zero
+    /// exactly where the ZMP crosses that edge, as the couple carries the wrench's moment
+    /// about the CoM into the effective force. A 10 kg body with its CoM at (0.1, 0, 0.8)
+    /// on the square support [−0.5, 0.5]², standing still, with a pitch moment τ about its
+    /// CoM: statics by hand put the ZMP at x = 0.1 + τ / (m g), on the edge x = 0.5 at
+    /// τ = 0.4 m g. Without the couple the angle ignores τ (atan(0.4 / 0.8) throughout).
     #[test]
-    fn moment_couple_reproduces_the_axis_moment() {
-        let c = Vector3::new(0.1, -0.05, 0.4);
-        let n_r = Vector3::new(3.0, -7.0, 2.0);
-        for (p, q) in [
-            (Vector3::new(0.5, 0.3, 0.0), Vector3::new(0.5, -0.3, 0.0)),
-            (Vector3::new(-0.2, -0.4, 0.0), Vector3::new(0.6, 0.1, 0.0)),
-        ] {
-            let a = (q - p).normalize();
-            let rel: Vector3<f64> = p - c;
-            let l: Vector3<f64> = rel - a * a.dot(&rel);
-            let n_i = a * a.dot(&n_r);
-            let f_ni = (l / l.norm()).cross(&n_i) / l.norm();
-            assert!(((-l).cross(&f_ni) - n_i).norm() < 1e-14);
+    fn force_angle_with_the_couple_vanishes_where_the_zmp_crosses_the_edge() {
+        let (m, g) = (10.0, 9.81);
+        let com = Vector3::new(0.1, 0.0, 0.8);
+        let square = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)]
+            .map(|(x, y)| nalgebra::Vector2::new(x, y));
+        let support = SupportPolygon::from_points(&square).unwrap();
+        let front = (0..support.len())
+            .find(|&i| {
+                let e = support.edge(i);
+                e.from.x == 0.5 && e.to.x == 0.5
+            })
+            .expect("the square has the edge x = 0.5");
+        let set = Inertia::point_mass(m, com);
+        let threshold = 0.4 * m * g;
+        let mut out = StabilityReport::default();
+        for f in [0.0, 0.5, 0.99, 1.0, 1.01, 1.5] {
+            let tau = f * threshold;
+            let w = GravitoInertialWrench {
+                mass: m,
+                com,
+                force: Vector3::new(0.0, 0.0, -m * g),
+                moment_about_com: Vector3::new(0.0, tau, 0.0),
+            };
+            evaluate_measures(&w, &support, &set, &mut out);
+            let zmp = out.zmp.expect("the body presses on the ground");
+            assert!((zmp.x - (0.1 + tau / (m * g))).abs() < 1e-12, "ZMP {zmp:?}");
+            let e = &out.edges[front];
+            let (theta, no_couple) = (e.force_angle.unwrap(), e.force_angle_no_couple.unwrap());
+            assert!((no_couple - 0.5f64.atan()).abs() < 1e-12, "{no_couple}");
+            let s = e.zmp_distance.unwrap();
+            if f == 1.0 {
+                assert!(theta.abs() < 1e-6 && s.abs() < 1e-12, "θ {theta}, s {s}");
+            } else {
+                // same side of the edge as the ZMP, and as the moment about the axis
+                assert_eq!(theta > 0.0, s > 0.0, "τ = {tau}: θ {theta}, s {s}");
+                assert_eq!(e.moment > 0.0, s > 0.0, "τ = {tau}: M {}", e.moment);
+            }
         }
     }
 

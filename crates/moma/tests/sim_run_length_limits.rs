@@ -1,4 +1,4 @@
-//! Review regressions: a simulation whose duration is absurd relative to its step or its
+//! A simulation whose duration is absurd relative to its step or its
 //! recording interval is refused up front (it used to abort on a multi-terabyte
 //! allocation, or to run for ever) instead of exhausting memory or time.
 

@@ -1,4 +1,4 @@
-//! Review regressions: degenerate or gigantic footprints are rejected with an error
+//! Degenerate or gigantic footprints are rejected with an error
 //! naming the footprint instead of being silently ignored or taking for ever.
 
 use moma::planning::costmap::{Footprint, footprint_cspace};

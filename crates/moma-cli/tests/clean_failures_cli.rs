@@ -1,4 +1,4 @@
-//! Review regressions: malformed or extreme inputs that used to abort, hang, succeed
+//! Failures are clean: malformed or extreme inputs that used to abort, hang, succeed
 //! silently or leave a partial output file behind.
 
 use std::path::PathBuf;

@@ -4,10 +4,11 @@
 
 use moma::Error;
 use moma::ik::placement::{MAX_SAMPLES, PlacementGrid};
+use moma::planning::MAX_TRAJECTORY_SAMPLES;
 use moma::planning::costmap::{
     Footprint, FootprintCSpace, MAX_FOOTPRINT_CSPACE_CELLS, astar_footprint, footprint_cspace,
 };
-use moma::planning::trajectory::{DiffDriveLimits, MAX_TRAJECTORY_SAMPLES, time_parameterize};
+use moma::planning::trajectory::{DiffDriveLimits, time_parameterize};
 use moma::planning::{MapKind, OccupancyGrid, SearchGrid};
 
 const LIMITS: DiffDriveLimits = DiffDriveLimits {
