@@ -145,9 +145,9 @@ fn obstacle_on_the_path_triggers_a_replan_and_the_goal_is_still_reached() {
 
 #[test]
 fn a_crate_too_close_to_avoid_is_a_collision_and_ends_the_mission() {
-    // appears 0.3 m ahead of the footprint of a robot at 0.75 m/s (at x = 2.56 m),
-    // near its line: braking onto the re-plan needs 0.56 m, so it cannot avoid it
-    let extra = "[[obstacles]]\nt = 1.5\ncenter = [3.6, 2.2]\nradius = 0.35";
+    // appears 1.5 m ahead of a robot at speed, right on its line: the re-plan cannot
+    // swing wide enough in time
+    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
     let r = mission(&mission_text(GOAL, extra));
     assert!(!r.reached);
     assert!(r.reason.as_deref().unwrap().contains("collision"));
