@@ -12,6 +12,11 @@
 //! * `spin`: μ = 0.3, opposite wheel torques ramped from 0 at 0.3 s to ±6 N·m at 3.3 s:
 //!   the wheels start to slip when the torque exceeds what friction carries. 3.3 s.
 //!
+//! Events, counted after the first 0.2 s of settling: `first_lift`, a contact's lowest
+//! point 1 mm above the ground; `first_unloaded`, its normal force zero; `first_slip`, a
+//! loaded wheel's contact point sliding at 0.2 m/s (four times v_ε); `first_saturated`,
+//! friction at μ N (slip at v_ε).
+//!
 //! Every arm joint follows `u = k_p (q_ref − q) − k_d q̇` with the scenario's gains; wheel
 //! torques are linear between the schedule's knots.
 //!
@@ -38,6 +43,10 @@ const KP: f64 = 200.0;
 const KD: f64 = 20.0;
 /// Lift-off and slip events are counted after the initial settling.
 const SETTLE: f64 = 0.2;
+/// Lift-off: a contact's lowest point this high (m) above the ground.
+const LIFT_HEIGHT: f64 = 1e-3;
+/// Slip onset: a wheel's contact point sliding this fast (m/s).
+const SLIP_SPEED: f64 = 0.2;
 const RECORD_EVERY: f64 = 0.01;
 
 const SCENARIOS: &[Scenario] = &[
@@ -131,6 +140,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut records = Vec::new();
         let mut first_lift = None;
         let mut first_slip = None;
+        let mut first_unloaded = None;
+        let mut first_saturated = None;
         let started = std::time::Instant::now();
         for k in 0..=nsteps {
             let t = st.t;
@@ -144,11 +155,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 // Reports of the step just taken.
                 if t > SETTLE {
                     for (c, r) in st.contacts.iter().enumerate() {
-                        if first_lift.is_none() && r.lifted {
-                            first_lift = Some((t, plant.contact_name(c).to_string()));
+                        let name = || Some((t, plant.contact_name(c).to_string()));
+                        if first_unloaded.is_none() && r.lifted {
+                            first_unloaded = name();
                         }
-                        if first_slip.is_none() && r.slipping {
-                            first_slip = Some((t, plant.contact_name(c).to_string()));
+                        if first_lift.is_none() && -r.depth >= LIFT_HEIGHT {
+                            first_lift = name();
+                        }
+                        if first_saturated.is_none() && r.slipping {
+                            first_saturated = name();
+                        }
+                        if first_slip.is_none() && c < 2 && !r.lifted && r.slip.norm() >= SLIP_SPEED
+                        {
+                            first_slip = name();
                         }
                     }
                 }
@@ -183,8 +202,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "wheel_knots": sc.wheel_knots,
             "params": plant.params,
             "contacts": (0..plant.ncontacts()).map(|c| plant.contact_name(c)).collect::<Vec<_>>(),
+            "lift_height": LIFT_HEIGHT,
+            "slip_speed": SLIP_SPEED,
             "first_lift": first_lift.as_ref().map(|(t, c)| json!({"t": t, "contact": c})),
             "first_slip": first_slip.as_ref().map(|(t, c)| json!({"t": t, "contact": c})),
+            "first_unloaded": first_unloaded.as_ref().map(|(t, c)| json!({"t": t, "contact": c})),
+            "first_saturated": first_saturated.as_ref().map(|(t, c)| json!({"t": t, "contact": c})),
             "wall_seconds": wall,
             "records": records,
         });
