@@ -21,8 +21,10 @@ mod geometry;
 mod law;
 mod params;
 mod plant;
+mod point_force;
 mod report;
 mod spec;
+mod start;
 mod step;
 
 pub use geometry::{disk_lowest_point, sphere_lowest_point};
