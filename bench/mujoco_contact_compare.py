@@ -16,7 +16,11 @@ qdot from MuJoCo's own state, every step), and prints the differences:
 With --reference FILE it also writes the MuJoCo figures the Rust test
 crates/moma/tests/contact_mujoco.rs checks against.
 
-Usage: python bench/mujoco_contact_compare.py DIR [--reference FILE]
+With --time it also times mj_step on bench/mujoco_contact.xml (the model of the
+comparison: semi-implicit Euler, 0.1 ms) in a C loop (mujoco.rollout), the robot rolling
+under wheel torques (0.25, 0.45) N·m: median of 7 repeats of 5000 steps.
+
+Usage: python bench/mujoco_contact_compare.py DIR [--reference FILE] [--time]
 """
 
 import argparse
@@ -139,10 +143,34 @@ def compare_roll(moma, mj):
     }
 
 
+def time_step(steps=5000, repeats=7):
+    import statistics
+    import time
+
+    from mujoco import rollout
+
+    m = mujoco.MjModel.from_xml_path(os.path.join(HERE, "mujoco_contact.xml"))
+    d = mujoco.MjData(m)
+    ctrl = np.tile(np.array([0.25, 0.45, 0.0, 0.0, 0.0]), (steps, 1))
+    times = []
+    for _ in range(repeats):
+        mujoco.mj_resetData(m, d)
+        d.qpos[2] = 0.08
+        d.qpos[3] = 1.0
+        state = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+        mujoco.mj_getState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        t0 = time.perf_counter()
+        rollout.rollout(m, d, state, ctrl)
+        times.append((time.perf_counter() - t0) / steps)
+    return {"model": "mujoco_contact.xml", "integrator": "Euler", "timestep": m.opt.timestep,
+            "median_us_per_step": statistics.median(times) * 1e6}
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("dir")
     ap.add_argument("--reference")
+    ap.add_argument("--time", action="store_true")
     a = ap.parse_args()
     out = {"mujoco_version": mujoco.__version__}
     ref = {"source": f"MuJoCo {mujoco.__version__} (PyPI), bench/mujoco_contact.xml, bench/mujoco_contact_compare.py"}
@@ -162,6 +190,8 @@ def main():
         if name == "spin":
             ref["spin_first_slip"] = mj["first_slip"]
         out[name] = res
+    if a.time:
+        out["mj_step"] = time_step()
     print(json.dumps(out, indent=2))
     if a.reference:
         with open(a.reference, "w") as f:
