@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
             let mut s = settled.clone();
             let t0 = std::time::Instant::now();
             for i in 0..iters {
-                if i % 10_000 == 0 {
+                if i.is_multiple_of(10_000) {
                     s.clone_from(&settled);
                 }
                 hold(&s, &mut u);

@@ -171,7 +171,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         }
                     }
                 }
-                if k % every == 0 {
+                if k.is_multiple_of(every) {
                     let p = st.base_position();
                     let (roll, pitch, _) = st.base_orientation().euler_angles();
                     records.push(json!({

@@ -185,7 +185,7 @@ fn with_high_friction_and_moderate_torques_the_contact_plant_follows_the_rolling
         k += 1;
         // After the first 0.2 s, in which the robot settles onto its contacts.
         any_slip |= s.t > 0.2 && s.contacts.iter().any(|r| r.slipping || r.lifted);
-        if k % every == 0 {
+        if k.is_multiple_of(every) {
             let mut row = vec![s.q[0], s.q[1], s.yaw()];
             row.extend_from_slice(&s.joint_positions()[2..]);
             contact_traj.push(row);
@@ -217,7 +217,7 @@ fn with_high_friction_and_moderate_torques_the_contact_plant_follows_the_rolling
         vr += vdot * dt;
         admissible_velocity_basis(&wm, &q, &mut basis);
         q += &basis * &vr * dt;
-        if (i + 1) % every == 0 {
+        if (i + 1).is_multiple_of(every) {
             reduced_traj.push(vec![q[0], q[1], q[2], q[5], q[6], q[7]]);
         }
     }
