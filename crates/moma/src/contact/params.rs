@@ -95,3 +95,94 @@ pub fn normal_step_bound(stiffness: f64, damping: f64, mass: f64) -> f64 {
 pub fn friction_step_bound(mu: f64, normal: f64, slip_velocity: f64, mass: f64) -> f64 {
     2.0 * mass * slip_velocity / (mu * normal)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs semi-implicit Euler on `m ẍ = −k x − c ẋ` from x = 1 for 20 000 steps and
+    /// returns |x| at the end (NaN once it has overflowed).
+    fn spring_damper(k: f64, c: f64, m: f64, dt: f64) -> f64 {
+        let (mut x, mut v) = (1.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            v += dt * (-k * x - c * v) / m;
+            x += dt * v;
+        }
+        x.abs()
+    }
+
+    #[test]
+    fn the_normal_bound_separates_decay_from_growth() {
+        for (k, c, m) in [
+            (1e5, 0.0, 1.0),
+            (1e5, 2e3, 1.0),
+            (1e5, 2e3, 10.0),
+            (1e6, 50.0, 3.0),
+        ] {
+            let b = normal_step_bound(k, c, m);
+            // Bounded below the bound (undamped it is neutrally stable, the amplitude of x
+            // up to 1/√(1 − (ω_n dt/2)²) ≈ 5 at 0.98 × the bound), unbounded above it (NaN
+            // once it has overflowed).
+            let below = spring_damper(k, c, m, 0.98 * b);
+            assert!(
+                below < 10.0,
+                "k {k} c {c} m {m}: 0.98 × bound gives {below}"
+            );
+            let above = spring_damper(k, c, m, 1.02 * b);
+            assert!(
+                above.is_nan() || above > 1e3,
+                "k {k} c {c} m {m}: 1.02 × bound gives {above}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_friction_bound_separates_decay_from_growth() {
+        let (mu, n, ve, m) = (1.0, 280.0, 0.05, 0.5);
+        let b = friction_step_bound(mu, n, ve, m);
+        let run = |dt: f64| {
+            let mut v = 0.01f64;
+            for _ in 0..20_000 {
+                v -= dt * mu * n * v / (ve * m);
+            }
+            v.abs()
+        };
+        assert!(run(0.98 * b) < 0.01);
+        let v = run(1.02 * b);
+        assert!(v.is_nan() || v > 1.0, "{v}");
+    }
+
+    #[test]
+    fn each_field_is_checked_by_name() {
+        let ok = ContactParams::default();
+        assert!(ok.validate().is_ok());
+        let cases: [(ContactParams, &str); 4] = [
+            (ContactParams { mu: 0.0, ..ok }, "contact.mu"),
+            (
+                ContactParams {
+                    damping: -1.0,
+                    ..ok
+                },
+                "contact.damping",
+            ),
+            (
+                ContactParams {
+                    stiffness: f64::INFINITY,
+                    ..ok
+                },
+                "contact.stiffness",
+            ),
+            (
+                ContactParams {
+                    slip_velocity: 0.0,
+                    ..ok
+                },
+                "contact.slip_velocity",
+            ),
+        ];
+        for (p, field) in cases {
+            let e = p.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+    }
+}
