@@ -6,7 +6,10 @@
 use moma::contact::{CasterSpec, ContactParams, ContactPlant, ContactState, WheelSpec};
 use moma::dynamics::center_of_mass;
 use moma::io::urdf::model_from_urdf_file;
-use moma::mobile::wheeled::{WheeledBase, WheeledData, WheeledModel, admissible_velocity_basis};
+use moma::mobile::wheeled::{
+    WheeledBase, WheeledData, WheeledModel, admissible_velocity_basis, lagrange_multipliers,
+    wheel_longitudinal_forces,
+};
 use moma::mobile::{Caster, DiffDrive, reduced_forward_dynamics};
 use moma::multibody::{Data, Model, RootJoint};
 use moma::stability::{GravitoInertialWrench, contact_normal_loads};
@@ -188,6 +191,17 @@ fn with_high_friction_and_moderate_torques_the_contact_plant_follows_the_rolling
         if k.is_multiple_of(every) {
             let mut row = vec![s.q[0], s.q[1], s.yaw()];
             row.extend_from_slice(&s.joint_positions()[2..]);
+            // The wheels' ground forces along the heading and across it (summed), applied
+            // over the step just taken.
+            let (sn, cs) = s.yaw().sin_cos();
+            for r in &s.contacts[..2] {
+                row.push(r.friction.x * cs + r.friction.y * sn);
+            }
+            let lat: f64 = s.contacts[..2]
+                .iter()
+                .map(|r| -r.friction.x * sn + r.friction.y * cs)
+                .sum();
+            row.push(lat);
             contact_traj.push(row);
         }
     });
@@ -214,17 +228,34 @@ fn with_high_friction_and_moderate_torques_the_contact_plant_follows_the_rolling
         let vdot = reduced_forward_dynamics(&wm, &mut wd, &q, &vr, &u)
             .unwrap()
             .clone();
+        let lambda = lagrange_multipliers(&wm, &mut wd, &q).unwrap().clone();
+        let f = wheel_longitudinal_forces(&wm, lambda.as_slice(), &u);
         vr += vdot * dt;
         admissible_velocity_basis(&wm, &q, &mut basis);
         q += &basis * &vr * dt;
         if (i + 1).is_multiple_of(every) {
-            reduced_traj.push(vec![q[0], q[1], q[2], q[5], q[6], q[7]]);
+            // Forces of the step just taken; the axle's lateral ground force is −λ₀.
+            reduced_traj.push(vec![
+                q[0], q[1], q[2], q[5], q[6], q[7], f[0], f[1], -lambda[0],
+            ]);
         }
     }
     let mut worst_pos: f64 = 0.0;
     let mut worst_yaw: f64 = 0.0;
     let mut worst_arm: f64 = 0.0;
-    for (a, b) in contact_traj.iter().zip(&reduced_traj) {
+    let mut worst_long: f64 = 0.0;
+    let mut worst_lat: f64 = 0.0;
+    let (mut largest_long, mut largest_lat) = (0.0f64, 0.0f64);
+    for (i, (a, b)) in contact_traj.iter().zip(&reduced_traj).enumerate() {
+        // Forces away from the torque steps at 0.5 s and 3.5 s (samples every 0.1 s),
+        // where the contact plant's compliant contacts take a few milliseconds to follow.
+        let t = (i + 1) as f64 * 0.1;
+        if (0.65..3.45).contains(&t) || t > 3.65 {
+            worst_long = worst_long.max((a[6] - b[6]).abs().max((a[7] - b[7]).abs()));
+            worst_lat = worst_lat.max((a[8] - b[8]).abs());
+            largest_long = largest_long.max(b[6].abs().max(b[7].abs()));
+            largest_lat = largest_lat.max(b[8].abs());
+        }
         worst_pos = worst_pos.max(((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt());
         worst_yaw = worst_yaw.max((a[2] - b[2]).abs());
         for j in 3..6 {
@@ -234,7 +265,7 @@ fn with_high_friction_and_moderate_torques_the_contact_plant_follows_the_rolling
     let travelled =
         (reduced_traj.last().unwrap()[0].powi(2) + reduced_traj.last().unwrap()[1].powi(2)).sqrt();
     eprintln!(
-        "over {duration} s ({travelled:.3} m travelled): base position {worst_pos:.4} m, yaw {worst_yaw:.4} rad, arm joints {worst_arm:.5} rad"
+        "over {duration} s ({travelled:.3} m travelled): base position {worst_pos:.4} m, yaw {worst_yaw:.4} rad, arm joints {worst_arm:.5} rad; wheel forces: longitudinal {worst_long:.4} N (of up to {largest_long:.3} N), lateral {worst_lat:.4} N (of up to {largest_lat:.3} N)"
     );
     assert!(travelled > 2.0, "the robot should travel: {travelled} m");
     // Tolerances (measured: 2.8 mm, 2.2 mrad, 0.5 mrad): 1 cm over the 2.7 m travelled,
@@ -243,6 +274,15 @@ fn with_high_friction_and_moderate_torques_the_contact_plant_follows_the_rolling
     assert!(worst_pos < 0.01, "base position differs by {worst_pos} m");
     assert!(worst_yaw < 5e-3, "yaw differs by {worst_yaw} rad");
     assert!(worst_arm < 2e-3, "arm joints differ by {worst_arm} rad");
+    // The contact forces against the reduced model's multipliers: each wheel's traction
+    // against the rolling rows' −λ₁, −λ₂, the wheels' summed lateral force against the
+    // no-side-slip row's −λ₀. Tolerances 0.05 N and 0.1 N.
+    assert!(
+        largest_long > 1.0 && largest_lat > 0.1,
+        "forces too small to compare"
+    );
+    assert!(worst_long < 0.05, "traction differs by {worst_long} N");
+    assert!(worst_lat < 0.1, "lateral force differs by {worst_lat} N");
 }
 
 /// Spins in place with opposite wheel torques ±`tau` for 0.5 s; returns whether a wheel
