@@ -134,3 +134,34 @@ fn at_0_9_times_the_predicted_limit_nothing_lifts_and_at_1_1_times_the_caster_do
         }
     }
 }
+
+#[test]
+fn the_simulated_lift_off_acceleration_is_the_predicted_limit_within_five_percent() {
+    // Bisection on the steady acceleration between 0.9 × and 1.1 × the prediction: the
+    // smallest that lifts a contact. Measured: 1.8 % and 4.1 % below the prediction. The
+    // prediction is for a rigid robot in its posture at rest; the plant's contacts are
+    // compliant and its joints PD-held, so as the caster unloads the base pitches back
+    // and the arm deflects, which moves the centre of mass towards the axle (the share
+    // of each is not separated here).
+    for (payload, arm) in [(0.0, [0.0, 1.5, 0.0]), (2.0, [0.0, -1.2, 0.6])] {
+        let lim = predicted_forward_limit(payload, arm);
+        let (mut lo, mut hi) = (0.9 * lim, 1.1 * lim);
+        for _ in 0..7 {
+            let mid = 0.5 * (lo + hi);
+            if lifts(payload, arm, mid).is_some() {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let sim = 0.5 * (lo + hi);
+        eprintln!(
+            "payload {payload} kg, arm {arm:?}: predicted {lim:.4} m/s², simulated lift-off {sim:.4} m/s² ({:+.2} %)",
+            100.0 * (sim / lim - 1.0)
+        );
+        assert!(
+            (sim / lim - 1.0).abs() < 0.05,
+            "simulated {sim} vs predicted {lim}"
+        );
+    }
+}
