@@ -38,6 +38,7 @@
 
 pub mod closed_form;
 pub mod collision;
+pub mod contact;
 pub mod control;
 pub mod dynamics;
 pub mod error;

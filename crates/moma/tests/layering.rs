@@ -26,7 +26,7 @@ const LAYERS: &[&[&str]] = &[
     &["multibody"],
     &["io", "kinematics"],
     &["dynamics", "collision"],
-    &["mobile", "space"],
+    &["mobile", "space", "contact"],
     &["stability", "manipulability"],
     &["ik"],
     &["control"],
