@@ -1,14 +1,16 @@
 //! `moma collision ROBOT.urdf --root R [--srdf FILE] [--package-dir DIR]... [--scene
 //! SCENE.yaml] --states STATES.json [--layout moma|pinocchio] [--all-pairs]
-//! [--output OUT.json] [--svg FIG.svg]`: signed distances between the robot's links (and
-//! against the scene's objects) for each state. Schema: `docs/cli.md`.
+//! [--footprint] [--gradient] [--output OUT.json] [--svg FIG.svg]`: signed distances
+//! between the robot's links (and against the scene's objects) for each state, with the
+//! robot's planar footprint and the minimum distance's derivative on request. Schema:
+//! `docs/cli.md`.
 
 use super::common::{Layout, LayoutConv, load_model, parse_root, read_states};
 use anyhow::{Context, Result};
 use moma::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection, Scene, SceneData,
-    SceneOptions, compute_distances, compute_scene_distances, outline_points, read_scene,
-    update_geometry_placements,
+    SceneOptions, base_ground_pose, compute_distances, compute_scene_distances, footprint,
+    footprint_in, min_distance_gradient, outline_points, read_scene, update_geometry_placements,
 };
 use moma::kinematics;
 use moma::multibody::{Data, FrameKind, RootJoint};
@@ -47,6 +49,19 @@ pub struct Args {
     /// fixed to each other, not disabled by the SRDF).
     #[arg(long)]
     pub all_pairs: bool,
+    /// Add each state's planar footprint: the convex hull of the robot's collision
+    /// geometry projected on the ground, in the base frame (x forward) for a planar or
+    /// free-flyer root, in the world frame for a fixed one. In the JSON as `footprint`
+    /// (vertices, counter-clockwise) and `footprint_text` (`x,y;x,y;...`, as `moma plan
+    /// --footprint` takes it); with `--output`, the texts are also printed, one line per
+    /// state.
+    #[arg(long)]
+    pub footprint: bool,
+    /// Add each state's `gradient`: the derivative of `min_distance` (the closest pair's
+    /// signed distance) with respect to the velocity coordinates (nv entries; ∂d/∂q for a
+    /// fixed or planar root in the moma layout).
+    #[arg(long)]
+    pub gradient: bool,
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -70,6 +85,12 @@ struct StateOut {
     min_distance: f64,
     in_collision: bool,
     closest: [String; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gradient: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    footprint: Option<Vec<[f64; 2]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    footprint_text: Option<String>,
     pairs: Vec<PairOut>,
 }
 
@@ -79,6 +100,8 @@ struct Output {
     source: String,
     root: String,
     layout: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    footprint_frame: Option<&'static str>,
     pairs_enabled: Vec<[String; 2]>,
     scene_objects: Vec<String>,
     states: Vec<StateOut>,
@@ -138,13 +161,19 @@ pub fn run(args: Args) -> Result<()> {
         PairSelection::Enabled
     };
     let mut first_placements = None;
+    let mut scratch = Vec::new();
     let mut out_states = Vec::with_capacity(states.len());
     for (k, s) in states.iter_mut().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
         conv.state_in(s, &src)?;
         kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
         let q = DVector::from_column_slice(&s.q);
-        kinematics::forward_kinematics(&model, &mut data, &q);
+        if args.gradient {
+            // Forward kinematics and the joint Jacobians of q.
+            kinematics::compute_joint_jacobians(&model, &mut data, &q);
+        } else {
+            kinematics::forward_kinematics(&model, &mut data, &q);
+        }
         update_geometry_placements(&gm, &data, &mut gd);
         if first_placements.is_none() {
             first_placements = Some(gd.placements.clone());
@@ -178,10 +207,35 @@ pub fn run(args: Args) -> Result<()> {
                 "{src}: no pair to check (the robot has fewer than two links with enabled pairs and no scene is given)"
             );
         }
+        let gradient = if args.gradient {
+            let mut g = DVector::zeros(model.nv);
+            min_distance_gradient(&model, &data, &gm, &gd, &scene, &sd, &mut g)
+                .context("the closest pair for the gradient")?;
+            Some(g.as_slice().to_vec())
+        } else {
+            None
+        };
+        let (footprint, footprint_text) = if args.footprint {
+            let poly = match base_ground_pose(&model, &data) {
+                Some((origin, yaw)) => footprint_in(&gm, &gd, &origin, yaw, &mut scratch),
+                None => footprint(&gm, &gd, &mut scratch),
+            };
+            let text = poly
+                .iter()
+                .map(|p| format!("{},{}", p.x, p.y))
+                .collect::<Vec<_>>()
+                .join(";");
+            (Some(poly.iter().map(|p| [p.x, p.y]).collect()), Some(text))
+        } else {
+            (None, None)
+        };
         out_states.push(StateOut {
             min_distance,
             in_collision: min_distance < 0.0,
             closest,
+            gradient,
+            footprint,
+            footprint_text,
             pairs,
         });
     }
@@ -193,6 +247,11 @@ pub fn run(args: Args) -> Result<()> {
             Layout::Moma => "moma",
             Layout::Pinocchio => "pinocchio",
         },
+        footprint_frame: args.footprint.then_some(if model.root == RootJoint::Fixed {
+            "world"
+        } else {
+            "base"
+        }),
         pairs_enabled: gm
             .pairs
             .iter()
@@ -212,7 +271,13 @@ pub fn run(args: Args) -> Result<()> {
     match &args.output {
         Some(p) => {
             files.push((p.clone(), json));
-            crate::output::write_all_atomic(&files)
+            crate::output::write_all_atomic(&files)?;
+            for s in &out.states {
+                if let Some(t) = &s.footprint_text {
+                    println!("{t}");
+                }
+            }
+            Ok(())
         }
         None => {
             crate::output::write_all_atomic(&files)?;

@@ -15,19 +15,21 @@ pub mod footprint;
 pub mod geometry_data;
 pub mod geometry_model;
 pub mod gjk;
+pub mod gradient;
 pub mod mesh;
 pub mod scene;
 pub mod srdf;
 pub mod urdf_geometry;
 
 pub use convex::Convex;
-pub use footprint::{footprint, outline_points};
+pub use footprint::{base_ground_pose, footprint, footprint_in, outline_points};
 pub use geometry_data::{
     GeometryData, PairSelection, compute_collision, compute_distances, distance_derivative,
-    update_geometry_placements,
+    pair_derivative, update_geometry_placements,
 };
 pub use geometry_model::{GeometryModel, GeometryObject, GeometryOptions, LinkGeometry};
 pub use gjk::PairDistance;
+pub use gradient::{ClosestPair, closest_pair, min_distance_gradient, scene_distance_derivative};
 pub use scene::{
     Scene, SceneData, SceneObject, SceneOptions, compute_scene_distances, point_cloud_object,
     read_scene, scene_collision, voxel_object,
