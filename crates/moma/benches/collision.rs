@@ -1,9 +1,13 @@
 //! Collision-geometry bench on Fetch (fixed base, 21 links with STL collision meshes used
 //! as convex hulls, the SRDF's 76 enabled pairs): one full self-distance evaluation, one
-//! in-collision check with early exit, and the distances of all 21 links to a scene of
-//! ten boxes and to a scene of 100,000 voxels. Each iteration runs forward kinematics,
-//! the geometry placements and the query on the next of 64 seeded random states
-//! (joints uniform within their limits), with the warm starts of the previous state.
+//! in-collision check with early exit, the distances of all 21 links to MotionBenchMaker's
+//! table scene (the YAML's 12 objects) and its in-collision check, and the distances to
+//! a scene of ten boxes and to a scene of 100,000 voxels. Each iteration runs forward
+//! kinematics, the geometry placements and the query on the next of the 100 states of
+//! `benches/data/fetch_states_pinocchio.txt` — the states `bench/pinocchio/run.sh
+//! collision` times with Pinocchio + coal — with the warm starts of the previous state.
+//! Before timing, the per-state in-collision verdicts are printed as `# verdicts QUERY
+//! 0101...` lines, to compare with coal's.
 //!
 //! Run: `cargo bench -p moma --bench collision --locked -- --warm-up-time 1 --measurement-time 3`.
 
@@ -12,14 +16,15 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use moma::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneObject,
-    compute_collision, compute_distances, compute_scene_distances, update_geometry_placements,
-    voxel_object,
+    SceneOptions, compute_collision, compute_distances, compute_scene_distances, read_scene,
+    scene_collision, update_geometry_placements, voxel_object,
 };
-use moma::kinematics::{forward_kinematics, random_configuration};
+use moma::io::pinocchio_layout::PinocchioLayout;
+use moma::kinematics::forward_kinematics;
 use moma::multibody::{Data, RootJoint};
 use moma::planning::grid3::Grid3;
 use moma::spatial::SE3;
-use nalgebra::Vector3;
+use nalgebra::{DVector, Vector3};
 use rand::{Rng, SeedableRng};
 
 fn bench(c: &mut Criterion) {
@@ -33,10 +38,72 @@ fn bench(c: &mut Criterion) {
     let gm = GeometryModel::from_urdf(&model, urdf.as_ref(), &opts).expect("geometry");
     let mut data = Data::new(&model);
     let mut gd = GeometryData::new(&gm);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-    let states: Vec<_> = (0..64)
-        .map(|_| random_configuration(&model, &mut rng))
+    let layout = PinocchioLayout::new(&model);
+    let text = std::fs::read_to_string(format!(
+        "{}/benches/data/fetch_states_pinocchio.txt",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("states file");
+    let states: Vec<DVector<f64>> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let pin: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            let mut q = DVector::zeros(model.nq);
+            layout.q_from_pinocchio(&pin, q.as_mut_slice()).unwrap();
+            q
+        })
         .collect();
+    assert_eq!(states.len(), 100);
+    let table = read_scene(
+        format!(
+            "{}/tests/data/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml",
+            env!("CARGO_MANIFEST_DIR")
+        )
+        .as_ref(),
+        &SceneOptions {
+            world_frames: vec!["base_link".into()],
+            package_dirs: Vec::new(),
+        },
+    )
+    .expect("scene");
+    let mut table_sd = SceneData::new(&gm, &table);
+    let mut verdicts =
+        |name: &str, f: &mut dyn FnMut(&mut GeometryData, &mut SceneData) -> bool| {
+            let v: String = states
+                .iter()
+                .map(|q| {
+                    forward_kinematics(&model, &mut data, q);
+                    update_geometry_placements(&gm, &data, &mut gd);
+                    if f(&mut gd, &mut table_sd) { '1' } else { '0' }
+                })
+                .collect();
+            eprintln!("# verdicts {name} {v}");
+        };
+    verdicts("self_collisions_first", &mut |gd, _| {
+        compute_collision(&gm, gd).is_some()
+    });
+    verdicts("scene_collisions_first", &mut |gd, sd| {
+        scene_collision(&gm, gd, &table, sd).is_some()
+    });
+    // The mean minimum distances over the states, to compare with coal's '# check' lines.
+    let (mut self_sum, mut scene_sum) = (0.0, 0.0);
+    for q in &states {
+        forward_kinematics(&model, &mut data, q);
+        update_geometry_placements(&gm, &data, &mut gd);
+        self_sum += compute_distances(&gm, &mut gd, PairSelection::Enabled);
+        scene_sum += compute_scene_distances(&gm, &mut gd, &table, &mut table_sd);
+    }
+    let n = states.len() as f64;
+    eprintln!(
+        "# check mean min self distance over the states {:.9}",
+        self_sum / n
+    );
+    eprintln!(
+        "# check fetch+table mean min scene distance over the states {:.9}",
+        scene_sum / n
+    );
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let mut k = 0;
     c.bench_function("fetch/self_distance_enabled_hulls", |b| {
         b.iter(|| {
@@ -52,6 +119,22 @@ fn bench(c: &mut Criterion) {
             forward_kinematics(&model, &mut data, &states[k]);
             update_geometry_placements(&gm, &data, &mut gd);
             black_box(compute_collision(&gm, &mut gd))
+        })
+    });
+    c.bench_function("fetch/scene_distance_mbm_table", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            forward_kinematics(&model, &mut data, &states[k]);
+            update_geometry_placements(&gm, &data, &mut gd);
+            black_box(compute_scene_distances(&gm, &mut gd, &table, &mut table_sd))
+        })
+    });
+    c.bench_function("fetch/scene_in_collision_mbm_table", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            forward_kinematics(&model, &mut data, &states[k]);
+            update_geometry_placements(&gm, &data, &mut gd);
+            black_box(scene_collision(&gm, &gd, &table, &mut table_sd))
         })
     });
     // Ten boxes around the robot (a table and shelves' worth) ...
