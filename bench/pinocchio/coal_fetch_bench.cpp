@@ -480,6 +480,9 @@ int main(int argc, char **argv) {
                   "states in collision %d/%d\n",
                   vlabel.c_str(), cells.size(), r, (std::size_t)tree->getTree()->getNumLeafNodes(),
                   gv.collisionPairs.size(), ncv, NSTATES);
+      verdicts("voxel_collisions_first", [&](const VectorXd &q) {
+        return pinocchio::computeCollisions(model, data, gv, gvd, q, true);
+      });
       report(vlabel, "voxel_collisions_first", median_ns_per_call([&](int i) {
                g_sink = g_sink + pinocchio::computeCollisions(model, data, gv, gvd, Q[i], true);
              }));

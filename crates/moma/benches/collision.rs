@@ -14,10 +14,11 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use moma::collision::Convex;
 use moma::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneObject,
-    SceneOptions, compute_collision, compute_distances, compute_scene_distances, read_scene,
-    scene_collision, update_geometry_placements, voxel_object,
+    SceneOptions, compute_collision, compute_distances, compute_scene_distances,
+    point_cloud_object, read_scene, scene_collision, update_geometry_placements, voxel_object,
 };
 use moma::io::pinocchio_layout::PinocchioLayout;
 use moma::kinematics::forward_kinematics;
@@ -68,23 +69,25 @@ fn bench(c: &mut Criterion) {
     )
     .expect("scene");
     let mut table_sd = SceneData::new(&gm, &table);
-    let mut verdicts =
-        |name: &str, f: &mut dyn FnMut(&mut GeometryData, &mut SceneData) -> bool| {
-            let v: String = states
-                .iter()
-                .map(|q| {
-                    forward_kinematics(&model, &mut data, q);
-                    update_geometry_placements(&gm, &data, &mut gd);
-                    if f(&mut gd, &mut table_sd) { '1' } else { '0' }
-                })
-                .collect();
-            eprintln!("# verdicts {name} {v}");
-        };
-    verdicts("self_collisions_first", &mut |gd, _| {
+    let verdicts = |data: &mut Data,
+                    gd: &mut GeometryData,
+                    name: &str,
+                    f: &mut dyn FnMut(&mut GeometryData) -> bool| {
+        let v: String = states
+            .iter()
+            .map(|q| {
+                forward_kinematics(&model, data, q);
+                update_geometry_placements(&gm, data, gd);
+                if f(gd) { '1' } else { '0' }
+            })
+            .collect();
+        eprintln!("# verdicts {name} {v}");
+    };
+    verdicts(&mut data, &mut gd, "self_collisions_first", &mut |gd| {
         compute_collision(&gm, gd).is_some()
     });
-    verdicts("scene_collisions_first", &mut |gd, sd| {
-        scene_collision(&gm, gd, &table, sd).is_some()
+    verdicts(&mut data, &mut gd, "scene_collisions_first", &mut |gd| {
+        scene_collision(&gm, gd, &table, &mut table_sd).is_some()
     });
     // The mean minimum distances over the states, to compare with coal's '# check' lines.
     let (mut self_sum, mut scene_sum) = (0.0, 0.0);
@@ -150,7 +153,7 @@ fn bench(c: &mut Criterion) {
                     format!("box{i}"),
                     vec![(
                         SE3::from_translation(c),
-                        moma::collision::Convex::Box {
+                        Convex::Box {
                             half: Vector3::new(0.1, 0.2, 0.05),
                         },
                     )],
@@ -173,7 +176,42 @@ fn bench(c: &mut Criterion) {
         objects: vec![voxel_object("slab", &grid, 0.02, Vector3::new(0.5, -1.0, 0.7)).unwrap()],
     };
     assert_eq!(voxels.objects[0].shapes.len(), 100_000);
-    for (name, scene) in [("10_boxes", &boxes), ("100000_voxels", &voxels)] {
+    // The table scene voxelised as coal_fetch_bench.cpp does for its OcTree row: the
+    // cells of edge VOXEL_EDGE (the size its bisection picks for ~100,000 cells) whose
+    // centre lies inside a primitive.
+    let table_voxels = Scene {
+        objects: vec![
+            point_cloud_object(
+                "table_voxels",
+                &voxel_centres(&table, VOXEL_EDGE),
+                VOXEL_EDGE,
+            )
+            .unwrap(),
+        ],
+    };
+    eprintln!(
+        "# fetch+table_voxels: {} voxels of {VOXEL_EDGE} m",
+        table_voxels.objects[0].shapes.len()
+    );
+    {
+        let mut sd = SceneData::new(&gm, &table_voxels);
+        verdicts(&mut data, &mut gd, "voxel_collisions_first", &mut |gd| {
+            scene_collision(&gm, gd, &table_voxels, &mut sd).is_some()
+        });
+        c.bench_function("fetch/scene_in_collision_mbm_table_voxels", |b| {
+            b.iter(|| {
+                k = (k + 1) % states.len();
+                forward_kinematics(&model, &mut data, &states[k]);
+                update_geometry_placements(&gm, &data, &mut gd);
+                black_box(scene_collision(&gm, &gd, &table_voxels, &mut sd))
+            })
+        });
+    }
+    for (name, scene) in [
+        ("10_boxes", &boxes),
+        ("100000_voxels", &voxels),
+        ("mbm_table_voxels", &table_voxels),
+    ] {
         let mut sd = SceneData::new(&gm, scene);
         c.bench_function(&format!("fetch/scene_distance_{name}"), |b| {
             b.iter(|| {
@@ -184,6 +222,40 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+}
+
+/// coal_fetch_bench.cpp's voxel edge for the table scene (its '# fetch+table_voxels' line).
+const VOXEL_EDGE: f64 = 0.011287292;
+
+/// Centres `(i + 1/2) r` of the grid cells of edge `r` whose centre lies inside a box or
+/// cylinder of the scene.
+fn voxel_centres(scene: &Scene, r: f64) -> Vec<Vector3<f64>> {
+    let mut out = Vec::new();
+    for s in scene.objects.iter().flat_map(|o| &o.shapes) {
+        let (lo, hi) = s.aabb;
+        let cell = |x: f64| (x / r).floor() as i64;
+        for i in cell(lo.x) - 1..=cell(hi.x) + 1 {
+            for j in cell(lo.y) - 1..=cell(hi.y) + 1 {
+                for k in cell(lo.z) - 1..=cell(hi.z) + 1 {
+                    let x = Vector3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * r;
+                    let l = s.pose.rotation.tr_mul(&(x - s.pose.translation));
+                    let inside = match &s.shape {
+                        Convex::Box { half } => (0..3).all(|a| l[a].abs() <= half[a]),
+                        Convex::Cylinder {
+                            radius,
+                            half_height,
+                        } => l.z.abs() <= *half_height && l.xy().norm() <= *radius,
+                        Convex::Sphere { radius } => l.norm() <= *radius,
+                        other => panic!("no voxeliser for {other:?}"),
+                    };
+                    if inside {
+                        out.push(x);
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 criterion_group!(benches, bench);
