@@ -164,12 +164,22 @@ fn bad_input_exits_1_and_writes_nothing() {
 /// Runs `moma collision` on Fetch with the table scene over `states` (moma layout) with
 /// `extra` flags; returns the parsed JSON and the standard output.
 fn run_fetch(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Value, String) {
+    let scene = format!("{DATA}/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml");
+    let mut all = Vec::new();
+    if root == "fixed" {
+        all.extend(["--scene", scene.as_str()]);
+    }
+    all.extend(extra);
+    run_fetch_with(root, states, &all, name)
+}
+
+/// As [`run_fetch`] without the table scene.
+fn run_fetch_with(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Value, String) {
     let (urdf, srdf, pkg) = (
         format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
         format!("{DATA}/robots/fetch/fetch.srdf"),
         format!("{DATA}/robots/fetch"),
     );
-    let scene = format!("{DATA}/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml");
     let states_file = tmp(&format!("{name}_states.json"));
     let qs: Vec<Value> = states
         .iter()
@@ -183,9 +193,6 @@ fn run_fetch(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Va
     let out = tmp(&format!("{name}_out.json"));
     let mut args = fetch_args(&urdf, &srdf, &pkg);
     args[3] = root;
-    if root == "fixed" {
-        args.extend(["--scene", &scene]);
-    }
     args.extend([
         "--states",
         states_file.to_str().unwrap(),
@@ -372,4 +379,148 @@ fn footprint_holds_the_geometry_and_rides_with_the_base() {
         };
         assert!(area(&pa) > 0.2 && (area(&pa) - area(&pb)).abs() < 1e-9);
     }
+}
+
+#[test]
+fn voxels_and_points_are_the_box_they_fill() {
+    // A 1 m × 0.5 m × 0.1 m plate in front of Fetch as 20 × 10 × 2 voxels of 5 cm, as a
+    // point cloud filling the same cells (two points per cell), and as one box.
+    let (r, origin) = (0.05, [0.5, -0.25, 0.7]);
+    let mut map = String::from("voxel 20 10 2\n");
+    let mut cloud = String::from("# x y z\n");
+    for x in 0..20 {
+        for y in 0..10 {
+            for z in 0..2 {
+                map.push_str(&format!("{x} {y} {z}\n"));
+                for f in [0.3, 0.7] {
+                    let p = [x, y, z]
+                        .iter()
+                        .zip(origin)
+                        .map(|(i, o)| o + (*i as f64 + f) * r)
+                        .collect::<Vec<_>>();
+                    cloud.push_str(&format!("{},{},{}\n", p[0], p[1], p[2]));
+                }
+            }
+        }
+    }
+    let (map_file, cloud_file, box_file) =
+        (tmp("plate.3dmap"), tmp("plate.xyz"), tmp("plate.yaml"));
+    std::fs::write(&map_file, map).unwrap();
+    std::fs::write(&cloud_file, cloud).unwrap();
+    std::fs::write(
+        &box_file,
+        "world:\n  collision_objects:\n    - header: {frame_id: world}\n      id: plate\n      primitives: [{type: box, dimensions: [1.0, 0.5, 0.1]}]\n      primitive_poses: [{position: [1.0, 0.0, 0.75], orientation: [0, 0, 0, 1]}]\n",
+    )
+    .unwrap();
+    let states = postures();
+    let scene_pairs = |v: &Value| -> Vec<(String, f64)> {
+        v["states"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|s| s["pairs"].as_array().unwrap().clone())
+            .filter(|p| p["b"] == "plate")
+            .map(|p| {
+                (
+                    p["a"].as_str().unwrap().to_string(),
+                    p["distance"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (as_box, _) = run_fetch_with(
+        "fixed",
+        &states,
+        &["--scene", box_file.to_str().unwrap()],
+        "plate_box",
+    );
+    let size = r.to_string();
+    let (as_voxels, _) = run_fetch_with(
+        "fixed",
+        &states,
+        &[
+            "--voxels",
+            map_file.to_str().unwrap(),
+            "--voxel-size",
+            &size,
+            "--voxel-origin",
+            "0.5,-0.25,0.7",
+        ],
+        "plate_voxels",
+    );
+    let (as_points, _) = run_fetch_with(
+        "fixed",
+        &states,
+        &[
+            "--points",
+            cloud_file.to_str().unwrap(),
+            "--voxel-size",
+            &size,
+        ],
+        "plate_points",
+    );
+    let want = scene_pairs(&as_box);
+    assert_eq!(want.len(), 21 * states.len());
+    let mut near = 0;
+    for got in [scene_pairs(&as_voxels), scene_pairs(&as_points)] {
+        assert_eq!(got.len(), want.len());
+        for ((la, d), (lb, w)) in got.iter().zip(&want) {
+            assert_eq!(la, lb);
+            // Apart, the distance to a union of cubes that fills a box is the distance
+            // to the box (overlapping, the depths differ: each cube is shallower).
+            if *w > 0.0 {
+                assert!((d - w).abs() < 1e-9, "{la}: {d} vs the box's {w}");
+                near += usize::from(*w < 0.3);
+            } else {
+                assert!(*d < 0.0, "{la}: {d} apart but overlapping the box ({w})");
+            }
+        }
+    }
+    assert!(near >= 10, "{near} links within 0.3 m of the plate");
+    // Bad input: a voxel size that is not positive, a bad point line.
+    let o = moma(&[
+        "collision",
+        "x.urdf",
+        "--root",
+        "fixed",
+        "--states",
+        "s.json",
+        "--points",
+        cloud_file.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "--points without --voxel-size is a usage error"
+    );
+    std::fs::write(&cloud_file, "0 0 0\n1 2\n").unwrap();
+    let states_file = tmp("plate_bad_states.json");
+    std::fs::write(
+        &states_file,
+        serde_json::json!({"states": [{"q": states[0]}]}).to_string(),
+    )
+    .unwrap();
+    let (urdf, srdf, pkg) = (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    );
+    let mut args = fetch_args(&urdf, &srdf, &pkg);
+    args.extend([
+        "--states",
+        states_file.to_str().unwrap(),
+        "--points",
+        cloud_file.to_str().unwrap(),
+        "--voxel-size",
+        "0.05",
+    ]);
+    let o = moma(&args);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("plate.xyz") && err.contains("line 2"), "{err}");
+    args.truncate(args.len() - 2);
+    args.push("--voxel-size=-0.05");
+    let o = moma(&args);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--voxel-size"));
 }

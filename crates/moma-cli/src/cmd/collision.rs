@@ -1,5 +1,6 @@
 //! `moma collision ROBOT.urdf --root R [--srdf FILE] [--package-dir DIR]... [--scene
 //! SCENE.yaml] --states STATES.json [--layout moma|pinocchio] [--all-pairs]
+//! [--voxels MAP.3dmap | --points CLOUD.xyz --voxel-size R [--voxel-origin X,Y,Z]]
 //! [--footprint] [--gradient] [--output OUT.json] [--svg FIG.svg]`: signed distances
 //! between the robot's links (and against the scene's objects) for each state, with the
 //! robot's planar footprint and the minimum distance's derivative on request. Schema:
@@ -10,7 +11,8 @@ use anyhow::{Context, Result};
 use moma::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection, Scene, SceneData,
     SceneOptions, base_ground_pose, compute_distances, compute_scene_distances, footprint,
-    footprint_in, min_distance_gradient, outline_points, read_scene, update_geometry_placements,
+    footprint_in, min_distance_gradient, outline_points, point_cloud_object, read_points,
+    read_scene, update_geometry_placements, voxel_object,
 };
 use moma::kinematics;
 use moma::multibody::{Data, FrameKind, RootJoint};
@@ -38,6 +40,22 @@ pub struct Args {
     /// fixed root, in the robot's root link.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// Blocked voxels of a Moving AI `.3dmap` as one more scene object (its id: the file
+    /// name without extension), cubes of `--voxel-size` m, voxel (0, 0, 0) at
+    /// `--voxel-origin`, world frame.
+    #[arg(long, requires = "voxel_size")]
+    pub voxels: Option<PathBuf>,
+    /// A point cloud (text: `x y z` or `x,y,z` per line, world frame, `#` comments)
+    /// binned into voxels of `--voxel-size` m (cells `floor(p / size)`) as one more scene
+    /// object (its id: the file name without extension).
+    #[arg(long, requires = "voxel_size")]
+    pub points: Option<PathBuf>,
+    /// Edge of the voxels of `--voxels` and `--points` (m).
+    #[arg(long)]
+    pub voxel_size: Option<f64>,
+    /// World position of the `.3dmap`'s corner (voxel (0, 0, 0)'s low corner): `X,Y,Z`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_values_t = [0.0, 0.0, 0.0])]
+    pub voxel_origin: Vec<f64>,
     /// States file (as `moma dynamics`): `{"states": [{"q": [..]}, ..]}`.
     #[arg(long)]
     pub states: PathBuf,
@@ -150,6 +168,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => Scene::default(),
     };
+    let mut scene = scene;
+    add_voxel_objects(&args, &mut scene)?;
     let mut states = read_states(&args.states, &["q"])?;
     let conv = LayoutConv::new(&model, args.layout);
     let mut data = Data::new(&model);
@@ -284,6 +304,46 @@ pub fn run(args: Args) -> Result<()> {
             crate::output::print_json(&out)
         }
     }
+}
+
+/// The `--voxels` and `--points` objects, appended to the scene.
+fn add_voxel_objects(args: &Args, scene: &mut Scene) -> Result<()> {
+    let id = |p: &std::path::Path| {
+        p.file_stem().map_or_else(
+            || "voxels".to_string(),
+            |s| s.to_string_lossy().into_owned(),
+        )
+    };
+    let size = args.voxel_size.unwrap_or(f64::NAN);
+    if (args.voxels.is_some() || args.points.is_some()) && !(size.is_finite() && size > 0.0) {
+        anyhow::bail!("--voxel-size: {size} must be a positive number of metres");
+    }
+    if let Some(path) = &args.voxels {
+        let grid = moma::planning::movingai::load_3dmap(path)?;
+        let o = &args.voxel_origin;
+        if o.len() != 3 {
+            anyhow::bail!("--voxel-origin: expected X,Y,Z, got {} numbers", o.len());
+        }
+        let origin = Vector3::new(o[0], o[1], o[2]);
+        let obj = voxel_object(&id(path), &grid, size, origin)
+            .with_context(|| format!("{}: --voxels", path.display()))?;
+        scene.objects.push(obj);
+    }
+    if let Some(path) = &args.points {
+        let points = read_points(path)?;
+        let obj = point_cloud_object(&id(path), &points, size)
+            .with_context(|| format!("{}: --points", path.display()))?;
+        scene.objects.push(obj);
+    }
+    let mut ids: Vec<&str> = scene.objects.iter().map(|o| o.id.as_str()).collect();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        anyhow::bail!(
+            "scene object id '{}' appears twice (a voxel or point file is named like another object)",
+            w[0]
+        );
+    }
+    Ok(())
 }
 
 /// Side (x–z) and top (x–y) views of the robot's shapes (blue) and the scene's (grey),

@@ -17,6 +17,7 @@ pub mod geometry_model;
 pub mod gjk;
 pub mod gradient;
 pub mod mesh;
+pub mod point_cloud;
 pub mod scene;
 pub mod srdf;
 pub mod urdf_geometry;
@@ -30,6 +31,7 @@ pub use geometry_data::{
 pub use geometry_model::{GeometryModel, GeometryObject, GeometryOptions, LinkGeometry};
 pub use gjk::PairDistance;
 pub use gradient::{ClosestPair, closest_pair, min_distance_gradient, scene_distance_derivative};
+pub use point_cloud::read_points;
 pub use scene::{
     Scene, SceneData, SceneObject, SceneOptions, compute_scene_distances, point_cloud_object,
     read_scene, scene_collision, voxel_object,
