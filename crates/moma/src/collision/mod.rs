@@ -11,6 +11,7 @@
 //! to a 1e-12 m duality gap (see [`gjk`]).
 
 pub mod convex;
+pub mod exact;
 pub mod footprint;
 pub mod geometry_data;
 pub mod geometry_model;
@@ -23,6 +24,7 @@ pub mod srdf;
 pub mod urdf_geometry;
 
 pub use convex::Convex;
+pub use exact::{ExactGeometry, compute_exact_distances};
 pub use footprint::{base_ground_pose, footprint, footprint_in, outline_points};
 pub use geometry_data::{
     GeometryData, PairSelection, compute_collision, compute_distances, distance_derivative,
