@@ -524,3 +524,77 @@ fn voxels_and_points_are_the_box_they_fill() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--voxel-size"));
 }
+
+#[test]
+fn exact_meshes_match_coal_and_touch_at_zero() {
+    let reference: Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{DATA}/collision/fetch_self_public.json")).unwrap(),
+    )
+    .unwrap();
+    let all = reference["states"].as_array().unwrap();
+    // One state whose enabled meshes touch and one whose do not.
+    let pick: Vec<&Value> = [true, false]
+        .iter()
+        .map(|t| {
+            all.iter()
+                .find(|s| s["in_collision_enabled_mesh"] == *t)
+                .unwrap()
+        })
+        .collect();
+    let states_file = tmp("exact_states.json");
+    let qs: Vec<Value> = pick
+        .iter()
+        .map(|s| serde_json::json!({"q": s["q"]}))
+        .collect();
+    std::fs::write(
+        &states_file,
+        serde_json::json!({ "states": qs }).to_string(),
+    )
+    .unwrap();
+    let (urdf, srdf, pkg) = (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    );
+    let out = tmp("exact_out.json");
+    let mut args = fetch_args(&urdf, &srdf, &pkg);
+    args.extend([
+        "--states",
+        states_file.to_str().unwrap(),
+        "--layout",
+        "pinocchio",
+        "--mesh",
+        "exact",
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    let o = moma(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(got["mesh"], "exact");
+    let ref_pairs = reference["pairs"].as_array().unwrap();
+    for (s, want) in got["states"].as_array().unwrap().iter().zip(&pick) {
+        let pairs = s["pairs"].as_array().unwrap();
+        assert_eq!(pairs.len(), 76);
+        for p in pairs {
+            let k = ref_pairs
+                .iter()
+                .position(|r| {
+                    (r[0] == p["a"] && r[1] == p["b"]) || (r[0] == p["b"] && r[1] == p["a"])
+                })
+                .unwrap();
+            let (d, w) = (
+                p["distance"].as_f64().unwrap(),
+                want["distance_mesh"][k].as_f64().unwrap(),
+            );
+            assert!(
+                (d - w).abs() <= 1e-6,
+                "{} {}: {d} vs coal {w}",
+                p["a"],
+                p["b"]
+            );
+            assert!(d >= 0.0);
+        }
+        assert_eq!(s["in_collision"], want["in_collision_enabled_mesh"]);
+    }
+}

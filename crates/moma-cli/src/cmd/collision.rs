@@ -1,6 +1,6 @@
 //! `moma collision ROBOT.urdf --root R [--srdf FILE] [--package-dir DIR]... [--scene
 //! SCENE.yaml] --states STATES.json [--layout moma|pinocchio] [--all-pairs]
-//! [--voxels MAP.3dmap | --points CLOUD.xyz --voxel-size R [--voxel-origin X,Y,Z]]
+//! [--mesh convex|exact] [--voxels MAP.3dmap | --points CLOUD.xyz --voxel-size R [--voxel-origin X,Y,Z]]
 //! [--footprint] [--gradient] [--output OUT.json] [--svg FIG.svg]`: signed distances
 //! between the robot's links (and against the scene's objects) for each state, with the
 //! robot's planar footprint and the minimum distance's derivative on request. Schema:
@@ -9,10 +9,10 @@
 use super::common::{Layout, LayoutConv, load_model, parse_root, read_states};
 use anyhow::{Context, Result};
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection, Scene, SceneData,
-    SceneOptions, base_ground_pose, compute_distances, compute_scene_distances, footprint,
-    footprint_in, min_distance_gradient, outline_points, point_cloud_object, read_points,
-    read_scene, update_geometry_placements, voxel_object,
+    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection,
+    Scene, SceneData, SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
+    compute_scene_distances, footprint, footprint_in, min_distance_gradient, outline_points,
+    point_cloud_object, read_points, read_scene, update_geometry_placements, voxel_object,
 };
 use moma::kinematics;
 use moma::multibody::{Data, FrameKind, RootJoint};
@@ -63,6 +63,12 @@ pub struct Args {
     /// pinocchio (continuous joints as cos, sin; planar root [x, y, cos θ, sin θ]).
     #[arg(long, value_enum, default_value_t = Layout::Moma)]
     pub layout: Layout,
+    /// Link meshes as their convex hulls (signed distances, negative when overlapping)
+    /// or exactly, as their triangles (surface distances, 0 where triangles touch or
+    /// cross, as coal's between BVH meshes; self pairs only: the links keep their hulls
+    /// against the scene).
+    #[arg(long, value_enum, default_value_t = MeshMode::Convex)]
+    pub mesh: MeshMode,
     /// List and check every link pair, not only the enabled ones (not adjacent, not
     /// fixed to each other, not disabled by the SRDF).
     #[arg(long)]
@@ -87,6 +93,15 @@ pub struct Args {
     /// into this SVG file.
     #[arg(long)]
     pub svg: Option<PathBuf>,
+}
+
+/// How link meshes enter the distances.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeshMode {
+    /// Each mesh as its convex hull.
+    Convex,
+    /// Each mesh as its triangles (self pairs).
+    Exact,
 }
 
 #[derive(Serialize)]
@@ -118,6 +133,7 @@ struct Output {
     source: String,
     root: String,
     layout: &'static str,
+    mesh: &'static str,
     #[serde(skip_serializing_if = "Option::is_none")]
     footprint_frame: Option<&'static str>,
     pairs_enabled: Vec<[String; 2]>,
@@ -182,6 +198,10 @@ pub fn run(args: Args) -> Result<()> {
     };
     let mut first_placements = None;
     let mut scratch = Vec::new();
+    let exact = match args.mesh {
+        MeshMode::Exact => Some(ExactGeometry::new(&gm)?),
+        MeshMode::Convex => None,
+    };
     let mut out_states = Vec::with_capacity(states.len());
     for (k, s) in states.iter_mut().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
@@ -198,7 +218,10 @@ pub fn run(args: Args) -> Result<()> {
         if first_placements.is_none() {
             first_placements = Some(gd.placements.clone());
         }
-        compute_distances(&gm, &mut gd, which);
+        match &exact {
+            Some(ex) => compute_exact_distances(&gm, ex, &mut gd, which),
+            None => compute_distances(&gm, &mut gd, which),
+        };
         compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
         let mut pairs = Vec::new();
         for (p, &[a, b]) in gm.pairs.iter().enumerate() {
@@ -251,7 +274,8 @@ pub fn run(args: Args) -> Result<()> {
         };
         out_states.push(StateOut {
             min_distance,
-            in_collision: min_distance < 0.0,
+            // Exact meshes touch at 0 (a surface distance is never negative).
+            in_collision: min_distance < 0.0 || (exact.is_some() && min_distance <= 0.0),
             closest,
             gradient,
             footprint,
@@ -266,6 +290,10 @@ pub fn run(args: Args) -> Result<()> {
         layout: match args.layout {
             Layout::Moma => "moma",
             Layout::Pinocchio => "pinocchio",
+        },
+        mesh: match args.mesh {
+            MeshMode::Convex => "convex",
+            MeshMode::Exact => "exact",
         },
         footprint_frame: args.footprint.then_some(if model.root == RootJoint::Fixed {
             "world"
