@@ -4,9 +4,10 @@
 use crate::err;
 use crate::model::{PyModel, Vec1, check_state, load};
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneOptions,
-    base_ground_pose, compute_distances, compute_scene_distances, footprint as world_footprint,
-    footprint_in, min_distance_gradient, read_scene, update_geometry_placements,
+    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData,
+    SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
+    compute_scene_distances, footprint as world_footprint, footprint_in, min_distance_gradient,
+    read_scene, update_geometry_placements,
 };
 use moma::multibody::Data;
 use nalgebra::DVector;
@@ -115,9 +116,12 @@ impl PyScene {
 /// world frame), `min_distance`, `in_collision` (min < 0) and `closest` (a, b); with
 /// `gradient=True` also `gradient` (nv,): the derivative of `min_distance` (the closest
 /// pair's signed distance) with respect to the velocity coordinates (∂d/∂q for a fixed
-/// or planar root).
+/// or planar root). `mesh="exact"` measures the self pairs between the links' triangle
+/// meshes (surface distances, 0 where triangles touch; `in_collision` when the minimum
+/// is 0) instead of their convex hulls (`"convex"`, the default).
 #[pyfunction]
-#[pyo3(signature = (model, geom, q, scene = None, all_pairs = false, gradient = false))]
+#[pyo3(signature = (model, geom, q, scene = None, all_pairs = false, gradient = false, mesh = "convex"))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn distances<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
@@ -126,7 +130,18 @@ pub(crate) fn distances<'py>(
     scene: Option<PyRef<'py, PyScene>>,
     all_pairs: bool,
     gradient: bool,
+    mesh: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let exact = match mesh {
+        "convex" => None,
+        "exact" => Some(ExactGeometry::new(&geom.inner).map_err(err)?),
+        other => {
+            return Err(err(moma::Error::invalid(
+                "distances: mesh",
+                format!("'{other}' is not 'convex' or 'exact'"),
+            )));
+        }
+    };
     let m = &model.inner;
     let gm = &geom.inner;
     let mut qv = DVector::zeros(m.nq);
@@ -148,7 +163,10 @@ pub(crate) fn distances<'py>(
     } else {
         PairSelection::Enabled
     };
-    compute_distances(gm, &mut gd, which);
+    match &exact {
+        Some(ex) => compute_exact_distances(gm, ex, &mut gd, which),
+        None => compute_distances(gm, &mut gd, which),
+    };
     compute_scene_distances(gm, &mut gd, scene, &mut sd);
     let mut names = Vec::new();
     let mut results = Vec::new();
@@ -179,7 +197,7 @@ pub(crate) fn distances<'py>(
     let out = PyDict::new(py);
     let min = best.map_or(f64::INFINITY, |i| dist[i]);
     out.set_item("min_distance", min)?;
-    out.set_item("in_collision", min < 0.0)?;
+    out.set_item("in_collision", min < 0.0 || (exact.is_some() && min <= 0.0))?;
     out.set_item("closest", best.map(|i| names[i].clone()))?;
     out.set_item("pairs", names)?;
     out.set_item("distance", PyArray1::from_vec(py, dist))?;

@@ -135,3 +135,20 @@ def test_footprint_contains_the_geometry_and_follows_the_base(fetch):
         moma.footprint(model, geom, q, frame="base")
     with pytest.raises(moma.MomaError, match="'side' is not"):
         moma.footprint(planar, pgeom, qp, frame="side")
+
+
+def test_exact_meshes_match_coal(fetch):
+    model, geom = fetch
+    ref = json.loads((DATA / "collision" / "fetch_self_public.json").read_text())
+    state = next(s for s in ref["states"] if s["in_collision_enabled_mesh"])
+    q = moma.from_pinocchio(model, np.array(state["q"]))["q"]
+    out = moma.distances(model, geom, q, mesh="exact")
+    got = {tuple(sorted(p)): d for p, d in zip(out["pairs"], out["distance"])}
+    n = 0
+    for (a, b), want, on in zip(ref["pairs"], state["distance_mesh"], ref["pair_enabled"]):
+        if on:
+            assert abs(got[tuple(sorted((a, b)))] - want) <= 1e-6, (a, b)
+            n += 1
+    assert n == 76 and out["in_collision"] and out["min_distance"] == 0.0
+    with pytest.raises(moma.MomaError, match="'hull' is not"):
+        moma.distances(model, geom, q, mesh="hull")
