@@ -1,7 +1,8 @@
 //! Collision geometry: the robot's shapes from the URDF (primitives and meshes, a mesh
 //! used as its convex hull), the link pairs to check (minus adjacent, fixed-together and
 //! SRDF-disabled pairs), signed distances with world witness points, in-collision with
-//! early exit, and the distance's derivative.
+//! early exit, the distance's derivative, the robot's footprint, and exact triangle-mesh
+//! distances as an option ([`exact`]).
 //!
 //! Pinocchio's idiom: an immutable [`GeometryModel`] attached to the joints of a
 //! rigid-body [`Model`](crate::multibody::Model), a [`GeometryData`] workspace, and free
