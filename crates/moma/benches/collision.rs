@@ -1,8 +1,9 @@
 //! Collision-geometry bench on Fetch (fixed base, 21 links with STL collision meshes used
 //! as convex hulls, the SRDF's 76 enabled pairs): one full self-distance evaluation, one
 //! in-collision check with early exit, the distances of all 21 links to MotionBenchMaker's
-//! table scene (the YAML's 12 objects) and its in-collision check, and the distances to
-//! a scene of ten boxes and to a scene of 100,000 voxels. Each iteration runs forward
+//! table scene (the YAML's 12 objects) and its in-collision check, the same scene
+//! voxelised as coal's OcTree row (99,826 cells; distances and in-collision), and the
+//! distances to a scene of ten boxes and to a slab of 100,000 voxels. Each iteration runs forward
 //! kinematics, the geometry placements and the query on the next of the 100 states of
 //! `benches/data/fetch_states_pinocchio.txt` — the states `bench/pinocchio/run.sh
 //! collision` times with Pinocchio + coal — with the warm starts of the previous state.
