@@ -9,7 +9,12 @@
 // fetch.srdf; it is also the package directory that `package://fetch_description/...` resolves
 // against. SCENE.txt is the flat file mbm_scene.py writes from a MotionBenchMaker scene YAML.
 // Output: `robot query nq nv median_ns` lines ('#' lines are notes and sanity checks).
-// Env: NBATCH, WARMUP (batch counts), VOXELS (target voxel count of the voxel scene, 0 = none).
+// Env: NBATCH, WARMUP (batch counts), VOXELS (target voxel count of the voxel scene, 0 = none),
+// STATES (a file of Pinocchio-layout states, one per line, '#' lines skipped, as
+// fetch_states.py writes: the states moma's `cargo bench --bench collision` times too; run.sh
+// passes the repository's crates/moma/benches/data/fetch_states_pinocchio.txt). Without it,
+// NSTATES seeded random states. With STATES the per-state verdicts of the in-collision
+// checks are printed as '# verdicts QUERY 0101...' lines to compare with moma's.
 //
 // Model (the definitions of the collision reference set): fixed base (no root joint, base_link
 // = world), every <collision> element of the URDF, each mesh replaced by the convex hull of its
@@ -57,7 +62,7 @@ using pinocchio::GeometryObject;
 using pinocchio::Model;
 using Eigen::VectorXd;
 
-static const int NSTATES = 100;
+static int NSTATES = 100;
 static int NBATCH = 100;
 static int WARMUP = 10;
 static volatile double g_sink = 0.0;
@@ -210,6 +215,33 @@ static std::vector<VectorXd> random_states(const Model &model, unsigned seed, in
   return Q;
 }
 
+// States from a text file: one Pinocchio-layout q per line ('#' lines skipped).
+static std::vector<VectorXd> read_states(const Model &model, const std::string &path) {
+  std::ifstream in(path);
+  if (!in) {
+    std::fprintf(stderr, "cannot read states %s\n", path.c_str());
+    std::exit(1);
+  }
+  std::vector<VectorXd> Q;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream s(line);
+    VectorXd q(model.nq);
+    for (int k = 0; k < model.nq; ++k) s >> q[k];
+    if (!s) {
+      std::fprintf(stderr, "%s: a state line with fewer than nq = %d numbers\n", path.c_str(), model.nq);
+      std::exit(1);
+    }
+    Q.push_back(q);
+  }
+  if (Q.empty()) {
+    std::fprintf(stderr, "%s: no state\n", path.c_str());
+    std::exit(1);
+  }
+  return Q;
+}
+
 // MotionBenchMaker's default Fetch state (configs/robots/fetch.yaml: tucked arm, torso 0.1 m).
 static VectorXd mbm_default_state(const Model &model) {
   const std::vector<std::pair<std::string, double>> js = {
@@ -291,7 +323,16 @@ int main(int argc, char **argv) {
                 (int)dr.enable_cached_gjk_guess, cr.security_margin);
   }
 
-  const std::vector<VectorXd> Q = random_states(model, 42, NSTATES);
+  const char *states_path = std::getenv("STATES");
+  const std::vector<VectorXd> Q = states_path ? read_states(model, states_path) : random_states(model, 42, NSTATES);
+  NSTATES = (int)Q.size();
+  std::printf("# states: %s (%d)\n", states_path ? states_path : "seeded random", NSTATES);
+  // One character per state: 1 if the query reports a collision.
+  auto verdicts = [&](const char *what, auto &&collides) {
+    std::string v;
+    for (const VectorXd &q : Q) v += collides(q) ? '1' : '0';
+    std::printf("# verdicts %s %s\n", what, v.c_str());
+  };
 
   // Sanity checks against the collision reference set: MotionBenchMaker's tucked default state
   // overlaps torso_lift_link's hull (about -2.5 cm), and how many random states collide.
@@ -304,12 +345,21 @@ int main(int argc, char **argv) {
     double dm = 1e9;
     for (auto &r : gdata_mesh.distanceResults) dm = std::min(dm, r.min_distance);
     std::printf("# check default_state min_enabled_mesh=%.9f\n", dm);
+    double sum = 0;
+    for (const VectorXd &q : Q) {
+      const std::size_t k = pinocchio::computeDistances(model, data, geom, gdata, q);
+      sum += gdata.distanceResults[k].min_distance;
+    }
+    std::printf("# check mean min self distance over the states %.9f\n", sum / NSTATES);
     int nc = 0, ncm = 0;
     for (const VectorXd &q : Q) {
       nc += pinocchio::computeCollisions(model, data, geom, gdata, q, true);
       ncm += pinocchio::computeCollisions(model, data, geom_mesh, gdata_mesh, q, true);
     }
     std::printf("# check random states in self-collision: hulls %d/%d, meshes %d/%d\n", nc, NSTATES, ncm, NSTATES);
+    verdicts("self_collisions_first", [&](const VectorXd &q) {
+      return pinocchio::computeCollisions(model, data, geom, gdata, q, true);
+    });
   }
 
   std::printf("# robot query nq nv median_ns   ('# min' lines: fastest batch)\n");
@@ -370,6 +420,17 @@ int main(int argc, char **argv) {
     for (const VectorXd &q : Q) nc += pinocchio::computeCollisions(model, data, gs, gsd, q, true);
     std::printf("# %s: %zu primitives, %zu link-object pairs, random states in collision %d/%d\n", label.c_str(),
                 scene.size(), gs.collisionPairs.size(), nc, NSTATES);
+    verdicts("scene_collisions_first", [&](const VectorXd &q) {
+      return pinocchio::computeCollisions(model, data, gs, gsd, q, true);
+    });
+    {
+      double sum = 0;
+      for (const VectorXd &q : Q) {
+        const std::size_t k = pinocchio::computeDistances(model, data, gs, gsd, q);
+        sum += gsd.distanceResults[k].min_distance;
+      }
+      std::printf("# check %s mean min scene distance over the states %.9f\n", label.c_str(), sum / NSTATES);
+    }
     {
       const std::size_t k = pinocchio::computeDistances(model, data, gs, gsd, mbm_default_state(model));
       std::printf("# check %s default_state min_distance=%.9f pair=%s\n", label.c_str(),
@@ -419,6 +480,9 @@ int main(int argc, char **argv) {
                   "states in collision %d/%d\n",
                   vlabel.c_str(), cells.size(), r, (std::size_t)tree->getTree()->getNumLeafNodes(),
                   gv.collisionPairs.size(), ncv, NSTATES);
+      verdicts("voxel_collisions_first", [&](const VectorXd &q) {
+        return pinocchio::computeCollisions(model, data, gv, gvd, q, true);
+      });
       report(vlabel, "voxel_collisions_first", median_ns_per_call([&](int i) {
                g_sink = g_sink + pinocchio::computeCollisions(model, data, gv, gvd, Q[i], true);
              }));

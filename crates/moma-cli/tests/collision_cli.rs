@@ -160,3 +160,441 @@ fn bad_input_exits_1_and_writes_nothing() {
         "{err}"
     );
 }
+
+/// Runs `moma collision` on Fetch with the table scene over `states` (moma layout) with
+/// `extra` flags; returns the parsed JSON and the standard output.
+fn run_fetch(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Value, String) {
+    let scene = format!("{DATA}/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml");
+    let mut all = Vec::new();
+    if root == "fixed" {
+        all.extend(["--scene", scene.as_str()]);
+    }
+    all.extend(extra);
+    run_fetch_with(root, states, &all, name)
+}
+
+/// As [`run_fetch`] without the table scene.
+fn run_fetch_with(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Value, String) {
+    let (urdf, srdf, pkg) = (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    );
+    let states_file = tmp(&format!("{name}_states.json"));
+    let qs: Vec<Value> = states
+        .iter()
+        .map(|q| serde_json::json!({ "q": q }))
+        .collect();
+    std::fs::write(
+        &states_file,
+        serde_json::json!({ "states": qs }).to_string(),
+    )
+    .unwrap();
+    let out = tmp(&format!("{name}_out.json"));
+    let mut args = fetch_args(&urdf, &srdf, &pkg);
+    args[3] = root;
+    args.extend([
+        "--states",
+        states_file.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    args.extend(extra);
+    let o = moma(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    (got, String::from_utf8(o.stdout).unwrap())
+}
+
+/// Arm postures of Fetch (moma layout, 15 joints) whose closest pairs are a link and the
+/// table (overlapping) and two links.
+fn postures() -> Vec<Vec<f64>> {
+    vec![
+        vec![
+            0., 0., 0.38, 0.1, 0.2, 0.1, 0.5, -0.3, 0.4, 1.2, 0.3, 0.8, 0.2, 0.03, 0.03,
+        ],
+        vec![
+            0., 0., 0.3, 0.1, 0.2, 0.1, 0.5, -0.3, 0.4, 1.2, 0.3, 0.8, 0.2, 0.03, 0.03,
+        ],
+        vec![
+            0., 0., 0.1, 0.1, 0.2, 0.1, 0.3, 0.6, 0.4, 0.4, 0.3, 0.8, 0.2, 0.03, 0.03,
+        ],
+        vec![
+            0., 0., 0.05, 0.1, 0.2, 0.1, 0.0, 0.9, 0.0, 0.2, 0.3, 0.5, 0.2, 0.03, 0.03,
+        ],
+        vec![
+            0., 0., 0.3, -0.2, 0.4, 0.7, -1.1, 0.2, 2.0, -1.5, 1.0, 1.1, -0.6, 0.01, 0.02,
+        ],
+    ]
+}
+
+#[test]
+fn gradient_matches_finite_differences_of_the_minimum() {
+    let h = 1e-6;
+    let base = postures();
+    let mut states = Vec::new();
+    for q in &base {
+        states.push(q.clone());
+        for k in 0..q.len() {
+            for s in [h, -h] {
+                let mut p = q.clone();
+                p[k] += s;
+                states.push(p);
+            }
+        }
+    }
+    let (got, _) = run_fetch("fixed", &states, &["--gradient"], "grad");
+    let out = got["states"].as_array().unwrap();
+    let n = base[0].len();
+    let (mut checked, mut scene_pairs, mut self_pairs) = (0, 0, 0);
+    for (i, _) in base.iter().enumerate() {
+        let s = &out[i * (2 * n + 1)];
+        let g: Vec<f64> = s["gradient"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(g.len(), n);
+        let d0 = s["min_distance"].as_f64().unwrap();
+        let objects = got["scene_objects"].as_array().unwrap();
+        if objects.contains(&s["closest"][1]) {
+            scene_pairs += 1;
+        } else {
+            self_pairs += 1;
+        }
+        for k in 0..n {
+            let (p, m) = (
+                &out[i * (2 * n + 1) + 1 + 2 * k],
+                &out[i * (2 * n + 1) + 2 + 2 * k],
+            );
+            // The same closest pair on both sides, and no kink: the one-sided slopes agree.
+            if p["closest"] != s["closest"] || m["closest"] != s["closest"] {
+                continue;
+            }
+            let (dp, dm) = (
+                p["min_distance"].as_f64().unwrap(),
+                m["min_distance"].as_f64().unwrap(),
+            );
+            if ((dp - d0) / h - (d0 - dm) / h).abs() > 1e-3 {
+                continue;
+            }
+            let fd = (dp - dm) / (2.0 * h);
+            assert!(
+                (fd - g[k]).abs() <= 1e-5 * (1.0 + fd.abs()),
+                "posture {i} dof {k}: gradient {} vs finite difference {fd}",
+                g[k]
+            );
+            if g[k].abs() > 1e-3 {
+                checked += 1;
+            }
+        }
+    }
+    assert!(
+        scene_pairs >= 1 && self_pairs >= 1,
+        "{scene_pairs} {self_pairs}"
+    );
+    assert!(checked >= 15, "{checked} non-zero derivatives checked");
+}
+
+fn polygon(v: &Value) -> Vec<[f64; 2]> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|p| [p[0].as_f64().unwrap(), p[1].as_f64().unwrap()])
+        .collect()
+}
+
+fn inside_convex(poly: &[[f64; 2]], p: [f64; 2]) -> bool {
+    (0..poly.len()).all(|i| {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) >= -1e-9
+    })
+}
+
+#[test]
+fn footprint_holds_the_geometry_and_rides_with_the_base() {
+    let arm = postures();
+    let (fixed, stdout) = run_fetch("fixed", &arm, &["--footprint", "--all-pairs"], "fp_fixed");
+    assert_eq!(fixed["footprint_frame"], "world");
+    let objects = fixed["scene_objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 12);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), arm.len());
+    for (s, line) in fixed["states"].as_array().unwrap().iter().zip(&lines) {
+        let poly = polygon(&s["footprint"]);
+        assert!(poly.len() >= 3);
+        // The printed text is the JSON's polygon, in `moma plan --footprint`'s syntax.
+        assert_eq!(s["footprint_text"], *line);
+        let parsed: Vec<f64> = line.split([';', ',']).map(|t| t.parse().unwrap()).collect();
+        assert_eq!(parsed, poly.iter().flatten().copied().collect::<Vec<_>>());
+        // Every witness point lies on the robot's geometry: its ground projection is in
+        // the footprint (all link pairs, and each link against the table).
+        let mut n = 0;
+        for p in s["pairs"].as_array().unwrap() {
+            let mut pts = vec![&p["witness_a"]];
+            if !objects.contains(&p["b"]) {
+                pts.push(&p["witness_b"]);
+            }
+            for w in pts {
+                let xy = [w[0].as_f64().unwrap(), w[1].as_f64().unwrap()];
+                assert!(inside_convex(&poly, xy), "{xy:?} outside the footprint");
+                n += 1;
+            }
+        }
+        assert!(n > 400, "{n}");
+    }
+    // On a planar base at (1, 2, 0.7) the footprint in the base frame is the fixed
+    // robot's footprint in the world.
+    let moved: Vec<Vec<f64>> = arm
+        .iter()
+        .map(|q| [&[1.0, 2.0, 0.7][..], q].concat())
+        .collect();
+    let (planar, _) = run_fetch("planar", &moved, &["--footprint"], "fp_planar");
+    assert_eq!(planar["footprint_frame"], "base");
+    for (a, b) in fixed["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(planar["states"].as_array().unwrap())
+    {
+        // The same polygon up to round-off (its first vertex may differ).
+        let (pa, pb) = (polygon(&a["footprint"]), polygon(&b["footprint"]));
+        assert!(
+            pa.len().abs_diff(pb.len()) <= 2,
+            "{} vs {}",
+            pa.len(),
+            pb.len()
+        );
+        assert!(pa.iter().all(|p| inside_convex(&pb, *p)));
+        assert!(pb.iter().all(|p| inside_convex(&pa, *p)));
+        let area = |p: &[[f64; 2]]| {
+            (0..p.len())
+                .map(|i| {
+                    let (a, b) = (p[i], p[(i + 1) % p.len()]);
+                    a[0] * b[1] - b[0] * a[1]
+                })
+                .sum::<f64>()
+                / 2.0
+        };
+        assert!(area(&pa) > 0.2 && (area(&pa) - area(&pb)).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn voxels_and_points_are_the_box_they_fill() {
+    // A 1 m × 0.5 m × 0.1 m plate in front of Fetch as 20 × 10 × 2 voxels of 5 cm, as a
+    // point cloud filling the same cells (two points per cell), and as one box.
+    let (r, origin) = (0.05, [0.5, -0.25, 0.7]);
+    let mut map = String::from("voxel 20 10 2\n");
+    let mut cloud = String::from("# x y z\n");
+    for x in 0..20 {
+        for y in 0..10 {
+            for z in 0..2 {
+                map.push_str(&format!("{x} {y} {z}\n"));
+                for f in [0.3, 0.7] {
+                    let p = [x, y, z]
+                        .iter()
+                        .zip(origin)
+                        .map(|(i, o)| o + (*i as f64 + f) * r)
+                        .collect::<Vec<_>>();
+                    cloud.push_str(&format!("{},{},{}\n", p[0], p[1], p[2]));
+                }
+            }
+        }
+    }
+    let (map_file, cloud_file, box_file) =
+        (tmp("plate.3dmap"), tmp("plate.xyz"), tmp("plate.yaml"));
+    std::fs::write(&map_file, map).unwrap();
+    std::fs::write(&cloud_file, cloud).unwrap();
+    std::fs::write(
+        &box_file,
+        "world:\n  collision_objects:\n    - header: {frame_id: world}\n      id: plate\n      primitives: [{type: box, dimensions: [1.0, 0.5, 0.1]}]\n      primitive_poses: [{position: [1.0, 0.0, 0.75], orientation: [0, 0, 0, 1]}]\n",
+    )
+    .unwrap();
+    let states = postures();
+    let scene_pairs = |v: &Value| -> Vec<(String, f64)> {
+        v["states"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|s| s["pairs"].as_array().unwrap().clone())
+            .filter(|p| p["b"] == "plate")
+            .map(|p| {
+                (
+                    p["a"].as_str().unwrap().to_string(),
+                    p["distance"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (as_box, _) = run_fetch_with(
+        "fixed",
+        &states,
+        &["--scene", box_file.to_str().unwrap()],
+        "plate_box",
+    );
+    let size = r.to_string();
+    let (as_voxels, _) = run_fetch_with(
+        "fixed",
+        &states,
+        &[
+            "--voxels",
+            map_file.to_str().unwrap(),
+            "--voxel-size",
+            &size,
+            "--voxel-origin",
+            "0.5,-0.25,0.7",
+        ],
+        "plate_voxels",
+    );
+    let (as_points, _) = run_fetch_with(
+        "fixed",
+        &states,
+        &[
+            "--points",
+            cloud_file.to_str().unwrap(),
+            "--voxel-size",
+            &size,
+        ],
+        "plate_points",
+    );
+    let want = scene_pairs(&as_box);
+    assert_eq!(want.len(), 21 * states.len());
+    let mut near = 0;
+    for got in [scene_pairs(&as_voxels), scene_pairs(&as_points)] {
+        assert_eq!(got.len(), want.len());
+        for ((la, d), (lb, w)) in got.iter().zip(&want) {
+            assert_eq!(la, lb);
+            // Apart, the distance to a union of cubes that fills a box is the distance
+            // to the box (overlapping, the depths differ: each cube is shallower).
+            if *w > 0.0 {
+                assert!((d - w).abs() < 1e-9, "{la}: {d} vs the box's {w}");
+                near += usize::from(*w < 0.3);
+            } else {
+                assert!(*d < 0.0, "{la}: {d} apart but overlapping the box ({w})");
+            }
+        }
+    }
+    assert!(near >= 10, "{near} links within 0.3 m of the plate");
+    // Bad input: a voxel size that is not positive, a bad point line.
+    let o = moma(&[
+        "collision",
+        "x.urdf",
+        "--root",
+        "fixed",
+        "--states",
+        "s.json",
+        "--points",
+        cloud_file.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "--points without --voxel-size is a usage error"
+    );
+    std::fs::write(&cloud_file, "0 0 0\n1 2\n").unwrap();
+    let states_file = tmp("plate_bad_states.json");
+    std::fs::write(
+        &states_file,
+        serde_json::json!({"states": [{"q": states[0]}]}).to_string(),
+    )
+    .unwrap();
+    let (urdf, srdf, pkg) = (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    );
+    let mut args = fetch_args(&urdf, &srdf, &pkg);
+    args.extend([
+        "--states",
+        states_file.to_str().unwrap(),
+        "--points",
+        cloud_file.to_str().unwrap(),
+        "--voxel-size",
+        "0.05",
+    ]);
+    let o = moma(&args);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("plate.xyz") && err.contains("line 2"), "{err}");
+    args.truncate(args.len() - 2);
+    args.push("--voxel-size=-0.05");
+    let o = moma(&args);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--voxel-size"));
+}
+
+#[test]
+fn exact_meshes_match_coal_and_touch_at_zero() {
+    let reference: Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{DATA}/collision/fetch_self_public.json")).unwrap(),
+    )
+    .unwrap();
+    let all = reference["states"].as_array().unwrap();
+    // One state whose enabled meshes touch and one whose do not.
+    let pick: Vec<&Value> = [true, false]
+        .iter()
+        .map(|t| {
+            all.iter()
+                .find(|s| s["in_collision_enabled_mesh"] == *t)
+                .unwrap()
+        })
+        .collect();
+    let states_file = tmp("exact_states.json");
+    let qs: Vec<Value> = pick
+        .iter()
+        .map(|s| serde_json::json!({"q": s["q"]}))
+        .collect();
+    std::fs::write(
+        &states_file,
+        serde_json::json!({ "states": qs }).to_string(),
+    )
+    .unwrap();
+    let (urdf, srdf, pkg) = (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    );
+    let out = tmp("exact_out.json");
+    let mut args = fetch_args(&urdf, &srdf, &pkg);
+    args.extend([
+        "--states",
+        states_file.to_str().unwrap(),
+        "--layout",
+        "pinocchio",
+        "--mesh",
+        "exact",
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    let o = moma(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(got["mesh"], "exact");
+    let ref_pairs = reference["pairs"].as_array().unwrap();
+    for (s, want) in got["states"].as_array().unwrap().iter().zip(&pick) {
+        let pairs = s["pairs"].as_array().unwrap();
+        assert_eq!(pairs.len(), 76);
+        for p in pairs {
+            let k = ref_pairs
+                .iter()
+                .position(|r| {
+                    (r[0] == p["a"] && r[1] == p["b"]) || (r[0] == p["b"] && r[1] == p["a"])
+                })
+                .unwrap();
+            let (d, w) = (
+                p["distance"].as_f64().unwrap(),
+                want["distance_mesh"][k].as_f64().unwrap(),
+            );
+            assert!(
+                (d - w).abs() <= 1e-6,
+                "{} {}: {d} vs coal {w}",
+                p["a"],
+                p["b"]
+            );
+            assert!(d >= 0.0);
+        }
+        assert_eq!(s["in_collision"], want["in_collision_enabled_mesh"]);
+    }
+}

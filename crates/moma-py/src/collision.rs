@@ -1,10 +1,13 @@
-//! Collision geometry: `GeometryModel.from_urdf`, `Scene.from_yaml` and `distances`.
+//! Collision geometry: `GeometryModel.from_urdf`, `Scene.from_yaml`, `distances` (with
+//! the minimum distance's gradient on request) and `footprint`.
 
 use crate::err;
 use crate::model::{PyModel, Vec1, check_state, load};
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneOptions,
-    compute_distances, compute_scene_distances, read_scene, update_geometry_placements,
+    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData,
+    SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
+    compute_scene_distances, footprint as world_footprint, footprint_in, min_distance_gradient,
+    read_scene, update_geometry_placements,
 };
 use moma::multibody::Data;
 use nalgebra::DVector;
@@ -110,9 +113,15 @@ impl PyScene {
 /// Signed distances in configuration `q`: the enabled self pairs (every link pair with
 /// `all_pairs=True`) and every (link, scene object) pair. Returns a dict with
 /// `pairs` (list of (a, b) names), `distance` (n,), `witness_a` and `witness_b` (n, 3,
-/// world frame), `min_distance`, `in_collision` (min < 0) and `closest` (a, b).
+/// world frame), `min_distance`, `in_collision` (min < 0) and `closest` (a, b); with
+/// `gradient=True` also `gradient` (nv,): the derivative of `min_distance` (the closest
+/// pair's signed distance) with respect to the velocity coordinates (∂d/∂q for a fixed
+/// or planar root). `mesh="exact"` measures the self pairs between the links' triangle
+/// meshes (surface distances, 0 where triangles touch; `in_collision` when the minimum
+/// is 0) instead of their convex hulls (`"convex"`, the default).
 #[pyfunction]
-#[pyo3(signature = (model, geom, q, scene = None, all_pairs = false))]
+#[pyo3(signature = (model, geom, q, scene = None, all_pairs = false, gradient = false, mesh = "convex"))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn distances<'py>(
     py: Python<'py>,
     model: PyRef<'py, PyModel>,
@@ -120,7 +129,19 @@ pub(crate) fn distances<'py>(
     q: Vec1<'py>,
     scene: Option<PyRef<'py, PyScene>>,
     all_pairs: bool,
+    gradient: bool,
+    mesh: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let exact = match mesh {
+        "convex" => None,
+        "exact" => Some(ExactGeometry::new(&geom.inner).map_err(err)?),
+        other => {
+            return Err(err(moma::Error::invalid(
+                "distances: mesh",
+                format!("'{other}' is not 'convex' or 'exact'"),
+            )));
+        }
+    };
     let m = &model.inner;
     let gm = &geom.inner;
     let mut qv = DVector::zeros(m.nq);
@@ -131,14 +152,21 @@ pub(crate) fn distances<'py>(
     let mut data = Data::new(m);
     let mut gd = GeometryData::new(gm);
     let mut sd = SceneData::new(gm, scene);
-    moma::kinematics::forward_kinematics(m, &mut data, &qv);
+    if gradient {
+        moma::kinematics::compute_joint_jacobians(m, &mut data, &qv);
+    } else {
+        moma::kinematics::forward_kinematics(m, &mut data, &qv);
+    }
     update_geometry_placements(gm, &data, &mut gd);
     let which = if all_pairs {
         PairSelection::All
     } else {
         PairSelection::Enabled
     };
-    compute_distances(gm, &mut gd, which);
+    match &exact {
+        Some(ex) => compute_exact_distances(gm, ex, &mut gd, which),
+        None => compute_distances(gm, &mut gd, which),
+    };
     compute_scene_distances(gm, &mut gd, scene, &mut sd);
     let mut names = Vec::new();
     let mut results = Vec::new();
@@ -169,7 +197,7 @@ pub(crate) fn distances<'py>(
     let out = PyDict::new(py);
     let min = best.map_or(f64::INFINITY, |i| dist[i]);
     out.set_item("min_distance", min)?;
-    out.set_item("in_collision", min < 0.0)?;
+    out.set_item("in_collision", min < 0.0 || (exact.is_some() && min <= 0.0))?;
     out.set_item("closest", best.map(|i| names[i].clone()))?;
     out.set_item("pairs", names)?;
     out.set_item("distance", PyArray1::from_vec(py, dist))?;
@@ -181,12 +209,73 @@ pub(crate) fn distances<'py>(
     };
     out.set_item("witness_a", mat(wa)?)?;
     out.set_item("witness_b", mat(wb)?)?;
+    if gradient {
+        let mut g = DVector::zeros(m.nv);
+        if min_distance_gradient(m, &data, gm, &gd, scene, &sd, &mut g).is_none() {
+            return Err(err(moma::Error::invalid(
+                "distances",
+                "no pair to differentiate (no enabled pair and no scene)",
+            )));
+        }
+        out.set_item("gradient", PyArray1::from_vec(py, g.as_slice().to_vec()))?;
+    }
     Ok(out)
+}
+
+/// The robot's planar footprint in configuration `q`: the convex hull (m, 2),
+/// counter-clockwise, of its collision geometry projected on the ground (round shapes
+/// through circumscribed 32-gons). `frame="base"` (the default for a planar or
+/// free-flyer root) expresses it in the base's ground frame (x forward), as `moma plan
+/// --footprint` takes it; `frame="world"` (the default for a fixed root) in the world.
+#[pyfunction]
+#[pyo3(signature = (model, geom, q, frame = None))]
+pub(crate) fn footprint<'py>(
+    py: Python<'py>,
+    model: PyRef<'py, PyModel>,
+    geom: PyRef<'py, PyGeometryModel>,
+    q: Vec1<'py>,
+    frame: Option<&str>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = &model.inner;
+    let gm = &geom.inner;
+    let mut qv = DVector::zeros(m.nq);
+    load("footprint", "q", q.as_array(), &mut qv)?;
+    check_state(m, || "footprint".into(), qv.as_slice(), None, None, None)?;
+    let mut data = Data::new(m);
+    let mut gd = GeometryData::new(gm);
+    moma::kinematics::forward_kinematics(m, &mut data, &qv);
+    update_geometry_placements(gm, &data, &mut gd);
+    let base = base_ground_pose(m, &data);
+    let mut scratch = Vec::new();
+    let poly = match (frame, base) {
+        (None | Some("base"), Some((origin, yaw))) => {
+            footprint_in(gm, &gd, &origin, yaw, &mut scratch)
+        }
+        (None | Some("world"), _) => world_footprint(gm, &gd, &mut scratch),
+        (Some("base"), None) => {
+            return Err(err(moma::Error::invalid(
+                "footprint: frame",
+                "'base' needs a planar or free-flyer root (a fixed root's base is the world)",
+            )));
+        }
+        (Some(other), _) => {
+            return Err(err(moma::Error::invalid(
+                "footprint: frame",
+                format!("'{other}' is not 'base' or 'world'"),
+            )));
+        }
+    };
+    let rows: Vec<Vec<f64>> = poly.iter().map(|p| vec![p.x, p.y]).collect();
+    if rows.is_empty() {
+        return Ok(PyArray2::zeros(py, [0, 2], false));
+    }
+    PyArray2::from_vec2(py, &rows).map_err(err)
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyGeometryModel>()?;
     m.add_class::<PyScene>()?;
     m.add_function(wrap_pyfunction!(distances, m)?)?;
+    m.add_function(wrap_pyfunction!(footprint, m)?)?;
     Ok(())
 }

@@ -307,7 +307,8 @@ fn bad_input_names_the_file_and_the_element() {
 #[test]
 fn panda_without_its_meshes_names_the_first_link_and_uri() {
     // The repository's Panda URDF has 17 collision elements: 9 STL meshes of
-    // example-robot-data (not shipped here) and 8 boxes on the fingers.
+    // example-robot-data (in tests/data/robots/panda, not given here) and 8 boxes on the
+    // fingers.
     let urdf = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pinocchio/urdf/panda.urdf");
     let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
     let e = GeometryModel::from_urdf(&model, &urdf, &GeometryOptions::default())

@@ -1,14 +1,18 @@
 //! `moma collision ROBOT.urdf --root R [--srdf FILE] [--package-dir DIR]... [--scene
 //! SCENE.yaml] --states STATES.json [--layout moma|pinocchio] [--all-pairs]
-//! [--output OUT.json] [--svg FIG.svg]`: signed distances between the robot's links (and
-//! against the scene's objects) for each state. Schema: `docs/cli.md`.
+//! [--mesh convex|exact] [--voxels MAP.3dmap | --points CLOUD.xyz --voxel-size R [--voxel-origin X,Y,Z]]
+//! [--footprint] [--gradient] [--output OUT.json] [--svg FIG.svg]`: signed distances
+//! between the robot's links (and against the scene's objects) for each state, with the
+//! robot's planar footprint and the minimum distance's derivative on request. Schema:
+//! `docs/cli.md`.
 
 use super::common::{Layout, LayoutConv, load_model, parse_root, read_states};
 use anyhow::{Context, Result};
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection, Scene, SceneData,
-    SceneOptions, compute_distances, compute_scene_distances, outline_points, read_scene,
-    update_geometry_placements,
+    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection,
+    Scene, SceneData, SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
+    compute_scene_distances, footprint, footprint_in, min_distance_gradient, outline_points,
+    point_cloud_object, read_points, read_scene, update_geometry_placements, voxel_object,
 };
 use moma::kinematics;
 use moma::multibody::{Data, FrameKind, RootJoint};
@@ -36,6 +40,22 @@ pub struct Args {
     /// fixed root, in the robot's root link.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// Blocked voxels of a Moving AI `.3dmap` as one more scene object (its id: the file
+    /// name without extension), cubes of `--voxel-size` m, voxel (0, 0, 0) at
+    /// `--voxel-origin`, world frame.
+    #[arg(long, requires = "voxel_size")]
+    pub voxels: Option<PathBuf>,
+    /// A point cloud (text: `x y z` or `x,y,z` per line, world frame, `#` comments)
+    /// binned into voxels of `--voxel-size` m (cells `floor(p / size)`) as one more scene
+    /// object (its id: the file name without extension).
+    #[arg(long, requires = "voxel_size")]
+    pub points: Option<PathBuf>,
+    /// Edge of the voxels of `--voxels` and `--points` (m).
+    #[arg(long)]
+    pub voxel_size: Option<f64>,
+    /// World position of the `.3dmap`'s corner (voxel (0, 0, 0)'s low corner): `X,Y,Z`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_values_t = [0.0, 0.0, 0.0])]
+    pub voxel_origin: Vec<f64>,
     /// States file (as `moma dynamics`): `{"states": [{"q": [..]}, ..]}`.
     #[arg(long)]
     pub states: PathBuf,
@@ -43,10 +63,29 @@ pub struct Args {
     /// pinocchio (continuous joints as cos, sin; planar root [x, y, cos θ, sin θ]).
     #[arg(long, value_enum, default_value_t = Layout::Moma)]
     pub layout: Layout,
+    /// Link meshes as their convex hulls (signed distances, negative when overlapping)
+    /// or exactly, as their triangles (surface distances, 0 where triangles touch or
+    /// cross, as coal's between BVH meshes; self pairs only: the links keep their hulls
+    /// against the scene).
+    #[arg(long, value_enum, default_value_t = MeshMode::Convex)]
+    pub mesh: MeshMode,
     /// List and check every link pair, not only the enabled ones (not adjacent, not
     /// fixed to each other, not disabled by the SRDF).
     #[arg(long)]
     pub all_pairs: bool,
+    /// Add each state's planar footprint: the convex hull of the robot's collision
+    /// geometry projected on the ground, in the base frame (x forward) for a planar or
+    /// free-flyer root, in the world frame for a fixed one. In the JSON as `footprint`
+    /// (vertices, counter-clockwise) and `footprint_text` (`x,y;x,y;...`, as `moma plan
+    /// --footprint` takes it); with `--output`, the texts are also printed, one line per
+    /// state.
+    #[arg(long)]
+    pub footprint: bool,
+    /// Add each state's `gradient`: the derivative of `min_distance` (the closest pair's
+    /// signed distance) with respect to the velocity coordinates (nv entries; ∂d/∂q for a
+    /// fixed or planar root in the moma layout).
+    #[arg(long)]
+    pub gradient: bool,
     /// Write the JSON here (atomically) instead of standard output.
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -54,6 +93,15 @@ pub struct Args {
     /// into this SVG file.
     #[arg(long)]
     pub svg: Option<PathBuf>,
+}
+
+/// How link meshes enter the distances.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeshMode {
+    /// Each mesh as its convex hull.
+    Convex,
+    /// Each mesh as its triangles (self pairs).
+    Exact,
 }
 
 #[derive(Serialize)]
@@ -70,6 +118,12 @@ struct StateOut {
     min_distance: f64,
     in_collision: bool,
     closest: [String; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gradient: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    footprint: Option<Vec<[f64; 2]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    footprint_text: Option<String>,
     pairs: Vec<PairOut>,
 }
 
@@ -79,6 +133,9 @@ struct Output {
     source: String,
     root: String,
     layout: &'static str,
+    mesh: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    footprint_frame: Option<&'static str>,
     pairs_enabled: Vec<[String; 2]>,
     scene_objects: Vec<String>,
     states: Vec<StateOut>,
@@ -127,6 +184,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => Scene::default(),
     };
+    let mut scene = scene;
+    add_voxel_objects(&args, &mut scene)?;
     let mut states = read_states(&args.states, &["q"])?;
     let conv = LayoutConv::new(&model, args.layout);
     let mut data = Data::new(&model);
@@ -138,18 +197,31 @@ pub fn run(args: Args) -> Result<()> {
         PairSelection::Enabled
     };
     let mut first_placements = None;
+    let mut scratch = Vec::new();
+    let exact = match args.mesh {
+        MeshMode::Exact => Some(ExactGeometry::new(&gm)?),
+        MeshMode::Convex => None,
+    };
     let mut out_states = Vec::with_capacity(states.len());
     for (k, s) in states.iter_mut().enumerate() {
         let src = format!("{}: states[{k}]", args.states.display());
         conv.state_in(s, &src)?;
         kinematics::check_state(&model, &src, Some(&s.q), None, None, None)?;
         let q = DVector::from_column_slice(&s.q);
-        kinematics::forward_kinematics(&model, &mut data, &q);
+        if args.gradient {
+            // Forward kinematics and the joint Jacobians of q.
+            kinematics::compute_joint_jacobians(&model, &mut data, &q);
+        } else {
+            kinematics::forward_kinematics(&model, &mut data, &q);
+        }
         update_geometry_placements(&gm, &data, &mut gd);
         if first_placements.is_none() {
             first_placements = Some(gd.placements.clone());
         }
-        compute_distances(&gm, &mut gd, which);
+        match &exact {
+            Some(ex) => compute_exact_distances(&gm, ex, &mut gd, which),
+            None => compute_distances(&gm, &mut gd, which),
+        };
         compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
         let mut pairs = Vec::new();
         for (p, &[a, b]) in gm.pairs.iter().enumerate() {
@@ -178,10 +250,36 @@ pub fn run(args: Args) -> Result<()> {
                 "{src}: no pair to check (the robot has fewer than two links with enabled pairs and no scene is given)"
             );
         }
+        let gradient = if args.gradient {
+            let mut g = DVector::zeros(model.nv);
+            min_distance_gradient(&model, &data, &gm, &gd, &scene, &sd, &mut g)
+                .context("the closest pair for the gradient")?;
+            Some(g.as_slice().to_vec())
+        } else {
+            None
+        };
+        let (footprint, footprint_text) = if args.footprint {
+            let poly = match base_ground_pose(&model, &data) {
+                Some((origin, yaw)) => footprint_in(&gm, &gd, &origin, yaw, &mut scratch),
+                None => footprint(&gm, &gd, &mut scratch),
+            };
+            let text = poly
+                .iter()
+                .map(|p| format!("{},{}", p.x, p.y))
+                .collect::<Vec<_>>()
+                .join(";");
+            (Some(poly.iter().map(|p| [p.x, p.y]).collect()), Some(text))
+        } else {
+            (None, None)
+        };
         out_states.push(StateOut {
             min_distance,
-            in_collision: min_distance < 0.0,
+            // Exact meshes touch at 0 (a surface distance is never negative).
+            in_collision: min_distance < 0.0 || (exact.is_some() && min_distance <= 0.0),
             closest,
+            gradient,
+            footprint,
+            footprint_text,
             pairs,
         });
     }
@@ -193,6 +291,15 @@ pub fn run(args: Args) -> Result<()> {
             Layout::Moma => "moma",
             Layout::Pinocchio => "pinocchio",
         },
+        mesh: match args.mesh {
+            MeshMode::Convex => "convex",
+            MeshMode::Exact => "exact",
+        },
+        footprint_frame: args.footprint.then_some(if model.root == RootJoint::Fixed {
+            "world"
+        } else {
+            "base"
+        }),
         pairs_enabled: gm
             .pairs
             .iter()
@@ -212,13 +319,59 @@ pub fn run(args: Args) -> Result<()> {
     match &args.output {
         Some(p) => {
             files.push((p.clone(), json));
-            crate::output::write_all_atomic(&files)
+            crate::output::write_all_atomic(&files)?;
+            for s in &out.states {
+                if let Some(t) = &s.footprint_text {
+                    println!("{t}");
+                }
+            }
+            Ok(())
         }
         None => {
             crate::output::write_all_atomic(&files)?;
             crate::output::print_json(&out)
         }
     }
+}
+
+/// The `--voxels` and `--points` objects, appended to the scene.
+fn add_voxel_objects(args: &Args, scene: &mut Scene) -> Result<()> {
+    let id = |p: &std::path::Path| {
+        p.file_stem().map_or_else(
+            || "voxels".to_string(),
+            |s| s.to_string_lossy().into_owned(),
+        )
+    };
+    let size = args.voxel_size.unwrap_or(f64::NAN);
+    if (args.voxels.is_some() || args.points.is_some()) && !(size.is_finite() && size > 0.0) {
+        anyhow::bail!("--voxel-size: {size} must be a positive number of metres");
+    }
+    if let Some(path) = &args.voxels {
+        let grid = moma::planning::movingai::load_3dmap(path)?;
+        let o = &args.voxel_origin;
+        if o.len() != 3 {
+            anyhow::bail!("--voxel-origin: expected X,Y,Z, got {} numbers", o.len());
+        }
+        let origin = Vector3::new(o[0], o[1], o[2]);
+        let obj = voxel_object(&id(path), &grid, size, origin)
+            .with_context(|| format!("{}: --voxels", path.display()))?;
+        scene.objects.push(obj);
+    }
+    if let Some(path) = &args.points {
+        let points = read_points(path)?;
+        let obj = point_cloud_object(&id(path), &points, size)
+            .with_context(|| format!("{}: --points", path.display()))?;
+        scene.objects.push(obj);
+    }
+    let mut ids: Vec<&str> = scene.objects.iter().map(|o| o.id.as_str()).collect();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        anyhow::bail!(
+            "scene object id '{}' appears twice (a voxel or point file is named like another object)",
+            w[0]
+        );
+    }
+    Ok(())
 }
 
 /// Side (x–z) and top (x–y) views of the robot's shapes (blue) and the scene's (grey),

@@ -92,9 +92,20 @@ class Scene:
     def ids(self) -> list[str]: ...
 
 def distances(
-    model: Model, geom: GeometryModel, q: ArrayLike, scene: Optional[Scene] = None, all_pairs: bool = False
+    model: Model,
+    geom: GeometryModel,
+    q: ArrayLike,
+    scene: Optional[Scene] = None,
+    all_pairs: bool = False,
+    gradient: bool = False,
+    mesh: Literal["convex", "exact"] = "convex",
 ) -> dict[str, Any]:
-    """Signed distances: keys pairs, distance (n,), witness_a, witness_b (n, 3), min_distance, in_collision, closest."""
+    """Signed distances: keys pairs, distance (n,), witness_a, witness_b (n, 3), min_distance, in_collision, closest; gradient (nv,) of min_distance with gradient=True; mesh="exact" for triangle-mesh self distances."""
+
+def footprint(
+    model: Model, geom: GeometryModel, q: ArrayLike, frame: Optional[Literal["base", "world"]] = None
+) -> F64:
+    """Planar footprint (m, 2), counter-clockwise: base frame for a planar/free-flyer root, world for a fixed one."""
 
 def rnea(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
     """Inverse dynamics: tau = M(q) a + C(q, v) v + g(q) (nv)."""

@@ -5,8 +5,9 @@
 use super::convex::Convex;
 use super::geometry_data::GeometryData;
 use super::geometry_model::GeometryModel;
+use crate::multibody::{Data, Model, RootJoint};
 use crate::spatial::SE3;
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Rotation2, Vector2, Vector3};
 
 /// Segments of the polygon that replaces a circle in [`outline_points`].
 pub const CIRCLE_SEGMENTS: usize = 32;
@@ -81,6 +82,41 @@ pub fn footprint(
         outline_points(&o.shape, pose, points);
     }
     hull_2d(points.iter().map(|p| Vector2::new(p.x, p.y)))
+}
+
+/// The ground pose `(x, y, yaw)` of a mobile base after forward kinematics: the root
+/// joint's position in the world x–y plane and the heading of its x axis projected on
+/// the ground. `None` for a fixed root (the footprint then stays in the world frame).
+#[must_use]
+pub fn base_ground_pose(model: &Model, data: &Data) -> Option<(Vector2<f64>, f64)> {
+    if model.root == RootJoint::Fixed || model.njoints < 2 {
+        return None;
+    }
+    let m = &data.world_from_joint[1];
+    let r = &m.rotation;
+    Some((
+        Vector2::new(m.translation.x, m.translation.y),
+        r[(1, 0)].atan2(r[(0, 0)]),
+    ))
+}
+
+/// The footprint of [`footprint`] expressed in a planar frame on the ground with origin
+/// `origin` and heading `yaw` (world x–y): with the base's ground pose
+/// ([`base_ground_pose`]) it is the heading-aware footprint a planner moves with the
+/// base, as `moma plan --footprint` takes it. Counter-clockwise.
+#[must_use]
+pub fn footprint_in(
+    gm: &GeometryModel,
+    gd: &GeometryData,
+    origin: &Vector2<f64>,
+    yaw: f64,
+    points: &mut Vec<Vector3<f64>>,
+) -> Vec<Vector2<f64>> {
+    let to_frame = Rotation2::new(-yaw);
+    footprint(gm, gd, points)
+        .into_iter()
+        .map(|p| to_frame * (p - origin))
+        .collect()
 }
 
 /// The convex hull of planar points, counter-clockwise, without collinear points

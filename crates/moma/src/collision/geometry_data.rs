@@ -3,7 +3,7 @@
 
 use super::geometry_model::GeometryModel;
 use super::gjk::{EpaWorkspace, PairDistance, WarmStart, overlaps, signed_distance};
-use crate::multibody::{Data, Model};
+use crate::multibody::{Data, JointIndex, Model};
 use crate::spatial::SE3;
 use nalgebra::{DVector, Vector3};
 
@@ -177,18 +177,47 @@ pub fn distance_derivative(
         "distance_derivative: out must have length nv"
     );
     let [la, lb] = gm.pairs[p];
-    let r = &gd.results[p];
-    let (ja, jb) = (gm.links[la].joint, gm.links[lb].joint);
+    pair_derivative(
+        model,
+        data,
+        Some(gm.links[la].joint),
+        Some(gm.links[lb].joint),
+        &gd.results[p],
+        out,
+    );
+}
+
+/// Derivative of a signed distance `r` between a shape carried by joint `joint_a` and one
+/// carried by `joint_b` (`None`: fixed in the world, as a scene object) with respect to
+/// the velocity coordinates: `out[k] = n · (∂witness_b/∂v_k − ∂witness_a/∂v_k)`, from the
+/// world-frame joint Jacobians in `data.joint_jacobians` (run
+/// `kinematics::compute_joint_jacobians` first). See [`distance_derivative`].
+///
+/// # Panics
+/// If `out` does not have length `model.nv`.
+pub fn pair_derivative(
+    model: &Model,
+    data: &Data,
+    joint_a: Option<JointIndex>,
+    joint_b: Option<JointIndex>,
+    r: &PairDistance,
+    out: &mut DVector<f64>,
+) {
+    assert_eq!(
+        out.len(),
+        model.nv,
+        "pair_derivative: out must have length nv"
+    );
     for k in 0..model.nv {
         let jk = model.joint_of_dof[k];
         let col = data.joint_jacobians.column(k);
         let lin = Vector3::new(col[0], col[1], col[2]);
         let ang = Vector3::new(col[3], col[4], col[5]);
         let mut g = 0.0;
-        if model.is_ancestor(jk, jb) {
+        if joint_b.is_some_and(|jb| model.is_ancestor(jk, jb)) {
             g += r.normal.dot(&(lin + ang.cross(&r.witness_b)));
         }
-        if model.is_ancestor(jk, ja) {
+        if joint_a.is_some_and(|ja| model.is_ancestor(jk, ja)) {
             g -= r.normal.dot(&(lin + ang.cross(&r.witness_a)));
         }
         out[k] = g;

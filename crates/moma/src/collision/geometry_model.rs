@@ -2,7 +2,7 @@
 //! rigid-body `Model`, and the link pairs to check.
 
 use super::convex::Convex;
-use super::mesh::{ConvexHullData, convex_hull_vertices, read_mesh};
+use super::mesh::{ConvexHullData, TriangleMesh, convex_hull_vertices, read_mesh};
 use super::srdf::disabled_pairs;
 use super::urdf_geometry::{GeometrySpec, UrdfGeometry, read_urdf_geometry, resolve_uri};
 use crate::multibody::{FrameKind, JointIndex, Model};
@@ -10,6 +10,7 @@ use crate::spatial::SE3;
 use crate::{Error, Result};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// One convex shape of a link.
 #[derive(Clone, Debug)]
@@ -29,6 +30,9 @@ pub struct GeometryObject {
     pub bounding_centre: Vector3<f64>,
     /// Radius of that ball.
     pub bounding_radius: f64,
+    /// The mesh's triangles (object frame, scaled) for a mesh element, for exact
+    /// distances ([`super::exact`]); `None` for primitives.
+    pub mesh: Option<Arc<TriangleMesh>>,
 }
 
 /// A link with collision geometry.
@@ -84,7 +88,7 @@ impl GeometryModel {
         let mut gm = Self::from_elements(model, &elements.collisions, |g, uri, scale| {
             let path = resolve_uri(uri, &g.link, dir, &options.package_dirs)?;
             let mesh = read_mesh(&path, scale).map_err(|e| in_link(e, &g.link, uri))?;
-            Ok(convex_hull_vertices(&mesh.vertices))
+            Ok((convex_hull_vertices(&mesh.vertices), Arc::new(mesh)))
         })?;
         let adjacent: Vec<(usize, usize)> = elements
             .joints
@@ -137,7 +141,11 @@ impl GeometryModel {
     fn from_elements(
         model: &Model,
         elements: &[UrdfGeometry],
-        mut hull: impl FnMut(&UrdfGeometry, &str, [f64; 3]) -> Result<ConvexHullData>,
+        mut hull: impl FnMut(
+            &UrdfGeometry,
+            &str,
+            [f64; 3],
+        ) -> Result<(ConvexHullData, Arc<TriangleMesh>)>,
     ) -> Result<Self> {
         let mut links: Vec<LinkGeometry> = Vec::new();
         let mut objects: Vec<GeometryObject> = Vec::new();
@@ -151,6 +159,7 @@ impl GeometryModel {
             let li = links.len();
             let first = objects.len();
             for g in &mine {
+                let mut mesh = None;
                 let (shape, hull_faces) = match &g.spec {
                     GeometrySpec::Box(s) => (
                         Convex::Box {
@@ -176,7 +185,8 @@ impl GeometryModel {
                         Vec::new(),
                     ),
                     GeometrySpec::Mesh { uri, scale } => {
-                        let h = hull(g, uri, *scale)?;
+                        let (h, m) = hull(g, uri, *scale)?;
+                        mesh = Some(m);
                         (
                             Convex::Hull {
                                 vertices: h.vertices,
@@ -196,6 +206,7 @@ impl GeometryModel {
                     hull_faces,
                     bounding_centre: centre,
                     bounding_radius,
+                    mesh,
                 });
             }
             links.push(LinkGeometry {

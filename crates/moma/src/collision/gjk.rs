@@ -45,7 +45,8 @@ pub struct PairDistance {
 #[derive(Clone, Copy, Debug)]
 pub struct WarmStart {
     direction: Vector3<f64>,
-    hint_a: usize,
+    /// The hull vertex shape A's support climbs start from.
+    pub(super) hint_a: usize,
     hint_b: usize,
 }
 
