@@ -12,6 +12,7 @@ pub mod inspect;
 pub mod manipulability;
 pub mod map_info;
 pub mod mission;
+pub mod motion;
 pub mod osc;
 pub mod plan;
 pub mod reach_map;
