@@ -175,8 +175,8 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
     Ok(out)
 }
 
-/// While the start state's closest pair is within `margin` and one of its links has a
-/// mesh hull, swaps that link's hull for its mesh's triangles (of the pair's two links,
+/// While the start state's closest pair is two links within `margin` and one of them has
+/// a mesh hull, swaps that link's hull for its mesh's triangles (of the pair's two links,
 /// the one whose hull volume exceeds its mesh volume the most: the more concave one) and looks
 /// again. Returns the geometry and the links swapped (in order).
 ///
@@ -202,13 +202,11 @@ pub fn surface_links_for_start(
                 ClearanceChecker::new(model, &current, scene, group, start, margin, &weights)?;
             checker.distance_report(&x)
         };
-        let Some(c) = closest.filter(|c| c.distance <= margin) else {
+        // Only link–link contacts: a scene object inside a link's surface would not be seen.
+        let Some(c) = closest.filter(|c| c.distance <= margin && !c.scene_object) else {
             break;
         };
-        let mut candidates = vec![c.link.clone()];
-        if !c.scene_object {
-            candidates.push(c.other.clone());
-        }
+        let candidates = [c.link.clone(), c.other.clone()];
         let mut pick: Option<(String, f64)> = None;
         for name in candidates.iter().filter(|name| !swapped.contains(name)) {
             let Some(li) = current.link_index(name) else {
