@@ -323,7 +323,7 @@ pub fn run(args: Args) -> Result<()> {
         goal_state: r.goal_state.clone(),
         group: group.names.clone(),
         seed: args.seed,
-        margin: opts.margin,
+        margin: r.margin,
         velocity_limits: group.velocity.clone(),
         acceleration_limits: opts.acceleration.clone(),
         mesh_surface_links: swapped,

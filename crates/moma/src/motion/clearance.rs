@@ -312,6 +312,13 @@ impl<'a> ClearanceChecker<'a> {
         self.margin
     }
 
+    /// Sets the clearance every state keeps (m, finite, ≥ 0).
+    pub fn set_margin(&mut self, margin: f64) {
+        if margin.is_finite() && margin >= 0.0 {
+            self.margin = margin;
+        }
+    }
+
     /// The weighted radius each state checked by `is_valid` vouches for (module docs).
     pub fn set_tube(&mut self, tube: f64) {
         self.tube = tube.max(0.0);

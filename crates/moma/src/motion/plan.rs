@@ -31,8 +31,9 @@ pub struct MotionOptions {
     pub time_limit: Duration,
     /// The seed of every random choice (IK seeds, samples, shortcuts).
     pub seed: u64,
-    /// The clearance (m) every state of the motion keeps from the scene and between
-    /// links.
+    /// The clearance (m) every checked state keeps from the scene and between links (half
+    /// of it holds everywhere in between); a start or goal state closer than that shrinks
+    /// it to half its own clearance.
     pub margin: f64,
     /// The largest joint-space distance between the blend states the timing checks; each
     /// checked state vouches for half of it around it.
@@ -161,6 +162,9 @@ pub struct MotionResult {
     pub ik_attempts: usize,
     /// Collision-free IK goal states found.
     pub ik_solutions: usize,
+    /// The margin kept: the option's, or half the start's (goal state's) clearance when
+    /// that is smaller.
+    pub margin: f64,
 }
 
 /// A planning problem: the robot, its geometry, the scene and the group.
@@ -176,23 +180,16 @@ pub struct MotionProblem<'a> {
     pub group: &'a JointGroup,
 }
 
-fn closest_message(c: &ClosestPair, what: &str, margin: f64) -> String {
+fn closest_message(c: &ClosestPair, what: &str) -> String {
     let other = if c.scene_object {
         format!("scene object '{}'", c.other)
     } else {
         format!("link '{}'", c.other)
     };
-    if c.distance < 0.0 {
-        format!(
-            "{other} intersects link '{}' at the {what} ({:.4} m deep)",
-            c.link, -c.distance
-        )
-    } else {
-        format!(
-            "{other} is {:.4} m from link '{}' at the {what}, within the {margin} m margin",
-            c.distance, c.link
-        )
-    }
+    format!(
+        "{other} intersects link '{}' at the {what} ({:.4} m deep)",
+        c.link, -c.distance
+    )
 }
 
 /// Checks a full state: length, finite, group in the box, clear of everything.
@@ -201,21 +198,22 @@ fn check_state(
     checker: &mut ClearanceChecker<'_>,
     field: &str,
     q: &[f64],
-) -> Result<Vec<f64>> {
+) -> Result<(Vec<f64>, f64)> {
     crate::error::ensure_len(field, problem.model.nq, q.len())?;
     crate::error::ensure_finite(field, q)?;
     problem.group.check_in_box(field, q)?;
     let mut x = vec![0.0; problem.group.dim()];
     problem.group.extract(q, &mut x);
-    if let Some(c) = checker.distance_report(&x)
-        && c.distance <= checker.margin()
+    let clearance = checker.distance_report(&x);
+    if let Some(c) = &clearance
+        && c.distance <= 0.0
     {
         return Err(Error::invalid(
             field,
-            closest_message(&c, &format!("{field} state"), checker.margin()),
+            closest_message(c, &format!("{field} state")),
         ));
     }
-    Ok(x)
+    Ok((x, clearance.map_or(f64::INFINITY, |c| c.distance)))
 }
 
 fn check_options(o: &MotionOptions, dim: usize) -> Result<()> {
@@ -240,7 +238,7 @@ fn check_options(o: &MotionOptions, dim: usize) -> Result<()> {
 /// # Errors
 /// [`Error::InvalidInput`] naming the field for bad input: a start or goal state of the
 /// wrong length, outside the planning box, or in contact (naming the link and the scene
-/// object or the other link), a goal state that moves joints outside the group, invalid
+/// object or the other link; touching counts), a goal state that moves joints outside the group, invalid
 /// options.
 pub fn plan_motion(
     problem: &MotionProblem<'_>,
@@ -270,7 +268,9 @@ pub fn plan_motion(
         weights,
         options.resolution,
     )?;
-    let x_start = check_state(problem, &mut checker, "start", start)?;
+    let (x_start, d_start) = check_state(problem, &mut checker, "start", start)?;
+    // A start (or goal state) closer than the margin shrinks it to half its clearance.
+    checker.set_margin(options.margin.min(0.5 * d_start));
     let mut result = MotionResult {
         not_solved: None,
         planning_time: Duration::ZERO,
@@ -282,10 +282,12 @@ pub fn plan_motion(
         iterations: 0,
         ik_attempts: 0,
         ik_solutions: 0,
+        margin: 0.0,
     };
     let goals: Vec<Vec<f64>> = match goal {
         MotionGoal::State(q) => {
-            let x = check_state(problem, &mut checker, "goal", q)?;
+            let (x, d_goal) = check_state(problem, &mut checker, "goal", q)?;
+            checker.set_margin(checker.margin().min(0.5 * d_goal));
             if let Some(j) =
                 (0..problem.model.nq).find(|&i| !group.q_index.contains(&i) && q[i] != start[i])
             {
@@ -330,6 +332,7 @@ pub fn plan_motion(
                     }
                 });
                 result.checks = checker.states_checked;
+                result.margin = checker.margin();
                 result.planning_time = began.elapsed();
                 return Ok(result);
             }
@@ -368,6 +371,7 @@ pub fn plan_motion(
     }
     let Some((path, k)) = found else {
         result.not_solved = Some(limit);
+        result.margin = checker.margin();
         result.checks = checker.states_checked;
         result.planning_time = began.elapsed();
         return Ok(result);
@@ -402,6 +406,7 @@ pub fn plan_motion(
     checker.set_tube(0.0);
     result.planning_time = began.elapsed();
     result.checks = checker.states_checked;
+    result.margin = checker.margin();
     let full = |x: &[f64]| -> Vec<f64> {
         let mut q = start.to_vec();
         group.embed(x, &mut q);
