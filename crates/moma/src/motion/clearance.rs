@@ -560,7 +560,7 @@ impl StateValidity for ClearanceChecker<'_> {
             if step >= need {
                 return true;
             }
-            if !(step > 1e-12) {
+            if step.is_nan() || step <= 1e-12 {
                 return false;
             }
             t += step;
