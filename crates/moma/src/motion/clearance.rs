@@ -14,13 +14,14 @@
 //! rigidly together. Each pair `p` gets a row of coefficients `c_p` (one per group joint),
 //! and a pair whose row is all zero never moves; it is checked once, with the start state.
 //!
-//! **Segments** (`a → b`, `δ = |b − a|`): at a checked state with signed distance `d_p`,
-//! pair `p` stays apart for a further fraction `(d_p − margin) / (c_p · δ)` of the segment;
-//! the next checked state is the smallest such step further on. A state with `d_p ≤ margin`
-//! for some pair fails the segment. So a segment that passes is free of contact (with the
-//! margin to spare) at every state of it, not only at the checked ones, up to the accuracy
-//! of the distances (1e-12 m). Pairs whose bounding balls are so far apart that they
-//! cannot limit the rest of the segment are not computed.
+//! **Segments** (`a → b`, `δ = |b − a|`): at a checked state every pair's signed distance
+//! `d_p` must exceed the margin, and pair `p` then stays at least half the margin apart for
+//! a further fraction `(d_p − margin/2) / (c_p · δ)` of the segment; the next checked state
+//! is the smallest such step further on (so steps never shrink below `(margin/2) / (c_p ·
+//! δ)`). A segment that passes keeps half the margin at every state of it, not only at the
+//! checked ones, up to the accuracy of the distances (1e-12 m). Pairs are not computed when
+//! their bounding balls, or the distance found at an earlier state of the same segment less
+//! the most it can have closed since, already cover the step found so far.
 //!
 //! **States** ([`StateValidity::is_valid`]) pass when every pair's distance exceeds the
 //! margin plus `tube · ‖c_p ⊘ w‖₂`, the most the pair can close over any state within the
