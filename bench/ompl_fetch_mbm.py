@@ -28,7 +28,10 @@ Queries: `--samples` scenes per goal query drawn from the problem's variation fi
 own variations; the World variation is not applied), as MotionBenchMaker draws its samples.
 Planning time = OMPL's own computation time of the solve call (no path simplification).
 
-    python ompl_fetch_mbm.py [--fetch DIR] [--mbm DIR] [--runs N] [--time S] [--json OUT]
+    python ompl_fetch_mbm.py [--fetch DIR] [--mbm DIR] [--runs N] [--time S] [--json OUT] [--moma BIN]
+
+With `--moma BIN` the same run also plans every query with moma's CLI (`moma motion`, same scene
+objects, start and goal state, time limit; seeds 0..runs-1) and prints its table after OMPL's.
 
 Prints the success rate and the median / 95th-percentile planning time (successful runs) per
 scene and overall, and writes the per-run results to --json.
@@ -352,6 +355,44 @@ def write_goals(path, goals):
         f.write("\n ]\n}\n")
 
 
+def run_moma(args, fetch, goals, qe):
+    """`moma motion` on the query (same scene objects, start and goal state), one run per seed
+    0..runs-1; its planning time is moma's own `planning_time_s` (IK not involved: a goal state)."""
+    import subprocess
+    import tempfile
+
+    urdf = os.path.join(args.fetch, "fetch_description", "robots", "fetch.urdf")
+    srdf = os.path.join(args.fetch, "fetch.srdf")
+    tmp = tempfile.mkdtemp(prefix="moma_vs_ompl_")
+    scene = os.path.join(tmp, "scene.yaml")
+    with open(scene, "w") as f:
+        f.write("world:\n  collision_objects:\n")
+        for o in qe["scene_objects"]:
+            f.write(f"    - header: {{frame_id: base_link}}\n      id: {o['id']}\n      primitives:\n"
+                    f"        - type: {o['type']}\n          dimensions: {json.dumps(o['dimensions'])}\n"
+                    f"      primitive_poses:\n        - position: {json.dumps(o['position'])}\n"
+                    f"          orientation: {json.dumps(o['orientation'])}\n")
+    for key in ("start_q", "goal_q"):
+        with open(os.path.join(tmp, key + ".json"), "w") as f:
+            json.dump({"states": [{"q": qe[key]}]}, f)
+    rows = []
+    for run in range(args.runs):
+        out = os.path.join(tmp, "out.json")
+        cmd = [args.moma, "motion", urdf, "--root", "fixed", "--srdf", srdf, "--package-dir", args.fetch,
+               "--scene", scene, "--group", ",".join(GROUP), "--start", os.path.join(tmp, "start_q.json"),
+               "--goal-state", os.path.join(tmp, "goal_q.json"), "--time-limit", str(args.time),
+               "--seed", str(run), "--output", out]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        ok, t, checks, reason = False, float("nan"), 0, r.stderr.strip()
+        if r.returncode in (0, 3):
+            with open(out) as f:
+                d = json.load(f)
+            ok, t, checks, reason = d["solved"], d["planning_time_s"], d["checks"], d["reason"]
+        rows.append({"problem": qe["problem"], "sample": qe["sample"], "tag": qe["tag"], "object": qe["object"],
+                     "run": run, "success": bool(ok), "time_s": t, "validity_checks": checks, "reason": reason})
+    return rows
+
+
 def percentile(xs, p):
     return float(np.percentile(np.array(xs), p)) if xs else float("nan")
 
@@ -372,6 +413,9 @@ def main():
     ap.add_argument("--resolution", type=float, default=0.005)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", default=None, help="per-run results (default: no file)")
+    ap.add_argument("--moma", default=None,
+                    help="moma binary: also plan every query with `moma motion` (same start, goal state, scene, "
+                         "time limit; seeds 0..runs-1) in the same run and print its table beside OMPL's")
     args = ap.parse_args()
 
     from ompl import base as ob
@@ -408,7 +452,7 @@ def main():
     print(f"# validity: exact meshes (coal BVH), pinocchio {pin.__version__}, computeCollisions with early exit through the broad phase (dynamic AABB tree); "
           f"machine {platform.machine()}, {os.cpu_count()} cores, loadavg {os.getloadavg()}")
 
-    results = []
+    results, moma_results = [], []
     for qi, qe in enumerate(goals["queries"]):
         if qe["goal_state"] is None or qe["start"] is None:
             print(f"# {qe['problem']}: no IK state, query skipped")
@@ -445,19 +489,25 @@ def main():
                             "success": ok, "status": str(status), "time_s": t, "wall_s": wall,
                             "validity_checks": checker.count, "path_states": n_states,
                             "start_free": start_free, "goal_free": goal_free})
-    print(f"{'problem':18s} {'queries':>7s} {'success':>9s} {'median ms':>10s} {'p95 ms':>8s} {'checks/run':>10s}")
-    problems = [p for p in dict.fromkeys(r["problem"] for r in results)] + ["overall"]
-    for prob in problems:
-        rs = [r for r in results if prob == "overall" or r["problem"] == prob]
-        ts = [r["time_s"] for r in rs if r["success"]]
-        nq = len({(r["problem"], r["sample"], r["object"]) for r in rs})
-        print(f"{prob:18s} {nq:7d} {sum(r['success'] for r in rs):4d}/{len(rs):<4d} "
-              f"{percentile(ts, 50) * 1e3:10.1f} {percentile(ts, 95) * 1e3:8.1f} "
-              f"{np.median([r['validity_checks'] for r in rs]):10.0f}", flush=True)
+        if args.moma:
+            moma_results.extend(run_moma(args, fetch, goals, qe))
+    for title, rows in (("OMPL RRT-Connect", results), ("moma motion", moma_results)):
+        if not rows:
+            continue
+        print(f"# {title}")
+        print(f"{'problem':18s} {'queries':>7s} {'success':>9s} {'median ms':>10s} {'p95 ms':>8s} {'checks/run':>10s}")
+        problems = [p for p in dict.fromkeys(r["problem"] for r in rows)] + ["overall"]
+        for prob in problems:
+            rs = [r for r in rows if prob == "overall" or r["problem"] == prob]
+            ts = [r["time_s"] for r in rs if r["success"]]
+            nq = len({(r["problem"], r["sample"], r["object"]) for r in rs})
+            print(f"{prob:18s} {nq:7d} {sum(r['success'] for r in rs):4d}/{len(rs):<4d} "
+                  f"{percentile(ts, 50) * 1e3:10.1f} {percentile(ts, 95) * 1e3:8.1f} "
+                  f"{np.median([r['validity_checks'] for r in rs]):10.0f}", flush=True)
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"settings": vars(args) | {"extent": extent, "pinocchio": pin.__version__},
-                       "results": results}, f, indent=1)
+                       "results": results, "moma_results": moma_results}, f, indent=1)
 
 
 if __name__ == "__main__":

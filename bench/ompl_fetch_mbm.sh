@@ -2,7 +2,7 @@
 # OMPL baseline for Fetch arm planning on the MotionBenchMaker problems (see the header of
 # ompl_fetch_mbm.py for what is planned and how).
 #
-#   bench/ompl_fetch_mbm.sh [ompl_fetch_mbm.py options: --fetch DIR --mbm DIR --runs N --time S --json OUT ...]
+#   bench/ompl_fetch_mbm.sh [ompl_fetch_mbm.py options: --fetch DIR --mbm DIR --runs N --time S --json OUT --moma BIN ...]
 #
 # First run: installs Pinocchio 4.1.0 (with coal 3.0.3), OMPL 2.0.1 and PyYAML from PyPI into the
 # venv of the peers' benchmarks (MOMA_PEERS_CACHE, default ~/.cache/moma-pinocchio-bench), the

@@ -33,6 +33,11 @@ enum Command {
     Dynamics(cmd::dynamics::Args),
     /// Signed distances between the robot's links and against a scene, per state.
     Collision(cmd::collision::Args),
+    /// Plan a collision-free, timed motion of a joint group among a scene's obstacles.
+    Motion(cmd::motion::Args),
+    /// Run a folder of motion queries (e.g. MotionBenchMaker's Fetch scenes): success rate
+    /// and planning-time percentiles.
+    MotionBench(cmd::motion_bench::Args),
     /// Analytical derivatives of inverse and forward dynamics (dτ/dq, dτ/dv, M; dq̈/dq,
     /// dq̈/dv, M⁻¹) on a list of states.
     Derivatives(cmd::derivatives::Args),
@@ -80,6 +85,8 @@ fn main() {
         Command::Derivatives(a) => cmd::derivatives::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Collision(a) => cmd::collision::run(a),
+        Command::Motion(a) => cmd::motion::run(a),
+        Command::MotionBench(a) => cmd::motion_bench::run(a),
         Command::Eval(a) => cmd::eval::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::MapInfo(a) => cmd::map_info::run(a),

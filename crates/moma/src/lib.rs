@@ -49,6 +49,7 @@ pub(crate) mod linalg;
 pub mod manipulability;
 pub mod mission;
 pub mod mobile;
+pub mod motion;
 pub mod multibody;
 pub mod ode;
 pub mod planning;

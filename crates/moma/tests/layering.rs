@@ -29,7 +29,7 @@ const LAYERS: &[&[&str]] = &[
     &["mobile", "space", "contact"],
     &["stability", "manipulability"],
     &["ik"],
-    &["control"],
+    &["control", "motion"],
     &["closed_form"],
     &["sim"],
     &["mission"],

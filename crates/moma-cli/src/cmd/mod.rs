@@ -12,6 +12,8 @@ pub mod inspect;
 pub mod manipulability;
 pub mod map_info;
 pub mod mission;
+pub mod motion;
+pub mod motion_bench;
 pub mod osc;
 pub mod plan;
 pub mod reach_map;

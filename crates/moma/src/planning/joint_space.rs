@@ -27,6 +27,21 @@ pub const MAX_STATES_PER_SEGMENT: f64 = 1e6;
 pub trait StateValidity {
     /// Whether the joint state `q` (one value per joint of the space) is valid.
     fn is_valid(&mut self, q: &[f64]) -> bool;
+
+    /// Whether the straight segment `a → b` is valid, `a` taken as already checked; adds
+    /// the states checked to `checks`. The default checks states at the space's resolution
+    /// ([`JointSpace::discrete_segment_valid`], module docs); a check that can vouch for a
+    /// whole stretch of the segment from one state (a clearance bound, say) overrides it.
+    fn segment_valid(
+        &mut self,
+        space: &JointSpace,
+        a: &[f64],
+        b: &[f64],
+        scratch: &mut Vec<f64>,
+        checks: &mut u64,
+    ) -> bool {
+        space.discrete_segment_valid(self, a, b, scratch, checks)
+    }
 }
 
 impl<F: FnMut(&[f64]) -> bool> StateValidity for F {
@@ -185,12 +200,27 @@ impl JointSpace {
         (self.distance(a, b) / self.resolution).ceil() as usize
     }
 
-    /// Checks the segment `a → b` at the resolution (see the module docs), with `scratch`
-    /// (resized to the dimension) for the interpolated states; adds the number of states
-    /// checked to `checks`. `a` itself is not checked.
+    /// Checks the segment `a → b` with the validity check's own segment check
+    /// ([`StateValidity::segment_valid`]; by default at the resolution, see the module
+    /// docs), with `scratch` for the interpolated states; adds the number of states checked
+    /// to `checks`. `a` itself is not checked.
     pub fn segment_valid(
         &self,
         validity: &mut impl StateValidity,
+        a: &[f64],
+        b: &[f64],
+        scratch: &mut Vec<f64>,
+        checks: &mut u64,
+    ) -> bool {
+        validity.segment_valid(self, a, b, scratch, checks)
+    }
+
+    /// Checks the segment `a → b` state by state at the resolution (see the module docs),
+    /// with `scratch` (resized to the dimension) for the interpolated states; adds the
+    /// number of states checked to `checks`. `a` itself is not checked.
+    pub fn discrete_segment_valid<V: StateValidity + ?Sized>(
+        &self,
+        validity: &mut V,
         a: &[f64],
         b: &[f64],
         scratch: &mut Vec<f64>,

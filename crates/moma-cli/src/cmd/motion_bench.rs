@@ -1,0 +1,231 @@
+//! `moma motion-bench SCENE_DIR --robot ROBOT.urdf [--srdf FILE] [--package-dir DIR]...
+//! [--goal state|pose] [--runs N] [--time-limit s] [--seed N] [--problem NAME] [--json
+//! OUT.json]`: runs every query of a query folder (`SCENE_DIR/queries.json`, schema in
+//! `docs/motion.md`) with `moma motion`'s planner and prints the success rate and the
+//! median and 95th-percentile planning time per problem and overall.
+
+use super::motion::{Robot, options, parse_goal_pose, parse_group};
+use anyhow::{Context, Result, bail};
+use moma::motion::MotionGoal;
+use moma::multibody::RootJoint;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Arguments of `moma motion-bench`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The query folder: `queries.json` and the scene files it names.
+    pub scene_dir: PathBuf,
+    /// The robot description (URDF).
+    #[arg(long)]
+    pub robot: PathBuf,
+    /// SRDF whose `<disable_collisions>` pairs are not checked.
+    #[arg(long)]
+    pub srdf: Option<PathBuf>,
+    /// Folder against which `package://PKG/...` mesh URIs resolve; repeatable.
+    #[arg(long = "package-dir")]
+    pub package_dirs: Vec<PathBuf>,
+    /// Plan to each query's goal state, or to its goal pose (IK on the file's `ee_frame`).
+    #[arg(long, value_enum, default_value_t = GoalKind::State)]
+    pub goal: GoalKind,
+    /// Position tolerance of a goal pose (m).
+    #[arg(long, default_value_t = 0.01)]
+    pub position_tolerance: f64,
+    /// Orientation tolerance of a goal pose (rad).
+    #[arg(long, default_value_t = 0.01)]
+    pub orientation_tolerance: f64,
+    /// Seeded runs per query (seeds `seed`, `seed + 1`, …).
+    #[arg(long, default_value_t = 1)]
+    pub runs: u64,
+    /// Longest planning time per run (s).
+    #[arg(long, default_value_t = 1.0)]
+    pub time_limit: f64,
+    /// Seed of the first run.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Clearance every state keeps (m).
+    #[arg(long, default_value_t = 0.002)]
+    pub margin: f64,
+    /// Only the queries of this problem.
+    #[arg(long)]
+    pub problem: Option<String>,
+    /// Write every run's result here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Which goal of a query to plan to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GoalKind {
+    /// The query's goal state.
+    State,
+    /// The query's goal pose of `ee_frame`.
+    Pose,
+}
+
+#[derive(Deserialize)]
+struct QueryFile {
+    group: Vec<String>,
+    ee_frame: String,
+    queries: Vec<Query>,
+}
+
+#[derive(Deserialize)]
+struct Query {
+    name: String,
+    problem: String,
+    scene: String,
+    start: Vec<f64>,
+    goal_state: Vec<f64>,
+    goal_pose: Vec<f64>,
+}
+
+#[derive(Serialize)]
+struct Run {
+    name: String,
+    problem: String,
+    seed: u64,
+    solved: bool,
+    reason: Option<String>,
+    planning_time_s: f64,
+    checks: u64,
+    min_distance: Option<f64>,
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    // Linear interpolation between the closest ranks (numpy's default).
+    let x = p / 100.0 * (sorted.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x - x.floor());
+    let next = sorted[(i + 1).min(sorted.len() - 1)];
+    sorted[i] + f * (next - sorted[i])
+}
+
+/// Runs `moma motion-bench`.
+pub fn run(args: Args) -> Result<()> {
+    let file = args.scene_dir.join("queries.json");
+    let text = std::fs::read_to_string(&file)
+        .with_context(|| format!("{}: cannot read the query file", file.display()))?;
+    let qf: QueryFile = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a query file", file.display()))?;
+    if args.runs == 0 || args.runs > 1000 {
+        bail!("--runs: {} is not in 1..=1000", args.runs);
+    }
+    let robot = Robot::load(
+        &args.robot,
+        RootJoint::Fixed,
+        args.srdf.as_deref(),
+        &args.package_dirs,
+    )?;
+    let group = parse_group(&robot.model, &qf.group.join(","))
+        .with_context(|| format!("{}: group", file.display()))?;
+    let mut runs: Vec<Run> = Vec::new();
+    for (k, q) in qf.queries.iter().enumerate() {
+        if args.problem.as_ref().is_some_and(|p| *p != q.problem) {
+            continue;
+        }
+        let field = format!("{}: queries[{k}] ({})", file.display(), q.name);
+        let scene = robot
+            .scene(&args.scene_dir.join(&q.scene))
+            .with_context(|| field.clone())?;
+        let goal = match args.goal {
+            GoalKind::State => MotionGoal::State(q.goal_state.clone()),
+            GoalKind::Pose => {
+                let values: Vec<String> = q.goal_pose.iter().map(f64::to_string).collect();
+                MotionGoal::Pose(
+                    parse_goal_pose(
+                        &robot.model,
+                        &format!("{}:{}", qf.ee_frame, values.join(",")),
+                        args.position_tolerance,
+                        args.orientation_tolerance,
+                    )
+                    .with_context(|| field.clone())?,
+                )
+            }
+        };
+        for r in 0..args.runs {
+            let seed = args.seed + r;
+            let opts = options(group.dim(), args.time_limit, seed, args.margin, "1.0")?;
+            let run = match robot.plan(&scene, &group, &q.start, &goal, &opts) {
+                Ok((res, _)) => Run {
+                    name: q.name.clone(),
+                    problem: q.problem.clone(),
+                    seed,
+                    solved: res.not_solved.is_none(),
+                    reason: res.not_solved.as_ref().map(ToString::to_string),
+                    planning_time_s: res.planning_time.as_secs_f64(),
+                    checks: res.checks,
+                    min_distance: res.closest.as_ref().map(|c| c.distance),
+                },
+                Err(e) => Run {
+                    name: q.name.clone(),
+                    problem: q.problem.clone(),
+                    seed,
+                    solved: false,
+                    reason: Some(format!("error: {e}")),
+                    planning_time_s: f64::NAN,
+                    checks: 0,
+                    min_distance: None,
+                },
+            };
+            runs.push(run);
+        }
+    }
+    if runs.is_empty() {
+        bail!("{}: no query to run", file.display());
+    }
+    let mut problems: Vec<String> = Vec::new();
+    for r in &runs {
+        if !problems.contains(&r.problem) {
+            problems.push(r.problem.clone());
+        }
+    }
+    problems.push("overall".into());
+    println!(
+        "# moma motion-bench: {} runs, time limit {} s, goal {:?}, margin {} m",
+        runs.len(),
+        args.time_limit,
+        args.goal,
+        args.margin
+    );
+    println!(
+        "{:18} {:>7} {:>11} {:>10} {:>9} {:>10}",
+        "problem", "queries", "solved", "median ms", "p95 ms", "checks/run"
+    );
+    for p in &problems {
+        let rs: Vec<&Run> = runs
+            .iter()
+            .filter(|r| p == "overall" || r.problem == *p)
+            .collect();
+        let mut times: Vec<f64> = rs
+            .iter()
+            .filter(|r| r.solved)
+            .map(|r| r.planning_time_s * 1e3)
+            .collect();
+        times.sort_by(f64::total_cmp);
+        let mut checks: Vec<f64> = rs.iter().map(|r| r.checks as f64).collect();
+        checks.sort_by(f64::total_cmp);
+        let queries = rs
+            .iter()
+            .map(|r| r.name.as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
+        let solved = rs.iter().filter(|r| r.solved).count();
+        println!(
+            "{:18} {:>7} {:>5}/{:<5} {:>10.1} {:>9.1} {:>10.0}",
+            p,
+            queries,
+            solved,
+            rs.len(),
+            percentile(&times, 50.0),
+            percentile(&times, 95.0),
+            percentile(&checks, 50.0)
+        );
+    }
+    if let Some(path) = &args.json {
+        crate::output::write_json(path, &runs)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,434 @@
+//! Collision-free motion of a planning group from a start state to a goal state or a goal
+//! pose: goal states by IK ([`super::goal`]), RRT-Connect with the conservative segment
+//! check ([`super::clearance`]), shortcutting, then time-optimal timing with blends that
+//! are checked too. See `docs/motion.md`.
+
+use super::clearance::{ClearanceChecker, ClosestPair};
+use super::goal::{GoalPose, ik_goals};
+use super::group::JointGroup;
+use crate::collision::{GeometryModel, Scene};
+use crate::multibody::Model;
+use crate::planning::{
+    JointLimits, JointPath, JointSpace, Planned, RrtConnectOptions, RrtConnectWorkspace,
+    ShortcutOptions, TimingOptions, rrt_connect, shortcut, time_optimal,
+};
+use crate::{Error, Result};
+use std::time::{Duration, Instant};
+
+/// Where the motion must end.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MotionGoal {
+    /// A full configuration (its joints outside the group must equal the start's).
+    State(Vec<f64>),
+    /// A pose of a frame, reached by IK over the group.
+    Pose(GoalPose),
+}
+
+/// The options of [`plan_motion`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionOptions {
+    /// The longest planning time (IK, search, shortcutting and timing together).
+    pub time_limit: Duration,
+    /// The seed of every random choice (IK seeds, samples, shortcuts).
+    pub seed: u64,
+    /// The clearance (m) every checked state keeps from the scene and between links (half
+    /// of it holds everywhere in between); a start or goal state closer than that shrinks
+    /// it to half its own clearance.
+    pub margin: f64,
+    /// The largest joint-space distance between the blend states the timing checks; each
+    /// checked state vouches for half of it around it.
+    pub resolution: f64,
+    /// RRT-Connect's longest step; `None`: 0.2 × the box diagonal.
+    pub max_step: Option<f64>,
+    /// IK seeds tried for a goal pose.
+    pub ik_attempts: usize,
+    /// Distinct collision-free IK solutions sought before planning.
+    pub ik_solutions: usize,
+    /// Random shortcut attempts.
+    pub shortcut_attempts: usize,
+    /// Acceleration limit per group joint (m/s² or rad/s²).
+    pub acceleration: Vec<f64>,
+    /// The largest distance of a timing blend from its waypoint (joint-space norm).
+    pub max_deviation: f64,
+    /// The time between trajectory samples (s).
+    pub sample_period: f64,
+}
+
+impl MotionOptions {
+    /// The defaults for a group of `dim` joints: 1 s, seed 0, a 2 mm margin, blends
+    /// checked every 0.01 rad (or m), 200 IK seeds for up to 4 solutions, 100 shortcut
+    /// attempts, 1 rad/s² (m/s²) on every joint, blends within 0.1, samples every 10 ms.
+    #[must_use]
+    pub fn new(dim: usize) -> Self {
+        MotionOptions {
+            time_limit: Duration::from_secs(1),
+            seed: 0,
+            margin: 2e-3,
+            resolution: 0.01,
+            max_step: None,
+            ik_attempts: 200,
+            ik_solutions: 4,
+            shortcut_attempts: 100,
+            acceleration: vec![1.0; dim],
+            max_deviation: 0.1,
+            sample_period: 0.01,
+        }
+    }
+}
+
+/// Why a query was not solved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NotSolved {
+    /// The time limit passed before a path was found.
+    TimeLimit,
+    /// The search's iteration limit was reached.
+    IterationLimit,
+    /// No IK attempt reached the goal pose within the tolerances and the joint limits.
+    GoalUnreachable {
+        /// Attempts made.
+        attempts: usize,
+        /// The smallest position error reached (m).
+        best_position_error: f64,
+        /// The smallest rotation error reached (rad).
+        best_orientation_error: f64,
+    },
+    /// IK reached the pose, but every solution was in collision.
+    GoalInCollision {
+        /// Attempts made.
+        attempts: usize,
+        /// Attempts that reached the pose.
+        reached: usize,
+    },
+}
+
+impl std::fmt::Display for NotSolved {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NotSolved::TimeLimit => write!(f, "time limit reached before a path was found"),
+            NotSolved::IterationLimit => write!(f, "iteration limit reached"),
+            NotSolved::GoalUnreachable {
+                attempts,
+                best_position_error,
+                best_orientation_error,
+            } => write!(
+                f,
+                "goal pose unreachable: no IK solution within the joint limits and the \
+                 tolerances in {attempts} attempts (closest: {best_position_error:.4} m, \
+                 {best_orientation_error:.4} rad)"
+            ),
+            NotSolved::GoalInCollision { attempts, reached } => write!(
+                f,
+                "goal pose reachable only in collision: {reached} of {attempts} IK attempts \
+                 reached it, every solution touches the scene or the robot"
+            ),
+        }
+    }
+}
+
+/// A timed trajectory in full configurations.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionTrajectory {
+    /// Sample times (s).
+    pub t: Vec<f64>,
+    /// Full configuration per sample.
+    pub q: Vec<Vec<f64>>,
+    /// Group joint velocities per sample.
+    pub qd: Vec<Vec<f64>>,
+    /// The total time (s).
+    pub duration: f64,
+}
+
+/// The outcome of [`plan_motion`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionResult {
+    /// `None` when solved, else why not.
+    pub not_solved: Option<NotSolved>,
+    /// Planning time (IK, search, shortcut and timing; not the report pass).
+    pub planning_time: Duration,
+    /// The goal state reached (full configuration), when solved.
+    pub goal_state: Option<Vec<f64>>,
+    /// Path waypoints (full configurations), joined by straight segments.
+    pub path: Vec<Vec<f64>>,
+    /// The timed trajectory, when solved.
+    pub trajectory: Option<MotionTrajectory>,
+    /// The closest pair over the path's waypoints and the trajectory's samples (exact
+    /// distances), when solved.
+    pub closest: Option<ClosestPair>,
+    /// States checked for collision while planning.
+    pub checks: u64,
+    /// RRT-Connect iterations.
+    pub iterations: usize,
+    /// IK attempts for a goal pose (0 for a goal state).
+    pub ik_attempts: usize,
+    /// Collision-free IK goal states found.
+    pub ik_solutions: usize,
+    /// The margin kept: the option's, or half the start's (goal state's) clearance when
+    /// that is smaller.
+    pub margin: f64,
+}
+
+/// A planning problem: the robot, its geometry, the scene and the group.
+#[derive(Clone, Copy, Debug)]
+pub struct MotionProblem<'a> {
+    /// The rigid-body model.
+    pub model: &'a Model,
+    /// Its collision geometry.
+    pub geometry: &'a GeometryModel,
+    /// The obstacles.
+    pub scene: &'a Scene,
+    /// The joints that move.
+    pub group: &'a JointGroup,
+}
+
+fn closest_message(c: &ClosestPair, what: &str) -> String {
+    let other = if c.scene_object {
+        format!("scene object '{}'", c.other)
+    } else {
+        format!("link '{}'", c.other)
+    };
+    format!(
+        "{other} intersects link '{}' at the {what} ({:.4} m deep)",
+        c.link, -c.distance
+    )
+}
+
+/// Checks a full state: length, finite, group in the box, clear of everything.
+fn check_state(
+    problem: &MotionProblem<'_>,
+    checker: &mut ClearanceChecker<'_>,
+    field: &str,
+    q: &[f64],
+) -> Result<(Vec<f64>, f64)> {
+    crate::error::ensure_len(field, problem.model.nq, q.len())?;
+    crate::error::ensure_finite(field, q)?;
+    problem.group.check_in_box(field, q)?;
+    let mut x = vec![0.0; problem.group.dim()];
+    problem.group.extract(q, &mut x);
+    let clearance = checker.distance_report(&x);
+    if let Some(c) = &clearance
+        && c.distance <= 0.0
+    {
+        return Err(Error::invalid(
+            field,
+            closest_message(c, &format!("{field} state")),
+        ));
+    }
+    Ok((x, clearance.map_or(f64::INFINITY, |c| c.distance)))
+}
+
+fn check_options(o: &MotionOptions, dim: usize) -> Result<()> {
+    crate::error::ensure_len("acceleration limits", dim, o.acceleration.len())?;
+    for (field, v) in [
+        ("resolution", o.resolution),
+        ("sample_period", o.sample_period),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::invalid(field, format!("{v} is not positive")));
+        }
+    }
+    if !(o.max_deviation.is_finite() && o.max_deviation >= 0.0) {
+        return Err(Error::invalid("max_deviation", "is negative or not finite"));
+    }
+    Ok(())
+}
+
+/// Plans a collision-free, timed motion of the group (module docs); the start is a full
+/// configuration, the joints outside the group stay where it puts them.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the field for bad input: a start or goal state of the
+/// wrong length, outside the planning box, or in contact (naming the link and the scene
+/// object or the other link; touching counts), a goal state that moves joints outside the group, invalid
+/// options.
+pub fn plan_motion(
+    problem: &MotionProblem<'_>,
+    start: &[f64],
+    goal: &MotionGoal,
+    options: &MotionOptions,
+) -> Result<MotionResult> {
+    let began = Instant::now();
+    let deadline = began + options.time_limit;
+    let group = problem.group;
+    let dim = group.dim();
+    check_options(options, dim)?;
+    crate::error::ensure_len("start", problem.model.nq, start.len())?;
+    let weights = vec![1.0; dim];
+    let mut checker = ClearanceChecker::new(
+        problem.model,
+        problem.geometry,
+        problem.scene,
+        group,
+        start,
+        options.margin,
+        &weights,
+    )?;
+    let space = JointSpace::with_weights(
+        group.lower.clone(),
+        group.upper.clone(),
+        weights,
+        options.resolution,
+    )?;
+    let (x_start, d_start) = check_state(problem, &mut checker, "start", start)?;
+    // A start (or goal state) closer than the margin shrinks it to half its clearance.
+    checker.set_margin(options.margin.min(0.5 * d_start));
+    let mut result = MotionResult {
+        not_solved: None,
+        planning_time: Duration::ZERO,
+        goal_state: None,
+        path: Vec::new(),
+        trajectory: None,
+        closest: None,
+        checks: 0,
+        iterations: 0,
+        ik_attempts: 0,
+        ik_solutions: 0,
+        margin: 0.0,
+    };
+    let goals: Vec<Vec<f64>> = match goal {
+        MotionGoal::State(q) => {
+            let (x, d_goal) = check_state(problem, &mut checker, "goal", q)?;
+            checker.set_margin(checker.margin().min(0.5 * d_goal));
+            if let Some(j) =
+                (0..problem.model.nq).find(|&i| !group.q_index.contains(&i) && q[i] != start[i])
+            {
+                return Err(Error::invalid(
+                    "goal",
+                    format!(
+                        "coordinate {j} is outside the group and differs from the start \
+                         ({} vs {})",
+                        q[j], start[j]
+                    ),
+                ));
+            }
+            vec![x]
+        }
+        MotionGoal::Pose(pose) => {
+            let found = ik_goals(
+                problem.model,
+                group,
+                start,
+                pose,
+                &mut checker,
+                options.ik_attempts,
+                options.ik_solutions.max(1),
+                options.seed,
+                deadline,
+            )?;
+            result.ik_attempts = found.attempts;
+            result.ik_solutions = found.states.len();
+            if found.states.is_empty() {
+                result.not_solved = Some(if Instant::now() >= deadline {
+                    NotSolved::TimeLimit
+                } else if found.reached == 0 {
+                    NotSolved::GoalUnreachable {
+                        attempts: found.attempts,
+                        best_position_error: found.best_position_error,
+                        best_orientation_error: found.best_orientation_error,
+                    }
+                } else {
+                    NotSolved::GoalInCollision {
+                        attempts: found.attempts,
+                        reached: found.reached,
+                    }
+                });
+                result.checks = checker.states_checked;
+                result.margin = checker.margin();
+                result.planning_time = began.elapsed();
+                return Ok(result);
+            }
+            found.states
+        }
+    };
+    // Search: towards each goal state in turn, sharing the time left.
+    let mut ws = RrtConnectWorkspace::new();
+    let mut found: Option<(JointPath, usize)> = None;
+    let mut limit = NotSolved::TimeLimit;
+    for (k, x_goal) in goals.iter().enumerate() {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            break;
+        }
+        let share = left / (goals.len() - k) as u32;
+        let rrt = RrtConnectOptions {
+            max_step: options.max_step,
+            time_limit: share,
+            seed: options.seed.wrapping_add(k as u64),
+            ..RrtConnectOptions::default()
+        };
+        match rrt_connect(&space, &mut checker, &x_start, x_goal, &rrt, &mut ws)? {
+            Planned::Solved { path, stats } => {
+                result.iterations += stats.iterations;
+                found = Some((path, k));
+                break;
+            }
+            Planned::NotSolved { limit: l, stats } => {
+                result.iterations += stats.iterations;
+                if l == crate::planning::PlanLimit::Iterations {
+                    limit = NotSolved::IterationLimit;
+                }
+            }
+        }
+    }
+    let Some((path, k)) = found else {
+        result.not_solved = Some(limit);
+        result.margin = checker.margin();
+        result.checks = checker.states_checked;
+        result.planning_time = began.elapsed();
+        return Ok(result);
+    };
+    let mut extra = 0u64;
+    let path = shortcut(
+        &space,
+        &mut checker,
+        &path,
+        &ShortcutOptions {
+            attempts: options.shortcut_attempts,
+            seed: options.seed,
+        },
+        &mut extra,
+    )?;
+    // The blends are checked state by state; each state vouches for half the spacing.
+    checker.set_tube(0.5 * options.resolution);
+    let timed = time_optimal(
+        &space,
+        &mut checker,
+        &path,
+        &JointLimits {
+            velocity: group.velocity.clone(),
+            acceleration: options.acceleration.clone(),
+        },
+        &TimingOptions {
+            max_deviation: options.max_deviation,
+            sample_period: options.sample_period,
+            ..TimingOptions::default()
+        },
+    )?;
+    checker.set_tube(0.0);
+    result.planning_time = began.elapsed();
+    result.checks = checker.states_checked;
+    result.margin = checker.margin();
+    let full = |x: &[f64]| -> Vec<f64> {
+        let mut q = start.to_vec();
+        group.embed(x, &mut q);
+        q
+    };
+    result.goal_state = Some(full(&goals[k]));
+    result.path = path.to_vecs().iter().map(|x| full(x)).collect();
+    // Report: the closest pair over the waypoints and the samples.
+    let mut closest: Option<ClosestPair> = None;
+    for x in path.to_vecs().iter().chain(&timed.q) {
+        if let Some(c) = checker.distance_report(x)
+            && closest.as_ref().is_none_or(|b| c.distance < b.distance)
+        {
+            closest = Some(c);
+        }
+    }
+    result.closest = closest;
+    result.trajectory = Some(MotionTrajectory {
+        t: timed.t,
+        q: timed.q.iter().map(|x| full(x)).collect(),
+        qd: timed.qd,
+        duration: timed.duration,
+    });
+    Ok(result)
+}

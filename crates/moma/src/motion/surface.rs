@@ -1,0 +1,264 @@
+//! Mesh surfaces for concave links: a link whose mesh's convex hull covers a neighbour
+//! (Fetch's `torso_lift_link`, whose hull swallows the shoulder in the tucked pose) is
+//! given its mesh's triangles instead, each triangle a flat convex shape.
+//!
+//! A triangle soup has no inside: two bodies can only come into contact by their surfaces
+//! meeting first, so along a motion checked continuously ([`super::clearance`]) from a
+//! state that is free of contact, positive surface distances mean no contact. The one
+//! thing the surface cannot tell is whether the start itself has one body wholly inside
+//! another; [`surface_links_for_start`] only swaps a link when its hull is in contact at
+//! the start, and the caller states that the start is free (the planner's input).
+
+use super::clearance::ClearanceChecker;
+use super::group::JointGroup;
+use crate::collision::mesh::{TriangleMesh, read_mesh};
+use crate::collision::urdf_geometry::{GeometrySpec, read_urdf_geometry, resolve_uri};
+use crate::collision::{Convex, GeometryModel, GeometryObject, LinkGeometry, Scene};
+use crate::multibody::{FrameKind, Model};
+use crate::spatial::SE3;
+use crate::{Error, Result};
+use nalgebra::Vector3;
+use std::path::{Path, PathBuf};
+
+/// Where the URDF's meshes are: the file and the package folders.
+#[derive(Clone, Debug)]
+pub struct MeshSource {
+    /// The URDF the model and geometry were loaded from.
+    pub urdf: PathBuf,
+    /// Folders `package://` URIs resolve against.
+    pub package_dirs: Vec<PathBuf>,
+}
+
+/// The link's mesh objects replaced by their triangles (primitives kept).
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the link when it has no geometry; the URDF's and the
+/// mesh files' read errors (naming the file).
+pub fn with_mesh_surface(
+    model: &Model,
+    gm: &GeometryModel,
+    source: &MeshSource,
+    link: &str,
+) -> Result<GeometryModel> {
+    let Some(li) = gm.link_index(link) else {
+        return Err(Error::invalid(
+            format!("link '{link}'"),
+            "has no collision geometry",
+        ));
+    };
+    let text = std::fs::read_to_string(&source.urdf).map_err(|e| Error::Io {
+        path: source.urdf.clone(),
+        source: e,
+    })?;
+    let elements = read_urdf_geometry(&text, &source.urdf.display().to_string())?;
+    let frame = model
+        .frames
+        .iter()
+        .find(|f| f.kind == FrameKind::Body && f.name == link)
+        .ok_or_else(|| Error::invalid(format!("link '{link}'"), "is not a body of the model"))?;
+    let dir = source.urdf.parent().unwrap_or(Path::new("."));
+    let mine: Vec<_> = elements
+        .collisions
+        .iter()
+        .filter(|g| g.link == link)
+        .collect();
+    let old = &gm.links[li];
+    if mine.len() != old.count {
+        return Err(Error::invalid(
+            format!("link '{link}'"),
+            format!(
+                "the URDF gives {} collision elements, the geometry holds {}",
+                mine.len(),
+                old.count
+            ),
+        ));
+    }
+    let mut replaced: Vec<GeometryObject> = Vec::new();
+    for (k, g) in mine.iter().enumerate() {
+        let original = &gm.objects[old.first + k];
+        let GeometrySpec::Mesh { uri, scale } = &g.spec else {
+            replaced.push(original.clone());
+            continue;
+        };
+        let path = resolve_uri(uri, link, dir, &source.package_dirs)?;
+        let mesh = read_mesh(&path, *scale)?;
+        let placement: SE3 = frame.placement * g.origin;
+        let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
+        let mut leaves = Vec::new();
+        split(&mesh, &mut order, &mut leaves);
+        for leaf in leaves {
+            let mut v: Vec<Vector3<f64>> = leaf
+                .iter()
+                .flat_map(|&t| mesh.triangles[t].map(|i| mesh.vertices[i as usize]))
+                .collect();
+            v.sort_by(|a, b| {
+                a.iter()
+                    .zip(b.iter())
+                    .map(|(x, y)| x.total_cmp(y))
+                    .find(|o| o.is_ne())
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            });
+            v.dedup();
+            let centre = v.iter().fold(Vector3::zeros(), |s, p| s + p) / v.len() as f64;
+            let radius = v.iter().map(|p| (p - centre).norm()).fold(0.0, f64::max);
+            replaced.push(GeometryObject {
+                link: li,
+                joint: original.joint,
+                placement,
+                shape: Convex::Hull {
+                    vertices: v,
+                    neighbours: Vec::new(),
+                },
+                hull_faces: Vec::new(),
+                bounding_centre: centre,
+                bounding_radius: radius,
+            });
+        }
+    }
+    let mut out = gm.clone();
+    let n_new = replaced.len();
+    out.objects
+        .splice(old.first..old.first + old.count, replaced);
+    let shift = n_new as isize - old.count as isize;
+    out.links[li] = LinkGeometry {
+        count: n_new,
+        ..old.clone()
+    };
+    for l in out.links.iter_mut().skip(li + 1) {
+        l.first = (l.first as isize + shift) as usize;
+    }
+    Ok(out)
+}
+
+/// The volume a link's mesh hulls hold over the volume its meshes hold: 1 for convex
+/// meshes, larger the more concave they are (`None` for a link without meshes).
+fn concavity(gm: &GeometryModel, li: usize, source: &MeshSource) -> Result<Option<f64>> {
+    let link = &gm.links[li];
+    let signed = |v: &[Vector3<f64>], faces: &mut dyn Iterator<Item = [u32; 3]>| -> f64 {
+        faces
+            .map(|f| {
+                let [a, b, c] = f.map(|i| v[i as usize]);
+                a.dot(&b.cross(&c)) / 6.0
+            })
+            .sum::<f64>()
+            .abs()
+    };
+    let mut hull = 0.0;
+    for o in &gm.objects[link.first..link.first + link.count] {
+        if let Convex::Hull { vertices, .. } = &o.shape {
+            hull += signed(vertices, &mut o.hull_faces.iter().copied());
+        }
+    }
+    let mut mesh = 0.0;
+    let meshes = link_meshes(&link.name, source)?;
+    for m in &meshes {
+        mesh += signed(&m.vertices, &mut m.triangles.iter().copied());
+    }
+    Ok((!meshes.is_empty() && hull > 0.0).then(|| hull / mesh.max(1e-12)))
+}
+
+/// The meshes of a link's collision elements, in the elements' frames.
+fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
+    let text = std::fs::read_to_string(&source.urdf).map_err(|e| Error::Io {
+        path: source.urdf.clone(),
+        source: e,
+    })?;
+    let elements = read_urdf_geometry(&text, &source.urdf.display().to_string())?;
+    let dir = source.urdf.parent().unwrap_or(Path::new("."));
+    let mut out = Vec::new();
+    for g in elements.collisions.iter().filter(|g| g.link == link) {
+        if let GeometrySpec::Mesh { uri, scale } = &g.spec {
+            let path = resolve_uri(uri, link, dir, &source.package_dirs)?;
+            out.push(read_mesh(&path, *scale)?);
+        }
+    }
+    Ok(out)
+}
+
+/// While the start state's closest pair is two links within `margin` and one of them has
+/// a mesh hull, swaps that link's hull for its mesh's triangles (of the pair's two links,
+/// the one whose hull volume exceeds its mesh volume the most: the more concave one) and looks
+/// again. Returns the geometry and the links swapped (in order).
+///
+/// # Errors
+/// Read errors of the URDF and mesh files; the checker's errors.
+pub fn surface_links_for_start(
+    model: &Model,
+    gm: &GeometryModel,
+    scene: &Scene,
+    group: &JointGroup,
+    start: &[f64],
+    margin: f64,
+    source: &MeshSource,
+) -> Result<(GeometryModel, Vec<String>)> {
+    let mut current = gm.clone();
+    let mut swapped: Vec<String> = Vec::new();
+    let weights = vec![1.0; group.dim()];
+    let mut x = vec![0.0; group.dim()];
+    group.extract(start, &mut x);
+    for _ in 0..gm.links.len() {
+        let closest = {
+            let mut checker =
+                ClearanceChecker::new(model, &current, scene, group, start, margin, &weights)?;
+            checker.distance_report(&x)
+        };
+        // Only link–link contacts: a scene object inside a link's surface would not be seen.
+        let Some(c) = closest.filter(|c| c.distance <= margin && !c.scene_object) else {
+            break;
+        };
+        let candidates = [c.link.clone(), c.other.clone()];
+        let mut pick: Option<(String, f64)> = None;
+        for name in candidates.iter().filter(|name| !swapped.contains(name)) {
+            let Some(li) = current.link_index(name) else {
+                continue;
+            };
+            if let Some(r) = concavity(&current, li, source)?
+                && pick.as_ref().is_none_or(|p| r > p.1)
+            {
+                pick = Some((name.clone(), r));
+            }
+        }
+        let Some((name, _)) = pick else {
+            break;
+        };
+        current = with_mesh_surface(model, &current, source, &name)?;
+        swapped.push(name);
+    }
+    Ok((current, swapped))
+}
+
+/// Triangles per surface patch.
+pub const PATCH_TRIANGLES: usize = 8;
+
+/// Splits the triangles `order` at the median centroid along the longest axis of their
+/// centroids' box until at most [`PATCH_TRIANGLES`] remain: neighbouring triangles end up
+/// in one patch.
+fn split(mesh: &TriangleMesh, order: &mut [usize], leaves: &mut Vec<Vec<usize>>) {
+    if order.len() <= PATCH_TRIANGLES {
+        if !order.is_empty() {
+            leaves.push(order.to_vec());
+        }
+        return;
+    }
+    let centroid = |t: usize| -> Vector3<f64> {
+        mesh.triangles[t]
+            .iter()
+            .fold(Vector3::zeros(), |s, &i| s + mesh.vertices[i as usize])
+            / 3.0
+    };
+    let (mut lo, mut hi) = (
+        Vector3::repeat(f64::INFINITY),
+        Vector3::repeat(f64::NEG_INFINITY),
+    );
+    for &t in order.iter() {
+        let c = centroid(t);
+        lo = lo.inf(&c);
+        hi = hi.sup(&c);
+    }
+    let axis = (hi - lo).imax();
+    order.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+    let mid = order.len() / 2;
+    let (left, right) = order.split_at_mut(mid);
+    split(mesh, left, leaves);
+    split(mesh, right, leaves);
+}
