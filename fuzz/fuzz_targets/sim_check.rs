@@ -18,8 +18,9 @@
 
 use std::path::{Path, PathBuf};
 
-use moma::sim::scenario::{InputProfile, RobotSpec, Scenario, parse_scenario};
-use moma::sim::wheeled::ReducedSystem;
+use moma::sim::scenario::{RobotSpec, Scenario, parse_scenario};
+use moma::sim::settings::InputProfile;
+use moma::sim::reduced_system::ReducedSystem;
 
 /// The robots a fuzzed scenario may load, relative to `scenarios/`.
 const ROBOTS: [&str; 5] = [
@@ -90,15 +91,15 @@ fn confine(sc: &mut moma::simulate::Scenario) -> bool {
     // One step budget for the whole run (every integrator step, over all recording
     // intervals, control ticks and phases): a stiff loop stops at it with an error.
     match &mut sc.integrator {
-        moma::sim::scenario::IntegratorSettings::Rk4 { max_steps, .. }
-        | moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } => {
+        moma::sim::settings::IntegratorSettings::Rk4 { max_steps, .. }
+        | moma::sim::settings::IntegratorSettings::Adaptive { max_steps, .. } => {
             *max_steps = Some(max_steps.unwrap_or(FUZZ_MAX_STEPS).clamp(1, FUZZ_MAX_STEPS));
         }
     }
     let few = |step: f64| step.is_finite() && step > 0.0 && sc.duration / step <= MAX_STEPS;
     let integrator = match sc.integrator {
-        moma::sim::scenario::IntegratorSettings::Rk4 { dt, .. } => few(dt),
-        moma::sim::scenario::IntegratorSettings::Adaptive { rtol, atol, .. } => {
+        moma::sim::settings::IntegratorSettings::Rk4 { dt, .. } => few(dt),
+        moma::sim::settings::IntegratorSettings::Adaptive { rtol, atol, .. } => {
             rtol >= 1e-10 && atol >= 1e-10
         }
     };

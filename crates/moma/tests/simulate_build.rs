@@ -122,7 +122,7 @@ fn a_stiff_closed_loop_stops_at_the_step_budget_of_the_whole_run() {
     let mut sc: Scenario = load(&path).unwrap();
     sc.check_header(&path).unwrap();
     // a small budget keeps the test short; the default one is exercised by the CLI test
-    let moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } = &mut sc.integrator
+    let moma::sim::settings::IntegratorSettings::Adaptive { max_steps, .. } = &mut sc.integrator
     else {
         panic!("the regression runs the adaptive integrator")
     };

@@ -9,14 +9,14 @@
 //! summary with the Lyapunov monitor and the saturation report. Schema:
 //! `docs/simulate.md`.
 
-use super::simulate::{
+use super::simulate_common::{
     Args, RobotSpec, Scenario, arm_plots, balance_plots, motion_plots, progress_bar, series,
 };
 use crate::output::write_dir;
 use crate::svg_plots::line_chart;
 use anyhow::{Context, Result, anyhow};
 use moma::sim::closed_loop::{ClosedLoopResult, simulate_closed_loop};
-use moma::sim::scenario::IntegratorSettings;
+use moma::sim::settings::IntegratorSettings;
 use moma::sim::stability_monitor::StabilityMonitor;
 use moma::simulate::{ClosedLoop, ControllerSpec};
 use serde::Serialize;

@@ -4,7 +4,7 @@
 //! `trajectory.csv`, `summary.json` and plots of the base attitude, the momentum and the
 //! end-effector path. Schema: `docs/space.md`.
 
-use super::simulate::{Args, Scenario};
+use super::simulate_common::{Args, Scenario};
 use crate::output::write_all_atomic;
 use crate::svg_plots::{Series, line_chart, path_chart};
 use anyhow::{Context, Result};

@@ -19,7 +19,7 @@ use crate::mobile::{WheeledData, WheeledModel, reduced_forward_dynamics};
 use crate::multibody::{Data, JointType};
 use crate::ode::{OdeSystem, Rk4};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{
     AccelerationLimits, BodySet, ExternalLoads, StabilityData, StabilityModel, SupportAttachment,

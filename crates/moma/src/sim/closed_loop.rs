@@ -23,12 +23,13 @@ use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::Recorder;
-use crate::sim::scenario::IntegratorSettings;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::IntegratorSettings;
 use crate::sim::stepping::{
     Grid, check_rk4_budget, check_rk4_steps, integrate_on_grid, positive, record_plant_sample,
     start_recording, validate_run_common,
 };
-use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem};
+use crate::sim::wheeled::MAX_RECORDED_SAMPLES;
 
 /// Largest number of control ticks a run accepts (`duration / control_period`).
 pub const MAX_CONTROL_TICKS: f64 = 100_000_000.0;

@@ -7,8 +7,8 @@ use crate::error::{Error, Result};
 use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepBudget, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::{Recorder, Sample};
-use crate::sim::scenario::{DEFAULT_MAX_STEPS, IntegratorSettings, MAX_STEP_BUDGET};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::{DEFAULT_MAX_STEPS, IntegratorSettings, MAX_STEP_BUDGET};
 
 /// Where a run stops: `n` segment ends `end(k)`, k = 0..n; with RK4, segment k takes
 /// `steps(k)` steps of `h` from the previous end.

@@ -30,8 +30,8 @@ use crate::sim::feedback::{
     PointReference, SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
 };
 use crate::sim::fixed_base::FixedBaseSystem;
+use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::scenario::RobotSpec;
-use crate::sim::wheeled::ReducedSystem;
 
 /// Most waypoints a reference may list.
 const MAX_WAYPOINTS: usize = 100_000;

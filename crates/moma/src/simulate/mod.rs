@@ -15,9 +15,10 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::sim::scenario::InputProfile;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::InputProfile;
 use crate::sim::stability_monitor::StabilityMonitor;
-use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem, SimulationOptions};
+use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, SimulationOptions};
 
 pub mod control;
 pub mod robot;
