@@ -12,13 +12,14 @@ use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
 use crate::mobile::wheeled::{
-    actuation_matrix, admissible_velocity_basis, admissible_velocity_basis_dot,
-    lagrange_multipliers, reduced_forward_dynamics_crba, wheel_longitudinal_forces,
+    admissible_velocity_basis_dot, lagrange_multipliers, reduced_forward_dynamics_crba,
+    wheel_longitudinal_forces,
 };
 use crate::mobile::{WheeledData, WheeledModel, reduced_forward_dynamics};
 use crate::multibody::{Data, JointType};
 use crate::ode::{OdeSystem, Rk4};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
+use crate::sim::computed_torque::ComputedTorque;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{
@@ -503,7 +504,7 @@ impl<'m> Runner<'m> {
         self.first_plan();
         let (time_limit, rec_every) = self.run_length()?;
         let mut ws = Workspace::new(self.wm)?;
-        let act = Actuators::new(self.wm, &x, &mut ws)?;
+        let act = Actuators::new(self.wm)?;
         let c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
@@ -681,9 +682,10 @@ impl<'m> Runner<'m> {
 
         let last = st.phase == Phase::Done;
         if !last {
-            let torque_clip = c
-                .act
-                .computed_torque(&ws.control_dynamics, &ws.a_des, &mut ws.u);
+            let torque_clip =
+                c.act
+                    .torque
+                    .inputs(&ws.control_dynamics.reduced, &ws.a_des, &mut ws.u);
             self.saturation_events(st, t, torque_clip, speed_clip);
         }
         if st.k.is_multiple_of(c.rec_every) || last {
@@ -1341,39 +1343,22 @@ impl Workspace {
     }
 }
 
-/// The actuators: the platform block of the input map and the limits.
+/// The actuators: the computed-torque map with the torque limits, the wheel-speed limit.
 struct Actuators {
-    /// Inverse of the platform block of N_Cᵀ S (Qr[0..2] = B u[0..2]).
-    b_inv: Matrix2<f64>,
-    wheel_tau: [f64; 2],
+    /// Computed torque on the reduced model, clipped at the joints' effort limits.
+    torque: ComputedTorque,
     wheel_speed: f64,
-    arm_tau: Vec<f64>,
+    /// Number of arm inputs.
+    na: usize,
     /// Platform speeds (v, ω) to wheel rates.
     w_inv: Matrix2<f64>,
 }
 
 impl Actuators {
-    /// Forms the input map at the initial state `x` (leaves the admissible-velocity basis
-    /// at `x` in the controller's workspace).
-    fn new(wm: &WheeledModel, x: &[f64], ws: &mut Workspace) -> Result<Self> {
+    /// The actuators of `wm` with the limits of its URDF (a missing or non-positive
+    /// limit is none).
+    fn new(wm: &WheeledModel) -> Result<Self> {
         let model = &wm.model;
-        let mut smat = DMatrix::zeros(model.nv, wm.nu());
-        // the platform block of N_Cᵀ S: Qr[0..2] = B u[0..2]
-        ws.q_now.copy_from_slice(&x[..model.nq]);
-        admissible_velocity_basis(wm, &ws.q_now, &mut ws.control_dynamics.basis);
-        actuation_matrix(wm, &ws.q_now, &mut smat);
-        let b_full = ws.control_dynamics.basis.transpose() * &smat;
-        let b_pp = Matrix2::new(
-            b_full[(0, 0)],
-            b_full[(0, 1)],
-            b_full[(1, 0)],
-            b_full[(1, 1)],
-        );
-        let b_inv = b_pp.try_inverse().ok_or_else(|| Error::Singular {
-            what: "wheel actuation map".into(),
-            detail: None,
-        })?;
-        // limits of the actuators
         let lim = |i: usize, v: &DVector<f64>| {
             let x = v[i];
             if x.is_finite() && x > 0.0 {
@@ -1392,16 +1377,14 @@ impl Actuators {
             ),
             None => ([f64::INFINITY; 2], f64::INFINITY),
         };
-        let arm_tau = wm
-            .arm_dofs()
-            .iter()
-            .map(|&i| lim(i, &model.effort_limit))
+        let bounds = wheel_tau
+            .into_iter()
+            .chain(wm.arm_dofs().iter().map(|&i| lim(i, &model.effort_limit)))
             .collect();
         Ok(Self {
-            b_inv,
-            wheel_tau,
+            torque: ComputedTorque::new(wm, bounds)?,
             wheel_speed,
-            arm_tau,
+            na: wm.arm_dofs().len(),
             w_inv: wm.base.drive.platform_to_wheel(),
         })
     }
@@ -1411,56 +1394,10 @@ impl Actuators {
     fn absolute_power(&self, u: &[f64], v_now: &DVector<f64>, v: f64, w: f64) -> f64 {
         let wrates = self.w_inv * Vector2::new(v, w);
         let mut p_abs = (u[0] * wrates[0]).abs() + (u[1] * wrates[1]).abs();
-        for k2 in 0..self.arm_tau.len() {
+        for k2 in 0..self.na {
             p_abs += (u[2 + k2] * v_now[2 + k2]).abs();
         }
         p_abs
-    }
-
-    /// Computed torque through the reduced model, Qr = Mr a + (cr + Gr), mapped to the
-    /// inputs `u` and clipped at the torque limits; `true` if any was clipped.
-    fn computed_torque(
-        &self,
-        control_dynamics: &WheeledData,
-        a_des: &DVector<f64>,
-        u: &mut [f64],
-    ) -> bool {
-        let mr = &control_dynamics.reduced.mass_matrix;
-        let bias = &control_dynamics.reduced.velocity_terms;
-        let nr = a_des.len();
-        let mut qr = [0.0f64; 2];
-        for (i, qri) in qr.iter_mut().enumerate() {
-            let mut s = bias[i];
-            for j in 0..nr {
-                s += mr[(i, j)] * a_des[j];
-            }
-            *qri = s;
-        }
-        let up = self.b_inv * Vector2::new(qr[0], qr[1]);
-        let mut torque_clip = false;
-        for s in 0..2 {
-            let tau = up[s];
-            u[s] = if tau.abs() > self.wheel_tau[s] {
-                torque_clip = true;
-                self.wheel_tau[s].copysign(tau)
-            } else {
-                tau
-            };
-        }
-        for (k2, &limit) in self.arm_tau.iter().enumerate() {
-            let i = 2 + k2;
-            let mut s = bias[i];
-            for j in 0..nr {
-                s += mr[(i, j)] * a_des[j];
-            }
-            u[i] = if s.abs() > limit {
-                torque_clip = true;
-                limit.copysign(s)
-            } else {
-                s
-            };
-        }
-        torque_clip
     }
 }
 

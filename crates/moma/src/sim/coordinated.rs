@@ -132,7 +132,7 @@ impl CoordinatedController {
         )?;
         let nq = wm.model.nq;
         let mut me = Self {
-            inner: InnerLoop::new(&wm, limits.max_wheel_torque),
+            inner: InnerLoop::new(&wm, limits.max_wheel_torque)?,
             wd: WheeledData::new(&wm),
             frame: fid,
             joints: idx,
