@@ -127,7 +127,9 @@ impl ComputedTorque {
 mod tests {
     use super::*;
     use crate::io::urdf::model_from_urdf_file;
-    use crate::mobile::wheeled::{WheeledBase, reduced_forward_dynamics_crba};
+    use crate::mobile::wheeled::{
+        WheeledBase, reduced_forward_dynamics_crba, reduced_forward_dynamics_under_inputs,
+    };
     use crate::mobile::{DiffDrive, WheeledData};
     use crate::multibody::RootJoint;
 
@@ -176,8 +178,14 @@ mod tests {
         let mut u = vec![0.0; nu];
         assert!(!ct.inputs(&wd.reduced, &a, &mut u));
         let mut plant = WheeledData::new(&wm);
-        let vdot = reduced_forward_dynamics_crba(&wm, &mut plant, &q, &v, &u).unwrap();
-        assert!((vdot - &a).amax() < 1e-9, "{vdot} vs {a}");
+        let vdot = reduced_forward_dynamics_crba(&wm, &mut plant, &q, &v, &u)
+            .unwrap()
+            .clone();
+        assert!((&vdot - &a).amax() < 1e-9, "{vdot} vs {a}");
+        // the controller's evaluation under the torques is the plant's, to the bit
+        reduced_forward_dynamics_under_inputs(&wm, &mut wd, &q, &u).unwrap();
+        assert_eq!(wd.reduced.vdot, vdot);
+        assert_eq!(wd.reduced.qddot, plant.reduced.qddot);
 
         let peak = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let bounded = ComputedTorque::new(&wm, vec![0.5 * peak; nu]).unwrap();
