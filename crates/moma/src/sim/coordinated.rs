@@ -95,12 +95,7 @@ impl CoordinatedController {
             ("controller.gains.K_E", gains.k_e),
             ("controller.gains.K_Y", gains.k_y),
         ] {
-            if !(x.is_finite() && x > 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {x}"),
-                ));
-            }
+            crate::error::ensure_positive(n, x)?;
         }
         let mut idx = [0usize; 2];
         for (k, name) in joints.iter().enumerate() {

@@ -159,12 +159,7 @@ impl VelocityServo {
             ("controller.arm_kp", self.arm_kp),
             ("controller.arm_kd", self.arm_kd),
         ] {
-            if !(x.is_finite() && x > 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {x}"),
-                ));
-            }
+            crate::error::ensure_positive(n, x)?;
         }
         Ok(())
     }
@@ -458,16 +453,7 @@ impl PointReference {
     /// # Errors
     /// The first bad field.
     pub fn validate(&self) -> Result<()> {
-        let pos = |n: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {x}"),
-                ))
-            }
-        };
+        let pos = crate::error::ensure_positive;
         match self {
             Self::Line { from, to, duration } => {
                 crate::error::ensure_finite("reference.from", from)?;
@@ -749,20 +735,12 @@ impl M5TaskController {
         crate::error::ensure_finite("reference.amplitude", &amp)?;
         crate::error::ensure_finite("reference.omega", &omega)?;
         for (n, g) in [("controller.kp", kp), ("controller.kd", kd)] {
-            if let Some(i) = g.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
-                return Err(Error::invalid(
-                    format!("{n}[{i}]"),
-                    format!("must be > 0 and finite, got {}", g[i]),
-                ));
+            for (i, &x) in g.iter().enumerate() {
+                crate::error::ensure_positive(&format!("{n}[{i}]"), x)?;
             }
         }
-        if let Some(m) = max_torque
-            && !(m.is_finite() && m > 0.0)
-        {
-            return Err(Error::invalid(
-                "controller.max_torque",
-                format!("must be > 0 and finite, got {m}"),
-            ));
+        if let Some(m) = max_torque {
+            crate::error::ensure_positive("controller.max_torque", m)?;
         }
         Ok(Self {
             model,
@@ -998,13 +976,8 @@ fn check_osc_gains(gains: &OscGains, max_torque: Option<f64>) -> Result<()> {
             ));
         }
     }
-    if let Some(m) = max_torque
-        && !(m.is_finite() && m > 0.0)
-    {
-        return Err(Error::invalid(
-            "controller.max_torque",
-            format!("must be > 0 and finite, got {m}"),
-        ));
+    if let Some(m) = max_torque {
+        crate::error::ensure_positive("controller.max_torque", m)?;
     }
     Ok(())
 }

@@ -166,16 +166,8 @@ pub enum IntegratorSettings {
 impl IntegratorSettings {
     /// Checks positivity and finiteness of the settings.
     pub fn validate(&self) -> Result<()> {
-        let pos = |field: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    format!("integrator.{field}"),
-                    format!("must be a positive finite number, got {x}"),
-                ))
-            }
-        };
+        let pos =
+            |field: &str, x: f64| crate::error::ensure_positive(&format!("integrator.{field}"), x);
         match *self {
             IntegratorSettings::Rk4 { dt, .. } => pos("dt", dt)?,
             IntegratorSettings::Adaptive {

@@ -222,13 +222,8 @@ impl StabilityMonitor {
     /// contacts (add a caster off the axle), for a non-positive μ or a non-finite ground
     /// height; errors of [`BodySet::mask`] for an unknown joint or link.
     pub fn new(robot: &WheeledModel, settings: StabilitySettings) -> Result<Self> {
-        if let Some(mu) = settings.mu
-            && !(mu.is_finite() && mu > 0.0)
-        {
-            return Err(Error::invalid(
-                "stability.mu",
-                format!("must be a positive finite number, got {mu}"),
-            ));
+        if let Some(mu) = settings.mu {
+            crate::error::ensure_positive("stability.mu", mu)?;
         }
         if let Some(z) = settings.ground_z {
             crate::error::ensure_finite("stability.ground_z", [z].iter())?;

@@ -135,18 +135,6 @@ pub(crate) fn budget_exhausted(
     }
 }
 
-/// A positive finite number or an error naming `field`.
-pub(crate) fn positive(field: &str, x: f64) -> Result<()> {
-    if x.is_finite() && x > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            field,
-            format!("must be a positive finite number, got {x}"),
-        ))
-    }
-}
-
 /// The checks every run of `system` makes first: initial state sizes and finiteness,
 /// the integrator settings, a positive duration and recording interval.
 ///
@@ -165,8 +153,8 @@ pub(crate) fn validate_run_common(
     crate::error::ensure_finite("initial q", q0)?;
     crate::error::ensure_finite("initial v", v0)?;
     integrator.validate()?;
-    positive("duration", duration)?;
-    positive("record interval", record_interval)
+    crate::error::ensure_positive("duration", duration)?;
+    crate::error::ensure_positive("record interval", record_interval)
 }
 
 /// Where the run's step budget comes from, for messages: the scenario's key, or

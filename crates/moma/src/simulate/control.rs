@@ -642,10 +642,8 @@ fn check_limits(c: &ControllerSpec) -> Result<()> {
         ("max_wheel_torque", c.max_wheel_torque),
         ("max_torque", c.max_torque),
     ] {
-        if let Some(x) = x
-            && !(x.is_finite() && x > 0.0)
-        {
-            bail!("controller.{name} must be a positive finite number, got {x}");
+        if let Some(problem) = x.and_then(crate::error::not_positive_finite) {
+            bail!("controller.{name} {problem}");
         }
     }
     Ok(())

@@ -82,7 +82,7 @@ impl<T, E: std::error::Error> Context<T> for std::result::Result<T, E> {
 
 /// `Err` naming `field[i]` unless every value is finite.
 pub(crate) fn finite(field: &str, xs: &[f64]) -> Result<()> {
-    if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
+    if let Some(i) = crate::error::first_non_finite(xs) {
         bail!("{field}[{i}] is not a finite number");
     }
     Ok(())
