@@ -90,7 +90,7 @@ pub enum Error {
     Planning(String),
 
     // ---- `moma simulate` scenarios --------------------------------------------------
-    /// A `moma simulate` scenario that cannot run as written (`crate::simulate`): the
+    /// A `moma simulate` scenario that cannot run as written (`crate::sim_config`): the
     /// message names the file, the table and the field, with the causes that led to it.
     #[error("{0}")]
     Scenario(String),

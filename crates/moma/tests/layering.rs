@@ -33,7 +33,7 @@ const LAYERS: &[&[&str]] = &[
     &["closed_form"],
     &["sim"],
     &["mission"],
-    &["sweep", "simulate"],
+    &["sweep", "sim_config"],
 ];
 
 /// Items re-exported at the crate root, with the module that defines them.

@@ -1,9 +1,9 @@
-//! `moma::simulate`: every shipped `moma simulate` scenario builds into the run its tables
+//! `moma::sim_config`: every shipped `moma simulate` scenario builds into the run its tables
 //! ask for, and a scenario that cannot run gets the message that names its file and field.
 
 use std::path::{Path, PathBuf};
 
-use moma::simulate::{Run, Scenario, load, prepare};
+use moma::sim_config::{Run, Scenario, load, prepare};
 
 fn scenarios() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
@@ -58,7 +58,7 @@ fn edited(file: &str, from: &str, to: &str) -> (Scenario, PathBuf) {
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.contains(from), "{file} has no {from:?}");
     let text = text.replacen(from, to, 1);
-    let sc = moma::sim::scenario::parse_scenario(&text, &path).unwrap();
+    let sc = moma::sim_config::schema::parse_scenario(&text, &path).unwrap();
     (sc, path)
 }
 

@@ -11,7 +11,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use moma::sim::settings::IntegratorSettings;
 use moma::sim::wheeled::{SimulationResult, simulate_observed};
-use moma::simulate::{OpenLoop, Run};
+use moma::sim_config::{OpenLoop, Run};
 use serde::Serialize;
 
 pub use super::simulate_common::Args;
@@ -70,7 +70,7 @@ fn resolve_scenario(arg: Option<PathBuf>) -> Result<PathBuf> {
 
 /// Parses a scenario file, with errors naming the file and the line/field.
 pub fn load_scenario(path: &Path) -> Result<Scenario> {
-    Ok(moma::simulate::load(path)?)
+    Ok(moma::sim_config::load(path)?)
 }
 
 /// Builds every output file in memory.
@@ -117,7 +117,7 @@ pub fn run(args: Args) -> Result<()> {
     let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
     sc.check_header(&path)?;
-    match moma::simulate::prepare(&sc, &path)? {
+    match moma::sim_config::prepare(&sc, &path)? {
         Run::Closed(cl) => super::simulate_control::run(&path, &sc, *cl, &args),
         Run::Space(sr) => super::simulate_space::run(&path, &sc, *sr, &args),
         Run::Open(ol) => run_open_loop(&path, &sc, *ol, &args),
@@ -209,7 +209,7 @@ fn run_open_loop(path: &Path, sc: &Scenario, mut ol: OpenLoop, args: &Args) -> R
     let fixed = matches!(sc.robot, RobotSpec::FixedBase { .. });
     let files = render(
         fixed,
-        &moma::simulate::wheel_joints(sc),
+        &moma::sim_config::wheel_joints(sc),
         &result,
         &mut summary,
         sc.output.plots,

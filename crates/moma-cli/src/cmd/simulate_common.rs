@@ -23,11 +23,11 @@ pub struct Args {
     pub quiet: bool,
 }
 
-pub use moma::sim::scenario::RobotSpec;
+pub use moma::sim_config::schema::RobotSpec;
 
 /// A scenario file: the library's schema with this command's `[space]`, `[stability]`,
-/// `[controller]` and `[reference]` tables ([`moma::simulate::Scenario`]).
-pub use moma::simulate::Scenario;
+/// `[controller]` and `[reference]` tables ([`moma::sim_config::Scenario`]).
+pub use moma::sim_config::Scenario;
 
 /// One named curve over the times `t`.
 pub(super) fn series<'a>(t: &'a [f64], name: &'a str, y: Vec<f64>) -> Series<'a> {

@@ -14,7 +14,6 @@ pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
 pub mod reduced_system;
-pub mod scenario;
 pub mod settings;
 pub mod stability_monitor;
 mod stepping;

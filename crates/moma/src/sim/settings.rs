@@ -1,7 +1,7 @@
 //! What a simulation run is driven by and integrated with: the input profiles
 //! ([`InputProfile`], one [`ChannelProfile`] per input), the integrator choice
 //! ([`IntegratorSettings`]) and the step budget of a run ([`DEFAULT_MAX_STEPS`],
-//! [`MAX_STEP_BUDGET`]). The scenario file ([`crate::sim::scenario`]) reads them; the
+//! [`MAX_STEP_BUDGET`]). The scenario file ([`crate::sim_config::schema`]) reads them; the
 //! simulators ([`crate::sim::wheeled`], [`crate::sim::closed_loop`],
 //! [`crate::sim::free_floating`]) take them.
 

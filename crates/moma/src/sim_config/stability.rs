@@ -7,8 +7,8 @@ use super::{Context, bail};
 use crate::error::Result;
 use crate::mobile::WheeledModel;
 use crate::sim::recorder::Recorder;
-use crate::sim::scenario::RobotSpec;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
+use crate::sim_config::schema::RobotSpec;
 use crate::stability::BodySet;
 
 /// The `[stability]` table.

@@ -31,7 +31,7 @@ use crate::sim::feedback::{
 };
 use crate::sim::fixed_base::FixedBaseSystem;
 use crate::sim::reduced_system::ReducedSystem;
-use crate::sim::scenario::RobotSpec;
+use crate::sim_config::schema::RobotSpec;
 
 /// Most waypoints a reference may list.
 const MAX_WAYPOINTS: usize = 100_000;
