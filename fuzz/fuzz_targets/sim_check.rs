@@ -18,9 +18,9 @@
 
 use std::path::{Path, PathBuf};
 
-use moma::sim_config::schema::{RobotSpec, Scenario, parse_scenario};
-use moma::sim::settings::InputProfile;
 use moma::sim::reduced_system::ReducedSystem;
+use moma::sim::settings::InputProfile;
+use moma::sim_config::schema::{RobotSpec, Scenario, parse_scenario};
 
 /// The robots a fuzzed scenario may load, relative to `scenarios/`.
 const ROBOTS: [&str; 5] = [
