@@ -1,13 +1,13 @@
 //! What the `moma simulate` targets do with one scenario text: the whole schema read by
-//! the library (`sim::scenario::parse_scenario`; the command's own `[space]`,
+//! the library (`sim_config::schema::parse_scenario`; the command's own `[space]`,
 //! `[stability]`, `[controller]` and `[reference]` tables as any TOML table), the header
 //! checks, the integrator and the input profiles validated, the profiles evaluated at
 //! four times (a validated profile must give finite inputs), and, for a chapter model or
 //! a URDF robot (its path kept on the shipped robots), the system built and the initial
 //! state and inputs checked against its sizes (`Scenario::initial_state`).
 //!
-//! Then the same text is read with the command's own tables (`moma::simulate::Scenario`)
-//! and goes through the library's whole build (`moma::simulate::prepare`: the robot, the
+//! Then the same text is read with the command's own tables (`moma::sim_config::Scenario`)
+//! and goes through the library's whole build (`moma::sim_config::prepare`: the robot, the
 //! `[space]`, `[stability]`, `[controller]` and `[reference]` checks, the closed loop, the
 //! free-floating run, the stability monitor), its URDF and map paths kept on shipped
 //! files, and a run it builds is simulated over a horizon capped at 10 ms (skipped when
@@ -18,8 +18,9 @@
 
 use std::path::{Path, PathBuf};
 
-use moma::sim::scenario::{InputProfile, RobotSpec, Scenario, parse_scenario};
-use moma::sim::wheeled::ReducedSystem;
+use moma::sim::reduced_system::ReducedSystem;
+use moma::sim::settings::InputProfile;
+use moma::sim_config::schema::{RobotSpec, Scenario, parse_scenario};
 
 /// The robots a fuzzed scenario may load, relative to `scenarios/`.
 const ROBOTS: [&str; 5] = [
@@ -48,7 +49,7 @@ fn system(sc: &Scenario) -> Option<Box<dyn ReducedSystem>> {
     if let RobotSpec::Urdf { urdf, .. } | RobotSpec::FixedBase { urdf } = &mut spec {
         *urdf = urdf_path(urdf);
     }
-    moma::simulate::robot::build_robot(&spec, sc.gravity, Path::new("."))
+    moma::sim_config::robot::build_robot(&spec, sc.gravity, Path::new("."))
         .ok()
         .map(|(sys, _)| sys)
 }
@@ -75,8 +76,8 @@ fn map_path(p: &Path) -> PathBuf {
 
 /// Keeps every file the scenario names on shipped files, and caps the horizon; `false`
 /// when the run would take too many steps to simulate here.
-fn confine(sc: &mut moma::simulate::Scenario) -> bool {
-    use moma::simulate::ReferenceSpec;
+fn confine(sc: &mut moma::sim_config::Scenario) -> bool {
+    use moma::sim_config::ReferenceSpec;
     match &mut sc.robot {
         RobotSpec::Urdf { urdf, .. }
         | RobotSpec::FixedBase { urdf }
@@ -90,15 +91,15 @@ fn confine(sc: &mut moma::simulate::Scenario) -> bool {
     // One step budget for the whole run (every integrator step, over all recording
     // intervals, control ticks and phases): a stiff loop stops at it with an error.
     match &mut sc.integrator {
-        moma::sim::scenario::IntegratorSettings::Rk4 { max_steps, .. }
-        | moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } => {
+        moma::sim::settings::IntegratorSettings::Rk4 { max_steps, .. }
+        | moma::sim::settings::IntegratorSettings::Adaptive { max_steps, .. } => {
             *max_steps = Some(max_steps.unwrap_or(FUZZ_MAX_STEPS).clamp(1, FUZZ_MAX_STEPS));
         }
     }
     let few = |step: f64| step.is_finite() && step > 0.0 && sc.duration / step <= MAX_STEPS;
     let integrator = match sc.integrator {
-        moma::sim::scenario::IntegratorSettings::Rk4 { dt, .. } => few(dt),
-        moma::sim::scenario::IntegratorSettings::Adaptive { rtol, atol, .. } => {
+        moma::sim::settings::IntegratorSettings::Rk4 { dt, .. } => few(dt),
+        moma::sim::settings::IntegratorSettings::Adaptive { rtol, atol, .. } => {
             rtol >= 1e-10 && atol >= 1e-10
         }
     };
@@ -112,13 +113,13 @@ fn confine(sc: &mut moma::simulate::Scenario) -> bool {
 
 /// The library's whole build of a scenario with the command's tables, and a short run.
 fn build_and_run(text: &str) {
-    use moma::simulate::Run;
+    use moma::sim_config::Run;
     let path = Path::new("fuzz.toml");
     let Ok(mut sc) = parse_scenario::<
-        moma::simulate::SpaceSpec,
-        moma::simulate::StabilitySpec,
-        moma::simulate::ControllerSpec,
-        moma::simulate::ReferenceSpec,
+        moma::sim_config::SpaceSpec,
+        moma::sim_config::StabilitySpec,
+        moma::sim_config::ControllerSpec,
+        moma::sim_config::ReferenceSpec,
     >(text, path) else {
         return;
     };
@@ -126,7 +127,7 @@ fn build_and_run(text: &str) {
         return;
     }
     let short = confine(&mut sc);
-    let Ok(run) = moma::simulate::prepare(&sc, path) else {
+    let Ok(run) = moma::sim_config::prepare(&sc, path) else {
         return;
     };
     if !short {
@@ -158,7 +159,7 @@ fn build_and_run(text: &str) {
                 &mut |_| {},
             ) && let Some(spec) = &sc.stability
             {
-                let _ = moma::simulate::replay(spec, &sc.robot, sc.gravity, Path::new("."), &res.recorder);
+                let _ = moma::sim_config::replay(spec, &sc.robot, sc.gravity, Path::new("."), &res.recorder);
             }
         }
         Run::Space(sr) => {

@@ -18,7 +18,7 @@ use moma::multibody::RootJoint;
 use moma::sim::closed_loop::{ClosedLoopOptions, simulate_closed_loop};
 use moma::sim::feedback::{OscController, OscGains, PointReference};
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::IntegratorSettings;
+use moma::sim::settings::IntegratorSettings;
 use moma::sim::wheeled_system::WheeledSystem;
 
 fn panda_on_diff_drive() -> WheeledModel {

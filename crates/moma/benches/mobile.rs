@@ -22,8 +22,9 @@ use moma::mobile::wheeled::{WheeledBase, WheeledData, WheeledModel, lagrange_mul
 use moma::multibody::{Data, RootJoint};
 use moma::sim::Rk4;
 use moma::sim::chapter_models::m5;
-use moma::sim::scenario::InputProfile;
-use moma::sim::wheeled::{ReducedOde, ReducedSystem};
+use moma::sim::reduced_system::ReducedSystem;
+use moma::sim::settings::InputProfile;
+use moma::sim::wheeled::ReducedOde;
 use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::DVector;
 

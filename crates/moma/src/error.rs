@@ -90,7 +90,7 @@ pub enum Error {
     Planning(String),
 
     // ---- `moma simulate` scenarios --------------------------------------------------
-    /// A `moma simulate` scenario that cannot run as written (`crate::simulate`): the
+    /// A `moma simulate` scenario that cannot run as written (`crate::sim_config`): the
     /// message names the file, the table and the field, with the causes that led to it.
     #[error("{0}")]
     Scenario(String),
@@ -135,6 +135,34 @@ pub fn ensure_finite<'a>(field: &str, values: impl IntoIterator<Item = &'a f64>)
             field: field.to_string(),
         })
     }
+}
+
+/// The one check of a positive finite number (a duration, a step, a gain, a limit): `None`
+/// when `x` is one, else what is wrong with it (`must be a positive finite number, got
+/// {x}`) for the reader of a file to put after the field's name in its own error.
+#[must_use]
+pub fn not_positive_finite(x: f64) -> Option<String> {
+    if x.is_finite() && x > 0.0 {
+        None
+    } else {
+        Some(format!("must be a positive finite number, got {x}"))
+    }
+}
+
+/// Returns `Err(Error::InvalidInput)` naming `field` unless `x` is a positive finite
+/// number ([`not_positive_finite`]).
+pub fn ensure_positive(field: &str, x: f64) -> Result<()> {
+    match not_positive_finite(x) {
+        None => Ok(()),
+        Some(message) => Err(Error::invalid(field, message)),
+    }
+}
+
+/// The index of the first value of `xs` that is not finite, for a reader to name the entry
+/// in its own error.
+#[must_use]
+pub fn first_non_finite(xs: &[f64]) -> Option<usize> {
+    xs.iter().position(|x| !x.is_finite())
 }
 
 /// Returns `Err(Error::WrongLength)` unless `got == expected`.

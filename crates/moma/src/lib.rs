@@ -54,7 +54,7 @@ pub mod multibody;
 pub mod ode;
 pub mod planning;
 pub mod sim;
-pub mod simulate;
+pub mod sim_config;
 pub mod space;
 pub mod spatial;
 pub mod stability;

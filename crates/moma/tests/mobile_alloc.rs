@@ -11,7 +11,7 @@ use moma::mobile::reduced_forward_dynamics;
 use moma::mobile::wheeled::{WheeledBase, WheeledData, WheeledModel, lagrange_multipliers};
 use moma::multibody::RootJoint;
 use moma::sim::OdeSystem;
-use moma::sim::scenario::InputProfile;
+use moma::sim::settings::InputProfile;
 use moma::sim::wheeled::ReducedOde;
 use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::DVector;

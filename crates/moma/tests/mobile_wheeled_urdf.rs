@@ -15,7 +15,7 @@ use moma::mobile::wheeled::{
 use moma::mobile::{Caster, DiffDrive};
 use moma::multibody::RootJoint;
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::{InputProfile, IntegratorSettings};
+use moma::sim::settings::{InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{SimulationOptions, simulate};
 use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::{DMatrix, DVector, Vector2};
@@ -335,7 +335,7 @@ fn unforced_energy_drift_and_residual_massless_wheels_and_d_zero() {
 
 #[test]
 fn driven_run_balances_energy_with_input_work() {
-    use moma::sim::scenario::ChannelProfile;
+    use moma::sim::settings::ChannelProfile;
     let mut sys = WheeledSystem::new(robot(true, 0.1));
     let (q, v, _) = state(&sys.robot);
     let input = InputProfile {
@@ -465,7 +465,7 @@ impl moma::sim::OdeSystem for FullDae {
 
 #[test]
 fn reduced_simulation_agrees_with_the_full_coordinate_dae() {
-    use moma::sim::scenario::ChannelProfile;
+    use moma::sim::settings::ChannelProfile;
     use moma::sim::{AdaptiveOptions, DormandPrince45};
     for track in [true, false] {
         let wm = robot(track, 0.1);

@@ -16,7 +16,7 @@ use moma::sim::closed_loop::simulate_closed_loop;
 use moma::sim::free_floating;
 use moma::sim::recorder::Recorder;
 use moma::sim::wheeled::{SampleObserver, simulate_observed};
-use moma::simulate::{Run, load, prepare};
+use moma::sim_config::{Run, load, prepare};
 
 type Golden = BTreeMap<String, BTreeMap<String, Vec<f64>>>;
 

@@ -21,7 +21,7 @@ use moma::closed_form::m2_platform_arm::PlatformArm;
 use moma::closed_form::m5_mobile_manipulator::MobileManipulator;
 use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
+use moma::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{SimulationOptions, simulate};
 use moma::sim::{AdaptiveOptions, DormandPrince45, OdeSystem};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};

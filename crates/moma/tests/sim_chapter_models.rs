@@ -3,7 +3,7 @@
 
 use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
+use moma::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{SimulationOptions, simulate};
 use serde_json::Value;
 

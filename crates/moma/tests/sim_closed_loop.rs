@@ -18,7 +18,7 @@ use moma::sim::feedback::{
     TaskLaw, TrackingReference, VelocityServo,
 };
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::IntegratorSettings;
+use moma::sim::settings::IntegratorSettings;
 use moma::sim::wheeled_system::WheeledSystem;
 use serde_json::Value;
 

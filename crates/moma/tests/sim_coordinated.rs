@@ -9,7 +9,7 @@ use moma::sim::closed_loop::{ClosedLoopOptions, ClosedLoopResult, simulate_close
 use moma::sim::coordinated::{CoordinatedController, CoordinatedGains};
 use moma::sim::feedback::{PointReference, VelocityServo};
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::IntegratorSettings;
+use moma::sim::settings::IntegratorSettings;
 use moma::sim::wheeled_system::WheeledSystem;
 
 fn data(path: &str) -> String {

@@ -12,7 +12,7 @@ use moma::planning::{MapKind, OccupancyGrid, load_map};
 use moma::sim::closed_loop::{ClosedLoopOptions, simulate_closed_loop};
 use moma::sim::feedback::{PlatformController, PlatformLaw, TrackingReference, VelocityServo};
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::IntegratorSettings;
+use moma::sim::settings::IntegratorSettings;
 use moma::sim::wheeled_system::WheeledSystem;
 
 fn data(path: &str) -> String {

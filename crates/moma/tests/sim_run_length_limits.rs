@@ -4,7 +4,7 @@
 
 use moma::sim::chapter_models::chapter_system;
 use moma::sim::monitor::MonitorLimits;
-use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
+use moma::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::wheeled::{SimulationOptions, simulate};
 use serde_json::json;
 
@@ -112,7 +112,7 @@ fn rk4_steps_beyond_the_budget_are_refused_before_the_run() {
     );
     // the default budget
     let err = run_with(
-        2.0 * moma::sim::scenario::DEFAULT_MAX_STEPS as f64 * 1e-3,
+        2.0 * moma::sim::settings::DEFAULT_MAX_STEPS as f64 * 1e-3,
         rk4(None),
         1.0,
     )
@@ -122,7 +122,7 @@ fn rk4_steps_beyond_the_budget_are_refused_before_the_run() {
 
 #[test]
 fn a_step_budget_outside_its_bounds_is_refused() {
-    for n in [0, moma::sim::scenario::MAX_STEP_BUDGET + 1] {
+    for n in [0, moma::sim::settings::MAX_STEP_BUDGET + 1] {
         let err = run_with(0.1, adaptive(1e-9, Some(n)), 0.01).unwrap_err();
         assert!(err.to_string().contains("integrator.max_steps"), "{err}");
     }

@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use moma::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
-use moma::sim::scenario::{ChannelProfile, InputProfile, IntegratorSettings};
+use moma::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
 use moma::sim::stability_monitor::{
     StabilityMonitor, StabilitySettings, first_crossing, first_slip,
 };

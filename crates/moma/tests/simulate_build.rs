@@ -1,9 +1,9 @@
-//! `moma::simulate`: every shipped `moma simulate` scenario builds into the run its tables
+//! `moma::sim_config`: every shipped `moma simulate` scenario builds into the run its tables
 //! ask for, and a scenario that cannot run gets the message that names its file and field.
 
 use std::path::{Path, PathBuf};
 
-use moma::simulate::{Run, Scenario, load, prepare};
+use moma::sim_config::{Run, Scenario, load, prepare};
 
 fn scenarios() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
@@ -58,7 +58,7 @@ fn edited(file: &str, from: &str, to: &str) -> (Scenario, PathBuf) {
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.contains(from), "{file} has no {from:?}");
     let text = text.replacen(from, to, 1);
-    let sc = moma::sim::scenario::parse_scenario(&text, &path).unwrap();
+    let sc = moma::sim_config::schema::parse_scenario(&text, &path).unwrap();
     (sc, path)
 }
 
@@ -122,7 +122,7 @@ fn a_stiff_closed_loop_stops_at_the_step_budget_of_the_whole_run() {
     let mut sc: Scenario = load(&path).unwrap();
     sc.check_header(&path).unwrap();
     // a small budget keeps the test short; the default one is exercised by the CLI test
-    let moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } = &mut sc.integrator
+    let moma::sim::settings::IntegratorSettings::Adaptive { max_steps, .. } = &mut sc.integrator
     else {
         panic!("the regression runs the adaptive integrator")
     };

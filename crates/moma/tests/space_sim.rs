@@ -246,7 +246,7 @@ fn settings(
         frame: model.frame_id("panda_hand_tcp").unwrap(),
         duration: 6.0,
         record_interval: 0.05,
-        integrator: moma::sim::scenario::IntegratorSettings::adaptive(1e-10, 1e-10),
+        integrator: moma::sim::settings::IntegratorSettings::adaptive(1e-10, 1e-10),
         torque: Vec::new(),
         joint_damping: 0.0,
         control,
@@ -328,7 +328,7 @@ fn approach_capture_post_capture() {
     }
     let mut s = settings(&model, None);
     s.duration = 4.0;
-    s.integrator = moma::sim::scenario::IntegratorSettings::adaptive(1e-12, 1e-12);
+    s.integrator = moma::sim::settings::IntegratorSettings::adaptive(1e-12, 1e-12);
     s.joint_damping = 0.5;
     s.capture = Some(free_floating::CaptureEvent {
         time: 1.5,
@@ -371,7 +371,7 @@ fn the_step_budget_spans_both_phases_of_a_capture() {
     let (q, v) = start(&model, &Force::zero());
     let mut s = settings(&model, None);
     s.duration = 2.0;
-    s.integrator = moma::sim::scenario::IntegratorSettings::adaptive(1e-8, 1e-8);
+    s.integrator = moma::sim::settings::IntegratorSettings::adaptive(1e-8, 1e-8);
     s.capture = Some(free_floating::CaptureEvent {
         time: 0.5,
         target: TargetBody {
@@ -383,7 +383,7 @@ fn the_step_budget_spans_both_phases_of_a_capture() {
         },
     });
     let n = free_floating::run(&model, &q, &v, &s).unwrap().steps as u64;
-    let moma::sim::scenario::IntegratorSettings::Adaptive { max_steps, .. } = &mut s.integrator
+    let moma::sim::settings::IntegratorSettings::Adaptive { max_steps, .. } = &mut s.integrator
     else {
         unreachable!()
     };

@@ -20,6 +20,7 @@ pub mod reach_map;
 pub mod render_report;
 pub mod scen;
 pub mod simulate;
+pub mod simulate_common;
 pub mod simulate_control;
 pub mod simulate_space;
 pub mod simulate_stability;

@@ -9,16 +9,16 @@
 //! summary with the Lyapunov monitor and the saturation report. Schema:
 //! `docs/simulate.md`.
 
-use super::simulate::{
+use super::simulate_common::{
     Args, RobotSpec, Scenario, arm_plots, balance_plots, motion_plots, progress_bar, series,
 };
 use crate::output::write_dir;
 use crate::svg_plots::line_chart;
 use anyhow::{Context, Result, anyhow};
 use moma::sim::closed_loop::{ClosedLoopResult, simulate_closed_loop};
-use moma::sim::scenario::IntegratorSettings;
+use moma::sim::settings::IntegratorSettings;
 use moma::sim::stability_monitor::StabilityMonitor;
-use moma::simulate::{ClosedLoop, ControllerSpec};
+use moma::sim_config::{ClosedLoop, ControllerSpec};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -306,7 +306,7 @@ fn files(
         if matches!(sc.robot, RobotSpec::FixedBase { .. }) {
             arm_plots(rec, &mut files);
         } else {
-            motion_plots(&moma::simulate::wheel_joints(sc), rec, &mut files);
+            motion_plots(&moma::sim_config::wheel_joints(sc), rec, &mut files);
         }
         balance_plots(rec, &mut files);
         control_plots(res, &mut files);
@@ -325,7 +325,7 @@ fn files(
     Ok(files)
 }
 
-/// Runs a closed-loop scenario built by `moma::simulate::closed_loop` and writes its
+/// Runs a closed-loop scenario built by `moma::sim_config::closed_loop` and writes its
 /// files; exit status 3 when it tips over under `require_stable` or misses
 /// `controller.goal_tolerance`.
 pub fn run(path: &Path, sc: &Scenario, mut cl: ClosedLoop, args: &Args) -> Result<()> {
@@ -348,8 +348,9 @@ pub fn run(path: &Path, sc: &Scenario, mut cl: ClosedLoop, args: &Args) -> Resul
     let monitor = match &sc.stability {
         None => None,
         Some(spec) => {
-            let mon = moma::simulate::replay(spec, &sc.robot, sc.gravity, base_dir, &res.recorder)
-                .with_context(|| format!("{}: stability", path.display()))?;
+            let mon =
+                moma::sim_config::replay(spec, &sc.robot, sc.gravity, base_dir, &res.recorder)
+                    .with_context(|| format!("{}: stability", path.display()))?;
             summary.stability = Some(super::simulate_stability::summary(spec, &mon, None));
             Some(mon)
         }

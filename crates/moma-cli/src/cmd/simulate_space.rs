@@ -4,12 +4,12 @@
 //! `trajectory.csv`, `summary.json` and plots of the base attitude, the momentum and the
 //! end-effector path. Schema: `docs/space.md`.
 
-use super::simulate::{Args, Scenario};
+use super::simulate_common::{Args, Scenario};
 use crate::output::write_all_atomic;
 use crate::svg_plots::{Series, line_chart, path_chart};
 use anyhow::{Context, Result};
 use moma::sim::free_floating;
-use moma::simulate::SpaceRun;
+use moma::sim_config::SpaceRun;
 use moma::spatial::{Force, rpy_from_rotation};
 use serde::Serialize;
 use std::path::Path;
@@ -52,7 +52,7 @@ struct Summary {
     files: Vec<String>,
 }
 
-/// Runs a free-floating scenario built by `moma::simulate::space_run` and writes its
+/// Runs a free-floating scenario built by `moma::sim_config::space_run` and writes its
 /// files.
 pub fn run(path: &Path, sc: &Scenario, sr: SpaceRun, args: &Args) -> Result<()> {
     let start = Instant::now();
@@ -61,7 +61,7 @@ pub fn run(path: &Path, sc: &Scenario, sr: SpaceRun, args: &Args) -> Result<()> 
     let wall = start.elapsed().as_secs_f64();
     let dir = args.output.clone().unwrap_or_else(|| sc.output.dir.clone());
     let frame = match &sc.robot {
-        moma::sim::scenario::RobotSpec::FreeFloating { frame, .. } => frame.as_str(),
+        moma::sim_config::schema::RobotSpec::FreeFloating { frame, .. } => frame.as_str(),
         _ => sr.model.frames[sr.settings.frame.0].name.as_str(),
     };
     let files = render(

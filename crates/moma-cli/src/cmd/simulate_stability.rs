@@ -1,12 +1,12 @@
 //! The outputs of the `[stability]` table of `moma simulate` scenarios (tip-over
 //! measures, wheel–ground loads and slip along a wheeled URDF run): the summary section,
 //! `stability.csv` and the plots. The table and its monitor are built by the library
-//! (`moma::simulate::stability`); schema and outputs in docs/simulate.md.
+//! (`moma::sim_config::stability`); schema and outputs in docs/simulate.md.
 
 use moma::sim::stability_monitor::{
     Crossing, StabilityMonitor, StabilityTrace, first_crossing, first_slip,
 };
-use moma::simulate::StabilitySpec;
+use moma::sim_config::StabilitySpec;
 use serde::Serialize;
 
 use crate::svg_plots::{Series, line_chart};

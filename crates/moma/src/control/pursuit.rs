@@ -86,12 +86,7 @@ impl PurePursuit {
             ("max_lookahead", p.max_lookahead),
             ("goal_tolerance", p.goal_tolerance),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {v}"),
-                ));
-            }
+            crate::error::ensure_positive(n, v)?;
         }
         for (n, v) in [
             ("regulation_min_radius", p.regulation_min_radius),

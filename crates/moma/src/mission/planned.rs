@@ -85,12 +85,7 @@ pub fn plan_platform_reference(
         ("reference.kappa_max", r.kappa_max),
         ("reference.timing.dt", r.dt),
     ] {
-        if !(x.is_finite() && x > 0.0) {
-            return Err(Error::invalid(
-                n,
-                format!("must be > 0 and finite, got {x}"),
-            ));
-        }
+        crate::error::ensure_positive(n, x)?;
     }
     let extent = grid.width.max(grid.height) as f64 * grid.resolution;
     if r.footprint_radius > extent {

@@ -12,19 +12,18 @@ use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
 use crate::mobile::wheeled::{
-    actuation_matrix, admissible_velocity_basis, admissible_velocity_basis_dot,
-    lagrange_multipliers, reduced_forward_dynamics_crba, wheel_longitudinal_forces,
+    admissible_velocity_basis_dot, lagrange_multipliers, reduced_forward_dynamics_crba,
+    reduced_forward_dynamics_under_inputs,
 };
-use crate::mobile::{WheeledData, WheeledModel, reduced_forward_dynamics};
+use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::{Data, JointType};
 use crate::ode::{OdeSystem, Rk4};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::computed_torque::ComputedTorque;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
 use crate::sim::wheeled_system::WheeledSystem;
-use crate::stability::{
-    AccelerationLimits, BodySet, ExternalLoads, StabilityData, StabilityModel, SupportAttachment,
-    SupportPolygon, contact_normal_loads, driven_wheel_friction,
-};
+use crate::stability::{AccelerationLimits, BodySet, SupportPolygon};
 
 /// Spacing of the reference samples (s).
 const REF_DT: f64 = 0.02;
@@ -502,8 +501,8 @@ impl<'m> Runner<'m> {
         let mut x = initial_state(self.m);
         self.first_plan();
         let (time_limit, rec_every) = self.run_length()?;
-        let mut ws = Workspace::new(self.wm)?;
-        let act = Actuators::new(self.wm, &x, &mut ws)?;
+        let mut ws = Workspace::new(self.wm, self.m.file.limits.mu)?;
+        let act = Actuators::new(self.wm)?;
         let c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
@@ -626,18 +625,23 @@ impl<'m> Runner<'m> {
 
         self.obstacle_arrivals(c, st, t, axle, v);
 
-        // reduced dynamics at the state (controller's model)
-        let step_ok = reduced_forward_dynamics_crba(
+        // the reduced dynamics of the state, evaluated once: the law's model (Mr, cr + Gr,
+        // N_C, Ṅ_C v under zero input), then below the plant's response to the torques
+        // (v̇, q̈, λ) for the monitors and the integrator's first stage
+        let evaluated = match reduced_forward_dynamics_crba(
             self.wm,
             &mut ws.control_dynamics,
             &ws.q_now,
             &ws.v_now,
             &ws.zero_u,
-        );
-        if let Err(e) = step_ok {
-            self.fail(t, format!("the dynamics became singular: {e}"));
-            st.phase = Phase::Done;
-        }
+        ) {
+            Ok(_) => true,
+            Err(e) => {
+                self.fail(t, format!("the dynamics became singular: {e}"));
+                st.phase = Phase::Done;
+                false
+            }
+        };
 
         self.phase_transitions(c, st, t, pose, v, w);
 
@@ -681,13 +685,22 @@ impl<'m> Runner<'m> {
 
         let last = st.phase == Phase::Done;
         if !last {
-            let torque_clip = c
-                .act
-                .computed_torque(&ws.control_dynamics, &ws.a_des, &mut ws.u);
+            let torque_clip =
+                c.act
+                    .torque
+                    .inputs(&ws.control_dynamics.reduced, &ws.a_des, &mut ws.u);
             self.saturation_events(st, t, torque_clip, speed_clip);
         }
+        let evaluated = evaluated
+            && reduced_forward_dynamics_under_inputs(
+                self.wm,
+                &mut ws.control_dynamics,
+                &ws.q_now,
+                &ws.u,
+            )
+            .is_ok();
         if st.k.is_multiple_of(c.rec_every) || last {
-            self.record_and_check(c, ws, st, t, ee.p);
+            self.record_and_check(c, ws, st, t, ee.p, evaluated);
         }
         if last {
             return Flow::Finished;
@@ -703,7 +716,18 @@ impl<'m> Runner<'m> {
             nq,
             nr,
         };
-        if let Err(e) = ws.rk.step(&mut plant, t, x, c.h) {
+        let stepped = if evaluated {
+            // the first stage is the state's evaluation under the torques just formed
+            let cd = &ws.control_dynamics;
+            ws.first_stage[..nq].copy_from_slice(cd.qdot.as_slice());
+            ws.first_stage[nq..nq + nr].copy_from_slice(cd.reduced.vdot.as_slice());
+            ws.first_stage[nq + nr] = cd.force.dot(&cd.qdot);
+            ws.rk
+                .step_from_derivative(&mut plant, t, x, &ws.first_stage, c.h)
+        } else {
+            ws.rk.step(&mut plant, t, x, c.h)
+        };
+        if let Err(e) = stepped {
             self.fail(t, format!("the simulation failed: {e}"));
             st.phase = Phase::Done;
             // record the state reached before the failure on the next pass
@@ -989,8 +1013,9 @@ impl<'m> Runner<'m> {
         st: &mut LoopState,
         t: f64,
         ee: Vector3<f64>,
+        evaluated: bool,
     ) {
-        let Some((slip, clear)) = self.record(c, ws, st, t, ee) else {
+        let Some((slip, clear)) = self.record(c, ws, st, t, ee, evaluated) else {
             return;
         };
         if st.first_slip && slip.is_some_and(|s| s > 1.0) {
@@ -1079,7 +1104,8 @@ impl<'m> Runner<'m> {
     }
 
     /// Records one sample; returns (slip ratio, clearance) for the event checks, `None`
-    /// if the monitors could not be evaluated (the sample is still recorded).
+    /// if the monitors could not be evaluated (the sample is still recorded). `evaluated`:
+    /// the step's dynamics under the applied torques are in the workspace.
     fn record(
         &mut self,
         c: &Controller,
@@ -1087,8 +1113,13 @@ impl<'m> Runner<'m> {
         st: &LoopState,
         t: f64,
         ee: Vector3<f64>,
+        evaluated: bool,
     ) -> Option<(Option<f64>, f64)> {
-        let mon = self.monitors(ws);
+        let mon = if evaluated {
+            monitors(self.wm, ws, t)
+        } else {
+            None
+        };
         let side = arm_side(&self.wm.model, ws, &c.chain, ee);
         let (q, r) = (&ws.q_now, &st.cur_ref);
         let res = c.res;
@@ -1120,70 +1151,29 @@ impl<'m> Runner<'m> {
         s.phase.push(st.phase.name());
         mon.map(|m| (m.slip, clearance))
     }
+}
 
-    /// The stability and slip monitors at the sample's state; `None` if its reduced
-    /// dynamics fail.
-    fn monitors(&self, ws: &mut Workspace) -> Option<Monitors> {
-        let wm = self.wm;
-        let (q, v, u) = (&ws.q_now, &ws.v_now, &ws.u);
-        reduced_forward_dynamics(wm, &mut ws.monitor_dynamics, q, v, u).ok()?;
-        let lam = lagrange_multipliers(wm, &mut ws.monitor_dynamics, q)
-            .ok()
-            .map(|l| {
-                let at = |i: usize| l.get(i).copied().unwrap_or(0.0);
-                ([at(0), at(1), at(2)], l.len())
-            });
-        let rep = crate::stability::evaluate(
-            &wm.model,
-            &mut ws.data,
-            &ws.stability_model,
-            &mut ws.stability_data,
-            q,
-            &ws.monitor_dynamics.qdot,
-            &ws.monitor_dynamics.reduced.qddot,
-            &ExternalLoads::default(),
-        );
-        let (zmp, force_angle, mhs) = (rep.zmp_margin, rep.force_angle_min, rep.mhs_min);
-        let slip = lam.and_then(|(lam, nk)| self.slip_ratio(ws, lam, nk));
-        Some(Monitors {
-            zmp,
-            force_angle,
-            mhs,
-            slip,
-        })
-    }
-
-    /// The larger drive-wheel slip ratio from the constraint multipliers `lam` (`nk` of
-    /// them) and the support wrench just evaluated; `None` if it cannot be formed.
-    fn slip_ratio(&self, ws: &mut Workspace, lam: [f64; 3], nk: usize) -> Option<f64> {
-        let wm = self.wm;
-        let (q, u) = (&ws.q_now, &ws.u);
-        // contacts in the world, loads from the wrench (stability::loads)
-        let (sn, cs) = q[2].sin_cos();
-        for (w, p) in ws.contacts.iter_mut().zip(&ws.support_pts) {
-            *w = Vector2::new(q[0] + cs * p.x - sn * p.y, q[1] + sn * p.x + cs * p.y);
-        }
-        let ground = ws.stability_model.support.ground_z();
-        contact_normal_loads(
-            &ws.contacts,
-            ground,
-            &ws.stability_data.wrench,
-            &mut ws.loads,
-        )
+/// The stability and slip monitors (the one set of [`StabilityMonitor`]) at the step's
+/// state, from the dynamics the step evaluated under the applied torques; `None` if the
+/// multipliers or the loads cannot be formed.
+fn monitors(wm: &WheeledModel, ws: &mut Workspace, t: f64) -> Option<Monitors> {
+    lagrange_multipliers(wm, &mut ws.control_dynamics, &ws.q_now).ok()?;
+    ws.monitor
+        .sample_evaluated(t, ws.q_now.as_slice(), &mut ws.control_dynamics, &ws.u)
         .ok()?;
-        let long = wheel_longitudinal_forces(wm, &lam[..nk], u);
-        let fr = driven_wheel_friction(
-            -lam[0],
-            long,
-            [ws.loads[0], ws.loads[1]],
-            self.m.file.limits.mu,
-        )
-        .ok()?;
-        fr.iter()
-            .map(|w| w.slip_ratio.unwrap_or(f64::INFINITY))
-            .reduce(f64::max)
-            .filter(|x| x.is_finite())
-    }
+    let tr = &ws.monitor.trace;
+    let last = |xs: &[Option<f64>]| xs.last().copied().flatten();
+    Some(Monitors {
+        zmp: last(&tr.zmp_margin),
+        force_angle: last(&tr.force_angle_min),
+        mhs: last(&tr.mhs_min),
+        slip: tr.wheels.last().and_then(|w| {
+            w.iter()
+                .map(|f| f.slip_ratio.unwrap_or(f64::INFINITY))
+                .reduce(f64::max)
+                .filter(|x| x.is_finite())
+        }),
+    })
 }
 
 /// How a control step ends.
@@ -1273,22 +1263,13 @@ struct Workspace {
     /// The control law's reduced dynamics (Mr, cr + Gr, N_C) at the step's state, under
     /// zero input.
     control_dynamics: WheeledData,
-    /// The monitors' reduced dynamics at a recorded state under the applied input (v̇,
-    /// q̈, the multipliers λ).
-    monitor_dynamics: WheeledData,
-    /// Kinematics workspace (end effector, arm side view, stability).
+    /// Kinematics workspace (end effector, arm side view).
     data: Data,
-    /// The support and body set of the stability measures.
-    stability_model: StabilityModel,
-    /// Their workspace (the gravito-inertial wrench of the last evaluation).
-    stability_data: StabilityData,
-    /// The contacts (drive wheels, casters) in the base frame.
-    support_pts: Vec<Vector2<f64>>,
-    /// The same in the world at the recorded state.
-    contacts: Vec<Vector2<f64>>,
-    /// Their normal loads (N).
-    loads: Vec<f64>,
+    /// The stability, load and slip monitors of the recorded samples.
+    monitor: StabilityMonitor,
     rk: Rk4,
+    /// The integrator's first stage `[q̇, v̇, Qᵀq̇]` at the step's state.
+    first_stage: Vec<f64>,
     /// The configuration q of the step's state.
     q_now: DVector<f64>,
     /// The reduced velocity v = [v, ω, q̇_arm] of the step's state.
@@ -1309,25 +1290,22 @@ struct Workspace {
 }
 
 impl Workspace {
-    fn new(wm: &WheeledModel) -> Result<Self> {
+    fn new(wm: &WheeledModel, mu: f64) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
-        let support = SupportPolygon::from_wheeled_model(wm)?;
-        let stability_model =
-            StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All)?;
-        let stability_data = StabilityData::new(&stability_model);
-        let support_pts = wm.base.support_points();
+        let settings = StabilitySettings {
+            mu: Some(mu),
+            bodies: BodySet::All,
+            ground_z: None,
+            stop_at_tip: false,
+        };
         Ok(Self {
             sys: WheeledSystem::new(wm.clone()),
             control_dynamics: WheeledData::new(wm),
-            monitor_dynamics: WheeledData::new(wm),
             data: Data::new(model),
-            stability_model,
-            stability_data,
-            contacts: support_pts.clone(),
-            loads: vec![0.0; support_pts.len()],
-            support_pts,
+            monitor: StabilityMonitor::new(wm, settings)?,
             rk: Rk4::new(nq + nr + 1),
+            first_stage: vec![0.0; nq + nr + 1],
             q_now: DVector::zeros(nq),
             v_now: DVector::zeros(nr),
             u: vec![0.0; nu],
@@ -1341,39 +1319,22 @@ impl Workspace {
     }
 }
 
-/// The actuators: the platform block of the input map and the limits.
+/// The actuators: the computed-torque map with the torque limits, the wheel-speed limit.
 struct Actuators {
-    /// Inverse of the platform block of N_Cᵀ S (Qr[0..2] = B u[0..2]).
-    b_inv: Matrix2<f64>,
-    wheel_tau: [f64; 2],
+    /// Computed torque on the reduced model, clipped at the joints' effort limits.
+    torque: ComputedTorque,
     wheel_speed: f64,
-    arm_tau: Vec<f64>,
+    /// Number of arm inputs.
+    na: usize,
     /// Platform speeds (v, ω) to wheel rates.
     w_inv: Matrix2<f64>,
 }
 
 impl Actuators {
-    /// Forms the input map at the initial state `x` (leaves the admissible-velocity basis
-    /// at `x` in the controller's workspace).
-    fn new(wm: &WheeledModel, x: &[f64], ws: &mut Workspace) -> Result<Self> {
+    /// The actuators of `wm` with the limits of its URDF (a missing or non-positive
+    /// limit is none).
+    fn new(wm: &WheeledModel) -> Result<Self> {
         let model = &wm.model;
-        let mut smat = DMatrix::zeros(model.nv, wm.nu());
-        // the platform block of N_Cᵀ S: Qr[0..2] = B u[0..2]
-        ws.q_now.copy_from_slice(&x[..model.nq]);
-        admissible_velocity_basis(wm, &ws.q_now, &mut ws.control_dynamics.basis);
-        actuation_matrix(wm, &ws.q_now, &mut smat);
-        let b_full = ws.control_dynamics.basis.transpose() * &smat;
-        let b_pp = Matrix2::new(
-            b_full[(0, 0)],
-            b_full[(0, 1)],
-            b_full[(1, 0)],
-            b_full[(1, 1)],
-        );
-        let b_inv = b_pp.try_inverse().ok_or_else(|| Error::Singular {
-            what: "wheel actuation map".into(),
-            detail: None,
-        })?;
-        // limits of the actuators
         let lim = |i: usize, v: &DVector<f64>| {
             let x = v[i];
             if x.is_finite() && x > 0.0 {
@@ -1392,16 +1353,14 @@ impl Actuators {
             ),
             None => ([f64::INFINITY; 2], f64::INFINITY),
         };
-        let arm_tau = wm
-            .arm_dofs()
-            .iter()
-            .map(|&i| lim(i, &model.effort_limit))
+        let bounds = wheel_tau
+            .into_iter()
+            .chain(wm.arm_dofs().iter().map(|&i| lim(i, &model.effort_limit)))
             .collect();
         Ok(Self {
-            b_inv,
-            wheel_tau,
+            torque: ComputedTorque::new(wm, bounds)?,
             wheel_speed,
-            arm_tau,
+            na: wm.arm_dofs().len(),
             w_inv: wm.base.drive.platform_to_wheel(),
         })
     }
@@ -1411,56 +1370,10 @@ impl Actuators {
     fn absolute_power(&self, u: &[f64], v_now: &DVector<f64>, v: f64, w: f64) -> f64 {
         let wrates = self.w_inv * Vector2::new(v, w);
         let mut p_abs = (u[0] * wrates[0]).abs() + (u[1] * wrates[1]).abs();
-        for k2 in 0..self.arm_tau.len() {
+        for k2 in 0..self.na {
             p_abs += (u[2 + k2] * v_now[2 + k2]).abs();
         }
         p_abs
-    }
-
-    /// Computed torque through the reduced model, Qr = Mr a + (cr + Gr), mapped to the
-    /// inputs `u` and clipped at the torque limits; `true` if any was clipped.
-    fn computed_torque(
-        &self,
-        control_dynamics: &WheeledData,
-        a_des: &DVector<f64>,
-        u: &mut [f64],
-    ) -> bool {
-        let mr = &control_dynamics.reduced.mass_matrix;
-        let bias = &control_dynamics.reduced.velocity_terms;
-        let nr = a_des.len();
-        let mut qr = [0.0f64; 2];
-        for (i, qri) in qr.iter_mut().enumerate() {
-            let mut s = bias[i];
-            for j in 0..nr {
-                s += mr[(i, j)] * a_des[j];
-            }
-            *qri = s;
-        }
-        let up = self.b_inv * Vector2::new(qr[0], qr[1]);
-        let mut torque_clip = false;
-        for s in 0..2 {
-            let tau = up[s];
-            u[s] = if tau.abs() > self.wheel_tau[s] {
-                torque_clip = true;
-                self.wheel_tau[s].copysign(tau)
-            } else {
-                tau
-            };
-        }
-        for (k2, &limit) in self.arm_tau.iter().enumerate() {
-            let i = 2 + k2;
-            let mut s = bias[i];
-            for j in 0..nr {
-                s += mr[(i, j)] * a_des[j];
-            }
-            u[i] = if s.abs() > limit {
-                torque_clip = true;
-                limit.copysign(s)
-            } else {
-                s
-            };
-        }
-        torque_clip
     }
 }
 

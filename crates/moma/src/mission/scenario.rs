@@ -377,7 +377,7 @@ fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
 }
 
 fn finite(path: &Path, field: &str, xs: &[f64]) -> Result<()> {
-    if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
+    if let Some(i) = crate::error::first_non_finite(xs) {
         return Err(field_err(
             path,
             field,
@@ -388,14 +388,10 @@ fn finite(path: &Path, field: &str, xs: &[f64]) -> Result<()> {
 }
 
 fn positive(path: &Path, field: &str, x: f64) -> Result<()> {
-    if !(x.is_finite() && x > 0.0) {
-        return Err(field_err(
-            path,
-            field,
-            format!("must be a positive finite number, got {x}"),
-        ));
+    match crate::error::not_positive_finite(x) {
+        Some(problem) => Err(field_err(path, field, problem)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Validates a parsed mission file; `base` resolves relative paths.

@@ -544,6 +544,37 @@ pub fn reduced_forward_dynamics_crba<'d>(
     Ok(&wd.reduced.vdot)
 }
 
+/// The reduced forward dynamics of the state last evaluated in `wd` by
+/// [`reduced_forward_dynamics_crba`] (at `q`, any input) under new inputs `u`: only
+/// `Qr`, `v̇_r` and `q̈` change (Mr, cr + Gr, N_C, Ṅ_C v do not depend on the input), so a
+/// controller that evaluated the state under zero input to form its torques gets the
+/// plant's response to them without a second CRBA and RNEA. The result is the one
+/// [`reduced_forward_dynamics_crba`] gives at the same state under `u`.
+///
+/// # Errors
+/// [`Error::Singular`] if Mr is not positive definite.
+///
+/// # Panics
+/// On wrong vector lengths.
+pub fn reduced_forward_dynamics_under_inputs<'d>(
+    wm: &WheeledModel,
+    wd: &'d mut WheeledData,
+    q: &DVector<f64>,
+    u: &[f64],
+) -> Result<&'d DVector<f64>> {
+    assert_eq!(q.len(), wm.model.nq, "q length");
+    generalized_force(wm, q, u, &mut wd.force);
+    {
+        let red = &mut wd.reduced;
+        let (_, _, _, qr) = red.parts_mut();
+        project(wm, &wd.basis, &wd.force, qr);
+        red.solve_reduced()?;
+    }
+    wd.reduced.qddot.copy_from(&wd.nd_v);
+    wd.reduced.qddot.gemv(1.0, &wd.basis, &wd.reduced.vdot, 1.0);
+    Ok(&wd.reduced.vdot)
+}
+
 /// Full reduced dynamics at `(q, v_r)` under `u`: Mr, Cr (from the Christoffel Coriolis
 /// matrix), cr, Gr (separately from cr), Qr, v̇, q̈, the multipliers λ and the
 /// constraint force −Cᵀλ, all in `wd.reduced`; C, N_C, Ṅ_C in `wd`.

@@ -9,7 +9,7 @@ use crate::closed_form::m2_platform_arm::{PlatformArm, PlatformArmParams};
 use crate::closed_form::m5_mobile_manipulator::{MobileManipulator, MobileManipulatorParams};
 use crate::closed_form::{ChapterModel, PlatformVelocity};
 use crate::error::{Error, Result};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
 
 /// A closed-form Pfaffian system with `N` coordinates, `NV` reduced velocities and `NU`
 /// inputs, with the names of its channels.

@@ -23,12 +23,13 @@ use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::Recorder;
-use crate::sim::scenario::IntegratorSettings;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::IntegratorSettings;
 use crate::sim::stepping::{
-    Grid, check_rk4_budget, check_rk4_steps, integrate_on_grid, positive, record_plant_sample,
+    Grid, check_rk4_budget, check_rk4_steps, integrate_on_grid, record_plant_sample,
     start_recording, validate_run_common,
 };
-use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem};
+use crate::sim::wheeled::MAX_RECORDED_SAMPLES;
 
 /// Largest number of control ticks a run accepts (`duration / control_period`).
 pub const MAX_CONTROL_TICKS: f64 = 100_000_000.0;
@@ -405,7 +406,7 @@ impl TickGrid {
     fn new(options: &ClosedLoopOptions) -> Result<Self> {
         let (ticks, period, every) = match options.control_period {
             Some(p) => {
-                positive("controller.period", p)?;
+                crate::error::ensure_positive("controller.period", p)?;
                 let n = (options.duration / p).round().max(1.0);
                 if n > MAX_CONTROL_TICKS {
                     return Err(Error::invalid(

@@ -95,12 +95,7 @@ impl CoordinatedController {
             ("controller.gains.K_E", gains.k_e),
             ("controller.gains.K_Y", gains.k_y),
         ] {
-            if !(x.is_finite() && x > 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {x}"),
-                ));
-            }
+            crate::error::ensure_positive(n, x)?;
         }
         let mut idx = [0usize; 2];
         for (k, name) in joints.iter().enumerate() {
@@ -132,7 +127,7 @@ impl CoordinatedController {
         )?;
         let nq = wm.model.nq;
         let mut me = Self {
-            inner: InnerLoop::new(&wm, limits.max_wheel_torque),
+            inner: InnerLoop::new(&wm, limits.max_wheel_torque)?,
             wd: WheeledData::new(&wm),
             frame: fid,
             joints: idx,

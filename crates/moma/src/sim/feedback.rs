@@ -31,10 +31,11 @@ use crate::control::unicycle::{
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::mobile::wheeled::reduced_forward_dynamics_crba;
-use crate::mobile::{WheeledData, WheeledModel, actuation_matrix};
+use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::FrameIndex;
 use crate::planning::trajectory::TrajectoryPoint;
 use crate::sim::closed_loop::{FeedbackLaw, Observation, SaturationFlags};
+use crate::sim::computed_torque::ComputedTorque;
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// A time-sampled platform trajectory (from [`crate::planning::trajectory`]),
@@ -158,52 +159,10 @@ impl VelocityServo {
             ("controller.arm_kp", self.arm_kp),
             ("controller.arm_kd", self.arm_kd),
         ] {
-            if !(x.is_finite() && x > 0.0) {
-                return Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {x}"),
-                ));
-            }
+            crate::error::ensure_positive(n, x)?;
         }
         Ok(())
     }
-}
-
-/// Reduced generalised force `tau_r` (nr) → actuator inputs `u` for a wheeled model:
-/// `N_Cᵀ S` is block diagonal (a 2 × 2 wheel block and the identity on the arm), so
-/// the wheel block is solved in closed form. `s` is an nv × nu buffer.
-fn actuators_from_reduced(
-    wm: &WheeledModel,
-    basis: &DMatrix<f64>,
-    q: &DVector<f64>,
-    s: &mut DMatrix<f64>,
-    tau_r: &DVector<f64>,
-    u: &mut [f64],
-) -> Result<()> {
-    actuation_matrix(wm, q, s);
-    let mut b = [[0.0; 2]; 2];
-    for (a, row) in b.iter_mut().enumerate() {
-        for (j, e) in row.iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for i in 0..wm.nv() {
-                acc += basis[(i, a)] * s[(i, j)];
-            }
-            *e = acc;
-        }
-    }
-    let det = b[0][0] * b[1][1] - b[0][1] * b[1][0];
-    if det.abs() < 1e-300 || !det.is_finite() {
-        return Err(Error::Singular {
-            what: "actuator map N_Cᵀ S (wheel block)".into(),
-            detail: Some(format!("determinant {det:e}")),
-        });
-    }
-    u[0] = (b[1][1] * tau_r[0] - b[0][1] * tau_r[1]) / det;
-    u[1] = (-b[1][0] * tau_r[0] + b[0][0] * tau_r[1]) / det;
-    for k in 2..wm.nr() {
-        u[k] = tau_r[k];
-    }
-    Ok(())
 }
 
 fn clip(u: &mut [f64], limit: f64) -> bool {
@@ -232,35 +191,34 @@ pub struct PlatformController {
 }
 
 /// The inner computed-torque loop on the reduced dynamics shared by the platform laws
-/// and the coordinated law: `Qr = Mr a + (cr + Gr)` for a commanded reduced
-/// acceleration `a`, the actuator inputs from `N_Cᵀ S u = Qr`, wheel torques clipped.
+/// and the coordinated law: the reduced dynamics of the state, then
+/// [`ComputedTorque::inputs`] for a commanded reduced acceleration `a`, wheel torques
+/// clipped.
 #[derive(Clone, Debug)]
 pub(crate) struct InnerLoop {
     wm: WheeledModel,
     wd: WheeledData,
-    max_wheel_torque: f64,
-    s: DMatrix<f64>,
+    torque: ComputedTorque,
     q: DVector<f64>,
     v: DVector<f64>,
     acc: DVector<f64>,
-    tau_r: DVector<f64>,
     zero_u: Vec<f64>,
 }
 
 impl InnerLoop {
-    pub(crate) fn new(wm: &WheeledModel, max_wheel_torque: f64) -> Self {
-        let (nq, nv, nr, nu) = (wm.model.nq, wm.nv(), wm.nr(), wm.nu());
-        Self {
+    pub(crate) fn new(wm: &WheeledModel, max_wheel_torque: f64) -> Result<Self> {
+        let (nq, nr, nu) = (wm.model.nq, wm.nr(), wm.nu());
+        let mut bounds = vec![f64::INFINITY; nu];
+        bounds[..2].fill(max_wheel_torque);
+        Ok(Self {
             wd: WheeledData::new(wm),
-            max_wheel_torque,
-            s: DMatrix::zeros(nv, nu),
+            torque: ComputedTorque::new(wm, bounds)?,
             q: DVector::zeros(nq),
             v: DVector::zeros(nr),
             acc: DVector::zeros(nr),
-            tau_r: DVector::zeros(nr),
             zero_u: vec![0.0; nu],
             wm: wm.clone(),
-        }
+        })
     }
 
     /// Writes the inputs `u` at `(q, v)` for the reduced acceleration
@@ -281,18 +239,7 @@ impl InnerLoop {
         for (j, &dof) in self.wm.arm_dofs().iter().enumerate() {
             self.acc[2 + j] = accel(2 + j, q[dof], v[2 + j]);
         }
-        let red = &self.wd.reduced;
-        self.tau_r.copy_from(&red.velocity_terms);
-        self.tau_r.gemv(1.0, &red.mass_matrix, &self.acc, 1.0);
-        actuators_from_reduced(
-            &self.wm,
-            &self.wd.basis,
-            &self.q,
-            &mut self.s,
-            &self.tau_r,
-            u,
-        )?;
-        Ok(clip(&mut u[..2], self.max_wheel_torque))
+        Ok(self.torque.inputs(&self.wd.reduced, &self.acc, u))
     }
 }
 
@@ -319,7 +266,7 @@ impl PlatformController {
             max_wheel_torque.unwrap_or(f64::INFINITY),
         )?;
         Ok(Self {
-            inner: InnerLoop::new(&wm, limits.max_wheel_torque),
+            inner: InnerLoop::new(&wm, limits.max_wheel_torque)?,
             law,
             servo,
             limits,
@@ -506,16 +453,7 @@ impl PointReference {
     /// # Errors
     /// The first bad field.
     pub fn validate(&self) -> Result<()> {
-        let pos = |n: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    n,
-                    format!("must be > 0 and finite, got {x}"),
-                ))
-            }
-        };
+        let pos = crate::error::ensure_positive;
         match self {
             Self::Line { from, to, duration } => {
                 crate::error::ensure_finite("reference.from", from)?;
@@ -630,9 +568,8 @@ pub struct OscController {
     pub reference: PointReference,
     /// Gains.
     pub gains: OscGains,
-    max_torque: Option<f64>,
+    torque: ComputedTorque,
     posture: Vec<f64>,
-    s: DMatrix<f64>,
     q: DVector<f64>,
     v: DVector<f64>,
     zero_a: DVector<f64>,
@@ -659,15 +596,14 @@ impl OscController {
         check_osc_gains(&gains, max_torque)?;
         crate::error::ensure_len("posture", wm.nr() - 2, posture.len())?;
         crate::error::ensure_finite("posture", &posture)?;
-        let (nq, nv, nr, nu) = (wm.model.nq, wm.nv(), wm.nr(), wm.nu());
+        let (nq, nr, nu) = (wm.model.nq, wm.nr(), wm.nu());
         Ok(Self {
             rod: ReducedOscData::new(&wm, &[0, 1, 2]),
             frame: fid,
             reference,
             gains,
-            max_torque,
+            torque: ComputedTorque::new(&wm, vec![max_torque.unwrap_or(f64::INFINITY); nu])?,
             posture,
-            s: DMatrix::zeros(nv, nu),
             q: DVector::zeros(nq),
             v: DVector::zeros(nr),
             zero_a: DVector::zeros(3),
@@ -726,15 +662,9 @@ impl FeedbackLaw for OscController {
             xdot,
             self.tau_r.as_mut_slice(),
         );
-        actuators_from_reduced(
-            &self.wm,
-            &self.rod.wheeled.basis,
-            &self.q,
-            &mut self.s,
-            &self.tau_r,
-            u,
-        )?;
-        let torque = self.max_torque.is_some_and(|m| clip(u, m));
+        let torque = self
+            .torque
+            .inputs_from_reduced_force(self.tau_r.as_slice(), u);
         Ok(SaturationFlags {
             speed: false,
             torque,
@@ -805,20 +735,12 @@ impl M5TaskController {
         crate::error::ensure_finite("reference.amplitude", &amp)?;
         crate::error::ensure_finite("reference.omega", &omega)?;
         for (n, g) in [("controller.kp", kp), ("controller.kd", kd)] {
-            if let Some(i) = g.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
-                return Err(Error::invalid(
-                    format!("{n}[{i}]"),
-                    format!("must be > 0 and finite, got {}", g[i]),
-                ));
+            for (i, &x) in g.iter().enumerate() {
+                crate::error::ensure_positive(&format!("{n}[{i}]"), x)?;
             }
         }
-        if let Some(m) = max_torque
-            && !(m.is_finite() && m > 0.0)
-        {
-            return Err(Error::invalid(
-                "controller.max_torque",
-                format!("must be > 0 and finite, got {m}"),
-            ));
+        if let Some(m) = max_torque {
+            crate::error::ensure_positive("controller.max_torque", m)?;
         }
         Ok(Self {
             model,
@@ -1054,13 +976,8 @@ fn check_osc_gains(gains: &OscGains, max_torque: Option<f64>) -> Result<()> {
             ));
         }
     }
-    if let Some(m) = max_torque
-        && !(m.is_finite() && m > 0.0)
-    {
-        return Err(Error::invalid(
-            "controller.max_torque",
-            format!("must be > 0 and finite, got {m}"),
-        ));
+    if let Some(m) = max_torque {
+        crate::error::ensure_positive("controller.max_torque", m)?;
     }
     Ok(())
 }

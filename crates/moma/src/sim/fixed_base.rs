@@ -6,7 +6,7 @@
 use crate::dynamics::{aba, kinetic_energy, potential_energy};
 use crate::error::{Error, Result};
 use crate::multibody::{Data, Model};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
 use nalgebra::DVector;
 
 /// A fixed-base model with its workspace.

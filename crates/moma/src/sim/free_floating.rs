@@ -14,7 +14,7 @@ use crate::dynamics::aba;
 use crate::error::{Error, Result};
 use crate::kinematics::{ReferenceFrame, frame_jacobian};
 use crate::multibody::{Data, FrameIndex, Model};
-use crate::sim::scenario::{ChannelProfile, IntegratorSettings};
+use crate::sim::settings::{ChannelProfile, IntegratorSettings};
 use crate::sim::stepping::{budget_exhausted, check_rk4_budget};
 use crate::sim::{AdaptiveOptions, Dop853, OdeSystem, Rk4, StepBudget};
 use crate::space::{self, SpaceData, check_free_flyer};

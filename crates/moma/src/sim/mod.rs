@@ -6,13 +6,15 @@
 
 pub mod chapter_models;
 pub mod closed_loop;
+pub mod computed_torque;
 pub mod coordinated;
 pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
 pub mod monitor;
 pub mod recorder;
-pub mod scenario;
+pub mod reduced_system;
+pub mod settings;
 pub mod stability_monitor;
 mod stepping;
 pub mod wheeled;

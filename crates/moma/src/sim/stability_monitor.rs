@@ -222,13 +222,8 @@ impl StabilityMonitor {
     /// contacts (add a caster off the axle), for a non-positive μ or a non-finite ground
     /// height; errors of [`BodySet::mask`] for an unknown joint or link.
     pub fn new(robot: &WheeledModel, settings: StabilitySettings) -> Result<Self> {
-        if let Some(mu) = settings.mu
-            && !(mu.is_finite() && mu > 0.0)
-        {
-            return Err(Error::invalid(
-                "stability.mu",
-                format!("must be a positive finite number, got {mu}"),
-            ));
+        if let Some(mu) = settings.mu {
+            crate::error::ensure_positive("stability.mu", mu)?;
         }
         if let Some(z) = settings.ground_z {
             crate::error::ensure_finite("stability.ground_z", [z].iter())?;
@@ -381,6 +376,40 @@ impl StabilityMonitor {
         let (robot, wd) = (&self.robot, &mut self.wd);
         crate::mobile::reduced_forward_dynamics(robot, wd, &self.q, &self.v, u)?;
         crate::mobile::wheeled::lagrange_multipliers(robot, wd, &self.q)?;
+        self.record(t, None, u)
+    }
+
+    /// As [`StabilityMonitor::sample`] on a state whose dynamics the caller has already
+    /// evaluated in `wd` (for this monitor's robot): the reduced forward dynamics at
+    /// `(q, v)` under `u` (`qdot`, `reduced.qddot`) and the multipliers
+    /// (`reduced.lambda`, from [`crate::mobile::wheeled::lagrange_multipliers`]). A
+    /// closed loop that evaluates each state once shares that evaluation with its
+    /// monitor this way. `wd.data` serves as the kinematics workspace.
+    ///
+    /// # Errors
+    /// Errors of the loads for a non-finite state.
+    ///
+    /// # Panics
+    /// On wrong lengths.
+    pub fn sample_evaluated(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        wd: &mut WheeledData,
+        u: &[f64],
+    ) -> Result<bool> {
+        self.q.copy_from_slice(q);
+        self.record(t, Some(wd), u)
+    }
+
+    /// Evaluates the stability measures, loads and slip of the state in `self.q` with the
+    /// dynamics in `shared` (else in the monitor's own workspace) and appends them.
+    fn record(&mut self, t: f64, shared: Option<&mut WheeledData>, u: &[f64]) -> Result<bool> {
+        let robot = &self.robot;
+        let wd = match shared {
+            Some(w) => w,
+            None => &mut self.wd,
+        };
         // q̇ and q̈ of the full model are in wd.qdot and wd.reduced.qddot.
         let r = evaluate(
             &robot.model,

@@ -7,8 +7,8 @@ use crate::error::{Error, Result};
 use crate::ode::{AdaptiveOptions, DormandPrince45, OdeSystem, Rk4, StepBudget, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::{Recorder, Sample};
-use crate::sim::scenario::{DEFAULT_MAX_STEPS, IntegratorSettings, MAX_STEP_BUDGET};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::{DEFAULT_MAX_STEPS, IntegratorSettings, MAX_STEP_BUDGET};
 
 /// Where a run stops: `n` segment ends `end(k)`, k = 0..n; with RK4, segment k takes
 /// `steps(k)` steps of `h` from the previous end.
@@ -135,18 +135,6 @@ pub(crate) fn budget_exhausted(
     }
 }
 
-/// A positive finite number or an error naming `field`.
-pub(crate) fn positive(field: &str, x: f64) -> Result<()> {
-    if x.is_finite() && x > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            field,
-            format!("must be a positive finite number, got {x}"),
-        ))
-    }
-}
-
 /// The checks every run of `system` makes first: initial state sizes and finiteness,
 /// the integrator settings, a positive duration and recording interval.
 ///
@@ -165,8 +153,8 @@ pub(crate) fn validate_run_common(
     crate::error::ensure_finite("initial q", q0)?;
     crate::error::ensure_finite("initial v", v0)?;
     integrator.validate()?;
-    positive("duration", duration)?;
-    positive("record interval", record_interval)
+    crate::error::ensure_positive("duration", duration)?;
+    crate::error::ensure_positive("record interval", record_interval)
 }
 
 /// Where the run's step budget comes from, for messages: the scenario's key, or

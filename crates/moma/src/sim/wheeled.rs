@@ -13,7 +13,8 @@ use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::Recorder;
-use crate::sim::scenario::{InputProfile, IntegratorSettings};
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::{InputProfile, IntegratorSettings};
 use crate::sim::stepping::{
     Grid, check_rk4_budget, integrate_on_grid, record_plant_sample, start_recording,
     validate_run_common,
@@ -25,52 +26,9 @@ pub const MAX_RECORDED_SAMPLES: f64 = 10_000_000.0;
 
 /// Largest number of fixed RK4 steps [`simulate`] accepts (`duration / dt`) with the
 /// largest step budget a scenario may set
-/// ([`crate::sim::scenario::MAX_STEP_BUDGET`]); the default budget,
-/// [`crate::sim::scenario::DEFAULT_MAX_STEPS`], is smaller.
-pub const MAX_RK4_STEPS: f64 = crate::sim::scenario::MAX_STEP_BUDGET as f64;
-
-/// A constrained mechanical system in reduced coordinates `q̇ = N_C(q) v`,
-/// `Mr v̇ + Cr v + Gr = Qr`.
-pub trait ReducedSystem {
-    /// Number of configuration coordinates `q`.
-    fn nq(&self) -> usize;
-    /// Number of reduced velocities `v`.
-    fn nv(&self) -> usize;
-    /// Number of inputs `u`.
-    fn nu(&self) -> usize;
-    /// Names of the configuration coordinates (length [`ReducedSystem::nq`]).
-    fn q_names(&self) -> Vec<String>;
-    /// Names of the reduced velocities.
-    fn v_names(&self) -> Vec<String>;
-    /// Names of the inputs.
-    fn u_names(&self) -> Vec<String>;
-    /// SI units of the configuration coordinates (`"m"`, `"rad"`), one per q name.
-    fn q_units(&self) -> Vec<&'static str>;
-    /// SI units of the reduced velocities (`"m/s"`, `"rad/s"`).
-    fn v_units(&self) -> Vec<&'static str>;
-    /// SI units of the inputs (`"N m"` for torques, `"N"` for forces).
-    fn u_units(&self) -> Vec<&'static str>;
-    /// Writes `q̇ = N_C(q) v` and the reduced acceleration `v̇` under input `u`.
-    fn dynamics(
-        &mut self,
-        q: &[f64],
-        v: &[f64],
-        u: &[f64],
-        qdot: &mut [f64],
-        vdot: &mut [f64],
-    ) -> Result<()>;
-    /// Kinetic and potential energy `(T, V)` (J).
-    fn energy(&mut self, q: &[f64], v: &[f64]) -> Result<(f64, f64)>;
-    /// Power of the inputs `Qᵀ q̇ = (S u)ᵀ N_C v` (W).
-    fn input_power(&mut self, q: &[f64], v: &[f64], u: &[f64]) -> Result<f64>;
-    /// Constraint residual `‖C(q) N_C(q) v‖`.
-    fn constraint_residual(&mut self, q: &[f64], v: &[f64]) -> Result<f64>;
-    /// Number of constraint rows k (length of the multiplier vector).
-    fn nk(&self) -> usize;
-    /// Lagrange multipliers λ (k) at `(q, v)` under input `u`; for the no-side-slip row,
-    /// `−λ` is the lateral ground force on the axle along `e_lat = (−sin θ, cos θ)`.
-    fn multipliers(&mut self, q: &[f64], v: &[f64], u: &[f64], out: &mut [f64]) -> Result<()>;
-}
+/// ([`crate::sim::settings::MAX_STEP_BUDGET`]); the default budget,
+/// [`crate::sim::settings::DEFAULT_MAX_STEPS`], is smaller.
+pub const MAX_RK4_STEPS: f64 = crate::sim::settings::MAX_STEP_BUDGET as f64;
 
 /// The ODE `ẋ = f(t, x)` of a [`ReducedSystem`] under an [`InputProfile`], state
 /// `[q, v, W]`.

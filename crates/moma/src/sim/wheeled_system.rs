@@ -2,7 +2,7 @@
 //! [`ReducedSystem`] for the simulator.
 
 use crate::error::Result;
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
 
 /// A [`crate::mobile::WheeledModel`] with its workspace, simulated in reduced coordinates
 /// `v_r = [v, ω, q̇_arm…]` under inputs `u = [τ_L, τ_R, τ_arm…]`.

@@ -217,12 +217,7 @@ pub fn driven_wheel_friction(
     normal: [f64; 2],
     mu: f64,
 ) -> Result<[WheelFriction; 2]> {
-    if !(mu.is_finite() && mu > 0.0) {
-        return Err(Error::invalid(
-            "friction coefficient mu",
-            format!("must be a positive finite number, got {mu}"),
-        ));
-    }
+    crate::error::ensure_positive("friction coefficient mu", mu)?;
     crate::error::ensure_finite(
         "wheel forces",
         [

@@ -1,4 +1,6 @@
-//! `moma simulate` scenarios made runnable: the command's `[space]`, `[stability]`,
+//! The `moma simulate` scenario file and what makes it runnable: the file's schema and
+//! parser ([`schema`]: robot, initial state, inputs, integrator, output and limits), the
+//! command's `[space]`, `[stability]`,
 //! `[controller]` and `[reference]` tables ([`SpaceSpec`], [`StabilitySpec`],
 //! [`ControllerSpec`], [`ReferenceSpec`]), their checks, and the builders that turn a
 //! parsed [`Scenario`] into what a run needs: the robot ([`robot`]), the open-loop run
@@ -6,7 +8,8 @@
 //! free-floating run ([`SpaceRun`]) and the stability monitor.
 //!
 //! The module stands above `sim` and `mission`: a `planned` reference is planned by
-//! `mission::planned`, which `sim` may not import. The schema is in `docs/simulate.md`
+//! `mission::planned`, which `sim` may not import. The simulator (`sim`) reads no file:
+//! it takes the settings of [`crate::sim::settings`], which this schema reads. The schema is in `docs/simulate.md`
 //! and `docs/space.md`.
 //!
 //! Every error is an [`Error::Scenario`] whose message is the one the command prints:
@@ -15,12 +18,14 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::sim::scenario::InputProfile;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::settings::InputProfile;
 use crate::sim::stability_monitor::StabilityMonitor;
-use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, ReducedSystem, SimulationOptions};
+use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, SimulationOptions};
 
 pub mod control;
 pub mod robot;
+pub mod schema;
 pub mod space;
 pub mod stability;
 
@@ -29,10 +34,10 @@ pub use robot::{build_robot, build_wheeled_model, chapter_params_json, fixed_bas
 pub use space::{CaptureSpec, ControlSpec, MomentumSpec, SpaceRun, SpaceSpec, space_run};
 pub use stability::{StabilitySpec, monitor, replay};
 
-/// A `moma simulate` scenario: the schema of [`crate::sim::scenario`] with this module's
+/// A `moma simulate` scenario: the schema of [`crate::sim_config::schema`] with this module's
 /// tables.
 pub type Scenario =
-    crate::sim::scenario::Scenario<SpaceSpec, StabilitySpec, ControllerSpec, ReferenceSpec>;
+    crate::sim_config::schema::Scenario<SpaceSpec, StabilitySpec, ControllerSpec, ReferenceSpec>;
 
 /// `return Err(Error::Scenario(format!(…)))`.
 macro_rules! bail {
@@ -81,7 +86,7 @@ impl<T, E: std::error::Error> Context<T> for std::result::Result<T, E> {
 
 /// `Err` naming `field[i]` unless every value is finite.
 pub(crate) fn finite(field: &str, xs: &[f64]) -> Result<()> {
-    if let Some(i) = xs.iter().position(|x| !x.is_finite()) {
+    if let Some(i) = crate::error::first_non_finite(xs) {
         bail!("{field}[{i}] is not a finite number");
     }
     Ok(())
@@ -94,7 +99,7 @@ pub(crate) fn finite(field: &str, xs: &[f64]) -> Result<()> {
 pub fn load(path: &Path) -> Result<Scenario> {
     let text = std::fs::read_to_string(path)
         .with_ctx(|| format!("{}: cannot read scenario file", path.display()))?;
-    crate::sim::scenario::parse_scenario(&text, path).ctx_plain()
+    crate::sim_config::schema::parse_scenario(&text, path).ctx_plain()
 }
 
 /// Turns any error into an [`Error::Scenario`] with the same message (causes included).
@@ -181,13 +186,13 @@ pub fn prepare(sc: &Scenario, path: &Path) -> Result<Run> {
             );
         }
         if sc.stability.is_some()
-            && !matches!(sc.robot, crate::sim::scenario::RobotSpec::Urdf { .. })
+            && !matches!(sc.robot, crate::sim_config::schema::RobotSpec::Urdf { .. })
         {
             bail!("{}", at(path, STABILITY_NEEDS_URDF));
         }
         return Ok(Run::Closed(Box::new(closed_loop(sc, path, base_dir)?)));
     }
-    if let crate::sim::scenario::RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
+    if let crate::sim_config::schema::RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
         if sc.stability.is_some() {
             bail!("{}", at(path, STABILITY_NEEDS_URDF));
         }
@@ -204,7 +209,7 @@ pub fn prepare(sc: &Scenario, path: &Path) -> Result<Run> {
 /// # Errors
 /// [`Error::Scenario`] naming the file and the field at fault.
 pub fn open_loop(sc: &Scenario, path: &Path, base_dir: &Path) -> Result<OpenLoop> {
-    use crate::sim::scenario::RobotSpec;
+    use crate::sim_config::schema::RobotSpec;
     if sc.space.is_some() {
         bail!(
             "{}",
@@ -277,7 +282,7 @@ pub fn initial_state(
 /// The wheel joints a scenario's URDF robot tracks (empty otherwise).
 pub fn wheel_joints(sc: &Scenario) -> Vec<String> {
     match &sc.robot {
-        crate::sim::scenario::RobotSpec::Urdf {
+        crate::sim_config::schema::RobotSpec::Urdf {
             wheel_joints: Some(w),
             ..
         } => w.to_vec(),

@@ -8,8 +8,8 @@ use super::{Context, bail, finite};
 use crate::closed_form::ChapterModel;
 use crate::error::Result;
 use crate::sim::chapter_models::chapter_system;
-use crate::sim::scenario::{CasterSpec, DriveSpec, RobotSpec};
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim_config::schema::{CasterSpec, DriveSpec, RobotSpec};
 
 /// Builds the robot of a scenario and the name the summary gives it; `base_dir` resolves
 /// relative URDF paths. A free-floating robot is refused (the space run builds it).

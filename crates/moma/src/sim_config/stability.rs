@@ -7,8 +7,8 @@ use super::{Context, bail};
 use crate::error::Result;
 use crate::mobile::WheeledModel;
 use crate::sim::recorder::Recorder;
-use crate::sim::scenario::RobotSpec;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
+use crate::sim_config::schema::RobotSpec;
 use crate::stability::BodySet;
 
 /// The `[stability]` table.
@@ -41,10 +41,8 @@ pub fn monitor(spec: &StabilitySpec, wm: &WheeledModel) -> Result<StabilityMonit
         None => BodySet::All,
         Some(s) => s.parse().ctx("stability.bodies")?,
     };
-    if let Some(mu) = spec.mu
-        && !(mu.is_finite() && mu > 0.0)
-    {
-        bail!("stability.mu must be a positive finite number, got {mu}");
+    if let Some(problem) = spec.mu.and_then(crate::error::not_positive_finite) {
+        bail!("stability.mu {problem}");
     }
     if let Some(z) = spec.ground_z
         && !z.is_finite()

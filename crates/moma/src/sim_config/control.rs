@@ -30,8 +30,8 @@ use crate::sim::feedback::{
     PointReference, SampledTrajectory, TaskLaw, TrackingReference, VelocityServo,
 };
 use crate::sim::fixed_base::FixedBaseSystem;
-use crate::sim::scenario::RobotSpec;
-use crate::sim::wheeled::ReducedSystem;
+use crate::sim::reduced_system::ReducedSystem;
+use crate::sim_config::schema::RobotSpec;
 
 /// Most waypoints a reference may list.
 const MAX_WAYPOINTS: usize = 100_000;
@@ -642,10 +642,8 @@ fn check_limits(c: &ControllerSpec) -> Result<()> {
         ("max_wheel_torque", c.max_wheel_torque),
         ("max_torque", c.max_torque),
     ] {
-        if let Some(x) = x
-            && !(x.is_finite() && x > 0.0)
-        {
-            bail!("controller.{name} must be a positive finite number, got {x}");
+        if let Some(problem) = x.and_then(crate::error::not_positive_finite) {
+            bail!("controller.{name} {problem}");
         }
     }
     Ok(())
