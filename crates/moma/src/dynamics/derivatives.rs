@@ -38,14 +38,16 @@
 //! tangent space in both layouts.
 //!
 //! Forward dynamics follows from the implicit function theorem: with q̈ = ABA(q, v, τ),
-//! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H⁻¹ comes from a
-//! Cholesky factorisation of H (one solve per column, then symmetrised), and the products
-//! with it are dense, as Pinocchio's.
-
+//! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H is factorised as
+//! `Lᵀ D L` with the tree's sparsity (Featherstone's LTDL, `Σ depth²` operations), and
+//! the three right-hand sides `[−∂τ/∂q, −∂τ/∂v, I]` are solved together, row by row: each
+//! step of the two triangular solves is one contiguous multiply–add of a 3 nv row, and
+//! only along the tree's ancestor chains (`2 Σ depth` row updates in all). The joint
+//! placements are ABA's, not computed twice.
+use super::tree_ltdl::{dof_parents, ltdl_in_place, ltdl_solve_rows};
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{assert_nv, update_joint_placement};
-use crate::linalg::cholesky_in_place;
 use crate::multibody::{Data, JointType, Model};
 use crate::spatial::{SE3, skew};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
@@ -94,8 +96,12 @@ pub struct DerivativeData {
     w: Vec<Vector6<f64>>,
     u: Vec<Vector6<f64>>,
     dadv: Vec<Vector6<f64>>,
-    /// The Cholesky factor of H and one column of scratch.
-    chol: DMatrix<f64>,
+    /// Each velocity coordinate's parent in the tree (see `tree_ltdl`).
+    dof_parent: Vec<usize>,
+    /// The tree-sparse `Lᵀ D L` factor of H, the right-hand sides of the forward-dynamics
+    /// derivatives by rows (nv blocks of 3 nv), and one column of scratch.
+    fact: DMatrix<f64>,
+    rows: DVector<f64>,
     column: DVector<f64>,
 }
 
@@ -128,7 +134,9 @@ impl DerivativeData {
             w: vec![Vector6::zeros(); nv],
             u: vec![Vector6::zeros(); nv],
             dadv: vec![Vector6::zeros(); nv],
-            chol: m(),
+            dof_parent: dof_parents(model),
+            fact: m(),
+            rows: DVector::zeros(3 * nv * nv),
             column: DVector::zeros(nv),
         }
     }
@@ -170,11 +178,23 @@ pub fn rnea_derivatives(
     );
     assert_nv(model, v, "v");
     assert_nv(model, a, "a");
-    let (qs, vs, as_) = (q.as_slice(), v.as_slice(), a.as_slice());
+    rnea_derivatives_impl(model, dd, q.as_slice(), v.as_slice(), a.as_slice(), false);
+}
+
+/// [`rnea_derivatives`] on checked slices; `placements_ready` when `dd.data` already holds
+/// the joint placements at `qs` (after ABA at the same q).
+fn rnea_derivatives_impl(
+    model: &Model,
+    dd: &mut DerivativeData,
+    qs: &[f64],
+    vs: &[f64],
+    as_: &[f64],
+    placements_ready: bool,
+) {
     dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
     dd.layout
         .a_to_pinocchio(qs, vs, as_, dd.a_local.as_mut_slice());
-    forward_pass(model, dd, qs);
+    forward_pass(model, dd, qs, placements_ready);
     backward_pass(model, dd);
     // τ computed in the pass's convention → moma's, then the matrices
     dd.column.copy_from(&dd.tau);
@@ -214,20 +234,48 @@ pub fn aba_derivatives(
     dd.ddq.copy_from(ddq);
     // a moved-out vector is put back below: no allocation
     let ddq = std::mem::take(&mut dd.ddq);
-    rnea_derivatives(model, dd, q, v, &ddq);
+    rnea_derivatives_impl(model, dd, q.as_slice(), v.as_slice(), ddq.as_slice(), true);
     dd.ddq = ddq;
-    dd.chol.copy_from(&dd.drnea_da);
-    if let Err(k) = cholesky_in_place(&mut dd.chol, 0.0) {
+    dd.fact.copy_from(&dd.drnea_da);
+    if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
         for m in [&mut dd.daba_dq, &mut dd.daba_dv, &mut dd.daba_dtau] {
             m.fill(f64::NAN);
         }
         return Err(Error::Singular {
             what: "joint-space inertia H(q)".into(),
-            detail: Some(format!("Cholesky pivot {k} is not positive")),
+            detail: Some(format!(
+                "the pivot of velocity coordinate {k} is not positive"
+            )),
         });
     }
+    // H [∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ] = [−∂τ/∂q, −∂τ/∂v, I], solved by rows
     let nv = model.nv;
-    cholesky_inverse(&dd.chol, &mut dd.daba_dtau);
+    let m = 3 * nv;
+    let rows = dd.rows.as_mut_slice();
+    let (dq, dv) = (dd.drnea_dq.as_slice(), dd.drnea_dv.as_slice());
+    for r in 0..nv {
+        let row = &mut rows[r * m..(r + 1) * m];
+        for c in 0..nv {
+            row[c] = -dq[c * nv + r];
+            row[nv + c] = -dv[c * nv + r];
+            row[2 * nv + c] = 0.0;
+        }
+        row[2 * nv + r] = 1.0;
+    }
+    ltdl_solve_rows(&dd.fact, &dd.dof_parent, rows, m);
+    let (oq, ov, ot) = (
+        dd.daba_dq.as_mut_slice(),
+        dd.daba_dv.as_mut_slice(),
+        dd.daba_dtau.as_mut_slice(),
+    );
+    for r in 0..nv {
+        let row = &rows[r * m..(r + 1) * m];
+        for c in 0..nv {
+            oq[c * nv + r] = row[c];
+            ov[c * nv + r] = row[nv + c];
+            ot[c * nv + r] = row[2 * nv + c];
+        }
+    }
     // H⁻¹ symmetric to the last bit
     for j in 0..nv {
         for r in j + 1..nv {
@@ -236,62 +284,7 @@ pub fn aba_derivatives(
             dd.daba_dtau[(j, r)] = m;
         }
     }
-    neg_product(&dd.daba_dtau, &dd.drnea_dq, &mut dd.daba_dq);
-    neg_product(&dd.daba_dtau, &dd.drnea_dv, &mut dd.daba_dv);
     Ok(())
-}
-
-/// `out = (L Lᵀ)⁻¹` from the Cholesky factor `l` (lower triangle), one column of the
-/// identity at a time: forward substitution by axpys on L's contiguous columns (starting
-/// at the column's one, above which it stays zero), then back substitution by dot
-/// products with them.
-fn cholesky_inverse(l: &DMatrix<f64>, out: &mut DMatrix<f64>) {
-    let n = l.nrows();
-    let (l, o) = (l.as_slice(), out.as_mut_slice());
-    for j in 0..n {
-        let x = &mut o[j * n..(j + 1) * n];
-        x.fill(0.0);
-        x[j] = 1.0;
-        // L y = e_j
-        for k in j..n {
-            let col = &l[k * n..(k + 1) * n];
-            let yk = x[k] / col[k];
-            x[k] = yk;
-            for (d, s) in x[k + 1..].iter_mut().zip(&col[k + 1..]) {
-                *d -= s * yk;
-            }
-        }
-        // Lᵀ x = y
-        for k in (0..n).rev() {
-            let col = &l[k * n..(k + 1) * n];
-            let dot: f64 = x[k + 1..]
-                .iter()
-                .zip(&col[k + 1..])
-                .map(|(a, b)| a * b)
-                .sum();
-            x[k] = (x[k] - dot) / col[k];
-        }
-    }
-}
-
-/// `out = −a b` for square matrices of one size, column by column as sums of `a`'s
-/// columns (contiguous, so the inner loop vectorises; nalgebra's dynamic product would
-/// allocate its packing buffers).
-fn neg_product(a: &DMatrix<f64>, b: &DMatrix<f64>, out: &mut DMatrix<f64>) {
-    let n = a.nrows();
-    let (a, b, o) = (a.as_slice(), b.as_slice(), out.as_mut_slice());
-    for j in 0..n {
-        let oj = &mut o[j * n..(j + 1) * n];
-        oj.fill(0.0);
-        for k in 0..n {
-            let x = -b[j * n + k];
-            if x != 0.0 {
-                for (d, s) in oj.iter_mut().zip(&a[k * n..(k + 1) * n]) {
-                    *d += s * x;
-                }
-            }
-        }
-    }
 }
 
 /// Column `k` of joint `i`'s motion subspace in its own frame, constant for every kind
@@ -325,7 +318,7 @@ fn local_column(jt: &JointType, k: usize) -> Vector6<f64> {
 
 /// The world placement, twist and acceleration of every joint, the per-dof vectors and
 /// each body's inertia, B and force (the composites' starting values).
-fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
+fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64], placements_ready: bool) {
     let gravity = Vector6::new(
         -model.gravity.x,
         -model.gravity.y,
@@ -335,7 +328,9 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
         0.0,
     );
     for i in 1..model.njoints {
-        update_joint_placement(model, &mut dd.data, i, qs);
+        if !placements_ready {
+            update_joint_placement(model, &mut dd.data, i, qs);
+        }
         let p = model.parents[i].0;
         let local = dd.data.parent_from_joint[i];
         let (omi, v_parent, a_parent) = if p == 0 {
@@ -376,9 +371,16 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
 /// Accumulates the composites from the leaves up and writes τ and the three matrices (in
 /// the pass's convention).
 fn backward_pass(model: &Model, dd: &mut DerivativeData) {
+    let nv = model.nv;
     dd.drnea_dq.fill(0.0);
     dd.drnea_dv.fill(0.0);
     dd.drnea_da.fill(0.0);
+    // column-major storage: entry (r, c) at c nv + r
+    let (dq, dv, da) = (
+        dd.drnea_dq.as_mut_slice(),
+        dd.drnea_dv.as_mut_slice(),
+        dd.drnea_da.as_mut_slice(),
+    );
     for i in (1..model.njoints).rev() {
         let (ic, bc, f) = (dd.ic[i], dd.bc[i], dd.force[i]);
         let iv = model.idx_v[i];
@@ -388,13 +390,16 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
             dd.tau[k] = jk.dot(&f);
             let y1 = ic * jk;
             let y2 = bc.tr_mul(&jk);
-            // row k against the columns of i and of its ancestors
+            // row k against the columns of i and of its ancestors; H by symmetry also
+            // in column k
             let mut a = i;
             while a > 0 {
                 for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dd.drnea_dq[(k, m)] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
-                    dd.drnea_dv[(k, m)] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
-                    dd.drnea_da[(k, m)] = y1.dot(&dd.jac[m]);
+                    dq[m * nv + k] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
+                    dv[m * nv + k] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
+                    let h = y1.dot(&dd.jac[m]);
+                    da[m * nv + k] = h;
+                    da[k * nv + m] = h;
                 }
                 a = model.parents[a].0;
             }
@@ -405,9 +410,8 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
                     let jr = &dd.jac[r];
-                    dd.drnea_dq[(r, k)] = jr.dot(&phi_q);
-                    dd.drnea_dv[(r, k)] = jr.dot(&phi_v);
-                    dd.drnea_da[(r, k)] = jr.dot(&y1);
+                    dq[k * nv + r] = jr.dot(&phi_q);
+                    dv[k * nv + r] = jr.dot(&phi_v);
                 }
                 a = model.parents[a].0;
             }
