@@ -26,9 +26,10 @@
 //! * `j` below `i`: `J_iᵀ` of `J_j ×* F_j + Ic_j u_j + Bc_j w_j`, of
 //!   `Ic_j (v_λ + v_j) × J_j + Bc_j J_j` and of `Ic_j J_j`.
 //!
-//! One forward pass computes the per-dof 6-vectors; one backward pass accumulates the
-//! composites and writes each row of a joint against its ancestors' columns, and each
-//! column against its ancestors' rows (Pinocchio's one forward and one backward pass with
+//! One forward pass computes the per-dof 6-vectors; a backward pass accumulates the
+//! composites and writes τ, H and ∂τ/∂v, each row of a joint against its ancestors'
+//! columns and each column against its ancestors' rows, and a second one writes ∂τ/∂q
+//! the same way from the composites (Pinocchio's one forward and one backward pass with
 //! 6 × nv column blocks).
 //!
 //! The pass runs with a constant joint-frame motion subspace for every joint, which is
@@ -42,9 +43,16 @@
 //! `Lᵀ D L` with the tree's sparsity (Featherstone's LTDL, `Σ depth²` operations), and
 //! the three right-hand sides `[−∂τ/∂q, −∂τ/∂v, I]` are solved together, row by row: each
 //! step of the two triangular solves is one contiguous multiply–add of a 3 nv row, and
-//! only along the tree's ancestor chains (`2 Σ depth` row updates in all). The joint
-//! placements are ABA's, not computed twice.
-use super::tree_ltdl::{dof_parents, ltdl_in_place, ltdl_solve_rows};
+//! only along the tree's ancestor chains (`2 Σ depth` row updates in all).
+//!
+//! q̈ itself comes from the same passes, with no separate ABA: of everything they
+//! compute, only the accelerations, `u`, the forces, τ and ∂τ/∂q depend on `a`, and
+//! linearly. So they run at a = 0, which gives H and the bias `h = RNEA(q, v, 0)`;
+//! `q̈ = H⁻¹ (τ − h)` by the same factorisation; then `δa_i = δa_λ + J_i q̈_i` is added to
+//! the accelerations, `δa_λ × J` to `u` and the subtree sums of `I_k δa_k` to the forces,
+//! and ∂τ/∂q is written at a = q̈.
+
+use super::tree_ltdl::{Rhs, dof_parents, ltdl_in_place, ltdl_solve_rows, subtree_ends};
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{assert_nv, update_joint_placement};
@@ -90,14 +98,24 @@ pub struct DerivativeData {
     ic: Vec<Matrix6<f64>>,
     bc: Vec<Matrix6<f64>>,
     force: Vec<Vector6<f64>>,
+    /// Per joint: the body's own inertia, and the acceleration and force added by
+    /// `add_acceleration` (world frame).
+    inertia: Vec<Matrix6<f64>>,
+    dacc: Vec<Vector6<f64>>,
+    dforce: Vec<Vector6<f64>>,
     /// Per dof: world motion-subspace column J, w = v_λ × J, u = a_λ × J + v_λ × w and
     /// (v_λ + v_j) × J.
     jac: Vec<Vector6<f64>>,
     w: Vec<Vector6<f64>>,
     u: Vec<Vector6<f64>>,
     dadv: Vec<Vector6<f64>>,
-    /// Each velocity coordinate's parent in the tree (see `tree_ltdl`).
+    /// Per dof: `Ic J` and `Bcᵀ J` with the composites of its joint.
+    y1: Vec<Vector6<f64>>,
+    y2: Vec<Vector6<f64>>,
+    /// Each velocity coordinate's parent in the tree, and one past the last coordinate
+    /// of its subtree (see `tree_ltdl`).
     dof_parent: Vec<usize>,
+    subtree_end: Vec<usize>,
     /// The tree-sparse `Lᵀ D L` factor of H, the right-hand sides of the forward-dynamics
     /// derivatives by rows (nv blocks of 3 nv), and one column of scratch.
     fact: DMatrix<f64>,
@@ -130,11 +148,17 @@ impl DerivativeData {
             ic: vec![Matrix6::zeros(); n],
             bc: vec![Matrix6::zeros(); n],
             force: vec![Vector6::zeros(); n],
+            inertia: vec![Matrix6::zeros(); n],
+            dacc: vec![Vector6::zeros(); n],
+            dforce: vec![Vector6::zeros(); n],
             jac: vec![Vector6::zeros(); nv],
             w: vec![Vector6::zeros(); nv],
             u: vec![Vector6::zeros(); nv],
             dadv: vec![Vector6::zeros(); nv],
+            y1: vec![Vector6::zeros(); nv],
+            y2: vec![Vector6::zeros(); nv],
             dof_parent: dof_parents(model),
+            subtree_end: subtree_ends(&dof_parents(model)),
             fact: m(),
             rows: DVector::zeros(3 * nv * nv),
             column: DVector::zeros(nv),
@@ -178,24 +202,23 @@ pub fn rnea_derivatives(
     );
     assert_nv(model, v, "v");
     assert_nv(model, a, "a");
-    rnea_derivatives_impl(model, dd, q.as_slice(), v.as_slice(), a.as_slice(), false);
+    rnea_derivatives_impl(model, dd, q.as_slice(), v.as_slice(), a.as_slice());
 }
 
-/// [`rnea_derivatives`] on checked slices; `placements_ready` when `dd.data` already holds
-/// the joint placements at `qs` (after ABA at the same q).
+/// [`rnea_derivatives`] on checked slices.
 fn rnea_derivatives_impl(
     model: &Model,
     dd: &mut DerivativeData,
     qs: &[f64],
     vs: &[f64],
     as_: &[f64],
-    placements_ready: bool,
 ) {
     dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
     dd.layout
         .a_to_pinocchio(qs, vs, as_, dd.a_local.as_mut_slice());
-    forward_pass(model, dd, qs, placements_ready);
-    backward_pass(model, dd);
+    forward_pass(model, dd, qs);
+    composite_pass(model, dd);
+    dq_pass(model, dd);
     // τ computed in the pass's convention → moma's, then the matrices
     dd.column.copy_from(&dd.tau);
     dd.layout
@@ -213,7 +236,8 @@ fn rnea_derivatives_impl(
 
 /// Derivatives of forward dynamics q̈ = ABA(q, v, τ): writes ∂q̈/∂q, ∂q̈/∂v and
 /// ∂q̈/∂τ = H(q)⁻¹ into `dd.daba_dq`, `dd.daba_dv`, `dd.daba_dtau`, and q̈ into `dd.ddq`
-/// (in moma's layout). `dd.drnea_*` are left holding the RNEA derivatives at a = q̈.
+/// (in moma's layout). `dd.drnea_*` are left holding the RNEA derivatives at a = q̈, and
+/// `dd.tau` the given τ.
 ///
 /// # Errors
 /// [`Error::Singular`] when H(q) is not positive definite (e.g. a joint that moves only
@@ -229,40 +253,81 @@ pub fn aba_derivatives(
     tau: &DVector<f64>,
 ) -> Result<()> {
     assert!(dd.fits(model), "DerivativeData was not made for this model");
+    assert_eq!(
+        q.len(),
+        model.nq,
+        "q has {} entries, the model nq = {}",
+        q.len(),
+        model.nq
+    );
+    assert_nv(model, v, "v");
     assert_nv(model, tau, "tau");
-    let ddq = super::aba(model, &mut dd.data, q, v, tau);
-    dd.ddq.copy_from(ddq);
-    // a moved-out vector is put back below: no allocation
-    let ddq = std::mem::take(&mut dd.ddq);
-    rnea_derivatives_impl(model, dd, q.as_slice(), v.as_slice(), ddq.as_slice(), true);
-    dd.ddq = ddq;
+    let (qs, vs, ts) = (q.as_slice(), v.as_slice(), tau.as_slice());
+    // the passes at a = 0 give H, ∂τ/∂v and h = RNEA(q, v, 0) (pass convention)
+    dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
+    dd.a_local.fill(0.0);
+    forward_pass(model, dd, qs);
+    composite_pass(model, dd);
+    // q̈ = H⁻¹ (τ − h) in the pass's convention, into a_local
     dd.fact.copy_from(&dd.drnea_da);
     if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
-        for m in [&mut dd.daba_dq, &mut dd.daba_dv, &mut dd.daba_dtau] {
-            m.fill(f64::NAN);
-        }
-        return Err(Error::Singular {
-            what: "joint-space inertia H(q)".into(),
-            detail: Some(format!(
-                "the pivot of velocity coordinate {k} is not positive"
-            )),
-        });
+        return Err(singular(dd, k));
     }
-    // H [∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ] = [−∂τ/∂q, −∂τ/∂v, I], solved by rows
+    dd.layout
+        .tau_to_pinocchio(qs, ts, dd.a_local.as_mut_slice());
+    dd.a_local -= &dd.tau;
+    ltdl_solve_rows(
+        &dd.fact,
+        &dd.dof_parent,
+        dd.a_local.as_mut_slice(),
+        1,
+        Rhs::Dense,
+    );
+    dd.layout
+        .a_from_pinocchio(qs, vs, dd.a_local.as_slice(), dd.ddq.as_mut_slice());
+    // everything that depends on the acceleration, at a = q̈: then ∂τ/∂q
+    add_acceleration(model, dd);
+    dq_pass(model, dd);
+    dd.tau.copy_from(tau);
+    dd.layout.rnea_derivatives_from_pinocchio(
+        qs,
+        vs,
+        dd.ddq.as_slice(),
+        ts,
+        &mut dd.drnea_dq,
+        &mut dd.drnea_dv,
+        &mut dd.drnea_da,
+    );
+    if dd.layout.has_planar_root() {
+        // moma's H differs from the pass's by the planar root's rotation
+        dd.fact.copy_from(&dd.drnea_da);
+        if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
+            return Err(singular(dd, k));
+        }
+    }
+    // H [∂q̈/∂τ, ∂q̈/∂q, ∂q̈/∂v] = [I, −∂τ/∂q, −∂τ/∂v], solved by rows
     let nv = model.nv;
     let m = 3 * nv;
     let rows = dd.rows.as_mut_slice();
     let (dq, dv) = (dd.drnea_dq.as_slice(), dd.drnea_dv.as_slice());
     for r in 0..nv {
         let row = &mut rows[r * m..(r + 1) * m];
+        row[..nv].fill(0.0);
+        row[r] = 1.0;
         for c in 0..nv {
-            row[c] = -dq[c * nv + r];
-            row[nv + c] = -dv[c * nv + r];
-            row[2 * nv + c] = 0.0;
+            row[nv + c] = -dq[c * nv + r];
+            row[2 * nv + c] = -dv[c * nv + r];
         }
-        row[2 * nv + r] = 1.0;
     }
-    ltdl_solve_rows(&dd.fact, &dd.dof_parent, rows, m);
+    ltdl_solve_rows(
+        &dd.fact,
+        &dd.dof_parent,
+        rows,
+        m,
+        Rhs::Derivatives {
+            end: &dd.subtree_end,
+        },
+    );
     let (oq, ov, ot) = (
         dd.daba_dq.as_mut_slice(),
         dd.daba_dv.as_mut_slice(),
@@ -271,20 +336,30 @@ pub fn aba_derivatives(
     for r in 0..nv {
         let row = &rows[r * m..(r + 1) * m];
         for c in 0..nv {
-            oq[c * nv + r] = row[c];
-            ov[c * nv + r] = row[nv + c];
-            ot[c * nv + r] = row[2 * nv + c];
+            oq[c * nv + r] = row[nv + c];
+            ov[c * nv + r] = row[2 * nv + c];
         }
-    }
-    // H⁻¹ symmetric to the last bit
-    for j in 0..nv {
-        for r in j + 1..nv {
-            let m = 0.5 * (dd.daba_dtau[(r, j)] + dd.daba_dtau[(j, r)]);
-            dd.daba_dtau[(r, j)] = m;
-            dd.daba_dtau[(j, r)] = m;
+        // H⁻¹ from its upper triangle (row r, columns r..), exactly symmetric
+        ot[r * nv + r..(r + 1) * nv].copy_from_slice(&row[r..nv]);
+        for c in r + 1..nv {
+            ot[c * nv + r] = row[c];
         }
     }
     Ok(())
+}
+
+/// Fills the forward-dynamics outputs with NaN and names the failed pivot.
+fn singular(dd: &mut DerivativeData, k: usize) -> Error {
+    for m in [&mut dd.daba_dq, &mut dd.daba_dv, &mut dd.daba_dtau] {
+        m.fill(f64::NAN);
+    }
+    dd.ddq.fill(f64::NAN);
+    Error::Singular {
+        what: "joint-space inertia H(q)".into(),
+        detail: Some(format!(
+            "the pivot of velocity coordinate {k} is not positive"
+        )),
+    }
 }
 
 /// Column `k` of joint `i`'s motion subspace in its own frame, constant for every kind
@@ -318,7 +393,7 @@ fn local_column(jt: &JointType, k: usize) -> Vector6<f64> {
 
 /// The world placement, twist and acceleration of every joint, the per-dof vectors and
 /// each body's inertia, B and force (the composites' starting values).
-fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64], placements_ready: bool) {
+fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
     let gravity = Vector6::new(
         -model.gravity.x,
         -model.gravity.y,
@@ -328,9 +403,7 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64], placements_r
         0.0,
     );
     for i in 1..model.njoints {
-        if !placements_ready {
-            update_joint_placement(model, &mut dd.data, i, qs);
-        }
+        update_joint_placement(model, &mut dd.data, i, qs);
         let p = model.parents[i].0;
         let local = dd.data.parent_from_joint[i];
         let (omi, v_parent, a_parent) = if p == 0 {
@@ -362,25 +435,22 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64], placements_r
         dd.force[i] = inertia * acc + cross_force(&vel, &h);
         dd.bc[i] = velocity_variation(&inertia, &vel, &h);
         dd.ic[i] = inertia;
+        dd.inertia[i] = inertia;
         dd.world_from_joint[i] = omi;
         dd.vel[i] = vel;
         dd.acc[i] = acc;
     }
 }
 
-/// Accumulates the composites from the leaves up and writes τ and the three matrices (in
-/// the pass's convention).
-fn backward_pass(model: &Model, dd: &mut DerivativeData) {
+/// Accumulates the composites (inertia, B, force) from the leaves up and writes τ, H and
+/// ∂τ/∂v (in the pass's convention), keeping each dof's `Ic J` and `Bcᵀ J` for
+/// [`dq_pass`]. Everything here but τ is independent of the acceleration.
+fn composite_pass(model: &Model, dd: &mut DerivativeData) {
     let nv = model.nv;
-    dd.drnea_dq.fill(0.0);
     dd.drnea_dv.fill(0.0);
     dd.drnea_da.fill(0.0);
     // column-major storage: entry (r, c) at c nv + r
-    let (dq, dv, da) = (
-        dd.drnea_dq.as_mut_slice(),
-        dd.drnea_dv.as_mut_slice(),
-        dd.drnea_da.as_mut_slice(),
-    );
+    let (dv, da) = (dd.drnea_dv.as_mut_slice(), dd.drnea_da.as_mut_slice());
     for i in (1..model.njoints).rev() {
         let (ic, bc, f) = (dd.ic[i], dd.bc[i], dd.force[i]);
         let iv = model.idx_v[i];
@@ -390,12 +460,13 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
             dd.tau[k] = jk.dot(&f);
             let y1 = ic * jk;
             let y2 = bc.tr_mul(&jk);
+            dd.y1[k] = y1;
+            dd.y2[k] = y2;
             // row k against the columns of i and of its ancestors; H by symmetry also
             // in column k
             let mut a = i;
             while a > 0 {
                 for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dq[m * nv + k] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
                     dv[m * nv + k] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
                     let h = y1.dot(&dd.jac[m]);
                     da[m * nv + k] = h;
@@ -404,14 +475,11 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
                 a = model.parents[a].0;
             }
             // column k against the rows of the strict ancestors
-            let phi_q = cross_force(&jk, &f) + ic * dd.u[k] + bc * dd.w[k];
             let phi_v = ic * dd.dadv[k] + bc * jk;
             let mut a = p;
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    let jr = &dd.jac[r];
-                    dq[k * nv + r] = jr.dot(&phi_q);
-                    dv[k * nv + r] = jr.dot(&phi_v);
+                    dv[k * nv + r] = dd.jac[r].dot(&phi_v);
                 }
                 a = model.parents[a].0;
             }
@@ -420,6 +488,67 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
             dd.ic[p] += ic;
             dd.bc[p] += bc;
             dd.force[p] += f;
+        }
+    }
+}
+
+/// ∂τ/∂q from the composites of [`composite_pass`] and the acceleration terms `u` and
+/// subtree forces of the current acceleration.
+fn dq_pass(model: &Model, dd: &mut DerivativeData) {
+    let nv = model.nv;
+    dd.drnea_dq.fill(0.0);
+    let dq = dd.drnea_dq.as_mut_slice();
+    for i in (1..model.njoints).rev() {
+        let (ic, bc, f) = (&dd.ic[i], &dd.bc[i], &dd.force[i]);
+        let iv = model.idx_v[i];
+        let p = model.parents[i].0;
+        for k in iv..iv + model.nvs[i] {
+            let (jk, y1, y2) = (&dd.jac[k], &dd.y1[k], &dd.y2[k]);
+            // row k against the columns of i and of its ancestors
+            let mut a = i;
+            while a > 0 {
+                for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
+                    dq[m * nv + k] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
+                }
+                a = model.parents[a].0;
+            }
+            // column k against the rows of the strict ancestors
+            let phi_q = cross_force(jk, f) + ic * dd.u[k] + bc * dd.w[k];
+            let mut a = p;
+            while a > 0 {
+                for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
+                    dq[k * nv + r] = dd.jac[r].dot(&phi_q);
+                }
+                a = model.parents[a].0;
+            }
+        }
+    }
+}
+
+/// Adds the acceleration `dd.a_local` to a pass run at zero acceleration: everything is
+/// linear in it, so each joint's acceleration grows by `δa_i = δa_λ + J_i a_i`, each
+/// dof's `u` by `δa_λ × J`, and each subtree force by the subtree's `Σ I_k δa_k`.
+fn add_acceleration(model: &Model, dd: &mut DerivativeData) {
+    for i in 1..model.njoints {
+        let p = model.parents[i].0;
+        let da_parent = if p == 0 { Vector6::zeros() } else { dd.dacc[p] };
+        let iv = model.idx_v[i];
+        let mut da = da_parent;
+        for k in iv..iv + model.nvs[i] {
+            let jk = dd.jac[k];
+            dd.u[k] += cross_motion(&da_parent, &jk);
+            da += jk * dd.a_local[k];
+        }
+        dd.dacc[i] = da;
+        dd.acc[i] += da;
+        dd.dforce[i] = dd.inertia[i] * da;
+    }
+    for i in (1..model.njoints).rev() {
+        let df = dd.dforce[i];
+        dd.force[i] += df;
+        let p = model.parents[i].0;
+        if p > 0 {
+            dd.dforce[p] += df;
         }
     }
 }
