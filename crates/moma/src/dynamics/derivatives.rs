@@ -57,8 +57,8 @@ use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{assert_nv, update_joint_placement};
 use crate::multibody::{Data, JointType, Model};
-use crate::spatial::{SE3, skew};
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
+use crate::spatial::{Inertia, SE3, skew};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3, Vector6};
 
 /// The workspace and the results of [`rnea_derivatives`] and [`aba_derivatives`], sized
 /// once for a model by [`DerivativeData::new`]; neither function allocates after that.
@@ -95,12 +95,12 @@ pub struct DerivativeData {
     vel: Vec<Vector6<f64>>,
     acc: Vec<Vector6<f64>>,
     /// Per joint: composite inertia, composite B, subtree force (world frame).
-    ic: Vec<Matrix6<f64>>,
-    bc: Vec<Matrix6<f64>>,
+    ic: Vec<Inertia>,
+    bc: Vec<VelocityVariation>,
     force: Vec<Vector6<f64>>,
     /// Per joint: the body's own inertia, and the acceleration and force added by
     /// `add_acceleration` (world frame).
-    inertia: Vec<Matrix6<f64>>,
+    inertia: Vec<Inertia>,
     dacc: Vec<Vector6<f64>>,
     dforce: Vec<Vector6<f64>>,
     /// Per dof: world motion-subspace column J, w = v_λ × J, u = a_λ × J + v_λ × w and
@@ -145,10 +145,10 @@ impl DerivativeData {
             world_from_joint: vec![SE3::identity(); n],
             vel: vec![Vector6::zeros(); n],
             acc: vec![Vector6::zeros(); n],
-            ic: vec![Matrix6::zeros(); n],
-            bc: vec![Matrix6::zeros(); n],
+            ic: vec![Inertia::zero(); n],
+            bc: vec![VelocityVariation::zero(); n],
             force: vec![Vector6::zeros(); n],
-            inertia: vec![Matrix6::zeros(); n],
+            inertia: vec![Inertia::zero(); n],
             dacc: vec![Vector6::zeros(); n],
             dforce: vec![Vector6::zeros(); n],
             jac: vec![Vector6::zeros(); nv],
@@ -430,10 +430,10 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
             dd.w[k] = w;
             dd.dadv[k] = cross_motion(&v_sum, &jk);
         }
-        let inertia = omi.act_inertia(&model.inertias[i]).to_matrix();
-        let h = inertia * vel;
-        dd.force[i] = inertia * acc + cross_force(&vel, &h);
-        dd.bc[i] = velocity_variation(&inertia, &vel, &h);
+        let inertia = omi.act_inertia(&model.inertias[i]);
+        let h = inertia_mul(&inertia, &vel);
+        dd.force[i] = inertia_mul(&inertia, &acc) + cross_force(&vel, &h);
+        dd.bc[i] = VelocityVariation::new(&inertia, &vel, &h);
         dd.ic[i] = inertia;
         dd.inertia[i] = inertia;
         dd.world_from_joint[i] = omi;
@@ -458,7 +458,7 @@ fn composite_pass(model: &Model, dd: &mut DerivativeData) {
         for k in iv..iv + model.nvs[i] {
             let jk = dd.jac[k];
             dd.tau[k] = jk.dot(&f);
-            let y1 = ic * jk;
+            let y1 = inertia_mul(&ic, &jk);
             let y2 = bc.tr_mul(&jk);
             dd.y1[k] = y1;
             dd.y2[k] = y2;
@@ -475,7 +475,7 @@ fn composite_pass(model: &Model, dd: &mut DerivativeData) {
                 a = model.parents[a].0;
             }
             // column k against the rows of the strict ancestors
-            let phi_v = ic * dd.dadv[k] + bc * jk;
+            let phi_v = inertia_mul(&ic, &dd.dadv[k]) + bc.mul(&jk);
             let mut a = p;
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
@@ -513,7 +513,7 @@ fn dq_pass(model: &Model, dd: &mut DerivativeData) {
                 a = model.parents[a].0;
             }
             // column k against the rows of the strict ancestors
-            let phi_q = cross_force(jk, f) + ic * dd.u[k] + bc * dd.w[k];
+            let phi_q = cross_force(jk, f) + inertia_mul(ic, &dd.u[k]) + bc.mul(&dd.w[k]);
             let mut a = p;
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
@@ -541,7 +541,7 @@ fn add_acceleration(model: &Model, dd: &mut DerivativeData) {
         }
         dd.dacc[i] = da;
         dd.acc[i] += da;
-        dd.dforce[i] = dd.inertia[i] * da;
+        dd.dforce[i] = inertia_mul(&dd.inertia[i], &da);
     }
     for i in (1..model.njoints).rev() {
         let df = dd.dforce[i];
@@ -588,25 +588,75 @@ fn cross_force(v: &Vector6<f64>, f: &Vector6<f64>) -> Vector6<f64> {
     join(va.cross(&fl), vl.cross(&fl) + va.cross(&fa))
 }
 
+/// `I x` for a spatial inertia in its compact form (`[m x_l − c' × x_ω; c' × x_l + Ī x_ω]`
+/// with `c'` the first moment and `Ī` the rotational inertia about the origin).
+#[inline]
+fn inertia_mul(inertia: &Inertia, x: &Vector6<f64>) -> Vector6<f64> {
+    let ((xl, xa), c) = (split(x), inertia.first_moment());
+    join(
+        xl * inertia.mass() - c.cross(&xa),
+        inertia.inertia_about_origin() * xa + c.cross(&xl),
+    )
+}
+
 /// `B = v×* I − I v× + (x ↦ x ×* h)` with `h = I v`: the derivative of
 /// `I a + v ×* I v` through the velocity, beside `I δa`.
-fn velocity_variation(inertia: &Matrix6<f64>, v: &Vector6<f64>, h: &Vector6<f64>) -> Matrix6<f64> {
-    let ((vl, va), (hl, ha)) = (split(v), split(h));
-    let (wx, vx) = (skew(&va), skew(&vl));
-    let mut crm = Matrix6::zeros();
-    crm.fixed_view_mut::<3, 3>(0, 0).copy_from(&wx);
-    crm.fixed_view_mut::<3, 3>(0, 3).copy_from(&vx);
-    crm.fixed_view_mut::<3, 3>(3, 3).copy_from(&wx);
-    // v×* = −(v×)ᵀ and I = Iᵀ, so v×* I − I v× = −(crmᵀ I + I crm) = −(Y + Yᵀ), Y = I crm
-    let y = inertia * crm;
-    let mut b = -(y + y.transpose());
-    let (hlx, hax): (Matrix3<f64>, Matrix3<f64>) = (skew(&hl), skew(&ha));
-    // x ×* h = [x_ω × h_l; x_l × h_l + x_ω × h_ω] = [−h_l× x_ω; −h_l× x_l − h_ω× x_ω]
-    let mut top_right = b.fixed_view_mut::<3, 3>(0, 3);
-    top_right -= hlx;
-    let mut bottom_left = b.fixed_view_mut::<3, 3>(3, 0);
-    bottom_left -= hlx;
-    let mut bottom_right = b.fixed_view_mut::<3, 3>(3, 3);
-    bottom_right -= hax;
-    b
+///
+/// With `I = [m 1, −c'×; c'×, Ī]` and `Y = I (v×)`, `B = −(Y + Yᵀ) − [0, h_l×; h_l×, h_ω×]`;
+/// the skew identities `a× b× = b aᵀ − (a·b) 1` and `a bᵀ − b aᵀ = (b × a)×` reduce
+/// `Y + Yᵀ` to `[0, k×; −k×, S]` with `k = m v_l − c' × ω`, which is `h_l`, and
+/// `S = v_l c'ᵀ + c' v_lᵀ − 2 (c'·v_l) 1 + Ī ω× + (Ī ω×)ᵀ`. So the upper-left and
+/// lower-left blocks of B vanish and it is `[0, −2 h_l×; 0, R]`, `R = −S − h_ω×`: two
+/// 3-blocks, summed as such over a subtree.
+#[derive(Clone, Copy, Debug)]
+struct VelocityVariation {
+    /// `2 h_l`: the upper-right block is `−(2 h_l)×`.
+    hl2: Vector3<f64>,
+    /// The lower-right block R.
+    r: Matrix3<f64>,
+}
+
+impl VelocityVariation {
+    fn zero() -> Self {
+        Self {
+            hl2: Vector3::zeros(),
+            r: Matrix3::zeros(),
+        }
+    }
+
+    #[inline]
+    fn new(inertia: &Inertia, v: &Vector6<f64>, h: &Vector6<f64>) -> Self {
+        let ((vl, va), (hl, ha)) = (split(v), split(h));
+        let c = inertia.first_moment();
+        let p = inertia.inertia_about_origin() * skew(&va);
+        let cv = c * vl.transpose();
+        let mut r = -(cv + cv.transpose() + p + p.transpose()) - skew(&ha);
+        let d = 2.0 * c.dot(&vl);
+        r[(0, 0)] += d;
+        r[(1, 1)] += d;
+        r[(2, 2)] += d;
+        Self { hl2: hl * 2.0, r }
+    }
+
+    /// `B x = [−2 h_l × x_ω; R x_ω]`.
+    #[inline]
+    fn mul(&self, x: &Vector6<f64>) -> Vector6<f64> {
+        let xa = Vector3::new(x[3], x[4], x[5]);
+        join(-self.hl2.cross(&xa), self.r * xa)
+    }
+
+    /// `Bᵀ x = [0; 2 h_l × x_l + Rᵀ x_ω]`.
+    #[inline]
+    fn tr_mul(&self, x: &Vector6<f64>) -> Vector6<f64> {
+        let (xl, xa) = split(x);
+        join(Vector3::zeros(), self.hl2.cross(&xl) + self.r.tr_mul(&xa))
+    }
+}
+
+impl std::ops::AddAssign for VelocityVariation {
+    #[inline]
+    fn add_assign(&mut self, o: Self) {
+        self.hl2 += o.hl2;
+        self.r += o.r;
+    }
 }
