@@ -186,7 +186,15 @@ fn bench_reports_medians() {
     // the batch counts asked for are the ones used
     assert_eq!(j["nbatch"], 3);
     assert_eq!(j["warmup"], 1);
-    for algo in ["rnea", "crba", "aba", "fk", "frame_jacobian"] {
+    for algo in [
+        "rnea",
+        "crba",
+        "aba",
+        "fk",
+        "frame_jacobian",
+        "rnea_derivatives",
+        "aba_derivatives",
+    ] {
         let med = j["median_ns"][algo].as_f64().unwrap();
         let min = j["min_ns"][algo].as_f64().unwrap();
         // a median of three batches is at least their minimum, and a real time

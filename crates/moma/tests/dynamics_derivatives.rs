@@ -238,7 +238,9 @@ fn finite_differences(urdf: &str, root: RootJoint, seed: u64) {
 
         dynamics::aba_derivatives(&model, &mut dd, &q, &v, &tau).unwrap();
         let ddq = dynamics::aba(&model, &mut data, &q, &v, &tau).clone();
-        assert!((&dd.ddq - &ddq).amax() < 1e-12, "{urdf} {root:?}: ddq");
+        // q̈ by the LᵀDL solve of the derivative passes against ABA: the same to rounding
+        let e = (&dd.ddq - &ddq).amax() / ddq.amax().max(1.0);
+        assert!(e < 1e-11, "{urdf} {root:?}: ddq relative error {e:e}");
         let h = 1e-6;
         let bq = fd_q(&model, &q, h, |q| {
             dynamics::aba(&model, &mut data, q, &v, &tau).clone()

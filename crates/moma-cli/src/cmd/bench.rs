@@ -1,5 +1,5 @@
 //! `moma bench ROBOT.urdf --root R [--frame NAME] [--json]`: median nanoseconds per call
-//! of the rigid-body algorithms, with the method of the Pinocchio benchmark
+//! of the rigid-body algorithms and the derivatives of the dynamics, with the method of the Pinocchio benchmark
 //! (`bench/pinocchio/pinocchio_bench.cpp`): 100 seeded random states (q = neutral ⊕ dq,
 //! dq ~ π·U(−1, 1), v, a, τ ~ U(−1, 1)); each batch calls the algorithm once per state;
 //! WARMUP batches are discarded, then the median per-call time over NBATCH batches is
@@ -59,6 +59,12 @@ struct Times {
     /// One operational-space update (Λ, J̄, N, F, τ) of the frame, 6 task rows; NaN when
     /// nv < 6.
     osc: f64,
+    /// ∂τ/∂q, ∂τ/∂v and H (`dynamics::rnea_derivatives`, Pinocchio's
+    /// `computeRNEADerivatives`).
+    rnea_derivatives: f64,
+    /// ∂q̈/∂q, ∂q̈/∂v and H⁻¹ (`dynamics::aba_derivatives`, Pinocchio's
+    /// `computeABADerivatives`); NaN if H was singular at a state.
+    aba_derivatives: f64,
 }
 
 #[derive(Serialize)]
@@ -113,6 +119,8 @@ struct Measured {
     fk_frames: (f64, f64),
     joint_jacobians: (f64, f64),
     osc: (f64, f64),
+    rnea_derivatives: (f64, f64),
+    aba_derivatives: (f64, f64),
 }
 
 impl Measured {
@@ -129,6 +137,8 @@ impl Measured {
             fk_frames: f(&self.fk_frames),
             joint_jacobians: f(&self.joint_jacobians),
             osc: f(&self.osc),
+            rnea_derivatives: f(&self.rnea_derivatives),
+            aba_derivatives: f(&self.aba_derivatives),
         }
     }
 }
@@ -224,6 +234,17 @@ fn measure(model: &Model, fid: FrameIndex, nbatch: usize, warmup: usize) -> Meas
         data.joint_jacobians[(0, nv - 1)]
     });
     let osc = time_osc(m, &mut data, fid, &qs, &vs, &ts, nbatch, warmup);
+    let mut dd = dynamics::DerivativeData::new(m);
+    let rnea_derivatives = time(nbatch, warmup, |i| {
+        dynamics::rnea_derivatives(m, &mut dd, &qs[i], &vs[i], &as_[i]);
+        dd.drnea_dq[(0, nv - 1)]
+    });
+    let aba_derivatives = time(nbatch, warmup, |i| {
+        match dynamics::aba_derivatives(m, &mut dd, &qs[i], &vs[i], &ts[i]) {
+            Ok(()) => dd.daba_dq[(0, nv - 1)],
+            Err(_) => f64::NAN,
+        }
+    });
     Measured {
         rnea,
         crba,
@@ -235,6 +256,8 @@ fn measure(model: &Model, fid: FrameIndex, nbatch: usize, warmup: usize) -> Meas
         fk_frames,
         joint_jacobians,
         osc,
+        rnea_derivatives,
+        aba_derivatives,
     }
 }
 
@@ -321,6 +344,12 @@ fn print_report(args: &Args, report: &Report) -> Result<()> {
         ("frame_jacobian", med.frame_jacobian, min.frame_jacobian),
         ("joint_jacobians", med.joint_jacobians, min.joint_jacobians),
         ("osc", med.osc, min.osc),
+        (
+            "rnea_derivatives",
+            med.rnea_derivatives,
+            min.rnea_derivatives,
+        ),
+        ("aba_derivatives", med.aba_derivatives, min.aba_derivatives),
     ] {
         outln!("{} {name} {nq} {nv} {a:.1} {b:.1}", report.robot);
     }

@@ -26,9 +26,10 @@
 //! * `j` below `i`: `J_iᵀ` of `J_j ×* F_j + Ic_j u_j + Bc_j w_j`, of
 //!   `Ic_j (v_λ + v_j) × J_j + Bc_j J_j` and of `Ic_j J_j`.
 //!
-//! One forward pass computes the per-dof 6-vectors; one backward pass accumulates the
-//! composites and writes each row of a joint against its ancestors' columns, and each
-//! column against its ancestors' rows (Pinocchio's one forward and one backward pass with
+//! One forward pass computes the per-dof 6-vectors; a backward pass accumulates the
+//! composites and writes τ, H and ∂τ/∂v, each row of a joint against its ancestors'
+//! columns and each column against its ancestors' rows, and a second one writes ∂τ/∂q
+//! the same way from the composites (Pinocchio's one forward and one backward pass with
 //! 6 × nv column blocks).
 //!
 //! The pass runs with a constant joint-frame motion subspace for every joint, which is
@@ -38,17 +39,26 @@
 //! tangent space in both layouts.
 //!
 //! Forward dynamics follows from the implicit function theorem: with q̈ = ABA(q, v, τ),
-//! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H⁻¹ comes from a
-//! Cholesky factorisation of H (one solve per column, then symmetrised), and the products
-//! with it are dense, as Pinocchio's.
+//! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H is factorised as
+//! `Lᵀ D L` with the tree's sparsity (Featherstone's LTDL, `Σ depth²` operations), and
+//! the three right-hand sides `[−∂τ/∂q, −∂τ/∂v, I]` are solved together, row by row: each
+//! step of the two triangular solves is one contiguous multiply–add of a 3 nv row, and
+//! only along the tree's ancestor chains (`2 Σ depth` row updates in all).
+//!
+//! q̈ itself comes from the same passes, with no separate ABA: of everything they
+//! compute, only the accelerations, `u`, the forces, τ and ∂τ/∂q depend on `a`, and
+//! linearly. So they run at a = 0, which gives H and the bias `h = RNEA(q, v, 0)`;
+//! `q̈ = H⁻¹ (τ − h)` by the same factorisation; then `δa_i = δa_λ + J_i q̈_i` is added to
+//! the accelerations, `δa_λ × J` to `u` and the subtree sums of `I_k δa_k` to the forces,
+//! and ∂τ/∂q is written at a = q̈.
 
+use super::tree_ltdl::{Rhs, dof_parents, ltdl_in_place, ltdl_solve_rows, subtree_ends};
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{assert_nv, update_joint_placement};
-use crate::linalg::cholesky_in_place;
 use crate::multibody::{Data, JointType, Model};
-use crate::spatial::{SE3, skew};
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
+use crate::spatial::{Inertia, SE3, skew};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3, Vector6};
 
 /// The workspace and the results of [`rnea_derivatives`] and [`aba_derivatives`], sized
 /// once for a model by [`DerivativeData::new`]; neither function allocates after that.
@@ -85,17 +95,31 @@ pub struct DerivativeData {
     vel: Vec<Vector6<f64>>,
     acc: Vec<Vector6<f64>>,
     /// Per joint: composite inertia, composite B, subtree force (world frame).
-    ic: Vec<Matrix6<f64>>,
-    bc: Vec<Matrix6<f64>>,
+    ic: Vec<Inertia>,
+    bc: Vec<VelocityVariation>,
     force: Vec<Vector6<f64>>,
+    /// Per joint: the body's own inertia, and the acceleration and force added by
+    /// `add_acceleration` (world frame).
+    inertia: Vec<Inertia>,
+    dacc: Vec<Vector6<f64>>,
+    dforce: Vec<Vector6<f64>>,
     /// Per dof: world motion-subspace column J, w = v_λ × J, u = a_λ × J + v_λ × w and
     /// (v_λ + v_j) × J.
     jac: Vec<Vector6<f64>>,
     w: Vec<Vector6<f64>>,
     u: Vec<Vector6<f64>>,
     dadv: Vec<Vector6<f64>>,
-    /// The Cholesky factor of H and one column of scratch.
-    chol: DMatrix<f64>,
+    /// Per dof: `Ic J` and `Bcᵀ J` with the composites of its joint.
+    y1: Vec<Vector6<f64>>,
+    y2: Vec<Vector6<f64>>,
+    /// Each velocity coordinate's parent in the tree, and one past the last coordinate
+    /// of its subtree (see `tree_ltdl`).
+    dof_parent: Vec<usize>,
+    subtree_end: Vec<usize>,
+    /// The tree-sparse `Lᵀ D L` factor of H, the right-hand sides of the forward-dynamics
+    /// derivatives by rows (nv blocks of 3 nv), and one column of scratch.
+    fact: DMatrix<f64>,
+    rows: DVector<f64>,
     column: DVector<f64>,
 }
 
@@ -121,14 +145,22 @@ impl DerivativeData {
             world_from_joint: vec![SE3::identity(); n],
             vel: vec![Vector6::zeros(); n],
             acc: vec![Vector6::zeros(); n],
-            ic: vec![Matrix6::zeros(); n],
-            bc: vec![Matrix6::zeros(); n],
+            ic: vec![Inertia::zero(); n],
+            bc: vec![VelocityVariation::zero(); n],
             force: vec![Vector6::zeros(); n],
+            inertia: vec![Inertia::zero(); n],
+            dacc: vec![Vector6::zeros(); n],
+            dforce: vec![Vector6::zeros(); n],
             jac: vec![Vector6::zeros(); nv],
             w: vec![Vector6::zeros(); nv],
             u: vec![Vector6::zeros(); nv],
             dadv: vec![Vector6::zeros(); nv],
-            chol: m(),
+            y1: vec![Vector6::zeros(); nv],
+            y2: vec![Vector6::zeros(); nv],
+            dof_parent: dof_parents(model),
+            subtree_end: subtree_ends(&dof_parents(model)),
+            fact: m(),
+            rows: DVector::zeros(3 * nv * nv),
             column: DVector::zeros(nv),
         }
     }
@@ -170,12 +202,23 @@ pub fn rnea_derivatives(
     );
     assert_nv(model, v, "v");
     assert_nv(model, a, "a");
-    let (qs, vs, as_) = (q.as_slice(), v.as_slice(), a.as_slice());
+    rnea_derivatives_impl(model, dd, q.as_slice(), v.as_slice(), a.as_slice());
+}
+
+/// [`rnea_derivatives`] on checked slices.
+fn rnea_derivatives_impl(
+    model: &Model,
+    dd: &mut DerivativeData,
+    qs: &[f64],
+    vs: &[f64],
+    as_: &[f64],
+) {
     dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
     dd.layout
         .a_to_pinocchio(qs, vs, as_, dd.a_local.as_mut_slice());
     forward_pass(model, dd, qs);
-    backward_pass(model, dd);
+    composite_pass(model, dd);
+    dq_pass(model, dd);
     // τ computed in the pass's convention → moma's, then the matrices
     dd.column.copy_from(&dd.tau);
     dd.layout
@@ -193,7 +236,8 @@ pub fn rnea_derivatives(
 
 /// Derivatives of forward dynamics q̈ = ABA(q, v, τ): writes ∂q̈/∂q, ∂q̈/∂v and
 /// ∂q̈/∂τ = H(q)⁻¹ into `dd.daba_dq`, `dd.daba_dv`, `dd.daba_dtau`, and q̈ into `dd.ddq`
-/// (in moma's layout). `dd.drnea_*` are left holding the RNEA derivatives at a = q̈.
+/// (in moma's layout). `dd.drnea_*` are left holding the RNEA derivatives at a = q̈, and
+/// `dd.tau` the given τ.
 ///
 /// # Errors
 /// [`Error::Singular`] when H(q) is not positive definite (e.g. a joint that moves only
@@ -209,88 +253,112 @@ pub fn aba_derivatives(
     tau: &DVector<f64>,
 ) -> Result<()> {
     assert!(dd.fits(model), "DerivativeData was not made for this model");
+    assert_eq!(
+        q.len(),
+        model.nq,
+        "q has {} entries, the model nq = {}",
+        q.len(),
+        model.nq
+    );
+    assert_nv(model, v, "v");
     assert_nv(model, tau, "tau");
-    let ddq = super::aba(model, &mut dd.data, q, v, tau);
-    dd.ddq.copy_from(ddq);
-    // a moved-out vector is put back below: no allocation
-    let ddq = std::mem::take(&mut dd.ddq);
-    rnea_derivatives(model, dd, q, v, &ddq);
-    dd.ddq = ddq;
-    dd.chol.copy_from(&dd.drnea_da);
-    if let Err(k) = cholesky_in_place(&mut dd.chol, 0.0) {
-        for m in [&mut dd.daba_dq, &mut dd.daba_dv, &mut dd.daba_dtau] {
-            m.fill(f64::NAN);
-        }
-        return Err(Error::Singular {
-            what: "joint-space inertia H(q)".into(),
-            detail: Some(format!("Cholesky pivot {k} is not positive")),
-        });
+    let (qs, vs, ts) = (q.as_slice(), v.as_slice(), tau.as_slice());
+    // the passes at a = 0 give H, ∂τ/∂v and h = RNEA(q, v, 0) (pass convention)
+    dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
+    dd.a_local.fill(0.0);
+    forward_pass(model, dd, qs);
+    composite_pass(model, dd);
+    // q̈ = H⁻¹ (τ − h) in the pass's convention, into a_local
+    dd.fact.copy_from(&dd.drnea_da);
+    if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
+        return Err(singular(dd, k));
     }
+    dd.layout
+        .tau_to_pinocchio(qs, ts, dd.a_local.as_mut_slice());
+    dd.a_local -= &dd.tau;
+    ltdl_solve_rows(
+        &dd.fact,
+        &dd.dof_parent,
+        dd.a_local.as_mut_slice(),
+        1,
+        Rhs::Dense,
+    );
+    dd.layout
+        .a_from_pinocchio(qs, vs, dd.a_local.as_slice(), dd.ddq.as_mut_slice());
+    // everything that depends on the acceleration, at a = q̈: then ∂τ/∂q
+    add_acceleration(model, dd);
+    dq_pass(model, dd);
+    dd.tau.copy_from(tau);
+    dd.layout.rnea_derivatives_from_pinocchio(
+        qs,
+        vs,
+        dd.ddq.as_slice(),
+        ts,
+        &mut dd.drnea_dq,
+        &mut dd.drnea_dv,
+        &mut dd.drnea_da,
+    );
+    if dd.layout.has_planar_root() {
+        // moma's H differs from the pass's by the planar root's rotation
+        dd.fact.copy_from(&dd.drnea_da);
+        if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
+            return Err(singular(dd, k));
+        }
+    }
+    // H [∂q̈/∂τ, ∂q̈/∂q, ∂q̈/∂v] = [I, −∂τ/∂q, −∂τ/∂v], solved by rows
     let nv = model.nv;
-    cholesky_inverse(&dd.chol, &mut dd.daba_dtau);
-    // H⁻¹ symmetric to the last bit
-    for j in 0..nv {
-        for r in j + 1..nv {
-            let m = 0.5 * (dd.daba_dtau[(r, j)] + dd.daba_dtau[(j, r)]);
-            dd.daba_dtau[(r, j)] = m;
-            dd.daba_dtau[(j, r)] = m;
+    let m = 3 * nv;
+    let rows = dd.rows.as_mut_slice();
+    let (dq, dv) = (dd.drnea_dq.as_slice(), dd.drnea_dv.as_slice());
+    for r in 0..nv {
+        let row = &mut rows[r * m..(r + 1) * m];
+        row[..nv].fill(0.0);
+        row[r] = 1.0;
+        for c in 0..nv {
+            row[nv + c] = -dq[c * nv + r];
+            row[2 * nv + c] = -dv[c * nv + r];
         }
     }
-    neg_product(&dd.daba_dtau, &dd.drnea_dq, &mut dd.daba_dq);
-    neg_product(&dd.daba_dtau, &dd.drnea_dv, &mut dd.daba_dv);
+    ltdl_solve_rows(
+        &dd.fact,
+        &dd.dof_parent,
+        rows,
+        m,
+        Rhs::Derivatives {
+            end: &dd.subtree_end,
+        },
+    );
+    let (oq, ov, ot) = (
+        dd.daba_dq.as_mut_slice(),
+        dd.daba_dv.as_mut_slice(),
+        dd.daba_dtau.as_mut_slice(),
+    );
+    for r in 0..nv {
+        let row = &rows[r * m..(r + 1) * m];
+        for c in 0..nv {
+            oq[c * nv + r] = row[nv + c];
+            ov[c * nv + r] = row[2 * nv + c];
+        }
+        // H⁻¹ from its upper triangle (row r, columns r..), exactly symmetric
+        ot[r * nv + r..(r + 1) * nv].copy_from_slice(&row[r..nv]);
+        for c in r + 1..nv {
+            ot[c * nv + r] = row[c];
+        }
+    }
     Ok(())
 }
 
-/// `out = (L Lᵀ)⁻¹` from the Cholesky factor `l` (lower triangle), one column of the
-/// identity at a time: forward substitution by axpys on L's contiguous columns (starting
-/// at the column's one, above which it stays zero), then back substitution by dot
-/// products with them.
-fn cholesky_inverse(l: &DMatrix<f64>, out: &mut DMatrix<f64>) {
-    let n = l.nrows();
-    let (l, o) = (l.as_slice(), out.as_mut_slice());
-    for j in 0..n {
-        let x = &mut o[j * n..(j + 1) * n];
-        x.fill(0.0);
-        x[j] = 1.0;
-        // L y = e_j
-        for k in j..n {
-            let col = &l[k * n..(k + 1) * n];
-            let yk = x[k] / col[k];
-            x[k] = yk;
-            for (d, s) in x[k + 1..].iter_mut().zip(&col[k + 1..]) {
-                *d -= s * yk;
-            }
-        }
-        // Lᵀ x = y
-        for k in (0..n).rev() {
-            let col = &l[k * n..(k + 1) * n];
-            let dot: f64 = x[k + 1..]
-                .iter()
-                .zip(&col[k + 1..])
-                .map(|(a, b)| a * b)
-                .sum();
-            x[k] = (x[k] - dot) / col[k];
-        }
+/// Fills the forward-dynamics outputs with NaN and names the failed pivot.
+fn singular(dd: &mut DerivativeData, k: usize) -> Error {
+    for m in [&mut dd.daba_dq, &mut dd.daba_dv, &mut dd.daba_dtau] {
+        m.fill(f64::NAN);
     }
-}
-
-/// `out = −a b` for square matrices of one size, column by column as sums of `a`'s
-/// columns (contiguous, so the inner loop vectorises; nalgebra's dynamic product would
-/// allocate its packing buffers).
-fn neg_product(a: &DMatrix<f64>, b: &DMatrix<f64>, out: &mut DMatrix<f64>) {
-    let n = a.nrows();
-    let (a, b, o) = (a.as_slice(), b.as_slice(), out.as_mut_slice());
-    for j in 0..n {
-        let oj = &mut o[j * n..(j + 1) * n];
-        oj.fill(0.0);
-        for k in 0..n {
-            let x = -b[j * n + k];
-            if x != 0.0 {
-                for (d, s) in oj.iter_mut().zip(&a[k * n..(k + 1) * n]) {
-                    *d += s * x;
-                }
-            }
-        }
+    dd.ddq.fill(f64::NAN);
+    Error::Singular {
+        what: "joint-space inertia H(q)".into(),
+        detail: Some(format!(
+            "the pivot of velocity coordinate {k} is not positive"
+        )),
     }
 }
 
@@ -362,23 +430,27 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
             dd.w[k] = w;
             dd.dadv[k] = cross_motion(&v_sum, &jk);
         }
-        let inertia = omi.act_inertia(&model.inertias[i]).to_matrix();
-        let h = inertia * vel;
-        dd.force[i] = inertia * acc + cross_force(&vel, &h);
-        dd.bc[i] = velocity_variation(&inertia, &vel, &h);
+        let inertia = omi.act_inertia(&model.inertias[i]);
+        let h = inertia_mul(&inertia, &vel);
+        dd.force[i] = inertia_mul(&inertia, &acc) + cross_force(&vel, &h);
+        dd.bc[i] = VelocityVariation::new(&inertia, &vel, &h);
         dd.ic[i] = inertia;
+        dd.inertia[i] = inertia;
         dd.world_from_joint[i] = omi;
         dd.vel[i] = vel;
         dd.acc[i] = acc;
     }
 }
 
-/// Accumulates the composites from the leaves up and writes τ and the three matrices (in
-/// the pass's convention).
-fn backward_pass(model: &Model, dd: &mut DerivativeData) {
-    dd.drnea_dq.fill(0.0);
+/// Accumulates the composites (inertia, B, force) from the leaves up and writes τ, H and
+/// ∂τ/∂v (in the pass's convention), keeping each dof's `Ic J` and `Bcᵀ J` for
+/// [`dq_pass`]. Everything here but τ is independent of the acceleration.
+fn composite_pass(model: &Model, dd: &mut DerivativeData) {
+    let nv = model.nv;
     dd.drnea_dv.fill(0.0);
     dd.drnea_da.fill(0.0);
+    // column-major storage: entry (r, c) at c nv + r
+    let (dv, da) = (dd.drnea_dv.as_mut_slice(), dd.drnea_da.as_mut_slice());
     for i in (1..model.njoints).rev() {
         let (ic, bc, f) = (dd.ic[i], dd.bc[i], dd.force[i]);
         let iv = model.idx_v[i];
@@ -386,28 +458,28 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
         for k in iv..iv + model.nvs[i] {
             let jk = dd.jac[k];
             dd.tau[k] = jk.dot(&f);
-            let y1 = ic * jk;
+            let y1 = inertia_mul(&ic, &jk);
             let y2 = bc.tr_mul(&jk);
-            // row k against the columns of i and of its ancestors
+            dd.y1[k] = y1;
+            dd.y2[k] = y2;
+            // row k against the columns of i and of its ancestors; H by symmetry also
+            // in column k
             let mut a = i;
             while a > 0 {
                 for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dd.drnea_dq[(k, m)] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
-                    dd.drnea_dv[(k, m)] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
-                    dd.drnea_da[(k, m)] = y1.dot(&dd.jac[m]);
+                    dv[m * nv + k] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
+                    let h = y1.dot(&dd.jac[m]);
+                    da[m * nv + k] = h;
+                    da[k * nv + m] = h;
                 }
                 a = model.parents[a].0;
             }
             // column k against the rows of the strict ancestors
-            let phi_q = cross_force(&jk, &f) + ic * dd.u[k] + bc * dd.w[k];
-            let phi_v = ic * dd.dadv[k] + bc * jk;
+            let phi_v = inertia_mul(&ic, &dd.dadv[k]) + bc.mul(&jk);
             let mut a = p;
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    let jr = &dd.jac[r];
-                    dd.drnea_dq[(r, k)] = jr.dot(&phi_q);
-                    dd.drnea_dv[(r, k)] = jr.dot(&phi_v);
-                    dd.drnea_da[(r, k)] = jr.dot(&y1);
+                    dv[k * nv + r] = dd.jac[r].dot(&phi_v);
                 }
                 a = model.parents[a].0;
             }
@@ -416,6 +488,67 @@ fn backward_pass(model: &Model, dd: &mut DerivativeData) {
             dd.ic[p] += ic;
             dd.bc[p] += bc;
             dd.force[p] += f;
+        }
+    }
+}
+
+/// ∂τ/∂q from the composites of [`composite_pass`] and the acceleration terms `u` and
+/// subtree forces of the current acceleration.
+fn dq_pass(model: &Model, dd: &mut DerivativeData) {
+    let nv = model.nv;
+    dd.drnea_dq.fill(0.0);
+    let dq = dd.drnea_dq.as_mut_slice();
+    for i in (1..model.njoints).rev() {
+        let (ic, bc, f) = (&dd.ic[i], &dd.bc[i], &dd.force[i]);
+        let iv = model.idx_v[i];
+        let p = model.parents[i].0;
+        for k in iv..iv + model.nvs[i] {
+            let (jk, y1, y2) = (&dd.jac[k], &dd.y1[k], &dd.y2[k]);
+            // row k against the columns of i and of its ancestors
+            let mut a = i;
+            while a > 0 {
+                for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
+                    dq[m * nv + k] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
+                }
+                a = model.parents[a].0;
+            }
+            // column k against the rows of the strict ancestors
+            let phi_q = cross_force(jk, f) + inertia_mul(ic, &dd.u[k]) + bc.mul(&dd.w[k]);
+            let mut a = p;
+            while a > 0 {
+                for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
+                    dq[k * nv + r] = dd.jac[r].dot(&phi_q);
+                }
+                a = model.parents[a].0;
+            }
+        }
+    }
+}
+
+/// Adds the acceleration `dd.a_local` to a pass run at zero acceleration: everything is
+/// linear in it, so each joint's acceleration grows by `δa_i = δa_λ + J_i a_i`, each
+/// dof's `u` by `δa_λ × J`, and each subtree force by the subtree's `Σ I_k δa_k`.
+fn add_acceleration(model: &Model, dd: &mut DerivativeData) {
+    for i in 1..model.njoints {
+        let p = model.parents[i].0;
+        let da_parent = if p == 0 { Vector6::zeros() } else { dd.dacc[p] };
+        let iv = model.idx_v[i];
+        let mut da = da_parent;
+        for k in iv..iv + model.nvs[i] {
+            let jk = dd.jac[k];
+            dd.u[k] += cross_motion(&da_parent, &jk);
+            da += jk * dd.a_local[k];
+        }
+        dd.dacc[i] = da;
+        dd.acc[i] += da;
+        dd.dforce[i] = inertia_mul(&dd.inertia[i], &da);
+    }
+    for i in (1..model.njoints).rev() {
+        let df = dd.dforce[i];
+        dd.force[i] += df;
+        let p = model.parents[i].0;
+        if p > 0 {
+            dd.dforce[p] += df;
         }
     }
 }
@@ -455,25 +588,75 @@ fn cross_force(v: &Vector6<f64>, f: &Vector6<f64>) -> Vector6<f64> {
     join(va.cross(&fl), vl.cross(&fl) + va.cross(&fa))
 }
 
+/// `I x` for a spatial inertia in its compact form (`[m x_l − c' × x_ω; c' × x_l + Ī x_ω]`
+/// with `c'` the first moment and `Ī` the rotational inertia about the origin).
+#[inline]
+fn inertia_mul(inertia: &Inertia, x: &Vector6<f64>) -> Vector6<f64> {
+    let ((xl, xa), c) = (split(x), inertia.first_moment());
+    join(
+        xl * inertia.mass() - c.cross(&xa),
+        inertia.inertia_about_origin() * xa + c.cross(&xl),
+    )
+}
+
 /// `B = v×* I − I v× + (x ↦ x ×* h)` with `h = I v`: the derivative of
 /// `I a + v ×* I v` through the velocity, beside `I δa`.
-fn velocity_variation(inertia: &Matrix6<f64>, v: &Vector6<f64>, h: &Vector6<f64>) -> Matrix6<f64> {
-    let ((vl, va), (hl, ha)) = (split(v), split(h));
-    let (wx, vx) = (skew(&va), skew(&vl));
-    let mut crm = Matrix6::zeros();
-    crm.fixed_view_mut::<3, 3>(0, 0).copy_from(&wx);
-    crm.fixed_view_mut::<3, 3>(0, 3).copy_from(&vx);
-    crm.fixed_view_mut::<3, 3>(3, 3).copy_from(&wx);
-    // v×* = −(v×)ᵀ and I = Iᵀ, so v×* I − I v× = −(crmᵀ I + I crm) = −(Y + Yᵀ), Y = I crm
-    let y = inertia * crm;
-    let mut b = -(y + y.transpose());
-    let (hlx, hax): (Matrix3<f64>, Matrix3<f64>) = (skew(&hl), skew(&ha));
-    // x ×* h = [x_ω × h_l; x_l × h_l + x_ω × h_ω] = [−h_l× x_ω; −h_l× x_l − h_ω× x_ω]
-    let mut top_right = b.fixed_view_mut::<3, 3>(0, 3);
-    top_right -= hlx;
-    let mut bottom_left = b.fixed_view_mut::<3, 3>(3, 0);
-    bottom_left -= hlx;
-    let mut bottom_right = b.fixed_view_mut::<3, 3>(3, 3);
-    bottom_right -= hax;
-    b
+///
+/// With `I = [m 1, −c'×; c'×, Ī]` and `Y = I (v×)`, `B = −(Y + Yᵀ) − [0, h_l×; h_l×, h_ω×]`;
+/// the skew identities `a× b× = b aᵀ − (a·b) 1` and `a bᵀ − b aᵀ = (b × a)×` reduce
+/// `Y + Yᵀ` to `[0, k×; −k×, S]` with `k = m v_l − c' × ω`, which is `h_l`, and
+/// `S = v_l c'ᵀ + c' v_lᵀ − 2 (c'·v_l) 1 + Ī ω× + (Ī ω×)ᵀ`. So the upper-left and
+/// lower-left blocks of B vanish and it is `[0, −2 h_l×; 0, R]`, `R = −S − h_ω×`: two
+/// 3-blocks, summed as such over a subtree.
+#[derive(Clone, Copy, Debug)]
+struct VelocityVariation {
+    /// `2 h_l`: the upper-right block is `−(2 h_l)×`.
+    hl2: Vector3<f64>,
+    /// The lower-right block R.
+    r: Matrix3<f64>,
+}
+
+impl VelocityVariation {
+    fn zero() -> Self {
+        Self {
+            hl2: Vector3::zeros(),
+            r: Matrix3::zeros(),
+        }
+    }
+
+    #[inline]
+    fn new(inertia: &Inertia, v: &Vector6<f64>, h: &Vector6<f64>) -> Self {
+        let ((vl, va), (hl, ha)) = (split(v), split(h));
+        let c = inertia.first_moment();
+        let p = inertia.inertia_about_origin() * skew(&va);
+        let cv = c * vl.transpose();
+        let mut r = -(cv + cv.transpose() + p + p.transpose()) - skew(&ha);
+        let d = 2.0 * c.dot(&vl);
+        r[(0, 0)] += d;
+        r[(1, 1)] += d;
+        r[(2, 2)] += d;
+        Self { hl2: hl * 2.0, r }
+    }
+
+    /// `B x = [−2 h_l × x_ω; R x_ω]`.
+    #[inline]
+    fn mul(&self, x: &Vector6<f64>) -> Vector6<f64> {
+        let xa = Vector3::new(x[3], x[4], x[5]);
+        join(-self.hl2.cross(&xa), self.r * xa)
+    }
+
+    /// `Bᵀ x = [0; 2 h_l × x_l + Rᵀ x_ω]`.
+    #[inline]
+    fn tr_mul(&self, x: &Vector6<f64>) -> Vector6<f64> {
+        let (xl, xa) = split(x);
+        join(Vector3::zeros(), self.hl2.cross(&xl) + self.r.tr_mul(&xa))
+    }
+}
+
+impl std::ops::AddAssign for VelocityVariation {
+    #[inline]
+    fn add_assign(&mut self, o: Self) {
+        self.hl2 += o.hl2;
+        self.r += o.r;
+    }
 }

@@ -20,6 +20,7 @@ mod crba;
 mod derivatives;
 mod rnea;
 mod rnea_batch;
+mod tree_ltdl;
 
 pub use aba::aba;
 pub use centroidal::{

@@ -137,6 +137,13 @@ impl PinocchioLayout {
         self.nv
     }
 
+    /// True if the model has a planar root: the only joint whose velocities, torques and
+    /// matrices differ between the two layouts (continuous joints differ in q only).
+    #[must_use]
+    pub fn has_planar_root(&self) -> bool {
+        self.planar.is_some()
+    }
+
     /// True when both layouts coincide (no planar root, no continuous joint).
     #[must_use]
     pub fn is_identity(&self) -> bool {
