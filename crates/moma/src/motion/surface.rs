@@ -112,6 +112,7 @@ pub fn with_mesh_surface(
                 hull_faces: Vec::new(),
                 bounding_centre: centre,
                 bounding_radius: radius,
+                mesh: None,
             });
         }
     }
