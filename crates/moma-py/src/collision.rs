@@ -9,6 +9,7 @@ use moma::collision::{
     compute_scene_distances, footprint as world_footprint, footprint_in, min_distance_gradient,
     read_scene, update_geometry_placements,
 };
+use moma::motion::MeshSource;
 use moma::multibody::Data;
 use nalgebra::DVector;
 use numpy::{PyArray1, PyArray2};
@@ -20,7 +21,9 @@ use std::path::PathBuf;
 /// convex hulls) and the link pairs it checks.
 #[pyclass(module = "moma", name = "GeometryModel", frozen)]
 pub struct PyGeometryModel {
-    inner: GeometryModel,
+    pub(crate) inner: GeometryModel,
+    /// Where the meshes are: `plan_motion` swaps concave links for their mesh surfaces.
+    pub(crate) source: MeshSource,
 }
 
 #[pymethods]
@@ -39,12 +42,16 @@ impl PyGeometryModel {
         srdf: Option<PathBuf>,
         package_dirs: Vec<PathBuf>,
     ) -> PyResult<Self> {
+        let source = MeshSource {
+            urdf: path.clone(),
+            package_dirs: package_dirs.clone(),
+        };
         let opts = GeometryOptions { package_dirs, srdf };
         let m = &model.inner;
         let inner = py
             .detach(|| GeometryModel::from_urdf(m, &path, &opts))
             .map_err(err)?;
-        Ok(Self { inner })
+        Ok(Self { inner, source })
     }
 
     /// Names of the links that carry geometry.
@@ -79,7 +86,7 @@ impl PyGeometryModel {
 /// Scene objects from a MoveIt planning-scene YAML file (MotionBenchMaker's schema).
 #[pyclass(module = "moma", name = "Scene", frozen)]
 pub struct PyScene {
-    inner: Scene,
+    pub(crate) inner: Scene,
 }
 
 #[pymethods]

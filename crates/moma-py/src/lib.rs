@@ -23,6 +23,7 @@ mod collision;
 mod dynamics;
 mod layout;
 mod model;
+mod motion;
 mod planning;
 mod sweep;
 
@@ -97,6 +98,7 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     chapter::register(m)?;
     collision::register(m)?;
     planning::register(m)?;
+    motion::register(m)?;
     sweep::register(m)?;
     Ok(())
 }

@@ -107,6 +107,24 @@ def footprint(
 ) -> F64:
     """Planar footprint (m, 2), counter-clockwise: base frame for a planar/free-flyer root, world for a fixed one."""
 
+def plan_motion(
+    model: Model,
+    geom: GeometryModel,
+    scene: Optional[Scene],
+    group: list[str],
+    start: ArrayLike,
+    goal_state: Optional[ArrayLike] = None,
+    goal_pose: Optional[ArrayLike] = None,
+    frame: Optional[str] = None,
+    position_tolerance: float = 0.01,
+    orientation_tolerance: float = 0.01,
+    time_limit: float = 1.0,
+    seed: int = 0,
+    margin: float = 0.002,
+    max_acceleration: Optional[Union[float, list[float]]] = None,
+) -> dict[str, Any]:
+    """Collision-free, time-optimal motion of a joint group to goal_state or to goal_pose of frame (as moma motion): keys solved, reason, planning_time_s, path (n, nq), trajectory {t (m,), q (m, nq)}, duration_s, min_distance, closest_pair, checks, iterations, ik_attempts, ik_solutions, goal_state, group, seed, margin, velocity_limits, acceleration_limits, mesh_surface_links."""
+
 def rnea(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
     """Inverse dynamics: tau = M(q) a + C(q, v) v + g(q) (nv)."""
 

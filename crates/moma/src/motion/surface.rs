@@ -110,6 +110,8 @@ pub fn with_mesh_surface(
                     neighbours: Vec::new(),
                 },
                 hull_faces: Vec::new(),
+                // One triangle, measured as its own hull: no mesh for the exact queries.
+                mesh: None,
                 bounding_centre: centre,
                 bounding_radius: radius,
                 mesh: None,
