@@ -114,7 +114,6 @@ pub fn with_mesh_surface(
                 mesh: None,
                 bounding_centre: centre,
                 bounding_radius: radius,
-                mesh: None,
             });
         }
     }
