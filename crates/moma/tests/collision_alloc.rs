@@ -3,7 +3,7 @@
 //! the scene distances on 40 random Fetch states against MotionBenchMaker's cage.
 
 mod counting_alloc;
-use counting_alloc::{ARMED, COUNT};
+use counting_alloc::allocations;
 use moma::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairSelection, SceneData, SceneOptions,
     compute_collision, compute_distances, compute_scene_distances, read_scene,
@@ -13,7 +13,6 @@ use moma::kinematics::{forward_kinematics, random_configuration};
 use moma::multibody::{Data, RootJoint};
 use rand::SeedableRng;
 use std::path::Path;
-use std::sync::atomic::Ordering;
 
 #[test]
 fn queries_do_not_allocate_after_warm_up() {
@@ -51,13 +50,8 @@ fn queries_do_not_allocate_after_warm_up() {
         }
     };
     run(&mut data, &mut gd, &mut sd);
-    COUNT.store(0, Ordering::SeqCst);
-    ARMED.store(true, Ordering::SeqCst);
-    run(&mut data, &mut gd, &mut sd);
-    ARMED.store(false, Ordering::SeqCst);
-    assert_eq!(
-        COUNT.load(Ordering::SeqCst),
-        0,
-        "the geometry queries allocated"
-    );
+    let (count, ()) = allocations(|| {
+        run(&mut data, &mut gd, &mut sd);
+    });
+    assert_eq!(count, 0, "the geometry queries allocated");
 }

@@ -2,10 +2,8 @@
 //! counting allocator wraps the system one; OSC runs on Panda (fixed base) and on the
 //! chapter robot m5 (reduced model) with the counter armed.
 
-use std::sync::atomic::Ordering;
-
 mod counting_alloc;
-use counting_alloc::{ARMED, COUNT};
+use counting_alloc::allocations;
 
 use moma::control::osc::{OscData, ReducedOscData, osc_fixed_base, osc_reduced};
 use moma::io::urdf::model_from_urdf_file;
@@ -38,25 +36,16 @@ fn osc_updates_do_not_allocate() {
     let am = DVector::from_element(3, 0.2);
     let tm = DVector::from_element(wm.nr(), 0.4);
 
-    COUNT.store(0, Ordering::SeqCst);
-    ARMED.store(true, Ordering::SeqCst);
-    for _ in 0..3 {
-        osc_fixed_base(&model, &mut data, &mut od, fid, &q, &v, &a, &t0).unwrap();
-    }
-    ARMED.store(false, Ordering::SeqCst);
-    assert_eq!(
-        COUNT.load(Ordering::SeqCst),
-        0,
-        "allocations during fixed-base OSC updates"
-    );
-    ARMED.store(true, Ordering::SeqCst);
-    for _ in 0..3 {
-        osc_reduced(&wm, &mut rod, tip, &qm, &vr, &am, &tm).unwrap();
-    }
-    ARMED.store(false, Ordering::SeqCst);
-    assert_eq!(
-        COUNT.load(Ordering::SeqCst),
-        0,
-        "allocations during reduced OSC updates"
-    );
+    let (count, ()) = allocations(|| {
+        for _ in 0..3 {
+            osc_fixed_base(&model, &mut data, &mut od, fid, &q, &v, &a, &t0).unwrap();
+        }
+    });
+    assert_eq!(count, 0, "allocations during fixed-base OSC updates");
+    let (count, ()) = allocations(|| {
+        for _ in 0..3 {
+            osc_reduced(&wm, &mut rod, tip, &qm, &vr, &am, &tm).unwrap();
+        }
+    });
+    assert_eq!(count, 0, "allocations during reduced OSC updates");
 }

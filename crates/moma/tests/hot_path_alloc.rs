@@ -1,4 +1,3 @@
-#![allow(unsafe_code)]
 //! The hot paths that the documentation calls allocation-free, beyond the rigid-body core
 //! and the reduced dynamics: IK iterations (no objective and the posture objective),
 //! one integrator step (RK4, Dormand–Prince, DOP853), A* and D* Lite queries after
@@ -15,48 +14,10 @@ use moma::planning::dstar_lite::DStarLite;
 use moma::planning::{AstarWorkspace, SearchGrid};
 use moma::sim::{AdaptiveOptions, Dop853, DormandPrince45, OdeSystem, Rk4};
 use nalgebra::{DVector, Isometry3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::Arc;
 
-struct Counting;
-
-thread_local! {
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-
-fn bump() {
-    // `try_with`: the slot may be gone while a thread shuts down.
-    let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-}
-
-// SAFETY: forwards every call to the system allocator unchanged; only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        bump();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        bump();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Allocations made by `f` on this thread.
-fn allocations<R>(f: impl FnOnce() -> R) -> (usize, R) {
-    let before = COUNT.with(Cell::get);
-    let r = f();
-    (COUNT.with(Cell::get) - before, r)
-}
+mod counting_alloc;
+use counting_alloc::allocations;
 
 #[test]
 fn the_counter_counts() {

@@ -1,9 +1,5 @@
-#![allow(unsafe_code)]
 //! The reduced forward dynamics, multipliers and the simulator's right-hand side do not
 //! allocate after construction (counting global allocator).
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use moma::io::urdf::model_from_urdf_file;
 use moma::mobile::DiffDrive;
@@ -16,26 +12,8 @@ use moma::sim::wheeled::ReducedOde;
 use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::DVector;
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+mod counting_alloc;
+use counting_alloc::allocations;
 
 fn robot() -> WheeledModel {
     let path = format!(
@@ -58,18 +36,13 @@ fn hot_paths_do_not_allocate() {
     // Warm up once, then count.
     reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u).unwrap();
     lagrange_multipliers(&wm, &mut wd, &q).unwrap();
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    for _ in 0..100 {
-        reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u).unwrap();
-        lagrange_multipliers(&wm, &mut wd, &q).unwrap();
-    }
-    let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert_eq!(
-        after - before,
-        0,
-        "reduced dynamics allocated {} times",
-        after - before
-    );
+    let (count, ()) = allocations(|| {
+        for _ in 0..100 {
+            reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u).unwrap();
+            lagrange_multipliers(&wm, &mut wd, &q).unwrap();
+        }
+    });
+    assert_eq!(count, 0, "reduced dynamics allocated {} times", count);
 
     // The root-constrained ABA path (wheels not tracked).
     let mut untracked = robot();
@@ -83,18 +56,13 @@ fn hot_paths_do_not_allocate() {
     let v2 = DVector::from_fn(untracked.nr(), |i, _| 0.2 - 0.05 * i as f64);
     let u2 = vec![0.3; untracked.nu()];
     reduced_forward_dynamics(&untracked, &mut wd2, &q2, &v2, &u2).unwrap();
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    for _ in 0..100 {
-        reduced_forward_dynamics(&untracked, &mut wd2, &q2, &v2, &u2).unwrap();
-        lagrange_multipliers(&untracked, &mut wd2, &q2).unwrap();
-    }
-    let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert_eq!(
-        after - before,
-        0,
-        "root-constrained ABA allocated {} times",
-        after - before
-    );
+    let (count, ()) = allocations(|| {
+        for _ in 0..100 {
+            reduced_forward_dynamics(&untracked, &mut wd2, &q2, &v2, &u2).unwrap();
+            lagrange_multipliers(&untracked, &mut wd2, &q2).unwrap();
+        }
+    });
+    assert_eq!(count, 0, "root-constrained ABA allocated {} times", count);
 
     // The simulator's ODE right-hand side.
     let mut sys = WheeledSystem::new(robot());
@@ -104,15 +72,10 @@ fn hot_paths_do_not_allocate() {
     let x: Vec<f64> = (0..n).map(|i| 0.05 * i as f64).collect();
     let mut dx = vec![0.0; n];
     ode.rhs(0.0, &x, &mut dx).unwrap();
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    for k in 0..100 {
-        ode.rhs(0.01 * k as f64, &x, &mut dx).unwrap();
-    }
-    let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert_eq!(
-        after - before,
-        0,
-        "ODE rhs allocated {} times",
-        after - before
-    );
+    let (count, ()) = allocations(|| {
+        for k in 0..100 {
+            ode.rhs(0.01 * k as f64, &x, &mut dx).unwrap();
+        }
+    });
+    assert_eq!(count, 0, "ODE rhs allocated {} times", count);
 }

@@ -13,10 +13,9 @@ use moma::multibody::{
 use moma::spatial::{Inertia, SE3};
 use nalgebra::{DVector, Matrix3, Matrix6xX, Vector3};
 use rand::SeedableRng;
-use std::sync::atomic::Ordering;
 
 mod counting_alloc;
-use counting_alloc::{ARMED, COUNT};
+use counting_alloc::allocations;
 
 /// Runs every rigid-body algorithm three times on `model` with the counter armed and
 /// returns the number of allocations (`rnea_batch` after its `BatchData::new`).
@@ -38,43 +37,42 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
     let mut taus = vec![0.0; 5 * model.nv];
     let mut derivatives = dynamics::DerivativeData::new(model);
 
-    COUNT.store(0, Ordering::SeqCst);
-    ARMED.store(true, Ordering::SeqCst);
-    for _ in 0..3 {
-        kinematics::forward_kinematics(model, &mut data, &q);
-        kinematics::forward_kinematics_second_order(model, &mut data, &q, &v, &a);
-        kinematics::update_frame_placements(model, &mut data);
-        kinematics::frames_forward_kinematics(model, &mut data, &q);
-        kinematics::compute_joint_jacobians(model, &mut data, &q);
-        for rf in [
-            ReferenceFrame::World,
-            ReferenceFrame::Local,
-            ReferenceFrame::LocalWorldAligned,
-        ] {
-            kinematics::frame_jacobian(model, &mut data, &q, fid, rf, &mut jac);
-            kinematics::frame_jacobian_from_kinematics(model, &mut data, fid, rf, &mut jac);
-            let _ = kinematics::frame_acceleration_bias(model, &mut data, &q, &v, fid, rf);
-            let _ = kinematics::frame_velocity(model, &data, fid, rf);
+    allocations(|| {
+        for _ in 0..3 {
+            kinematics::forward_kinematics(model, &mut data, &q);
+            kinematics::forward_kinematics_second_order(model, &mut data, &q, &v, &a);
+            kinematics::update_frame_placements(model, &mut data);
+            kinematics::frames_forward_kinematics(model, &mut data, &q);
+            kinematics::compute_joint_jacobians(model, &mut data, &q);
+            for rf in [
+                ReferenceFrame::World,
+                ReferenceFrame::Local,
+                ReferenceFrame::LocalWorldAligned,
+            ] {
+                kinematics::frame_jacobian(model, &mut data, &q, fid, rf, &mut jac);
+                kinematics::frame_jacobian_from_kinematics(model, &mut data, fid, rf, &mut jac);
+                let _ = kinematics::frame_acceleration_bias(model, &mut data, &q, &v, fid, rf);
+                let _ = kinematics::frame_velocity(model, &data, fid, rf);
+            }
+            kinematics::integrate(model, &q, &v, &mut q_out);
+            kinematics::difference(model, &q, &q_out, &mut v_out);
+            let _ = dynamics::rnea(model, &mut data, &q, &v, &a);
+            dynamics::rnea_batch(model, &mut batch, &qs, &vs, &accs, &mut taus);
+            let _ = dynamics::crba(model, &mut data, &q);
+            let _ = dynamics::aba(model, &mut data, &q, &v, &a);
+            let _ = dynamics::nonlinear_effects(model, &mut data, &q, &v);
+            let _ = dynamics::gravity_torque(model, &mut data, &q);
+            let _ = dynamics::coriolis_matrix(model, &mut data, &q, &v);
+            let _ = dynamics::kinetic_energy(model, &mut data, &q, &v);
+            let _ = dynamics::potential_energy(model, &mut data, &q);
+            let _ = dynamics::center_of_mass(model, &mut data, &q);
+            let _ = dynamics::centroidal_momentum_matrix(model, &mut data, &q);
+            let _ = dynamics::centroidal_momentum(model, &mut data, &q, &v);
+            dynamics::rnea_derivatives(model, &mut derivatives, &q, &v, &a);
+            dynamics::aba_derivatives(model, &mut derivatives, &q, &v, &a).unwrap();
         }
-        kinematics::integrate(model, &q, &v, &mut q_out);
-        kinematics::difference(model, &q, &q_out, &mut v_out);
-        let _ = dynamics::rnea(model, &mut data, &q, &v, &a);
-        dynamics::rnea_batch(model, &mut batch, &qs, &vs, &accs, &mut taus);
-        let _ = dynamics::crba(model, &mut data, &q);
-        let _ = dynamics::aba(model, &mut data, &q, &v, &a);
-        let _ = dynamics::nonlinear_effects(model, &mut data, &q, &v);
-        let _ = dynamics::gravity_torque(model, &mut data, &q);
-        let _ = dynamics::coriolis_matrix(model, &mut data, &q, &v);
-        let _ = dynamics::kinetic_energy(model, &mut data, &q, &v);
-        let _ = dynamics::potential_energy(model, &mut data, &q);
-        let _ = dynamics::center_of_mass(model, &mut data, &q);
-        let _ = dynamics::centroidal_momentum_matrix(model, &mut data, &q);
-        let _ = dynamics::centroidal_momentum(model, &mut data, &q, &v);
-        dynamics::rnea_derivatives(model, &mut derivatives, &q, &v, &a);
-        dynamics::aba_derivatives(model, &mut derivatives, &q, &v, &a).unwrap();
-    }
-    ARMED.store(false, Ordering::SeqCst);
-    COUNT.load(Ordering::SeqCst)
+    })
+    .0
 }
 
 /// A tree whose joints are not in depth-first order: `a` and `b` hang from the root,
@@ -166,10 +164,8 @@ fn algorithms_do_not_allocate() {
             "non-depth-first {root}: {n} allocations on the hot path"
         );
         // the counter works: an allocation while armed is seen
-        ARMED.store(true, Ordering::SeqCst);
-        let probe = std::hint::black_box(vec![1u8; 16]);
-        ARMED.store(false, Ordering::SeqCst);
+        let (seen, probe) = allocations(|| std::hint::black_box(vec![1u8; 16]));
         drop(probe);
-        assert!(COUNT.load(Ordering::SeqCst) > 0);
+        assert!(seen > 0);
     }
 }

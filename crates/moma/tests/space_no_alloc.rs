@@ -8,10 +8,9 @@ use moma::space::{self, SpaceData};
 use moma::spatial::Force;
 use nalgebra::Vector3;
 use rand::SeedableRng;
-use std::sync::atomic::Ordering;
 
 mod counting_alloc;
-use counting_alloc::{ARMED, COUNT};
+use counting_alloc::allocations;
 
 #[test]
 fn space_algorithms_do_not_allocate() {
@@ -27,22 +26,17 @@ fn space_algorithms_do_not_allocate() {
     let frame = model.frame_id("panda_hand_tcp").unwrap();
     let qd = [0.1; 9];
     let h = Force::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(-0.1, 0.0, 0.2));
-    COUNT.store(0, Ordering::SeqCst);
-    ARMED.store(true, Ordering::SeqCst);
-    for _ in 0..3 {
-        let _ = space::momentum(&model, &mut data, &q, &v);
-        space::momentum_maps(&model, &mut data, &mut sd, &q).unwrap();
-        space::base_velocity(&model, &mut data, &mut sd, &q, &qd, &h).unwrap();
-        space::generalized_jacobian(&model, &mut data, &mut sd, &q, frame).unwrap();
-        let _ = space::momentum_drift(&sd, &h);
-        let _ = space::frame_velocity(&sd, &qd, &h);
-        space::generalized_inertia(&model, &mut data, &mut sd, &q).unwrap();
-        space::dynamic_singularity(&model, &mut data, &mut sd, &q, frame).unwrap();
-    }
-    ARMED.store(false, Ordering::SeqCst);
-    assert_eq!(
-        COUNT.load(Ordering::SeqCst),
-        0,
-        "allocations in the space algorithms"
-    );
+    let (count, ()) = allocations(|| {
+        for _ in 0..3 {
+            let _ = space::momentum(&model, &mut data, &q, &v);
+            space::momentum_maps(&model, &mut data, &mut sd, &q).unwrap();
+            space::base_velocity(&model, &mut data, &mut sd, &q, &qd, &h).unwrap();
+            space::generalized_jacobian(&model, &mut data, &mut sd, &q, frame).unwrap();
+            let _ = space::momentum_drift(&sd, &h);
+            let _ = space::frame_velocity(&sd, &qd, &h);
+            space::generalized_inertia(&model, &mut data, &mut sd, &q).unwrap();
+            space::dynamic_singularity(&model, &mut data, &mut sd, &q, frame).unwrap();
+        }
+    });
+    assert_eq!(count, 0, "allocations in the space algorithms");
 }

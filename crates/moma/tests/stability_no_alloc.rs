@@ -10,10 +10,9 @@ use moma::stability::{
 };
 use nalgebra::{DVector, Vector2, Vector3};
 use rand::SeedableRng;
-use std::sync::atomic::Ordering;
 
 mod counting_alloc;
-use counting_alloc::{ARMED, COUNT};
+use counting_alloc::allocations;
 
 #[test]
 fn evaluate_does_not_allocate() {
@@ -51,18 +50,13 @@ fn evaluate_does_not_allocate() {
             moments: &m,
         };
         evaluate(&model, &mut data, &sm, &mut sd, &q, &v, &a, &ext);
-        COUNT.store(0, Ordering::SeqCst);
-        ARMED.store(true, Ordering::SeqCst);
-        for _ in 0..3 {
-            evaluate(&model, &mut data, &sm, &mut sd, &q, &v, &a, &ext);
-            let _ = sd.acceleration_limits(&sm);
-        }
-        ARMED.store(false, Ordering::SeqCst);
-        assert_eq!(
-            COUNT.load(Ordering::SeqCst),
-            0,
-            "{file}: evaluate allocated"
-        );
+        let (count, ()) = allocations(|| {
+            for _ in 0..3 {
+                evaluate(&model, &mut data, &sm, &mut sd, &q, &v, &a, &ext);
+                let _ = sd.acceleration_limits(&sm);
+            }
+        });
+        assert_eq!(count, 0, "{file}: evaluate allocated");
         assert!(sd.report.zmp.is_some());
     }
 }
