@@ -15,6 +15,9 @@ use crate::planning::{
 use crate::{Error, Result};
 use std::time::{Duration, Instant};
 
+/// Shortcut attempts between two looks at the time limit.
+const SHORTCUT_ROUND: usize = 25;
+
 /// Where the motion must end.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MotionGoal {
@@ -44,7 +47,7 @@ pub struct MotionOptions {
     pub ik_attempts: usize,
     /// Distinct collision-free IK solutions sought before planning.
     pub ik_solutions: usize,
-    /// Random shortcut attempts.
+    /// Random shortcut attempts (in rounds of 25, while the time limit allows).
     pub shortcut_attempts: usize,
     /// Acceleration limit per group joint (m/s² or rad/s²).
     pub acceleration: Vec<f64>,
@@ -410,17 +413,27 @@ pub fn plan_motion(
         result.planning_time = began.elapsed();
         return Ok(result);
     };
+    // Shortcutting in rounds of `SHORTCUT_ROUND` attempts, each seeded from the seed and
+    // its number, until the attempts are spent or the time limit passes.
     let mut extra = 0u64;
-    let path = shortcut(
-        &space,
-        &mut checker,
-        &path,
-        &ShortcutOptions {
-            attempts: options.shortcut_attempts,
-            seed: options.seed,
-        },
-        &mut extra,
-    )?;
+    let mut path = path;
+    let mut round = 0u64;
+    let mut left = options.shortcut_attempts;
+    while left > 0 && Instant::now() < deadline {
+        let attempts = left.min(SHORTCUT_ROUND);
+        path = shortcut(
+            &space,
+            &mut checker,
+            &path,
+            &ShortcutOptions {
+                attempts,
+                seed: options.seed.wrapping_add(round),
+            },
+            &mut extra,
+        )?;
+        left -= attempts;
+        round += 1;
+    }
     result.phases.shortcut = lap();
     // The blends are checked state by state; each state vouches for half the spacing.
     checker.set_tube(0.5 * options.resolution);
