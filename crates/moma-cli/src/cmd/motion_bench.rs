@@ -89,7 +89,10 @@ struct Run {
     reason: Option<String>,
     planning_time_s: f64,
     checks: u64,
+    distances: u64,
     min_distance: Option<f64>,
+    /// Seconds in setup, IK, search, shortcutting and timing.
+    phases_s: [f64; 5],
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -157,7 +160,16 @@ pub fn run(args: Args) -> Result<()> {
                     reason: res.not_solved.as_ref().map(ToString::to_string),
                     planning_time_s: res.planning_time.as_secs_f64(),
                     checks: res.checks,
+                    distances: res.distances,
                     min_distance: res.closest.as_ref().map(|c| c.distance),
+                    phases_s: [
+                        res.phases.setup,
+                        res.phases.ik,
+                        res.phases.search,
+                        res.phases.shortcut,
+                        res.phases.timing,
+                    ]
+                    .map(|d| d.as_secs_f64()),
                 },
                 Err(e) => Run {
                     name: q.name.clone(),
@@ -167,7 +179,9 @@ pub fn run(args: Args) -> Result<()> {
                     reason: Some(format!("error: {e}")),
                     planning_time_s: f64::NAN,
                     checks: 0,
+                    distances: 0,
                     min_distance: None,
+                    phases_s: [f64::NAN; 5],
                 },
             };
             runs.push(run);
@@ -222,6 +236,31 @@ pub fn run(args: Args) -> Result<()> {
             percentile(&times, 50.0),
             percentile(&times, 95.0),
             percentile(&checks, 50.0)
+        );
+    }
+    // Where the time went, over every run that got past its input checks.
+    let timed: Vec<&Run> = runs.iter().filter(|r| r.phases_s[0].is_finite()).collect();
+    let mut totals = [0.0; 5];
+    for r in &timed {
+        for (t, p) in totals.iter_mut().zip(r.phases_s) {
+            *t += p;
+        }
+    }
+    let all: f64 = totals.iter().sum();
+    let checks: u64 = timed.iter().map(|r| r.checks).sum();
+    let distances: u64 = timed.iter().map(|r| r.distances).sum();
+    if all > 0.0 {
+        println!(
+            "# time: setup {:.1} %, IK {:.1} %, search {:.1} %, shortcut {:.1} %, timing {:.1} %; \
+             {:.1} µs per checked state, {:.1} exact pair distances per state (wall clock, \
+             all phases)",
+            100.0 * totals[0] / all,
+            100.0 * totals[1] / all,
+            100.0 * totals[2] / all,
+            100.0 * totals[3] / all,
+            100.0 * totals[4] / all,
+            1e6 * all / checks.max(1) as f64,
+            distances as f64 / checks.max(1) as f64
         );
     }
     if let Some(path) = &args.json {

@@ -166,6 +166,38 @@ pub fn signed_distance(
     }
 }
 
+/// The signed distance of [`signed_distance`], or a lower bound on it above `enough`: GJK
+/// stops at the first separating plane that shows the distance exceeds `enough` (a caller
+/// that only needs "more than `enough`" pays for no further iteration). At or below
+/// `enough` the value is the signed distance itself.
+pub fn distance_above(
+    a: &Convex,
+    pose_a: &SE3,
+    b: &Convex,
+    pose_b: &SE3,
+    enough: f64,
+    warm: &mut WarmStart,
+    epa: &mut EpaWorkspace,
+) -> f64 {
+    let pair = Pair {
+        a: Placed {
+            shape: a,
+            pose: pose_a,
+        },
+        b: Placed {
+            shape: b,
+            pose: pose_b,
+        },
+        inflate: false,
+    };
+    let margin = a.margin() + b.margin();
+    let mut simplex = [SupportPoint::default(); 4];
+    match gjk(&pair, warm, &mut simplex, enough + margin) {
+        Gjk::Separated { distance, .. } => distance - margin,
+        Gjk::Overlap { .. } => signed_distance(a, pose_a, b, pose_b, warm, epa).distance,
+    }
+}
+
 /// Whether the two placed shapes overlap (signed distance < 0, or cores within 1e-10 m),
 /// with GJK stopped at the first separating plane.
 pub fn overlaps(a: &Convex, pose_a: &SE3, b: &Convex, pose_b: &SE3, warm: &mut WarmStart) -> bool {

@@ -16,12 +16,16 @@
 //!
 //! **Segments** (`a → b`, `δ = |b − a|`): at a checked state every pair's signed distance
 //! `d_p` must exceed the margin, and pair `p` then stays at least half the margin apart for
-//! a further fraction `(d_p − margin/2) / (c_p · δ)` of the segment; the next checked state
-//! is the smallest such step further on (so steps never shrink below `(margin/2) / (c_p ·
-//! δ)`). A segment that passes keeps half the margin at every state of it, not only at the
-//! checked ones, up to the accuracy of the distances (1e-12 m). Pairs are not computed when
-//! their bounding balls, or the distance found at an earlier state of the same segment less
-//! the most it can have closed since, already cover the step found so far.
+//! a fraction `(d_p − margin/2) / (c_p · δ)` of the segment on either side of the state;
+//! the state vouches for the smallest such stretch (never shorter than `(margin/2) / (c_p ·
+//! δ)`). The end state is checked first, then the start, then the middles of what is still
+//! uncovered, coarse to fine. A segment that passes keeps half the margin at every state of
+//! it, not only at the checked ones, up to the accuracy of the distances (1e-12 m). Pairs
+//! are not computed when their bounding balls, their world boxes (robot object against a
+//! scene shape), or the distance found at an earlier state of the same segment less the
+//! most it can have closed since, already cover the stretch found so far; the blocks go
+//! best first (the one that limited the last state, then by the stretch their balls vouch
+//! for), and GJK stops once a separating plane shows the distance covers it.
 //!
 //! **States** ([`StateValidity::is_valid`]) pass when every pair's distance exceeds the
 //! margin plus `tube · ‖c_p ⊘ w‖₂`, the most the pair can close over any state within the
@@ -33,13 +37,14 @@
 //! hold the meshes: a positive hull distance is a positive mesh distance.
 
 use super::group::JointGroup;
-use crate::collision::gjk::{EpaWorkspace, WarmStart, signed_distance};
+use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_above, signed_distance};
 use crate::collision::{GeometryModel, Scene};
 use crate::kinematics;
 use crate::multibody::{Data, Model};
 use crate::planning::{JointSpace, StateValidity};
 use crate::{Error, Result};
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
+use std::collections::VecDeque;
 
 /// The most checked states of one segment before it is given up as failed (a segment
 /// grazing an obstacle within the margin needs ever shorter steps).
@@ -106,6 +111,17 @@ pub struct ClearanceChecker<'a> {
     object_balls: Vec<Ball>,
     /// Ball groups of robot objects.
     groups: Vec<Ball>,
+    /// The groups' world centres at the placed state.
+    group_centres: Vec<Vector3<f64>>,
+    /// The objects' world ball centres, valid where `object_stamp` is `state_stamp`.
+    object_centres: Vec<Vector3<f64>>,
+    object_stamp: Vec<u64>,
+    state_stamp: u64,
+    /// Per robot object: its bounding box in its joint's frame (centre, rotation, half
+    /// sides), and its world axis-aligned box, valid where `box_stamp` is `state_stamp`.
+    object_boxes: Vec<(Vector3<f64>, Matrix3<f64>, Vector3<f64>)>,
+    object_world_boxes: Vec<(Vector3<f64>, Vector3<f64>)>,
+    box_stamp: Vec<u64>,
     /// Object pairs, grouped by block: robot object, other object.
     entries: Vec<(usize, Other)>,
     /// Blocks whose gap can change.
@@ -123,6 +139,10 @@ pub struct ClearanceChecker<'a> {
     warm: Vec<WarmStart>,
     epa: EpaWorkspace,
     delta: Vec<f64>,
+    /// The stretches of the current segment no checked state covers yet.
+    open: VecDeque<(f64, f64)>,
+    /// The blocks to compute at this state: the step their balls vouch for, block.
+    order: Vec<(f64, usize)>,
     /// The block that limited the last step (checked first next time).
     last_limiting: usize,
     /// Per object pair: the distance last computed on this segment, where (segment
@@ -135,6 +155,8 @@ pub struct ClearanceChecker<'a> {
     t_now: f64,
     /// States evaluated since construction.
     pub states_checked: u64,
+    /// Exact pair distances computed since construction (the pairs no bound ruled out).
+    pub distances_computed: u64,
 }
 
 impl<'a> ClearanceChecker<'a> {
@@ -284,6 +306,20 @@ impl<'a> ClearanceChecker<'a> {
             group,
             margin,
             tube: 0.0,
+            group_centres: vec![Vector3::zeros(); groups.len()],
+            object_centres: vec![Vector3::zeros(); object_balls.len()],
+            object_stamp: vec![0; object_balls.len()],
+            state_stamp: 0,
+            object_boxes: gm
+                .objects
+                .iter()
+                .map(|o| {
+                    let (c, h) = o.shape.local_aabb();
+                    (o.placement.act_point(&c), o.placement.rotation, h)
+                })
+                .collect(),
+            object_world_boxes: vec![(Vector3::zeros(), Vector3::zeros()); object_balls.len()],
+            box_stamp: vec![0; object_balls.len()],
             object_balls,
             groups,
             entries,
@@ -297,6 +333,8 @@ impl<'a> ClearanceChecker<'a> {
             warm: vec![WarmStart::default(); n_entries],
             epa: EpaWorkspace::default(),
             delta: vec![0.0; dim],
+            open: VecDeque::new(),
+            order: Vec::new(),
             last_limiting: 0,
             cache_d: vec![0.0; n_entries],
             cache_t: vec![0.0; n_entries],
@@ -304,6 +342,7 @@ impl<'a> ClearanceChecker<'a> {
             epoch: 0,
             t_now: 0.0,
             states_checked: 0,
+            distances_computed: 0,
         })
     }
 
@@ -341,29 +380,79 @@ impl<'a> ClearanceChecker<'a> {
     fn place(&mut self, x: &[f64]) {
         self.group.embed(x, self.q.as_mut_slice());
         kinematics::forward_kinematics(self.model, &mut self.data, &self.q);
+        // The ball groups' centres in the world, once per state (every block tests one);
+        // the objects' balls on demand (stamped with the state).
+        for (c, g) in self.group_centres.iter_mut().zip(&self.groups) {
+            *c = self.data.world_from_joint[g.joint].act_point(&g.centre);
+        }
+        self.state_stamp += 1;
     }
 
-    fn ball_gap(&self, a: &Ball, b: Other, groups: bool) -> f64 {
-        let ca = self.data.world_from_joint[a.joint].act_point(&a.centre);
+    /// The world centre of robot object `i`'s ball at the placed state.
+    fn object_centre(&mut self, i: usize) -> Vector3<f64> {
+        if self.object_stamp[i] != self.state_stamp {
+            let b = &self.object_balls[i];
+            self.object_centres[i] = self.data.world_from_joint[b.joint].act_point(&b.centre);
+            self.object_stamp[i] = self.state_stamp;
+        }
+        self.object_centres[i]
+    }
+
+    /// The gap between the bounding balls of ball group `a` and `b` (a group, or a scene
+    /// shape's box), at the placed state.
+    fn group_gap(&self, a: usize, b: Other) -> f64 {
+        let (ca, ra) = (self.group_centres[a], self.groups[a].radius);
         match b {
-            Other::Robot(j) => {
-                let bb = if groups {
-                    &self.groups[j]
-                } else {
-                    &self.object_balls[j]
-                };
-                let cb = self.data.world_from_joint[bb.joint].act_point(&bb.centre);
-                (ca - cb).norm() - a.radius - bb.radius
-            }
-            Other::Scene(o, s) => {
-                let (lo, hi) = &self.scene.objects[o].shapes[s].aabb;
-                let d = (lo - ca).sup(&(ca - hi)).sup(&Vector3::zeros());
-                d.norm() - a.radius
-            }
+            Other::Robot(j) => (ca - self.group_centres[j]).norm() - ra - self.groups[j].radius,
+            Other::Scene(o, s) => self.box_gap(&ca, o, s) - ra,
         }
     }
 
+    /// The gap between the bounding balls of robot object `a` and `b` (a robot object or
+    /// a scene shape's box), at the placed state.
+    fn object_gap(&mut self, a: usize, b: Other) -> f64 {
+        let ca = self.object_centre(a);
+        let ra = self.object_balls[a].radius;
+        match b {
+            Other::Robot(j) => {
+                (ca - self.object_centre(j)).norm() - ra - self.object_balls[j].radius
+            }
+            Other::Scene(o, s) => self.box_gap(&ca, o, s) - ra,
+        }
+    }
+
+    /// The gap between robot object `a`'s world axis-aligned box and scene shape `(o,
+    /// s)`'s (a lower bound on their distance), at the placed state.
+    fn object_box_gap(&mut self, a: usize, o: usize, s: usize) -> f64 {
+        if self.box_stamp[a] != self.state_stamp {
+            let (c, r, h) = &self.object_boxes[a];
+            let world = &self.data.world_from_joint[self.object_balls[a].joint];
+            let centre = world.act_point(c);
+            let half = (world.rotation * r).abs() * h;
+            self.object_world_boxes[a] = (centre - half, centre + half);
+            self.box_stamp[a] = self.state_stamp;
+        }
+        let (lo_a, hi_a) = &self.object_world_boxes[a];
+        let (lo_b, hi_b) = &self.scene.objects[o].shapes[s].aabb;
+        (lo_b - hi_a)
+            .sup(&(lo_a - hi_b))
+            .sup(&Vector3::zeros())
+            .norm()
+    }
+
+    /// The distance from `c` to scene shape `(o, s)`'s axis-aligned box.
+    fn box_gap(&self, c: &Vector3<f64>, o: usize, s: usize) -> f64 {
+        let (lo, hi) = &self.scene.objects[o].shapes[s].aabb;
+        (lo - c).sup(&(c - hi)).sup(&Vector3::zeros()).norm()
+    }
+
     fn exact(&mut self, k: usize) -> f64 {
+        self.exact_above(k, f64::INFINITY)
+    }
+
+    /// The signed distance of entry `k`, or a lower bound on it above `enough`.
+    fn exact_above(&mut self, k: usize, enough: f64) -> f64 {
+        self.distances_computed += 1;
         let (a, b) = self.entries[k];
         let oa = &self.gm.objects[a];
         let pa = self.data.world_from_joint[oa.joint.0] * oa.placement;
@@ -380,6 +469,17 @@ impl<'a> ClearanceChecker<'a> {
                 (&sh.shape, sh.pose)
             }
         };
+        if enough.is_finite() {
+            return distance_above(
+                &oa.shape,
+                &pa,
+                shape,
+                &pose,
+                enough,
+                &mut self.warm[k],
+                &mut self.epa,
+            );
+        }
         signed_distance(
             &oa.shape,
             &pa,
@@ -395,45 +495,64 @@ impl<'a> ClearanceChecker<'a> {
     /// `self.rate`) that every moving pair vouches for, capped at `need` (`+∞` when no
     /// pair limits it), or `None` when a pair is within the margin (plus the tube).
     fn allowed_step(&mut self, need: f64, tube: f64) -> Option<f64> {
-        // The step shrinks as limiting pairs are found, and a pair whose bounding balls
-        // keep it clear over the step found so far is not computed; the block that limited
-        // the last state goes first.
+        // Best first: the blocks whose bounding balls vouch for the shortest steps go
+        // first, so the step shrinks early; a block whose balls keep it clear over the
+        // step found so far (and every block after it) is not computed.
         let mut step = need;
-        let n = self.moving.len();
-        let first = self.last_limiting.min(n.saturating_sub(1));
-        for i in 0..n {
-            let bi = if i == 0 {
-                first
-            } else if i <= first {
-                i - 1
-            } else {
-                i
-            };
+        self.order.clear();
+        for bi in 0..self.moving.len() {
             let block = self.moving[bi];
             let (rate, extra) = (
                 self.rate[block.row],
                 self.margin + tube * self.tube_norm[block.row],
             );
             let slack = extra - 0.5 * self.margin;
-            if self.ball_gap(&self.groups[block.a], block.b, true)
-                > (slack + step * rate).max(extra)
-            {
+            let gap = self.group_gap(block.a, block.b);
+            if gap > (slack + step * rate).max(extra) {
                 continue;
             }
+            // The block that limited the last state goes first.
+            let vouched = if bi == self.last_limiting {
+                -1.0
+            } else if gap <= extra {
+                0.0
+            } else {
+                (gap - slack) / rate
+            };
+            self.order.push((vouched, bi));
+        }
+        self.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        for o in 0..self.order.len() {
+            let (vouched, bi) = self.order[o];
+            if vouched > step {
+                break;
+            }
+            let block = self.moving[bi];
+            let (rate, extra) = (
+                self.rate[block.row],
+                self.margin + tube * self.tube_norm[block.row],
+            );
+            let slack = extra - 0.5 * self.margin;
             for k in block.first..block.first + block.count {
                 let (a, b) = self.entries[k];
                 let bound = (slack + step * rate).max(extra);
                 // The distance found earlier on this segment, less the most it can have
                 // closed since, is a lower bound too.
                 if self.cache_epoch[k] == self.epoch
-                    && self.cache_d[k] - rate * (self.t_now - self.cache_t[k]) > bound
+                    && self.cache_d[k] - rate * (self.t_now - self.cache_t[k]).abs() > bound
                 {
                     continue;
                 }
-                if block.count > 1 && self.ball_gap(&self.object_balls[a], b, false) > bound {
+                if block.count > 1 && self.object_gap(a, b) > bound {
                     continue;
                 }
-                let d = self.exact(k);
+                if let Other::Scene(o, s) = b
+                    && self.object_box_gap(a, o, s) > bound
+                {
+                    continue;
+                }
+                // Above `bound` a lower bound is enough (GJK stops early).
+                let d = self.exact_above(k, bound);
                 self.cache_d[k] = d;
                 self.cache_t[k] = self.t_now;
                 self.cache_epoch[k] = self.epoch;
@@ -466,13 +585,13 @@ impl<'a> ClearanceChecker<'a> {
                 self.fixed[bi - self.moving.len()]
             };
             let cut = best.map_or(f64::INFINITY, |(b, _)| b);
-            if self.ball_gap(&self.groups[block.a], block.b, true) >= cut {
+            if self.group_gap(block.a, block.b) >= cut {
                 continue;
             }
             for k in block.first..block.first + block.count {
                 let (a, b) = self.entries[k];
                 let cut = best.map_or(f64::INFINITY, |(b, _)| b);
-                if self.ball_gap(&self.object_balls[a], b, false) >= cut {
+                if self.object_gap(a, b) >= cut {
                     continue;
                 }
                 let d = self.exact(k);
@@ -545,28 +664,66 @@ impl StateValidity for ClearanceChecker<'_> {
         }
         scratch.resize(dim, 0.0);
         self.epoch += 1;
-        let mut t = 0.0;
-        for _ in 0..MAX_STATES_PER_SEGMENT {
-            self.t_now = t;
-            for k in 0..dim {
-                scratch[k] = a[k] + t * (b[k] - a[k]);
+        // The end state first (a segment towards an obstacle fails there at once), then
+        // the start, then the stretch neither covers, coarse to fine: each checked state
+        // vouches for the same fraction on both sides of it.
+        let mut states = 2;
+        let Some(s1) = self.check_at(a, b, 1.0, 1.0, scratch, checks) else {
+            return false;
+        };
+        if s1 >= 1.0 {
+            return true;
+        }
+        let Some(s0) = self.check_at(a, b, 0.0, 1.0 - s1, scratch, checks) else {
+            return false;
+        };
+        if s0 >= 1.0 - s1 {
+            return true;
+        }
+        self.open.clear();
+        self.open.push_back((s0, 1.0 - s1));
+        while let Some((lo, hi)) = self.open.pop_front() {
+            states += 1;
+            if states > MAX_STATES_PER_SEGMENT {
+                return false;
             }
-            *checks += 1;
-            self.states_checked += 1;
-            self.place(scratch);
-            let need = 1.0 - t;
-            let Some(step) = self.allowed_step(need, 0.0) else {
+            let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+            let Some(s) = self.check_at(a, b, mid, half, scratch, checks) else {
                 return false;
             };
-            if step >= need {
-                return true;
+            if s >= half {
+                continue;
             }
-            if step.is_nan() || step <= 1e-12 {
+            if s.is_nan() || s <= 1e-12 {
                 return false;
             }
-            t += step;
+            self.open.push_back((lo, mid - s));
+            self.open.push_back((mid + s, hi));
         }
-        false
+        true
+    }
+}
+
+impl ClearanceChecker<'_> {
+    /// Checks the state at fraction `t` of the segment `a → b` (rates set): the fraction
+    /// it vouches for on either side, capped at `need`, or `None` when it is too close.
+    fn check_at(
+        &mut self,
+        a: &[f64],
+        b: &[f64],
+        t: f64,
+        need: f64,
+        scratch: &mut [f64],
+        checks: &mut u64,
+    ) -> Option<f64> {
+        self.t_now = t;
+        for (k, x) in scratch.iter_mut().enumerate() {
+            *x = a[k] + t * (b[k] - a[k]);
+        }
+        *checks += 1;
+        self.states_checked += 1;
+        self.place(scratch);
+        self.allowed_step(need, 0.0)
     }
 }
 

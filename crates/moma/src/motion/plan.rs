@@ -15,6 +15,9 @@ use crate::planning::{
 use crate::{Error, Result};
 use std::time::{Duration, Instant};
 
+/// Shortcut attempts between two looks at the time limit.
+const SHORTCUT_ROUND: usize = 25;
+
 /// Where the motion must end.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MotionGoal {
@@ -44,7 +47,7 @@ pub struct MotionOptions {
     pub ik_attempts: usize,
     /// Distinct collision-free IK solutions sought before planning.
     pub ik_solutions: usize,
-    /// Random shortcut attempts.
+    /// Random shortcut attempts (in rounds of 25, while the time limit allows).
     pub shortcut_attempts: usize,
     /// Acceleration limit per group joint (m/s² or rad/s²).
     pub acceleration: Vec<f64>,
@@ -156,8 +159,12 @@ pub struct MotionResult {
     pub closest: Option<ClosestPair>,
     /// States checked for collision while planning.
     pub checks: u64,
+    /// Exact pair distances computed while planning (the pairs no bound ruled out).
+    pub distances: u64,
     /// RRT-Connect iterations.
     pub iterations: usize,
+    /// Where the planning time went.
+    pub phases: PhaseTimes,
     /// IK attempts for a goal pose (0 for a goal state).
     pub ik_attempts: usize,
     /// Collision-free IK goal states found.
@@ -165,6 +172,21 @@ pub struct MotionResult {
     /// The margin kept: the option's, or half the start's (goal state's) clearance when
     /// that is smaller.
     pub margin: f64,
+}
+
+/// Where the planning time went, phase by phase (wall clock).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Building the collision check and checking the start and goal states.
+    pub setup: Duration,
+    /// Goal states by IK (goal poses only).
+    pub ik: Duration,
+    /// RRT-Connect.
+    pub search: Duration,
+    /// Shortcutting.
+    pub shortcut: Duration,
+    /// Time-optimal timing with its blend checks.
+    pub timing: Duration,
 }
 
 /// A planning problem: the robot, its geometry, the scene and the group.
@@ -279,11 +301,21 @@ pub fn plan_motion(
         trajectory: None,
         closest: None,
         checks: 0,
+        distances: 0,
         iterations: 0,
+        phases: PhaseTimes::default(),
         ik_attempts: 0,
         ik_solutions: 0,
         margin: 0.0,
     };
+    let mut mark = began;
+    let mut lap = || {
+        let now = Instant::now();
+        let d = now - mark;
+        mark = now;
+        d
+    };
+    result.phases.setup = lap();
     let goals: Vec<Vec<f64>> = match goal {
         MotionGoal::State(q) => {
             let (x, d_goal) = check_state(problem, &mut checker, "goal", q)?;
@@ -300,6 +332,7 @@ pub fn plan_motion(
                     ),
                 ));
             }
+            result.phases.setup += lap();
             vec![x]
         }
         MotionGoal::Pose(pose) => {
@@ -314,6 +347,7 @@ pub fn plan_motion(
                 options.seed,
                 deadline,
             )?;
+            result.phases.ik = lap();
             result.ik_attempts = found.attempts;
             result.ik_solutions = found.states.len();
             if found.states.is_empty() {
@@ -332,6 +366,7 @@ pub fn plan_motion(
                     }
                 });
                 result.checks = checker.states_checked;
+                result.distances = checker.distances_computed;
                 result.margin = checker.margin();
                 result.planning_time = began.elapsed();
                 return Ok(result);
@@ -369,24 +404,37 @@ pub fn plan_motion(
             }
         }
     }
+    result.phases.search = lap();
     let Some((path, k)) = found else {
         result.not_solved = Some(limit);
         result.margin = checker.margin();
         result.checks = checker.states_checked;
+        result.distances = checker.distances_computed;
         result.planning_time = began.elapsed();
         return Ok(result);
     };
+    // Shortcutting in rounds of `SHORTCUT_ROUND` attempts, each seeded from the seed and
+    // its number, until the attempts are spent or the time limit passes.
     let mut extra = 0u64;
-    let path = shortcut(
-        &space,
-        &mut checker,
-        &path,
-        &ShortcutOptions {
-            attempts: options.shortcut_attempts,
-            seed: options.seed,
-        },
-        &mut extra,
-    )?;
+    let mut path = path;
+    let mut round = 0u64;
+    let mut left = options.shortcut_attempts;
+    while left > 0 && Instant::now() < deadline {
+        let attempts = left.min(SHORTCUT_ROUND);
+        path = shortcut(
+            &space,
+            &mut checker,
+            &path,
+            &ShortcutOptions {
+                attempts,
+                seed: options.seed.wrapping_add(round),
+            },
+            &mut extra,
+        )?;
+        left -= attempts;
+        round += 1;
+    }
+    result.phases.shortcut = lap();
     // The blends are checked state by state; each state vouches for half the spacing.
     checker.set_tube(0.5 * options.resolution);
     let timed = time_optimal(
@@ -404,8 +452,10 @@ pub fn plan_motion(
         },
     )?;
     checker.set_tube(0.0);
+    result.phases.timing = lap();
     result.planning_time = began.elapsed();
     result.checks = checker.states_checked;
+    result.distances = checker.distances_computed;
     result.margin = checker.margin();
     let full = |x: &[f64]| -> Vec<f64> {
         let mut q = start.to_vec();

@@ -4,8 +4,9 @@
 //! 1. **Random shortcuts** (seeded ChaCha8): two arc-length positions `s1 < s2` are drawn
 //!    uniformly along the path; their points `a`, `b` lie on segments `i` and `j > i`. The
 //!    candidate replaces everything between waypoint `i` and waypoint `j + 1` by
-//!    `waypoint i → a → b → waypoint j + 1`; it is taken when all three segments are valid
-//!    at the space's resolution and it is strictly shorter in the weighted norm.
+//!    `waypoint i → a → b → waypoint j + 1`; it is taken when it is strictly shorter in the
+//!    weighted norm and the one new segment `a → b` is valid at the space's resolution (the
+//!    other two are parts of the path's segments `i` and `j`, valid already).
 //! 2. **Redundant waypoints**: in one pass, a waypoint whose neighbours are joined by a
 //!    valid segment is dropped (the triangle inequality makes that never longer).
 //!
@@ -100,9 +101,9 @@ pub fn shortcut(
         if new_len >= cumulative[j + 1] - cumulative[i] {
             continue;
         }
-        let valid = space.segment_valid(validity, wi, &a, &mut scratch, checks)
-            && space.segment_valid(validity, &a, &b, &mut scratch, checks)
-            && space.segment_valid(validity, &b, wj, &mut scratch, checks);
+        // `waypoint i → a` and `b → waypoint j + 1` lie on segments of the path (valid):
+        // only the new segment needs a check.
+        let valid = space.segment_valid(validity, &a, &b, &mut scratch, checks);
         if valid {
             points.splice((i + 1) * dim..(j + 1) * dim, a.iter().chain(&b).copied());
         }
