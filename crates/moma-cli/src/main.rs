@@ -12,6 +12,7 @@ mod cmd;
 mod report;
 mod svg_heatmap;
 mod svg_map;
+mod svg_placement;
 mod svg_plots;
 mod svg_stability;
 
@@ -38,6 +39,8 @@ enum Command {
     /// Run a folder of motion queries (e.g. MotionBenchMaker's Fetch scenes): success rate
     /// and planning-time percentiles.
     MotionBench(cmd::motion_bench::Args),
+    /// Where to stand for a grasp: reachable, collision-free, upright base poses, ranked.
+    Place(cmd::place::Args),
     /// Analytical derivatives of inverse and forward dynamics (dτ/dq, dτ/dv, M; dq̈/dq,
     /// dq̈/dv, M⁻¹) on a list of states.
     Derivatives(cmd::derivatives::Args),
@@ -87,6 +90,7 @@ fn main() {
         Command::Collision(a) => cmd::collision::run(a),
         Command::Motion(a) => cmd::motion::run(a),
         Command::MotionBench(a) => cmd::motion_bench::run(a),
+        Command::Place(a) => cmd::place::run(a),
         Command::Eval(a) => cmd::eval::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::MapInfo(a) => cmd::map_info::run(a),

@@ -381,3 +381,19 @@ mod tests {
         assert_eq!(e.to_string(), "stuck");
     }
 }
+
+/// The robot description and where its collision geometry comes from: the arguments the
+/// geometry commands share (`moma collision`, `moma motion`, `moma place`).
+#[derive(clap::Args, Clone, Debug)]
+pub struct RobotArgs {
+    /// The robot description (URDF); its `<collision>` elements are the geometry (meshes
+    /// as their convex hulls).
+    pub urdf: std::path::PathBuf,
+    /// SRDF whose `<disable_collisions>` pairs are not checked.
+    #[arg(long)]
+    pub srdf: Option<std::path::PathBuf>,
+    /// Folder against which `package://PKG/...` mesh URIs resolve, as DIR/PKG/... (or
+    /// DIR/... when DIR is named PKG); repeatable; ROS_PACKAGE_PATH is searched after.
+    #[arg(long = "package-dir")]
+    pub package_dirs: Vec<std::path::PathBuf>,
+}

@@ -15,6 +15,7 @@ pub mod mission;
 pub mod motion;
 pub mod motion_bench;
 pub mod osc;
+pub mod place;
 pub mod plan;
 pub mod reach_map;
 pub mod render_report;

@@ -196,13 +196,11 @@ pub fn placement_map<E: PlacementEvaluator>(
     grid: &PlacementGrid,
 ) -> Result<PlacementMap> {
     evaluator.validate()?;
-    let samples: Vec<PlacementSample> = (0..grid.len())
-        .into_par_iter()
-        .map_init(
-            || evaluator.workspace(),
-            |ws, i| evaluator.evaluate(ws, grid.pose(i)),
-        )
-        .collect::<Result<_>>()?;
+    let samples: Vec<PlacementSample> = evaluate_grid(
+        grid,
+        || evaluator.workspace(),
+        |ws, _, base| evaluator.evaluate(ws, base),
+    )?;
     let larger = evaluator.larger_is_better();
     let mut best: Option<PlacementSample> = None;
     let mut reachable = 0;
@@ -227,6 +225,29 @@ pub fn placement_map<E: PlacementEvaluator>(
         best,
         reachable,
     })
+}
+
+/// Evaluates `evaluate(workspace, index, base pose)` at every pose of `grid` in
+/// parallel: rayon workers, each with one workspace from `workspace` (built once per
+/// worker, reused for every pose it visits); the results in grid order. The one
+/// parallel loop over a grid of base poses, shared by [`placement_map`] and the grasp
+/// placement of `motion::placement`; `evaluate` must depend on the pose alone for the
+/// result to be independent of the thread count.
+///
+/// # Errors
+/// The first error of `evaluate` (in grid order).
+pub fn evaluate_grid<T, W>(
+    grid: &PlacementGrid,
+    workspace: impl Fn() -> W + Sync + Send,
+    evaluate: impl Fn(&mut W, usize, [f64; 3]) -> Result<T> + Sync + Send,
+) -> Result<Vec<T>>
+where
+    T: Send,
+{
+    (0..grid.len())
+        .into_par_iter()
+        .map_init(&workspace, |ws, i| evaluate(ws, i, grid.pose(i)))
+        .collect()
 }
 
 /// Which Jacobian the placement measure is computed on.

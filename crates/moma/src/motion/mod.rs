@@ -15,7 +15,9 @@
 
 pub mod clearance;
 pub mod goal;
+pub mod grasp_query;
 pub mod group;
+pub mod placement;
 pub mod plan;
 pub mod surface;
 
