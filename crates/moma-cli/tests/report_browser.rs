@@ -477,6 +477,46 @@ fn malformed_reports_are_refused_with_the_field_named() {
         "{err}"
     );
     assert!(!out.exists(), "no output on error");
+    // a robot whose mesh does not resolve, a posture of the wrong length: exit 1, named,
+    // nothing written
+    std::fs::write(&input, serde_json::to_vec(&mission()).unwrap()).unwrap();
+    let bad_urdf = dir.join("bad.urdf");
+    std::fs::write(
+        &bad_urdf,
+        r#"<robot name="r"><link name="a"><visual><geometry><mesh filename="package://nowhere/m.stl"/></geometry></visual></link></robot>"#,
+    )
+    .unwrap();
+    let posture = dir.join("posture.json");
+    std::fs::write(&posture, r#"{"states": [{"q": [0.1, 0.2]}]}"#).unwrap();
+    let urdf = repo().join("scenarios/robots/mobile_manipulator.urdf");
+    for (extra, expect) in [
+        (
+            vec!["--robot".to_string(), bad_urdf.display().to_string()],
+            "link 'a' mesh: cannot resolve 'package://nowhere/m.stl'",
+        ),
+        (
+            vec![
+                "--robot".to_string(),
+                urdf.display().to_string(),
+                "--posture".into(),
+                posture.display().to_string(),
+            ],
+            "posture.json: q has 2 values, the model's nq is",
+        ),
+    ] {
+        let run = moma()
+            .arg("render-report")
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .args(&extra)
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(1), "{extra:?}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains(expect), "{extra:?}: {err}");
+        assert!(!out.exists(), "no output on error");
+    }
     clean_up(&dir);
 }
 
