@@ -301,14 +301,26 @@ fn mission() -> Value {
 
 /// Renders the synthetic mission into `dir/out` and returns that folder.
 fn render(dir: &Path) -> PathBuf {
+    render_with(dir, "out", &[])
+}
+
+/// The repository's root (the CLI crate's manifest is two folders below it).
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Renders the synthetic mission into `dir/NAME` with more `render-report` arguments
+/// (e.g. `--robot`), and returns that folder.
+fn render_with(dir: &Path, name: &str, extra: &[String]) -> PathBuf {
     let input = dir.join("mission_report.json");
     std::fs::write(&input, serde_json::to_vec(&mission()).unwrap()).unwrap();
-    let out = dir.join("out");
+    let out = dir.join(name);
     let run = moma()
         .args(["render-report"])
         .arg(&input)
         .arg("--output")
         .arg(&out)
+        .args(extra)
         .output()
         .unwrap();
     assert!(
@@ -318,6 +330,9 @@ fn render(dir: &Path) -> PathBuf {
     );
     out
 }
+
+/// The XHTML namespace three.js passes to `createElementNS`.
+const XHTML_NS: &str = "http://www.w3.org/1999/xhtml";
 
 /// Every way a page could reach the network.
 fn external_references(text: &str) -> Vec<String> {
@@ -334,8 +349,8 @@ fn external_references(text: &str) -> Vec<String> {
         "href=\"//",
         "href='//",
         "ftp:",
-        "ws:",
-        "wss:",
+        "ws://",
+        "wss://",
     ] {
         if let Some(i) = lower.find(pat) {
             found.push(format!(
@@ -352,14 +367,23 @@ fn report_is_self_contained_and_complete() {
     let dir = temp_dir("static");
     let out = render(&dir);
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert_eq!(external_references(&html), Vec::<String>::new());
+    // three.js names the XHTML namespace (an identifier, never fetched)
+    assert_eq!(html.matches(XHTML_NS).count(), 1);
+    assert_eq!(
+        external_references(&html.replace(XHTML_NS, "")),
+        Vec::<String>::new()
+    );
     // the title's markup is escaped and cannot close a script element early
     assert!(html.contains("Synthetic S-curve &lt;/script&gt;&lt;b&gt;mission"));
     assert_eq!(
         html.matches("<script").count(),
         html.matches("</script>").count()
     );
-    assert_eq!(html.matches("</script>").count(), 3, "errors, data, player");
+    assert_eq!(
+        html.matches("</script>").count(),
+        5,
+        "errors, data, three.js, 3-D view, player"
+    );
     assert!(html.contains(r#"<script type="application/json" id="mission-data">"#));
     assert!(html.contains("data:image/png;base64,"));
     // the embedded data reads back: decimated to the page's bound, None as null
@@ -383,11 +407,24 @@ fn report_is_self_contained_and_complete() {
         view[0] >= -0.5 && view[2] <= 5.5 && view[1] >= -0.5 && view[3] <= 4.0,
         "{view:?}"
     );
+    // about 0.23 MB of page and data, 0.55 MB of three.js
     assert!(
-        html.len() < 600_000,
+        html.len() < 1_000_000,
         "report.html is {} bytes; the page should stay small",
         html.len()
     );
+    // the occupied cells of the cropped map (x from -0.35 m, y from -0.35 m: the left and
+    // bottom walls lie outside) as merged rectangles: the pillar, the right and top walls
+    let walls: Vec<[f64; 4]> = serde_json::from_value(data["walls"].clone()).unwrap();
+    assert_eq!(
+        walls,
+        [
+            [2.5, -0.35, 3.0, 0.8],
+            [5.35, -0.35, 5.5, 3.85],
+            [-0.35, 3.85, 5.5, 3.9]
+        ]
+    );
+    assert!(data["view3d"].is_null(), "no robot given, no 3-D robot");
     for f in [
         "top_view.svg",
         "speed.svg",
@@ -440,6 +477,46 @@ fn malformed_reports_are_refused_with_the_field_named() {
         "{err}"
     );
     assert!(!out.exists(), "no output on error");
+    // a robot whose mesh does not resolve, a posture of the wrong length: exit 1, named,
+    // nothing written
+    std::fs::write(&input, serde_json::to_vec(&mission()).unwrap()).unwrap();
+    let bad_urdf = dir.join("bad.urdf");
+    std::fs::write(
+        &bad_urdf,
+        r#"<robot name="r"><link name="a"><visual><geometry><mesh filename="package://nowhere/m.stl"/></geometry></visual></link></robot>"#,
+    )
+    .unwrap();
+    let posture = dir.join("posture.json");
+    std::fs::write(&posture, r#"{"states": [{"q": [0.1, 0.2]}]}"#).unwrap();
+    let urdf = repo().join("scenarios/robots/mobile_manipulator.urdf");
+    for (extra, expect) in [
+        (
+            vec!["--robot".to_string(), bad_urdf.display().to_string()],
+            "link 'a' mesh: cannot resolve 'package://nowhere/m.stl'",
+        ),
+        (
+            vec![
+                "--robot".to_string(),
+                urdf.display().to_string(),
+                "--posture".into(),
+                posture.display().to_string(),
+            ],
+            "posture.json: q has 2 values, the model's nq is",
+        ),
+    ] {
+        let run = moma()
+            .arg("render-report")
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .args(&extra)
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(1), "{extra:?}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains(expect), "{extra:?}: {err}");
+        assert!(!out.exists(), "no output on error");
+    }
     clean_up(&dir);
 }
 
@@ -486,7 +563,10 @@ fn chromium_once(browser: &Path, profile: &Path, page: &Path, extra: &[String]) 
         "--disable-extensions",
         "--disable-background-networking",
         "--run-all-compositor-stages-before-draw",
-        "--window-size=1280,1400",
+        // WebGL without a GPU: Chromium's software renderer, which it no longer picks on
+        // its own
+        "--enable-unsafe-swiftshader",
+        "--window-size=1280,2000",
     ])
     .arg(format!("--user-data-dir={}", profile.display()))
     .args(extra)
@@ -541,7 +621,9 @@ fn report_plays_in_headless_chromium() {
         return;
     };
     let dir = temp_dir("browser");
-    let out = render(&dir);
+    // the shipped mission robot (primitives only), its planar base following the path
+    let urdf = repo().join("scenarios/robots/mobile_manipulator.urdf");
+    let out = render_with(&dir, "out", &["--robot".into(), urdf.display().to_string()]);
     let page = std::fs::canonicalize(out.join("report.html")).unwrap();
     let profile = dir.join("profile");
     let dump = |ms: u32| {
@@ -569,6 +651,9 @@ fn report_plays_in_headless_chromium() {
             "plots drawn at {when}"
         );
         assert_eq!(body_attr(dom, "data-plots").as_deref(), Some("7"));
+        assert_eq!(body_attr(dom, "data-view3d").as_deref(), Some("drawn"));
+        // base box, 2 wheels, 4 casters, mount plate, 6 arm links
+        assert_eq!(body_attr(dom, "data-view3d-shapes").as_deref(), Some("14"));
     }
     let frame = |dom: &str| -> usize { body_attr(dom, "data-frame").unwrap().parse().unwrap() };
     let time = |dom: &str| -> f64 { body_attr(dom, "data-time").unwrap().parse().unwrap() };
@@ -634,5 +719,156 @@ fn report_plays_in_headless_chromium() {
     let b = shot(4000, "b.png");
     assert!(a.starts_with(b"\x89PNG") && b.starts_with(b"\x89PNG"));
     assert_ne!(a, b, "the screenshots after 1 s and 4 s are identical");
+    // the 3-D canvas: the robot is in it, and it moves
+    let rect = view3d_rect(&late);
+    let (a, b) = (Screenshot::read(&a), Screenshot::read(&b));
+    let (na, nb) = (a.robot_pixels(rect), b.robot_pixels(rect));
+    assert!(
+        na > 2000 && nb > 2000,
+        "robot-coloured pixels in the 3-D view: {na} after 1 s, {nb} after 4 s"
+    );
+    let changed = a.changed_pixels(&b, rect);
+    assert!(
+        changed > rect[2] * rect[3] / 100,
+        "only {changed} pixels of the 3-D view differ between 1 s and 4 s"
+    );
+    clean_up(&dir);
+}
+
+/// The 3-D canvas's rectangle in page pixels from the dumped `<body>`: x, y, w, h.
+fn view3d_rect(dom: &str) -> [usize; 4] {
+    let r: Vec<usize> = body_attr(dom, "data-view3d-rect")
+        .expect("data-view3d-rect")
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(r.len() == 4 && r[2] > 300 && r[3] > 100, "{r:?}");
+    [r[0], r[1], r[2], r[3]]
+}
+
+/// A decoded screenshot, RGB.
+struct Screenshot {
+    width: usize,
+    height: usize,
+    rgb: Vec<u8>,
+}
+
+impl Screenshot {
+    fn read(bytes: &[u8]) -> Screenshot {
+        let mut d = png::Decoder::new(std::io::Cursor::new(bytes));
+        d.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+        let mut r = d.read_info().unwrap();
+        let mut buf = vec![0; r.output_buffer_size().unwrap()];
+        let info = r.next_frame(&mut buf).unwrap();
+        let ch = info.color_type.samples();
+        assert!(ch >= 3, "a colour screenshot");
+        let rgb = buf[..info.buffer_size()]
+            .chunks(ch)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect();
+        Screenshot {
+            width: info.width as usize,
+            height: info.height as usize,
+            rgb,
+        }
+    }
+    /// The pixels of `rect` that lie in the screenshot.
+    fn pixels(&self, rect: [usize; 4]) -> impl Iterator<Item = (usize, [u8; 3])> + '_ {
+        let [x, y, w, h] = rect;
+        (y..(y + h).min(self.height)).flat_map(move |row| {
+            (x..(x + w).min(self.width)).map(move |col| {
+                let i = 3 * (row * self.width + col);
+                (i, [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]])
+            })
+        })
+    }
+    /// Pixels of the 3-D view's robot colour (teal, #2a9d8f and #1f7a6f, lit or shaded):
+    /// green and blue well above red and close to each other. Nothing else in the 3-D
+    /// view has that hue (grey walls, white and grey map, orange obstacles, red path,
+    /// grey plan, magenta target, tan scene objects, dark wheels).
+    fn robot_pixels(&self, rect: [usize; 4]) -> usize {
+        self.pixels(rect)
+            .filter(|(_, [r, g, b])| {
+                let (r, g, b) = (i32::from(*r), i32::from(*g), i32::from(*b));
+                g > r + 45 && b > r + 35 && (g - b).abs() < 60
+            })
+            .count()
+    }
+    fn changed_pixels(&self, other: &Screenshot, rect: [usize; 4]) -> usize {
+        self.pixels(rect)
+            .filter(|(i, p)| other.rgb.get(*i..*i + 3) != Some(&p[..]))
+            .count()
+    }
+}
+
+#[test]
+fn the_3d_view_draws_fetch_meshes_in_a_scene_and_nothing_without_a_robot() {
+    let Some(browser) = find_browser() else {
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED the_3d_view_draws_fetch_meshes_in_a_scene_and_nothing_without_a_robot: \
+             no chromium or chromium-browser on PATH"
+        );
+        return;
+    };
+    let dir = temp_dir("fetch");
+    let data = repo().join("crates/moma/tests/data");
+    let fetch = data.join("robots/fetch/fetch_description/robots/fetch.urdf");
+    let scene = data.join("scenes/motion_bench_maker/configs/scenes/bookshelf/scene_small.yaml");
+    let with_fetch = render_with(
+        &dir,
+        "fetch",
+        &[
+            "--robot".into(),
+            fetch.display().to_string(),
+            "--root".into(),
+            "fixed".into(),
+            "--scene".into(),
+            scene.display().to_string(),
+        ],
+    );
+    let html = std::fs::read_to_string(with_fetch.join("report.html")).unwrap();
+    let start = html.find(r#"id="mission-data">"#).unwrap() + r#"id="mission-data">"#.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let v: Value = serde_json::from_str::<Value>(&html[start..end]).unwrap()["view3d"].clone();
+    let robot = v["robot"].as_array().unwrap();
+    // Fetch's visuals are COLLADA for most links: those links are drawn with their
+    // collision STL meshes, the rest with their visual STLs
+    let meshes = robot.iter().filter(|s| s["g"]["type"] == "mesh").count();
+    assert!(meshes >= 15, "{meshes} Fetch meshes of {}", robot.len());
+    assert!(!v["scene"].as_array().unwrap().is_empty(), "the bookshelf");
+    assert!(html.len() < 2_500_000, "{} bytes", html.len());
+    let empty = render_with(&dir, "none", &[]);
+    let mut counts = Vec::new();
+    for (out, expect) in [(&with_fetch, "drawn"), (&empty, "none")] {
+        let page = std::fs::canonicalize(out.join("report.html")).unwrap();
+        let profile = dir.join("profile");
+        let dom = chromium(
+            &browser,
+            &profile,
+            &page,
+            &["--dump-dom".into(), "--virtual-time-budget=1500".into()],
+        );
+        assert_eq!(body_attr(&dom, "data-errors").as_deref(), Some(""));
+        assert_eq!(body_attr(&dom, "data-view3d").as_deref(), Some(expect));
+        let file = out.join("shot.png");
+        chromium(
+            &browser,
+            &profile,
+            &page,
+            &[
+                format!("--screenshot={}", file.display()),
+                "--virtual-time-budget=1500".into(),
+            ],
+        );
+        let shot = Screenshot::read(&std::fs::read(&file).unwrap());
+        counts.push(shot.robot_pixels(view3d_rect(&dom)));
+    }
+    assert!(
+        counts[0] > 2000 && counts[1] < 50,
+        "robot-coloured pixels in the 3-D view: {} with Fetch, {} without a robot",
+        counts[0],
+        counts[1]
+    );
     clean_up(&dir);
 }

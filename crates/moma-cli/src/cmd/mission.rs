@@ -214,7 +214,7 @@ pub fn run(args: Args) -> Result<()> {
     // second rendering is the only time summary.json does not count).
     let report_clock = Instant::now();
     let pre = summary(&m, &result, clock.elapsed().as_secs_f64(), 0.0, &[]);
-    let mut report = mission_report(&m, &result, &pre);
+    let mut report = mission_report(&m, &result, &pre)?;
     report
         .check()
         .map_err(|e| anyhow!("{}: the report data is malformed: {e}", path.display()))?;
@@ -267,10 +267,27 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// The report's data from a run (the interface of `crate::report`).
-fn mission_report(m: &Mission, r: &MissionResult, summary: &Value) -> crate::report::MissionReport {
+///
+/// The 3-D view draws the robot's URDF shapes (read again here, relative to the mission
+/// file as the mission reads it) at the recorded configurations.
+fn mission_report(
+    m: &Mission,
+    r: &MissionResult,
+    summary: &Value,
+) -> Result<crate::report::MissionReport> {
     use crate::report::{
-        MissionReport, ReportEvent, ReportMap, ReportObstacle, ReportPlan, ReportSamples,
+        MAX_FRAMES, MissionReport, ReportEvent, ReportMap, ReportObstacle, ReportPlan,
+        ReportSamples, RobotShapes,
     };
+    let urdf = m
+        .path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(&m.file.robot.urdf);
+    let model = &m.robot.model;
+    let view3d = RobotShapes::from_urdf(&urdf, model, &[])
+        .and_then(|shapes| shapes.view(model, &r.samples.t, &r.samples.q, MAX_FRAMES, Vec::new()))
+        .map_err(|e| anyhow!("{}: the 3-D view: {e}", m.path.display()))?;
     let g = &m.map.grid;
     let cells = g
         .cells
@@ -291,7 +308,7 @@ fn mission_report(m: &Mission, r: &MissionResult, summary: &Value) -> crate::rep
     let s = &r.samples;
     let col = |k: usize| s.q.iter().map(|q| q[k]).collect::<Vec<f64>>();
     let nu = r.u_names.len();
-    MissionReport {
+    Ok(MissionReport {
         title: m.name.clone(),
         map: ReportMap {
             width: g.width,
@@ -350,5 +367,6 @@ fn mission_report(m: &Mission, r: &MissionResult, summary: &Value) -> crate::rep
             })
             .collect(),
         summary: summary.clone(),
-    }
+        view3d: Some(view3d),
+    })
 }

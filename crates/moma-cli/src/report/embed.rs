@@ -175,6 +175,11 @@ pub(crate) fn page_data(r: &MissionReport) -> Value {
         "samples": Value::Object(samples),
         "events": events,
         "summary": r.summary,
+        "walls": map::walls(&r.map, view)
+            .iter()
+            .map(|w| w.map(|x| num(x, 4)))
+            .collect::<Vec<_>>(),
+        "view3d": r.view3d.as_ref().map(super::view3d::page_value),
     })
 }
 

@@ -170,6 +170,65 @@ pub(crate) fn encode(m: &ReportMap, view: [f64; 4]) -> MapImage {
     }
 }
 
+/// Most wall boxes the 3-D view receives; a crop that needs more is merged in blocks.
+pub(crate) const MAX_WALLS: usize = 20_000;
+
+/// The occupied cells of the crop inside `view` as axis-aligned rectangles for the 3-D
+/// view's walls, `[x0, y0, x1, y1]` in world metres: runs of occupied cells along each
+/// row, merged with the same run on the rows above. When that gives more than
+/// [`MAX_WALLS`] rectangles the cells are taken in blocks of 2, 3, … (a block is occupied
+/// if any of its cells is).
+pub(crate) fn walls(m: &ReportMap, view: [f64; 4]) -> Vec<[f64; 4]> {
+    let (cx0, cx1, cy0, cy1) = crop_cells(m, view);
+    let res = m.resolution;
+    for k in 1.. {
+        let (bw, bh) = ((cx1 - cx0).div_ceil(k), (cy1 - cy0).div_ceil(k));
+        let occupied =
+            |bx: usize, by: usize| block_colour(m, cx0 + bx * k, cy0 + by * k, k) == OCCUPIED;
+        // open rectangles: (x0, x1) run -> (y0 in blocks, index in out)
+        let mut out: Vec<[usize; 4]> = Vec::new();
+        let mut open: Vec<(usize, usize, usize)> = Vec::new(); // (x0, x1, rect index)
+        for by in 0..bh {
+            let mut runs = Vec::new();
+            let mut bx = 0;
+            while bx < bw {
+                if occupied(bx, by) {
+                    let a = bx;
+                    while bx < bw && occupied(bx, by) {
+                        bx += 1;
+                    }
+                    runs.push((a, bx));
+                } else {
+                    bx += 1;
+                }
+            }
+            let mut next = Vec::with_capacity(runs.len());
+            for (a, b) in runs {
+                if let Some(&(_, _, r)) = open.iter().find(|o| o.0 == a && o.1 == b) {
+                    out[r][3] = by + 1;
+                    next.push((a, b, r));
+                } else {
+                    out.push([a, by, b, by + 1]);
+                    next.push((a, b, out.len() - 1));
+                }
+            }
+            open = next;
+            if out.len() > MAX_WALLS {
+                break;
+            }
+        }
+        if out.len() <= MAX_WALLS {
+            let x = |c: usize| m.origin[0] + (cx0 + c * k).min(cx1) as f64 * res;
+            let y = |c: usize| m.origin[1] + (cy0 + c * k).min(cy1) as f64 * res;
+            return out
+                .iter()
+                .map(|r| [x(r[0]), y(r[1]), x(r[2]), y(r[3])])
+                .collect();
+        }
+    }
+    unreachable!("a crop of one block has one rectangle at most")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -195,6 +254,33 @@ mod tests {
         let w = u32::from_be_bytes(b[16..20].try_into().unwrap());
         let h = u32::from_be_bytes(b[20..24].try_into().unwrap());
         (w, h)
+    }
+
+    #[test]
+    fn walls_merge_occupied_runs_into_rectangles() {
+        // a 6 x 4 map: an L of occupied cells (column 1 rows 0-2, row 0 columns 1-4)
+        let (w, h) = (6, 4);
+        let mut cells = vec![0u8; w * h];
+        for y in 0..3 {
+            cells[y * w + 1] = 1;
+        }
+        for x in 1..5 {
+            cells[x] = 1;
+        }
+        cells[3 * w + 5] = 2; // unknown is no wall
+        let m = ReportMap {
+            width: w,
+            height: h,
+            resolution: 0.5,
+            origin: [10.0, 20.0],
+            cells,
+        };
+        let r = walls(&m, [10.0, 20.0, 13.0, 22.0]);
+        assert_eq!(
+            r,
+            vec![[10.5, 20.0, 12.5, 20.5], [10.5, 20.5, 11.0, 21.5]],
+            "row 0's run, then column 1 above it merged over rows 1 and 2"
+        );
     }
 
     fn b64_decode(s: &str) -> Vec<u8> {
@@ -286,6 +372,7 @@ mod tests {
             },
             events: vec![],
             summary: serde_json::Value::Null,
+            view3d: None,
         };
         // box x [2, 10.5], y [1, 6]; span 8.5; pad 0.5 + 0.85
         let v = view_region(&r);

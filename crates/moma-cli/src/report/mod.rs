@@ -6,14 +6,21 @@
 //! from JSON by the hidden `moma render-report` command, the entry point of the browser
 //! test). The page animates the mission on the map (footprint and heading, the planned
 //! paths with the active one highlighted, the executed path, obstacles appearing at their
-//! times, re-plan markers), shows the arm's side view, and links every plot to one time
+//! times, re-plan markers), shows the arm's side view and the robot in 3-D (its URDF shapes
+//! at poses from moma's forward kinematics, on the map with raised walls; three.js is
+//! bundled in), and links every plot to one time
 //! cursor (play/pause, slider, playback speed; clicking a plot seeks). For headless checks
 //! the page writes its state into the DOM: `<body data-frame data-time data-plots-drawn
 //! data-errors>` (see `docs/report.md`).
 
 mod embed;
 mod map;
+mod robot3d;
 mod svgs;
+mod view3d;
+
+pub use robot3d::{RobotShapes, scene_shapes};
+pub use view3d::{MAX_FRAMES, ReportView3d};
 
 use serde::{Deserialize, Serialize};
 
@@ -42,6 +49,10 @@ pub struct MissionReport {
     pub events: Vec<ReportEvent>,
     /// The `summary.json` object, shown as a table.
     pub summary: serde_json::Value,
+    /// The robot (and a scene) in 3-D, animated with the samples' clock; `None`: no 3-D
+    /// view (the map's walls and the obstacles are still drawn in 3-D).
+    #[serde(default)]
+    pub view3d: Option<ReportView3d>,
 }
 
 /// An occupancy grid in world coordinates (no rotation).
@@ -206,6 +217,9 @@ impl MissionReport {
                 ));
             }
         }
+        if let Some(v) = &self.view3d {
+            v.check()?;
+        }
         Ok(())
     }
 }
@@ -213,6 +227,10 @@ impl MissionReport {
 const CSS: &str = include_str!("page.css");
 const JS: &str = include_str!("page.js");
 const ERRORS_JS: &str = include_str!("errors.js");
+const VIEW3D_JS: &str = include_str!("view3d.js");
+/// three.js (MIT licence, `vendor/three/LICENSE`): the parts the 3-D view uses, bundled
+/// and minified as the global `THREE` (how: `vendor/three/README.md`).
+const THREE_JS: &str = include_str!("vendor/three/three.min.js");
 
 /// The whole self-contained page (inline CSS, JS and images; no network reference).
 ///
@@ -230,7 +248,9 @@ pub fn render_html(report: &MissionReport) -> String {
     let data = embed::page_data(report);
     let json = embed::script_json(&data);
     let title = embed::html_escape(&report.title);
-    let mut o = String::with_capacity(json.len() + CSS.len() + JS.len() + 4096);
+    let mut o = String::with_capacity(
+        json.len() + CSS.len() + JS.len() + THREE_JS.len() + VIEW3D_JS.len() + 4096,
+    );
     o.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     o.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
     o.push_str(&format!("<title>{title} · moma mission report</title>\n"));
@@ -242,6 +262,10 @@ pub fn render_html(report: &MissionReport) -> String {
     o.push_str(&body(&title));
     o.push_str("<script type=\"application/json\" id=\"mission-data\">");
     o.push_str(&json);
+    o.push_str("</script>\n<script>\n");
+    o.push_str(THREE_JS);
+    o.push_str("\n</script>\n<script>\n");
+    o.push_str(VIEW3D_JS);
     o.push_str("</script>\n<script>\n");
     o.push_str(JS);
     o.push_str("</script>\n</body>\n</html>\n");
@@ -274,6 +298,11 @@ fn body(title: &str) -> String {
 <table id="now"></table>
 </div>
 </div>
+</section>
+<section class="panel view3d">
+<h2>3-D view <span class="hint">(drag to orbit, wheel to zoom, right-drag or shift-drag to pan, double-click to reset)</span> <label class="follow"><input type="checkbox" id="view3d-follow" checked> follow the robot</label></h2>
+<canvas id="view3d" width="1200" height="500" aria-label="3-D view of the robot, the map and the obstacles"></canvas>
+<div class="legend" id="view3d-note"></div>
 </section>
 <section class="controls panel">
 <button id="play" type="button" title="play / pause (space)">Pause</button>
@@ -348,13 +377,25 @@ mod tests {
             },
             events: vec![],
             summary: serde_json::json!({"reached": false, "reason": "no motion"}),
+            view3d: None,
         }
     }
 
     #[test]
     fn the_page_assets_cannot_end_a_script_or_reach_the_network() {
-        for (name, text) in [("page.js", JS), ("errors.js", ERRORS_JS), ("page.css", CSS)] {
-            let lower = text.to_ascii_lowercase();
+        for (name, text) in [
+            ("page.js", JS),
+            ("errors.js", ERRORS_JS),
+            ("page.css", CSS),
+            ("view3d.js", VIEW3D_JS),
+            ("three.min.js", THREE_JS),
+        ] {
+            // three.js names the XHTML namespace (an identifier, never fetched) and has
+            // canvas.toDataURL( (which a CSS url( check would match, case aside)
+            let lower = text
+                .replace("http://www.w3.org/1999/xhtml", "")
+                .replace("DataURL(", "")
+                .to_ascii_lowercase();
             for bad in ["</script", "<!--", "http:", "https:", "@import", "url("] {
                 assert!(!lower.contains(bad), "{name} contains {bad}");
             }
@@ -440,7 +481,12 @@ mod tests {
             clr.iter().any(|v| v.as_f64() == Some(-1.0)),
             "the dip is kept"
         );
-        assert!(html.len() < 400_000, "{} bytes", html.len());
+        // the data stays under 0.4 MB beside three.js
+        assert!(
+            html.len() < 400_000 + THREE_JS.len(),
+            "{} bytes",
+            html.len()
+        );
         for (name, svg) in render_svgs(&r) {
             let points = svg
                 .split("<polyline points=\"")

@@ -1,5 +1,5 @@
 // The mission report's player: one clock drives the top view, the arm's side view, the
-// plots' cursors, the "now" table and the events list. State for headless checks is
+// 3-D view, the plots' cursors, the "now" table and the events list. State for headless checks is
 // written on <body>: data-frame (sample index), data-time (s), data-plots-drawn,
 // data-plots (how many there are), data-errors (captured by the first script).
 (function () {
@@ -697,6 +697,7 @@
     try {
       drawTop(clock, frame);
       drawSide(clock, frame);
+      if (view3d) view3d.draw(clock);
       for (const P of PLOTS) drawPlot(P, clock, frame);
       updateTables(frame);
     } finally {
@@ -747,6 +748,9 @@
     last = now;
   }
 
+  // the 3-D view (view3d.js), when the browser has WebGL
+  const view3d = window.momaView3d(D, document.getElementById('view3d'),
+    document.getElementById('view3d-note'), poseAt);
   topLegend();
   sideLegend();
   setupPlots();
