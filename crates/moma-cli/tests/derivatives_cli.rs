@@ -200,3 +200,100 @@ fn moma_layout_is_the_default() {
     assert_eq!(pin.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&pin.stderr).contains("Pinocchio layout"));
 }
+
+/// `--frame`: the frame derivative fields of the Pinocchio 4.1 files `frame_*.json`
+/// through `--layout pinocchio` (TIAGo on a planar root, where the chain rule acts, and
+/// Panda on a free-flyer), every entry within 1e-8 of the matrix's largest.
+fn frame_reference_through_cli(file: &str) {
+    let path = data_dir().join(file);
+    let doc: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let frame = doc["frame"].as_str().unwrap();
+    let states: Vec<Value> = doc["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| serde_json::json!({"q": s["q"], "v": s["v"], "a": s["a"]}))
+        .collect();
+    let input = tmp(&format!("states_{file}"));
+    std::fs::write(&input, serde_json::json!({ "states": states }).to_string()).unwrap();
+    let out = moma()
+        .arg("derivatives")
+        .arg(data_dir().join(doc["urdf"].as_str().unwrap()))
+        .args(["--root", doc["root"].as_str().unwrap(), "--states"])
+        .arg(&input)
+        .args(["--layout", "pinocchio", "--frame", frame])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got: Value = serde_json::from_slice(&out.stdout).unwrap();
+    for (k, want) in doc["states"].as_array().unwrap().iter().enumerate() {
+        let g = &got["states"][k]["frame"];
+        assert_eq!(g["name"], frame);
+        let close = |g: &Value, w: &Value, what: &str| {
+            let (g, w) = match (g.as_array().unwrap()[0].is_array(), w) {
+                (true, _) => (matrix(g), matrix(w)),
+                (false, _) => (vec![matrix_row(g)], vec![matrix_row(w)]),
+            };
+            let scale = w.iter().flatten().fold(1.0f64, |m, x| m.max(x.abs()));
+            assert_eq!(g.len(), w.len(), "{file} {k} {what} rows");
+            for (gr, wr) in g.iter().zip(&w) {
+                assert_eq!(gr.len(), wr.len(), "{file} {k} {what} columns");
+                for (x, y) in gr.iter().zip(wr) {
+                    assert!(
+                        (x - y).abs() <= 1e-8 * scale,
+                        "{file} state {k} {what}: {x} vs {y}"
+                    );
+                }
+            }
+        };
+        close(
+            &g["placement"]["translation"],
+            &want["placement"]["translation"],
+            "translation",
+        );
+        close(
+            &g["placement"]["rotation"],
+            &want["placement"]["rotation"],
+            "rotation",
+        );
+        for rf in ["local", "world", "local_world_aligned"] {
+            for key in [
+                "velocity",
+                "acceleration",
+                "jacobian",
+                "dv_dq",
+                "da_dq",
+                "da_dv",
+            ] {
+                close(&g[rf][key], &want[rf][key], &format!("{rf} {key}"));
+            }
+        }
+    }
+}
+
+fn matrix_row(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn frame_reference_through_the_binary() {
+    frame_reference_through_cli("frame_tiago_planar.json");
+    frame_reference_through_cli("frame_panda_freeflyer.json");
+}
+
+#[test]
+fn unknown_frame_is_reported() {
+    let (out, o) = run_states(
+        r#"{"states": [{"q": [0, 0, 0, 0, 0, 0, 0, 0, 0]}]}"#,
+        &["--frame", "no_such_link"],
+    );
+    fails_with(&out, &o, 1, &["--frame", "no_such_link"]);
+}

@@ -36,6 +36,8 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
     let accs: Vec<f64> = (0..5).flat_map(|_| a.iter().copied()).collect();
     let mut taus = vec![0.0; 5 * model.nv];
     let mut derivatives = dynamics::DerivativeData::new(model);
+    let mut frame_derivatives = dynamics::FrameDerivativeData::new(model);
+    let mut fm = [(); 4].map(|()| Matrix6xX::zeros(model.nv));
 
     allocations(|| {
         for _ in 0..3 {
@@ -70,6 +72,26 @@ fn count_hot_path(model: &Model, frame: FrameIndex) -> usize {
             let _ = dynamics::centroidal_momentum(model, &mut data, &q, &v);
             dynamics::rnea_derivatives(model, &mut derivatives, &q, &v, &a);
             dynamics::aba_derivatives(model, &mut derivatives, &q, &v, &a).unwrap();
+            dynamics::forward_kinematics_derivatives(model, &mut frame_derivatives, &q, &v, &a);
+            for rf in [
+                ReferenceFrame::World,
+                ReferenceFrame::Local,
+                ReferenceFrame::LocalWorldAligned,
+            ] {
+                let [vq, aq, av, aa] = &mut fm;
+                dynamics::frame_velocity_derivatives(model, &frame_derivatives, fid, rf, vq, aq);
+                dynamics::frame_acceleration_derivatives(
+                    model,
+                    &frame_derivatives,
+                    fid,
+                    rf,
+                    vq,
+                    aq,
+                    av,
+                    aa,
+                );
+                let _ = dynamics::frame_motion(model, &frame_derivatives, fid, rf);
+            }
         }
     })
     .0

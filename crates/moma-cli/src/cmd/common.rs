@@ -248,6 +248,20 @@ impl LayoutConv {
         }
     }
 
+    /// A frame's ∂V/∂q, ∂A/∂q, ∂A/∂v and Jacobian (moma's layout, at moma's `(q, v, a)`)
+    /// turned, in place, into the command's layout.
+    pub fn frame_derivatives_out(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        [vq, aq, av, jac]: [&mut nalgebra::Matrix6xX<f64>; 4],
+    ) {
+        if let Some(map) = &self.map {
+            map.frame_acceleration_derivatives_to_pinocchio(q, v, a, vq, aq, av, jac);
+        }
+    }
+
     /// A Jacobian (any rows, nv columns) in the command's layout.
     pub fn jacobian_out(&self, q: &[f64], j: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
         match &self.map {

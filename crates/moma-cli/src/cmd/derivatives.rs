@@ -1,14 +1,15 @@
 //! `moma derivatives ROBOT.urdf --root R --states STATES.json [--layout moma|pinocchio]
-//! [--output OUT.json]`: the analytical derivatives of inverse dynamics (∂τ/∂q, ∂τ/∂v,
-//! ∂τ/∂a = M) and of forward dynamics (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹) for each state.
-//! Schema: `docs/cli.md`.
+//! [--frame NAME] [--output OUT.json]`: the analytical derivatives of inverse dynamics
+//! (∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M) and of forward dynamics (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹) for
+//! each state, and with `--frame` those of the frame's placement, velocity and
+//! acceleration. Schema: `docs/cli.md`.
 
 use super::common::{Layout, LayoutConv, State, load_model, parse_root, read_states};
-use anyhow::{Result, anyhow, bail};
-use moma::dynamics::{self, DerivativeData};
-use moma::kinematics;
-use moma::multibody::{Model, RootJoint};
-use nalgebra::{DMatrix, DVector};
+use anyhow::{Context, Result, anyhow, bail};
+use moma::dynamics::{self, DerivativeData, FrameDerivativeData};
+use moma::kinematics::{self, ReferenceFrame};
+use moma::multibody::{FrameIndex, Model, RootJoint};
+use nalgebra::{DMatrix, DVector, Matrix6xX};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -34,6 +35,11 @@ pub struct Args {
     /// outputs are Pinocchio's computeRNEADerivatives / computeABADerivatives.
     #[arg(long, value_enum, default_value_t = Layout::Moma)]
     pub layout: Layout,
+    /// Also the derivatives of this frame's placement, velocity and acceleration at
+    /// (q, v, a), in the LOCAL, WORLD and LOCAL_WORLD_ALIGNED frames (field `frame` of
+    /// each state).
+    #[arg(long)]
+    pub frame: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -44,6 +50,44 @@ struct StateOut {
     daba_dq: Vec<Vec<f64>>,
     daba_dv: Vec<Vec<f64>>,
     daba_dtau: Vec<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    frame: Option<FrameOut>,
+}
+
+/// One frame's motion and derivatives at one state.
+#[derive(Serialize)]
+struct FrameOut {
+    name: String,
+    placement: Placement,
+    local: FrameDerivativesOut,
+    world: FrameDerivativesOut,
+    local_world_aligned: FrameDerivativesOut,
+}
+
+#[derive(Serialize)]
+struct Placement {
+    translation: [f64; 3],
+    rotation: [[f64; 3]; 3],
+}
+
+/// The frame's twist and acceleration in one reference frame and their derivatives
+/// (6 × nv row lists).
+#[derive(Serialize)]
+struct FrameDerivativesOut {
+    velocity: [f64; 6],
+    acceleration: [f64; 6],
+    jacobian: Vec<Vec<f64>>,
+    dv_dq: Vec<Vec<f64>>,
+    da_dq: Vec<Vec<f64>>,
+    da_dv: Vec<Vec<f64>>,
+}
+
+/// The frame part of `moma derivatives`: its index, workspace and four 6 × nv buffers.
+struct FrameWork {
+    name: String,
+    frame: FrameIndex,
+    fd: FrameDerivativeData,
+    m: [Matrix6xX<f64>; 4],
 }
 
 #[derive(Serialize)]
@@ -66,13 +110,24 @@ pub fn run(args: Args) -> Result<()> {
     let mut states = read_states(&args.states, &["q", "v", "a", "tau"])?;
     let conv = LayoutConv::new(&model, args.layout);
     let mut dd = DerivativeData::new(&model);
+    let mut frame = match &args.frame {
+        Some(name) => Some(FrameWork {
+            name: name.clone(),
+            frame: model
+                .frame_id(name)
+                .with_context(|| format!("{}: --frame", args.urdf.display()))?,
+            fd: FrameDerivativeData::new(&model),
+            m: [(); 4].map(|()| Matrix6xX::zeros(model.nv)),
+        }),
+        None => None,
+    };
     let out_states = states
         .iter_mut()
         .enumerate()
         .map(|(k, s)| {
             let src = format!("{}: states[{k}]", args.states.display());
             conv.state_in(s, &src)?;
-            evaluate_state(&model, &mut dd, s, &src, &conv)
+            evaluate_state(&model, &mut dd, frame.as_mut(), s, &src, &conv)
         })
         .collect::<Result<Vec<_>>>()?;
     let out = Output {
@@ -97,6 +152,7 @@ pub fn run(args: Args) -> Result<()> {
 fn evaluate_state(
     model: &Model,
     dd: &mut DerivativeData,
+    frame: Option<&mut FrameWork>,
     s: &State,
     src: &str,
     conv: &LayoutConv,
@@ -140,6 +196,9 @@ fn evaluate_state(
             );
         }
     }
+    let frame = frame
+        .map(|fw| evaluate_frame(model, fw, &q, &v, &a, src, conv))
+        .transpose()?;
     let [dq, dv, da] = rnea;
     let [bq, bv, bt] = aba;
     Ok(StateOut {
@@ -149,5 +208,68 @@ fn evaluate_state(
         daba_dq: rows(&bq),
         daba_dv: rows(&bv),
         daba_dtau: rows(&bt),
+        frame,
+    })
+}
+
+/// The frame's placement, motion and derivatives at `(q, v, a)` (moma's layout) in the
+/// three reference frames, written in `conv`'s layout.
+fn evaluate_frame(
+    model: &Model,
+    fw: &mut FrameWork,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    a: &DVector<f64>,
+    src: &str,
+    conv: &LayoutConv,
+) -> Result<FrameOut> {
+    dynamics::forward_kinematics_derivatives(model, &mut fw.fd, q, v, a);
+    let (qs, vs, as_) = (q.as_slice(), v.as_slice(), a.as_slice());
+    let mut one = |rf: ReferenceFrame| -> Result<FrameDerivativesOut> {
+        let [vq, aq, av, aa] = &mut fw.m;
+        dynamics::frame_acceleration_derivatives(model, &fw.fd, fw.frame, rf, vq, aq, av, aa);
+        conv.frame_derivatives_out(qs, vs, as_, [vq, aq, av, aa]);
+        let (_, vel, acc) = dynamics::frame_motion(model, &fw.fd, fw.frame, rf);
+        let six = |m: &moma::spatial::Motion| {
+            let x = m.to_vector();
+            [x[0], x[1], x[2], x[3], x[4], x[5]]
+        };
+        for (name, m) in [("dv_dq", &*vq), ("da_dq", &*aq), ("da_dv", &*av)] {
+            if let Some(k) = m.iter().position(|x| !x.is_finite()) {
+                bail!(
+                    "{src}: frame {name} has a non-finite entry at [{}][{}] (inputs v, a beyond f64's range?)",
+                    k % 6,
+                    k / 6
+                );
+            }
+        }
+        let rows6 = |m: &Matrix6xX<f64>| -> Vec<Vec<f64>> {
+            m.row_iter().map(|r| r.iter().copied().collect()).collect()
+        };
+        Ok(FrameDerivativesOut {
+            velocity: six(&vel),
+            acceleration: six(&acc),
+            jacobian: rows6(aa),
+            dv_dq: rows6(vq),
+            da_dq: rows6(aq),
+            da_dv: rows6(av),
+        })
+    };
+    let (local, world, local_world_aligned) = (
+        one(ReferenceFrame::Local)?,
+        one(ReferenceFrame::World)?,
+        one(ReferenceFrame::LocalWorldAligned)?,
+    );
+    let (m, _, _) = dynamics::frame_motion(model, &fw.fd, fw.frame, ReferenceFrame::World);
+    let r = m.rotation;
+    Ok(FrameOut {
+        name: fw.name.clone(),
+        placement: Placement {
+            translation: [m.translation.x, m.translation.y, m.translation.z],
+            rotation: [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
+        },
+        local,
+        world,
+        local_world_aligned,
     })
 }

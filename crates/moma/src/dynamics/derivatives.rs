@@ -52,12 +52,13 @@
 //! the accelerations, `δa_λ × J` to `u` and the subtree sums of `I_k δa_k` to the forces,
 //! and ∂τ/∂q is written at a = q̈.
 
+use super::motion_pass::{MotionTerms, cross_force, cross_motion, join, split};
 use super::tree_ltdl::{Rhs, dof_parents, ltdl_in_place, ltdl_solve_rows, subtree_ends};
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
-use crate::kinematics::{assert_nv, update_joint_placement};
-use crate::multibody::{Data, JointType, Model};
-use crate::spatial::{Inertia, SE3, skew};
+use crate::kinematics::assert_nv;
+use crate::multibody::{Data, Model};
+use crate::spatial::{Inertia, skew};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3, Vector6};
 
 /// The workspace and the results of [`rnea_derivatives`] and [`aba_derivatives`], sized
@@ -90,10 +91,8 @@ pub struct DerivativeData {
     /// Velocity and acceleration in the pass's convention (planar: base frame).
     v_local: DVector<f64>,
     a_local: DVector<f64>,
-    /// Per joint, world frame: placement, twist, acceleration (with −g).
-    world_from_joint: Vec<SE3>,
-    vel: Vec<Vector6<f64>>,
-    acc: Vec<Vector6<f64>>,
+    /// The kinematic pass (world frame, root acceleration −g).
+    motion: MotionTerms,
     /// Per joint: composite inertia, composite B, subtree force (world frame).
     ic: Vec<Inertia>,
     bc: Vec<VelocityVariation>,
@@ -103,12 +102,6 @@ pub struct DerivativeData {
     inertia: Vec<Inertia>,
     dacc: Vec<Vector6<f64>>,
     dforce: Vec<Vector6<f64>>,
-    /// Per dof: world motion-subspace column J, w = v_λ × J, u = a_λ × J + v_λ × w and
-    /// (v_λ + v_j) × J.
-    jac: Vec<Vector6<f64>>,
-    w: Vec<Vector6<f64>>,
-    u: Vec<Vector6<f64>>,
-    dadv: Vec<Vector6<f64>>,
     /// Per dof: `Ic J` and `Bcᵀ J` with the composites of its joint.
     y1: Vec<Vector6<f64>>,
     y2: Vec<Vector6<f64>>,
@@ -142,19 +135,13 @@ impl DerivativeData {
             layout: PinocchioLayout::new(model),
             v_local: DVector::zeros(nv),
             a_local: DVector::zeros(nv),
-            world_from_joint: vec![SE3::identity(); n],
-            vel: vec![Vector6::zeros(); n],
-            acc: vec![Vector6::zeros(); n],
+            motion: MotionTerms::new(model),
             ic: vec![Inertia::zero(); n],
             bc: vec![VelocityVariation::zero(); n],
             force: vec![Vector6::zeros(); n],
             inertia: vec![Inertia::zero(); n],
             dacc: vec![Vector6::zeros(); n],
             dforce: vec![Vector6::zeros(); n],
-            jac: vec![Vector6::zeros(); nv],
-            w: vec![Vector6::zeros(); nv],
-            u: vec![Vector6::zeros(); nv],
-            dadv: vec![Vector6::zeros(); nv],
             y1: vec![Vector6::zeros(); nv],
             y2: vec![Vector6::zeros(); nv],
             dof_parent: dof_parents(model),
@@ -168,7 +155,7 @@ impl DerivativeData {
     /// True if this workspace was sized for `model`.
     #[must_use]
     pub fn fits(&self, model: &Model) -> bool {
-        self.data.fits(model) && self.jac.len() == model.nv
+        self.data.fits(model) && self.motion.jac.len() == model.nv
     }
 }
 
@@ -362,35 +349,6 @@ fn singular(dd: &mut DerivativeData, k: usize) -> Error {
     }
 }
 
-/// Column `k` of joint `i`'s motion subspace in its own frame, constant for every kind
-/// (the planar joint's in its base-frame velocity convention).
-#[inline]
-fn local_column(jt: &JointType, k: usize) -> Vector6<f64> {
-    match jt {
-        JointType::Planar => {
-            let mut s = Vector6::zeros();
-            s[[0, 1, 5][k]] = 1.0;
-            s
-        }
-        JointType::FreeFlyer => {
-            let mut s = Vector6::zeros();
-            s[k] = 1.0;
-            s
-        }
-        JointType::RevoluteUnaligned { axis } => {
-            Vector6::new(0.0, 0.0, 0.0, axis.x, axis.y, axis.z)
-        }
-        JointType::PrismaticUnaligned { axis } => {
-            Vector6::new(axis.x, axis.y, axis.z, 0.0, 0.0, 0.0)
-        }
-        aligned => {
-            let mut s = Vector6::zeros();
-            s[aligned.axis_slot().expect("aligned joint")] = 1.0;
-            s
-        }
-    }
-}
-
 /// The world placement, twist and acceleration of every joint, the per-dof vectors and
 /// each body's inertia, B and force (the composites' starting values).
 fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
@@ -403,42 +361,23 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
         0.0,
     );
     for i in 1..model.njoints {
-        update_joint_placement(model, &mut dd.data, i, qs);
-        let p = model.parents[i].0;
-        let local = dd.data.parent_from_joint[i];
-        let (omi, v_parent, a_parent) = if p == 0 {
-            (local, Vector6::zeros(), gravity)
-        } else {
-            (dd.world_from_joint[p].compose(&local), dd.vel[p], dd.acc[p])
-        };
-        let jt = &model.joint_types[i];
-        let iv = model.idx_v[i];
-        let mut vel = v_parent;
-        let mut acc = a_parent;
-        for k in iv..iv + model.nvs[i] {
-            let jk = act_motion(&omi, &local_column(jt, k - iv));
-            dd.jac[k] = jk;
-            vel += jk * dd.v_local[k];
-            acc += jk * dd.a_local[k];
-        }
-        acc += cross_motion(&vel, &(vel - v_parent));
-        let v_sum = v_parent + vel;
-        for k in iv..iv + model.nvs[i] {
-            let jk = dd.jac[k];
-            let w = cross_motion(&v_parent, &jk);
-            dd.u[k] = cross_motion(&a_parent, &jk) + cross_motion(&v_parent, &w);
-            dd.w[k] = w;
-            dd.dadv[k] = cross_motion(&v_sum, &jk);
-        }
+        dd.motion.step(
+            model,
+            &mut dd.data,
+            i,
+            qs,
+            dd.v_local.as_slice(),
+            dd.a_local.as_slice(),
+            &gravity,
+        );
+        let omi = dd.motion.world_from_joint[i];
+        let (vel, acc) = (dd.motion.vel[i], dd.motion.acc[i]);
         let inertia = omi.act_inertia(&model.inertias[i]);
         let h = inertia_mul(&inertia, &vel);
         dd.force[i] = inertia_mul(&inertia, &acc) + cross_force(&vel, &h);
         dd.bc[i] = VelocityVariation::new(&inertia, &vel, &h);
         dd.ic[i] = inertia;
         dd.inertia[i] = inertia;
-        dd.world_from_joint[i] = omi;
-        dd.vel[i] = vel;
-        dd.acc[i] = acc;
     }
 }
 
@@ -456,7 +395,7 @@ fn composite_pass(model: &Model, dd: &mut DerivativeData) {
         let iv = model.idx_v[i];
         let p = model.parents[i].0;
         for k in iv..iv + model.nvs[i] {
-            let jk = dd.jac[k];
+            let jk = dd.motion.jac[k];
             dd.tau[k] = jk.dot(&f);
             let y1 = inertia_mul(&ic, &jk);
             let y2 = bc.tr_mul(&jk);
@@ -467,19 +406,19 @@ fn composite_pass(model: &Model, dd: &mut DerivativeData) {
             let mut a = i;
             while a > 0 {
                 for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dv[m * nv + k] = y1.dot(&dd.dadv[m]) + y2.dot(&dd.jac[m]);
-                    let h = y1.dot(&dd.jac[m]);
+                    dv[m * nv + k] = y1.dot(&dd.motion.dadv[m]) + y2.dot(&dd.motion.jac[m]);
+                    let h = y1.dot(&dd.motion.jac[m]);
                     da[m * nv + k] = h;
                     da[k * nv + m] = h;
                 }
                 a = model.parents[a].0;
             }
             // column k against the rows of the strict ancestors
-            let phi_v = inertia_mul(&ic, &dd.dadv[k]) + bc.mul(&jk);
+            let phi_v = inertia_mul(&ic, &dd.motion.dadv[k]) + bc.mul(&jk);
             let mut a = p;
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dv[k * nv + r] = dd.jac[r].dot(&phi_v);
+                    dv[k * nv + r] = dd.motion.jac[r].dot(&phi_v);
                 }
                 a = model.parents[a].0;
             }
@@ -503,21 +442,22 @@ fn dq_pass(model: &Model, dd: &mut DerivativeData) {
         let iv = model.idx_v[i];
         let p = model.parents[i].0;
         for k in iv..iv + model.nvs[i] {
-            let (jk, y1, y2) = (&dd.jac[k], &dd.y1[k], &dd.y2[k]);
+            let (jk, y1, y2) = (&dd.motion.jac[k], &dd.y1[k], &dd.y2[k]);
             // row k against the columns of i and of its ancestors
             let mut a = i;
             while a > 0 {
                 for m in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dq[m * nv + k] = y1.dot(&dd.u[m]) + y2.dot(&dd.w[m]);
+                    dq[m * nv + k] = y1.dot(&dd.motion.u[m]) + y2.dot(&dd.motion.w[m]);
                 }
                 a = model.parents[a].0;
             }
             // column k against the rows of the strict ancestors
-            let phi_q = cross_force(jk, f) + inertia_mul(ic, &dd.u[k]) + bc.mul(&dd.w[k]);
+            let phi_q =
+                cross_force(jk, f) + inertia_mul(ic, &dd.motion.u[k]) + bc.mul(&dd.motion.w[k]);
             let mut a = p;
             while a > 0 {
                 for r in model.idx_v[a]..model.idx_v[a] + model.nvs[a] {
-                    dq[k * nv + r] = dd.jac[r].dot(&phi_q);
+                    dq[k * nv + r] = dd.motion.jac[r].dot(&phi_q);
                 }
                 a = model.parents[a].0;
             }
@@ -535,12 +475,12 @@ fn add_acceleration(model: &Model, dd: &mut DerivativeData) {
         let iv = model.idx_v[i];
         let mut da = da_parent;
         for k in iv..iv + model.nvs[i] {
-            let jk = dd.jac[k];
-            dd.u[k] += cross_motion(&da_parent, &jk);
+            let jk = dd.motion.jac[k];
+            dd.motion.u[k] += cross_motion(&da_parent, &jk);
             da += jk * dd.a_local[k];
         }
         dd.dacc[i] = da;
-        dd.acc[i] += da;
+        dd.motion.acc[i] += da;
         dd.dforce[i] = inertia_mul(&dd.inertia[i], &da);
     }
     for i in (1..model.njoints).rev() {
@@ -551,41 +491,6 @@ fn add_acceleration(model: &Model, dd: &mut DerivativeData) {
             dd.dforce[p] += df;
         }
     }
-}
-
-#[inline]
-fn split(x: &Vector6<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    (
-        Vector3::new(x[0], x[1], x[2]),
-        Vector3::new(x[3], x[4], x[5]),
-    )
-}
-
-#[inline]
-fn join(l: Vector3<f64>, a: Vector3<f64>) -> Vector6<f64> {
-    Vector6::new(l.x, l.y, l.z, a.x, a.y, a.z)
-}
-
-/// `m` moved by `x` into its parent frame (`X m`).
-#[inline]
-fn act_motion(x: &SE3, m: &Vector6<f64>) -> Vector6<f64> {
-    let (l, a) = split(m);
-    let ra = x.rotation * a;
-    join(x.rotation * l + x.translation.cross(&ra), ra)
-}
-
-/// `v × m` (motion cross product, `[ω × m_l + v_l × m_ω; ω × m_ω]`).
-#[inline]
-fn cross_motion(v: &Vector6<f64>, m: &Vector6<f64>) -> Vector6<f64> {
-    let ((vl, va), (ml, ma)) = (split(v), split(m));
-    join(va.cross(&ml) + vl.cross(&ma), va.cross(&ma))
-}
-
-/// `v ×* f` (force cross product, `[ω × f_l; v_l × f_l + ω × f_ω]`).
-#[inline]
-fn cross_force(v: &Vector6<f64>, f: &Vector6<f64>) -> Vector6<f64> {
-    let ((vl, va), (fl, fa)) = (split(v), split(f));
-    join(va.cross(&fl), vl.cross(&fl) + va.cross(&fa))
 }
 
 /// `I x` for a spatial inertia in its compact form (`[m x_l − c' × x_ω; c' × x_l + Ī x_ω]`

@@ -1,7 +1,10 @@
 //! Rigid-body dynamics: inverse dynamics ([`rnea`]), the mass matrix ([`crba`]), forward
 //! dynamics ([`aba`]), gravity and nonlinear effects, a Christoffel-consistent Coriolis
 //! matrix, energies, centre of mass and centroidal momentum, and the analytical
-//! derivatives of inverse and forward dynamics ([`rnea_derivatives`], [`aba_derivatives`]).
+//! derivatives of inverse and forward dynamics ([`rnea_derivatives`], [`aba_derivatives`])
+//! and of a frame's placement, velocity and acceleration
+//! ([`forward_kinematics_derivatives`], [`frame_velocity_derivatives`],
+//! [`frame_acceleration_derivatives`]).
 //!
 //! Every algorithm is a free function `f(&model, &mut data, q, …)` over a
 //! [`Model`](crate::multibody::Model) and its [`Data`](crate::multibody::Data); inputs are
@@ -18,6 +21,8 @@ mod centroidal;
 mod coriolis;
 mod crba;
 mod derivatives;
+mod frame_derivatives;
+mod motion_pass;
 mod rnea;
 mod rnea_batch;
 mod tree_ltdl;
@@ -30,5 +35,9 @@ pub use centroidal::{
 pub use coriolis::coriolis_matrix;
 pub use crba::crba;
 pub use derivatives::{DerivativeData, aba_derivatives, rnea_derivatives};
+pub use frame_derivatives::{
+    FrameDerivativeData, forward_kinematics_derivatives, frame_acceleration_derivatives,
+    frame_motion, frame_velocity_derivatives,
+};
 pub use rnea::{gravity_torque, nonlinear_effects, rnea};
 pub use rnea_batch::{BatchData, BatchIsa, RNEA_LANES, rnea_batch, rnea_batch_isa};

@@ -41,7 +41,7 @@
 //! # Ok::<(), moma::Error>(())
 //! ```
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Dim, Dyn, Matrix, Matrix6xX, Storage, StorageMut};
 
 use crate::error::{Error, Result, ensure_finite, ensure_len};
 use crate::multibody::{JointType, Model};
@@ -492,6 +492,163 @@ impl PinocchioLayout {
         }
     }
 
+    /// moma's derivatives of a frame's velocity (6 × nv each, [`crate::dynamics`]'s
+    /// `frame_velocity_derivatives`), in place, from the ones with respect to Pinocchio's
+    /// tangent `q_P` and velocity `v_P`, at moma's `(q, v)`.
+    ///
+    /// The frame's twist is a function of the state, `V(q, v) = V_P(q_P, T v)` with
+    /// `δq_P = T δq` and `dT/dθ = −T Ŝ` (see [`Self::rnea_derivatives_to_pinocchio`]):
+    ///
+    /// * `∂V/∂v = ∂V_P/∂v_P T`,
+    /// * `∂V/∂q = ∂V_P/∂q_P T − (∂V_P/∂v_P T) Ŝ v e_θᵀ`.
+    ///
+    /// The rows (the frame's twist, in any reference frame) are untouched. Does not
+    /// allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    pub fn frame_velocity_derivatives_from_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        dv_dq: &mut Matrix6xX<f64>,
+        dv_dv: &mut Matrix6xX<f64>,
+    ) {
+        self.frame_velocity_chain(q, v, dv_dq, dv_dv, -1.0);
+    }
+
+    /// The inverse of [`Self::frame_velocity_derivatives_from_pinocchio`]: Pinocchio's
+    /// `getFrameVelocityDerivatives` from moma's, in place. Does not allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    pub fn frame_velocity_derivatives_to_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        dv_dq: &mut Matrix6xX<f64>,
+        dv_dv: &mut Matrix6xX<f64>,
+    ) {
+        self.frame_velocity_chain(q, v, dv_dq, dv_dv, 1.0);
+    }
+
+    fn frame_velocity_chain(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        dq: &mut Matrix6xX<f64>,
+        dv: &mut Matrix6xX<f64>,
+        sign: f64,
+    ) {
+        assert_eq!(v.len(), self.nv, "vector length");
+        assert_eq!(dq.ncols(), self.nv, "matrix columns");
+        assert_eq!(dv.ncols(), self.nv, "matrix columns");
+        if let Some((c, s, iv)) = self.heading(q) {
+            if sign < 0.0 {
+                // from Pinocchio: columns by T, then the heading's column
+                rotate_cols(dq, iv, c, -s);
+                rotate_cols(dv, iv, c, -s);
+            }
+            for r in 0..6 {
+                dq[(r, iv + 2)] += sign * skew_mul(dv, r, iv, v);
+            }
+            if sign > 0.0 {
+                rotate_cols(dq, iv, c, s);
+                rotate_cols(dv, iv, c, s);
+            }
+        }
+    }
+
+    /// moma's derivatives of a frame's twist and acceleration (6 × nv each,
+    /// [`crate::dynamics`]'s `frame_acceleration_derivatives`: ∂V/∂q, ∂A/∂q, ∂A/∂v,
+    /// ∂A/∂a), in place, from the ones with respect to Pinocchio's `q_P`, `v_P`, `a_P`, at
+    /// moma's `(q, v, a)`.
+    ///
+    /// ∂V/∂q as [`Self::frame_velocity_derivatives_from_pinocchio`] (with
+    /// ∂V_P/∂v_P = ∂A_P/∂a_P); with `a_P = T (a − ω Ŝ v)` (module docs):
+    ///
+    /// * `∂A/∂a = ∂A_P/∂a_P T`,
+    /// * `∂A/∂v = ∂A_P/∂v_P T − ∂A/∂a (ω Ŝ + Ŝ v e_ωᵀ)`,
+    /// * `∂A/∂q = ∂A_P/∂q_P T − (∂A_P/∂v_P T) Ŝ v e_θᵀ − ∂A/∂a Ŝ (a − ω Ŝ v) e_θᵀ`.
+    ///
+    /// Does not allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn frame_acceleration_derivatives_from_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        dv_dq: &mut Matrix6xX<f64>,
+        da_dq: &mut Matrix6xX<f64>,
+        da_dv: &mut Matrix6xX<f64>,
+        da_da: &mut Matrix6xX<f64>,
+    ) {
+        self.frame_acceleration_chain(q, v, a, [dv_dq, da_dq, da_dv, da_da], -1.0);
+    }
+
+    /// The inverse of [`Self::frame_acceleration_derivatives_from_pinocchio`]: Pinocchio's
+    /// `getFrameAccelerationDerivatives` from moma's, in place. Does not allocate.
+    ///
+    /// # Panics
+    /// On wrong sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn frame_acceleration_derivatives_to_pinocchio(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        dv_dq: &mut Matrix6xX<f64>,
+        da_dq: &mut Matrix6xX<f64>,
+        da_dv: &mut Matrix6xX<f64>,
+        da_da: &mut Matrix6xX<f64>,
+    ) {
+        self.frame_acceleration_chain(q, v, a, [dv_dq, da_dq, da_dv, da_da], 1.0);
+    }
+
+    fn frame_acceleration_chain(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        [vq, dq, dv, da]: [&mut Matrix6xX<f64>; 4],
+        sign: f64,
+    ) {
+        assert_eq!(v.len(), self.nv, "vector length");
+        assert_eq!(a.len(), self.nv, "vector length");
+        for m in [&*vq, &*dq, &*dv, &*da] {
+            assert_eq!(m.ncols(), self.nv, "matrix columns");
+        }
+        let Some((c, s, iv)) = self.heading(q) else {
+            return;
+        };
+        let w = v[iv + 2];
+        if sign < 0.0 {
+            for m in [&mut *vq, &mut *dq, &mut *dv, &mut *da] {
+                rotate_cols(m, iv, c, -s);
+            }
+        } else {
+            // back to ∂A_P/∂v_P T
+            add_heading_rate_terms(dv, &*da, v, iv, 1.0);
+        }
+        // now dv = ∂A_P/∂v_P T and da = ∂A/∂a = ∂V/∂v, in both directions
+        for r in 0..6 {
+            let sa =
+                skew_mul(&*da, r, iv, a) + w * (da[(r, iv)] * v[iv] + da[(r, iv + 1)] * v[iv + 1]);
+            dq[(r, iv + 2)] += sign * (skew_mul(&*dv, r, iv, v) + sa);
+            vq[(r, iv + 2)] += sign * skew_mul(&*da, r, iv, v);
+        }
+        if sign < 0.0 {
+            add_heading_rate_terms(dv, &*da, v, iv, -1.0);
+        } else {
+            for m in [&mut *vq, &mut *dq, &mut *dv, &mut *da] {
+                rotate_cols(m, iv, c, s);
+            }
+        }
+    }
+
     fn check_derivative_sizes(&self, vectors: &[&[f64]], matrices: &[&DMatrix<f64>]) {
         for x in vectors {
             assert_eq!(x.len(), self.nv, "vector length");
@@ -513,7 +670,12 @@ impl PinocchioLayout {
 
 /// Row `r` of `m Ŝ x`, Ŝ acting on the base's (x, y) coordinates `iv, iv + 1`:
 /// `−m[r, iv] x[iv + 1] + m[r, iv + 1] x[iv]`.
-fn skew_mul(m: &DMatrix<f64>, r: usize, iv: usize, x: &[f64]) -> f64 {
+fn skew_mul<R: Dim, S: Storage<f64, R, Dyn>>(
+    m: &Matrix<f64, R, Dyn, S>,
+    r: usize,
+    iv: usize,
+    x: &[f64],
+) -> f64 {
     -m[(r, iv)] * x[iv + 1] + m[(r, iv + 1)] * x[iv]
 }
 
@@ -530,9 +692,9 @@ fn skew_vec(x: &[f64], r: usize, iv: usize) -> f64 {
 
 /// `dv += sign · m (ω Ŝ + Ŝ v e_ωᵀ)` with ω = v[iv + 2]: the terms of ∂τ/∂v that the
 /// base-frame velocity adds through the acceleration map.
-fn add_heading_rate_terms(
-    dv: &mut DMatrix<f64>,
-    m: &DMatrix<f64>,
+fn add_heading_rate_terms<R: Dim, S: StorageMut<f64, R, Dyn>, T: Storage<f64, R, Dyn>>(
+    dv: &mut Matrix<f64, R, Dyn, S>,
+    m: &Matrix<f64, R, Dyn, T>,
     v: &[f64],
     iv: usize,
     sign: f64,
@@ -556,7 +718,12 @@ fn rotate_rows(m: &mut DMatrix<f64>, iv: usize, c: f64, s: f64) {
 }
 
 /// Columns `iv, iv + 1` of `m` replaced by them times `[c s; −s c]ᵀ`.
-fn rotate_cols(m: &mut DMatrix<f64>, iv: usize, c: f64, s: f64) {
+fn rotate_cols<R: Dim, S: StorageMut<f64, R, Dyn>>(
+    m: &mut Matrix<f64, R, Dyn, S>,
+    iv: usize,
+    c: f64,
+    s: f64,
+) {
     for r in 0..m.nrows() {
         let (a, b) = (m[(r, iv)], m[(r, iv + 1)]);
         m[(r, iv)] = c * a + s * b;
