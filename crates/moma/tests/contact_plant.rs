@@ -467,7 +467,7 @@ fn bad_input_names_the_field() {
     low[2] = 0.07;
     let e = err_text(ContactState::new(&p, &low, &v0));
     assert!(
-        e.contains("wheel 'left_wheel_joint'") && e.contains("below the ground"),
+        e.contains("contact.wheels[0] 'left_wheel_joint'") && e.contains("below the ground"),
         "{e}"
     );
     // A base pitched forward by 0.1 rad about the axle puts the caster in the ground.
@@ -476,7 +476,7 @@ fn bad_input_names_the_field() {
     pitched[4] = s;
     pitched[6] = c;
     let e = err_text(ContactState::new(&p, &pitched, &v0));
-    assert!(e.contains("caster 'caster'"), "{e}");
+    assert!(e.contains("contact.casters[0] 'caster'"), "{e}");
     // Wrong lengths and a non-unit quaternion.
     let e = err_text(ContactState::new(&p, &q0[..11], &v0));
     assert!(e.contains("initial q"), "{e}");

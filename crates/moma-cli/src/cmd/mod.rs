@@ -22,6 +22,7 @@ pub mod render_report;
 pub mod scen;
 pub mod simulate;
 pub mod simulate_common;
+pub mod simulate_contact;
 pub mod simulate_control;
 pub mod simulate_space;
 pub mod simulate_stability;

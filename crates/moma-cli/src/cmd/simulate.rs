@@ -117,6 +117,9 @@ pub fn run(args: Args) -> Result<()> {
     let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
     sc.check_header(&path)?;
+    if sc.plant == moma::sim_config::contact_spec::PlantKind::Contact {
+        return super::simulate_contact::run(&path, &sc, &args);
+    }
     match moma::sim_config::prepare(&sc, &path)? {
         Run::Closed(cl) => super::simulate_control::run(&path, &sc, *cl, &args),
         Run::Space(sr) => super::simulate_space::run(&path, &sc, *sr, &args),

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 /// `joint`, its axle along the joint axis. Frictional (Coulomb, μ of the contact
 /// parameters); it rolls when its contact point does not slip.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct WheelSpec {
     /// Name of the wheel's revolute (continuous) joint.
     pub joint: String,
@@ -21,6 +22,7 @@ pub struct WheelSpec {
 /// modelled), transmits no horizontal force either; this is also the caster of the
 /// reduced (rolling) model, where a caster adds no constraint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CasterSpec {
     /// Name of the frame at the sphere's centre.
     pub frame: String,

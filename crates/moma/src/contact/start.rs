@@ -88,7 +88,7 @@ impl ContactState {
     /// # Errors
     /// [`Error::WrongLength`] / [`Error::NonFinite`] for `initial q` / `initial v`;
     /// [`Error::InvalidInput`] naming the contact below the ground
-    /// (`initial q: wheel 'left_wheel_joint'`), or the parameter of an unstable step.
+    /// (`contact.wheels[0] 'left_wheel_joint'`, `contact.casters[0] 'caster'`), or the parameter of an unstable step.
     pub fn new(plant: &ContactPlant, q0: &[f64], v0: &[f64]) -> Result<Self> {
         let model = &plant.model;
         crate::kinematics::check_state(model, "initial", Some(q0), Some(v0), None, None)?;
@@ -114,12 +114,13 @@ impl ContactState {
         for (k, r) in st.contacts.iter().enumerate() {
             if r.depth > plant.params.start_penetration_tol {
                 let c = &plant.contacts[k];
+                let nw = plant.wheel_dofs().len();
                 return Err(Error::invalid(
-                    format!(
-                        "initial q: {} '{}'",
-                        if c.frictional { "wheel" } else { "caster" },
-                        c.name
-                    ),
+                    if k < nw {
+                        format!("contact.wheels[{k}] '{}'", c.name)
+                    } else {
+                        format!("contact.casters[{}] '{}'", k - nw, c.name)
+                    },
                     format!(
                         "starts {:.6} m below the ground, beyond contact.start_penetration_tol = {} m",
                         r.depth, plant.params.start_penetration_tol

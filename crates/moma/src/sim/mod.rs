@@ -7,6 +7,7 @@
 pub mod chapter_models;
 pub mod closed_loop;
 pub mod computed_torque;
+pub mod contact_run;
 pub mod coordinated;
 pub mod feedback;
 pub mod fixed_base;

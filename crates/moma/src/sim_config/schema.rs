@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::sim::monitor::MonitorLimits;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
+use crate::sim_config::contact_spec::{ContactSpec, PlantKind};
 
 // ---- the whole scenario file -------------------------------------------------------
 
@@ -42,6 +43,13 @@ pub struct Scenario<
     pub gravity: Option<f64>,
     /// The robot.
     pub robot: RobotSpec,
+    /// The plant a wheeled URDF robot runs on: `rolling` (the reduced model, default) or
+    /// `contact` (the contact plant, with the `[contact]` table).
+    #[serde(default)]
+    pub plant: PlantKind,
+    /// The contact plant's parameters and casters (`plant = "contact"`).
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
     /// Initial state.
     #[serde(default)]
     pub initial: InitialState,

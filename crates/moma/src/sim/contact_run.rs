@@ -1,0 +1,441 @@
+//! A wheeled robot run on the contact plant ([`crate::contact`]) instead of the reduced
+//! (rolling) model: the same input profile or the same feedback law, the contact plant
+//! stepped at its own `dt`, and what it did recorded at the recording interval.
+//!
+//! The law keeps its nominal (rolling) model. What it measures is the contact plant's
+//! free-flyer state mapped to the reduced coordinates ([`ReducedMap`]): `x, y` of the base
+//! origin, `θ` its heading (the yaw of the base x axis in the ground plane), the joints as
+//! they are; `v` the base origin's world velocity along the heading, `ω` the world yaw
+//! rate, the arm's joint rates. Its inputs `[τ_L, τ_R, τ_arm…]` go to the same joints of
+//! the contact plant. Under a control period the law's output is held over the period
+//! (zero-order hold); without one it is evaluated at every contact step.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use crate::contact::{ContactPlant, ContactState};
+use crate::error::{Error, Result};
+use crate::mobile::WheeledModel;
+use crate::mobile::wheeled::admissible_velocity_basis;
+use crate::sim::closed_loop::FeedbackLaw;
+use crate::sim::settings::InputProfile;
+
+/// Largest number of contact steps a run accepts (`duration / contact.dt`).
+pub const MAX_CONTACT_STEPS: f64 = 100_000_000.0;
+
+/// Between the reduced coordinates of a [`WheeledModel`] (planar root, tracked wheels)
+/// and the free-flyer coordinates of a [`ContactPlant`] of the same robot.
+#[derive(Clone, Debug)]
+pub struct ReducedMap {
+    /// The nominal (rolling) model.
+    pub robot: WheeledModel,
+    /// Base height above the ground at which the wheels touch it (m): `−ground_z`.
+    pub base_height: f64,
+    basis: DMatrix<f64>,
+    q: DVector<f64>,
+    /// Contact-plant input index of each reduced input.
+    input_index: Vec<usize>,
+}
+
+impl ReducedMap {
+    /// The map for `robot` (tracked wheel joints required) and `plant` (built from the
+    /// same robot description on a free-flyer root).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] if the robot tracks no wheel joints or the two models'
+    /// joints differ.
+    pub fn new(robot: WheeledModel, plant: &ContactPlant) -> Result<Self> {
+        let Some(wheels) = robot.wheel_dofs() else {
+            return Err(Error::invalid(
+                "robot.wheel_joints",
+                "the contact plant drives the wheel joints: name them",
+            ));
+        };
+        let (m, c) = (&robot.model, &plant.model);
+        if m.nv != c.nv - 3 || m.nq != m.nv {
+            return Err(Error::invalid(
+                "robot.urdf",
+                "the rolling and contact models of the robot have different joints",
+            ));
+        }
+        for i in 3..m.nv {
+            let (a, b) = (
+                &m.names[m.joint_of_dof[i].0],
+                &c.names[c.joint_of_dof[i + 3].0],
+            );
+            if a != b {
+                return Err(Error::invalid(
+                    "robot.urdf",
+                    format!("joint order differs between the two models: '{a}' vs '{b}'"),
+                ));
+            }
+        }
+        let mut input_index = vec![wheels[0] - 3, wheels[1] - 3];
+        input_index.extend(robot.arm_dofs().iter().map(|&i| i - 3));
+        Ok(Self {
+            base_height: -robot.ground_z(),
+            basis: DMatrix::zeros(robot.nv(), robot.nr()),
+            q: DVector::zeros(robot.model.nq),
+            robot,
+            input_index,
+        })
+    }
+
+    /// The contact plant's start `(q, v)` for the reduced `(q_r, v_r)`: the base on the
+    /// ground (at [`ReducedMap::base_height`]), level, at `(x, y, θ)`; its twist and the
+    /// joint rates from `q̇ = N_C(q_r) v_r`.
+    #[must_use]
+    pub fn to_contact(&mut self, q_r: &[f64], v_r: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        self.q.copy_from_slice(q_r);
+        admissible_velocity_basis(&self.robot, &self.q, &mut self.basis);
+        let qdot = &self.basis * DVector::from_column_slice(v_r);
+        let (s, c) = q_r[2].sin_cos();
+        let (h, half) = (self.base_height, q_r[2] / 2.0);
+        let mut q = vec![q_r[0], q_r[1], h, 0.0, 0.0, half.sin(), half.cos()];
+        q.extend_from_slice(&q_r[3..]);
+        // Base twist in the base frame: the world velocity turned by −θ.
+        let mut v = vec![
+            c * qdot[0] + s * qdot[1],
+            -s * qdot[0] + c * qdot[1],
+            0.0,
+            0.0,
+            0.0,
+            qdot[2],
+        ];
+        v.extend(qdot.iter().skip(3));
+        (q, v)
+    }
+
+    /// The reduced `(q_r, v_r)` the law measures on the contact plant's `state`
+    /// (module docs). Does not allocate.
+    pub fn to_reduced(&self, state: &ContactState, q_r: &mut [f64], v_r: &mut [f64]) {
+        let rot = state.base_orientation();
+        let yaw = state.yaw();
+        q_r[0] = state.q[0];
+        q_r[1] = state.q[1];
+        q_r[2] = yaw;
+        q_r[3..].copy_from_slice(state.joint_positions());
+        let lin = rot * Vector3::new(state.v[0], state.v[1], state.v[2]);
+        let ang = rot * Vector3::new(state.v[3], state.v[4], state.v[5]);
+        let (s, c) = yaw.sin_cos();
+        v_r[0] = c * lin.x + s * lin.y;
+        v_r[1] = ang.z;
+        for (k, &i) in self.robot.arm_dofs().iter().enumerate() {
+            v_r[2 + k] = state.v[i + 3];
+        }
+    }
+
+    /// Writes the contact plant's inputs `u_c` (one per joint) from the reduced inputs
+    /// `u_r = [τ_L, τ_R, τ_arm…]`.
+    pub fn to_contact_inputs(&self, u_r: &[f64], u_c: &mut [f64]) {
+        u_c.fill(0.0);
+        for (&i, &u) in self.input_index.iter().zip(u_r) {
+            u_c[i] = u;
+        }
+    }
+}
+
+/// What drives the contact plant.
+pub enum ContactDriver {
+    /// Open loop: the reduced inputs `u(t)`, evaluated at every contact step.
+    Profile(InputProfile),
+    /// Closed loop: a feedback law on the measured reduced state.
+    Law {
+        /// The law (on its nominal, rolling model).
+        law: Box<dyn FeedbackLaw>,
+        /// Control period (s) of the zero-order hold; `None`: every contact step.
+        period: Option<f64>,
+    },
+}
+
+/// A run of the contact plant.
+pub struct ContactRun {
+    /// The plant.
+    pub plant: ContactPlant,
+    /// Reduced ↔ contact coordinates (holds the nominal model).
+    pub map: ReducedMap,
+    /// Initial reduced configuration and velocity.
+    pub q0: Vec<f64>,
+    /// Initial reduced velocity.
+    pub v0: Vec<f64>,
+    /// The inputs.
+    pub driver: ContactDriver,
+    /// Duration (s).
+    pub duration: f64,
+    /// Recording interval (s), rounded to a whole number of contact steps.
+    pub record_interval: f64,
+    /// The start state (checked: nothing below the ground, a stable step).
+    pub start: ContactState,
+}
+
+/// The first time something happened to a contact.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ContactEvent {
+    /// Time (s).
+    pub t: f64,
+    /// The contact (wheel joint or caster frame).
+    pub contact: String,
+}
+
+/// Per contact over a run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ContactTotals {
+    /// The contact (wheel joint or caster frame).
+    pub contact: String,
+    /// Smallest and largest normal force (N) after the settling time.
+    pub min_normal: f64,
+    /// Largest normal force (N).
+    pub max_normal: f64,
+    /// Time (s) without normal force after the settling time.
+    pub lifted_time: f64,
+    /// Time (s) sliding (friction at μ N) after the settling time.
+    pub slipping_time: f64,
+    /// Largest slip speed (m/s) while loaded.
+    pub max_slip_speed: f64,
+}
+
+/// Events are counted after this settling time (s), in which the robot, started with
+/// no penetration, sinks onto its compliant contacts.
+pub const SETTLE_TIME: f64 = 0.05;
+
+/// A recorded contact run.
+#[derive(Clone, Debug)]
+pub struct ContactResult {
+    /// Sample times (s).
+    pub times: Vec<f64>,
+    /// Names of the reduced coordinates, velocities, inputs and contacts.
+    pub q_names: Vec<String>,
+    /// Names of the reduced velocities.
+    pub v_names: Vec<String>,
+    /// Names of the reduced inputs.
+    pub u_names: Vec<String>,
+    /// Names of the contacts (wheels, then casters).
+    pub contact_names: Vec<String>,
+    /// Names of the law's tracking-error components (closed loop).
+    pub error_names: Vec<String>,
+    /// Rows of `[q_r, v_r, u_r, z, roll, pitch, wheel speeds (2), per contact: normal,
+    /// slip speed, lifted (0/1), slipping (0/1), tracking errors]`.
+    pub rows: Vec<Vec<f64>>,
+    /// First contact to lose its load after [`SETTLE_TIME`].
+    pub first_lift_off: Option<ContactEvent>,
+    /// First wheel to slide (friction at μ N) after [`SETTLE_TIME`].
+    pub first_slip: Option<ContactEvent>,
+    /// Per-contact totals.
+    pub totals: Vec<ContactTotals>,
+    /// Largest tilt of the base (rad): the angle between its z axis and the vertical.
+    pub max_tilt: f64,
+    /// Contact steps taken.
+    pub steps: usize,
+    /// Evaluations of the law (closed loop) or of the input profile.
+    pub control_evaluations: usize,
+    /// Steps per control evaluation (closed loop with a period), else 1.
+    pub steps_per_control: usize,
+}
+
+impl ContactResult {
+    /// Column names of [`ContactResult::rows`], with units in brackets.
+    #[must_use]
+    pub fn column_names(&self) -> Vec<String> {
+        let mut c: Vec<String> = Vec::new();
+        c.extend(self.q_names.iter().map(|n| n.to_string()));
+        c.extend(self.v_names.iter().map(|n| n.to_string()));
+        c.extend(self.u_names.iter().map(|n| n.to_string()));
+        c.extend(
+            ["z [m]", "roll [rad]", "pitch [rad]"]
+                .iter()
+                .map(|s| (*s).to_string()),
+        );
+        c.push("wheel_speed_left [rad/s]".into());
+        c.push("wheel_speed_right [rad/s]".into());
+        for n in &self.contact_names {
+            c.push(format!("normal_{n} [N]"));
+            c.push(format!("slip_speed_{n} [m/s]"));
+            c.push(format!("lifted_{n}"));
+            c.push(format!("slipping_{n}"));
+        }
+        c.extend(self.error_names.iter().cloned());
+        c
+    }
+}
+
+impl ContactRun {
+    /// Runs to the end; `progress(t)` is called at every recorded sample.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a run longer than [`MAX_CONTACT_STEPS`]; the law's
+    /// error; [`Error::Numerical`] if the plant's accelerations stop being finite.
+    pub fn run(&mut self, progress: &mut dyn FnMut(f64)) -> Result<ContactResult> {
+        let dt = self.plant.params.dt;
+        let nsteps = (self.duration / dt).round();
+        if nsteps > MAX_CONTACT_STEPS {
+            return Err(Error::invalid(
+                "contact.dt",
+                format!(
+                    "duration / contact.dt = {nsteps:e} steps, more than {MAX_CONTACT_STEPS:e}"
+                ),
+            ));
+        }
+        let nsteps = nsteps as usize;
+        let every = ((self.record_interval / dt).round() as usize).max(1);
+        let hold = match &self.driver {
+            ContactDriver::Law {
+                period: Some(p), ..
+            } => ((p / dt).round() as usize).max(1),
+            _ => 1,
+        };
+        let robot = &self.map.robot;
+        let (nq, nr, nu) = (robot.model.nq, robot.nr(), robot.nu());
+        let error_names = match &self.driver {
+            ContactDriver::Law { law, .. } => law.error_names(),
+            ContactDriver::Profile(_) => Vec::new(),
+        };
+        let nc = self.plant.ncontacts();
+        let mut res = ContactResult {
+            times: Vec::new(),
+            q_names: with_units(robot.q_names(), robot, true),
+            v_names: with_units(robot.v_names(), robot, false),
+            u_names: robot
+                .u_names()
+                .into_iter()
+                .enumerate()
+                .map(|(k, n)| {
+                    let lin = k >= 2 && is_prismatic(robot, robot.arm_dofs()[k - 2]);
+                    format!("{n} [{}]", if lin { "N" } else { "N m" })
+                })
+                .collect(),
+            contact_names: (0..nc)
+                .map(|k| self.plant.contact_name(k).to_string())
+                .collect(),
+            error_names,
+            rows: Vec::new(),
+            first_lift_off: None,
+            first_slip: None,
+            totals: (0..nc)
+                .map(|k| ContactTotals {
+                    contact: self.plant.contact_name(k).to_string(),
+                    min_normal: f64::INFINITY,
+                    ..ContactTotals::default()
+                })
+                .collect(),
+            max_tilt: 0.0,
+            steps: 0,
+            control_evaluations: 0,
+            steps_per_control: hold,
+        };
+        let mut st = self.start.clone();
+        let (mut q_r, mut v_r) = (vec![0.0; nq], vec![0.0; nr]);
+        let mut u_r = vec![0.0; nu];
+        let mut u_c = vec![0.0; self.plant.nu()];
+        let mut err = vec![0.0; res.error_names.len()];
+        let nwheels = self.plant.wheel_dofs().len();
+        for k in 0..=nsteps {
+            let t = st.t;
+            self.map.to_reduced(&st, &mut q_r, &mut v_r);
+            if k % hold == 0 {
+                match &mut self.driver {
+                    ContactDriver::Profile(p) => p.eval(t, &mut u_r),
+                    ContactDriver::Law { law, .. } => {
+                        law.control(t, &q_r, &v_r, &mut u_r)?;
+                    }
+                }
+                res.control_evaluations += 1;
+                self.map.to_contact_inputs(&u_r, &mut u_c);
+            }
+            if k > 0 {
+                // The reports of the step just taken.
+                let tilt = (st.base_orientation() * Vector3::z())
+                    .z
+                    .clamp(-1.0, 1.0)
+                    .acos();
+                res.max_tilt = res.max_tilt.max(tilt);
+                if t > SETTLE_TIME {
+                    for (c, r) in st.contacts.iter().enumerate() {
+                        let tot = &mut res.totals[c];
+                        tot.min_normal = tot.min_normal.min(r.normal);
+                        tot.max_normal = tot.max_normal.max(r.normal);
+                        if r.lifted {
+                            tot.lifted_time += dt;
+                            res.first_lift_off.get_or_insert_with(|| ContactEvent {
+                                t,
+                                contact: tot.contact.clone(),
+                            });
+                        } else {
+                            tot.max_slip_speed = tot.max_slip_speed.max(r.slip.norm());
+                        }
+                        if r.slipping {
+                            tot.slipping_time += dt;
+                            res.first_slip.get_or_insert_with(|| ContactEvent {
+                                t,
+                                contact: tot.contact.clone(),
+                            });
+                        }
+                    }
+                }
+            }
+            if k % every == 0 {
+                let mut row = Vec::with_capacity(nq + nr + nu + 5 + 4 * nc + err.len());
+                row.extend_from_slice(&q_r);
+                row.extend_from_slice(&v_r);
+                row.extend_from_slice(&u_r);
+                let (roll, pitch, _) = st.base_orientation().euler_angles();
+                row.extend([st.q[2], roll, pitch]);
+                row.extend(self.plant.wheel_speeds(&st).take(nwheels.min(2)));
+                for r in &st.contacts {
+                    row.extend([
+                        r.normal,
+                        r.slip.norm(),
+                        f64::from(u8::from(r.lifted)),
+                        f64::from(u8::from(r.slipping)),
+                    ]);
+                }
+                if let ContactDriver::Law { law, .. } = &mut self.driver {
+                    law.observe(t, &q_r, &v_r, &mut err)?;
+                    row.extend_from_slice(&err);
+                }
+                res.times.push(t);
+                res.rows.push(row);
+                progress(t);
+            }
+            if k < nsteps {
+                self.plant.step(&mut st, &u_c)?;
+                res.steps += 1;
+            }
+        }
+        for tot in &mut res.totals {
+            if !tot.min_normal.is_finite() {
+                tot.min_normal = 0.0;
+            }
+        }
+        Ok(res)
+    }
+}
+
+fn is_prismatic(robot: &WheeledModel, dof: usize) -> bool {
+    let m = &robot.model;
+    m.joint_types[m.joint_of_dof[dof].0].is_prismatic()
+}
+
+/// `name [unit]` for the reduced coordinates (`q`) or velocities.
+fn with_units(names: Vec<String>, robot: &WheeledModel, q: bool) -> Vec<String> {
+    names
+        .into_iter()
+        .enumerate()
+        .map(|(k, n)| {
+            let unit = if q {
+                match k {
+                    0 | 1 => "m",
+                    2 => "rad",
+                    _ if is_prismatic(robot, k) => "m",
+                    _ => "rad",
+                }
+            } else {
+                match k {
+                    0 => "m/s",
+                    1 => "rad/s",
+                    _ if is_prismatic(robot, robot.arm_dofs()[k - 2]) => "m/s",
+                    _ => "rad/s",
+                }
+            };
+            format!("{n} [{unit}]")
+        })
+        .collect()
+}

@@ -1,0 +1,86 @@
+//! The `plant` choice and the `[contact]` table of a `moma simulate` scenario (schema in
+//! `docs/simulate.md`, the model in `docs/contact.md`).
+
+use serde::Deserialize;
+
+use crate::contact::{CasterSpec, ContactParams};
+use crate::error::{Error, Result};
+
+/// Which plant a wheeled scenario runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlantKind {
+    /// The reduced (rolling) model: planar base, wheels that roll without slipping.
+    #[default]
+    Rolling,
+    /// The contact plant: free-flyer base, wheels and casters in frictional, unilateral
+    /// contact with the ground (`docs/contact.md`).
+    Contact,
+}
+
+/// The `[contact]` table: the contact law's parameters (each optional, defaults of
+/// [`ContactParams`]) and the casters. The drive wheels are the robot's
+/// `wheel_joints`, disks of radius `drive.r_w`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Coulomb friction coefficient μ of the wheels (> 0).
+    #[serde(default)]
+    pub mu: Option<f64>,
+    /// Normal stiffness k (N/m).
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Normal damping c (N·s/m).
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Friction regularisation velocity v_ε (m/s).
+    #[serde(default)]
+    pub slip_velocity: Option<f64>,
+    /// Contact step (s).
+    #[serde(default)]
+    pub dt: Option<f64>,
+    /// Largest penetration allowed at the start (m).
+    #[serde(default)]
+    pub start_penetration_tol: Option<f64>,
+    /// The casters: a sphere of `radius` on the robot description's `frame`.
+    pub casters: Vec<CasterSpec>,
+}
+
+impl ContactSpec {
+    /// The law's parameters: the table's values over the defaults.
+    #[must_use]
+    pub fn params(&self) -> ContactParams {
+        let d = ContactParams::default();
+        ContactParams {
+            stiffness: self.stiffness.unwrap_or(d.stiffness),
+            damping: self.damping.unwrap_or(d.damping),
+            mu: self.mu.unwrap_or(d.mu),
+            slip_velocity: self.slip_velocity.unwrap_or(d.slip_velocity),
+            dt: self.dt.unwrap_or(d.dt),
+            start_penetration_tol: self
+                .start_penetration_tol
+                .unwrap_or(d.start_penetration_tol),
+        }
+    }
+}
+
+/// The check of a run on the rolling plant: `plant` is `rolling` and there is no
+/// `[contact]` table (`has_contact`), which only the contact plant reads.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `plant` or `contact`.
+pub fn check_rolling(plant: PlantKind, has_contact: bool) -> Result<()> {
+    if plant == PlantKind::Contact {
+        return Err(Error::invalid(
+            "plant",
+            "\"contact\" runs through sim_config::contact::prepare_contact (moma simulate does)",
+        ));
+    }
+    if has_contact {
+        return Err(Error::invalid(
+            "contact",
+            "the [contact] table is read only with plant = \"contact\"",
+        ));
+    }
+    Ok(())
+}
