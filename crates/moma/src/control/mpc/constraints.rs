@@ -10,7 +10,7 @@
 //! ```
 //!
 //! with gradient `max(0, λ + ρ c) ∇c` and Gauss–Newton Hessian `ρ ∇c ∇cᵀ` where active;
-//! after each accepted iteration the multipliers move to `max(0, λ + ρ c)`.
+//! after each MPC solve the multipliers move to `max(0, λ + ρ c)`.
 //!
 //! Kinds, per knot (state constraints from knot 1 on, since `x_0` is measured; the
 //! input–state ones at knots 0 … N − 1):
@@ -66,7 +66,7 @@ impl Default for ConstraintSettings {
             clearance: Some(0.03),
             position_margin: 0.02,
             torque_fraction: 1.0,
-            penalty: 100.0,
+            penalty: 1000.0,
             length_scale: 0.02,
             activation_distance: 0.25,
         }

@@ -2,8 +2,8 @@
 //! `x_{k+1} = f_k(x_k, u_k)`, stage costs `ℓ_k(x_k, u_k)`, a terminal cost `ℓ_N(x_N)` and
 //! box bounds on each input. State constraints and input–state constraints are the
 //! problem's own business: the whole-body problem folds them into its costs as
-//! augmented-Lagrangian terms ([`super::constraints`]) and updates the multipliers when
-//! the solver calls [`OptimalControlProblem::update_multipliers`].
+//! augmented-Lagrangian terms ([`super::constraints`]) and updates the multipliers once
+//! per MPC solve, after the solver returns (so the cost is one function within a solve).
 
 use nalgebra::{DMatrix, DVector};
 
@@ -94,8 +94,4 @@ pub trait OptimalControlProblem {
     ) -> Result<f64>;
     /// Lower and upper bounds of `u_k` (`±∞` for a free component).
     fn input_bounds(&self, k: usize) -> (&DVector<f64>, &DVector<f64>);
-    /// Called after every accepted iteration with the new trajectory, whose costs were
-    /// last evaluated by [`OptimalControlProblem::cost`] in stage order; a problem with
-    /// augmented-Lagrangian terms updates its multipliers here. The default does nothing.
-    fn update_multipliers(&mut self) {}
 }

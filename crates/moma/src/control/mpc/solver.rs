@@ -187,6 +187,7 @@ impl Solver {
         let mut stats = SolveStats::default();
         let mut cost = 0.0;
         let mut need_model = true;
+        #[allow(unused_assignments)]
         for it in 0..opts.max_iterations {
             if need_model {
                 cost = 0.0;
@@ -243,7 +244,6 @@ impl Solver {
                 } else {
                     mu * 0.1
                 };
-                problem.update_multipliers();
                 need_model = true;
             } else {
                 mu = (mu * 10.0).max(1e-6);
@@ -251,15 +251,6 @@ impl Solver {
                     break;
                 }
             }
-        }
-        if need_model {
-            // The multipliers moved after the last accepted step: the cost the caller
-            // sees is the one of the returned trajectory under them.
-            cost = 0.0;
-            for k in 0..self.n {
-                cost += problem.cost(k, &traj.xs[k], Some(&traj.us[k]))?;
-            }
-            cost += problem.cost(self.n, &traj.xs[self.n], None)?;
         }
         stats.cost = cost;
         stats.mu = mu;

@@ -202,9 +202,6 @@ impl OptimalControlProblem for MpcProblem {
     fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
         (&self.lo, &self.hi)
     }
-    fn update_multipliers(&mut self) {
-        self.constraints.update(self.settings.constraints.penalty);
-    }
 }
 
 /// The whole-body MPC: problem, solver workspace and the last solution.
@@ -340,6 +337,10 @@ impl WholeBodyMpc {
             let u = (k < n).then(|| &self.solution.us[k]);
             self.problem.knot(k, &self.solution.xs[k], u, None)?;
         }
+        // One multiplier step per solve, at the returned trajectory's values.
+        self.problem
+            .constraints
+            .update(self.problem.settings.constraints.penalty);
         let mut v = Violations::default();
         for row in &self.problem.constraints.violation {
             v = v.max(&Violations::from_array(*row));
