@@ -20,6 +20,7 @@
 
 pub mod coordinated;
 pub mod lyapunov;
+pub mod mpc;
 pub mod osc;
 pub mod pursuit;
 pub mod task;

@@ -13,6 +13,7 @@ pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
 pub mod monitor;
+pub mod mpc_loop;
 pub mod recorder;
 pub mod reduced_system;
 pub mod settings;

@@ -1,0 +1,296 @@
+//! The MPC's constraints and their augmented-Lagrangian terms.
+//!
+//! Every constraint is an inequality `c(x, u) ≤ 0`, scaled to be dimensionless (a torque
+//! by its limit, a speed by its limit, the ZMP margin and the clearance by
+//! [`ConstraintSettings::length_scale`]). Each enters the stage cost as the
+//! Powell–Hestenes–Rockafellar term
+//!
+//! ```text
+//! (1 / 2ρ) (max(0, λ + ρ c)² − λ²)
+//! ```
+//!
+//! with gradient `max(0, λ + ρ c) ∇c` and Gauss–Newton Hessian `ρ ∇c ∇cᵀ` where active;
+//! after each MPC solve the multipliers move to `max(0, λ + ρ c)`.
+//!
+//! Kinds, per knot (state constraints from knot 1 on, since `x_0` is measured; the
+//! input–state ones at knots 0 … N − 1):
+//!
+//! | kind | constraint | derivative |
+//! | --- | --- | --- |
+//! | torque | `|τ_i| ≤ τ_max,i`, every actuator, `τ = (N_Cᵀ S)⁻¹ (Mr v̇_r + cr + Gr)` | `∂τ/∂u` exact with Mr frozen; `∂τ/∂x` left out |
+//! | wheel speed | `|φ̇_L|, |φ̇_R| ≤ φ̇_max` | exact (linear) |
+//! | joint speed | `|q̇_i| ≤ q̇_max,i` | exact |
+//! | joint position | `lower + δ ≤ q_i ≤ upper − δ` | exact |
+//! | ZMP | margin ≥ `zmp_margin` | point-mass linearisation on the critical edge |
+//! | clearance | min distance (self pairs, scene) ≥ `clearance` | closest pair's distance derivative |
+
+use nalgebra::DVector;
+
+use super::problem::StageModel;
+use super::robot::{KnotValues, MpcRobot};
+
+/// The constraint kinds, in report order.
+pub const KINDS: [&str; 6] = [
+    "torque",
+    "wheel_speed",
+    "joint_speed",
+    "joint_position",
+    "zmp",
+    "clearance",
+];
+
+/// Set values and the augmented-Lagrangian penalty.
+#[derive(Clone, Debug)]
+pub struct ConstraintSettings {
+    /// Smallest ZMP margin allowed (m); `None`: no tip-over constraint.
+    pub zmp_margin: Option<f64>,
+    /// Smallest distance to the scene and between enabled link pairs (m); `None`: none.
+    pub clearance: Option<f64>,
+    /// Distance kept from the joint position limits (rad or m).
+    pub position_margin: f64,
+    /// Fraction of the torque limits the MPC may plan with (≤ 1).
+    pub torque_fraction: f64,
+    /// Penalty ρ.
+    pub penalty: f64,
+    /// Length that scales the ZMP and clearance constraints (m).
+    pub length_scale: f64,
+    /// Self pairs farther apart than this at the start of a solve are not checked in
+    /// that solve (m; `∞`: every enabled pair).
+    pub activation_distance: f64,
+}
+
+impl Default for ConstraintSettings {
+    fn default() -> Self {
+        Self {
+            zmp_margin: Some(0.05),
+            clearance: Some(0.03),
+            position_margin: 0.02,
+            torque_fraction: 1.0,
+            penalty: 1000.0,
+            length_scale: 0.02,
+            activation_distance: 0.25,
+        }
+    }
+}
+
+/// Rows per knot for `robot`.
+#[must_use]
+pub fn rows(robot: &MpcRobot) -> usize {
+    2 * robot.torque_limit.len() + 4 + 4 * robot.n_moved() + 2
+}
+
+/// Multipliers and the last evaluated values (scaled) of every row of every knot.
+#[derive(Clone, Debug)]
+pub struct ConstraintSet {
+    /// `lambda[k][row]`.
+    pub lambda: Vec<DVector<f64>>,
+    /// `value[k][row]`: the scaled `c` of the last evaluation (`−∞`: not applied).
+    pub value: Vec<DVector<f64>>,
+    /// Physical violation per kind (`max(0, ·)` in SI units) per knot: `[k][kind]`.
+    pub violation: Vec<[f64; 6]>,
+    gx: DVector<f64>,
+    gu: DVector<f64>,
+}
+
+impl ConstraintSet {
+    /// Zero multipliers for `n + 1` knots.
+    #[must_use]
+    pub fn new(robot: &MpcRobot, n: usize) -> Self {
+        let m = rows(robot);
+        Self {
+            lambda: vec![DVector::zeros(m); n + 1],
+            value: vec![DVector::from_element(m, f64::NEG_INFINITY); n + 1],
+            violation: vec![[0.0; 6]; n + 1],
+            gx: DVector::zeros(robot.nx()),
+            gu: DVector::zeros(robot.nu()),
+        }
+    }
+
+    /// Moves every multiplier to `max(0, λ + ρ c)`.
+    pub fn update(&mut self, penalty: f64) {
+        for (l, c) in self.lambda.iter_mut().zip(&self.value) {
+            for (li, &ci) in l.iter_mut().zip(c.iter()) {
+                if ci.is_finite() {
+                    *li = (*li + penalty * ci).max(0.0);
+                }
+            }
+        }
+    }
+
+    /// The augmented-Lagrangian cost of knot `k` at `(x, u)` (terminal: `u = None`)
+    /// from the knot's values; records the rows' values and violations, and with `out`
+    /// adds the gradient and Hessian.
+    #[allow(clippy::too_many_arguments)]
+    pub fn knot_terms(
+        &mut self,
+        robot: &MpcRobot,
+        s: &ConstraintSettings,
+        k: usize,
+        x: &DVector<f64>,
+        u: Option<&DVector<f64>>,
+        vals: &KnotValues,
+        mut out: Option<&mut StageModel>,
+    ) -> f64 {
+        let n = robot.n_moved();
+        let rho = s.penalty;
+        let state_rows = k > 0;
+        let input_rows = u.is_some();
+        let mut cost = 0.0;
+        let mut row = 0;
+        let viol = &mut self.violation[k];
+        *viol = [0.0; 6];
+        let (lambda, value, gx, gu) = (
+            &self.lambda[k],
+            &mut self.value[k],
+            &mut self.gx,
+            &mut self.gu,
+        );
+        // One row: scaled value c, physical violation, kind, and a closure writing ∇c.
+        let mut apply = |c: f64,
+                         phys: f64,
+                         kind: usize,
+                         grad: &mut dyn FnMut(&mut DVector<f64>, &mut DVector<f64>),
+                         out: &mut Option<&mut StageModel>| {
+            let l = lambda[row];
+            value[row] = c;
+            row += 1;
+            if !c.is_finite() {
+                return;
+            }
+            viol[kind] = viol[kind].max(phys.max(0.0));
+            let a = l + rho * c;
+            if a > 0.0 {
+                cost += (a * a - l * l) / (2.0 * rho);
+                if let Some(o) = out.as_deref_mut() {
+                    gx.fill(0.0);
+                    gu.fill(0.0);
+                    grad(gx, gu);
+                    o.lx.axpy(a, gx, 1.0);
+                    o.lu.axpy(a, gu, 1.0);
+                    o.lxx.ger(rho, gx, gx, 1.0);
+                    o.luu.ger(rho, gu, gu, 1.0);
+                    o.lux.ger(rho, gu, gx, 1.0);
+                }
+            } else {
+                cost -= l * l / (2.0 * rho);
+            }
+        };
+        let off = f64::NEG_INFINITY;
+        // Torques.
+        for i in 0..robot.torque_limit.len() {
+            let lim = s.torque_fraction * robot.torque_limit[i];
+            let tau = vals.torque[i];
+            for sign in [1.0, -1.0] {
+                let (c, phys) = if input_rows {
+                    ((sign * tau - lim) / lim, sign * tau - robot.torque_limit[i])
+                } else {
+                    (off, 0.0)
+                };
+                apply(
+                    c,
+                    phys,
+                    0,
+                    &mut |_, gu| {
+                        for j in 0..gu.len() {
+                            gu[j] = sign * vals.torque_du[(i, j)] / lim;
+                        }
+                    },
+                    &mut out,
+                );
+            }
+        }
+        // Wheel rates.
+        let wl = robot.wheel_rate_limit;
+        for side in 0..2 {
+            let (a, b) = (robot.wheel_map[(side, 0)], robot.wheel_map[(side, 1)]);
+            let rate = a * x[3 + n] + b * x[4 + n];
+            for sign in [1.0, -1.0] {
+                let (c, phys) = if state_rows {
+                    ((sign * rate - wl) / wl, sign * rate - wl)
+                } else {
+                    (off, 0.0)
+                };
+                apply(
+                    c,
+                    phys,
+                    1,
+                    &mut |gx, _| {
+                        gx[3 + n] = sign * a / wl;
+                        gx[4 + n] = sign * b / wl;
+                    },
+                    &mut out,
+                );
+            }
+        }
+        // Joint speeds and positions.
+        for i in 0..n {
+            let vmax = robot.speed_limit[i];
+            let qd = x[5 + n + i];
+            for sign in [1.0, -1.0] {
+                let (c, phys) = if state_rows {
+                    ((sign * qd - vmax) / vmax, sign * qd - vmax)
+                } else {
+                    (off, 0.0)
+                };
+                apply(
+                    c,
+                    phys,
+                    2,
+                    &mut |gx, _| gx[5 + n + i] = sign / vmax,
+                    &mut out,
+                );
+            }
+        }
+        for i in 0..n {
+            let q = x[3 + i];
+            let hi = robot.upper[i] - s.position_margin;
+            let lo = robot.lower[i] + s.position_margin;
+            let (c_hi, p_hi) = if state_rows && hi.is_finite() {
+                (q - hi, q - robot.upper[i])
+            } else {
+                (off, 0.0)
+            };
+            apply(c_hi, p_hi, 3, &mut |gx, _| gx[3 + i] = 1.0, &mut out);
+            let (c_lo, p_lo) = if state_rows && lo.is_finite() {
+                (lo - q, robot.lower[i] - q)
+            } else {
+                (off, 0.0)
+            };
+            apply(c_lo, p_lo, 3, &mut |gx, _| gx[3 + i] = -1.0, &mut out);
+        }
+        // ZMP margin (lift-off counts as a margin of −1 m).
+        let ls = s.length_scale;
+        let (c, phys) = match (s.zmp_margin, input_rows) {
+            (Some(m), true) => {
+                let margin = vals.zmp_margin.unwrap_or(-1.0);
+                ((m - margin) / ls, m - margin)
+            }
+            _ => (off, 0.0),
+        };
+        apply(
+            c,
+            phys,
+            4,
+            &mut |gx, gu| {
+                gx.axpy(-1.0 / ls, &vals.zmp_dx, 0.0);
+                gu.axpy(-1.0 / ls, &vals.zmp_du, 0.0);
+            },
+            &mut out,
+        );
+        // Clearance.
+        let (c, phys) = match s.clearance {
+            Some(d) if state_rows && vals.distance.is_finite() => {
+                ((d - vals.distance) / ls, d - vals.distance)
+            }
+            _ => (off, 0.0),
+        };
+        apply(
+            c,
+            phys,
+            5,
+            &mut |gx, _| gx.axpy(-1.0 / ls, &vals.distance_dx, 0.0),
+            &mut out,
+        );
+        cost
+    }
+}

@@ -1,0 +1,97 @@
+//! The discrete optimal-control problem the solver works on: `N` stages of dynamics
+//! `x_{k+1} = f_k(x_k, u_k)`, stage costs `ℓ_k(x_k, u_k)`, a terminal cost `ℓ_N(x_N)` and
+//! box bounds on each input. State constraints and input–state constraints are the
+//! problem's own business: the whole-body problem folds them into its costs as
+//! augmented-Lagrangian terms ([`super::constraints`]) and updates the multipliers once
+//! per MPC solve, after the solver returns (so the cost is one function within a solve).
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::Result;
+
+/// The first- and second-order model of one stage at a point `(x, u)`: the dynamics'
+/// Jacobians and the cost's gradient and Gauss–Newton Hessian. At the terminal stage only
+/// `lx` and `lxx` are read.
+#[derive(Clone, Debug)]
+pub struct StageModel {
+    /// ∂f/∂x (nx × nx).
+    pub a: DMatrix<f64>,
+    /// ∂f/∂u (nx × nu).
+    pub b: DMatrix<f64>,
+    /// ∂ℓ/∂x (nx).
+    pub lx: DVector<f64>,
+    /// ∂ℓ/∂u (nu).
+    pub lu: DVector<f64>,
+    /// ∂²ℓ/∂x² (nx × nx), symmetric positive semidefinite.
+    pub lxx: DMatrix<f64>,
+    /// ∂²ℓ/∂u² (nu × nu), symmetric positive semidefinite.
+    pub luu: DMatrix<f64>,
+    /// ∂²ℓ/∂u∂x (nu × nx).
+    pub lux: DMatrix<f64>,
+}
+
+impl StageModel {
+    /// Zeroed buffers for `nx` states and `nu` inputs.
+    #[must_use]
+    pub fn new(nx: usize, nu: usize) -> Self {
+        Self {
+            a: DMatrix::zeros(nx, nx),
+            b: DMatrix::zeros(nx, nu),
+            lx: DVector::zeros(nx),
+            lu: DVector::zeros(nu),
+            lxx: DMatrix::zeros(nx, nx),
+            luu: DMatrix::zeros(nu, nu),
+            lux: DMatrix::zeros(nu, nx),
+        }
+    }
+
+    /// Sets every cost term to zero (the dynamics' Jacobians are overwritten by the
+    /// problem anyway).
+    pub fn clear_cost(&mut self) {
+        self.lx.fill(0.0);
+        self.lu.fill(0.0);
+        self.lxx.fill(0.0);
+        self.luu.fill(0.0);
+        self.lux.fill(0.0);
+    }
+}
+
+/// A finite-horizon discrete optimal-control problem with box-bounded inputs.
+pub trait OptimalControlProblem {
+    /// State dimension.
+    fn nx(&self) -> usize;
+    /// Input dimension.
+    fn nu(&self) -> usize;
+    /// Number of stages N (inputs `u_0 … u_{N−1}`, states `x_0 … x_N`).
+    fn horizon(&self) -> usize;
+    /// Writes `x_{k+1} = f_k(x, u)` into `next`.
+    ///
+    /// # Errors
+    /// Whatever the model reports (a singular mass matrix, say).
+    fn dynamics(
+        &mut self,
+        k: usize,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        next: &mut DVector<f64>,
+    ) -> Result<()>;
+    /// The stage cost `ℓ_k(x, u)`, or the terminal cost `ℓ_N(x)` when `u` is `None`.
+    ///
+    /// # Errors
+    /// As [`OptimalControlProblem::dynamics`].
+    fn cost(&mut self, k: usize, x: &DVector<f64>, u: Option<&DVector<f64>>) -> Result<f64>;
+    /// Fills `out` with the stage model at `(x, u)` (terminal: `u` is `None`, only the
+    /// cost terms) and returns the cost there.
+    ///
+    /// # Errors
+    /// As [`OptimalControlProblem::dynamics`].
+    fn approximate(
+        &mut self,
+        k: usize,
+        x: &DVector<f64>,
+        u: Option<&DVector<f64>>,
+        out: &mut StageModel,
+    ) -> Result<f64>;
+    /// Lower and upper bounds of `u_k` (`±∞` for a free component).
+    fn input_bounds(&self, k: usize) -> (&DVector<f64>, &DVector<f64>);
+}

@@ -1,0 +1,83 @@
+//! What one MPC solve reports: its wall time, iterations, cost, and the largest
+//! constraint violation of each kind over the planned horizon (physical units).
+
+use std::time::Duration;
+
+use super::constraints::KINDS;
+
+/// Largest violation of each constraint kind over the horizon (0 when satisfied).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Violations {
+    /// Torque beyond its limit (N·m or N).
+    pub torque: f64,
+    /// Wheel rate beyond its limit (rad/s).
+    pub wheel_speed: f64,
+    /// Joint speed beyond its limit (rad/s or m/s).
+    pub joint_speed: f64,
+    /// Joint position beyond its limit (rad or m).
+    pub joint_position: f64,
+    /// ZMP margin below the set value (m).
+    pub zmp: f64,
+    /// Clearance below the set value (m).
+    pub clearance: f64,
+}
+
+impl Violations {
+    /// From per-kind values in [`KINDS`] order.
+    #[must_use]
+    pub fn from_array(a: [f64; 6]) -> Self {
+        Self {
+            torque: a[0],
+            wheel_speed: a[1],
+            joint_speed: a[2],
+            joint_position: a[3],
+            zmp: a[4],
+            clearance: a[5],
+        }
+    }
+
+    /// `(kind, value)` pairs in [`KINDS`] order.
+    #[must_use]
+    pub fn pairs(&self) -> [(&'static str, f64); 6] {
+        [
+            (KINDS[0], self.torque),
+            (KINDS[1], self.wheel_speed),
+            (KINDS[2], self.joint_speed),
+            (KINDS[3], self.joint_position),
+            (KINDS[4], self.zmp),
+            (KINDS[5], self.clearance),
+        ]
+    }
+
+    /// The larger of `self` and `other`, kind by kind.
+    #[must_use]
+    pub fn max(&self, other: &Self) -> Self {
+        Self {
+            torque: self.torque.max(other.torque),
+            wheel_speed: self.wheel_speed.max(other.wheel_speed),
+            joint_speed: self.joint_speed.max(other.joint_speed),
+            joint_position: self.joint_position.max(other.joint_position),
+            zmp: self.zmp.max(other.zmp),
+            clearance: self.clearance.max(other.clearance),
+        }
+    }
+}
+
+/// One solve.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveReport {
+    /// Wall-clock time of the solve.
+    pub time: Duration,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Total cost (including the augmented-Lagrangian terms).
+    pub cost: f64,
+    /// Whether the solver met its tolerance within its iteration budget.
+    pub converged: bool,
+    /// Largest violation per kind over the planned trajectory.
+    pub violations: Violations,
+    /// Smallest ZMP margin over the planned trajectory (m).
+    pub min_zmp_margin: f64,
+    /// Smallest clearance over the planned trajectory (m).
+    pub min_clearance: f64,
+}

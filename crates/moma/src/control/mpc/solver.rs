@@ -1,0 +1,377 @@
+//! Box-constrained iterative LQR (DDP with the dynamics' second derivatives left out):
+//! a Riccati backward pass over the stage models, each stage's input step the solution
+//! of a box QP ([`super::box_qp`]), and a forward pass that rolls the nonlinear dynamics
+//! out under the affine policy `u = ū + α k + K (x − x̄)` with a backtracking line search
+//! on the total cost. Levenberg–Marquardt regularisation `μ I` on `Q_uu` grows when a
+//! stage's free block is not positive definite or no step decreases the cost.
+//!
+//! With linear dynamics, quadratic costs and inactive bounds the first iteration is the
+//! exact finite-horizon LQR solution (the backward pass is the discrete Riccati
+//! recursion), which the tests check against an independent Riccati iteration.
+//!
+//! Every buffer is allocated in [`Solver::new`]; [`Solver::solve`] does not allocate.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::box_qp::BoxQp;
+use super::problem::{OptimalControlProblem, StageModel};
+use crate::error::{Error, Result};
+
+/// Settings of [`Solver::solve`].
+#[derive(Clone, Debug)]
+pub struct SolverOptions {
+    /// Iterations at most (each one backward pass and one line search).
+    pub max_iterations: usize,
+    /// Stop when the decrease the quadratic model predicts for a full step is below this.
+    pub tolerance: f64,
+    /// Initial regularisation μ.
+    pub mu_init: f64,
+    /// Regularisation below which μ is set to zero.
+    pub mu_min: f64,
+    /// Regularisation above which the solve gives up improving.
+    pub mu_max: f64,
+    /// Step lengths tried by the line search, largest first.
+    pub line_search: Vec<f64>,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 50,
+            tolerance: 1e-9,
+            mu_init: 0.0,
+            mu_min: 1e-9,
+            mu_max: 1e10,
+            line_search: vec![1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125],
+        }
+    }
+}
+
+/// State and input trajectory: `xs[0..=N]`, `us[0..N]`.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// States x_0 … x_N.
+    pub xs: Vec<DVector<f64>>,
+    /// Inputs u_0 … u_{N−1}.
+    pub us: Vec<DVector<f64>>,
+}
+
+impl Trajectory {
+    /// Zero states and inputs for `n` stages.
+    #[must_use]
+    pub fn zeros(nx: usize, nu: usize, n: usize) -> Self {
+        Self {
+            xs: vec![DVector::zeros(nx); n + 1],
+            us: vec![DVector::zeros(nu); n],
+        }
+    }
+}
+
+/// What one solve did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveStats {
+    /// Iterations run (backward passes with a line search).
+    pub iterations: usize,
+    /// Total cost of the returned trajectory.
+    pub cost: f64,
+    /// Whether the predicted decrease fell below the tolerance.
+    pub converged: bool,
+    /// Regularisation at the end.
+    pub mu: f64,
+}
+
+/// The iLQR workspace.
+#[derive(Clone, Debug)]
+pub struct Solver {
+    nx: usize,
+    nu: usize,
+    n: usize,
+    /// Stage models of the current trajectory (N + 1, the last terminal).
+    stages: Vec<StageModel>,
+    /// Feed-forward steps k_k.
+    pub feedforward: Vec<DVector<f64>>,
+    /// Feedback gains K_k (nu × nx).
+    pub gains: Vec<DMatrix<f64>>,
+    trial: Trajectory,
+    vx: DVector<f64>,
+    vxx: DMatrix<f64>,
+    qx: DVector<f64>,
+    qu: DVector<f64>,
+    qxx: DMatrix<f64>,
+    quu: DMatrix<f64>,
+    qux: DMatrix<f64>,
+    vxx_a: DMatrix<f64>,
+    vxx_b: DMatrix<f64>,
+    lo: DVector<f64>,
+    hi: DVector<f64>,
+    qp: BoxQp,
+    col: DVector<f64>,
+    tmp_x: DVector<f64>,
+    tmp_u: DVector<f64>,
+    tmp_ux: DMatrix<f64>,
+    tmp_xx: DMatrix<f64>,
+}
+
+impl Solver {
+    /// A workspace for `nx` states, `nu` inputs and `n` stages.
+    #[must_use]
+    pub fn new(nx: usize, nu: usize, n: usize) -> Self {
+        Self {
+            nx,
+            nu,
+            n,
+            stages: vec![StageModel::new(nx, nu); n + 1],
+            feedforward: vec![DVector::zeros(nu); n],
+            gains: vec![DMatrix::zeros(nu, nx); n],
+            trial: Trajectory::zeros(nx, nu, n),
+            vx: DVector::zeros(nx),
+            vxx: DMatrix::zeros(nx, nx),
+            qx: DVector::zeros(nx),
+            qu: DVector::zeros(nu),
+            qxx: DMatrix::zeros(nx, nx),
+            quu: DMatrix::zeros(nu, nu),
+            qux: DMatrix::zeros(nu, nx),
+            vxx_a: DMatrix::zeros(nx, nx),
+            vxx_b: DMatrix::zeros(nx, nu),
+            lo: DVector::zeros(nu),
+            hi: DVector::zeros(nu),
+            qp: BoxQp::new(nu),
+            col: DVector::zeros(nu),
+            tmp_x: DVector::zeros(nx),
+            tmp_u: DVector::zeros(nu),
+            tmp_ux: DMatrix::zeros(nu, nx),
+            tmp_xx: DMatrix::zeros(nx, nx),
+        }
+    }
+
+    /// Improves `traj` (its inputs are the initial guess; its states are overwritten by
+    /// the rollout from `x0`) for at most `opts.max_iterations` iterations.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] on dimensions that do not match the workspace; whatever the
+    /// problem reports.
+    pub fn solve<P: OptimalControlProblem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        x0: &DVector<f64>,
+        traj: &mut Trajectory,
+        opts: &SolverOptions,
+    ) -> Result<SolveStats> {
+        if problem.nx() != self.nx || problem.nu() != self.nu || problem.horizon() != self.n {
+            return Err(Error::invalid(
+                "solver",
+                format!(
+                    "workspace is for nx = {}, nu = {}, N = {}; the problem has {}, {}, {}",
+                    self.nx,
+                    self.nu,
+                    self.n,
+                    problem.nx(),
+                    problem.nu(),
+                    problem.horizon()
+                ),
+            ));
+        }
+        // Project the guess onto the bounds and roll it out.
+        for k in 0..self.n {
+            let (lo, hi) = problem.input_bounds(k);
+            for i in 0..self.nu {
+                traj.us[k][i] = traj.us[k][i].clamp(lo[i], hi[i]);
+            }
+        }
+        traj.xs[0].copy_from(x0);
+        for k in 0..self.n {
+            let (xs, rest) = traj.xs.split_at_mut(k + 1);
+            problem.dynamics(k, &xs[k], &traj.us[k], &mut rest[0])?;
+        }
+        let mut mu = opts.mu_init;
+        let mut stats = SolveStats::default();
+        let mut cost = 0.0;
+        let mut need_model = true;
+        #[allow(unused_assignments)]
+        for it in 0..opts.max_iterations {
+            if need_model {
+                cost = 0.0;
+                for k in 0..self.n {
+                    cost += problem.approximate(
+                        k,
+                        &traj.xs[k],
+                        Some(&traj.us[k]),
+                        &mut self.stages[k],
+                    )?;
+                }
+                cost += problem.approximate(
+                    self.n,
+                    &traj.xs[self.n],
+                    None,
+                    &mut self.stages[self.n],
+                )?;
+                need_model = false;
+            }
+            stats.iterations = it + 1;
+            // Backward pass, raising μ until every stage's QP is convex.
+            let (d1, d2) = loop {
+                if let Some(d) = self.backward(problem, traj, mu) {
+                    break d;
+                }
+                mu = (mu * 10.0).max(1e-6);
+                if mu > opts.mu_max {
+                    stats.cost = cost;
+                    stats.mu = mu;
+                    return Ok(stats);
+                }
+            };
+            if -(d1 + 0.5 * d2) < opts.tolerance {
+                stats.converged = true;
+                break;
+            }
+            let mut accepted = false;
+            for &alpha in &opts.line_search {
+                let new_cost = self.forward(problem, traj, alpha)?;
+                let expected = -(alpha * d1 + 0.5 * alpha * alpha * d2);
+                if new_cost.is_finite()
+                    && cost - new_cost >= 1e-4 * expected.max(0.0)
+                    && new_cost < cost
+                {
+                    std::mem::swap(traj, &mut self.trial);
+                    cost = new_cost;
+                    accepted = true;
+                    break;
+                }
+            }
+            if accepted {
+                mu = if mu * 0.1 < opts.mu_min {
+                    0.0
+                } else {
+                    mu * 0.1
+                };
+                need_model = true;
+            } else {
+                mu = (mu * 10.0).max(1e-6);
+                if mu > opts.mu_max {
+                    break;
+                }
+            }
+        }
+        stats.cost = cost;
+        stats.mu = mu;
+        Ok(stats)
+    }
+
+    /// The Riccati backward pass with regularisation `mu`; returns the expected-decrease
+    /// coefficients `(Σ kᵀQu, Σ kᵀQuu k)`, or `None` when a stage QP is not convex.
+    fn backward<P: OptimalControlProblem + ?Sized>(
+        &mut self,
+        problem: &P,
+        traj: &Trajectory,
+        mu: f64,
+    ) -> Option<(f64, f64)> {
+        let term = &self.stages[self.n];
+        self.vx.copy_from(&term.lx);
+        self.vxx.copy_from(&term.lxx);
+        let (mut d1, mut d2) = (0.0, 0.0);
+        for k in (0..self.n).rev() {
+            let s = &self.stages[k];
+            // Qx = lx + Aᵀ Vx, Qu = lu + Bᵀ Vx.
+            self.qx.copy_from(&s.lx);
+            self.qx.gemv_tr(1.0, &s.a, &self.vx, 1.0);
+            self.qu.copy_from(&s.lu);
+            self.qu.gemv_tr(1.0, &s.b, &self.vx, 1.0);
+            // Vxx A and Vxx B.
+            self.vxx.mul_to(&s.a, &mut self.vxx_a);
+            self.vxx.mul_to(&s.b, &mut self.vxx_b);
+            self.qxx.copy_from(&s.lxx);
+            self.qxx.gemm_tr(1.0, &s.a, &self.vxx_a, 1.0);
+            self.quu.copy_from(&s.luu);
+            self.quu.gemm_tr(1.0, &s.b, &self.vxx_b, 1.0);
+            self.qux.copy_from(&s.lux);
+            self.qux.gemm_tr(1.0, &s.b, &self.vxx_a, 1.0);
+            for i in 0..self.nu {
+                self.quu[(i, i)] += mu;
+            }
+            // Step bounds: the input bounds less the current input.
+            let (lo, hi) = problem.input_bounds(k);
+            let u = &traj.us[k];
+            for i in 0..self.nu {
+                self.lo[i] = lo[i] - u[i];
+                self.hi[i] = hi[i] - u[i];
+            }
+            // Warm start the QP from the previous feed-forward step.
+            self.tmp_u.copy_from(&self.feedforward[k]);
+            if !self
+                .qp
+                .solve(&self.quu, &self.qu, &self.lo, &self.hi, &self.tmp_u)
+            {
+                return None;
+            }
+            self.feedforward[k].copy_from(&self.qp.x);
+            // K = −Quu_ff⁻¹ Qux on the free rows, 0 on the clamped ones.
+            let gains = &mut self.gains[k];
+            for j in 0..self.nx {
+                for i in 0..self.nu {
+                    self.col[i] = if self.qp.clamped[i] {
+                        0.0
+                    } else {
+                        -self.qux[(i, j)]
+                    };
+                }
+                crate::linalg::cholesky_solve(&self.qp.factor, &mut self.col);
+                for i in 0..self.nu {
+                    gains[(i, j)] = if self.qp.clamped[i] { 0.0 } else { self.col[i] };
+                }
+            }
+            let kff = &self.feedforward[k];
+            // Expected decrease terms.
+            self.quu.mul_to(kff, &mut self.tmp_u);
+            d1 += kff.dot(&self.qu);
+            d2 += kff.dot(&self.tmp_u);
+            // Vx = Qx + Kᵀ Quu k + Kᵀ Qu + Quxᵀ k.
+            self.vx.copy_from(&self.qx);
+            self.vx.gemv_tr(1.0, gains, &self.tmp_u, 1.0);
+            self.vx.gemv_tr(1.0, gains, &self.qu, 1.0);
+            self.vx.gemv_tr(1.0, &self.qux, kff, 1.0);
+            // Vxx = Qxx + Kᵀ Quu K + Kᵀ Qux + Quxᵀ K.
+            self.quu.mul_to(gains, &mut self.tmp_ux);
+            self.vxx.copy_from(&self.qxx);
+            self.vxx.gemm_tr(1.0, gains, &self.tmp_ux, 1.0);
+            self.vxx.gemm_tr(1.0, gains, &self.qux, 1.0);
+            self.vxx.gemm_tr(1.0, &self.qux, gains, 1.0);
+            // Symmetrise against rounding.
+            self.tmp_xx.copy_from(&self.vxx);
+            for i in 0..self.nx {
+                for j in 0..self.nx {
+                    self.vxx[(i, j)] = 0.5 * (self.tmp_xx[(i, j)] + self.tmp_xx[(j, i)]);
+                }
+            }
+        }
+        Some((d1, d2))
+    }
+
+    /// Rolls out the policy with step `alpha` into `self.trial`; returns its cost.
+    fn forward<P: OptimalControlProblem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        traj: &Trajectory,
+        alpha: f64,
+    ) -> Result<f64> {
+        self.trial.xs[0].copy_from(&traj.xs[0]);
+        let mut cost = 0.0;
+        for k in 0..self.n {
+            // u = ū + α k + K (x − x̄), clamped to the bounds.
+            self.tmp_x.copy_from(&self.trial.xs[k]);
+            self.tmp_x -= &traj.xs[k];
+            let u = &mut self.trial.us[k];
+            u.copy_from(&traj.us[k]);
+            u.axpy(alpha, &self.feedforward[k], 1.0);
+            u.gemv(1.0, &self.gains[k], &self.tmp_x, 1.0);
+            let (lo, hi) = problem.input_bounds(k);
+            for i in 0..self.nu {
+                u[i] = u[i].clamp(lo[i], hi[i]);
+            }
+            cost += problem.cost(k, &self.trial.xs[k], Some(&self.trial.us[k]))?;
+            let (xs, rest) = self.trial.xs.split_at_mut(k + 1);
+            problem.dynamics(k, &xs[k], &self.trial.us[k], &mut rest[0])?;
+        }
+        cost += problem.cost(self.n, &self.trial.xs[self.n], None)?;
+        Ok(cost)
+    }
+}

@@ -1,0 +1,399 @@
+//! The whole-body MPC: the receding-horizon problem on [`MpcRobot`] (dynamics, costs,
+//! constraints), solved by [`Solver`] from the previous solution shifted one stage.
+//!
+//! Transition (semi-implicit Euler, step `dt`, exact Jacobians):
+//!
+//! ```text
+//! ν⁺ = ν + dt u,   [x y θ]⁺ = [x y θ] + dt N_b(θ) [v ω]⁺,   q_c⁺ = q_c + dt q̇_c⁺
+//! ```
+//!
+//! with `ν = [v, ω, q̇_c]` and `N_b(θ)` the platform block of the admissible-velocity
+//! basis. The dynamics proper enter through the torque constraints: the torques that
+//! realise `u` are the reduced model's inverse dynamics.
+
+use std::time::Instant;
+
+use nalgebra::DVector;
+
+use super::constraints::{ConstraintSet, ConstraintSettings};
+use super::costs::{CostWeights, KnotReference, knot_cost};
+use super::problem::{OptimalControlProblem, StageModel};
+use super::report::{SolveReport, Violations};
+use super::robot::{KnotWorkspace, MpcRobot, evaluate_knot, select_pairs};
+use super::solver::{SolveStats, Solver, SolverOptions, Trajectory};
+use super::warm_start::shift_solution;
+use crate::error::{Error, Result};
+
+/// Horizon, bounds, weights, constraints and solver settings.
+#[derive(Clone, Debug)]
+pub struct MpcSettings {
+    /// Stages N.
+    pub stages: usize,
+    /// Stage length (s); the horizon is `stages · dt`.
+    pub dt: f64,
+    /// Bound on `|v̇|` (m/s²).
+    pub max_linear_acceleration: f64,
+    /// Bound on `|ω̇|` (rad/s²).
+    pub max_angular_acceleration: f64,
+    /// Bound on each moved joint's `|q̈|`.
+    pub max_joint_acceleration: f64,
+    /// Cost weights.
+    pub weights: CostWeights,
+    /// Constraint set values and penalty.
+    pub constraints: ConstraintSettings,
+    /// Solver settings (its iteration budget is the per-solve budget).
+    pub solver: SolverOptions,
+}
+
+impl Default for MpcSettings {
+    fn default() -> Self {
+        Self {
+            stages: 20,
+            dt: 0.05,
+            max_linear_acceleration: 3.0,
+            max_angular_acceleration: 6.0,
+            max_joint_acceleration: 6.0,
+            weights: CostWeights::default(),
+            constraints: ConstraintSettings::default(),
+            solver: SolverOptions {
+                max_iterations: 4,
+                tolerance: 1e-6,
+                ..SolverOptions::default()
+            },
+        }
+    }
+}
+
+/// The problem the solver sees (kept apart from the solver so both can be borrowed).
+#[derive(Clone, Debug)]
+pub struct MpcProblem {
+    /// The robot.
+    pub robot: MpcRobot,
+    /// Settings.
+    pub settings: MpcSettings,
+    /// The reference at each knot (N + 1), set by the caller before a solve.
+    pub reference: Vec<KnotReference>,
+    /// Posture of the moved joints the regulariser pulls to.
+    pub posture: DVector<f64>,
+    /// Full configuration holding the joints the MPC does not move.
+    pub hold: DVector<f64>,
+    /// Multipliers and the last values of the constraints.
+    pub constraints: ConstraintSet,
+    ws: KnotWorkspace,
+    lo: DVector<f64>,
+    hi: DVector<f64>,
+    min_zmp: Vec<f64>,
+    min_clearance: Vec<f64>,
+}
+
+impl MpcProblem {
+    /// Evaluates knot `k` and its costs and constraint terms.
+    fn knot(
+        &mut self,
+        k: usize,
+        x: &DVector<f64>,
+        u: Option<&DVector<f64>>,
+        mut out: Option<&mut StageModel>,
+    ) -> Result<f64> {
+        evaluate_knot(&self.robot, &mut self.ws, &self.hold, x, u, out.is_some())?;
+        let vals = &self.ws.values;
+        self.min_zmp[k] = if u.is_some() {
+            vals.zmp_margin.unwrap_or(f64::NEG_INFINITY)
+        } else {
+            f64::INFINITY
+        };
+        self.min_clearance[k] = if k > 0 { vals.distance } else { f64::INFINITY };
+        if let Some(o) = out.as_deref_mut() {
+            o.clear_cost();
+        }
+        let c = knot_cost(
+            &self.robot,
+            &self.settings.weights,
+            &self.reference[k],
+            &self.posture,
+            x,
+            u,
+            vals,
+            out.as_deref_mut(),
+        );
+        let a = self.constraints.knot_terms(
+            &self.robot,
+            &self.settings.constraints,
+            k,
+            x,
+            u,
+            vals,
+            out,
+        );
+        Ok(c + a)
+    }
+}
+
+impl OptimalControlProblem for MpcProblem {
+    fn nx(&self) -> usize {
+        self.robot.nx()
+    }
+    fn nu(&self) -> usize {
+        self.robot.nu()
+    }
+    fn horizon(&self) -> usize {
+        self.settings.stages
+    }
+    fn dynamics(
+        &mut self,
+        _k: usize,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        next: &mut DVector<f64>,
+    ) -> Result<()> {
+        let n = self.robot.n_moved();
+        let h = self.settings.dt;
+        let dd = &self.robot.wheeled.base.drive;
+        next.copy_from(x);
+        for i in 0..2 + n {
+            next[3 + n + i] += h * u[i];
+        }
+        let nb = dd.basis(x[2]);
+        let (v, w) = (next[3 + n], next[4 + n]);
+        for r in 0..3 {
+            next[r] += h * (nb[(r, 0)] * v + nb[(r, 1)] * w);
+        }
+        for i in 0..n {
+            next[3 + i] += h * next[5 + n + i];
+        }
+        Ok(())
+    }
+    fn cost(&mut self, k: usize, x: &DVector<f64>, u: Option<&DVector<f64>>) -> Result<f64> {
+        self.knot(k, x, u, None)
+    }
+    fn approximate(
+        &mut self,
+        k: usize,
+        x: &DVector<f64>,
+        u: Option<&DVector<f64>>,
+        out: &mut StageModel,
+    ) -> Result<f64> {
+        if let Some(u) = u {
+            let n = self.robot.n_moved();
+            let h = self.settings.dt;
+            let dd = &self.robot.wheeled.base.drive;
+            let nb = dd.basis(x[2]);
+            let dnb = dd.basis_dot(x[2], 1.0);
+            let (v, w) = (x[3 + n] + h * u[0], x[4 + n] + h * u[1]);
+            out.a.fill_with_identity();
+            out.b.fill(0.0);
+            for r in 0..3 {
+                out.a[(r, 2)] += h * (dnb[(r, 0)] * v + dnb[(r, 1)] * w);
+                for c in 0..2 {
+                    out.a[(r, 3 + n + c)] = h * nb[(r, c)];
+                    out.b[(r, c)] = h * h * nb[(r, c)];
+                }
+            }
+            for i in 0..n {
+                out.a[(3 + i, 5 + n + i)] = h;
+                out.b[(3 + i, 2 + i)] = h * h;
+            }
+            for i in 0..2 + n {
+                out.b[(3 + n + i, i)] = h;
+            }
+        }
+        self.knot(k, x, u, Some(out))
+    }
+    fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
+        (&self.lo, &self.hi)
+    }
+}
+
+/// The whole-body MPC: problem, solver workspace and the last solution.
+#[derive(Clone, Debug)]
+pub struct WholeBodyMpc {
+    /// The problem (reference, posture and held joints are the caller's to set).
+    pub problem: MpcProblem,
+    solver: Solver,
+    /// The last solution (the warm start of the next solve).
+    pub solution: Trajectory,
+    x0: DVector<f64>,
+    solved_once: bool,
+}
+
+impl WholeBodyMpc {
+    /// An MPC for `robot` with `settings`; the posture and held joints start at
+    /// `q_start` (a full configuration of the robot's model).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for a horizon shorter than one stage, a non-positive step or
+    /// acceleration bound, or a configuration of the wrong length.
+    pub fn new(robot: MpcRobot, settings: MpcSettings, q_start: &DVector<f64>) -> Result<Self> {
+        if settings.stages == 0 {
+            return Err(Error::invalid("mpc.stages", "must be at least 1"));
+        }
+        for (field, v) in [
+            ("mpc.dt", settings.dt),
+            (
+                "mpc.max_linear_acceleration",
+                settings.max_linear_acceleration,
+            ),
+            (
+                "mpc.max_angular_acceleration",
+                settings.max_angular_acceleration,
+            ),
+            (
+                "mpc.max_joint_acceleration",
+                settings.max_joint_acceleration,
+            ),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(Error::invalid(field, format!("must be positive, got {v}")));
+            }
+        }
+        if q_start.len() != robot.wheeled.model.nq {
+            return Err(Error::invalid(
+                "q_start",
+                format!(
+                    "length {} != nq = {}",
+                    q_start.len(),
+                    robot.wheeled.model.nq
+                ),
+            ));
+        }
+        let (nx, nu, n) = (robot.nx(), robot.nu(), settings.stages);
+        let mut lo = DVector::from_element(nu, -settings.max_joint_acceleration);
+        lo[0] = -settings.max_linear_acceleration;
+        lo[1] = -settings.max_angular_acceleration;
+        let hi = -&lo;
+        let posture =
+            DVector::from_iterator(robot.n_moved(), robot.dofs.iter().map(|&d| q_start[d]));
+        let problem = MpcProblem {
+            ws: KnotWorkspace::new(&robot),
+            constraints: ConstraintSet::new(&robot, n),
+            reference: vec![KnotReference::default(); n + 1],
+            posture,
+            hold: q_start.clone(),
+            lo,
+            hi,
+            min_zmp: vec![f64::INFINITY; n + 1],
+            min_clearance: vec![f64::INFINITY; n + 1],
+            robot,
+            settings,
+        };
+        Ok(Self {
+            problem,
+            solver: Solver::new(nx, nu, n),
+            solution: Trajectory::zeros(nx, nu, n),
+            x0: DVector::zeros(nx),
+            solved_once: false,
+        })
+    }
+
+    /// Sets the reference of every knot from `f(t_k)`, `t_k = t + k dt` (no allocation).
+    pub fn set_reference(&mut self, t: f64, mut f: impl FnMut(f64) -> KnotReference) {
+        let dt = self.problem.settings.dt;
+        for (k, r) in self.problem.reference.iter_mut().enumerate() {
+            *r = f(t + dt * k as f64);
+        }
+    }
+
+    /// Solves from the plant state `(q, v_r)` (the held joints are read from `q`);
+    /// after the first solve, starts from the previous solution shifted one stage.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for states of the wrong length; what the model reports.
+    pub fn solve(&mut self, q: &[f64], v_r: &[f64]) -> Result<SolveReport> {
+        let start = Instant::now();
+        let robot = &self.problem.robot;
+        if q.len() != robot.wheeled.model.nq || v_r.len() != robot.wheeled.nr() {
+            return Err(Error::invalid(
+                "mpc state",
+                format!(
+                    "q has {} (nq = {}), v has {} (nr = {})",
+                    q.len(),
+                    robot.wheeled.model.nq,
+                    v_r.len(),
+                    robot.wheeled.nr()
+                ),
+            ));
+        }
+        robot.state_from_plant(q, v_r, &mut self.x0);
+        self.problem.hold.copy_from_slice(q);
+        let p = &mut self.problem;
+        select_pairs(
+            &p.robot,
+            &mut p.ws,
+            &p.hold,
+            p.settings.constraints.activation_distance,
+        );
+        if self.solved_once {
+            shift_solution(&mut self.solution.us, &mut self.problem.constraints.lambda);
+        }
+        let opts = self.problem.settings.solver.clone();
+        let stats: SolveStats =
+            self.solver
+                .solve(&mut self.problem, &self.x0, &mut self.solution, &opts)?;
+        self.solved_once = true;
+        // Values of the returned trajectory (the cost pass refreshes the constraint
+        // values without touching the multipliers).
+        let n = self.problem.settings.stages;
+        for k in 0..=n {
+            let u = (k < n).then(|| &self.solution.us[k]);
+            self.problem.knot(k, &self.solution.xs[k], u, None)?;
+        }
+        // One multiplier step per solve, at the returned trajectory's values.
+        self.problem
+            .constraints
+            .update(self.problem.settings.constraints.penalty);
+        let mut v = Violations::default();
+        for row in &self.problem.constraints.violation {
+            v = v.max(&Violations::from_array(*row));
+        }
+        Ok(SolveReport {
+            time: start.elapsed(),
+            iterations: stats.iterations,
+            cost: stats.cost,
+            converged: stats.converged,
+            violations: v,
+            min_zmp_margin: self
+                .problem
+                .min_zmp
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min),
+            min_clearance: self
+                .problem
+                .min_clearance
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min),
+        })
+    }
+
+    /// The actuator torques that realise the first planned input at the state of the
+    /// last solve (inverse dynamics of the reduced model), written into `tau` (nu of the
+    /// full model: wheels, then every arm joint); held joints get the torque that keeps
+    /// their acceleration zero. Clipped to the limits when `clip`.
+    ///
+    /// # Errors
+    /// What the model reports.
+    pub fn first_torques(&mut self, tau: &mut [f64], clip: bool) -> Result<()> {
+        let p = &mut self.problem;
+        evaluate_knot(
+            &p.robot,
+            &mut p.ws,
+            &p.hold,
+            &self.x0,
+            Some(&self.solution.us[0]),
+            false,
+        )?;
+        for (i, t) in tau.iter_mut().enumerate() {
+            let v = p.ws.values.torque[i];
+            let lim = p.robot.torque_limit[i];
+            *t = if clip { v.clamp(-lim, lim) } else { v };
+        }
+        Ok(())
+    }
+
+    /// The first planned input `[v̇, ω̇, q̈_c]`.
+    #[must_use]
+    pub fn first_input(&self) -> &DVector<f64> {
+        &self.solution.us[0]
+    }
+}

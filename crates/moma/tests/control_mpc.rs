@@ -1,0 +1,269 @@
+//! The whole-body MPC's solver and problem: the linear-quadratic case against an
+//! independent Riccati iteration, and the stage model against finite differences.
+
+mod mpc_common;
+
+use moma::Result;
+use moma::control::mpc::{
+    KnotReference, MpcSettings, OptimalControlProblem, Solver, SolverOptions, StageModel,
+    Trajectory,
+};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// `x⁺ = A x + B u`, `ℓ = xᵀQx + uᵀRu`, `ℓ_N = xᵀ P_N x`, with box bounds.
+struct LinearQuadratic {
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    p_n: DMatrix<f64>,
+    n: usize,
+    lo: DVector<f64>,
+    hi: DVector<f64>,
+}
+
+impl OptimalControlProblem for LinearQuadratic {
+    fn nx(&self) -> usize {
+        self.a.nrows()
+    }
+    fn nu(&self) -> usize {
+        self.b.ncols()
+    }
+    fn horizon(&self) -> usize {
+        self.n
+    }
+    fn dynamics(
+        &mut self,
+        _k: usize,
+        x: &DVector<f64>,
+        u: &DVector<f64>,
+        next: &mut DVector<f64>,
+    ) -> Result<()> {
+        next.copy_from(&(&self.a * x + &self.b * u));
+        Ok(())
+    }
+    fn cost(&mut self, _k: usize, x: &DVector<f64>, u: Option<&DVector<f64>>) -> Result<f64> {
+        Ok(match u {
+            Some(u) => (x.transpose() * &self.q * x)[0] + (u.transpose() * &self.r * u)[0],
+            None => (x.transpose() * &self.p_n * x)[0],
+        })
+    }
+    fn approximate(
+        &mut self,
+        k: usize,
+        x: &DVector<f64>,
+        u: Option<&DVector<f64>>,
+        out: &mut StageModel,
+    ) -> Result<f64> {
+        out.a.copy_from(&self.a);
+        out.b.copy_from(&self.b);
+        out.lux.fill(0.0);
+        match u {
+            Some(u) => {
+                out.lx.copy_from(&(2.0 * &self.q * x));
+                out.lxx.copy_from(&(2.0 * &self.q));
+                out.lu.copy_from(&(2.0 * &self.r * u));
+                out.luu.copy_from(&(2.0 * &self.r));
+            }
+            None => {
+                out.lx.copy_from(&(2.0 * &self.p_n * x));
+                out.lxx.copy_from(&(2.0 * &self.p_n));
+            }
+        }
+        self.cost(k, x, u)
+    }
+    fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
+        (&self.lo, &self.hi)
+    }
+}
+
+/// A double integrator per axis, two axes coupled through B, sampled at 0.1 s.
+fn double_integrator(n: usize, bound: f64) -> LinearQuadratic {
+    let h = 0.1;
+    let a = DMatrix::from_row_slice(
+        4,
+        4,
+        &[
+            1.0, 0.0, h, 0.0, //
+            0.0, 1.0, 0.0, h, //
+            0.0, 0.0, 1.0, 0.0, //
+            0.0, 0.0, 0.0, 1.0,
+        ],
+    );
+    let b = DMatrix::from_row_slice(
+        4,
+        2,
+        &[
+            0.5 * h * h,
+            0.0, //
+            0.0,
+            0.5 * h * h, //
+            h,
+            0.2 * h, //
+            0.0,
+            h,
+        ],
+    );
+    let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 2.0, 0.1, 0.1]));
+    let r = DMatrix::from_row_slice(2, 2, &[0.05, 0.01, 0.01, 0.08]);
+    LinearQuadratic {
+        a,
+        b,
+        p_n: q.clone() * 3.0,
+        q,
+        r,
+        n,
+        lo: DVector::from_element(2, -bound),
+        hi: DVector::from_element(2, bound),
+    }
+}
+
+/// The finite-horizon LQR gain of the first stage, by the discrete Riccati recursion
+/// `K = (R + BᵀPB)⁻¹ BᵀPA`, `P ← Q + AᵀP(A − BK)` from `P_N` (written out here, apart
+/// from the solver's backward pass).
+fn lqr_first_gain(p: &LinearQuadratic, stages: usize) -> DMatrix<f64> {
+    let mut pk = p.p_n.clone();
+    let mut k = DMatrix::zeros(2, 4);
+    for _ in 0..stages {
+        let btp = p.b.transpose() * &pk;
+        k = (&p.r + &btp * &p.b).try_inverse().unwrap() * (&btp * &p.a);
+        pk = &p.q + p.a.transpose() * &pk * (&p.a - &p.b * &k);
+    }
+    k
+}
+
+#[test]
+fn linear_quadratic_first_input_is_the_lqr_input() {
+    let x0 = DVector::from_vec(vec![1.0, -0.5, 0.3, 0.2]);
+    for stages in [1, 5, 40] {
+        let mut p = double_integrator(stages, f64::INFINITY);
+        let mut solver = Solver::new(4, 2, stages);
+        let mut traj = Trajectory::zeros(4, 2, stages);
+        let stats = solver
+            .solve(&mut p, &x0, &mut traj, &SolverOptions::default())
+            .unwrap();
+        let u_lqr = -lqr_first_gain(&p, stages) * &x0;
+        let err = (&traj.us[0] - &u_lqr).amax();
+        assert!(
+            err < 1e-9 * u_lqr.amax().max(1.0),
+            "N = {stages}: MPC {} vs LQR {u_lqr}",
+            traj.us[0]
+        );
+        assert!(stats.converged && stats.iterations <= 2, "{stats:?}");
+        // The feedback gain too: K of the solver's first stage is −K_lqr.
+        let gk = (&solver.gains[0] + lqr_first_gain(&p, stages)).amax();
+        assert!(gk < 1e-9, "N = {stages}: gain error {gk}");
+    }
+    // A long horizon reaches the infinite-horizon gain (the Riccati fixed point).
+    let p = double_integrator(400, f64::INFINITY);
+    let k400 = lqr_first_gain(&p, 400);
+    let k800 = lqr_first_gain(&p, 800);
+    assert!((&k400 - &k800).amax() < 1e-10);
+}
+
+#[test]
+fn bounded_inputs_stay_in_the_box_and_beat_the_clipped_lqr() {
+    let x0 = DVector::from_vec(vec![3.0, -2.0, 0.0, 0.0]);
+    let stages = 30;
+    let mut p = double_integrator(stages, 1.0);
+    let mut solver = Solver::new(4, 2, stages);
+    let mut traj = Trajectory::zeros(4, 2, stages);
+    let stats = solver
+        .solve(&mut p, &x0, &mut traj, &SolverOptions::default())
+        .unwrap();
+    assert!(traj.us.iter().all(|u| u.amax() <= 1.0 + 1e-12));
+    assert!(
+        traj.us[0].amax() > 1.0 - 1e-12,
+        "the first input saturates: {}",
+        traj.us[0]
+    );
+    // Rolling out the LQR policy clipped to the box costs more.
+    let k = lqr_first_gain(&p, stages);
+    let mut x = x0.clone();
+    let mut clipped = 0.0;
+    let mut next = DVector::zeros(4);
+    for _ in 0..stages {
+        let u = (-&k * &x).map(|v| v.clamp(-1.0, 1.0));
+        clipped += p.cost(0, &x, Some(&u)).unwrap();
+        p.dynamics(0, &x, &u, &mut next).unwrap();
+        x.copy_from(&next);
+    }
+    clipped += p.cost(stages, &x, None).unwrap();
+    assert!(stats.cost < clipped, "{} vs {clipped}", stats.cost);
+}
+
+/// The stage model of the Fetch problem against central differences of its cost, with
+/// the exact-derivative terms only (position tracking, base path, effort, the linear
+/// limits): the torque, ZMP and orientation terms use documented approximations.
+#[test]
+fn fetch_stage_model_matches_finite_differences() {
+    let mut s = MpcSettings::default();
+    s.constraints.zmp_margin = None;
+    s.constraints.clearance = None;
+    s.constraints.torque_fraction = 1e9;
+    s.weights.ee_orientation = 0.0;
+    let (mut mpc, q0) = mpc_common::fetch_mpc(None, s);
+    mpc.set_reference(0.0, |t| KnotReference {
+        base: [0.3 * t, 0.1, 0.05],
+        end_effector: Some((Vector3::new(0.8, -0.3, 0.9), Matrix3::identity())),
+    });
+    let p = &mut mpc.problem;
+    let (nx, nu) = (p.nx(), p.nu());
+    let mut x = DVector::zeros(nx);
+    let mut vr = vec![0.0; p.robot.wheeled.nr()];
+    vr[0] = 0.3;
+    vr[1] = -0.2;
+    vr[3] = 0.4;
+    p.robot.state_from_plant(q0.as_slice(), &vr, &mut x);
+    // Push a joint speed past its limit so that an AL term is active.
+    x[5 + 8 + 2] = p.robot.speed_limit[2] * 1.1;
+    let u = DVector::from_fn(nu, |i, _| 0.1 * (i as f64 + 1.0) - 0.4);
+    let mut m = StageModel::new(nx, nu);
+    p.approximate(3, &x, Some(&u), &mut m).unwrap();
+    let eps = 1e-6;
+    for i in 0..nx {
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[i] += eps;
+        xm[i] -= eps;
+        let fd =
+            (p.cost(3, &xp, Some(&u)).unwrap() - p.cost(3, &xm, Some(&u)).unwrap()) / (2.0 * eps);
+        assert!(
+            (fd - m.lx[i]).abs() < 1e-4 * (1.0 + fd.abs()),
+            "lx[{i}]: model {} vs fd {fd}",
+            m.lx[i]
+        );
+    }
+    for i in 0..nu {
+        let (mut up, mut um) = (u.clone(), u.clone());
+        up[i] += eps;
+        um[i] -= eps;
+        let fd =
+            (p.cost(3, &x, Some(&up)).unwrap() - p.cost(3, &x, Some(&um)).unwrap()) / (2.0 * eps);
+        assert!(
+            (fd - m.lu[i]).abs() < 1e-4 * (1.0 + fd.abs()),
+            "lu[{i}]: model {} vs fd {fd}",
+            m.lu[i]
+        );
+    }
+    // The transition's Jacobians.
+    let mut fp = DVector::zeros(nx);
+    let mut fm = DVector::zeros(nx);
+    for i in 0..nx {
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[i] += eps;
+        xm[i] -= eps;
+        p.dynamics(3, &xp, &u, &mut fp).unwrap();
+        p.dynamics(3, &xm, &u, &mut fm).unwrap();
+        let col = (&fp - &fm) / (2.0 * eps);
+        assert!((col - m.a.column(i)).amax() < 1e-8, "A column {i}");
+    }
+    for i in 0..nu {
+        let (mut up, mut um) = (u.clone(), u.clone());
+        up[i] += eps;
+        um[i] -= eps;
+        p.dynamics(3, &x, &up, &mut fp).unwrap();
+        p.dynamics(3, &x, &um, &mut fm).unwrap();
+        let col = (&fp - &fm) / (2.0 * eps);
+        assert!((col - m.b.column(i)).amax() < 1e-8, "B column {i}");
+    }
+}

@@ -1,0 +1,145 @@
+//! The whole-body MPC in closed loop on Fetch's reduced-model plant: reaching a target
+//! beside the path while the base drives, and the tip-over constraint holding the ZMP
+//! margin where the unconstrained MPC lets it go negative.
+
+mod mpc_common;
+
+use moma::collision::Scene;
+use moma::control::mpc::{KnotReference, MpcSettings};
+use moma::sim::mpc_loop::{MpcLoopSettings, MpcRun, run_mpc_loop};
+use moma::sim::wheeled_system::WheeledSystem;
+use nalgebra::{Matrix3, Vector3};
+
+/// The reach-on-the-move scenario: the base follows y = 0 at 0.3 m/s for the whole run;
+/// from t = 1 s the gripper is asked to a point 0.45 m right of the path at x = 1.0 m,
+/// above a table, which the base passes at about t = 3.3 s.
+pub fn reach_on_the_move(settings: MpcSettings, duration: f64) -> MpcRun {
+    let scene = Scene {
+        objects: vec![mpc_common::box_object(
+            "table",
+            [1.0, -0.85, 0.35],
+            [0.3, 0.25, 0.35],
+        )],
+    };
+    let (mut mpc, q0) = mpc_common::fetch_mpc(Some(scene), settings);
+    let mut plant = WheeledSystem::new(mpc.problem.robot.wheeled.clone());
+    let v0 = vec![0.0; plant.robot.nr()];
+    let target = Vector3::new(1.0, -0.45, 0.85);
+    let loop_settings = MpcLoopSettings {
+        duration,
+        period: 0.05,
+        substeps: 5,
+    };
+    run_mpc_loop(
+        &mut mpc,
+        &mut plant,
+        q0.as_slice(),
+        &v0,
+        &loop_settings,
+        |t| KnotReference {
+            base: [0.3 * t, 0.0, 0.0],
+            end_effector: (t >= 1.0).then_some((target, Matrix3::identity())),
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn reaches_while_the_base_moves_within_bounded_violations() {
+    let mut s = MpcSettings::default();
+    s.weights.ee_orientation = 0.0;
+    let run = reach_on_the_move(s, 5.0);
+    let sum = &run.summary;
+    println!("{sum:#?}");
+    // The closest approach of the gripper, and the base speed then.
+    let best = run
+        .samples
+        .iter()
+        .filter(|s| s.ee_error.is_some())
+        .min_by(|a, b| a.ee_error.unwrap().total_cmp(&b.ee_error.unwrap()))
+        .unwrap();
+    println!(
+        "closest {:?} m at t = {} s, base speed {} m/s",
+        best.ee_error, best.t, best.v[0]
+    );
+    assert!(best.ee_error.unwrap() < 0.06, "{:?}", best.ee_error);
+    assert!(best.v[0].abs() > 0.1, "the base still moves: {}", best.v[0]);
+    // Closed-loop constraint violations, bounded.
+    assert!(sum.min_zmp_margin > 0.05, "{}", sum.min_zmp_margin);
+    assert!(sum.min_clearance > 0.0, "{}", sum.min_clearance);
+    assert!(sum.wheel_speed_excess == 0.0, "{sum:?}");
+    assert!(sum.joint_speed_excess < 1.5, "{sum:?}");
+    assert!(sum.joint_position_excess < 0.05, "{sum:?}");
+    assert!(sum.max_torque_excess < 1.0, "{sum:?}");
+}
+
+/// Fetch with five times its wheel torque (so that braking can tip it): the base, moving
+/// at 1 m/s with the arm raised forward, is asked to stop at once.
+fn hard_stop(zmp: Option<f64>) -> MpcRun {
+    let mut s = MpcSettings::default();
+    s.constraints.zmp_margin = zmp;
+    s.max_linear_acceleration = 8.0;
+    s.weights.base_position = 400.0;
+    let (mut mpc, mut q0) = mpc_common::fetch_mpc(None, s);
+    let robot = &mut mpc.problem.robot;
+    robot.torque_limit[0] *= 5.0;
+    robot.torque_limit[1] *= 5.0;
+    let model = &robot.wheeled.model;
+    for (name, v) in [
+        ("torso_lift_joint", 0.38),
+        ("shoulder_lift_joint", -1.0),
+        ("elbow_flex_joint", 0.0),
+        ("wrist_flex_joint", 0.0),
+    ] {
+        let j = model.joint_id(name).unwrap();
+        q0[model.idx_q[j.0]] = v;
+    }
+    mpc.problem.posture =
+        nalgebra::DVector::from_iterator(robot.n_moved(), robot.dofs.iter().map(|&d| q0[d]));
+    let mut plant = WheeledSystem::new(mpc.problem.robot.wheeled.clone());
+    let mut v0 = vec![0.0; plant.robot.nr()];
+    v0[0] = 1.0;
+    let loop_settings = MpcLoopSettings {
+        duration: 1.5,
+        period: 0.05,
+        substeps: 5,
+    };
+    run_mpc_loop(
+        &mut mpc,
+        &mut plant,
+        q0.as_slice(),
+        &v0,
+        &loop_settings,
+        |_| KnotReference {
+            base: [0.0, 0.0, 0.0],
+            end_effector: None,
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn tip_over_constraint_keeps_the_zmp_margin_that_the_unconstrained_mpc_loses() {
+    let free = hard_stop(None);
+    let kept = hard_stop(Some(0.03));
+    println!("free {:#?}\nkept {:#?}", free.summary, kept.summary);
+    assert!(
+        free.summary.min_zmp_margin < 0.0,
+        "{}",
+        free.summary.min_zmp_margin
+    );
+    // Measured: −0.15 m without the constraint, −0.016 m with it (set value 0.03 m): the
+    // constraint removes most of the loss but does not yet hold the set value in closed
+    // loop (see docs/mpc.md); these bounds record that and fail if it gets worse.
+    assert!(
+        kept.summary.min_zmp_margin > free.summary.min_zmp_margin + 0.1,
+        "{} vs {}",
+        kept.summary.min_zmp_margin,
+        free.summary.min_zmp_margin
+    );
+    assert!(
+        kept.summary.min_zmp_margin > -0.03,
+        "{}",
+        kept.summary.min_zmp_margin
+    );
+}
