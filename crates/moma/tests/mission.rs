@@ -145,14 +145,41 @@ fn obstacle_on_the_path_triggers_a_replan_and_the_goal_is_still_reached() {
 
 #[test]
 fn a_crate_too_close_to_avoid_is_a_collision_and_ends_the_mission() {
-    // appears 1.5 m ahead of a robot at speed, right on its line: the re-plan cannot
-    // swing wide enough in time
-    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    // appears 1 m ahead of a robot at 0.75 m/s, on its line: the stop along the old path
+    // would run into it, and the re-plan from speed cannot swing wide enough in time
+    let extra = "[[obstacles]]\nt = 1.5\ncenter = [3.5, 2.1]\nradius = 0.35";
     let r = mission(&mission_text(GOAL, extra));
     assert!(!r.reached);
     assert!(r.reason.as_deref().unwrap().contains("collision"));
     assert!(r.events.iter().any(|e| e.kind == "contact"));
     assert!(r.min_clearance().unwrap() < 0.0);
+}
+
+#[test]
+fn a_crate_ahead_of_a_robot_at_speed_is_avoided_by_stopping_along_the_old_path() {
+    // appears 1.6 m ahead of a robot at 0.75 m/s: the way around it turns sooner than that
+    // speed allows, so the base brakes to rest along the path it was on (within a_max),
+    // then follows the path planned from where it stopped
+    let extra = "[[obstacles]]\nt = 1.5\ncenter = [4.2, 2.6]\nradius = 0.35";
+    let r = mission(&mission_text(GOAL, extra));
+    assert!(r.reached, "{:?}", r.reason);
+    let replan = r.events.iter().find(|e| e.kind == "replan").unwrap();
+    assert!(replan.text.contains("brakes to rest"), "{}", replan.text);
+    assert!(r.min_clearance().unwrap() > 0.0);
+    let s = &r.samples;
+    assert!(s.omega_ref.iter().all(|w| w.abs() <= 1.0 + 1e-9));
+    // the stop (within 2 s: 0.75 m/s at a_max = 0.5 m/s² takes 1.5 s) on the line the
+    // base was driving
+    let i = (0..s.t.len())
+        .filter(|&i| s.t[i] > 1.5 && s.t[i] < 3.5)
+        .min_by(|&a, &b| s.v_ref[a].abs().total_cmp(&s.v_ref[b].abs()))
+        .unwrap();
+    assert!(s.v_ref[i].abs() < 0.02 && s.v[i].abs() < 0.02, "{}", s.v[i]);
+    assert!(
+        (s.q[i][1] - 2.0).abs() < 0.05,
+        "stopped at {:?}",
+        &s.q[i][..3]
+    );
 }
 
 #[test]

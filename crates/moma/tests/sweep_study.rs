@@ -196,6 +196,64 @@ fn a_row_is_the_stability_of_its_state_with_the_payload_as_a_point_force() {
 }
 
 #[test]
+fn a_robot_rooted_at_axle_height_stands_on_the_ground_under_its_wheels() {
+    // TIAGo without its base_footprint link: rooted at base_link, on the wheel axes,
+    // 0.0985 m (the wheel radius) above the ground
+    let text = std::fs::read_to_string(tiago()).unwrap();
+    let cut = |s: &str, from: &str, to: &str| {
+        let a = s.find(from).unwrap();
+        let b = a + s[a..].find(to).unwrap() + to.len();
+        format!("{}{}", &s[..a], &s[b..])
+    };
+    let axle = cut(&text, "<joint name=\"base_footprint_joint\"", "</joint>");
+    let axle = cut(&axle, "<link name=\"base_footprint\">", "</link>");
+    // the two other links fixed to base_footprint, re-attached to base_link
+    let axle = axle
+        .replace(
+            "<parent link=\"base_footprint\"/>\n    <child link=\"base_cover_link\"/>\n    <origin rpy=\"0 0 0\" xyz=\"0 0 0.13\"/>",
+            "<parent link=\"base_link\"/>\n    <child link=\"base_cover_link\"/>\n    <origin rpy=\"0 0 0\" xyz=\"0 0 0.0315\"/>",
+        )
+        .replace(
+            "<parent link=\"base_footprint\"/>\n    <child link=\"rgbd_laser_link\"/>\n    <origin rpy=\"0 0 0\" xyz=\"-0.9 0 0\"/>",
+            "<parent link=\"base_link\"/>\n    <child link=\"rgbd_laser_link\"/>\n    <origin rpy=\"0 0 0\" xyz=\"-0.9 0 -0.0985\"/>",
+        );
+    assert!(!axle.contains("\"base_footprint\""));
+    let path = std::env::temp_dir().join(format!("moma_tiago_axle_{}.urdf", std::process::id()));
+    std::fs::write(&path, axle).unwrap();
+    let params =
+        "posture = [\"forward\", \"tucked\"]\naccel = [-2.5, 0.0, 1.5]\nyaw_rate = [0.0, 1.0]";
+    let ground = stability_toml("mode = \"grid\"", params);
+    let wheels = "d = 0.0, wheel_joints = [\"wheel_left_joint\", \"wheel_right_joint\"], casters";
+    let run = |text: &str| {
+        let s = sweep(text).unwrap();
+        let rows: Vec<Vec<Value>> = (0..s.len()).map(|i| s.evaluate(i).unwrap()).collect();
+        (s.columns(), rows)
+    };
+    let (cols, at_ground) = run(&ground);
+    let on_axle = ground.replace(&tiago().display().to_string(), &path.display().to_string());
+    let (_, axle_wheels) = run(&on_axle.replace("d = 0.0, casters", wheels));
+    let (_, axle_flat) = run(&on_axle);
+    std::fs::remove_file(&path).ok();
+    let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
+    let mut flat_differs = false;
+    for ((g, w), z0) in at_ground.iter().zip(&axle_wheels).zip(&axle_flat) {
+        for name in ["zmp_margin", "zmp_x", "fa_min", "mhs_min"] {
+            let (a, b) = (f(&g[col(name)]), f(&w[col(name)]));
+            assert!(
+                (a - b).abs() <= 1e-9 * (1.0 + a.abs()),
+                "{name}: {a} vs {b}"
+            );
+        }
+        // the same robot: its centre of mass is 0.0985 m lower in the axle-rooted frame
+        let (a, b) = (f(&g[col("com_z")]), f(&w[col("com_z")]));
+        assert!((a - b - 0.0985).abs() < 1e-9, "com_z {a} vs {b}");
+        flat_differs |= (f(&g[col("zmp_margin")]) - f(&z0[col("zmp_margin")])).abs() > 1e-3;
+    }
+    // without the wheel joints the ground is the axle plane, and accelerating rows differ
+    assert!(flat_differs);
+}
+
+#[test]
 fn results_do_not_depend_on_threads_or_shards() {
     for sample in ["mode = \"grid\"", "mode = \"random\"\ncount = 60\nseed = 7"] {
         let s = sweep(&stability_toml(

@@ -2,7 +2,7 @@
 //! built from a planned cell path.
 
 use crate::error::Result;
-use crate::planning::curvature::{SmoothOptions, smooth_diff_drive};
+use crate::planning::curvature::{SmoothOptions, SmoothPath, smooth_diff_drive};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, time_parameterize_curve};
 use crate::planning::{OccupancyGrid, SearchGrid};
 
@@ -45,6 +45,15 @@ pub struct Reference {
     /// `true` when the path ends with the heading it arrives with (no smooth path ends at
     /// the goal heading); the heading is then taken by a turn in place at the goal.
     pub turn_at_goal: bool,
+    /// The geometry the samples follow (of the axle midpoint; the last one when the
+    /// reference joins a braking stretch and a new path, see [`brake_along`]).
+    pub geometry: SmoothPath,
+    /// Arc length along [`Reference::geometry`] of every sample (m); NaN for the samples
+    /// of a stop along an earlier path, which are not on it.
+    pub arc: Vec<f64>,
+    /// `Some(s)` when the timing started faster than the path allows at its start and
+    /// braked past some limit of the path (ω_max among them) up to arc length `s`.
+    pub overspeed_until: Option<f64>,
 }
 
 impl Reference {
@@ -113,8 +122,9 @@ pub(crate) struct TimingStart {
 /// A path that must begin with a turn in place cannot start moving: it is then timed
 /// from rest (the robot brakes onto it; the caller's reference starts with `v = 0`).
 /// A path that allows less than the current speed at its start is timed from the
-/// current speed and brakes onto it; that braking is not held to ω_max (a known defect:
-/// the shipped mission's re-plan reaches 1.218 rad/s with ω_max = 1).
+/// current speed and brakes onto it, not held to ω_max while braking
+/// ([`Reference::overspeed_until`] says so; the mission then stops along the old path
+/// instead, [`brake_along`], and times the new path from that stop).
 /// When no smooth path ends at the goal pose with `kappa_max`, tighter bounds (2x, 4x)
 /// are tried, then the heading the cell path arrives with (see [`Reference`]).
 /// `start`, `goal` and `cspace` are those of the axle midpoint; `d` places the base frame
@@ -164,8 +174,8 @@ pub(crate) fn build_reference(
         start.v.max(0.0)
     };
     let timed = time_parameterize_curve(&path, limits, Some(tip), v0, 0.0)?;
-    let samples = timed
-        .samples(dt)?
+    let timed_samples = timed.samples(dt)?;
+    let samples = timed_samples
         .iter()
         .map(|p| RefSample {
             t: start.t0 + p.t,
@@ -194,7 +204,84 @@ pub(crate) fn build_reference(
         path: drawn,
         kappa_max: kappa_used,
         turn_at_goal,
+        arc: timed_samples.iter().map(|p| p.s).collect(),
+        overspeed_until: timed.overspeed_until(),
+        geometry: path,
     })
+}
+
+/// The arc length along `r`'s geometry at mission time `t` (interpolated between
+/// samples; clamped to the first and last).
+fn arc_at(r: &Reference, t: f64) -> f64 {
+    let s = &r.samples;
+    let n = s.len();
+    if t <= s[0].t {
+        return r.arc[0];
+    }
+    if t >= s[n - 1].t {
+        return r.arc[n - 1];
+    }
+    let i = s.partition_point(|p| p.t <= t) - 1;
+    let dt = s[i + 1].t - s[i].t;
+    let f = if dt > 0.0 { (t - s[i].t) / dt } else { 0.0 };
+    r.arc[i] + f * (r.arc[i + 1] - r.arc[i])
+}
+
+/// A stop along the path of `old` from where it is at mission time `t0`, starting at
+/// speed `v` (m/s, ≥ 0): the stretch of `old`'s geometry long enough to brake to rest at
+/// `min(a_max, tip.backward)` (with 10 % to spare, up to the path's end), timed under
+/// the platform limits and the tip-over accelerations from `v` to rest. Its turn rate
+/// stays within ω_max wherever the old path admits the braking speeds, as it did the
+/// old reference's. Returns the samples, from `t0` every `dt`.
+///
+/// # Errors
+/// As [`time_parameterize_curve`], or [`SmoothPath::from_curvature`].
+pub(crate) fn brake_along(
+    old: &Reference,
+    t0: f64,
+    v: f64,
+    limits: &DiffDriveLimits,
+    tip: &TipOverAcceleration,
+    dt: f64,
+) -> Result<Vec<RefSample>> {
+    let g = &old.geometry;
+    let s0 = arc_at(old, t0);
+    if !s0.is_finite() {
+        return Err(crate::error::Error::invalid(
+            "reference",
+            "no geometry at this time (it is stopping along a previous path)",
+        ));
+    }
+    let decel = limits.a_max.min(tip.backward);
+    let v = v.max(0.0);
+    let s1 = (s0 + 1.1 * v * v / (2.0 * decel) + 1e-3).min(g.length());
+    let start = g.at(s0);
+    let mut pieces = Vec::new();
+    let mut prev = start;
+    for p in g.samples().iter().filter(|p| p.s > s0 && p.s < s1) {
+        pieces.push((p.s - prev.s, prev.kappa, p.kappa));
+        prev = *p;
+    }
+    let end = g.at(s1);
+    if s1 > prev.s {
+        pieces.push((s1 - prev.s, prev.kappa, end.kappa));
+    }
+    let stretch = SmoothPath::from_curvature([start.x, start.y, start.theta], &pieces, 0.02)?;
+    let timed = time_parameterize_curve(&stretch, limits, Some(tip), v, 0.0)?;
+    Ok(timed
+        .samples(dt)?
+        .iter()
+        .map(|p| RefSample {
+            t: t0 + p.t,
+            x: p.x,
+            y: p.y,
+            theta: crate::control::wrap_angle(p.theta),
+            v: p.v,
+            omega: p.omega,
+            a: p.a,
+            alpha: p.alpha,
+        })
+        .collect())
 }
 
 /// The direction (rad) from a point of the cell path about 0.6 m before the goal to the

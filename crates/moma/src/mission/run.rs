@@ -5,7 +5,7 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 
 use super::plan::{Planner, SearchTiming};
-use super::reference::{RefSample, Reference, TimingStart, build_reference};
+use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
 use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
 use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
 use crate::control::wrap_angle;
@@ -444,15 +444,33 @@ impl<'m> Runner<'m> {
         trigger: &str,
         search: SearchTiming,
     ) -> bool {
-        let Some(accel) = self.timing_accel else {
-            return false;
-        };
+        match self.time_cells(&cells, &start) {
+            Some(Ok((r, st))) => {
+                self.adopt(cells, r, start.t0, start.v, trigger, search, st);
+                true
+            }
+            Some(Err(e)) => {
+                self.fail(start.t0, format!("the path could not be timed: {e}"));
+                false
+            }
+            None => false,
+        }
+    }
+
+    /// Smooths and times `cells` from `start` (`None` without timing accelerations),
+    /// with the wall time it took.
+    fn time_cells(
+        &mut self,
+        cells: &[(usize, usize)],
+        start: &TimingStart,
+    ) -> Option<Result<(Reference, f64)>> {
+        let accel = self.timing_accel?;
         let clock = Instant::now();
         let r = build_reference(
             &self.m.map.grid,
             self.planner.dstar.grid(),
-            &cells,
-            &start,
+            cells,
+            start,
             axle_pose(self.m.file.goal.pose, self.wm.base.drive.d),
             self.wm.base.drive.d,
             &self.limits,
@@ -462,39 +480,46 @@ impl<'m> Runner<'m> {
         );
         let st = clock.elapsed().as_secs_f64();
         self.wall.smoothing_timing_s += st;
-        match r {
-            Ok(r) => {
-                if r.kappa_max != self.m.file.limits.kappa_max || r.turn_at_goal {
-                    let text = format!(
-                        "smoothing with kappa_max = {} 1/m{}",
-                        r.kappa_max,
-                        if r.turn_at_goal {
-                            "; no smooth path ends at the goal heading: the path ends with its \
-                             arrival heading and the base turns in place at the goal"
-                        } else {
-                            ""
-                        }
-                    );
-                    self.event(start.t0, "smoothing", text);
+        Some(r.map(|r| (r, st)))
+    }
+
+    /// Makes `r` (timed from `t0` at speed `v_start`, from `cells`) the reference to
+    /// track and records it as a plan.
+    #[allow(clippy::too_many_arguments)]
+    fn adopt(
+        &mut self,
+        cells: Vec<(usize, usize)>,
+        r: Reference,
+        t0: f64,
+        v_start: f64,
+        trigger: &str,
+        search: SearchTiming,
+        smoothing_timing_s: f64,
+    ) {
+        if r.kappa_max != self.m.file.limits.kappa_max || r.turn_at_goal {
+            let text = format!(
+                "smoothing with kappa_max = {} 1/m{}",
+                r.kappa_max,
+                if r.turn_at_goal {
+                    "; no smooth path ends at the goal heading: the path ends with its \
+                     arrival heading and the base turns in place at the goal"
+                } else {
+                    ""
                 }
-                self.plans.push(PlanRecord {
-                    t: start.t0,
-                    trigger: trigger.to_string(),
-                    cells,
-                    path: r.path.clone(),
-                    duration: r.t_end() - r.t_start(),
-                    search,
-                    smoothing_timing_s: st,
-                    v_start: start.v,
-                });
-                self.reference = Some(r);
-                true
-            }
-            Err(e) => {
-                self.fail(start.t0, format!("the path could not be timed: {e}"));
-                false
-            }
+            );
+            self.event(t0, "smoothing", text);
         }
+        self.plans.push(PlanRecord {
+            t: t0,
+            trigger: trigger.to_string(),
+            cells,
+            path: r.path.clone(),
+            duration: r.t_end() - t0,
+            search,
+            smoothing_timing_s,
+            v_start,
+        });
+        self.reference = Some(r);
     }
 
     fn run(mut self) -> Result<MissionResult> {
@@ -858,20 +883,121 @@ impl<'m> Runner<'m> {
             pose: axle,
             v,
         };
-        if self.make_reference(cells, start, &format!("obstacle {oi}"), timing) {
-            let p = self.plans.last().expect("just pushed");
-            let text = format!(
-                "re-plan after obstacle {oi}: D* Lite expanded {} cells, \
-                 new path {:.2} m, {:.2} s to go from {:.2} m/s",
-                p.search.expanded,
-                path_length(&p.path),
-                p.duration,
-                p.v_start
-            );
-            self.event(t, "replan", text);
-        } else {
-            st.phase = Phase::Done;
+        let trigger = format!("obstacle {oi}");
+        let old = self.reference.take();
+        let (cells, r, st_s, stop) = match self.time_cells(&cells, &start) {
+            Some(Ok((r, st_s))) => {
+                // a new path that does not admit the current speed at its start would be
+                // braked onto past its limits (ω_max): stop along the old path instead,
+                // then follow a path planned from there
+                let brake = match (&old, r.overspeed_until) {
+                    (Some(o), Some(_)) if v > 0.0 => self.brake_then_replan(o, t, v, &mut timing),
+                    _ => None,
+                };
+                match brake {
+                    Some(b) => (b.cells, b.reference, st_s + b.smoothing_s, Some(b.t_stop)),
+                    None => (cells, r, st_s, None),
+                }
+            }
+            Some(Err(e)) => {
+                self.fail(t, format!("the path could not be timed: {e}"));
+                st.phase = Phase::Done;
+                return;
+            }
+            None => {
+                st.phase = Phase::Done;
+                return;
+            }
+        };
+        self.adopt(cells, r, t, v, &trigger, timing, st_s);
+        let p = self.plans.last().expect("just pushed");
+        let stop_text = stop.map_or(String::new(), |ts| {
+            format!(
+                "; the new path does not admit {v:.2} m/s at its start, so the base brakes \
+                 to rest along the old path first ({:.2} s)",
+                ts - t
+            )
+        });
+        let text = format!(
+            "re-plan after obstacle {oi}: D* Lite expanded {} cells, \
+             new path {:.2} m, {:.2} s to go from {:.2} m/s{stop_text}",
+            p.search.expanded,
+            path_length(&p.path),
+            p.duration,
+            p.v_start
+        );
+        self.event(t, "replan", text);
+    }
+
+    /// The stop of a re-plan at speed: brakes from `v` to rest along the path of `old`
+    /// from where it is at `t`, then plans and times a new path from that stop at rest.
+    /// `None` when the stop
+    /// cannot be made (it runs into a blocked cell, it cannot be timed, no path leaves
+    /// it), the caller then keeps the path planned from where the base is.
+    fn brake_then_replan(
+        &mut self,
+        old: &Reference,
+        t: f64,
+        v: f64,
+        timing: &mut SearchTiming,
+    ) -> Option<StopAndGo> {
+        let accel = self.timing_accel?;
+        let clock = Instant::now();
+        let mut samples = brake_along(old, t, v, &self.limits, &accel, REF_DT).ok()?;
+        self.wall.smoothing_timing_s += clock.elapsed().as_secs_f64();
+        let grid = &self.m.map.grid;
+        if samples.iter().any(|p| {
+            let [cx, cy] = grid.world_to_cell_f(p.x, p.y);
+            self.planner.blocked_at(cx, cy)
+        }) {
+            return None;
         }
+        let stop = *samples.last().expect("a timed stop has samples");
+        let [fx, fy] = grid.world_to_cell_f(stop.x, stop.y);
+        let cell = (
+            (fx.floor().max(0.0) as usize).min(grid.width - 1),
+            (fy.floor().max(0.0) as usize).min(grid.height - 1),
+        );
+        let search_clock = Instant::now();
+        self.planner.move_start(cell).ok()?;
+        let (path, second) = self.planner.replan();
+        let search_s = search_clock.elapsed().as_secs_f64().max(second.search_s);
+        timing.search_s += search_s;
+        timing.expanded += second.expanded;
+        self.wall.planning_s += search_s;
+        let cells = path?;
+        let from_stop = TimingStart {
+            t0: stop.t,
+            pose: [stop.x, stop.y, stop.theta],
+            v: 0.0,
+        };
+        let (mut r, st) = self.time_cells(&cells, &from_stop)?.ok()?;
+        samples.pop();
+        samples.append(&mut r.samples);
+        r.samples = samples;
+        // the joined reference's arc lengths: the new path's from the stop; the stretch
+        // before it is not on that geometry (NaN: a re-plan during the stop cannot stop
+        // along it again, and falls back to braking onto its new path)
+        let n_brake = r.samples.len() - r.arc.len();
+        let mut arc = vec![f64::NAN; n_brake];
+        arc.append(&mut r.arc);
+        r.arc = arc;
+        let d = self.wm.base.drive.d;
+        let mut drawn: Vec<[f64; 2]> = r.samples[..n_brake]
+            .iter()
+            .map(|p| {
+                let (sn, cs) = p.theta.sin_cos();
+                [p.x + d * cs, p.y + d * sn]
+            })
+            .collect();
+        drawn.append(&mut r.path);
+        r.path = drawn;
+        Some(StopAndGo {
+            cells,
+            reference: r,
+            smoothing_s: st,
+            t_stop: stop.t,
+        })
     }
 
     /// Drive → arrive at the end of the reference; arrive → reach (or done) once the
@@ -1174,6 +1300,18 @@ fn monitors(wm: &WheeledModel, ws: &mut Workspace, t: f64) -> Option<Monitors> {
                 .filter(|x| x.is_finite())
         }),
     })
+}
+
+/// A re-plan that stops along the old path first.
+struct StopAndGo {
+    /// The cell path from the stop.
+    cells: Vec<(usize, usize)>,
+    /// The stop, then the new path.
+    reference: Reference,
+    /// Smoothing and timing wall time of the new path (s).
+    smoothing_s: f64,
+    /// Mission time of the stop (s).
+    t_stop: f64,
 }
 
 /// How a control step ends.

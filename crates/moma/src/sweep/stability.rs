@@ -70,6 +70,10 @@ struct BaseSpec {
     d: f64,
     #[serde(default)]
     casters: Vec<[f64; 2]>,
+    /// The drive wheels' joints in the URDF `[left, right]`: the ground lies `r_w` below
+    /// their axis (as `WheeledModel::ground_z`). Without them the ground is the base
+    /// origin's plane, z = 0.
+    wheel_joints: Option<[String; 2]>,
 }
 
 #[derive(Deserialize)]
@@ -128,9 +132,41 @@ fn joint_coordinate(model: &Model, path: &Path, field: &str, name: &str) -> Resu
     Ok(model.idx_q[id.0])
 }
 
-/// The support polygon: the listed `support` points, or else the wheel contacts of the
-/// drive and the casters.
-fn support_polygon(path: &Path, spec: &Spec, drive: DiffDrive) -> Result<SupportPolygon> {
+/// The height of the ground in the base frame (m): the mean height of the wheel joints'
+/// origins in the neutral configuration, base at the origin, minus the wheel radius (so a
+/// URDF rooted at axle height stands on the ground under its wheels, as in
+/// `WheeledModel::ground_z`); 0 without `base.wheel_joints`.
+fn ground_height(path: &Path, model: &Model, spec: &Spec) -> Result<f64> {
+    let Some(names) = &spec.base.wheel_joints else {
+        return Ok(0.0);
+    };
+    let mut data = Data::new(model);
+    crate::kinematics::forward_kinematics(model, &mut data, &neutral(model));
+    let mut z = 0.0;
+    for name in names {
+        let j = model
+            .joint_id(name)
+            .map_err(|e| file_error(path, "stability.base.wheel_joints", e))?;
+        if j.0 <= 1 {
+            return Err(file_error(
+                path,
+                "stability.base.wheel_joints",
+                format!("joint '{name}' is the base's root, not a wheel"),
+            ));
+        }
+        z += 0.5 * data.world_from_joint[j.0].translation.z;
+    }
+    Ok(z - spec.base.r_w)
+}
+
+/// The support polygon on the ground `ground_z`: the listed `support` points, or else the
+/// wheel contacts of the drive and the casters.
+fn support_polygon(
+    path: &Path,
+    spec: &Spec,
+    drive: DiffDrive,
+    ground_z: f64,
+) -> Result<SupportPolygon> {
     let points: Vec<Vector2<f64>> = match &spec.support {
         Some(s) => s.iter().map(|p| Vector2::new(p[0], p[1])).collect(),
         None => {
@@ -149,7 +185,7 @@ fn support_polygon(path: &Path, spec: &Spec, drive: DiffDrive) -> Result<Support
     } else {
         "stability.base"
     };
-    SupportPolygon::from_points(&points).map_err(|e| file_error(path, field, e))
+    SupportPolygon::from_points_at_height(&points, ground_z).map_err(|e| file_error(path, field, e))
 }
 
 /// Where the payload sits: the joint of the body that `payload_frame` (default the last
@@ -287,7 +323,8 @@ impl StabilityStudy {
         }
         let drive = DiffDrive::new(spec.base.r_w, spec.base.b, spec.base.d)
             .map_err(|e| file_error(path, "stability.base", e))?;
-        let poly = support_polygon(path, &spec, drive)?;
+        let ground_z = ground_height(path, &model, &spec)?;
+        let poly = support_polygon(path, &spec, drive, ground_z)?;
         let bodies: BodySet = spec
             .mhs_bodies
             .as_deref()
