@@ -15,6 +15,7 @@
 
 mod embed;
 mod map;
+mod numbers;
 mod robot3d;
 mod svgs;
 mod view3d;

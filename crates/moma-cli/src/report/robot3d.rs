@@ -276,7 +276,7 @@ impl RobotShapes {
         max: usize,
         scene: Vec<ReportShape>,
     ) -> moma::Result<ReportView3d> {
-        let idx = super::embed::decimate_indices(t.len().min(qs.len()), max, &[]);
+        let idx = super::numbers::decimate_indices(t.len().min(qs.len()), max, &[]);
         let mut data = Data::new(model);
         let mut poses = Vec::with_capacity(idx.len());
         for &i in &idx {

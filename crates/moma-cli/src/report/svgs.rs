@@ -1,7 +1,8 @@
 //! The static figures beside the report: the top view on the map and the time plots
 //! (through the CLI's line charts).
 
-use super::embed::{MAX_SAMPLES, decimate_indices, html_escape, kept_samples};
+use super::embed::{MAX_SAMPLES, html_escape, kept_samples};
+use super::numbers::decimate_indices;
 use super::{MissionReport, map};
 use crate::svg_plots::{Series, fmt_tick, line_chart, ticks};
 use std::fmt::Write;

@@ -4,7 +4,7 @@
 //! shapes; and its compact form on the page (frames thinned, poses as integers, meshes as
 //! base64 of 16-bit grid coordinates).
 
-use super::embed::{decimate_indices, num};
+use super::numbers::{decimate_indices, num};
 use crate::svg_map::b64;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
