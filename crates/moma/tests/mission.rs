@@ -684,3 +684,99 @@ fn a_run_length_error_names_the_field_the_user_set() {
     let e = err("[simulation]\ndt = 1e-9\ntime_limit = 60.0");
     assert!(e.contains("test.toml: simulation.time_limit: 60 s"), "{e}");
 }
+
+/// The recorded monitors agree with the recorded states evaluated independently: the
+/// clearance at every sample against a brute-force distance from the base to every
+/// occupied cell of the map (no distance transform, no search window), and the ZMP margin
+/// at the final rest state against the static margin of the centre of mass computed by
+/// `dynamics::center_of_mass` in the support polygon written out from the mission file's
+/// wheels and casters.
+#[test]
+fn recorded_monitors_match_an_independent_evaluation() {
+    // a goal within a metre of the obstacle near (7.5, 4.0), so the clearance is exact there
+    let goal = "[goal]\npose = [6.8, 3.0, 1.5707963]\nend_effector = [6.8, 3.7, 0.9]";
+    let m = parse(&mission_text(goal, "")).expect("valid mission");
+    let r = run(&m).expect("mission runs");
+    assert!(r.reached, "{:?}", r.reason);
+
+    // clearance: footprint radius 0.38 m, exact within 1 m beyond it
+    let grid = &m.map.grid;
+    let occupied = grid.obstacle_mask(moma::planning::grid::OCCUPIED, false);
+    let cells: Vec<(f64, f64)> = (0..grid.height)
+        .flat_map(|y| (0..grid.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| occupied[grid.index(x, y)])
+        .map(|(x, y)| (x as f64, y as f64))
+        .collect();
+    assert!(!cells.is_empty());
+    let mut compared = 0;
+    for (q, &recorded) in r.samples.q.iter().zip(&r.samples.clearance) {
+        let [fx, fy] = grid.world_to_cell_f(q[0], q[1]);
+        let cell_distance = cells
+            .iter()
+            .map(|&(x, y)| {
+                let dx = (x - fx).max(fx - (x + 1.0)).max(0.0);
+                let dy = (y - fy).max(fy - (y + 1.0)).max(0.0);
+                dx.hypot(dy)
+            })
+            .fold(f64::INFINITY, f64::min);
+        let truth = cell_distance * grid.resolution - 0.38;
+        if truth < 0.9 {
+            assert!(
+                (recorded - truth).abs() < 1e-9,
+                "clearance {recorded} m recorded, {truth} m by brute force at ({}, {})",
+                q[0],
+                q[1]
+            );
+            compared += 1;
+        } else {
+            // near and beyond the exact band's edge (decided on the distance transform's
+            // cell value) the monitor may report a lower bound, within 1.5 cells
+            assert!(recorded <= truth + 1e-9 && recorded >= truth - 1.5 * grid.resolution);
+        }
+    }
+    assert!(
+        compared > 100,
+        "only {compared} samples near obstacles; min {}",
+        r.min_clearance().unwrap()
+    );
+
+    // ZMP at rest: the centre of mass's ground projection in the base frame against the
+    // hull of the wheel contacts (0, ±0.22) and the casters (±0.24, ±0.16), counter-clockwise
+    let hull = [
+        (0.24, -0.16),
+        (0.24, 0.16),
+        (0.0, 0.22),
+        (-0.24, 0.16),
+        (-0.24, -0.16),
+        (0.0, -0.22),
+    ];
+    let last = r.samples.q.last().unwrap();
+    let model = &m.robot.model;
+    let mut data = moma::multibody::Data::new(model);
+    let com = moma::dynamics::center_of_mass(
+        model,
+        &mut data,
+        &nalgebra::DVector::from_vec(last.clone()),
+    );
+    let (s, c) = last[2].sin_cos();
+    let (wx, wy) = (com.x - last[0], com.y - last[1]);
+    let (px, py) = (c * wx + s * wy, -s * wx + c * wy);
+    let margin = (0..hull.len())
+        .map(|i| {
+            let (a, b) = (hull[i], hull[(i + 1) % hull.len()]);
+            let (ex, ey) = (b.0 - a.0, b.1 - a.1);
+            (ex * (py - a.1) - ey * (px - a.0)) / ex.hypot(ey)
+        })
+        .fold(f64::INFINITY, f64::min);
+    let recorded = r
+        .samples
+        .zmp_margin
+        .last()
+        .unwrap()
+        .expect("ZMP defined at rest");
+    assert!(margin > 0.0);
+    assert!(
+        (recorded - margin).abs() < 1e-4,
+        "ZMP margin {recorded} m recorded, static margin {margin} m"
+    );
+}
