@@ -6,6 +6,14 @@
 //! body made of its child link and every link attached to it through fixed joints
 //! (their inertias are merged; each such link and fixed joint keeps a [`Frame`]).
 //!
+//! Storage is Pinocchio's: the tree lives in per-joint arrays with `parents[i] < i`. The
+//! URDF loader orders joints depth-first (child joints by name, as urdfdom); a model
+//! built in another parents-first order is valid, and the CRBA then takes a slower
+//! ancestor walk, decided once in [`Data::new`]. [`JointType`] has axis-aligned revolute
+//! and prismatic variants (a unit motion subspace: the algorithms add and cross a joint's
+//! twist by its one coordinate), variants about an unaligned axis, `Planar` and
+//! `FreeFlyer`.
+//!
 //! Root joints ([`RootJoint`]):
 //! * `Fixed`: the root link is welded to the world (its inertia is ignored, as in
 //!   Pinocchio).

@@ -4,6 +4,12 @@
 //! Conventions (as Pinocchio): spatial vectors are `[linear; angular]`; a transform
 //! `a_from_b` maps coordinates of frame `b` into frame `a`; a [`Motion`] expressed in a
 //! frame is the twist of the body at that frame's origin, with that frame's axes.
+//!
+//! A transform is a small [`SE3`] (rotation matrix and translation) rather than
+//! nalgebra's `Isometry3`, because moving spatial vectors is cheaper with the rotation
+//! stored as a matrix. Every joint angle's sine and cosine is [`trig::sin_cos`],
+//! branch-free arithmetic that vectorises, so the multi-state RNEA gives the same bits as
+//! the single one.
 
 mod inertia;
 mod motion;
