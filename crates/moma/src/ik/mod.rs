@@ -28,7 +28,13 @@
 //!
 //! Tasks on real models (frame pose of a URDF arm, whole-body pose of a mobile
 //! manipulator) live in [`tasks`]; base-placement maps (IK and a manipulability measure
-//! over a grid of base poses) in [`placement`].
+//! over a grid of base poses) in [`placement`]; [`model::ModelFrame`] binds a task to a
+//! frame of a [`Model`](crate::multibody::Model). [`placement`] evaluates the base-pose
+//! grid with rayon, one workspace per worker, each pose solved on its own from the same
+//! starting points (seed, then fixed restarts), so the map depends neither on the thread
+//! count nor on the visiting order; its whole-body measure takes the frame Jacobian of the
+//! arm mounted on a planar root ([`crate::multibody::mount_on_root`]) from
+//! [`crate::kinematics`].
 
 pub mod model;
 pub mod placement;

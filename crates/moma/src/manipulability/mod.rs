@@ -28,6 +28,11 @@
 //!
 //! Maps of these measures over base placements need IK at every sample and live in
 //! [`crate::ik::placement`].
+//!
+//! Every measure comes from one SVD of the Jacobian given, the crate's own one-sided
+//! Jacobi on the rows, not nalgebra's: with singular vectors requested, nalgebra 0.35
+//! returns wrong values and vectors for some rank-deficient matrices, which are exactly
+//! the singular postures the measures are asked about.
 
 use crate::error::{Error, Result, ensure_finite};
 use nalgebra::{DMatrix, DVector};

@@ -35,6 +35,12 @@
 //!
 //! Every function writes into a [`SpaceData`] workspace allocated once per model and does
 //! not allocate.
+//!
+//! The simulation is in [`crate::sim::free_floating`]: its ODE keeps the base quaternion in
+//! the state and projects it onto the unit sphere; control runs are kinematic (joint-rate
+//! servos through J*, the base following from momentum conservation); a capture adds the
+//! target's inertia to the grasping body and solves the impulsive momentum balance.
+//! `docs/space.md` maps SpaceDyn's functions to these.
 
 use crate::dynamics::{centroidal_momentum_matrix, crba};
 use crate::error::{Error, Result};
