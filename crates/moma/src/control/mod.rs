@@ -16,7 +16,15 @@
 //! | [`lyapunov`] | Lyapunov monitors: V along a run, dV/dt against the analytic rate, monotonicity violations with their time |
 //!
 //! Layering: `control` uses `kinematics`, `dynamics` and `mobile`; it integrates nothing
-//! itself (closed loops are run by `closed_form::control_cases` and the simulator).
+//! itself (closed loops are run by `closed_form::control_cases`, which runs the unicycle
+//! case schema of `moma eval` with the DOP853 driver, and by the simulator,
+//! [`crate::sim::closed_loop`], whose [`crate::sim::feedback`] binds these laws to plants).
+//!
+//! Operational-space control keeps every buffer in an [`osc::OscData`] workspace: two
+//! factorisations with the crate's one in-place Cholesky, and plain loops for the small
+//! products, because nalgebra's dynamic `gemm` allocates a packing buffer. The reduced
+//! variant builds `J N_C`, `N_Cᵀ H N_C` and the reduced biases from the [`crate::mobile`]
+//! terms.
 
 pub mod coordinated;
 pub mod lyapunov;

@@ -5,6 +5,8 @@
 //! [`Result`], so a singular mass matrix or other numerical trouble inside `f` stops the
 //! integration with that error. Non-finite states and states whose magnitude exceeds
 //! [`AdaptiveOptions::blowup`] are reported as [`Error::Numerical`] with the time.
+//! The adaptive driver lands exactly on requested output times, keeps step statistics
+//! ([`StepStats`]), reports a step-size underflow and stops at a step budget.
 
 use crate::error::{Error, Result};
 
