@@ -20,6 +20,26 @@
 //! A run that starts but cannot finish (an unreachable or sealed goal, a posture under
 //! which every motion tips, a time-out) returns `reached: false` and a reason; input
 //! errors are [`crate::Error`]s.
+//!
+//! # Files
+//!
+//! * [`scenario`] parses and validates the mission file (serde with unknown keys refused,
+//!   every count bounded before allocation) into a [`Mission`]: the loaded map, the
+//!   `WheeledModel`, the end-effector frame and the arm postures. The map and URDF are
+//!   parsed through a [`scenario::Loader`] (the file system, [`scenario::FileSystem`], on
+//!   every normal path; the fuzz targets hand in the shipped files parsed once, and sweeps
+//!   pass theirs through `Sweep::from_toml_str_with`).
+//! * `plan` owns the known world: the occupancy mask (map plus appeared obstacles), its
+//!   distance transform (for the clearance monitor) and one D* Lite on the
+//!   footprint-dilated C-space, so an obstacle is `move_start` + `set_blocked` and a
+//!   re-plan one incremental `compute`.
+//! * [`mod@reference`] turns a cell path into timed samples (curvature-bounded smoothing from
+//!   the exact poses, then `time_parameterize_curve` under the platform and tip-over
+//!   limits from the current speed).
+//! * `run` is the closed loop at a fixed control period equal to the RK4 step (the step
+//!   by step is in `ARCHITECTURE.md`); its results are plain columns ([`Samples`]), plans
+//!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
+//! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 pub(crate) mod plan;
 pub mod planned;

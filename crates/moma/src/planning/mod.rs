@@ -11,6 +11,41 @@
 //! caller's [`StateValidity`] check): a [`JointSpace`] (joint-limit box, weighted norm,
 //! segment-check resolution), [`rrt_connect()`], [`shortcut()`], then
 //! [`time_optimal()`] (circular blends, velocity and acceleration limits).
+//!
+//! # How it is built
+//!
+//! * Loaders ([`rosmap`], [`movingai`]) produce an [`OccupancyGrid`] stored like
+//!   `nav_msgs/OccupancyGrid` (row 0 at the bottom for ROS maps).
+//! * The configuration space comes from one exact linear-time distance transform
+//!   ([`edt`]): thresholding it gives disk dilation, a lookup gives nav2 inflation costs
+//!   ([`costmap`]); polygonal footprints get per-heading masks.
+//! * Searches run on a [`SearchGrid`] with a one-cell blocked border, reusable workspaces
+//!   and generation counters ([`mod@astar`], [`dstar_lite`], [`grid3`]). The search grid keeps
+//!   a one-byte legal-move mask per cell (8-connected, no corner cutting), updated by
+//!   [`SearchGrid::set_free`] for the 3 × 3 block around a change; A* and D* Lite read only
+//!   that byte to enumerate moves.
+//! * Grid A* orders by an exact fixed-point integer f (straight step 2^k, diagonal √2·2^k
+//!   rounded to an odd integer) in a calendar queue over A*'s bounded key window (a radix
+//!   heap for the cost-aware search), f ties last-in-first-out, with a 4-byte g per cell
+//!   (rerun on an 8-byte g when a cost outgrows 32 bits), and reports the length exactly
+//!   as n_straight + n_diagonal·√2.
+//! * D* Lite (Koenig and Likhachev's optimized version) uses the same integer costs, so
+//!   its re-planned cost equals A* from scratch bit for bit; it keeps g and rhs per cell,
+//!   an indexed 4-ary heap with each inconsistent cell once, re-keys stale keys in place
+//!   (or in one linear pass once many are stale), and decides with a budgeted flood fill
+//!   when the goal is cut off instead of expanding the rest of the map. `clone_from`
+//!   snapshots a planner without allocating once the copy has reached the source's size.
+//! * [`potential`] follows the chapter's formula in a Euclidean form (which can get stuck,
+//!   and says where) and a geodesic form (no local minima; the proof is in its docs).
+//! * [`smooth`] and [`trajectory`] turn a cell path into a differential-drive reference
+//!   (t, x, y, θ, v, ω). [`curvature`] turns it into a path with continuous, bounded
+//!   curvature between exact poses (pieces of linear curvature, sampled at every piece
+//!   boundary so curvature is linear between samples), and
+//!   [`trajectory::time_parameterize_curve`] times it by reachability analysis with every
+//!   limit linear in the squared speeds; the tip-over limits enter as four plain numbers,
+//!   so `planning` depends on nothing above `error`.
+//! * [`pipeline`] is the one call of `moma plan` and the Python `plan` (map frame, point,
+//!   disk or polygon footprint, search, smoothing, stop-and-turn timing).
 
 pub mod astar;
 pub mod costmap;

@@ -38,6 +38,16 @@
 //! the study, and the timing columns (named `*_time_s`) last. Values are written with
 //! Rust's shortest round-trip formatting, so the result columns are byte-identical
 //! whatever the thread count, the shard count or the machine's load.
+//!
+//! # How it runs
+//!
+//! A [`Sweep`] is a validated sweep file: a study (stability or placement, each holding
+//! its loaded robot and set-up immutably; mission, holding the parsed mission file that
+//! each point modifies, re-validates and runs), the parameters in file order and the
+//! sampling. [`Sweep::run`] evaluates a list of indices on a rayon pool with one study
+//! workspace per worker (the stability study's workspace holds its own copy of the model,
+//! whose payload body inertia it sets per point); a [`Table`] keeps typed cells
+//! ([`Value`]); [`merge`] joins shard tables.
 
 mod mission;
 mod placement;
