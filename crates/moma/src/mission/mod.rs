@@ -21,12 +21,14 @@
 //! which every motion tips, a time-out) returns `reached: false` and a reason; input
 //! errors are [`crate::Error`]s.
 
+pub mod footprint;
 pub(crate) mod plan;
 pub mod planned;
 pub mod reference;
 mod run;
 pub mod scenario;
 
+pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
 pub use reference::{RefSample, Reference};
 pub use run::{Event, MissionResult, PlanRecord, Samples, WallTimes, run, transport_tip_limits};
