@@ -840,7 +840,7 @@ fn mission_replan_case() -> MissionReplan {
     // radius + |d| + half a cell of the distance transform of the occupied cells
     let mut occupied = grid.obstacle_mask(planning::grid::OCCUPIED, f.map.unknown_is_obstacle);
     let dist = planning::distance_transform(&occupied, grid.width, grid.height);
-    let r_cells = (f.robot.footprint_radius + f.robot.drive.d.abs()) / res + 0.5;
+    let r_cells = (m.footprint.radius + m.robot.base.drive.d.abs()) / res + 0.5;
     let blocked: Vec<bool> = dist.iter().map(|&d| f64::from(d) <= r_cells).collect();
     let cs = SearchGrid::from_obstacles(&blocked, grid.width, grid.height).unwrap();
     let sc = grid

@@ -94,6 +94,7 @@ fn summary(
         })
         .collect();
     let mut doc = moma::mission::summary(m, r);
+    doc.insert("footprint".into(), m.footprint.to_json());
     doc.insert("replan_timing".into(), json!(replan_search));
     doc.insert("wall_time_s".into(), json!(wall_total));
     doc.insert(
@@ -285,7 +286,7 @@ fn mission_report(
         .unwrap_or(Path::new("."))
         .join(&m.file.robot.urdf);
     let model = &m.robot.model;
-    let view3d = RobotShapes::from_urdf(&urdf, model, &[])
+    let view3d = RobotShapes::from_urdf(&urdf, model, &m.package_dirs)
         .and_then(|shapes| shapes.view(model, &r.samples.t, &r.samples.q, MAX_FRAMES, Vec::new()))
         .map_err(|e| anyhow!("{}: the 3-D view: {e}", m.path.display()))?;
     let g = &m.map.grid;
@@ -317,7 +318,7 @@ fn mission_report(
             origin,
             cells,
         },
-        footprint_radius: f.robot.footprint_radius,
+        footprint_radius: m.footprint.radius,
         start: f.start.pose,
         goal: f.goal.pose,
         end_effector_target: f.goal.end_effector,

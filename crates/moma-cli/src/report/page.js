@@ -579,6 +579,10 @@
     'wall_time.report_s': ['wall time, report', 's'],
     real_time_factor: ['real-time factor (simulated / wall time)', ''],
     files: ['files written', ''], replan_timing: ['re-plan timing', ''],
+    'footprint.source': ['footprint from', ''], 'footprint.radius': ['footprint radius (C-space disk)', 'm'],
+    'footprint.posture': ['footprint posture', ''],
+    'footprint.circumscribed': ['footprint polygon, circumscribed radius', 'm'],
+    'footprint.padding': ['footprint padding', 'm'], 'footprint.polygon': ['footprint polygon (base frame x, y)', 'm'],
   };
   function cellText(v) {
     if (v === null || v === undefined) return '—';

@@ -41,12 +41,14 @@
 //!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
+pub mod footprint;
 pub(crate) mod plan;
 pub mod planned;
 pub mod reference;
 mod run;
 pub mod scenario;
 
+pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
 pub use reference::{RefSample, Reference};
 pub use run::{Event, MissionResult, PlanRecord, Samples, WallTimes, run, transport_tip_limits};

@@ -373,7 +373,7 @@ impl<'m> Runner<'m> {
         let (planner, first_path, first_search) = Planner::new(
             &m.map.grid,
             f.map.unknown_is_obstacle,
-            f.robot.footprint_radius,
+            m.footprint.radius,
             d,
             [s0[0], s0[1]],
             [g0[0], g0[1]],
@@ -1586,7 +1586,7 @@ impl Controller {
             time_limit,
             rec_every,
             res: m.map.grid.resolution,
-            r_foot: f.robot.footprint_radius,
+            r_foot: m.footprint.radius,
             goal: f.goal.pose,
             d,
             goal_axle: axle_pose(f.goal.pose, d),

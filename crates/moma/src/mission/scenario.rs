@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::footprint::MissionFootprint;
+use crate::collision::{GeometryModel, GeometryOptions};
 use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
 use crate::multibody::{FrameIndex, RootJoint};
@@ -64,16 +66,20 @@ pub struct MapSpec {
 pub struct RobotSpec {
     /// URDF file; its root link is the base frame.
     pub urdf: PathBuf,
-    /// Differential drive `{ r_w, b, d }` (m).
-    pub drive: DriveSpec,
-    /// `[left, right]` wheel joints of the URDF (optional, as in `moma simulate`).
+    /// Differential drive: `{ r_w, b, d }` (m), or `"urdf"` to read it from the URDF's
+    /// wheel joints (`wheel_joints`) and wheel links.
+    pub drive: DriveSource,
+    /// `[left, right]` wheel joints of the URDF (optional, as in `moma simulate`;
+    /// required with `drive = "urdf"`).
     #[serde(default)]
     pub wheel_joints: Option<[String; 2]>,
-    /// Passive casters, as in `moma simulate`.
+    /// Passive casters, as in `moma simulate` (at least one when given).
     #[serde(default)]
-    pub casters: Vec<CasterSpec>,
-    /// Radius (m) of the disk that covers the base, for the configuration space.
-    pub footprint_radius: f64,
+    pub casters: Option<Vec<CasterSpec>>,
+    /// Radius (m) of the disk that covers the base, for the configuration space (or
+    /// `footprint`).
+    #[serde(default)]
+    pub footprint_radius: Option<f64>,
     /// The end-effector frame (default: the URDF's last link).
     #[serde(default)]
     pub end_effector: Option<String>,
@@ -83,10 +89,108 @@ pub struct RobotSpec {
     /// Gravity magnitude (m/s², default 9.81).
     #[serde(default)]
     pub gravity: Option<f64>,
+    // --- a robot described by its URDF package (drive, casters, footprint, arm joints) ---
+    /// Folders against which `package://PKG/...` mesh URIs resolve (relative to the
+    /// mission file), as `moma collision --package-dir`.
+    #[serde(default)]
+    pub package_dirs: Vec<PathBuf>,
+    /// A casters file (`[[casters]]` tables, [`crate::mobile::read_casters`]; relative to
+    /// the mission file) instead of `casters`.
+    #[serde(default)]
+    pub casters_file: Option<PathBuf>,
+    /// The footprint from the robot: `"robot"` or `{ from = "robot", padding = m }`
+    /// instead of `footprint_radius`.
+    #[serde(default)]
+    pub footprint: Option<FootprintSpec>,
+    /// The joints `transport_posture` and `start.q_arm` give angles for, in that order
+    /// (default: every arm joint in model order); the arm joints not named stay at 0.
+    #[serde(default)]
+    pub arm_joints: Option<Vec<String>>,
+}
+
+/// `robot.drive`: given, or read from the URDF.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DriveSource {
+    /// `drive = "urdf"`: [`crate::mobile::wheeled_base_from_urdf`] on `wheel_joints`.
+    Urdf,
+    /// `drive = { r_w, b, d }`.
+    Given(DriveSpec),
+}
+
+impl<'de> Deserialize<'de> for DriveSource {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(s) if s == "urdf" => Ok(Self::Urdf),
+            toml::Value::String(s) => Err(D::Error::custom(format!(
+                "expected \"urdf\" or a table {{ r_w, b, d }}, got \"{s}\""
+            ))),
+            other => DriveSpec::deserialize(other)
+                .map(Self::Given)
+                .map_err(|e| D::Error::custom(e.message())),
+        }
+    }
+}
+
+impl Serialize for DriveSource {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Self::Urdf => s.serialize_str("urdf"),
+            Self::Given(d) => d.serialize(s),
+        }
+    }
+}
+
+/// `robot.footprint`: `"robot"` or `{ from = "robot", padding = m }`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FootprintSpec {
+    /// Added to the radius of the robot's footprint (m, default 0).
+    pub padding: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FootprintTable {
+    from: String,
+    #[serde(default)]
+    padding: f64,
+}
+
+impl<'de> Deserialize<'de> for FootprintSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let from_robot = |from: &str| {
+            if from == "robot" {
+                Ok(())
+            } else {
+                Err(D::Error::custom(format!(
+                    "the footprint comes \"from\" = \"robot\" (or give robot.footprint_radius), got \"{from}\""
+                )))
+            }
+        };
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(s) => from_robot(&s).map(|()| Self { padding: 0.0 }),
+            other => {
+                let t = FootprintTable::deserialize(other)
+                    .map_err(|e| D::Error::custom(e.message()))?;
+                from_robot(&t.from).map(|()| Self { padding: t.padding })
+            }
+        }
+    }
+}
+
+impl Serialize for FootprintSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct as _;
+        let mut t = s.serialize_struct("FootprintSpec", 2)?;
+        t.serialize_field("from", "robot")?;
+        t.serialize_field("padding", &self.padding)?;
+        t.end()
+    }
 }
 
 /// Differential-drive geometry.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DriveSpec {
     /// Wheel radius (m).
@@ -293,6 +397,10 @@ pub struct Mission {
     pub q_arm0: Vec<f64>,
     /// Output folder, resolved against the mission file's folder.
     pub output_dir: PathBuf,
+    /// The footprint disk the configuration space and the clearance use.
+    pub footprint: MissionFootprint,
+    /// `robot.package_dirs`, resolved against the mission file's folder.
+    pub package_dirs: Vec<PathBuf>,
 }
 
 /// Reads and validates a mission file.
@@ -335,6 +443,20 @@ pub trait Loader {
     /// # Errors
     /// As [`crate::io::urdf::model_from_urdf_file`].
     fn urdf(&self, path: &Path, root: RootJoint) -> Result<crate::multibody::Model>;
+    /// The collision geometry of `model`, loaded from the URDF at `path`
+    /// ([`GeometryModel::from_urdf`]; read only for `drive = "urdf"` and
+    /// `footprint = "robot"`).
+    ///
+    /// # Errors
+    /// As [`GeometryModel::from_urdf`].
+    fn geometry(
+        &self,
+        model: &crate::multibody::Model,
+        path: &Path,
+        options: &GeometryOptions,
+    ) -> Result<GeometryModel> {
+        GeometryModel::from_urdf(model, path, options)
+    }
 }
 
 /// The file system: every call parses the file anew.
@@ -416,8 +538,10 @@ pub fn from_file_with(
     check_simulation(&file, path)?;
     check_obstacles_and_robot(&file, path)?;
     let map = load_mission_map(&file, path, base, files)?;
-    let (robot, ee_frame) = load_robot(&file, path, base, files)?;
+    let package_dirs = package_dirs(&file, path, base)?;
+    let (robot, ee_frame, geometry) = load_robot(&file, path, base, &package_dirs, files)?;
     let (transport, q_arm0) = arm_postures(&file, &robot, path)?;
+    let footprint = mission_footprint(&file, path, &map, &robot, geometry.as_ref(), &transport)?;
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -434,6 +558,8 @@ pub fn from_file_with(
         transport,
         q_arm0,
         output_dir,
+        footprint,
+        package_dirs,
     })
 }
 
@@ -448,9 +574,6 @@ fn check_limits_and_gains(file: &MissionFile, path: &Path) -> Result<()> {
         ("limits.alpha_max", l.alpha_max),
         ("limits.mu", l.mu),
         ("limits.kappa_max", l.kappa_max),
-        ("robot.footprint_radius", file.robot.footprint_radius),
-        ("robot.drive.r_w", file.robot.drive.r_w),
-        ("robot.drive.b", file.robot.drive.b),
         ("goal.position_tolerance", file.goal.position_tolerance),
         ("goal.heading_tolerance", file.goal.heading_tolerance),
         (
@@ -464,6 +587,13 @@ fn check_limits_and_gains(file: &MissionFile, path: &Path) -> Result<()> {
         ),
     ] {
         positive(path, n, x)?;
+    }
+    if let Some(r) = file.robot.footprint_radius {
+        positive(path, "robot.footprint_radius", r)?;
+    }
+    if let DriveSource::Given(d) = &file.robot.drive {
+        positive(path, "robot.drive.r_w", d.r_w)?;
+        positive(path, "robot.drive.b", d.b)?;
     }
     if !(l.tip_fraction > 0.0 && l.tip_fraction <= 1.0) {
         return Err(field_err(
@@ -564,8 +694,10 @@ fn check_obstacles_and_robot(file: &MissionFile, path: &Path) -> Result<()> {
         }
         positive(path, &format!("{f}.radius"), o.radius)?;
     }
-    for (k, cs) in file.robot.casters.iter().enumerate() {
-        finite(path, &format!("robot.casters[{k}].position"), &cs.position)?;
+    if let Some(list) = &file.robot.casters
+        && let Some(problem) = crate::mobile::caster_list_problem(&casters_of(list))
+    {
+        return Err(Error::parse(path, format!("robot.casters{problem}")));
     }
     if let Some(g) = file.robot.gravity {
         positive(path, "robot.gravity", g)?;
@@ -573,8 +705,7 @@ fn check_obstacles_and_robot(file: &MissionFile, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Loads the map (`map.file`, `map.resolution`) and checks that the footprint is not
-/// larger than the whole map.
+/// Loads the map (`map.file`, `map.resolution`).
 fn load_mission_map(
     file: &MissionFile,
     path: &Path,
@@ -588,53 +719,109 @@ fn load_mission_map(
     let map = files
         .map(&map_path, file.map.resolution)
         .map_err(|e| field_err(path, "map.file", e))?;
-    let grid = &map.grid;
-    // A footprint larger than the map itself fits nowhere.
-    let extent = grid.width.max(grid.height) as f64 * grid.resolution;
-    if file.robot.footprint_radius > extent {
-        return Err(field_err(
-            path,
-            "robot.footprint_radius",
-            format!(
-                "{} m is larger than the whole map ({extent} m): it fits nowhere",
-                file.robot.footprint_radius
-            ),
-        ));
-    }
     Ok(map)
 }
 
+/// `robot.casters` as the mobile module's casters.
+fn casters_of(list: &[CasterSpec]) -> Vec<Caster> {
+    list.iter()
+        .map(|c| Caster {
+            name: c.name.clone(),
+            position: c.position,
+        })
+        .collect()
+}
+
+/// `robot.package_dirs` resolved against the mission file's folder; each must be a folder.
+fn package_dirs(file: &MissionFile, path: &Path, base: &Path) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::with_capacity(file.robot.package_dirs.len());
+    for (k, d) in file.robot.package_dirs.iter().enumerate() {
+        let dir = lexical_clean(&base.join(d));
+        if !dir.is_dir() {
+            return Err(field_err(
+                path,
+                &format!("robot.package_dirs[{k}]"),
+                format!("{} is not a folder", dir.display()),
+            ));
+        }
+        out.push(dir);
+    }
+    Ok(out)
+}
+
+/// The casters: `robot.casters`, `robot.casters_file` (read here), or none.
+fn mission_casters(file: &MissionFile, path: &Path, base: &Path) -> Result<Vec<Caster>> {
+    match (&file.robot.casters, &file.robot.casters_file) {
+        (Some(_), Some(_)) => Err(field_err(
+            path,
+            "robot.casters_file",
+            "give the casters either in robot.casters or in a casters file, not both",
+        )),
+        (Some(list), None) => Ok(casters_of(list)),
+        (None, Some(f)) => crate::mobile::read_casters(&base.join(f))
+            .map_err(|e| field_err(path, "robot.casters_file", e)),
+        (None, None) => Ok(Vec::new()),
+    }
+}
+
 /// Loads the robot (URDF with a planar root, drive, casters, support polygon) and finds
-/// its end-effector frame.
+/// its end-effector frame; the collision geometry too when the drive or the footprint
+/// come from it (`package_dirs` resolve its meshes).
 fn load_robot(
     file: &MissionFile,
     path: &Path,
     base: &Path,
+    package_dirs: &[PathBuf],
     files: &dyn Loader,
-) -> Result<(WheeledModel, FrameIndex)> {
+) -> Result<(WheeledModel, FrameIndex, Option<GeometryModel>)> {
     let urdf_path = base.join(&file.robot.urdf);
     let mut model = files
         .urdf(&urdf_path, RootJoint::Planar)
         .map_err(|e| field_err(path, "robot.urdf", e))?;
     model.gravity = nalgebra::Vector3::new(0.0, 0.0, -file.robot.gravity.unwrap_or(9.81));
-    let drive = DiffDrive::new(file.robot.drive.r_w, file.robot.drive.b, file.robot.drive.d)
-        .map_err(|e| field_err(path, "robot.drive", e))?;
-    let wbase = WheeledBase {
-        drive,
-        casters: file
-            .robot
-            .casters
-            .iter()
-            .map(|c| Caster {
-                name: c.name.clone(),
-                position: c.position,
-            })
-            .collect(),
-        wheel_joints: file.robot.wheel_joints.clone(),
+    let casters = mission_casters(file, path, base)?;
+    let geometry = if file.robot.drive == DriveSource::Urdf || file.robot.footprint.is_some() {
+        let options = GeometryOptions {
+            package_dirs: package_dirs.to_vec(),
+            srdf: None,
+        };
+        Some(
+            files
+                .geometry(&model, &urdf_path, &options)
+                .map_err(|e| field_err(path, "robot.urdf (collision geometry)", e))?,
+        )
+    } else {
+        None
+    };
+    let wbase = match (&file.robot.drive, &geometry) {
+        (DriveSource::Given(d), _) => WheeledBase {
+            drive: DiffDrive::new(d.r_w, d.b, d.d)
+                .map_err(|e| field_err(path, "robot.drive", e))?,
+            casters,
+            wheel_joints: file.robot.wheel_joints.clone(),
+        },
+        (DriveSource::Urdf, Some(gm)) => {
+            let [left, right] = file.robot.wheel_joints.as_ref().ok_or_else(|| {
+                field_err(
+                    path,
+                    "robot.wheel_joints",
+                    "drive = \"urdf\" reads the drive from the wheel joints: name them \
+                     ([left, right])",
+                )
+            })?;
+            crate::mobile::wheeled_base_from_urdf(&model, gm, [left, right], casters)
+                .map_err(|e| field_err(path, "robot.wheel_joints", e))?
+        }
+        (DriveSource::Urdf, None) => unreachable!("the geometry is loaded for drive = \"urdf\""),
     };
     let robot = WheeledModel::new(model, wbase).map_err(|e| field_err(path, "robot", e))?;
+    let casters_field = if file.robot.casters_file.is_some() {
+        "robot.casters_file"
+    } else {
+        "robot.casters"
+    };
     crate::stability::SupportPolygon::from_wheeled_base(&robot.base)
-        .map_err(|e| field_err(path, "robot.casters", format!("support polygon: {e}")))?;
+        .map_err(|e| field_err(path, casters_field, format!("support polygon: {e}")))?;
     let ee_frame = match &file.robot.end_effector {
         Some(n) => robot
             .model
@@ -642,17 +829,94 @@ fn load_robot(
             .map_err(|e| field_err(path, "robot.end_effector", e))?,
         None => robot.model.last_link_frame(),
     };
-    Ok((robot, ee_frame))
+    Ok((robot, ee_frame, geometry))
 }
 
-/// The transport posture and the start arm posture (each checked against the arm's size
-/// and joint limits; defaults: each other, else zero).
+/// The footprint disk: `robot.footprint_radius` or the robot's footprint at the
+/// transport posture (exactly one of `footprint_radius` and `footprint`), and no larger
+/// than the whole map.
+fn mission_footprint(
+    file: &MissionFile,
+    path: &Path,
+    map: &LoadedMap,
+    robot: &WheeledModel,
+    geometry: Option<&GeometryModel>,
+    transport: &[f64],
+) -> Result<MissionFootprint> {
+    let (fp, field) = match (file.robot.footprint_radius, &file.robot.footprint, geometry) {
+        (Some(_), Some(_), _) => {
+            return Err(field_err(
+                path,
+                "robot.footprint",
+                "give either robot.footprint_radius or robot.footprint, not both",
+            ));
+        }
+        (None, None, _) => {
+            return Err(field_err(
+                path,
+                "robot.footprint_radius",
+                "missing: give the radius (m) or robot.footprint = \"robot\"",
+            ));
+        }
+        (Some(r), None, _) => (MissionFootprint::given(r), "robot.footprint_radius"),
+        (None, Some(spec), Some(gm)) => {
+            if !(spec.padding.is_finite() && spec.padding >= 0.0) {
+                return Err(field_err(
+                    path,
+                    "robot.footprint.padding",
+                    format!("must be a finite distance >= 0, got {}", spec.padding),
+                ));
+            }
+            (
+                MissionFootprint::from_robot(robot, gm, transport, spec.padding),
+                "robot.footprint",
+            )
+        }
+        (None, Some(_), None) => unreachable!("the geometry is loaded for footprint = \"robot\""),
+    };
+    if !(fp.radius.is_finite() && fp.radius > 0.0) {
+        return Err(field_err(
+            path,
+            field,
+            format!(
+                "the robot's collision geometry gives a footprint of radius {} m",
+                fp.radius
+            ),
+        ));
+    }
+    // A footprint larger than the map itself fits nowhere.
+    let grid = &map.grid;
+    let extent = grid.width.max(grid.height) as f64 * grid.resolution;
+    if fp.radius > extent {
+        return Err(field_err(
+            path,
+            field,
+            format!(
+                "{} m is larger than the whole map ({extent} m): it fits nowhere",
+                fp.radius
+            ),
+        ));
+    }
+    Ok(fp)
+}
+
+/// The transport posture and the start arm posture, one angle per arm joint (each checked
+/// against the arm's size and joint limits; defaults: each other, else zero). With
+/// `robot.arm_joints` the file lists the named joints only and the others stay at zero.
 fn arm_postures(
     file: &MissionFile,
     robot: &WheeledModel,
     path: &Path,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
-    let na = robot.arm_dofs().len();
+    let m = &robot.model;
+    let arm = robot.arm_dofs();
+    // the arm slots (indices into arm_dofs) the file's lists fill
+    let slots: Vec<usize> = match &file.robot.arm_joints {
+        None => (0..arm.len()).collect(),
+        Some(names) => arm_joint_slots(names, robot, path)?,
+    };
+    let na = slots.len();
+    let name_of = |k: usize| m.names[m.joint_of_dof[arm[k]].0].clone();
     let check_arm = |field: &str, q: &[f64]| -> Result<()> {
         if q.len() != na {
             return Err(field_err(
@@ -662,8 +926,8 @@ fn arm_postures(
             ));
         }
         finite(path, field, q)?;
-        let m = &robot.model;
-        for (k, &i) in robot.arm_dofs().iter().enumerate() {
+        for (k, &slot) in slots.iter().enumerate() {
+            let i = arm[slot];
             let (lo, hi) = (m.lower_position_limit[i], m.upper_position_limit[i]);
             if q[k] < lo || q[k] > hi {
                 return Err(field_err(
@@ -671,7 +935,8 @@ fn arm_postures(
                     field,
                     format!(
                         "entry {k} ({}) = {} lies outside the joint limits [{lo}, {hi}]",
-                        m.names[m.joint_of_dof[i].0], q[k]
+                        name_of(slot),
+                        q[k]
                     ),
                 ));
             }
@@ -695,7 +960,55 @@ fn arm_postures(
         .q_arm
         .clone()
         .unwrap_or_else(|| transport.clone());
-    Ok((transport, q_arm0))
+    // every arm joint: the listed ones from the file, the others at zero
+    let full = |listed: &[f64]| {
+        let mut q = vec![0.0; arm.len()];
+        for (&slot, &x) in slots.iter().zip(listed) {
+            q[slot] = x;
+        }
+        q
+    };
+    Ok((full(&transport), full(&q_arm0)))
+}
+
+/// The arm slots of the joints `robot.arm_joints` names: each an arm joint (not the
+/// platform or a tracked wheel), named once; the arm joints left out must admit 0.
+fn arm_joint_slots(names: &[String], robot: &WheeledModel, path: &Path) -> Result<Vec<usize>> {
+    let m = &robot.model;
+    let arm = robot.arm_dofs();
+    let mut slots = Vec::with_capacity(names.len());
+    for (k, n) in names.iter().enumerate() {
+        let field = format!("robot.arm_joints[{k}]");
+        let j = m.joint_id(n).map_err(|e| field_err(path, &field, e))?;
+        let slot = arm
+            .iter()
+            .position(|&i| m.joint_of_dof[i] == j)
+            .ok_or_else(|| {
+                field_err(
+                    path,
+                    &field,
+                    format!("'{n}' is not an arm joint (the platform, a wheel or a fixed joint)"),
+                )
+            })?;
+        if slots.contains(&slot) {
+            return Err(field_err(path, &field, format!("'{n}' is named twice")));
+        }
+        slots.push(slot);
+    }
+    for (slot, &i) in arm.iter().enumerate() {
+        let (lo, hi) = (m.lower_position_limit[i], m.upper_position_limit[i]);
+        if !slots.contains(&slot) && (lo > 0.0 || hi < 0.0) {
+            return Err(field_err(
+                path,
+                "robot.arm_joints",
+                format!(
+                    "'{}' is not named, so it stays at 0, outside its joint limits [{lo}, {hi}]",
+                    m.names[m.joint_of_dof[i].0]
+                ),
+            ));
+        }
+    }
+    Ok(slots)
 }
 
 /// `path` with `.` components dropped and each `..` cancelling the component before it

@@ -205,27 +205,39 @@ pub fn casters_from_str(text: &str, path: &Path) -> Result<Vec<Caster>> {
         });
         parse(format!("{at}{}", e.message().trim().replace('\n', "; ")))
     })?;
-    if file.casters.is_empty() {
-        return Err(parse("casters: the list is empty".into()));
-    }
-    let mut out: Vec<Caster> = Vec::with_capacity(file.casters.len());
-    for (k, c) in file.casters.into_iter().enumerate() {
-        if c.name.trim().is_empty() {
-            return Err(parse(format!("casters[{k}].name: a caster needs a name")));
-        }
-        if out.iter().any(|o| o.name == c.name) {
-            return Err(parse(format!(
-                "casters[{k}].name: '{}' is named twice",
-                c.name
-            )));
-        }
-        if !c.position.iter().all(|x| x.is_finite()) {
-            return Err(parse(format!("casters[{k}].position: not finite")));
-        }
-        out.push(Caster {
+    let casters: Vec<Caster> = file
+        .casters
+        .into_iter()
+        .map(|c| Caster {
             name: c.name,
             position: c.position,
-        });
+        })
+        .collect();
+    if let Some(problem) = caster_list_problem(&casters) {
+        return Err(parse(format!("casters{problem}")));
     }
-    Ok(out)
+    Ok(casters)
+}
+
+/// What is wrong with a list of casters, if anything: an empty list, an empty or
+/// repeated name, a position that is not finite. The text starts with the entry it names
+/// (`[k].name: ...`, `[k].position: ...`) or `: the list is empty`, to follow the field
+/// that holds the list.
+#[must_use]
+pub fn caster_list_problem(casters: &[Caster]) -> Option<String> {
+    if casters.is_empty() {
+        return Some(": the list is empty".into());
+    }
+    for (k, c) in casters.iter().enumerate() {
+        if c.name.trim().is_empty() {
+            return Some(format!("[{k}].name: a caster needs a name"));
+        }
+        if casters[..k].iter().any(|o| o.name == c.name) {
+            return Some(format!("[{k}].name: '{}' is named twice", c.name));
+        }
+        if !c.position.iter().all(|x| x.is_finite()) {
+            return Some(format!("[{k}].position: not finite"));
+        }
+    }
+    None
 }
