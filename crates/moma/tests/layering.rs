@@ -33,7 +33,8 @@ const LAYERS: &[&[&str]] = &[
     &["closed_form"],
     &["sim"],
     &["mission"],
-    &["sweep", "sim_config"],
+    &["sim_config"],
+    &["sweep"],
 ];
 
 /// Items re-exported at the crate root, with the module that defines them.

@@ -344,13 +344,12 @@ pub fn run(path: &Path, sc: &Scenario, mut cl: ClosedLoop, args: &Args) -> Resul
         .map_err(|e| anyhow!("{}: closed-loop simulation failed: {e}", path.display()))?;
     let wall = start.elapsed().as_secs_f64();
     let mut summary = control_summary(path, sc, c, &cl, &res, wall);
-    let base_dir = path.parent().unwrap_or(Path::new("."));
     let monitor = match &sc.stability {
         None => None,
         Some(spec) => {
-            let mon =
-                moma::sim_config::replay(spec, &sc.robot, sc.gravity, base_dir, &res.recorder)
-                    .with_context(|| format!("{}: stability", path.display()))?;
+            // On the plant that ran (perturbed under [uncertainty]).
+            let mon = moma::sim_config::replay_scenario(spec, sc, path, &res.recorder)
+                .with_context(|| format!("{}: stability", path.display()))?;
             summary.stability = Some(super::simulate_stability::summary(spec, &mon, None));
             Some(mon)
         }

@@ -29,6 +29,10 @@ pub struct Args {
     /// No progress bar and no summary line.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Uncertainty study: also write the per-group summary (success rate, smallest ZMP
+    /// margin, seeds that tipped or slipped) as JSON, atomically.
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
 }
 
 /// `moma sweep merge`.
@@ -113,6 +117,13 @@ pub fn run(args: Args) -> Result<()> {
         None => (1, 1),
     };
     let sweep = Sweep::from_file(&path)?;
+    if args.summary.is_some() && sweep.study() != "uncertainty" {
+        bail!(
+            "--summary: only the uncertainty study has a summary ({} is a {} study)",
+            path.display(),
+            sweep.study()
+        );
+    }
     let indices =
         moma::sweep::shard_indices(sweep.len(), k, n).map_err(|e| anyhow!("--shard: {e}"))?;
     let pb = progress_bar(indices.len() as u64, args.quiet);
@@ -128,7 +139,43 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(pb) = &pb {
         pb.finish_and_clear();
     }
+    // Everything is computed before anything is written.
+    let summary = if sweep.study() == "uncertainty" {
+        Some(moma::sweep::summarize(&table)?)
+    } else {
+        None
+    };
+    let summary_json = match (&args.summary, &summary) {
+        (Some(_), Some(s)) => {
+            let mut j = serde_json::to_string_pretty(s).context("serialising the summary")?;
+            j.push('\n');
+            Some(j)
+        }
+        _ => None,
+    };
     write_atomic(&output, table.to_csv().as_bytes())?;
+    if let (Some(p), Some(j)) = (&args.summary, &summary_json) {
+        write_atomic(p, j.as_bytes())?;
+    }
+    if let (false, Some(groups)) = (args.quiet, &summary) {
+        for g in groups {
+            let group: Vec<String> = g.group.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            outln!(
+                "{}{} seeds: success rate {:.3}, smallest ZMP margin {}, tipped {}, slipped {}",
+                if group.is_empty() {
+                    String::new()
+                } else {
+                    format!("{}: ", group.join(", "))
+                },
+                g.seeds,
+                g.success_rate,
+                g.min_zmp_margin
+                    .map_or("-".to_string(), |(m, s)| format!("{m:.4} m (seed {s})")),
+                g.tipped.len(),
+                g.slipped.len()
+            );
+        }
+    }
     if !args.quiet {
         outln!(
             "wrote {}: {} of {} points (shard {k}/{n}, {} study) in {secs:.3} s",

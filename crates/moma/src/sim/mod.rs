@@ -47,6 +47,7 @@ pub mod coordinated;
 pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
+pub mod model_mismatch;
 pub mod monitor;
 pub mod mpc_loop;
 pub mod recorder;

@@ -27,14 +27,16 @@ pub mod contact;
 pub mod contact_spec;
 pub mod control;
 pub mod robot;
+pub mod rolling_plant;
 pub mod schema;
 pub mod space;
 pub mod stability;
+pub mod uncertainty;
 
 pub use control::{ClosedLoop, ControllerSpec, ReferenceSpec, TimingSpec, closed_loop};
 pub use robot::{build_robot, build_wheeled_model, chapter_params_json, fixed_base_model};
 pub use space::{CaptureSpec, ControlSpec, MomentumSpec, SpaceRun, SpaceSpec, space_run};
-pub use stability::{StabilitySpec, monitor, replay};
+pub use stability::{StabilitySpec, monitor, replay, replay_scenario};
 
 /// A `moma simulate` scenario: the schema of [`crate::sim_config::schema`] with this module's
 /// tables.
@@ -193,7 +195,21 @@ pub fn prepare(sc: &Scenario, path: &Path) -> Result<Run> {
         {
             bail!("{}", at(path, STABILITY_NEEDS_URDF));
         }
-        return Ok(Run::Closed(Box::new(closed_loop(sc, path, base_dir)?)));
+        let cl = closed_loop(sc, path, base_dir)?;
+        return Ok(Run::Closed(Box::new(match &sc.uncertainty {
+            Some(spec) => rolling_plant::apply_to_rolling(spec, cl, sc, path)?,
+            None => cl,
+        })));
+    }
+    if sc.uncertainty.is_some() {
+        bail!(
+            "{}",
+            at(
+                path,
+                "[uncertainty] perturbs the plant under a [controller] (the controller keeps \
+                 the nominal model): add a [controller] or remove [uncertainty]"
+            )
+        );
     }
     if let crate::sim_config::schema::RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
         if sc.stability.is_some() {

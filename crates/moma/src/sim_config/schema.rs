@@ -76,6 +76,10 @@ pub struct Scenario<
     /// What the closed-loop law tracks or stabilises to.
     #[serde(default)]
     pub reference: Option<Reference>,
+    /// How the plant differs from the controller's model, and the measurement noise
+    /// (closed loop on a wheeled URDF robot; docs/simulate.md).
+    #[serde(default)]
+    pub uncertainty: Option<crate::sim_config::uncertainty::UncertaintySpec>,
 }
 
 /// The robot of a scenario.

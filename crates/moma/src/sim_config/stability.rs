@@ -87,7 +87,27 @@ pub fn replay(
         casters,
         gravity,
     )?;
-    let mut mon = monitor(spec, &wm)?;
+    replay_on(spec, &wm, rec)
+}
+
+/// [`replay`] on the plant a closed-loop scenario ran: with `[uncertainty]`, the perturbed
+/// model ([`crate::sim_config::rolling_plant::rolling_plant_model`]), so the tip-over
+/// measures are those of the robot that moved, not of the controller's nominal model.
+///
+/// # Errors
+/// As [`replay`]; errors of the robot name the file `path`.
+pub fn replay_scenario(
+    spec: &StabilitySpec,
+    sc: &crate::sim_config::Scenario,
+    path: &std::path::Path,
+    rec: &Recorder,
+) -> Result<StabilityMonitor> {
+    let wm = crate::sim_config::rolling_plant::rolling_plant_model(sc, path)?;
+    replay_on(spec, &wm, rec)
+}
+
+fn replay_on(spec: &StabilitySpec, wm: &WheeledModel, rec: &Recorder) -> Result<StabilityMonitor> {
+    let mut mon = monitor(spec, wm)?;
     for i in 0..rec.len() {
         mon.sample(rec.times[i], rec.q_row(i), rec.v_row(i), rec.u_row(i))
             .with_ctx(|| format!("sample at t = {}", rec.times[i]))?;

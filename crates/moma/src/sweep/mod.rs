@@ -5,7 +5,7 @@
 //! sampling, and the parameters:
 //!
 //! ```toml
-//! study = "stability"            # stability | placement | mission
+//! study = "stability"            # stability | placement | mission | uncertainty
 //! [sample]
 //! mode = "grid"                  # grid (cartesian product) | random (count, seed)
 //! [parameters]
@@ -53,8 +53,10 @@ mod mission;
 mod placement;
 mod stability;
 mod table;
+mod uncertainty;
 
 pub use table::{Table, Value, merge};
+pub use uncertainty::{SeedSummary, summarize};
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -171,6 +173,7 @@ struct FileSpec {
     stability: Option<toml::Value>,
     placement: Option<toml::Value>,
     mission: Option<toml::Value>,
+    uncertainty: Option<toml::Value>,
 }
 
 #[derive(Deserialize, Default)]
@@ -186,6 +189,7 @@ enum Study {
     Stability(Box<stability::StabilityStudy>),
     Placement(placement::PlacementStudy),
     Mission(Box<mission::MissionStudy>),
+    Uncertainty(Box<uncertainty::UncertaintyStudy>),
 }
 
 /// Per-worker workspace of a study.
@@ -193,6 +197,7 @@ enum Workspace {
     Stability(Box<stability::Workspace>),
     Placement(Box<placement::Workspace>),
     Mission(mission::Workspace),
+    Uncertainty(uncertainty::Workspace),
 }
 
 /// A loaded, validated sweep: the study with its robot, the parameters and the sampling.
@@ -411,6 +416,7 @@ fn prepare_study(
         ("stability", &spec.stability),
         ("placement", &spec.placement),
         ("mission", &spec.mission),
+        ("uncertainty", &spec.uncertainty),
     ];
     for (name, v) in other_sections {
         if v.is_some() && name != spec.study {
@@ -446,11 +452,19 @@ fn prepare_study(
             parameters,
             files,
         )?)),
+        "uncertainty" => Study::Uncertainty(Box::new(uncertainty::UncertaintyStudy::new(
+            path,
+            dir,
+            section("uncertainty", &spec.uncertainty)?,
+            parameters,
+        )?)),
         other => {
             return Err(file_error(
                 path,
                 "study",
-                format!("unknown study '{other}' (expected stability, placement or mission)"),
+                format!(
+                    "unknown study '{other}' (expected stability, placement, mission or uncertainty)"
+                ),
             ));
         }
     })
@@ -528,7 +542,7 @@ impl Sweep {
         })
     }
 
-    /// The study's name (`stability`, `placement`, `mission`).
+    /// The study's name (`stability`, `placement`, `mission`, `uncertainty`).
     #[must_use]
     pub fn study(&self) -> &str {
         &self.study_name
@@ -569,6 +583,7 @@ impl Sweep {
             Study::Stability(_) => stability::RESULTS,
             Study::Placement(_) => placement::RESULTS,
             Study::Mission(_) => mission::RESULTS,
+            Study::Uncertainty(_) => uncertainty::RESULTS,
         }
     }
 
@@ -625,6 +640,7 @@ impl Sweep {
             Study::Stability(s) => Workspace::Stability(Box::new(s.workspace())),
             Study::Placement(s) => Workspace::Placement(Box::new(s.workspace())),
             Study::Mission(s) => Workspace::Mission(s.workspace()),
+            Study::Uncertainty(s) => Workspace::Uncertainty(s.workspace()),
         }
     }
 
@@ -638,6 +654,7 @@ impl Sweep {
             (Study::Stability(s), Workspace::Stability(w)) => s.evaluate(w, &point, &mut row),
             (Study::Placement(s), Workspace::Placement(w)) => s.evaluate(w, &point, &mut row),
             (Study::Mission(s), Workspace::Mission(w)) => s.evaluate(w, &point, &mut row),
+            (Study::Uncertainty(s), Workspace::Uncertainty(w)) => s.evaluate(w, &point, &mut row),
             _ => unreachable!("a workspace is made by its own study"),
         }
         .map_err(|e| Error::invalid(format!("sweep point {index}"), e.to_string()))?;

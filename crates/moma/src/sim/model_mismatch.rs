@@ -1,0 +1,265 @@
+//! Model mismatch between the plant and the controller: a perturbation of the plant's
+//! rigid-body model (a scale on every link's mass and rotational inertia, a point-mass
+//! payload on a named link) and noise on the state the feedback law measures. The law
+//! keeps its nominal model; only the plant's [`Model`] is perturbed
+//! ([`ModelPerturbation::apply`]), and the law sees the plant's state through
+//! [`NoisyMeasurement`].
+//!
+//! What is drawn (the values of a perturbation, the seed of the noise) is the caller's
+//! (`sim_config::uncertainty` reads and draws them from a scenario's `[uncertainty]`).
+
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::error::{Error, Result};
+use crate::multibody::Model;
+use crate::sim::closed_loop::{FeedbackLaw, Observation, SaturationFlags};
+use crate::spatial::Inertia;
+
+/// A point mass attached to a link.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Payload {
+    /// The link (a frame of the model) it sits on.
+    pub link: String,
+    /// Mass (kg, ≥ 0).
+    pub mass: f64,
+    /// Position in the link's frame (m).
+    pub position: Vector3<f64>,
+}
+
+/// A perturbation of a plant's rigid-body model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelPerturbation {
+    /// Factor on every body's mass and rotational inertia about its centre of mass
+    /// (centres of mass unchanged); 1 leaves the model as it is.
+    pub mass_scale: f64,
+    /// A point mass added to a link, if any.
+    pub payload: Option<Payload>,
+}
+
+impl Default for ModelPerturbation {
+    fn default() -> Self {
+        Self {
+            mass_scale: 1.0,
+            payload: None,
+        }
+    }
+}
+
+impl ModelPerturbation {
+    /// Applies the perturbation to `model`: every body's inertia scaled by
+    /// [`ModelPerturbation::mass_scale`], then the payload added to the body that carries
+    /// its link's frame, at the link-frame position mapped into that body's frame.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming `payload.link` for an unknown link or one on the
+    /// fixed world, `mass_scale` unless positive and finite, `payload.mass` unless finite
+    /// and ≥ 0, `payload.position` unless finite. The model is unchanged on error.
+    pub fn apply(&self, model: &mut Model) -> Result<()> {
+        crate::error::ensure_positive("mass_scale", self.mass_scale)?;
+        let attach = match &self.payload {
+            None => None,
+            Some(p) => {
+                if !(p.mass.is_finite() && p.mass >= 0.0) {
+                    return Err(Error::invalid(
+                        "payload.mass",
+                        format!("must be a finite number >= 0, got {}", p.mass),
+                    ));
+                }
+                crate::error::ensure_finite("payload.position", p.position.iter())?;
+                let f = model
+                    .frame_id(&p.link)
+                    .map_err(|e| Error::invalid("payload.link", e.to_string()))?;
+                let fr = &model.frames[f.0];
+                if fr.parent_joint.0 == 0 {
+                    return Err(Error::invalid(
+                        "payload.link",
+                        format!("'{}' is not on a moving body", p.link),
+                    ));
+                }
+                Some((
+                    fr.parent_joint.0,
+                    Inertia::point_mass(p.mass, fr.placement.act_point(&p.position)),
+                ))
+            }
+        };
+        let s = self.mass_scale;
+        for inertia in model.inertias.iter_mut().skip(1) {
+            let m = inertia.mass();
+            if m > 0.0 {
+                *inertia = Inertia::new(s * m, inertia.com(), inertia.inertia_about_com() * s);
+            }
+        }
+        if let Some((j, extra)) = attach {
+            model.inertias[j] += extra;
+        }
+        Ok(())
+    }
+}
+
+/// A feedback law that measures the state with additive zero-mean Gaussian noise: at
+/// every [`FeedbackLaw::control`] call, `q + σ_q ⊙ n_q` and `v + σ_v ⊙ n_v` with fresh
+/// standard normal `n` (Box–Muller on a ChaCha8 generator of the given seed) go to the
+/// inner law. The tracking error and signals it reports ([`FeedbackLaw::observe`],
+/// [`FeedbackLaw::signals`]) are those of the true state. Does not allocate after
+/// construction.
+pub struct NoisyMeasurement {
+    inner: Box<dyn FeedbackLaw>,
+    std_q: Vec<f64>,
+    std_v: Vec<f64>,
+    rng: ChaCha8Rng,
+    q: Vec<f64>,
+    v: Vec<f64>,
+}
+
+impl NoisyMeasurement {
+    /// Wraps `inner` with per-coordinate standard deviations `std_q` (one per
+    /// configuration coordinate) and `std_v` (one per velocity), noise drawn from `seed`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming `std_q[i]` / `std_v[i]` for a negative or non-finite
+    /// deviation.
+    pub fn new(
+        inner: Box<dyn FeedbackLaw>,
+        std_q: Vec<f64>,
+        std_v: Vec<f64>,
+        seed: u64,
+    ) -> Result<Self> {
+        for (name, xs) in [("std_q", &std_q), ("std_v", &std_v)] {
+            if let Some(i) = xs.iter().position(|s| !(s.is_finite() && *s >= 0.0)) {
+                return Err(Error::invalid(
+                    format!("{name}[{i}]"),
+                    format!("must be a finite number >= 0, got {}", xs[i]),
+                ));
+            }
+        }
+        let (nq, nv) = (std_q.len(), std_v.len());
+        Ok(Self {
+            inner,
+            std_q,
+            std_v,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            q: vec![0.0; nq],
+            v: vec![0.0; nv],
+        })
+    }
+}
+
+/// A standard normal draw (Box–Muller; `u1` in `(0, 1]` so its logarithm is finite).
+pub fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>();
+    let u2: f64 = rng.random();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+impl FeedbackLaw for NoisyMeasurement {
+    fn nu(&self) -> usize {
+        self.inner.nu()
+    }
+    fn error_names(&self) -> Vec<String> {
+        self.inner.error_names()
+    }
+    fn has_lyapunov(&self) -> bool {
+        self.inner.has_lyapunov()
+    }
+    fn control(&mut self, t: f64, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<SaturationFlags> {
+        if q.len() != self.q.len() || v.len() != self.v.len() {
+            return Err(Error::invalid(
+                "sensor noise",
+                format!(
+                    "deviations for {} coordinates and {} velocities, the state has {} and {}",
+                    self.q.len(),
+                    self.v.len(),
+                    q.len(),
+                    v.len()
+                ),
+            ));
+        }
+        for ((m, x), s) in self.q.iter_mut().zip(q).zip(&self.std_q) {
+            *m = x + s * standard_normal(&mut self.rng);
+        }
+        for ((m, x), s) in self.v.iter_mut().zip(v).zip(&self.std_v) {
+            *m = x + s * standard_normal(&mut self.rng);
+        }
+        self.inner.control(t, &self.q, &self.v, u)
+    }
+    fn observe(&mut self, t: f64, q: &[f64], v: &[f64], error: &mut [f64]) -> Result<Observation> {
+        self.inner.observe(t, q, v, error)
+    }
+    fn signal_names(&self) -> Vec<String> {
+        self.inner.signal_names()
+    }
+    fn signals(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) -> Result<()> {
+        self.inner.signals(t, q, v, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::urdf::model_from_urdf_file;
+    use crate::multibody::RootJoint;
+
+    fn robot() -> Model {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/robots/diffdrive_arm.urdf");
+        model_from_urdf_file(path, RootJoint::Planar).unwrap()
+    }
+
+    /// Body by body: the scale multiplies mass and rotational inertia and keeps the centre
+    /// of mass; the payload's first moment lands on the body carrying its link.
+    #[test]
+    fn scale_and_payload_change_the_bodies_they_name() {
+        let m0 = robot();
+        let mut m = m0.clone();
+        let p = ModelPerturbation {
+            mass_scale: 1.5,
+            payload: Some(Payload {
+                link: "forearm".into(),
+                mass: 2.0,
+                position: Vector3::new(0.0, 0.0, 0.3),
+            }),
+        };
+        p.apply(&mut m).unwrap();
+        assert!((m.total_mass() - (1.5 * m0.total_mass() + 2.0)).abs() < 1e-9);
+        let j = m.frames[m.frame_id("forearm").unwrap().0].parent_joint.0;
+        for k in 1..m.njoints {
+            let (a, b) = (&m0.inertias[k], &m.inertias[k]);
+            if k == j {
+                // m c of the body plus the payload's first moment at its position.
+                let at = m0.frames[m0.frame_id("forearm").unwrap().0]
+                    .placement
+                    .act_point(&Vector3::new(0.0, 0.0, 0.3));
+                let want = a.com() * (1.5 * a.mass()) + at * 2.0;
+                assert!((b.first_moment() - want).norm() < 1e-12);
+            } else {
+                assert!((b.mass() - 1.5 * a.mass()).abs() < 1e-12);
+                assert!((b.com() - a.com()).norm() < 1e-12);
+                assert!((b.inertia_about_com() - a.inertia_about_com() * 1.5).norm() < 1e-12);
+            }
+        }
+        let bad = |p: ModelPerturbation| p.apply(&mut robot()).unwrap_err().to_string();
+        let mut q = p.clone();
+        q.payload.as_mut().unwrap().link = "nope".into();
+        assert!(bad(q).contains("payload.link"));
+        let mut q = p.clone();
+        q.mass_scale = 0.0;
+        assert!(bad(q).contains("mass_scale"));
+        let mut q = p;
+        q.payload.as_mut().unwrap().mass = -1.0;
+        assert!(bad(q).contains("payload.mass"));
+    }
+
+    #[test]
+    fn standard_normal_has_unit_variance() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let n = 20_000;
+        let xs: Vec<f64> = (0..n).map(|_| standard_normal(&mut rng)).collect();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        // 4-sigma bands of the sample mean (1/√n) and variance (√(2/n)).
+        assert!(mean.abs() < 4.0 / (n as f64).sqrt(), "{mean}");
+        assert!((var - 1.0).abs() < 4.0 * (2.0 / n as f64).sqrt(), "{var}");
+    }
+}
