@@ -24,6 +24,7 @@ mod dynamics;
 mod layout;
 mod model;
 mod motion;
+mod place;
 mod planning;
 mod sweep;
 
@@ -99,6 +100,7 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     collision::register(m)?;
     planning::register(m)?;
     motion::register(m)?;
+    place::register(m)?;
     sweep::register(m)?;
     Ok(())
 }

@@ -125,6 +125,34 @@ def plan_motion(
 ) -> dict[str, Any]:
     """Collision-free, time-optimal motion of a joint group to goal_state or to goal_pose of frame (as moma motion): keys solved, reason, planning_time_s, path (n, nq), trajectory {t (m,), q (m, nq)}, duration_s, min_distance, closest_pair, checks, iterations, ik_attempts, ik_solutions, goal_state, group, seed, margin, velocity_limits, acceleration_limits, mesh_surface_links."""
 
+def place(
+    model: Model,
+    geom: GeometryModel,
+    scene: Scene,
+    group: list[str],
+    wheels: tuple[str, str],
+    grasp_pose: Optional[ArrayLike] = None,
+    frame: Optional[str] = None,
+    query: Optional[Path] = None,
+    query_index: int = 0,
+    position_tolerance: float = 0.01,
+    orientation_tolerance: float = 0.01,
+    casters: Optional[Union[Path, Sequence[Sequence[float]]]] = None,
+    payload: float = 0.0,
+    payload_offset: Optional[ArrayLike] = None,
+    posture: Optional[ArrayLike] = None,
+    area: Optional[ArrayLike] = None,
+    step: float = 0.1,
+    headings: int = 16,
+    ik_attempts: int = 8,
+    seed: int = 0,
+    margin: float = 0.005,
+    weights: tuple[float, float, float] = (1.0, 1.0, 1.0),
+    max_samples: int = 200000,
+    candidates: int = 20,
+) -> dict[str, Any]:
+    """Base placement for a grasp (as moma place; planar-root model): keys found, reason, candidates {base (n, 3), q (n, nq), manipulability, clearance, tip_over_margin, score (n,), grasp_error (n, 2), closest}, counts, reach, best_position_error, grid, grasp, payload_kg, payload_offset (3,), support (m, 2)."""
+
 def rnea(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
     """Inverse dynamics: tau = M(q) a + C(q, v) v + g(q) (nv)."""
 

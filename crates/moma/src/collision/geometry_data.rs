@@ -59,6 +59,12 @@ impl GeometryData {
             epa: EpaWorkspace::default(),
         }
     }
+
+    /// Forgets the warm starts, so the next queries' results depend only on the state
+    /// (a warm start can move a distance in its last bits).
+    pub fn reset_warm_starts(&mut self) {
+        self.warm.fill(WarmStart::default());
+    }
 }
 
 /// World placements of the geometry from the joint placements in `data` (run

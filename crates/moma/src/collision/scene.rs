@@ -193,6 +193,12 @@ impl SceneData {
             stack: Vec::with_capacity(depth),
         }
     }
+
+    /// Forgets the warm starts, so the next queries' results depend only on the state
+    /// (a warm start can move a distance in its last bits).
+    pub fn reset_warm_starts(&mut self) {
+        self.warm.fill(WarmStart::default());
+    }
 }
 
 /// Signed distances between every link and every scene object (after

@@ -539,7 +539,14 @@ impl Setup<'_> {
             out.best_position_error = gap;
             return Ok(out);
         }
-        // 2. The base in the scene.
+        // 2. The base in the scene. The collision workspaces start cold at every pose,
+        // so no distance depends on which poses this worker evaluated before.
+        for gd in [&mut ws.gd, &mut ws.base_gd] {
+            gd.reset_warm_starts();
+        }
+        for sd in [&mut ws.sd, &mut ws.base_sd] {
+            sd.reset_warm_starts();
+        }
         ws.q.copy_from_slice(p.posture);
         ws.q[0] = base[0];
         ws.q[1] = base[1];
