@@ -36,7 +36,7 @@ fn every_shipped_scenario_builds_its_run() {
             continue;
         }
         let run = prepare(&sc, &path).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let want = if name.starts_with("control_") {
+        let want = if name.starts_with("control_") || name.starts_with("uncertainty_") {
             "closed"
         } else if name.starts_with("space_") {
             "space"
