@@ -103,7 +103,9 @@ def test_casters_as_points_equal_the_file(robot):
         payload=0.35, area=AREA, headings=8, candidates=3,
     )
     np.testing.assert_array_equal(a["support"], b["support"])
-    np.testing.assert_array_equal(a["candidates"]["score"], b["candidates"]["score"])
+    # the same candidates; scores to rounding (GJK's iterations may end a step apart)
+    np.testing.assert_array_equal(a["candidates"]["base"], b["candidates"]["base"])
+    np.testing.assert_allclose(a["candidates"]["score"], b["candidates"]["score"], rtol=1e-12)
 
 
 def test_bad_input_raises(robot):

@@ -10,17 +10,17 @@ use super::uncertainty::{UncertaintySpec, perturb, with_noise};
 use super::{at, bail, chain};
 use crate::error::{Error, Result};
 
-/// The robot of a scenario with `[uncertainty]`, which must be a URDF robot on a wheeled
-/// base (errors name the file).
-fn wheeled_robot<'a>(
-    sc: &'a super::Scenario,
-    path: &Path,
-) -> Result<(
+/// A wheeled URDF robot's table: the URDF, its drive, wheel joints and casters.
+type WheeledUrdf<'a> = (
     &'a Path,
     &'a super::schema::DriveSpec,
     &'a Option<[String; 2]>,
     &'a [super::schema::CasterSpec],
-)> {
+);
+
+/// The robot of a scenario with `[uncertainty]`, which must be a URDF robot on a wheeled
+/// base (errors name the file).
+fn wheeled_robot<'a>(sc: &'a super::Scenario, path: &Path) -> Result<WheeledUrdf<'a>> {
     match &sc.robot {
         super::schema::RobotSpec::Urdf {
             urdf,

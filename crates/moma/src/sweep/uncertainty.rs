@@ -327,7 +327,7 @@ fn run_seed(sc: &Scenario, path: &Path) -> Result<Outcome> {
         reasons.push(format!("tipped at t = {t:.4} s"));
     }
     if let Some(tol) = tolerance
-        && !(final_error_norm <= tol)
+        && (final_error_norm > tol || final_error_norm.is_nan())
     {
         reasons.push(format!(
             "final tracking error {final_error_norm:.3e} > goal_tolerance {tol:e}"
