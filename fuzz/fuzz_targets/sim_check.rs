@@ -150,14 +150,8 @@ fn build_and_run(text: &str) {
             );
         }
         Run::Closed(mut cl) => {
-            if let Ok(res) = moma::sim::closed_loop::simulate_closed_loop(
-                cl.system.as_mut(),
-                cl.law.as_mut(),
-                &cl.q0,
-                &cl.v0,
-                &cl.options,
-                &mut |_| {},
-            ) && let Some(spec) = &sc.stability
+            if let Ok(res) = cl.run(&mut |_| {})
+                && let Some(spec) = &sc.stability
             {
                 let _ = moma::sim_config::replay(spec, &sc.robot, sc.gravity, Path::new("."), &res.recorder);
             }

@@ -4,23 +4,9 @@
 //! list that is empty or not finite) exits 1 naming the file and the field, writing
 //! nothing.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod cli_common;
 
-fn moma() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_moma"))
-}
-
-fn scenarios() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("moma-fetch-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use cli_common::{moma, scenarios, temp_dir};
 
 #[test]
 fn fetch_mission_reaches_its_goal_with_the_robots_footprint() {

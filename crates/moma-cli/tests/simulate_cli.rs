@@ -1,23 +1,11 @@
 //! `moma simulate`: the bundled default scenario runs with no argument, the chapter
 //! scenarios run, and bad scenario files fail with a clear message and no output.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-fn moma() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_moma"))
-}
+mod cli_common;
 
-fn scenarios() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("moma-simulate-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use cli_common::{moma, scenarios, temp_dir};
 
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()

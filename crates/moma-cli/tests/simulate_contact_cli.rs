@@ -2,23 +2,9 @@
 //! files and reports the casters' lift-off; bad contact parameters fail with the field
 //! named and no output.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod cli_common;
 
-fn moma() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_moma"))
-}
-
-fn scenarios() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("moma-contact-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use cli_common::{moma, scenarios, temp_dir};
 
 #[test]
 fn the_contact_brake_scenario_reports_the_casters_lift_off() {

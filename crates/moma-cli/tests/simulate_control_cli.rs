@@ -5,22 +5,10 @@
 //! the outputs are written.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn moma() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_moma"))
-}
+mod cli_common;
 
-fn scenarios() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("moma-control-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use cli_common::{moma, scenarios, temp_dir};
 
 fn run(scenario: &Path, out: &Path) -> std::process::Output {
     moma()

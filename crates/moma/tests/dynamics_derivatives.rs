@@ -5,47 +5,21 @@
 //! under test too), and against central finite differences of moma's own RNEA and ABA in
 //! moma's layout (q moved by `kinematics::integrate`).
 
+mod pinocchio_common;
+
 use moma::dynamics::{self, DerivativeData};
 use moma::io::pinocchio_layout::PinocchioLayout;
 use moma::io::urdf::model_from_urdf_file;
 use moma::kinematics;
 use moma::multibody::{Data, Model, RootJoint};
 use nalgebra::{DMatrix, DVector};
+use pinocchio_common::{matf, rel_err, root_of, vecf};
 use rand::{Rng, SeedableRng};
 use serde_json::Value;
 use std::path::PathBuf;
 
 fn data_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
-
-fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .expect("array")
-        .iter()
-        .map(|x| x.as_f64().expect("number"))
-        .collect()
-}
-
-fn matf(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = v.as_array().expect("rows").iter().map(vecf).collect();
-    DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
-}
-
-fn root_of(name: &str) -> RootJoint {
-    match name {
-        "fixed" => RootJoint::Fixed,
-        "planar" => RootJoint::Planar,
-        "free-flyer" => RootJoint::FreeFlyer,
-        other => panic!("unknown root {other}"),
-    }
-}
-
-/// The largest `|got − want|` over `max(1, max |want|)`.
-fn rel_err(got: &DMatrix<f64>, want: &DMatrix<f64>) -> f64 {
-    assert_eq!(got.shape(), want.shape());
-    let scale = want.amax().max(1.0);
-    (got - want).amax() / scale
 }
 
 /// Runs one reference file through the library and the layout's chain rule; returns the

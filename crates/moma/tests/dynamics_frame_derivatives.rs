@@ -6,6 +6,8 @@
 //! central finite differences, in moma's layout, of the frame motion computed by
 //! `kinematics::forward_kinematics_second_order` and of the frame placement.
 
+mod pinocchio_common;
+
 use moma::dynamics::{self, FrameDerivativeData};
 use moma::io::pinocchio_layout::PinocchioLayout;
 use moma::io::urdf::model_from_urdf_file;
@@ -13,6 +15,7 @@ use moma::kinematics::{self, ReferenceFrame};
 use moma::multibody::{Data, FrameIndex, Model, RootJoint};
 use moma::spatial::{SE3, log3, log6};
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector6};
+use pinocchio_common::{matf, rel_err, root_of, vecf};
 use rand::{Rng, SeedableRng};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -25,34 +28,6 @@ const FRAMES: [(&str, ReferenceFrame); 3] = [
 
 fn data_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
-
-fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .expect("array")
-        .iter()
-        .map(|x| x.as_f64().expect("number"))
-        .collect()
-}
-
-fn matf(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = v.as_array().expect("rows").iter().map(vecf).collect();
-    DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
-}
-
-fn root_of(name: &str) -> RootJoint {
-    match name {
-        "fixed" => RootJoint::Fixed,
-        "planar" => RootJoint::Planar,
-        "free-flyer" => RootJoint::FreeFlyer,
-        other => panic!("unknown root {other}"),
-    }
-}
-
-/// The largest `|got − want|` over `max(1, max |want|)`.
-fn rel_err(got: &DMatrix<f64>, want: &DMatrix<f64>) -> f64 {
-    assert_eq!(got.shape(), want.shape());
-    (got - want).amax() / want.amax().max(1.0)
 }
 
 fn dm(m: &Matrix6xX<f64>) -> DMatrix<f64> {

@@ -5,7 +5,6 @@
 //! relative. The dumps cover a fixed arm (UR5, identity layout), a planar root (Panda,
 //! TIAGo) with continuous wheel joints (TIAGo) and a free-flyer root (TIAGo).
 
-#[allow(dead_code)] // the conversions of the older cross-checks are not used here
 mod pinocchio_common;
 
 use moma::dynamics;

@@ -6,7 +6,6 @@
 //! against Pinocchio's RNEA on the shared reference dumps.
 
 // shared with the Pinocchio cross-checks; this file uses only part of it
-#[allow(dead_code)]
 mod pinocchio_common;
 
 use moma::dynamics::{self, BatchData, BatchIsa, RNEA_LANES as L};

@@ -12,7 +12,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use moma::mission;
-use moma::sim::closed_loop::simulate_closed_loop;
 use moma::sim::free_floating;
 use moma::sim::recorder::Recorder;
 use moma::sim::wheeled::{SampleObserver, simulate_observed};
@@ -92,15 +91,9 @@ fn run_simulate(path: &Path) -> BTreeMap<String, Vec<f64>> {
             }
         }
         Run::Closed(mut cl) => {
-            let r = simulate_closed_loop(
-                cl.system.as_mut(),
-                cl.law.as_mut(),
-                &cl.q0,
-                &cl.v0,
-                &cl.options,
-                &mut |_| {},
-            )
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let r = cl
+                .run(&mut |_| {})
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             recorder_rows(&r.recorder, &mut out);
             let n = r.error_names.len();
             if n > 0 {

@@ -6,7 +6,6 @@
 
 use std::path::{Path, PathBuf};
 
-use moma::sim::closed_loop::simulate_closed_loop;
 use moma::sim::contact_run::ContactResult;
 use moma::sim::stability_monitor::first_crossing;
 use moma::sim::wheeled::{SampleObserver, simulate_observed};
@@ -64,15 +63,7 @@ fn the_coordinated_law_on_the_contact_plant_follows_the_rolling_run() {
     let Run::Closed(mut cl) = prepare(&sr, &path_r).unwrap() else {
         panic!("a closed loop")
     };
-    let r = simulate_closed_loop(
-        cl.system.as_mut(),
-        cl.law.as_mut(),
-        &cl.q0,
-        &cl.v0,
-        &cl.options,
-        &mut |_| {},
-    )
-    .unwrap();
+    let r = cl.run(&mut |_| {}).unwrap();
     let rec = &r.recorder;
     let (mut pos, mut yaw, mut joints, mut n) = (0.0f64, 0.0f64, 0.0f64, 0);
     for (i, &t) in rec.times.iter().enumerate() {

@@ -137,15 +137,7 @@ fn a_stiff_closed_loop_stops_at_the_step_budget_of_the_whole_run() {
     let Run::Closed(mut cl) = prepare(&sc, &path).unwrap() else {
         panic!("a closed loop")
     };
-    let err = moma::sim::closed_loop::simulate_closed_loop(
-        cl.system.as_mut(),
-        cl.law.as_mut(),
-        &cl.q0,
-        &cl.v0,
-        &cl.options,
-        &mut |_| {},
-    )
-    .unwrap_err();
+    let err = cl.run(&mut |_| {}).unwrap_err();
     let moma::Error::Numerical { t, message } = &err else {
         panic!("{err}")
     };

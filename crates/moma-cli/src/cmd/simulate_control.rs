@@ -15,7 +15,7 @@ use super::simulate_common::{
 use crate::output::write_dir;
 use crate::svg_plots::line_chart;
 use anyhow::{Context, Result, anyhow};
-use moma::sim::closed_loop::{ClosedLoopResult, simulate_closed_loop};
+use moma::sim::closed_loop::ClosedLoopResult;
 use moma::sim::settings::IntegratorSettings;
 use moma::sim::stability_monitor::StabilityMonitor;
 use moma::sim_config::{ClosedLoop, ControllerSpec};
@@ -176,18 +176,11 @@ fn control_plots(res: &ClosedLoopResult, files: &mut Vec<(String, Vec<u8>)>) {
 /// Simulates the closed loop with a progress bar on a terminal.
 fn simulate_with_progress(cl: &mut ClosedLoop) -> moma::Result<ClosedLoopResult> {
     let bar = progress_bar(cl.options.duration);
-    let result = simulate_closed_loop(
-        cl.system.as_mut(),
-        cl.law.as_mut(),
-        &cl.q0,
-        &cl.v0,
-        &cl.options,
-        &mut |t| {
-            if let Some(pb) = &bar {
-                pb.set_position((t * 1000.0).round() as u64);
-            }
-        },
-    );
+    let result = cl.run(&mut |t| {
+        if let Some(pb) = &bar {
+            pb.set_position((t * 1000.0).round() as u64);
+        }
+    });
     if let Some(pb) = &bar {
         pb.finish_and_clear();
     }

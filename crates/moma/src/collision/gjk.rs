@@ -98,7 +98,22 @@ struct Pair<'a> {
     inflate: bool,
 }
 
-impl Pair<'_> {
+impl<'a> Pair<'a> {
+    /// The two placed shapes, support functions on their cores (no margins).
+    fn new(a: &'a Convex, pose_a: &'a SE3, b: &'a Convex, pose_b: &'a SE3) -> Self {
+        Pair {
+            a: Placed {
+                shape: a,
+                pose: pose_a,
+            },
+            b: Placed {
+                shape: b,
+                pose: pose_b,
+            },
+            inflate: false,
+        }
+    }
+
     /// Support point of A − B in direction `d`.
     fn support(&self, d: &Vector3<f64>, warm: &mut WarmStart) -> SupportPoint {
         let mut a = self.a.core(d, &mut warm.hint_a);
@@ -124,17 +139,7 @@ pub fn signed_distance(
     warm: &mut WarmStart,
     epa: &mut EpaWorkspace,
 ) -> PairDistance {
-    let mut pair = Pair {
-        a: Placed {
-            shape: a,
-            pose: pose_a,
-        },
-        b: Placed {
-            shape: b,
-            pose: pose_b,
-        },
-        inflate: false,
-    };
+    let mut pair = Pair::new(a, pose_a, b, pose_b);
     let margin = a.margin() + b.margin();
     let mut simplex = [SupportPoint::default(); 4];
     match gjk(&pair, warm, &mut simplex, f64::INFINITY) {
@@ -179,17 +184,7 @@ pub fn distance_above(
     warm: &mut WarmStart,
     epa: &mut EpaWorkspace,
 ) -> f64 {
-    let pair = Pair {
-        a: Placed {
-            shape: a,
-            pose: pose_a,
-        },
-        b: Placed {
-            shape: b,
-            pose: pose_b,
-        },
-        inflate: false,
-    };
+    let pair = Pair::new(a, pose_a, b, pose_b);
     let margin = a.margin() + b.margin();
     let mut simplex = [SupportPoint::default(); 4];
     match gjk(&pair, warm, &mut simplex, enough + margin) {
@@ -201,17 +196,7 @@ pub fn distance_above(
 /// Whether the two placed shapes overlap (signed distance < 0, or cores within 1e-10 m),
 /// with GJK stopped at the first separating plane.
 pub fn overlaps(a: &Convex, pose_a: &SE3, b: &Convex, pose_b: &SE3, warm: &mut WarmStart) -> bool {
-    let pair = Pair {
-        a: Placed {
-            shape: a,
-            pose: pose_a,
-        },
-        b: Placed {
-            shape: b,
-            pose: pose_b,
-        },
-        inflate: false,
-    };
+    let pair = Pair::new(a, pose_a, b, pose_b);
     let margin = a.margin() + b.margin();
     let mut simplex = [SupportPoint::default(); 4];
     match gjk(&pair, warm, &mut simplex, margin) {

@@ -23,7 +23,9 @@ use crate::error::{Error, Result};
 use crate::mission::planned::{PlannedPath, PlannedPathRequest, plan_platform_reference};
 use crate::planning::load_map;
 use crate::planning::trajectory::{DiffDriveLimits, time_parameterize};
-use crate::sim::closed_loop::{ClosedLoopOptions, FeedbackLaw};
+use crate::sim::closed_loop::{
+    ClosedLoopOptions, ClosedLoopResult, FeedbackLaw, simulate_closed_loop,
+};
 use crate::sim::coordinated::{CoordinatedController, CoordinatedGains};
 use crate::sim::feedback::{
     FixedOscController, M5TaskController, OscController, OscGains, PlatformController, PlatformLaw,
@@ -547,6 +549,24 @@ pub struct ClosedLoop {
     pub v0: Vec<f64>,
     /// Duration, integrator, control period, recording, limits, Lyapunov tolerance.
     pub options: ClosedLoopOptions,
+}
+
+impl ClosedLoop {
+    /// Runs the loop from its initial state; `progress` gets the simulated time as it
+    /// advances.
+    ///
+    /// # Errors
+    /// As [`simulate_closed_loop`].
+    pub fn run(&mut self, progress: &mut dyn FnMut(f64)) -> Result<ClosedLoopResult> {
+        simulate_closed_loop(
+            self.system.as_mut(),
+            self.law.as_mut(),
+            &self.q0,
+            &self.v0,
+            &self.options,
+            progress,
+        )
+    }
 }
 
 /// Builds the closed loop of a scenario with `[controller]` (and `[reference]`); `path`

@@ -153,6 +153,11 @@ pub(crate) fn at(path: &Path, what: &str) -> String {
     format!("{}: {what}", path.display())
 }
 
+/// Both run kinds that take `[uncertainty]` refuse it without a `[controller]`.
+pub(crate) const UNCERTAINTY_NEEDS_CONTROLLER: &str = "[uncertainty] perturbs the plant under a \
+     [controller] (the controller keeps the nominal model): add a [controller] or remove \
+     [uncertainty]";
+
 const STABILITY_NEEDS_URDF: &str =
     "[stability] needs a URDF robot on a wheeled base (robot.kind = \"urdf\")";
 
@@ -202,14 +207,7 @@ pub fn prepare(sc: &Scenario, path: &Path) -> Result<Run> {
         })));
     }
     if sc.uncertainty.is_some() {
-        bail!(
-            "{}",
-            at(
-                path,
-                "[uncertainty] perturbs the plant under a [controller] (the controller keeps \
-                 the nominal model): add a [controller] or remove [uncertainty]"
-            )
-        );
+        bail!("{}", at(path, UNCERTAINTY_NEEDS_CONTROLLER));
     }
     if let crate::sim_config::schema::RobotSpec::FreeFloating { urdf, frame } = &sc.robot {
         if sc.stability.is_some() {

@@ -14,7 +14,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 
-use super::{at, bail, chain};
+use super::{UNCERTAINTY_NEEDS_CONTROLLER, at, bail, chain};
 use crate::error::{Error, Result};
 use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
@@ -317,14 +317,7 @@ pub fn contact_draw(sc: &super::Scenario, path: &Path) -> Result<Option<Draw>> {
     spec.check()
         .map_err(|e| Error::Scenario(at(path, &chain(&e))))?;
     if sc.controller.is_none() {
-        bail!(
-            "{}",
-            at(
-                path,
-                "[uncertainty] perturbs the plant under a [controller] (the controller keeps \
-                 the nominal model): add a [controller] or remove [uncertainty]"
-            )
-        );
+        bail!("{}", at(path, UNCERTAINTY_NEEDS_CONTROLLER));
     }
     Ok(Some(spec.draw()))
 }

@@ -19,7 +19,6 @@ use serde::Deserialize;
 
 use super::{Parameter, Table, Value, file_error, num, require_numbers, resolve};
 use crate::error::{Error, Result};
-use crate::sim::closed_loop::simulate_closed_loop;
 use crate::sim::stability_monitor::{first_crossing, first_slip};
 use crate::sim_config::contact_spec::PlantKind;
 use crate::sim_config::uncertainty::Dist;
@@ -271,14 +270,7 @@ fn run_seed(sc: &Scenario, path: &Path) -> Result<Outcome> {
             let Run::Closed(mut cl) = crate::sim_config::prepare(sc, path)? else {
                 return Err(Error::parse(path, "not a closed-loop scenario"));
             };
-            let res = simulate_closed_loop(
-                cl.system.as_mut(),
-                cl.law.as_mut(),
-                &cl.q0,
-                &cl.v0,
-                &cl.options,
-                &mut |_| {},
-            )?;
+            let res = cl.run(&mut |_| {})?;
             let n = res.recorder.len();
             let err = if n == 0 || res.error_names.is_empty() {
                 0.0

@@ -1,5 +1,6 @@
 //! Shared by the Pinocchio cross-checks (`rigid_body_pinocchio.rs`,
-//! `rigid_body_pinocchio_more.rs`): reading a reference file of `tests/data/pinocchio`,
+//! `rigid_body_pinocchio_more.rs`, `io_pinocchio_layout.rs`, and the derivatives'
+//! `dynamics_derivatives.rs` and `dynamics_frame_derivatives.rs`): reading a reference file of `tests/data/pinocchio`,
 //! converting Pinocchio's coordinates to ours, and the comparisons both make, every value
 //! to 1e-9 relative (absolute below 1).
 //!
@@ -7,6 +8,8 @@
 //! v_P = T v with T = diag(Rᵀ(θ), 1); ours is q = [x, y, θ] with world-axes v. Hence
 //! τ = Tᵀ τ_P, H = Tᵀ H_P T, J = J_P T, A_g = A_g,P T, and accelerations
 //! a = T⁻¹ a_P + Ṫ⁻¹ v_P. Continuous joints ([cos, sin] in Pinocchio) become one angle.
+
+#![allow(dead_code)] // each test file uses its own part
 
 use moma::dynamics;
 use moma::io::urdf::model_from_urdf_file;
@@ -35,6 +38,22 @@ pub fn matf(v: &Value) -> DMatrix<f64> {
     let rows: Vec<Vec<f64>> = v.as_array().unwrap().iter().map(vecf).collect();
     let (r, c) = (rows.len(), rows[0].len());
     DMatrix::from_fn(r, c, |i, j| rows[i][j])
+}
+
+/// The root a reference file names (`"fixed"`, `"planar"`, `"free-flyer"`).
+pub fn root_of(name: &str) -> RootJoint {
+    match name {
+        "fixed" => RootJoint::Fixed,
+        "planar" => RootJoint::Planar,
+        "free-flyer" => RootJoint::FreeFlyer,
+        other => panic!("unknown root {other}"),
+    }
+}
+
+/// The largest `|got − want|` over `max(1, max |want|)`.
+pub fn rel_err(got: &DMatrix<f64>, want: &DMatrix<f64>) -> f64 {
+    assert_eq!(got.shape(), want.shape());
+    (got - want).amax() / want.amax().max(1.0)
 }
 
 fn usize_of(v: &Value) -> usize {
