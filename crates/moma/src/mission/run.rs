@@ -63,7 +63,8 @@ pub struct Event {
     /// Mission time (s).
     pub t: f64,
     /// Kind: `plan`, `obstacle`, `replan`, `torque_limit`, `speed_limit`, `slip`,
-    /// `contact`, `min_zmp_margin`, `arrived`, `reached`, `failed`.
+    /// `lift_off` (contact plant), `contact`, `min_zmp_margin`, `arrived`, `reached`,
+    /// `failed`.
     pub kind: String,
     /// Human-readable detail.
     pub text: String,
@@ -87,7 +88,9 @@ pub struct Samples {
     /// Reference position of the base frame origin (the axle midpoint's reference moved
     /// `d` ahead along the reference heading).
     pub ref_xy: Vec<[f64; 2]>,
-    /// ZMP margin (m); `None` where the ZMP is undefined (tipping).
+    /// ZMP margin (m); `None` where the ZMP is undefined (tipping). On the contact plant:
+    /// the centre of pressure of its normal forces inside the support, `None` while no
+    /// contact is loaded.
     pub zmp_margin: Vec<Option<f64>>,
     /// Smallest Force-Angle measure (rad).
     pub force_angle_min: Vec<Option<f64>>,
@@ -99,7 +102,8 @@ pub struct Samples {
     pub tracking_error: Vec<f64>,
     /// Larger drive-wheel slip ratio |(F_long, F_lat)| / (μ N) (`stability::loads`: the
     /// lateral axle force −λ₀ shared in proportion to the normal loads); `None` if a wheel
-    /// carries no load.
+    /// carries no load. On the contact plant: each wheel's friction force over μ N, μ of
+    /// `[contact]` (1 while it slides).
     pub slip_ratio: Vec<Option<f64>>,
     /// Actuator torques per sample (`u`, the model's input order).
     pub u: Vec<Vec<f64>>,
