@@ -117,7 +117,7 @@ pub fn run(args: Args) -> Result<()> {
     let path = resolve_scenario(args.scenario.clone())?;
     let sc = load_scenario(&path)?;
     sc.check_header(&path)?;
-    if sc.plant == moma::sim_config::contact_spec::PlantKind::Contact {
+    if sc.plant == moma::contact::PlantKind::Contact {
         return super::simulate_contact::run(&path, &sc, &args);
     }
     match moma::sim_config::prepare(&sc, &path)? {

@@ -13,6 +13,8 @@
 //!   articulated-body algorithm with the contact forces as generalised forces `Jᵀ f`,
 //!   semi-implicit Euler at a fixed `dt`. The stable-step bounds are checked before a
 //!   run ([`ContactPlant::check_step`]).
+//! * **Files** ([`PlantKind`], [`ContactSpec`]): the plant choice and the `[contact]`
+//!   table, one schema for the `moma simulate` scenario and the `moma mission` file.
 //!
 //! [`ContactPlant`] is immutable; a run is a [`ContactState`] (allocated once), advanced
 //! by [`ContactPlant::step`], which does not allocate.
@@ -26,6 +28,7 @@ mod report;
 mod spec;
 mod start;
 mod step;
+mod table;
 
 pub use geometry::{disk_lowest_point, sphere_lowest_point};
 pub use law::{friction_force, normal_force};
@@ -33,3 +36,4 @@ pub use params::{ContactParams, friction_step_bound, normal_step_bound};
 pub use plant::{ContactPlant, ContactState};
 pub use report::ContactReport;
 pub use spec::{CasterSpec, WheelSpec};
+pub use table::{ContactSpec, PlantKind};

@@ -12,7 +12,7 @@
 //! | path → motion | curvature-bounded smoothing from the exact start pose to the exact goal pose ([`crate::planning::curvature::smooth_diff_drive`]), then near time-optimal timing under v, ω, a, α and the tip-over accelerations ([`crate::stability::acceleration_limits`] of the transport posture, times `tip_fraction`; [`crate::planning::trajectory::time_parameterize_curve`]), re-plans continuing from the current speed |
 //! | off-axle base (`d ≠ 0`) | search, smoothing, timing and Kanayama work on the driven-axle midpoint (base pose − d·heading), the unicycle point whose speed and yaw rate are the reduced platform inputs; its C-space is dilated by `footprint_radius + |d|` (the footprint disk about the base frame at every heading); reference, tracking error, paths and tolerances are reported for the base frame |
 //! | tracking | Kanayama's law on the timed reference gives (v, ω); an inner loop turns them into wheel torques by computed torque on the reduced model `Mr v̇ + cr + Gr = N_Cᵀ S u`; the arm holds its transport posture (PD + gravity and coupling compensation, in the same computed torque) |
-//! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period |
+//! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period; or, with `simulation.plant = "contact"`, the contact plant ([`crate::contact`]) stepped at its own `dt` under the same held torques, measured through the reduced coordinates (`plant`) |
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |
 //! | goal | the base settles on the goal pose, then task-space inverse dynamics on the reduced model brings the end effector along a minimum-jerk line to its target while the platform holds still |
 //! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (the axle's lateral multiplier and the wheels' longitudinal forces against μ N, `stability::loads`), torque and speed saturation, tracking error, clearance, energy |
@@ -39,17 +39,21 @@
 //! * `run` is the closed loop at a fixed control period equal to the RK4 step (the step
 //!   by step is in `ARCHITECTURE.md`); its results are plain columns ([`Samples`]), plans
 //!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
+//! * `plant` builds and checks the contact plant of `simulation.plant = "contact"` at load
+//!   ([`MissionContact`]) and steps it in the loop, with its monitors and events.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 pub mod footprint;
 pub(crate) mod plan;
 pub mod planned;
+mod plant;
 pub mod reference;
 mod run;
 pub mod scenario;
 
 pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
+pub use plant::MissionContact;
 pub use reference::{RefSample, Reference};
 pub use run::{Event, MissionResult, PlanRecord, Samples, WallTimes, run, transport_tip_limits};
 pub use scenario::{Mission, MissionFile, load};
@@ -58,7 +62,8 @@ pub use scenario::{Mission, MissionFile, load};
 /// `reached`, `reason`, `time_to_goal`, `simulated_time`, `replans`, the stability,
 /// clearance, tracking and slip extremes, `final_pose_error` ([m, rad]),
 /// `end_effector_error`, saturation counts, energies, `tip_over_limits`,
-/// `timing_acceleration` and `samples`. Non-finite or missing values are `null`.
+/// `timing_acceleration` and `samples`; on the contact plant `contact` (first lift-off,
+/// first slip, per-contact totals, largest tilt). Non-finite or missing values are `null`.
 /// `moma mission` adds its timing and file keys to this map; the Python package returns
 /// it as it is.
 #[must_use]
@@ -109,8 +114,20 @@ pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_
         "timing_acceleration": r.timing_acceleration,
         "samples": r.samples.t.len(),
     });
-    match doc {
+    let mut map = match doc {
         serde_json::Value::Object(map) => map,
         _ => unreachable!("json! of an object literal is an object"),
+    };
+    if let Some(c) = &r.contact {
+        map.insert(
+            "contact".into(),
+            json!({
+                "first_lift_off": c.first_lift_off,
+                "first_slip": c.first_slip,
+                "max_tilt": fin(Some(c.max_tilt)),
+                "totals": c.totals,
+            }),
+        );
     }
+    map
 }

@@ -5,6 +5,7 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 
 use super::plan::{Planner, SearchTiming};
+use super::plant::{ContactLoop, start_configuration};
 use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
 use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
 use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
@@ -20,6 +21,7 @@ use crate::multibody::{Data, JointType};
 use crate::ode::{OdeSystem, Rk4};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::computed_torque::ComputedTorque;
+use crate::sim::contact_run::ContactTally;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
 use crate::sim::wheeled_system::WheeledSystem;
@@ -61,7 +63,8 @@ pub struct Event {
     /// Mission time (s).
     pub t: f64,
     /// Kind: `plan`, `obstacle`, `replan`, `torque_limit`, `speed_limit`, `slip`,
-    /// `contact`, `min_zmp_margin`, `arrived`, `reached`, `failed`.
+    /// `lift_off` (contact plant), `contact`, `min_zmp_margin`, `arrived`, `reached`,
+    /// `failed`.
     pub kind: String,
     /// Human-readable detail.
     pub text: String,
@@ -85,7 +88,9 @@ pub struct Samples {
     /// Reference position of the base frame origin (the axle midpoint's reference moved
     /// `d` ahead along the reference heading).
     pub ref_xy: Vec<[f64; 2]>,
-    /// ZMP margin (m); `None` where the ZMP is undefined (tipping).
+    /// ZMP margin (m); `None` where the ZMP is undefined (tipping). On the contact plant:
+    /// the centre of pressure of its normal forces inside the support, `None` while no
+    /// contact is loaded.
     pub zmp_margin: Vec<Option<f64>>,
     /// Smallest Force-Angle measure (rad).
     pub force_angle_min: Vec<Option<f64>>,
@@ -97,7 +102,8 @@ pub struct Samples {
     pub tracking_error: Vec<f64>,
     /// Larger drive-wheel slip ratio |(F_long, F_lat)| / (μ N) (`stability::loads`: the
     /// lateral axle force −λ₀ shared in proportion to the normal loads); `None` if a wheel
-    /// carries no load.
+    /// carries no load. On the contact plant: each wheel's friction force over μ N, μ of
+    /// `[contact]` (1 while it slides).
     pub slip_ratio: Vec<Option<f64>>,
     /// Actuator torques per sample (`u`, the model's input order).
     pub u: Vec<Vec<f64>>,
@@ -159,6 +165,9 @@ pub struct MissionResult {
     pub input_work: f64,
     /// Wall times.
     pub wall: WallTimes,
+    /// On the contact plant (`simulation.plant = "contact"`): the first lift-off and the
+    /// first slip, per-contact totals and the largest tilt; `None` on the rolling plant.
+    pub contact: Option<ContactTally>,
 }
 
 impl MissionResult {
@@ -526,14 +535,23 @@ impl<'m> Runner<'m> {
         let mut x = initial_state(self.m);
         self.first_plan();
         let (time_limit, rec_every) = self.run_length()?;
-        let mut ws = Workspace::new(self.wm, self.m.file.limits.mu)?;
+        let contact = self
+            .m
+            .contact
+            .as_ref()
+            .map(|c| {
+                let sim = &self.m.file.simulation;
+                ContactLoop::new(c, self.wm, sim.dt, self.m.file.start.pose[2])
+            })
+            .transpose()?;
+        let mut ws = Workspace::new(self.wm, self.m.file.limits.mu, contact)?;
         let act = Actuators::new(self.wm)?;
         let c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
         while let Flow::Next | Flow::Retry = self.step(&c, &mut ws, &mut st, &mut x) {}
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
-        Ok(self.finish(&st, &x))
+        Ok(self.finish(&st, &x, ws.contact.take()))
     }
 
     /// The plan at t = 0 (or the reason there is none: a posture that tips at rest, an
@@ -642,11 +660,16 @@ impl<'m> Runner<'m> {
         let (nq, nr) = (c.nq, c.nr);
         let t = st.k as f64 * c.h;
         st.t = t;
-        ws.q_now.copy_from_slice(&x[..nq]);
-        ws.v_now.copy_from_slice(&x[nq..nq + nr]);
-        let pose = [x[0], x[1], x[2]];
+        match &mut ws.contact {
+            Some(cl) => cl.measure(&mut ws.q_now, &mut ws.v_now),
+            None => {
+                ws.q_now.copy_from_slice(&x[..nq]);
+                ws.v_now.copy_from_slice(&x[nq..nq + nr]);
+            }
+        }
+        let pose = [ws.q_now[0], ws.q_now[1], ws.q_now[2]];
         let axle = axle_pose(pose, c.d);
-        let (v, w) = (x[nq], x[nq + 1]);
+        let (v, w) = (ws.v_now[0], ws.v_now[1]);
 
         self.obstacle_arrivals(c, st, t, axle, v);
 
@@ -733,6 +756,21 @@ impl<'m> Runner<'m> {
 
         // actuator energy over the step (rates at its start)
         st.energy += c.act.absolute_power(&ws.u, &ws.v_now, v, w) * c.h;
+
+        // the contact plant: the torques held over the control period
+        if let Some(cl) = &mut ws.contact {
+            let advanced = cl.advance(&ws.u);
+            for n in cl.news() {
+                self.event(n.t, n.kind, n.text);
+            }
+            if let Err(e) = advanced {
+                self.fail(t, format!("the simulation failed: {e}"));
+                st.phase = Phase::Done;
+                return Flow::Retry;
+            }
+            st.k += 1;
+            return Flow::Next;
+        }
 
         // integrate one step
         let mut plant = Plant {
@@ -1144,7 +1182,8 @@ impl<'m> Runner<'m> {
         let Some((slip, clear)) = self.record(c, ws, st, t, ee, evaluated) else {
             return;
         };
-        if st.first_slip && slip.is_some_and(|s| s > 1.0) {
+        // (on the contact plant the plant's own slip flag makes the event, in `step`)
+        if ws.contact.is_none() && st.first_slip && slip.is_some_and(|s| s > 1.0) {
             st.first_slip = false;
             self.event(t, "slip", "lateral wheel force exceeds μ N");
         }
@@ -1188,7 +1227,7 @@ impl<'m> Runner<'m> {
     }
 
     /// The result of the finished loop.
-    fn finish(mut self, st: &LoopState, x: &[f64]) -> MissionResult {
+    fn finish(mut self, st: &LoopState, x: &[f64], contact: Option<ContactLoop>) -> MissionResult {
         self.min_zmp_event();
         self.events.sort_by(|a, b| a.t.total_cmp(&b.t));
         let reached = self.failure.is_none() && st.time_to_goal.is_some();
@@ -1224,8 +1263,11 @@ impl<'m> Runner<'m> {
             torque_saturated_steps: st.torque_sat,
             speed_saturated_steps: st.speed_sat,
             steps: st.k,
-            input_work: x[model.nq + wm.nr()],
+            input_work: contact
+                .as_ref()
+                .map_or(x[model.nq + wm.nr()], |c| c.input_work),
             wall: self.wall,
+            contact: contact.map(|c| c.tally.finish()),
         }
     }
 
@@ -1241,10 +1283,18 @@ impl<'m> Runner<'m> {
         ee: Vector3<f64>,
         evaluated: bool,
     ) -> Option<(Option<f64>, f64)> {
-        let mon = if evaluated {
-            monitors(self.wm, ws, t)
-        } else {
-            None
+        let mon = match &mut ws.contact {
+            Some(cl) => {
+                let (zmp, slip) = cl.monitors([ws.q_now[0], ws.q_now[1], ws.q_now[2]]);
+                Some(Monitors {
+                    zmp,
+                    force_angle: None,
+                    mhs: None,
+                    slip,
+                })
+            }
+            None if evaluated => monitors(self.wm, ws, t),
+            None => None,
         };
         let side = arm_side(&self.wm.model, ws, &c.chain, ee);
         let (q, r) = (&ws.q_now, &st.cur_ref);
@@ -1385,12 +1435,8 @@ impl LoopState {
 /// The plant state at the start: the start pose, the start arm posture, at rest (the
 /// last entry integrates the input work).
 fn initial_state(m: &Mission) -> Vec<f64> {
-    let model = &m.robot.model;
-    let mut x = vec![0.0; model.nq + m.robot.nr() + 1];
-    x[..3].copy_from_slice(&m.file.start.pose);
-    for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
-        x[i] = m.q_arm0[k];
-    }
+    let mut x = start_configuration(&m.robot, m.file.start.pose, &m.q_arm0);
+    x.resize(m.robot.model.nq + m.robot.nr() + 1, 0.0);
     x
 }
 
@@ -1417,6 +1463,8 @@ struct Workspace {
     zero_u: Vec<f64>,
     /// The law's desired reduced accelerations.
     a_des: DVector<f64>,
+    /// The contact plant, when the mission runs on it (else the plant is `sys`).
+    contact: Option<ContactLoop>,
     /// The end effector's frame Jacobian (full velocity coordinates).
     jac: Matrix6xX<f64>,
     /// Ṅ_C.
@@ -1428,7 +1476,7 @@ struct Workspace {
 }
 
 impl Workspace {
-    fn new(wm: &WheeledModel, mu: f64) -> Result<Self> {
+    fn new(wm: &WheeledModel, mu: f64, contact: Option<ContactLoop>) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
         let settings = StabilitySettings {
@@ -1449,6 +1497,7 @@ impl Workspace {
             u: vec![0.0; nu],
             zero_u: vec![0.0; nu],
             a_des: DVector::zeros(nr),
+            contact,
             jac: Matrix6xX::zeros(model.nv),
             ndot: DMatrix::zeros(model.nv, nr),
             ndot_v: DVector::zeros(model.nv),

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::footprint::MissionFootprint;
+use super::plant::{MissionContact, start_configuration};
 use crate::collision::{GeometryModel, GeometryOptions};
+use crate::contact::{ContactSpec, PlantKind};
 use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
 use crate::multibody::{FrameIndex, RootJoint};
@@ -41,6 +43,10 @@ pub struct MissionFile {
     /// Simulation settings (optional).
     #[serde(default)]
     pub simulation: SimulationSpec,
+    /// The contact plant's law, step and casters (`simulation.plant = "contact"`; the
+    /// `[contact]` table of `moma simulate`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactSpec>,
     /// Outputs.
     #[serde(default)]
     pub output: OutputSpec,
@@ -320,6 +326,9 @@ pub struct SimulationSpec {
     pub record_interval: f64,
     /// Give up after this mission time (s); default: 3 × the first plan's duration + 30 s.
     pub time_limit: Option<f64>,
+    /// The plant the law drives: `rolling` (the reduced model, RK4 at `dt`; default) or
+    /// `contact` (the contact plant of the `[contact]` table, `docs/contact.md`).
+    pub plant: PlantKind,
 }
 
 impl Default for SimulationSpec {
@@ -328,6 +337,7 @@ impl Default for SimulationSpec {
             dt: 0.002,
             record_interval: 0.02,
             time_limit: None,
+            plant: PlantKind::Rolling,
         }
     }
 }
@@ -401,6 +411,8 @@ pub struct Mission {
     pub footprint: MissionFootprint,
     /// `robot.package_dirs`, resolved against the mission file's folder.
     pub package_dirs: Vec<PathBuf>,
+    /// The contact plant, built and checked (`simulation.plant = "contact"`).
+    pub contact: Option<MissionContact>,
 }
 
 /// Reads and validates a mission file.
@@ -542,6 +554,7 @@ pub fn from_file_with(
     let (robot, ee_frame, geometry) = load_robot(&file, path, base, &package_dirs, files)?;
     let (transport, q_arm0) = arm_postures(&file, &robot, path)?;
     let footprint = mission_footprint(&file, path, &map, &robot, geometry.as_ref(), &transport)?;
+    let contact = contact_plant(&file, path, base, &robot, &q_arm0, files)?;
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -560,7 +573,47 @@ pub fn from_file_with(
         output_dir,
         footprint,
         package_dirs,
+        contact,
     })
+}
+
+/// The contact plant of `simulation.plant = "contact"` (the robot description loaded
+/// again on a free-flyer root, the `[contact]` table), started at the start pose and arm
+/// posture and checked there; `None` for the rolling plant, which takes no `[contact]`.
+fn contact_plant(
+    file: &MissionFile,
+    path: &Path,
+    base: &Path,
+    robot: &WheeledModel,
+    q_arm0: &[f64],
+    files: &dyn Loader,
+) -> Result<Option<MissionContact>> {
+    let spec = match (file.simulation.plant, &file.contact) {
+        (PlantKind::Rolling, None) => return Ok(None),
+        (PlantKind::Rolling, Some(_)) => {
+            return Err(field_err(
+                path,
+                "contact",
+                "the [contact] table is read only with simulation.plant = \"contact\"",
+            ));
+        }
+        (PlantKind::Contact, None) => {
+            return Err(field_err(
+                path,
+                "simulation.plant",
+                "\"contact\" needs a [contact] table (at least its casters)",
+            ));
+        }
+        (PlantKind::Contact, Some(spec)) => spec,
+    };
+    let mut model = files
+        .urdf(&base.join(&file.robot.urdf), RootJoint::FreeFlyer)
+        .map_err(|e| field_err(path, "robot.urdf", e))?;
+    model.gravity = robot.model.gravity;
+    let q0 = start_configuration(robot, file.start.pose, q_arm0);
+    MissionContact::new(robot, model, spec, &q0, file.simulation.dt)
+        .map(Some)
+        .map_err(|e| Error::parse(path, e.to_string()))
 }
 
 /// The limits, the control gains and the start and goal poses are positive or finite as

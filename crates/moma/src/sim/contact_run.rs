@@ -12,10 +12,11 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::contact::{ContactPlant, ContactState};
+use crate::contact::{CasterSpec, ContactParams, ContactPlant, ContactState, WheelSpec};
 use crate::error::{Error, Result};
 use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::admissible_velocity_basis;
+use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
 use crate::sim::settings::InputProfile;
 
@@ -134,6 +135,32 @@ impl ReducedMap {
     }
 }
 
+/// The contact plant of `robot` and the map to its reduced coordinates: `model` is the
+/// same robot description on a free-flyer root, the drive wheels are the robot's
+/// tracked `wheel_joints` as disks of radius `drive.r_w`, the casters are `casters`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the field at fault (`robot.wheel_joints`,
+/// `contact.mu`, `contact.casters[k].frame`, …); [`Error::Model`] for a wrong root.
+pub fn contact_plant_of(
+    robot: WheeledModel,
+    model: Model,
+    casters: &[CasterSpec],
+    params: ContactParams,
+) -> Result<(ContactPlant, ReducedMap)> {
+    let Some(joints) = robot.base.wheel_joints.clone() else {
+        return Err(Error::invalid(
+            "robot.wheel_joints",
+            "the contact plant drives the wheel joints: name them",
+        ));
+    };
+    let radius = robot.base.drive.wheel_radius;
+    let wheels = joints.map(|joint| WheelSpec { joint, radius });
+    let plant = ContactPlant::new(model, &wheels, casters, params)?;
+    let map = ReducedMap::new(robot, &plant)?;
+    Ok((plant, map))
+}
+
 /// What drives the contact plant.
 pub enum ContactDriver {
     /// Open loop: the reduced inputs `u(t)`, evaluated at every contact step.
@@ -196,6 +223,88 @@ pub struct ContactTotals {
 /// Events are counted after this settling time (s), in which the robot, started with
 /// no penetration, sinks onto its compliant contacts.
 pub const SETTLE_TIME: f64 = 0.05;
+
+/// What the contacts did over a run, gathered step by step from the plant's reports
+/// ([`ContactTally::observe`]): the first lift-off and the first slip after
+/// [`SETTLE_TIME`], the per-contact totals and the largest tilt of the base.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ContactTally {
+    /// First contact to lose its load after [`SETTLE_TIME`].
+    pub first_lift_off: Option<ContactEvent>,
+    /// First wheel to slide (friction at μ N) after [`SETTLE_TIME`].
+    pub first_slip: Option<ContactEvent>,
+    /// Per-contact totals (a contact never loaded after the settling time has
+    /// `min_normal` 0 once [`ContactTally::finish`]ed).
+    pub totals: Vec<ContactTotals>,
+    /// Largest tilt of the base (rad): the angle between its z axis and the vertical.
+    pub max_tilt: f64,
+}
+
+impl ContactTally {
+    /// Nothing seen yet, one total per contact of `plant`.
+    #[must_use]
+    pub fn new(plant: &ContactPlant) -> Self {
+        Self {
+            first_lift_off: None,
+            first_slip: None,
+            totals: (0..plant.ncontacts())
+                .map(|k| ContactTotals {
+                    contact: plant.contact_name(k).to_string(),
+                    min_normal: f64::INFINITY,
+                    ..ContactTotals::default()
+                })
+                .collect(),
+            max_tilt: 0.0,
+        }
+    }
+
+    /// Adds the reports of the step of length `dt` that ended in `st` (at `st.t`).
+    /// Does not allocate, except to name the first lift-off and the first slip.
+    pub fn observe(&mut self, st: &ContactState, dt: f64) {
+        let t = st.t;
+        let tilt = (st.base_orientation() * Vector3::z())
+            .z
+            .clamp(-1.0, 1.0)
+            .acos();
+        self.max_tilt = self.max_tilt.max(tilt);
+        if t <= SETTLE_TIME {
+            return;
+        }
+        for (c, r) in st.contacts.iter().enumerate() {
+            let tot = &mut self.totals[c];
+            tot.min_normal = tot.min_normal.min(r.normal);
+            tot.max_normal = tot.max_normal.max(r.normal);
+            if r.lifted {
+                tot.lifted_time += dt;
+                self.first_lift_off.get_or_insert_with(|| ContactEvent {
+                    t,
+                    contact: tot.contact.clone(),
+                });
+            } else {
+                tot.max_slip_speed = tot.max_slip_speed.max(r.slip.norm());
+            }
+            if r.slipping {
+                tot.slipping_time += dt;
+                self.first_slip.get_or_insert_with(|| ContactEvent {
+                    t,
+                    contact: tot.contact.clone(),
+                });
+            }
+        }
+    }
+
+    /// The tally of a finished run: a contact never loaded after the settling time
+    /// reports `min_normal` 0.
+    #[must_use]
+    pub fn finish(mut self) -> Self {
+        for tot in &mut self.totals {
+            if !tot.min_normal.is_finite() {
+                tot.min_normal = 0.0;
+            }
+        }
+        self
+    }
+}
 
 /// A recorded contact run.
 #[derive(Clone, Debug)]
@@ -309,18 +418,13 @@ impl ContactRun {
             rows: Vec::new(),
             first_lift_off: None,
             first_slip: None,
-            totals: (0..nc)
-                .map(|k| ContactTotals {
-                    contact: self.plant.contact_name(k).to_string(),
-                    min_normal: f64::INFINITY,
-                    ..ContactTotals::default()
-                })
-                .collect(),
+            totals: Vec::new(),
             max_tilt: 0.0,
             steps: 0,
             control_evaluations: 0,
             steps_per_control: hold,
         };
+        let mut tally = ContactTally::new(&self.plant);
         let mut st = self.start.clone();
         let (mut q_r, mut v_r) = (vec![0.0; nq], vec![0.0; nr]);
         let mut u_r = vec![0.0; nu];
@@ -342,34 +446,7 @@ impl ContactRun {
             }
             if k > 0 {
                 // The reports of the step just taken.
-                let tilt = (st.base_orientation() * Vector3::z())
-                    .z
-                    .clamp(-1.0, 1.0)
-                    .acos();
-                res.max_tilt = res.max_tilt.max(tilt);
-                if t > SETTLE_TIME {
-                    for (c, r) in st.contacts.iter().enumerate() {
-                        let tot = &mut res.totals[c];
-                        tot.min_normal = tot.min_normal.min(r.normal);
-                        tot.max_normal = tot.max_normal.max(r.normal);
-                        if r.lifted {
-                            tot.lifted_time += dt;
-                            res.first_lift_off.get_or_insert_with(|| ContactEvent {
-                                t,
-                                contact: tot.contact.clone(),
-                            });
-                        } else {
-                            tot.max_slip_speed = tot.max_slip_speed.max(r.slip.norm());
-                        }
-                        if r.slipping {
-                            tot.slipping_time += dt;
-                            res.first_slip.get_or_insert_with(|| ContactEvent {
-                                t,
-                                contact: tot.contact.clone(),
-                            });
-                        }
-                    }
-                }
+                tally.observe(&st, dt);
             }
             if k % every == 0 {
                 let mut row = Vec::with_capacity(nq + nr + nu + 5 + 4 * nc + err.len());
@@ -400,11 +477,11 @@ impl ContactRun {
                 res.steps += 1;
             }
         }
-        for tot in &mut res.totals {
-            if !tot.min_normal.is_finite() {
-                tot.min_normal = 0.0;
-            }
-        }
+        let tally = tally.finish();
+        res.first_lift_off = tally.first_lift_off;
+        res.first_slip = tally.first_slip;
+        res.totals = tally.totals;
+        res.max_tilt = tally.max_tilt;
         Ok(res)
     }
 }

@@ -3,11 +3,10 @@
 
 use std::path::Path;
 
-use crate::contact::{ContactPlant, ContactState, WheelSpec};
+use crate::contact::{ContactState, PlantKind};
 use crate::error::Error;
 use crate::error::Result;
-use crate::sim::contact_run::{ContactDriver, ContactRun, ReducedMap};
-use crate::sim_config::contact_spec::PlantKind;
+use crate::sim::contact_run::{ContactDriver, ContactRun, contact_plant_of};
 use crate::sim_config::schema::RobotSpec;
 use crate::sim_config::{Scenario, at, bail, build_wheeled_model, chain, closed_loop, open_loop};
 
@@ -85,12 +84,7 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
         params.mu = draw.mu.unwrap_or(params.mu);
     }
     let (q_names, v_names) = (robot.q_names(), robot.v_names());
-    let wheels = wheel_joints.clone().map(|joint| WheelSpec {
-        joint,
-        radius: drive.r_w,
-    });
-    let plant = ContactPlant::new(model, &wheels, &spec.casters, params).map_err(named)?;
-    let mut map = ReducedMap::new(robot, &plant).map_err(named)?;
+    let (plant, mut map) = contact_plant_of(robot, model, &spec.casters, params).map_err(named)?;
     let (q0, v0, driver, record_interval) = if sc.controller.is_some() || sc.reference.is_some() {
         let cl = closed_loop(sc, path, base_dir)?;
         let law = match &sc.uncertainty {
@@ -125,4 +119,25 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
         record_interval,
         start,
     })
+}
+
+/// The check of a run on the rolling plant: `plant` is `rolling` and there is no
+/// `[contact]` table (`has_contact`), which only the contact plant reads.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `plant` or `contact`.
+pub fn check_rolling(plant: PlantKind, has_contact: bool) -> Result<()> {
+    if plant == PlantKind::Contact {
+        return Err(Error::invalid(
+            "plant",
+            "\"contact\" runs through sim_config::contact::prepare_contact (moma simulate does)",
+        ));
+    }
+    if has_contact {
+        return Err(Error::invalid(
+            "contact",
+            "the [contact] table is read only with plant = \"contact\"",
+        ));
+    }
+    Ok(())
 }

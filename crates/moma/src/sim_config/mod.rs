@@ -24,7 +24,6 @@ use crate::sim::stability_monitor::StabilityMonitor;
 use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, SimulationOptions};
 
 pub mod contact;
-pub mod contact_spec;
 pub mod control;
 pub mod robot;
 pub mod rolling_plant;
@@ -168,7 +167,7 @@ const STABILITY_NEEDS_URDF: &str =
 /// # Errors
 /// [`Error::Scenario`] naming the file and the field at fault.
 pub fn prepare(sc: &Scenario, path: &Path) -> Result<Run> {
-    contact_spec::check_rolling(sc.plant, sc.contact.is_some()).with_ctx(|| at(path, "plant"))?;
+    contact::check_rolling(sc.plant, sc.contact.is_some()).with_ctx(|| at(path, "plant"))?;
     let base_dir = path.parent().unwrap_or(Path::new("."));
     let (duration, interval) = (sc.duration, sc.output.record_interval);
     let samples = (duration / interval).ceil();

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::contact::{ContactSpec, PlantKind};
 use crate::error::{Error, Result};
 use crate::sim::monitor::MonitorLimits;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
-use crate::sim_config::contact_spec::{ContactSpec, PlantKind};
 
 // ---- the whole scenario file -------------------------------------------------------
 

@@ -18,9 +18,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::{Parameter, Table, Value, file_error, num, require_numbers, resolve};
+use crate::contact::PlantKind;
 use crate::error::{Error, Result};
 use crate::sim::stability_monitor::{first_crossing, first_slip};
-use crate::sim_config::contact_spec::PlantKind;
 use crate::sim_config::uncertainty::Dist;
 use crate::sim_config::{Run, Scenario};
 

@@ -1,13 +1,14 @@
-//! The `plant` choice and the `[contact]` table of a `moma simulate` scenario (schema in
-//! `docs/simulate.md`, the model in `docs/contact.md`).
+//! The `plant` choice and the `[contact]` table as a file writes them: one schema for the
+//! `moma simulate` scenario (`docs/simulate.md`) and the `moma mission` file
+//! (`docs/mission.md`); the model in `docs/contact.md`.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
-use crate::contact::{CasterSpec, ContactParams};
-use crate::error::{Error, Result};
+use super::params::ContactParams;
+use super::spec::CasterSpec;
 
 /// Which plant a wheeled scenario runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PlantKind {
     /// The reduced (rolling) model: planar base, wheels that roll without slipping.
@@ -19,28 +20,29 @@ pub enum PlantKind {
 }
 
 /// The `[contact]` table: the contact law's parameters (each optional, defaults of
-/// [`ContactParams`]) and the casters. The drive wheels are the robot's
-/// `wheel_joints`, disks of radius `drive.r_w`.
-#[derive(Clone, Debug, Deserialize)]
+/// [`ContactParams`], checked by [`ContactParams::validate`] when the plant is built) and
+/// the casters. The drive wheels are the robot's `wheel_joints`, disks of radius
+/// `drive.r_w`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     /// Coulomb friction coefficient μ of the wheels (> 0).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mu: Option<f64>,
     /// Normal stiffness k (N/m).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f64>,
     /// Normal damping c (N·s/m).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damping: Option<f64>,
     /// Friction regularisation velocity v_ε (m/s).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slip_velocity: Option<f64>,
     /// Contact step (s).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt: Option<f64>,
     /// Largest penetration allowed at the start (m).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start_penetration_tol: Option<f64>,
     /// The casters: a sphere of `radius` on the robot description's `frame`.
     pub casters: Vec<CasterSpec>,
@@ -62,25 +64,4 @@ impl ContactSpec {
                 .unwrap_or(d.start_penetration_tol),
         }
     }
-}
-
-/// The check of a run on the rolling plant: `plant` is `rolling` and there is no
-/// `[contact]` table (`has_contact`), which only the contact plant reads.
-///
-/// # Errors
-/// [`Error::InvalidInput`] naming `plant` or `contact`.
-pub fn check_rolling(plant: PlantKind, has_contact: bool) -> Result<()> {
-    if plant == PlantKind::Contact {
-        return Err(Error::invalid(
-            "plant",
-            "\"contact\" runs through sim_config::contact::prepare_contact (moma simulate does)",
-        ));
-    }
-    if has_contact {
-        return Err(Error::invalid(
-            "contact",
-            "the [contact] table is read only with plant = \"contact\"",
-        ));
-    }
-    Ok(())
 }

@@ -1,0 +1,237 @@
+//! The contact plant of a mission with `simulation.plant = "contact"`: built and checked
+//! when the file is loaded ([`MissionContact`]), stepped by the closed loop
+//! ([`ContactLoop`]) in place of the reduced (rolling) model's RK4 step.
+//!
+//! The law is the mission's own, on its rolling model. What it measures is the contact
+//! plant's free-flyer state mapped to the reduced coordinates
+//! ([`ReducedMap::to_reduced`], as `moma simulate` does); its torques are held over the
+//! control period `simulation.dt` while the contact plant takes `simulation.dt /
+//! contact.dt` steps. The monitors report what the contact plant did: the ZMP is the
+//! centre of pressure of its normal forces (on flat ground the two coincide), the slip
+//! ratio each wheel's friction over μ N, lift-off and slip the plant's own flags
+//! ([`ContactTally`]).
+
+use nalgebra::{DVector, Vector2};
+
+use crate::contact::{ContactPlant, ContactSpec, ContactState};
+use crate::control::wrap_angle;
+use crate::error::{Error, Result};
+use crate::mobile::WheeledModel;
+use crate::multibody::Model;
+use crate::sim::contact_run::{ContactTally, ReducedMap, contact_plant_of};
+use crate::stability::SupportPolygon;
+
+/// The contact plant of a mission, checked before the run: the plant, the map between
+/// its free-flyer state and the mission's reduced coordinates, and its start state (on
+/// the ground at the start pose and arm posture, at rest; nothing below the ground, a
+/// stable step).
+#[derive(Clone, Debug)]
+pub struct MissionContact {
+    /// The plant.
+    pub plant: ContactPlant,
+    /// Reduced ↔ contact coordinates (holds a copy of the mission's rolling model).
+    pub map: ReducedMap,
+    /// The checked start state.
+    pub start: ContactState,
+}
+
+impl MissionContact {
+    /// The contact plant of `robot` (its tracked wheel joints, disks of radius
+    /// `drive.r_w`, and `spec`'s casters) on `model`, the same description on a
+    /// free-flyer root, started at the reduced configuration `q0` at rest; `control_dt`
+    /// (the mission's control period) must hold a whole number of contact steps.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the field: `contact.mu` (≤ 0 and the other
+    /// parameters, [`crate::contact::ContactParams::validate`]), `contact.stiffness` (a
+    /// step the spring-damper is unstable at), `contact.slip_velocity`, `contact.dt`,
+    /// `contact.casters[k].frame`, `robot.wheel_joints`.
+    pub fn new(
+        robot: &WheeledModel,
+        model: Model,
+        spec: &ContactSpec,
+        q0: &[f64],
+        control_dt: f64,
+    ) -> Result<Self> {
+        let params = spec.params();
+        params.validate()?;
+        let ratio = control_dt / params.dt;
+        if ratio.round() < 1.0 || (ratio - ratio.round()).abs() > 1e-6 * ratio {
+            return Err(Error::invalid(
+                "contact.dt",
+                format!(
+                    "{} s must divide the control period simulation.dt = {control_dt} s into \
+                     a whole number of contact steps",
+                    params.dt
+                ),
+            ));
+        }
+        let (plant, mut map) = contact_plant_of(robot.clone(), model, &spec.casters, params)?;
+        let (qc, vc) = map.to_contact(q0, &vec![0.0; robot.nr()]);
+        let start = ContactState::new(&plant, &qc, &vc)?;
+        Ok(Self { plant, map, start })
+    }
+
+    /// Contact steps per control period `control_dt` (checked whole by
+    /// [`MissionContact::new`]).
+    #[must_use]
+    pub fn steps_per_control(&self, control_dt: f64) -> usize {
+        (control_dt / self.plant.params.dt).round() as usize
+    }
+}
+
+/// The reduced configuration at the start: the base at `pose`, the arm joints at `q_arm`
+/// (one per arm dof), the wheels at 0.
+#[must_use]
+pub(super) fn start_configuration(robot: &WheeledModel, pose: [f64; 3], q_arm: &[f64]) -> Vec<f64> {
+    let mut q = vec![0.0; robot.model.nq];
+    q[..3].copy_from_slice(&pose);
+    for (&i, &x) in robot.arm_dofs().iter().zip(q_arm) {
+        q[i] = x;
+    }
+    q
+}
+
+/// A contact lift-off or slip, first of its kind, for the mission's events.
+pub(super) struct ContactNews {
+    /// `lift_off` or `slip`.
+    pub kind: &'static str,
+    /// When (s).
+    pub t: f64,
+    /// What happened.
+    pub text: String,
+}
+
+/// A mission run's contact plant: its state, the inputs held, what it did.
+pub(super) struct ContactLoop {
+    plant: ContactPlant,
+    map: ReducedMap,
+    state: ContactState,
+    /// The plant's inputs (one per joint below the free flyer).
+    u_c: Vec<f64>,
+    steps: usize,
+    /// First lift-off and slip, totals, tilt.
+    pub tally: ContactTally,
+    /// Net work of the actuators ∫ uᵀ q̇ dt (J), per contact step.
+    pub input_work: f64,
+    /// The measured heading, continued across ±π as the rolling model's is.
+    heading: f64,
+    /// The support polygon in base axes and placed at the measured pose.
+    support: SupportPolygon,
+    placed: SupportPolygon,
+    news_lift: bool,
+    news_slip: bool,
+}
+
+impl ContactLoop {
+    /// The run of `setup` under the control period `control_dt`, on the support of
+    /// `robot`, its heading measured on from the start pose's `heading` (any angle, as
+    /// the rolling model's θ).
+    pub fn new(
+        setup: &MissionContact,
+        robot: &WheeledModel,
+        control_dt: f64,
+        heading: f64,
+    ) -> Result<Self> {
+        let support = SupportPolygon::from_wheeled_model(robot)?;
+        Ok(Self {
+            tally: ContactTally::new(&setup.plant),
+            plant: setup.plant.clone(),
+            map: setup.map.clone(),
+            state: setup.start.clone(),
+            u_c: vec![0.0; setup.plant.nu()],
+            steps: setup.steps_per_control(control_dt),
+            input_work: 0.0,
+            heading,
+            placed: support.clone(),
+            support,
+            news_lift: false,
+            news_slip: false,
+        })
+    }
+
+    /// The reduced state `(q, v)` the law measures. Does not allocate.
+    pub fn measure(&mut self, q: &mut DVector<f64>, v: &mut DVector<f64>) {
+        self.map
+            .to_reduced(&self.state, q.as_mut_slice(), v.as_mut_slice());
+        self.heading += wrap_angle(q[2] - self.heading);
+        q[2] = self.heading;
+    }
+
+    /// Applies the reduced inputs `u` (held) over one control period.
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] if the plant's accelerations stop being finite.
+    pub fn advance(&mut self, u: &[f64]) -> Result<()> {
+        self.map.to_contact_inputs(u, &mut self.u_c);
+        let dt = self.plant.params.dt;
+        for _ in 0..self.steps {
+            let power: f64 = self
+                .u_c
+                .iter()
+                .zip(self.state.v.iter().skip(6))
+                .map(|(u, v)| u * v)
+                .sum();
+            self.plant.step(&mut self.state, &self.u_c)?;
+            self.input_work += power * dt;
+            self.tally.observe(&self.state, dt);
+        }
+        Ok(())
+    }
+
+    /// The first lift-off and the first slip, each once, when they have happened.
+    pub fn news(&mut self) -> Vec<ContactNews> {
+        let mut out = Vec::new();
+        if !self.news_lift
+            && let Some(e) = &self.tally.first_lift_off
+        {
+            self.news_lift = true;
+            out.push(ContactNews {
+                kind: "lift_off",
+                t: e.t,
+                text: format!("'{}' loses its contact with the ground", e.contact),
+            });
+        }
+        if !self.news_slip
+            && let Some(e) = &self.tally.first_slip
+        {
+            self.news_slip = true;
+            out.push(ContactNews {
+                kind: "slip",
+                t: e.t,
+                text: format!("'{}' slides: its friction reaches μ N", e.contact),
+            });
+        }
+        out
+    }
+
+    /// The monitors of the present state: the ZMP margin (the centre of pressure of the
+    /// normal forces against the support polygon placed at the measured pose `(x, y,
+    /// θ)`; `None` when nothing touches the ground) and the larger drive-wheel slip
+    /// ratio |F_t| / (μ N) (`None` when a wheel carries no load).
+    pub fn monitors(&mut self, pose: [f64; 3]) -> (Option<f64>, Option<f64>) {
+        let reports = &self.state.contacts;
+        let total: f64 = reports.iter().map(|r| r.normal).sum();
+        let zmp = (total > 0.0).then(|| {
+            let cop = reports
+                .iter()
+                .fold(Vector2::zeros(), |a, r| a + r.point.xy() * r.normal)
+                / total;
+            self.support
+                .place_into(pose[0], pose[1], pose[2], &mut self.placed);
+            (0..self.placed.len())
+                .map(|i| {
+                    let e = self.placed.edge(i);
+                    e.inward.xy().dot(&(cop - e.from.xy()))
+                })
+                .fold(f64::INFINITY, f64::min)
+        });
+        let mu = self.plant.params.mu;
+        let wheels = self.plant.wheel_dofs().len();
+        let slip = reports[..wheels]
+            .iter()
+            .map(|r| (r.normal > 0.0).then(|| r.friction.norm() / (mu * r.normal)))
+            .try_fold(0.0f64, |a, s| s.map(|s| a.max(s)));
+        (zmp, slip)
+    }
+}

@@ -1,0 +1,155 @@
+//! `moma mission` on the contact plant (`simulation.plant = "contact"`): the shipped
+//! `scenarios/mission_contact.toml` (the default mission with μ = 1) reaches its goal
+//! along the rolling mission's path with nothing slipping or lifting off; on ice the
+//! plant's own slip flag makes the event; bad contact parameters are errors naming the
+//! field before anything runs.
+
+use std::path::{Path, PathBuf};
+
+use moma::mission::{self, Mission, MissionFile, MissionResult, scenario::from_file};
+
+fn scenarios() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
+}
+
+fn load(name: &str) -> Mission {
+    mission::load(&scenarios().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn run(m: &Mission) -> MissionResult {
+    mission::run(m).unwrap_or_else(|e| panic!("{}: {e}", m.name))
+}
+
+/// `mission_contact.toml` with `from` replaced by `to`, validated as if it were the file.
+fn variant(from: &str, to: &str) -> moma::Result<Mission> {
+    let path = scenarios().join("mission_contact.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains(from), "mission_contact.toml lacks '{from}'");
+    let file: MissionFile = toml::from_str(&text.replacen(from, to, 1)).expect("parses");
+    from_file(file, &path, &scenarios())
+}
+
+/// Largest deviations of the contact run from the rolling run, sample by sample (the
+/// same control steps and record interval): base position (m), heading (rad), arm
+/// joints (rad).
+fn deviation(m: &Mission, rolling: &MissionResult, contact: &MissionResult) -> [f64; 3] {
+    assert_eq!(
+        rolling.samples.t, contact.samples.t,
+        "the same sample times"
+    );
+    let arm: Vec<usize> = m.robot.arm_dofs().to_vec();
+    let mut d = [0.0f64; 3];
+    for (a, b) in rolling.samples.q.iter().zip(&contact.samples.q) {
+        d[0] = d[0].max((a[0] - b[0]).hypot(a[1] - b[1]));
+        d[1] = d[1].max((a[2] - b[2]).abs());
+        for &i in &arm {
+            d[2] = d[2].max((a[i] - b[i]).abs());
+        }
+    }
+    d
+}
+
+#[test]
+fn the_default_mission_on_the_contact_plant_follows_the_rolling_mission() {
+    let rolling_m = load("mission.toml");
+    let contact_m = load("mission_contact.toml");
+    assert!(rolling_m.contact.is_none() && contact_m.contact.is_some());
+    let rolling = run(&rolling_m);
+    let contact = run(&contact_m);
+    assert!(contact.reached, "{:?}", contact.reason);
+    assert!(rolling.reached, "{:?}", rolling.reason);
+    // the same law, phases and re-plan: one re-plan after the crate, at the same time
+    assert_eq!(contact.replans(), 1);
+    assert_eq!(contact.plans[1].t, rolling.plans[1].t);
+    // measured: 3.3 mm, 5.4 mrad, 7.4 mrad; held to 1 cm, 15 mrad, 20 mrad
+    let [pos, heading, joints] = deviation(&contact_m, &rolling, &contact);
+    assert!(pos < 0.01, "base position deviates by {pos} m");
+    assert!(heading < 0.015, "heading deviates by {heading} rad");
+    assert!(joints < 0.02, "arm joints deviate by {joints} rad");
+    // what the plant did: nothing slid or lifted off, the base stayed level
+    let tally = contact
+        .contact
+        .as_ref()
+        .expect("a contact run has its tally");
+    assert!(rolling.contact.is_none());
+    assert_eq!(tally.first_lift_off, None);
+    assert_eq!(tally.first_slip, None);
+    assert!(tally.max_tilt < 0.01, "tilt {}", tally.max_tilt);
+    assert!(tally.totals.iter().all(|t| t.min_normal > 0.0));
+    assert!(
+        !contact
+            .events
+            .iter()
+            .any(|e| e.kind == "slip" || e.kind == "lift_off")
+    );
+    // the monitors are the plant's: the start touches the ground without load (no centre
+    // of pressure), then every sample has its centre-of-pressure margin, well inside the
+    // support, and wheel friction below μ N
+    assert_eq!(contact.samples.zmp_margin[0], None);
+    assert!(contact.samples.zmp_margin[1..].iter().all(|z| z.is_some()));
+    let zmp = contact.min_zmp_margin().unwrap();
+    assert!(zmp > 0.1, "min ZMP margin {zmp}");
+    let slip = contact.max_slip_ratio().unwrap();
+    assert!(slip < 0.5, "largest slip ratio {slip}");
+    // the summary names what the contacts did
+    let s = mission::summary(&contact_m, &contact);
+    assert_eq!(s["contact"]["first_slip"], serde_json::Value::Null);
+    assert_eq!(s["contact"]["totals"].as_array().unwrap().len(), 6);
+    assert!(!mission::summary(&rolling_m, &rolling).contains_key("contact"));
+}
+
+#[test]
+fn on_ice_the_wheels_slide_and_the_plant_reports_it() {
+    let m = variant("mu = 1.0", "mu = 0.1").unwrap();
+    let r = run(&m);
+    let tally = r.contact.as_ref().unwrap();
+    let slip = tally.first_slip.as_ref().expect("the wheels slide on ice");
+    assert!(slip.contact.ends_with("wheel_joint"), "{}", slip.contact);
+    let event = r.events.iter().find(|e| e.kind == "slip").expect("event");
+    assert_eq!(event.t, slip.t);
+    // sliding wheels deliver μ N and no more
+    let ratio = r.max_slip_ratio().unwrap();
+    assert!((ratio - 1.0).abs() < 1e-9, "slip ratio {ratio}");
+    assert!(!r.reached);
+}
+
+#[test]
+fn bad_contact_input_names_the_field_before_running() {
+    let cases = [
+        ("mu = 1.0", "mu = 0.0", "contact.mu"),
+        ("mu = 1.0", "mu = -0.5", "contact.mu"),
+        // 1e12 N/m on a contact's normal effective mass (tens of kg) needs a step of
+        // about 1e-5 s, ten times below contact.dt
+        (
+            "mu = 1.0",
+            "mu = 1.0\nstiffness = 1e12",
+            "contact.stiffness",
+        ),
+        ("mu = 1.0", "mu = 1.0\ndt = 3e-4", "contact.dt"),
+        (
+            "frame = \"caster_rear_right\"",
+            "frame = \"no_such_frame\"",
+            "no_such_frame",
+        ),
+        (
+            "plant = \"contact\"",
+            "plant = \"rolling\"",
+            "contact: the [contact] table is read only",
+        ),
+    ];
+    for (from, to, field) in cases {
+        let e = variant(from, to).expect_err(to).to_string();
+        assert!(e.contains(field), "{to}: {e}");
+        assert!(e.contains("mission_contact.toml"), "{to}: {e}");
+    }
+    // the contact plant needs its table
+    let path = scenarios().join("mission.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let file: MissionFile =
+        toml::from_str(&text.replace("[output]", "[simulation]\nplant = \"contact\"\n[output]"))
+            .unwrap();
+    let e = from_file(file, &path, &scenarios())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("simulation.plant"), "{e}");
+}
