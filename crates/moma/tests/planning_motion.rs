@@ -216,6 +216,75 @@ fn unsolvable_problem_ends_at_the_time_limit() {
     assert!(took < Duration::from_millis(500), "{took:?}");
 }
 
+/// The unit square with a wall of no thickness at `x = 0.5`, open only for `0.8 < y <
+/// 0.9`: every state is valid, only a segment check sees the wall. The segments that cross
+/// it outside the opening are counted.
+struct ThinWall {
+    blocked: usize,
+}
+
+impl moma::planning::StateValidity for ThinWall {
+    fn is_valid(&mut self, _q: &[f64]) -> bool {
+        true
+    }
+
+    fn segment_valid(
+        &mut self,
+        _space: &JointSpace,
+        a: &[f64],
+        b: &[f64],
+        _scratch: &mut Vec<f64>,
+        checks: &mut u64,
+    ) -> bool {
+        *checks += 1;
+        if (a[0] - 0.5) * (b[0] - 0.5) > 0.0 {
+            return true;
+        }
+        let f = if a[0] == b[0] {
+            0.0
+        } else {
+            (0.5 - a[0]) / (b[0] - a[0])
+        };
+        let y = a[1] + f * (b[1] - a[1]);
+        let open = y > 0.8 && y < 0.9;
+        if !open {
+            self.blocked += 1;
+        }
+        open
+    }
+}
+
+#[test]
+fn lazy_search_cuts_the_edges_its_paths_fail_on_and_returns_a_checked_path() {
+    // The probes at the resolution never see the wall: only the paths' segment checks do.
+    let space = JointSpace::new(vec![0.0; 2], vec![1.0; 2], 0.01).unwrap();
+    let options = RrtConnectOptions {
+        lazy: true,
+        ..RrtConnectOptions::default()
+    };
+    let mut wall = ThinWall { blocked: 0 };
+    let out = rrt_connect(
+        &space,
+        &mut wall,
+        &[0.1, 0.1],
+        &[0.9, 0.1],
+        &options,
+        &mut RrtConnectWorkspace::new(),
+    )
+    .unwrap();
+    let path = out.path().expect("solved").clone();
+    // The straight segment and at least one path through the wall were refused.
+    assert!(wall.blocked >= 2, "blocked {}", wall.blocked);
+    let blocked = wall.blocked;
+    assert!(path.is_valid(&space, &mut wall, &mut 0));
+    assert_eq!(wall.blocked, blocked);
+    let ys = crossings(&path);
+    assert!(
+        !ys.is_empty() && ys.iter().all(|y| *y > 0.8 && *y < 0.9),
+        "{ys:?}"
+    );
+}
+
 #[test]
 fn shortcutting_never_lengthens_and_stays_valid() {
     let space = cube7();

@@ -21,9 +21,10 @@
 //! δ)`). The end state is checked first, then the start, then the middles of what is still
 //! uncovered, coarse to fine. A segment that passes keeps half the margin at every state of
 //! it, not only at the checked ones, up to the accuracy of the distances (1e-12 m). Pairs
-//! are not computed when their bounding balls, their world boxes (robot object against a
-//! scene shape), or the distance found at an earlier state of the same segment less the
-//! most it can have closed since, already cover the stretch found so far; the blocks go
+//! are not computed when their bounding balls, their world axis-aligned boxes (robot
+//! objects against each other or against a scene shape), or the distance found at an
+//! earlier state of the same segment less the most it can have closed since, already
+//! cover the stretch found so far; the blocks go
 //! best first (the one that limited the last state, then by the stretch their balls vouch
 //! for), and GJK stops once a separating plane shows the distance covers it.
 //!
@@ -93,9 +94,12 @@ pub struct ClosestPair {
     pub scene_object: bool,
 }
 
-/// Links with more objects than this (a mesh given as its triangles) are bounded by one
-/// ball per link before their objects are.
+/// Links with more objects than this (a mesh surface given as patches) are bounded by one
+/// ball per run of [`GROUP_SIZE`] consecutive objects before their objects are.
 const GROUP_ABOVE: usize = 4;
+/// Objects per ball group of a link with many objects (consecutive surface patches are
+/// neighbours: the patches come from a median split of the triangles).
+const GROUP_SIZE: usize = 8;
 
 /// The conservative collision check of a group (module docs); it owns its kinematics and
 /// geometry workspaces, so checks allocate nothing.
@@ -203,15 +207,18 @@ impl<'a> ClearanceChecker<'a> {
                 radius: o.bounding_radius,
             })
             .collect();
-        // Ball groups per link: one per object, or one for the whole link.
+        // Ball groups per link: one per object, or one per run of `GROUP_SIZE` objects.
         let mut groups: Vec<Ball> = Vec::new();
         let mut link_groups: Vec<Vec<(usize, std::ops::Range<usize>)>> = Vec::new();
         for link in &gm.links {
             let objs = link.first..link.first + link.count;
             let mut mine = Vec::new();
             if link.count > GROUP_ABOVE {
-                groups.push(enclosing_ball(&object_balls[objs.clone()]));
-                mine.push((groups.len() - 1, objs));
+                for lo in objs.clone().step_by(GROUP_SIZE) {
+                    let run = lo..(lo + GROUP_SIZE).min(objs.end);
+                    groups.push(enclosing_ball(&object_balls[run.clone()]));
+                    mine.push((groups.len() - 1, run));
+                }
             } else {
                 for i in objs {
                     groups.push(object_balls[i]);
@@ -421,9 +428,9 @@ impl<'a> ClearanceChecker<'a> {
         }
     }
 
-    /// The gap between robot object `a`'s world axis-aligned box and scene shape `(o,
-    /// s)`'s (a lower bound on their distance), at the placed state.
-    fn object_box_gap(&mut self, a: usize, o: usize, s: usize) -> f64 {
+    /// Robot object `a`'s world axis-aligned box at the placed state (computed once per
+    /// state).
+    fn object_world_box(&mut self, a: usize) -> (Vector3<f64>, Vector3<f64>) {
         if self.box_stamp[a] != self.state_stamp {
             let (c, r, h) = &self.object_boxes[a];
             let world = &self.data.world_from_joint[self.object_balls[a].joint];
@@ -432,8 +439,17 @@ impl<'a> ClearanceChecker<'a> {
             self.object_world_boxes[a] = (centre - half, centre + half);
             self.box_stamp[a] = self.state_stamp;
         }
-        let (lo_a, hi_a) = &self.object_world_boxes[a];
-        let (lo_b, hi_b) = &self.scene.objects[o].shapes[s].aabb;
+        self.object_world_boxes[a]
+    }
+
+    /// The gap between robot object `a`'s world axis-aligned box and `b`'s (a robot
+    /// object's, or a scene shape's), a lower bound on their distance, at the placed state.
+    fn object_box_gap(&mut self, a: usize, b: Other) -> f64 {
+        let (lo_a, hi_a) = self.object_world_box(a);
+        let (lo_b, hi_b) = match b {
+            Other::Robot(j) => self.object_world_box(j),
+            Other::Scene(o, s) => self.scene.objects[o].shapes[s].aabb,
+        };
         (lo_b - hi_a)
             .sup(&(lo_a - hi_b))
             .sup(&Vector3::zeros())
@@ -546,9 +562,7 @@ impl<'a> ClearanceChecker<'a> {
                 if block.count > 1 && self.object_gap(a, b) > bound {
                     continue;
                 }
-                if let Other::Scene(o, s) = b
-                    && self.object_box_gap(a, o, s) > bound
-                {
+                if self.object_box_gap(a, b) > bound {
                     continue;
                 }
                 // Above `bound` a lower bound is enough (GJK stops early).

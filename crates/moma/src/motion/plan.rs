@@ -43,6 +43,12 @@ pub struct MotionOptions {
     pub resolution: f64,
     /// RRT-Connect's longest step; `None`: 0.2 × the box diagonal.
     pub max_step: Option<f64>,
+    /// The search checks its steps state by state this far apart (joint-space norm,
+    /// each state clear of the margin) and runs the continuous check only on the segments
+    /// of the paths it finds (`planning::rrt_connect`'s lazy edges; a segment that fails is
+    /// cut from its tree and the search goes on); `None`: every step is checked
+    /// continuously. Either way every returned segment passed the continuous check.
+    pub search_resolution: Option<f64>,
     /// IK seeds tried for a goal pose.
     pub ik_attempts: usize,
     /// Distinct collision-free IK solutions sought before planning.
@@ -59,7 +65,8 @@ pub struct MotionOptions {
 
 impl MotionOptions {
     /// The defaults for a group of `dim` joints: 1 s, seed 0, a 2 mm margin, blends
-    /// checked every 0.01 rad (or m), 200 IK seeds for up to 4 solutions, 100 shortcut
+    /// checked every 0.01 rad (or m), search steps probed every 0.25 rad (or m) and
+    /// checked continuously on the paths found, 200 IK seeds for up to 4 solutions, 100 shortcut
     /// attempts, 1 rad/s² (m/s²) on every joint, blends within 0.1, samples every 10 ms.
     #[must_use]
     pub fn new(dim: usize) -> Self {
@@ -69,6 +76,7 @@ impl MotionOptions {
             margin: 2e-3,
             resolution: 0.01,
             max_step: None,
+            search_resolution: Some(0.25),
             ik_attempts: 200,
             ik_solutions: 4,
             shortcut_attempts: 100,
@@ -248,6 +256,14 @@ fn check_options(o: &MotionOptions, dim: usize) -> Result<()> {
             return Err(Error::invalid(field, format!("{v} is not positive")));
         }
     }
+    if let Some(r) = o.search_resolution
+        && !(r.is_finite() && r > 0.0)
+    {
+        return Err(Error::invalid(
+            "search_resolution",
+            format!("{r} is not a positive finite length"),
+        ));
+    }
     if !(o.max_deviation.is_finite() && o.max_deviation >= 0.0) {
         return Err(Error::invalid("max_deviation", "is negative or not finite"));
     }
@@ -375,6 +391,16 @@ pub fn plan_motion(
         }
     };
     // Search: towards each goal state in turn, sharing the time left.
+    // A lazy search probes its steps at its own resolution.
+    let search_space = match options.search_resolution {
+        Some(r) => JointSpace::with_weights(
+            group.lower.clone(),
+            group.upper.clone(),
+            space.weights().to_vec(),
+            r,
+        )?,
+        None => space.clone(),
+    };
     let mut ws = RrtConnectWorkspace::new();
     let mut found: Option<(JointPath, usize)> = None;
     let mut limit = NotSolved::TimeLimit;
@@ -388,9 +414,10 @@ pub fn plan_motion(
             max_step: options.max_step,
             time_limit: share,
             seed: options.seed.wrapping_add(k as u64),
+            lazy: options.search_resolution.is_some(),
             ..RrtConnectOptions::default()
         };
-        match rrt_connect(&space, &mut checker, &x_start, x_goal, &rrt, &mut ws)? {
+        match rrt_connect(&search_space, &mut checker, &x_start, x_goal, &rrt, &mut ws)? {
             Planned::Solved { path, stats } => {
                 result.iterations += stats.iterations;
                 found = Some((path, k));

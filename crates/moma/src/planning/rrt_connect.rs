@@ -13,6 +13,15 @@
 //!   limit ends it.
 //! * **Limits**: an iteration limit and a time limit (checked once per iteration); reaching
 //!   either returns [`Planned::NotSolved`] with the counts.
+//! * **Lazy edges** ([`RrtConnectOptions::lazy`]): a step is checked state by state at
+//!   the space's resolution ([`JointSpace::discrete_segment_valid`], whatever the check's
+//!   own [`StateValidity::segment_valid`]); when the trees meet, the edges of the path
+//!   between them that no earlier path checked get the segment check, start end first. An
+//!   edge that fails cuts its far node and every node below it from their tree (they are
+//!   skipped from then on), and the search goes on; a returned path passed the segment
+//!   check throughout, as without the option. A check that costs much more per segment
+//!   than its states do at that resolution (a continuous one) then pays for the segments
+//!   of the paths only.
 //! * **Allocation**: the trees live in a [`RrtConnectWorkspace`] that keeps its capacity
 //!   between queries; a query allocates only its returned path.
 
@@ -33,6 +42,9 @@ pub struct RrtConnectOptions {
     pub time_limit: Duration,
     /// The seed of the sampler.
     pub seed: u64,
+    /// Probe steps state by state at the space's resolution, and give only the paths
+    /// found the segment check (module docs).
+    pub lazy: bool,
 }
 
 impl Default for RrtConnectOptions {
@@ -42,6 +54,7 @@ impl Default for RrtConnectOptions {
             max_iterations: 100_000,
             time_limit: Duration::from_secs(1),
             seed: 0,
+            lazy: false,
         }
     }
 }
@@ -104,19 +117,37 @@ impl Planned {
     }
 }
 
-/// One tree: node states stored flat, each node's parent index (the root's is itself).
+/// One tree: node states stored flat, each node's parent index (the root's is itself),
+/// whether the edge to its parent is known valid, and whether a failed edge above it cut
+/// it off (lazy mode).
 #[derive(Debug, Clone, Default)]
 struct Tree {
     states: Vec<f64>,
     parents: Vec<u32>,
+    edge_checked: Vec<bool>,
+    cut: Vec<bool>,
 }
 
 impl Tree {
     fn reset(&mut self, root: &[f64]) {
         self.states.clear();
         self.parents.clear();
+        self.edge_checked.clear();
+        self.cut.clear();
         self.states.extend_from_slice(root);
         self.parents.push(0);
+        self.edge_checked.push(true);
+        self.cut.push(false);
+    }
+
+    /// Cuts node `i` and every node below it (children come after their parents).
+    fn cut_below(&mut self, i: usize) {
+        self.cut[i] = true;
+        for j in i + 1..self.len() {
+            if self.cut[self.parents[j] as usize] {
+                self.cut[j] = true;
+            }
+        }
     }
 
     fn len(&self) -> usize {
@@ -127,17 +158,22 @@ impl Tree {
         &self.states[i * dim..(i + 1) * dim]
     }
 
-    fn push(&mut self, q: &[f64], parent: usize) -> usize {
+    fn push(&mut self, q: &[f64], parent: usize, edge_checked: bool) -> usize {
         self.states.extend_from_slice(q);
         self.parents.push(parent as u32);
+        self.edge_checked.push(edge_checked);
+        self.cut.push(false);
         self.parents.len() - 1
     }
 
-    /// The node nearest to `q` in the weighted norm (linear scan).
+    /// The node nearest to `q` in the weighted norm (linear scan over the nodes not cut).
     fn nearest(&self, space: &JointSpace, q: &[f64]) -> usize {
         let dim = space.dim();
         let mut best = (0, f64::INFINITY);
         for (i, node) in self.states.chunks_exact(dim).enumerate() {
+            if self.cut[i] {
+                continue;
+            }
             let d = space.distance_squared(node, q);
             if d < best.1 {
                 best = (i, d);
@@ -242,7 +278,7 @@ pub fn rrt_connect(
         {
             *s = lo + (hi - lo) * rng.random::<f64>();
         }
-        let new = match extend(space, validity, ws, a, max_step, &mut checks) {
+        let new = match extend(space, validity, ws, a, max_step, options.lazy, &mut checks) {
             Extend::Trapped => {
                 a = 1 - a;
                 continue;
@@ -254,12 +290,15 @@ pub fn rrt_connect(
         ws.sample.clear();
         ws.sample.extend_from_slice(ws.trees[a].state(new, dim));
         loop {
-            match extend(space, validity, ws, b, max_step, &mut checks) {
+            match extend(space, validity, ws, b, max_step, options.lazy, &mut checks) {
                 Extend::Advanced(_) => continue,
                 Extend::Trapped => break,
                 Extend::Reached(joined) => {
                     let (from_start, from_goal) =
                         if a == 0 { (new, joined) } else { (joined, new) };
+                    if !check_path_edges(space, validity, ws, from_start, from_goal, &mut checks) {
+                        break;
+                    }
                     let path = join(&ws.trees, dim, from_start, from_goal);
                     return Ok(Planned::Solved {
                         path,
@@ -276,13 +315,15 @@ pub fn rrt_connect(
     })
 }
 
-/// Extends tree `t` one step of at most `max_step` towards `ws.sample`.
+/// Extends tree `t` one step of at most `max_step` towards `ws.sample`; `lazy` probes the
+/// step state by state at the space's resolution.
 fn extend(
     space: &JointSpace,
     validity: &mut impl StateValidity,
     ws: &mut RrtConnectWorkspace,
     t: usize,
     max_step: f64,
+    lazy: bool,
     checks: &mut u64,
 ) -> Extend {
     let dim = space.dim();
@@ -299,15 +340,69 @@ fn extend(
         ws.step
             .extend(from.iter().zip(&ws.sample).map(|(x, y)| x + f * (y - x)));
     }
-    if !space.segment_valid(validity, from, &ws.step, &mut ws.scratch, checks) {
+    let valid = if lazy {
+        space.discrete_segment_valid(validity, from, &ws.step, &mut ws.scratch, checks)
+    } else {
+        space.segment_valid(validity, from, &ws.step, &mut ws.scratch, checks)
+    };
+    if !valid {
         return Extend::Trapped;
     }
-    let i = tree.push(&ws.step, near);
+    let i = tree.push(&ws.step, near, !lazy);
     if reached {
         Extend::Reached(i)
     } else {
         Extend::Advanced(i)
     }
+}
+
+/// Checks the edges not yet known valid on the path through `from_start` (tree 0) and
+/// `from_goal` (tree 1), from the start tree's root on; the first that fails cuts its node
+/// and the nodes below it from their tree, and the answer is `false`.
+fn check_path_edges(
+    space: &JointSpace,
+    validity: &mut impl StateValidity,
+    ws: &mut RrtConnectWorkspace,
+    from_start: usize,
+    from_goal: usize,
+    checks: &mut u64,
+) -> bool {
+    let dim = space.dim();
+    // The start tree's edges root first, then the goal tree's from the junction on.
+    let mut chain = Vec::new();
+    let mut i = from_start;
+    while i != 0 {
+        chain.push((0, i));
+        i = ws.trees[0].parents[i] as usize;
+    }
+    chain.reverse();
+    let mut i = from_goal;
+    while i != 0 {
+        chain.push((1, i));
+        i = ws.trees[1].parents[i] as usize;
+    }
+    for (t, i) in chain {
+        let tree = &mut ws.trees[t];
+        if tree.edge_checked[i] {
+            continue;
+        }
+        let parent = tree.parents[i] as usize;
+        // Along the path: parent → node in the start tree, node → parent in the goal tree.
+        let (a, b) = if t == 0 { (parent, i) } else { (i, parent) };
+        let ok = space.segment_valid(
+            validity,
+            tree.state(a, dim),
+            tree.state(b, dim),
+            &mut ws.scratch,
+            checks,
+        );
+        if !ok {
+            tree.cut_below(i);
+            return false;
+        }
+        tree.edge_checked[i] = true;
+    }
+    true
 }
 
 /// The path root(0) → … → `from_start` then `from_goal` → … → root(1). The two nodes hold
