@@ -171,6 +171,10 @@ fn bad_lift_off_files_name_the_field() {
             lift_off_toml(p, "").replace("radius = 0.08 }, {", "radius = -0.08 }, {"),
             "lift_off.wheels[0].radius",
         ),
+        (
+            lift_off_toml(p, "").replace("\"left_wheel_joint\"", "\"front_wheel_joint\""),
+            "lift_off.wheels",
+        ),
         (lift_off_toml(p, "speed = 1.0"), "lift_off"),
     ];
     for (text, field) in cases {

@@ -82,6 +82,9 @@ fn plant_error(path: &Path, e: Error) -> Error {
             };
             file_error(path, &field, message)
         }
+        // A robot whose joints the plant cannot take (a joint of more than one dof).
+        Error::Model(_) => file_error(path, "lift_off.robot", e),
+        // A wheel joint the model lacks.
         other => file_error(path, "lift_off.wheels", other),
     }
 }
