@@ -75,8 +75,9 @@ enum Command {
     /// Render a mission's report.html and SVG figures from a saved MissionReport (JSON).
     #[command(hide = true)]
     RenderReport(cmd::render_report::Args),
-    /// Sweep a stability or placement study over a grid or a seeded random sample (or
-    /// one shard of it) into one CSV table; `moma sweep merge` joins shard tables.
+    /// Sweep a stability, placement, mission, uncertainty or lift-off study over a grid
+    /// or a seeded random sample (or one shard of it) into one CSV table; `moma sweep
+    /// merge` joins shard tables.
     Sweep(cmd::sweep::Args),
 }
 

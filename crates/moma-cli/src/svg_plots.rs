@@ -213,6 +213,69 @@ pub fn line_chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series<'_>]
     svg
 }
 
+/// The points `(x_i, y_i)` of each series as markers, on equal x and y ranges, with the
+/// line y = x across the plot (dashed grey, last in the legend).
+pub fn identity_scatter_chart(
+    title: &str,
+    xlabel: &str,
+    ylabel: &str,
+    series: &[Series<'_>],
+) -> String {
+    let (lo, hi) = range(
+        series
+            .iter()
+            .flat_map(|s| s.x.iter().chain(s.y.iter()).copied()),
+    );
+    let f = Frame {
+        x0: lo,
+        x1: hi,
+        y0: lo,
+        y1: hi,
+        pw: W - ML - MR,
+        ph: H - MT - MB,
+    };
+    let mut names: Vec<&str> = series.iter().map(|s| s.name).collect();
+    let identity = "y = x";
+    names.push(identity);
+    let width = W.max(W - MR + legend_width(&names));
+    let mut svg = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{H}" viewBox="0 0 {width} {H}" font-family="sans-serif">"#
+    );
+    axes(&mut svg, &f, title, xlabel, ylabel);
+    let _ = write!(
+        svg,
+        r##"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="#888" stroke-width="1.2" stroke-dasharray="6 4"/>"##,
+        f.px(lo),
+        f.py(lo),
+        f.px(hi),
+        f.py(hi)
+    );
+    for (i, s) in series.iter().enumerate() {
+        let color = COLORS[i % COLORS.len()];
+        for (a, b) in s.x.iter().zip(&s.y) {
+            if a.is_finite() && b.is_finite() {
+                let _ = write!(
+                    svg,
+                    r#"<circle cx="{:.2}" cy="{:.2}" r="4" fill="{color}" fill-opacity="0.8"/>"#,
+                    f.px(*a),
+                    f.py(*b)
+                );
+            }
+        }
+    }
+    legend(&mut svg, &names[..series.len()]);
+    let (x, y) = (W - MR + 14.0, MT + 14.0 + 18.0 * series.len() as f64);
+    let _ = write!(
+        svg,
+        r##"<line x1="{x}" y1="{y}" x2="{}" y2="{y}" stroke="#888" stroke-width="1.2" stroke-dasharray="6 4"/><text x="{}" y="{}" font-size="12">{identity}</text>"##,
+        x + 22.0,
+        x + 28.0,
+        y + 4.0
+    );
+    svg.push_str("</svg>\n");
+    svg
+}
+
 /// The path `(x(t), y(t))` in the plane with equal axis scales, start and end marked.
 pub fn path_chart(title: &str, x: &[f64], y: &[f64]) -> String {
     let (mut x0, mut x1) = range(x.iter().copied());
@@ -331,6 +394,19 @@ mod tests {
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert!(svg.contains("a&lt;b") && !svg.contains("NaN"));
         let p = path_chart("path", &[0.0, 1.0], &[0.0, 0.0]);
+        assert!(p.contains("polyline"));
+        let sc = identity_scatter_chart(
+            "a vs b",
+            "a",
+            "b",
+            &[Series {
+                name: "s",
+                x: &[1.0, 2.0, f64::NAN],
+                y: vec![1.1, 1.9, 3.0],
+            }],
+        );
+        assert_eq!(sc.matches("<circle").count(), 2);
+        assert!(sc.contains("y = x") && !sc.contains("NaN"));
         assert!(p.contains("polyline"));
         let tk = ticks(0.0, 1.0);
         assert_eq!(tk.len(), 6);

@@ -30,3 +30,4 @@ pub mod space;
 pub mod stability;
 pub mod stability_map;
 pub mod sweep;
+pub mod sweep_lift_off;

@@ -1,6 +1,8 @@
-//! `moma sweep SWEEP.toml`: a grid or seeded random sweep of a stability or placement
-//! study on all cores (or one shard of it), into one CSV table; `moma sweep merge`
-//! joins shard tables. The schema and the sharding rule are in `docs/sweep.md`.
+//! `moma sweep SWEEP.toml`: a grid or seeded random sweep of a study (stability,
+//! placement, mission, uncertainty, lift-off) on all cores (or one shard of it), into one
+//! CSV table, with the uncertainty study's summary and the lift-off study's figure;
+//! `moma sweep merge` joins shard tables. The schema and the sharding rule are in
+//! `docs/sweep.md`.
 
 use crate::output::write_atomic;
 use anyhow::{Context, Result, anyhow, bail};
@@ -33,6 +35,10 @@ pub struct Args {
     /// margin, seeds that tipped or slipped) as JSON, atomically.
     #[arg(long)]
     pub summary: Option<PathBuf>,
+    /// Lift-off study: also draw the simulated against the predicted lift-off
+    /// acceleration, with the line y = x (SVG), atomically.
+    #[arg(long)]
+    pub figure: Option<PathBuf>,
 }
 
 /// `moma sweep merge`.
@@ -124,6 +130,13 @@ pub fn run(args: Args) -> Result<()> {
             sweep.study()
         );
     }
+    if args.figure.is_some() && sweep.study() != "lift_off" {
+        bail!(
+            "--figure: only the lift_off study has a figure ({} is a {} study)",
+            path.display(),
+            sweep.study()
+        );
+    }
     let indices =
         moma::sweep::shard_indices(sweep.len(), k, n).map_err(|e| anyhow!("--shard: {e}"))?;
     let pb = progress_bar(indices.len() as u64, args.quiet);
@@ -153,9 +166,34 @@ pub fn run(args: Args) -> Result<()> {
         }
         _ => None,
     };
+    let deviation = if sweep.study() == "lift_off" {
+        super::sweep_lift_off::largest_deviation(&table)?
+    } else {
+        None
+    };
+    let figure = match &args.figure {
+        Some(_) => Some(super::sweep_lift_off::figure(
+            &table,
+            &format!(
+                "Tip-over: simulated lift-off vs predicted limit\n{}",
+                path.file_name()
+                    .map_or(String::new(), |f| f.to_string_lossy().into_owned())
+            ),
+        )?),
+        None => None,
+    };
     write_atomic(&output, table.to_csv().as_bytes())?;
     if let (Some(p), Some(j)) = (&args.summary, &summary_json) {
         write_atomic(p, j.as_bytes())?;
+    }
+    if let (Some(p), Some(svg)) = (&args.figure, &figure) {
+        write_atomic(p, svg.as_bytes())?;
+    }
+    if let (false, Some((dev, index))) = (args.quiet, deviation) {
+        outln!(
+            "largest deviation of the simulated lift-off from the predicted limit: {:+.2} % (point {index})",
+            100.0 * dev
+        );
     }
     if let (false, Some(groups)) = (args.quiet, &summary) {
         for g in groups {

@@ -3,12 +3,14 @@
 
 use nalgebra::{DVector, UnitQuaternion, Vector3};
 
+use super::geometry::{disk_lowest_point, sphere_lowest_point};
 use super::params::ContactParams;
 use super::point_force::add_point_force;
 use super::report::ContactReport;
 use super::spec::{CasterSpec, WheelSpec};
 use crate::error::{Error, Result};
 use crate::multibody::{Data, JointType, Model, RootJoint};
+use crate::spatial::SE3;
 
 /// The kind and geometry of one resolved ground contact.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,6 +31,20 @@ pub(crate) struct Contact {
     pub radius: f64,
     /// Frictional (wheels) or not (casters).
     pub frictional: bool,
+}
+
+impl Contact {
+    /// The contact's point (the lowest point of its disk or sphere), world, with its
+    /// body at `x` (world from the body's joint frame).
+    #[inline]
+    pub(crate) fn lowest_point(&self, x: &SE3) -> Vector3<f64> {
+        match self.shape {
+            Shape::Disk { axis } => {
+                disk_lowest_point(&x.translation, &(x.rotation * axis), self.radius)
+            }
+            Shape::Sphere { centre } => sphere_lowest_point(&x.act_point(&centre), self.radius),
+        }
+    }
 }
 
 /// The robot on a free-flyer root, its drive wheels and ball casters in compliant
@@ -138,6 +154,26 @@ impl ContactPlant {
     #[must_use]
     pub fn ncontacts(&self) -> usize {
         self.contacts.len()
+    }
+
+    /// Each contact's point (the lowest point of its wheel disk or caster sphere, world)
+    /// at the configuration `q`, in contact order; for setting a run up (allocates).
+    ///
+    /// # Errors
+    /// [`Error::WrongLength`] / [`Error::NonFinite`] for `q` (named `q`).
+    pub fn contact_points(&self, q: &[f64]) -> Result<Vec<Vector3<f64>>> {
+        crate::kinematics::check_state(&self.model, "contact_points", Some(q), None, None, None)?;
+        let mut data = Data::new(&self.model);
+        crate::kinematics::forward_kinematics(
+            &self.model,
+            &mut data,
+            &nalgebra::DVector::from_column_slice(q),
+        );
+        Ok(self
+            .contacts
+            .iter()
+            .map(|c| c.lowest_point(&data.world_from_joint[c.body]))
+            .collect())
     }
 
     /// Name of contact `k` (the wheel joint or the caster frame).

@@ -3,9 +3,8 @@
 
 use nalgebra::{Vector2, Vector3};
 
-use super::geometry::{disk_lowest_point, sphere_lowest_point};
 use super::law::{friction_force, normal_force};
-use super::plant::{ContactPlant, ContactState, Shape};
+use super::plant::{ContactPlant, ContactState};
 use super::point_force::add_point_force;
 use crate::error::{Error, Result};
 
@@ -23,12 +22,7 @@ pub(crate) fn evaluate_contacts(plant: &ContactPlant, st: &mut ContactState) {
     );
     for (k, c) in plant.contacts.iter().enumerate() {
         let x = &st.data.world_from_joint[c.body];
-        let point = match c.shape {
-            Shape::Disk { axis } => {
-                disk_lowest_point(&x.translation, &(x.rotation * axis), c.radius)
-            }
-            Shape::Sphere { centre } => sphere_lowest_point(&x.act_point(&centre), c.radius),
-        };
+        let point = c.lowest_point(x);
         // Velocity of the body's material point at the contact (world).
         let tw = &st.data.v[c.body];
         let w = x.rotation * tw.angular;

@@ -10,7 +10,9 @@
 //!   model ([`wheeled_system`]) or a chapter model m1/m2/m5 ([`chapter_models`]) is
 //!   simulated in reduced coordinates, so C q̇ = 0 holds by construction; a fixed-base arm
 //!   is [`fixed_base`]; the free-floating robot is [`free_floating`]; the contact plant of
-//!   [`crate::contact`] is run with a rolling model's inputs or law by [`contact_run`].
+//!   [`crate::contact`] is run with a rolling model's inputs or law by [`contact_run`],
+//!   and accelerated steadily (by d'Alembert's principle, its gravity tilted) until a
+//!   contact lifts by [`lift_off`], beside the tip-over limit `stability` predicts.
 //! * Open loop: [`wheeled::simulate_observed`] integrates the state `[q, v, W]` (the input
 //!   work integrated in the state, so [`monitor`] checks the energy balance) under the
 //!   input profiles, integrator choice and step budget of [`settings`], and hands every
@@ -47,6 +49,7 @@ pub mod coordinated;
 pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
+pub mod lift_off;
 pub mod model_mismatch;
 pub mod monitor;
 pub mod mpc_loop;

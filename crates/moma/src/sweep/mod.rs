@@ -5,7 +5,7 @@
 //! sampling, and the parameters:
 //!
 //! ```toml
-//! study = "stability"            # stability | placement | mission | uncertainty
+//! study = "stability"            # stability | placement | mission | uncertainty | lift_off
 //! [sample]
 //! mode = "grid"                  # grid (cartesian product) | random (count, seed)
 //! [parameters]
@@ -43,12 +43,14 @@
 //!
 //! A [`Sweep`] is a validated sweep file: a study (stability or placement, each holding
 //! its loaded robot and set-up immutably; mission, holding the parsed mission file that
-//! each point modifies, re-validates and runs), the parameters in file order and the
-//! sampling. [`Sweep::run`] evaluates a list of indices on a rayon pool with one study
+//! each point modifies, re-validates and runs; uncertainty, holding its scenario's text;
+//! lift-off, holding its contact plant and base posture, each point a `sim::lift_off`
+//! search), the parameters in file order and the sampling. [`Sweep::run`] evaluates a list of indices on a rayon pool with one study
 //! workspace per worker (the stability study's workspace holds its own copy of the model,
 //! whose payload body inertia it sets per point); a [`Table`] keeps typed cells
 //! ([`Value`]); [`merge`] joins shard tables.
 
+mod lift_off;
 mod mission;
 mod placement;
 mod stability;
@@ -174,6 +176,7 @@ struct FileSpec {
     placement: Option<toml::Value>,
     mission: Option<toml::Value>,
     uncertainty: Option<toml::Value>,
+    lift_off: Option<toml::Value>,
 }
 
 #[derive(Deserialize, Default)]
@@ -190,6 +193,7 @@ enum Study {
     Placement(placement::PlacementStudy),
     Mission(Box<mission::MissionStudy>),
     Uncertainty(Box<uncertainty::UncertaintyStudy>),
+    LiftOff(Box<lift_off::LiftOffStudy>),
 }
 
 /// Per-worker workspace of a study.
@@ -198,6 +202,7 @@ enum Workspace {
     Placement(Box<placement::Workspace>),
     Mission(mission::Workspace),
     Uncertainty(uncertainty::Workspace),
+    LiftOff(lift_off::Workspace),
 }
 
 /// A loaded, validated sweep: the study with its robot, the parameters and the sampling.
@@ -417,6 +422,7 @@ fn prepare_study(
         ("placement", &spec.placement),
         ("mission", &spec.mission),
         ("uncertainty", &spec.uncertainty),
+        ("lift_off", &spec.lift_off),
     ];
     for (name, v) in other_sections {
         if v.is_some() && name != spec.study {
@@ -458,12 +464,19 @@ fn prepare_study(
             section("uncertainty", &spec.uncertainty)?,
             parameters,
         )?)),
+        "lift_off" => Study::LiftOff(Box::new(lift_off::LiftOffStudy::new(
+            path,
+            dir,
+            section("lift_off", &spec.lift_off)?,
+            parameters,
+            files,
+        )?)),
         other => {
             return Err(file_error(
                 path,
                 "study",
                 format!(
-                    "unknown study '{other}' (expected stability, placement, mission or uncertainty)"
+                    "unknown study '{other}' (expected stability, placement, mission, uncertainty or lift_off)"
                 ),
             ));
         }
@@ -542,7 +555,7 @@ impl Sweep {
         })
     }
 
-    /// The study's name (`stability`, `placement`, `mission`, `uncertainty`).
+    /// The study's name (`stability`, `placement`, `mission`, `uncertainty`, `lift_off`).
     #[must_use]
     pub fn study(&self) -> &str {
         &self.study_name
@@ -584,6 +597,7 @@ impl Sweep {
             Study::Placement(_) => placement::RESULTS,
             Study::Mission(_) => mission::RESULTS,
             Study::Uncertainty(_) => uncertainty::RESULTS,
+            Study::LiftOff(_) => lift_off::RESULTS,
         }
     }
 
@@ -641,6 +655,7 @@ impl Sweep {
             Study::Placement(s) => Workspace::Placement(Box::new(s.workspace())),
             Study::Mission(s) => Workspace::Mission(s.workspace()),
             Study::Uncertainty(s) => Workspace::Uncertainty(s.workspace()),
+            Study::LiftOff(s) => Workspace::LiftOff(s.workspace()),
         }
     }
 
@@ -655,6 +670,7 @@ impl Sweep {
             (Study::Placement(s), Workspace::Placement(w)) => s.evaluate(w, &point, &mut row),
             (Study::Mission(s), Workspace::Mission(w)) => s.evaluate(w, &point, &mut row),
             (Study::Uncertainty(s), Workspace::Uncertainty(w)) => s.evaluate(w, &point, &mut row),
+            (Study::LiftOff(s), Workspace::LiftOff(w)) => s.evaluate(w, &point, &mut row),
             _ => unreachable!("a workspace is made by its own study"),
         }
         .map_err(|e| Error::invalid(format!("sweep point {index}"), e.to_string()))?;
@@ -829,6 +845,46 @@ pub(crate) fn require_names(path: &Path, p: &Parameter, names: &[String]) -> Res
                 format!("expected one of {}", names.join(", ")),
             ));
         }
+    }
+    Ok(())
+}
+
+/// q index of the one-coordinate joint `name` (not the root); `field` names it in errors.
+pub(crate) fn joint_coordinate(
+    model: &crate::multibody::Model,
+    path: &Path,
+    field: &str,
+    name: &str,
+) -> Result<usize> {
+    let id = model
+        .joint_id(name)
+        .map_err(|e| file_error(path, field, e))?;
+    if id.0 == 1 || model.nqs[id.0] != 1 {
+        return Err(file_error(
+            path,
+            field,
+            format!("joint '{name}' is not a one-coordinate arm joint"),
+        ));
+    }
+    Ok(model.idx_q[id.0])
+}
+
+/// Sets the joints a posture table (`{ JOINT = value, ... }`, field `at`) lists in `q`.
+pub(crate) fn set_joints(
+    path: &Path,
+    model: &crate::multibody::Model,
+    at: &str,
+    table: &toml::Table,
+    q: &mut nalgebra::DVector<f64>,
+) -> Result<()> {
+    for (joint, x) in table {
+        let f = format!("{at}.{joint}");
+        let iq = joint_coordinate(model, path, &f, joint)?;
+        q[iq] = x
+            .as_float()
+            .or_else(|| x.as_integer().map(|i| i as f64))
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| file_error(path, &f, "expected a finite number"))?;
     }
     Ok(())
 }

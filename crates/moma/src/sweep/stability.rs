@@ -17,7 +17,10 @@ use std::path::Path;
 use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
 
-use super::{Parameter, Value, Values, file_error, num, require_names, require_numbers, resolve};
+use super::{
+    Parameter, Value, Values, file_error, joint_coordinate, num, require_names, require_numbers,
+    resolve, set_joints,
+};
 use crate::error::Result;
 use crate::mission::scenario::Loader;
 use crate::mobile::{Caster, DiffDrive, WheeledBase};
@@ -115,21 +118,6 @@ pub(super) struct Workspace {
     q: DVector<f64>,
     v: DVector<f64>,
     a: DVector<f64>,
-}
-
-/// q index of the one-coordinate joint `name` (not the root).
-fn joint_coordinate(model: &Model, path: &Path, field: &str, name: &str) -> Result<usize> {
-    let id = model
-        .joint_id(name)
-        .map_err(|e| file_error(path, field, e))?;
-    if id.0 == 1 || model.nqs[id.0] != 1 {
-        return Err(file_error(
-            path,
-            field,
-            format!("joint '{name}' is not a one-coordinate arm joint"),
-        ));
-    }
-    Ok(model.idx_q[id.0])
 }
 
 /// The height of the ground in the base frame (m): the mean height of the wheel joints'
@@ -230,15 +218,7 @@ fn parse_postures(
             ));
         }
         let mut q = neutral(model);
-        for (joint, x) in &p.q {
-            let f = format!("{at}.q.{joint}");
-            let iq = joint_coordinate(model, path, &f, joint)?;
-            q[iq] = x
-                .as_float()
-                .or_else(|| x.as_integer().map(|i| i as f64))
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| file_error(path, &f, "expected a finite number"))?;
-        }
+        set_joints(path, model, &format!("{at}.q"), &p.q, &mut q)?;
         posture_names.push(p.name.clone());
         postures.push(q);
     }

@@ -1,0 +1,287 @@
+//! The lift-off study: over arm postures and payloads, the tip-over limit that
+//! `stability::acceleration_limit` predicts beside the smallest steady acceleration at
+//! which the contact plant lifts a contact (`sim::lift_off`).
+//!
+//! Each point is one posture (the `[lift_off].posture` joints, then the point's `q.JOINT`
+//! values) with a point-mass payload of `payload` kg at the origin of `payload_frame`:
+//! the predicted limit along `direction`, then the bisection between `bracket[0]` and
+//! `bracket[1]` times the prediction to the relative `tolerance`.
+
+use std::path::Path;
+
+use nalgebra::{DVector, Vector2, Vector3};
+use serde::Deserialize;
+
+use super::{Parameter, Value, Values, file_error, joint_coordinate, num, require_numbers};
+use super::{resolve, set_joints};
+use crate::contact::{ContactPlant, ContactSpec, WheelSpec};
+use crate::error::{Error, Result};
+use crate::mission::scenario::Loader;
+use crate::multibody::{RootJoint, neutral};
+use crate::sim::lift_off::{LiftOffProblem, LiftOffSettings};
+use crate::sim::model_mismatch::{ModelPerturbation, Payload};
+
+/// Result columns of the lift-off study.
+pub(super) const RESULTS: &[&str] = &[
+    "predicted_limit",
+    "simulated_limit",
+    "ratio",
+    "lifted_contact",
+    "bisection_runs",
+];
+
+/// The parameters this study reads.
+const NAMES: &str = "payload, q.JOINT";
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Spec {
+    robot: String,
+    wheels: Vec<WheelSpec>,
+    contact: ContactSpec,
+    #[serde(default)]
+    posture: toml::Table,
+    payload_frame: Option<String>,
+    direction: Option<String>,
+    bracket: Option<[f64; 2]>,
+    tolerance: Option<f64>,
+    max_iterations: Option<usize>,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Slot {
+    Payload,
+    /// A one-coordinate joint's q index.
+    Joint(usize),
+}
+
+/// The prepared study.
+pub(super) struct LiftOffStudy {
+    plant: ContactPlant,
+    posture: DVector<f64>,
+    payload_link: String,
+    direction: Vector2<f64>,
+    bracket: [f64; 2],
+    settings: LiftOffSettings,
+    slots: Vec<Slot>,
+}
+
+/// Per-worker workspace: the point's configuration.
+pub(super) struct Workspace {
+    q: DVector<f64>,
+}
+
+/// An error of building the contact plant, its field placed in the study's section.
+fn plant_error(path: &Path, e: Error) -> Error {
+    match e {
+        Error::InvalidInput { field, message } => {
+            let field = match field.strip_prefix("contact.wheels") {
+                Some(rest) => format!("lift_off.wheels{rest}"),
+                None => format!("lift_off.{field}"),
+            };
+            file_error(path, &field, message)
+        }
+        // A robot whose joints the plant cannot take (a joint of more than one dof).
+        Error::Model(_) => file_error(path, "lift_off.robot", e),
+        // A wheel joint the model lacks.
+        other => file_error(path, "lift_off.wheels", other),
+    }
+}
+
+/// The study slot of every sweep parameter, its values checked (numbers; a payload not
+/// negative).
+fn parameter_slots(
+    path: &Path,
+    model: &crate::multibody::Model,
+    params: &[Parameter],
+) -> Result<Vec<Slot>> {
+    let mut slots = Vec::with_capacity(params.len());
+    for p in params {
+        let slot = match p.name.as_str() {
+            "payload" => Slot::Payload,
+            n if n.starts_with("q.") => Slot::Joint(joint_coordinate(
+                model,
+                path,
+                &format!("parameters.\"{n}\""),
+                &n[2..],
+            )?),
+            n => {
+                return Err(file_error(
+                    path,
+                    &format!("parameters.{n}"),
+                    format!("unknown parameter of the lift_off study (expected {NAMES})"),
+                ));
+            }
+        };
+        require_numbers(path, p)?;
+        if matches!(slot, Slot::Payload) {
+            let negative = match &p.values {
+                Values::Linspace { lo, .. } => *lo < 0.0,
+                Values::List(v) => v.iter().any(|x| num(x) < 0.0),
+            };
+            if negative {
+                return Err(file_error(
+                    path,
+                    "parameters.payload",
+                    "must be >= 0 kg (0: no payload)",
+                ));
+            }
+        }
+        slots.push(slot);
+    }
+    Ok(slots)
+}
+
+/// The search settings of the section, checked, fields named.
+fn settings(path: &Path, spec: &Spec) -> Result<([f64; 2], LiftOffSettings)> {
+    let d = LiftOffSettings::default();
+    let settings = LiftOffSettings {
+        tolerance: spec.tolerance.unwrap_or(d.tolerance),
+        max_iterations: spec.max_iterations.unwrap_or(d.max_iterations),
+        ..d
+    };
+    settings.validate().map_err(|e| match e {
+        Error::InvalidInput { field, message } => {
+            file_error(path, &format!("lift_off.{field}"), message)
+        }
+        other => other,
+    })?;
+    let bracket = spec.bracket.unwrap_or([0.8, 1.2]);
+    if !(bracket[0].is_finite() && bracket[1].is_finite() && 0.0 <= bracket[0])
+        || bracket[0] >= bracket[1]
+    {
+        return Err(file_error(
+            path,
+            "lift_off.bracket",
+            format!(
+                "needs 0 <= lo < hi (factors of the predicted limit), got [{}, {}]",
+                bracket[0], bracket[1]
+            ),
+        ));
+    }
+    Ok((bracket, settings))
+}
+
+impl LiftOffStudy {
+    pub(super) fn new(
+        path: &Path,
+        dir: &Path,
+        section: toml::Value,
+        params: &[Parameter],
+        files: &dyn Loader,
+    ) -> Result<Self> {
+        let spec: Spec = section
+            .try_into()
+            .map_err(|e: toml::de::Error| file_error(path, "lift_off", e.message()))?;
+        let model = files.urdf(&resolve(dir, &spec.robot), RootJoint::FreeFlyer)?;
+        let mut posture = neutral(&model);
+        set_joints(
+            path,
+            &model,
+            "lift_off.posture",
+            &spec.posture,
+            &mut posture,
+        )?;
+        let payload_link = match &spec.payload_frame {
+            Some(f) => f.clone(),
+            None => model.frames[model.last_link_frame().0].name.clone(),
+        };
+        // The payload's link is checked once here (a zero mass changes nothing).
+        ModelPerturbation {
+            mass_scale: 1.0,
+            payload: Some(Payload {
+                link: payload_link.clone(),
+                mass: 0.0,
+                position: Vector3::zeros(),
+            }),
+        }
+        .apply(&mut model.clone())
+        .map_err(|e| file_error(path, "lift_off.payload_frame", e))?;
+        let direction = match spec.direction.as_deref().unwrap_or("forward") {
+            "forward" => Vector2::new(1.0, 0.0),
+            "backward" => Vector2::new(-1.0, 0.0),
+            "left" => Vector2::new(0.0, 1.0),
+            "right" => Vector2::new(0.0, -1.0),
+            other => {
+                return Err(file_error(
+                    path,
+                    "lift_off.direction",
+                    format!(
+                        "unknown direction '{other}' (expected forward, backward, left or right)"
+                    ),
+                ));
+            }
+        };
+        let (bracket, settings) = settings(path, &spec)?;
+        let slots = parameter_slots(path, &model, params)?;
+        let plant = ContactPlant::new(
+            model,
+            &spec.wheels,
+            &spec.contact.casters,
+            spec.contact.params(),
+        )
+        .map_err(|e| plant_error(path, e))?;
+        Ok(Self {
+            plant,
+            posture,
+            payload_link,
+            direction,
+            bracket,
+            settings,
+            slots,
+        })
+    }
+
+    pub(super) fn workspace(&self) -> Workspace {
+        Workspace {
+            q: self.posture.clone(),
+        }
+    }
+
+    pub(super) fn evaluate(
+        &self,
+        ws: &mut Workspace,
+        point: &[Value],
+        row: &mut Vec<Value>,
+    ) -> Result<()> {
+        ws.q.copy_from(&self.posture);
+        let mut payload = 0.0;
+        for (s, v) in self.slots.iter().zip(point) {
+            match s {
+                Slot::Payload => payload = num(v),
+                Slot::Joint(iq) => ws.q[*iq] = num(v),
+            }
+        }
+        let tool = Payload {
+            link: self.payload_link.clone(),
+            mass: payload,
+            position: Vector3::zeros(),
+        };
+        let problem = LiftOffProblem::new(
+            &self.plant,
+            &ws.q.as_slice()[7..],
+            (payload > 0.0).then_some(&tool),
+            self.direction,
+        )?;
+        let predicted = problem.predicted_limit()?.ok_or_else(|| {
+            Error::invalid(
+                "predicted_limit",
+                "no tip-over limit in this direction (the robot tips at rest, or no support \
+                 edge limits the direction)",
+            )
+        })?;
+        let found = problem.search(
+            self.bracket[0] * predicted,
+            self.bracket[1] * predicted,
+            &self.settings,
+        )?;
+        row.push(Value::Float(predicted));
+        row.push(Value::Float(found.acceleration));
+        row.push(Value::Float(found.acceleration / predicted));
+        row.push(Value::Text(
+            self.plant.contact_name(found.contact).to_string(),
+        ));
+        row.push(Value::Int(found.iterations as i64));
+        Ok(())
+    }
+}

@@ -1,0 +1,184 @@
+//! The lift-off sweep study (`study = "lift_off"`, `docs/sweep.md`) on the diff-drive arm
+//! of `scenarios/robots/diffdrive_arm.urdf`: on a small grid of postures with and without
+//! a payload, the simulated lift-off acceleration is the predicted tip-over limit within
+//! the 5 % of `contact_tip_limits.rs`, the caster lifts, and a row is the library's search
+//! (`sim::lift_off`) on the point's posture and payload; the shipped sweep loads; bad
+//! input names the file and the field.
+
+use moma::contact::{CasterSpec, ContactParams, ContactPlant, WheelSpec};
+use moma::io::urdf::model_from_urdf_file;
+use moma::multibody::RootJoint;
+use moma::sim::lift_off::{LiftOffSettings, lift_off_acceleration};
+use moma::sim::model_mismatch::Payload;
+use moma::sweep::{Sweep, Value};
+use nalgebra::{Vector2, Vector3};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn robot() -> PathBuf {
+    root().join("scenarios/robots/diffdrive_arm.urdf")
+}
+
+/// A lift-off sweep file over `params` with the `[lift_off]` section's extra lines.
+fn lift_off_toml(params: &str, extra: &str) -> String {
+    format!(
+        r#"study = "lift_off"
+[parameters]
+{params}
+[lift_off]
+robot = "{}"
+wheels = [{{ joint = "left_wheel_joint", radius = 0.08 }}, {{ joint = "right_wheel_joint", radius = 0.08 }}]
+contact = {{ mu = 2.0, slip_velocity = 0.1, casters = [{{ frame = "caster", radius = 0.03 }}] }}
+payload_frame = "tool"
+{extra}
+"#,
+        robot().display()
+    )
+}
+
+fn sweep(text: &str) -> moma::Result<Sweep> {
+    Sweep::from_toml_str(text, Path::new("lift.toml"), Path::new("."))
+}
+
+fn f(v: &Value) -> f64 {
+    match v {
+        Value::Float(x) => *x,
+        other => panic!("not a float: {other:?}"),
+    }
+}
+
+#[test]
+fn the_simulated_lift_off_is_the_predicted_limit_within_five_percent() {
+    let s = sweep(&lift_off_toml(
+        "\"q.shoulder_joint\" = [1.5, -1.2]\n\"q.elbow_joint\" = [0.6]\npayload = [0.0, 2.0]",
+        "tolerance = 0.01",
+    ))
+    .unwrap();
+    assert_eq!(s.len(), 4);
+    let cols = s.columns();
+    let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
+    let t = s.run(&[0, 1, 2, 3], 0).unwrap();
+    for row in &t.rows {
+        let (pred, sim, ratio) = (
+            f(&row[col("predicted_limit")]),
+            f(&row[col("simulated_limit")]),
+            f(&row[col("ratio")]),
+        );
+        eprintln!("{row:?}");
+        assert!(pred > 1.0 && pred < 15.0, "{pred}");
+        assert!((ratio - sim / pred).abs() < 1e-12);
+        assert!(
+            (ratio - 1.0).abs() < 0.05,
+            "simulated {sim} vs predicted {pred}"
+        );
+        assert_eq!(row[col("lifted_contact")], Value::Text("caster".into()));
+    }
+    // A row is the library's search on the point's posture and payload (point 1: the
+    // shoulder at 1.5 rad, the elbow at 0.6 rad, 2 kg at the tool).
+    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
+        joint: j.into(),
+        radius: 0.08,
+    });
+    let casters = [CasterSpec {
+        frame: "caster".into(),
+        radius: 0.03,
+    }];
+    let params = ContactParams {
+        mu: 2.0,
+        slip_velocity: 0.1,
+        ..ContactParams::default()
+    };
+    let model = model_from_urdf_file(robot(), RootJoint::FreeFlyer).unwrap();
+    let plant = ContactPlant::new(model, &wheels, &casters, params).unwrap();
+    let payload = Payload {
+        link: "tool".into(),
+        mass: 2.0,
+        position: Vector3::zeros(),
+    };
+    let row = &t.rows[1];
+    let pred = f(&row[col("predicted_limit")]);
+    let found = lift_off_acceleration(
+        &plant,
+        &[0.0, 0.0, 0.0, 1.5, 0.6],
+        Some(&payload),
+        Vector2::new(1.0, 0.0),
+        [0.8 * pred, 1.2 * pred],
+        &LiftOffSettings {
+            tolerance: 0.01,
+            ..LiftOffSettings::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(f(&row[col("simulated_limit")]), found.acceleration);
+    assert_eq!(
+        row[col("bisection_runs")],
+        Value::Int(found.iterations as i64)
+    );
+}
+
+#[test]
+fn the_shipped_lift_off_sweep_loads() {
+    let s = Sweep::from_file(root().join("scenarios/sweeps/lift_off.toml")).unwrap();
+    assert_eq!(s.study(), "lift_off");
+    assert!(s.len() >= 15, "{} postures", s.len());
+}
+
+#[test]
+fn bad_lift_off_files_name_the_field() {
+    let p = "\"q.shoulder_joint\" = [1.5]\npayload = [0.0, 2.0]";
+    let cases = [
+        (
+            lift_off_toml("\"q.wrist_joint\" = [0.1]", ""),
+            "parameters.\"q.wrist_joint\"",
+        ),
+        (
+            lift_off_toml("payload = [0.0, -1.0]", ""),
+            "parameters.payload",
+        ),
+        (
+            lift_off_toml("payload = { linspace = [-1.0, 2.0, 3] }", ""),
+            "parameters.payload",
+        ),
+        (lift_off_toml("speed = [1.0]", ""), "parameters.speed"),
+        (lift_off_toml(p, "tolerance = 0.0"), "lift_off.tolerance"),
+        (lift_off_toml(p, "tolerance = -0.01"), "lift_off.tolerance"),
+        (
+            lift_off_toml(p, "max_iterations = 0"),
+            "lift_off.max_iterations",
+        ),
+        (lift_off_toml(p, "bracket = [1.2, 0.8]"), "lift_off.bracket"),
+        (lift_off_toml(p, "direction = \"up\""), "lift_off.direction"),
+        (
+            lift_off_toml(p, "posture = { wrist_joint = 0.3 }"),
+            "lift_off.posture.wrist_joint",
+        ),
+        (
+            lift_off_toml(p, "").replace("payload_frame = \"tool\"", "payload_frame = \"hand\""),
+            "lift_off.payload_frame",
+        ),
+        (
+            lift_off_toml(p, "").replace("frame = \"caster\"", "frame = \"castor\""),
+            "lift_off.contact.casters[0].frame",
+        ),
+        (
+            lift_off_toml(p, "").replace("mu = 2.0", "mu = 0.0"),
+            "lift_off.contact.mu",
+        ),
+        (
+            lift_off_toml(p, "").replace("radius = 0.08 }, {", "radius = -0.08 }, {"),
+            "lift_off.wheels[0].radius",
+        ),
+        (
+            lift_off_toml(p, "").replace("\"left_wheel_joint\"", "\"front_wheel_joint\""),
+            "lift_off.wheels",
+        ),
+        (lift_off_toml(p, "speed = 1.0"), "lift_off"),
+    ];
+    for (text, field) in cases {
+        let e = sweep(&text).unwrap_err().to_string();
+        assert!(e.contains("lift.toml") && e.contains(field), "{field}: {e}");
+    }
+}
