@@ -18,11 +18,13 @@
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3};
 
 use crate::collision::{
-    GeometryData, GeometryModel, PairSelection, Scene, SceneData, compute_distances,
+    GeometryData, GeometryModel, PairSelection, Scene, SceneData, closest_pair, compute_distances,
     compute_scene_distances, min_distance_gradient, update_geometry_placements,
 };
 use crate::error::{Error, Result};
-use crate::kinematics::{ReferenceFrame, compute_joint_jacobians, frame_jacobian_from_kinematics};
+use crate::kinematics::{
+    ReferenceFrame, compute_joint_jacobians, frame_jacobian_from_kinematics, update_frame_placement,
+};
 use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::{
     WheeledData, actuation_matrix, admissible_velocity_basis, reduced_forward_dynamics_crba,
@@ -414,23 +416,22 @@ pub fn evaluate_knot(
     );
     vals.zmp_margin = report.zmp_margin;
     let critical = report.zmp_critical_edge;
-    let need_jacobians = derivatives || robot.clearance.is_some();
-    if need_jacobians {
+    // The joint placements at q are in place (the ZMP's kinematics); the Jacobians only
+    // for the derivatives.
+    if derivatives {
         compute_joint_jacobians(model, &mut ws.wd.data, &ws.q);
-    } else {
-        crate::kinematics::forward_kinematics(model, &mut ws.wd.data, &ws.q);
     }
     let data = &mut ws.wd.data;
     // End effector.
-    frame_jacobian_from_kinematics(
-        model,
-        data,
-        robot.end_effector,
-        ReferenceFrame::LocalWorldAligned,
-        &mut ws.jac,
-    );
-    vals.end_effector = data.world_from_frame[robot.end_effector.0];
+    vals.end_effector = update_frame_placement(model, data, robot.end_effector);
     if derivatives {
+        frame_jacobian_from_kinematics(
+            model,
+            data,
+            robot.end_effector,
+            ReferenceFrame::LocalWorldAligned,
+            &mut ws.jac,
+        );
         vals.end_effector_dx.fill(0.0);
         for d in 0..model.nv {
             if let Some(c) = x_column(robot, d) {
@@ -447,11 +448,15 @@ pub fn evaluate_knot(
         update_geometry_placements(active, data, gd);
         compute_distances(active, gd, PairSelection::Enabled);
         compute_scene_distances(active, gd, &c.scene, scd);
-        if let Some((_, d)) =
+        if !derivatives {
+            if let Some((_, d)) = closest_pair(gd, &c.scene, scd) {
+                vals.distance = d;
+            }
+        } else if let Some((_, d)) =
             min_distance_gradient(model, data, active, gd, &c.scene, scd, &mut ws.grad_nv)
         {
             vals.distance = d;
-            if derivatives {
+            {
                 for k in 0..model.nv {
                     if let Some(col) = x_column(robot, k) {
                         vals.distance_dx[col] = ws.grad_nv[k];
