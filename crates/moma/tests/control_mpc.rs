@@ -267,3 +267,41 @@ fn fetch_stage_model_matches_finite_differences() {
         assert!((col - m.b.column(i)).amax() < 1e-8, "B column {i}");
     }
 }
+
+/// The ZMP margin's gradient in the input (exact: the momentum rate is affine in the
+/// accelerations) against central differences of the margin, on Fetch moving with the
+/// arm swinging.
+#[test]
+fn zmp_margin_input_gradient_matches_finite_differences() {
+    use moma::control::mpc::robot::{KnotWorkspace, evaluate_knot};
+    let robot = mpc_common::fetch_robot(None);
+    let q0 = mpc_common::fetch_start(&robot);
+    let mut ws = KnotWorkspace::new(&robot);
+    let (nx, nu) = (robot.nx(), robot.nu());
+    let mut x = DVector::zeros(nx);
+    let mut vr = vec![0.0; robot.wheeled.nr()];
+    vr[0] = 0.6;
+    vr[1] = 0.3;
+    vr[3] = -0.5;
+    vr[4] = 0.8;
+    robot.state_from_plant(q0.as_slice(), &vr, &mut x);
+    let u = DVector::from_fn(nu, |i, _| 0.7 * (i as f64 + 1.0) - 3.0);
+    evaluate_knot(&robot, &mut ws, &q0, &x, Some(&u), true).unwrap();
+    let grad = ws.values.zmp_du.clone();
+    assert!(grad.amax() > 1e-3, "a gradient that moves: {grad}");
+    let eps = 1e-6;
+    for i in 0..nu {
+        let mut margin = |d: f64| {
+            let mut ud = u.clone();
+            ud[i] += d;
+            evaluate_knot(&robot, &mut ws, &q0, &x, Some(&ud), false).unwrap();
+            ws.values.zmp_margin.unwrap()
+        };
+        let fd = (margin(eps) - margin(-eps)) / (2.0 * eps);
+        assert!(
+            (fd - grad[i]).abs() < 1e-6 * (1.0 + fd.abs()),
+            "zmp_du[{i}]: {} vs central difference {fd}",
+            grad[i]
+        );
+    }
+}

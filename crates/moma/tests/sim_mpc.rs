@@ -128,9 +128,9 @@ fn tip_over_constraint_keeps_the_zmp_margin_that_the_unconstrained_mpc_loses() {
         "{}",
         free.summary.min_zmp_margin
     );
-    // Measured: −0.15 m without the constraint, −0.016 m with it (set value 0.03 m): the
-    // constraint removes most of the loss but does not yet hold the set value in closed
-    // loop (see docs/mpc.md); these bounds record that and fail if it gets worse.
+    // Measured: −0.15 m without the constraint, +0.022 m with it (set value 0.03 m): the
+    // constraint keeps the ZMP inside the support but not quite at the set value in
+    // closed loop (see docs/mpc.md); these bounds record that and fail if it gets worse.
     assert!(
         kept.summary.min_zmp_margin > free.summary.min_zmp_margin + 0.1,
         "{} vs {}",
@@ -138,7 +138,7 @@ fn tip_over_constraint_keeps_the_zmp_margin_that_the_unconstrained_mpc_loses() {
         free.summary.min_zmp_margin
     );
     assert!(
-        kept.summary.min_zmp_margin > -0.03,
+        kept.summary.min_zmp_margin > 0.0,
         "{}",
         kept.summary.min_zmp_margin
     );

@@ -21,7 +21,7 @@
 //! | wheel speed | `|φ̇_L|, |φ̇_R| ≤ φ̇_max` | exact (linear) |
 //! | joint speed | `|q̇_i| ≤ q̇_max,i` | exact |
 //! | joint position | `lower + δ ≤ q_i ≤ upper − δ` | exact |
-//! | ZMP | margin ≥ `zmp_margin` | point-mass linearisation on the critical edge |
+//! | ZMP | margin ≥ `zmp_margin` | in u exact (momentum rate affine in q̈); in x the point-mass linearisation, on the critical edge |
 //! | clearance | min distance (self pairs, scene) ≥ `clearance` | closest pair's distance derivative |
 
 use nalgebra::DVector;

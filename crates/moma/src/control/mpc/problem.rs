@@ -92,6 +92,13 @@ pub trait OptimalControlProblem {
         u: Option<&DVector<f64>>,
         out: &mut StageModel,
     ) -> Result<f64>;
+    /// A lower bound of the stage cost `ℓ_k` (terminal: `k = N`) that holds for every
+    /// `(x, u)` within one solve; the line search stops a rollout as soon as the cost so
+    /// far plus the bounds of the stages left cannot be accepted any more. `−∞` (the
+    /// default) never stops one.
+    fn cost_lower_bound(&self, _k: usize) -> f64 {
+        f64::NEG_INFINITY
+    }
     /// Lower and upper bounds of `u_k` (`±∞` for a free component).
     fn input_bounds(&self, k: usize) -> (&DVector<f64>, &DVector<f64>);
 }

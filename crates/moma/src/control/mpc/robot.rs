@@ -18,17 +18,19 @@
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3};
 
 use crate::collision::{
-    GeometryData, GeometryModel, PairSelection, Scene, SceneData, compute_distances,
+    GeometryData, GeometryModel, PairSelection, Scene, SceneData, closest_pair, compute_distances,
     compute_scene_distances, min_distance_gradient, update_geometry_placements,
 };
 use crate::error::{Error, Result};
-use crate::kinematics::{ReferenceFrame, compute_joint_jacobians, frame_jacobian_from_kinematics};
+use crate::kinematics::{
+    ReferenceFrame, compute_joint_jacobians, frame_jacobian_from_kinematics, update_frame_placement,
+};
 use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::{
     WheeledData, actuation_matrix, admissible_velocity_basis, reduced_forward_dynamics_crba,
 };
 use crate::multibody::FrameIndex;
-use crate::spatial::SE3;
+use crate::spatial::{Inertia, Motion, SE3};
 use crate::stability::{ExternalLoads, StabilityData, StabilityModel, evaluate};
 
 /// The robot's collision model and its scene.
@@ -256,7 +258,8 @@ pub struct KnotValues {
     pub zmp_margin: Option<f64>,
     /// Its gradient in x (point-mass linearisation, see `docs/mpc.md`).
     pub zmp_dx: DVector<f64>,
-    /// Its gradient in u.
+    /// Its gradient in u (exact: the momentum rate is affine in q̈, see
+    /// [`evaluate_knot`]).
     pub zmp_du: DVector<f64>,
     /// Smallest signed distance (self pairs and scene), `+∞` without geometry.
     pub distance: f64,
@@ -286,6 +289,7 @@ pub struct KnotWorkspace {
     grad_nv: DVector<f64>,
     sub_mass: Vec<f64>,
     sub_moment: Vec<Vector3<f64>>,
+    sub_inertia: Vec<Inertia>,
     jcom: Matrix3xX<f64>,
     /// The values of the last knot evaluated.
     pub values: KnotValues,
@@ -319,6 +323,7 @@ impl KnotWorkspace {
             grad_nv: DVector::zeros(nv),
             sub_mass: vec![0.0; nj],
             sub_moment: vec![Vector3::zeros(); nj],
+            sub_inertia: vec![Inertia::zero(); nj],
             jcom: Matrix3xX::zeros(nv),
             values: KnotValues {
                 torque: DVector::zeros(nu_full),
@@ -414,23 +419,22 @@ pub fn evaluate_knot(
     );
     vals.zmp_margin = report.zmp_margin;
     let critical = report.zmp_critical_edge;
-    let need_jacobians = derivatives || robot.clearance.is_some();
-    if need_jacobians {
+    // The joint placements at q are in place (the ZMP's kinematics); the Jacobians only
+    // for the derivatives.
+    if derivatives {
         compute_joint_jacobians(model, &mut ws.wd.data, &ws.q);
-    } else {
-        crate::kinematics::forward_kinematics(model, &mut ws.wd.data, &ws.q);
     }
     let data = &mut ws.wd.data;
     // End effector.
-    frame_jacobian_from_kinematics(
-        model,
-        data,
-        robot.end_effector,
-        ReferenceFrame::LocalWorldAligned,
-        &mut ws.jac,
-    );
-    vals.end_effector = data.world_from_frame[robot.end_effector.0];
+    vals.end_effector = update_frame_placement(model, data, robot.end_effector);
     if derivatives {
+        frame_jacobian_from_kinematics(
+            model,
+            data,
+            robot.end_effector,
+            ReferenceFrame::LocalWorldAligned,
+            &mut ws.jac,
+        );
         vals.end_effector_dx.fill(0.0);
         for d in 0..model.nv {
             if let Some(c) = x_column(robot, d) {
@@ -447,11 +451,15 @@ pub fn evaluate_knot(
         update_geometry_placements(active, data, gd);
         compute_distances(active, gd, PairSelection::Enabled);
         compute_scene_distances(active, gd, &c.scene, scd);
-        if let Some((_, d)) =
+        if !derivatives {
+            if let Some((_, d)) = closest_pair(gd, &c.scene, scd) {
+                vals.distance = d;
+            }
+        } else if let Some((_, d)) =
             min_distance_gradient(model, data, active, gd, &c.scene, scd, &mut ws.grad_nv)
         {
             vals.distance = d;
-            if derivatives {
+            {
                 for k in 0..model.nv {
                     if let Some(col) = x_column(robot, k) {
                         vals.distance_dx[col] = ws.grad_nv[k];
@@ -460,8 +468,9 @@ pub fn evaluate_knot(
             }
         }
     }
-    // ZMP gradient: the point-mass ZMP p = c_xy − h c̈_xy / (g + c̈_z), h = c_z − z_ground,
-    // with c̈ = J_c q̈ (the J̇_c q̇ term and ∂c̈/∂q left out), on the critical edge.
+    // ZMP gradient on the critical edge. In x: the point-mass ZMP
+    // p = c_xy − h c̈_xy / (g + c̈_z), h = c_z − z_ground, with c̈ = J_c q̈ (the J̇_c q̇ term
+    // and ∂c̈/∂q left out). In u: exact (below).
     vals.zmp_dx.fill(0.0);
     vals.zmp_du.fill(0.0);
     if derivatives && let (Some(_), Some(e)) = (vals.zmp_margin, critical) {
@@ -496,20 +505,44 @@ pub fn evaluate_knot(
         vals.zmp_dx[0] -= n.x;
         vals.zmp_dx[1] -= n.y;
         vals.zmp_dx[2] += dyaw;
-        // Through q̈ = N_C v̇_r: ∂p/∂v̇ = −h/den (J_c N_C)_xy + h c̈_xy/den² (J_c N_C)_z.
+        // In u, exactly: the momentum rate ḣ (world origin) is affine in q̈, with
+        // ∂ḣ/∂q̈_d = I_sub(d) J_d (the world inertia of the subtree dof d moves times its
+        // joint Jacobian column), and q̈ = N_C v̇_r + Ṅ_C v_r. The gravito-inertial
+        // force is f = m g − ḣ_lin and its moment about p0 = (0, 0, z_ground) is
+        // M = m c × g − ḣ_ang + p0 × ḣ_lin; the ZMP is (−M_y / f_z, M_x / f_z).
+        let nj = model.njoints;
+        for j in 0..nj {
+            ws.sub_inertia[j] = if j == 0 {
+                Inertia::zero()
+            } else {
+                model.inertias[j].transformed(&data.world_from_joint[j])
+            };
+        }
+        for j in (1..nj).rev() {
+            let sub = ws.sub_inertia[j];
+            ws.sub_inertia[model.parents[j].0] += sub;
+        }
+        let p0 = Vector3::new(0.0, 0.0, ws.sd.support.ground_z());
+        let w = &ws.sd.wrench;
+        let (f, m) = (w.force, w.moment_about(&p0));
         let nc = robot.n_moved();
-        for c in 0..2 + nc {
-            let rc = if c < 2 { c } else { robot.reduced[c - 2] };
-            let mut jn = Vector3::zeros();
-            for d in 0..model.nv {
-                let b = ws.wd.basis[(d, rc)];
-                if b != 0.0 {
-                    jn += ws.jcom.column(d) * b;
-                }
+        vals.zmp_du.fill(0.0);
+        for d in 0..model.nv {
+            let col = data.joint_jacobians.column(d);
+            let jd = Motion::new(
+                Vector3::new(col[0], col[1], col[2]),
+                Vector3::new(col[3], col[4], col[5]),
+            );
+            let dh = ws.sub_inertia[model.joint_of_dof[d].0].mul_motion(&jd);
+            let df = -dh.linear;
+            let dm = -dh.angular + p0.cross(&dh.linear);
+            let dpx = (-dm.y * f.z + m.y * df.z) / (f.z * f.z);
+            let dpy = (dm.x * f.z - m.x * df.z) / (f.z * f.z);
+            let ds = n.x * dpx + n.y * dpy;
+            for c in 0..2 + nc {
+                let rc = if c < 2 { c } else { robot.reduced[c - 2] };
+                vals.zmp_du[c] += ds * ws.wd.basis[(d, rc)];
             }
-            let dpx = -h / den * jn.x + h * cdd.x / (den * den) * jn.z;
-            let dpy = -h / den * jn.y + h * cdd.y / (den * den) * jn.z;
-            vals.zmp_du[c] = n.x * dpx + n.y * dpy;
         }
     }
     Ok(())

@@ -93,6 +93,8 @@ pub struct Solver {
     /// Feedback gains K_k (nu × nx).
     pub gains: Vec<DMatrix<f64>>,
     trial: Trajectory,
+    /// `rest_bound[k]`: the sum of the problem's cost lower bounds of stages k … N.
+    rest_bound: Vec<f64>,
     vx: DVector<f64>,
     vxx: DMatrix<f64>,
     qx: DVector<f64>,
@@ -124,6 +126,7 @@ impl Solver {
             feedforward: vec![DVector::zeros(nu); n],
             gains: vec![DMatrix::zeros(nu, nx); n],
             trial: Trajectory::zeros(nx, nu, n),
+            rest_bound: vec![0.0; n + 2],
             vx: DVector::zeros(nx),
             vxx: DMatrix::zeros(nx, nx),
             qx: DVector::zeros(nx),
@@ -183,6 +186,11 @@ impl Solver {
             let (xs, rest) = traj.xs.split_at_mut(k + 1);
             problem.dynamics(k, &xs[k], &traj.us[k], &mut rest[0])?;
         }
+        // Suffix sums of the stage costs' lower bounds (for stopping hopeless rollouts).
+        self.rest_bound[self.n + 1] = 0.0;
+        for k in (0..=self.n).rev() {
+            self.rest_bound[k] = self.rest_bound[k + 1] + problem.cost_lower_bound(k);
+        }
         let mut mu = opts.mu_init;
         let mut stats = SolveStats::default();
         let mut cost = 0.0;
@@ -226,8 +234,11 @@ impl Solver {
             }
             let mut accepted = false;
             for &alpha in &opts.line_search {
-                let new_cost = self.forward(problem, traj, alpha)?;
                 let expected = -(alpha * d1 + 0.5 * alpha * alpha * d2);
+                // Costs above this are rejected, so the rollout may stop once it is sure
+                // to exceed it.
+                let limit = cost - 1e-4 * expected.max(0.0);
+                let new_cost = self.forward(problem, traj, alpha, limit)?;
                 if new_cost.is_finite()
                     && cost - new_cost >= 1e-4 * expected.max(0.0)
                     && new_cost < cost
@@ -346,12 +357,15 @@ impl Solver {
         Some((d1, d2))
     }
 
-    /// Rolls out the policy with step `alpha` into `self.trial`; returns its cost.
+    /// Rolls out the policy with step `alpha` into `self.trial`; returns its cost, or `+∞`
+    /// as soon as the cost so far plus the lower bounds of the stages left exceeds
+    /// `limit` (the trial is then incomplete, and rejected).
     fn forward<P: OptimalControlProblem + ?Sized>(
         &mut self,
         problem: &mut P,
         traj: &Trajectory,
         alpha: f64,
+        limit: f64,
     ) -> Result<f64> {
         self.trial.xs[0].copy_from(&traj.xs[0]);
         let mut cost = 0.0;
@@ -368,6 +382,9 @@ impl Solver {
                 u[i] = u[i].clamp(lo[i], hi[i]);
             }
             cost += problem.cost(k, &self.trial.xs[k], Some(&self.trial.us[k]))?;
+            if cost + self.rest_bound[k + 1] > limit {
+                return Ok(f64::INFINITY);
+            }
             let (xs, rest) = self.trial.xs.split_at_mut(k + 1);
             problem.dynamics(k, &xs[k], &self.trial.us[k], &mut rest[0])?;
         }

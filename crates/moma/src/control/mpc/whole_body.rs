@@ -199,6 +199,29 @@ impl OptimalControlProblem for MpcProblem {
         }
         self.knot(k, x, u, Some(out))
     }
+    /// The costs are weighted squares (≥ 0 with non-negative weights) and each
+    /// augmented-Lagrangian term is at least `−λ²/2ρ`; the multipliers do not move within
+    /// a solve.
+    fn cost_lower_bound(&self, k: usize) -> f64 {
+        let w = &self.settings.weights;
+        let rho = self.settings.constraints.penalty;
+        let weights = [
+            w.base_position,
+            w.base_yaw,
+            w.ee_position,
+            w.ee_orientation,
+            w.platform_velocity,
+            w.joint_velocity,
+            w.platform_acceleration,
+            w.joint_acceleration,
+            w.posture,
+            w.terminal,
+        ];
+        if rho.is_nan() || rho <= 0.0 || weights.iter().any(|v| v.is_nan() || *v < 0.0) {
+            return f64::NEG_INFINITY;
+        }
+        -self.constraints.lambda[k].norm_squared() / (2.0 * rho)
+    }
     fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
         (&self.lo, &self.hi)
     }
