@@ -6,7 +6,8 @@ mod mpc_common;
 
 use moma::collision::Scene;
 use moma::control::mpc::{KnotReference, MpcSettings};
-use moma::sim::mpc_loop::{MpcLoopSettings, MpcRun, run_mpc_loop};
+use moma::sim::mpc_loop::{MpcLoopSettings, run_mpc_loop};
+use moma::sim::mpc_run::MpcRun;
 use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::{Matrix3, Vector3};
 
