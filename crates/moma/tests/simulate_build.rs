@@ -133,7 +133,10 @@ fn mpc_errors_name_the_file_and_the_field() {
         1,
     );
     let parsed: moma::Result<Scenario> = moma::sim_config::schema::parse_scenario(&text, &path);
-    let m = parsed.err().expect("an unknown key parsed").to_string();
+    let Err(e) = parsed else {
+        panic!("an unknown key parsed")
+    };
+    let m = e.to_string();
     assert!(m.contains("mpc_reach_on_the_move.toml"), "{m}");
     assert!(m.contains("unknown field `horizon`"), "{m}");
     let m = message(file, "stages = 20", "stages = -5");

@@ -3,7 +3,8 @@
 //! pursuit drive a wheeled URDF robot through an inner computed-torque loop (their
 //! reference may be a path planned on a map); `coordinated` coordinates the platform
 //! with two arm joints so the end effector tracks its reference; `osc` drives
-//! an end-effector point of a wheeled URDF robot through the reduced model; `pd_plus`,
+//! an end-effector point of a wheeled URDF robot through the reduced model; `mpc` is the
+//! whole-body MPC (its solves summarised in the summary's `mpc` object); `pd_plus`,
 //! `computed_torque` and the `decoupled_*` laws run on the chapter's model m5. Writes the
 //! open-loop files plus `control.csv`, `tracking_error.svg` and `lyapunov.svg`, and a
 //! summary with the Lyapunov monitor and the saturation report. Schema:

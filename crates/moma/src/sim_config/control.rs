@@ -3,7 +3,8 @@
 //! wheeled URDF robot through an inner computed-torque loop (their reference may be a
 //! path planned on a map, `mission::planned`); `coordinated` coordinates the platform
 //! with two arm joints; `osc` drives an end-effector point of a wheeled URDF robot
-//! through the reduced model, or of a fixed-base arm; `pd_plus`, `computed_torque` and
+//! through the reduced model, or of a fixed-base arm; `mpc` is the whole-body MPC
+//! (its table in [`crate::sim_config::mpc`]); `pd_plus`, `computed_torque` and
 //! the `decoupled_*` laws run on the chapter's model m5. Schema: `docs/simulate.md`.
 
 use std::path::Path;
