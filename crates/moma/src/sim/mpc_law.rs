@@ -34,8 +34,8 @@ use crate::sim::closed_loop::{FeedbackLaw, Observation, SaturationFlags};
 use crate::sim::mpc_run::{MpcRun, MpcSample, summarize};
 use crate::stability::{ExternalLoads, StabilityData, evaluate};
 
-/// The MPC law: the MPC, its reference `reference(t)`, the computed-torque map and the
-/// per-tick log.
+/// The MPC law: the MPC, its reference `reference(t)`, the workspaces that evaluate
+/// what its torques do, and the per-tick log.
 pub struct MpcLaw<R> {
     mpc: WholeBodyMpc,
     reference: R,
@@ -78,12 +78,6 @@ impl<R: FnMut(f64) -> KnotReference> MpcLaw<R> {
     #[must_use]
     pub fn samples(&self) -> &[MpcSample] {
         &self.samples
-    }
-
-    /// The MPC (its last solution is the warm start of the next solve).
-    #[must_use]
-    pub fn mpc(&self) -> &WholeBodyMpc {
-        &self.mpc
     }
 
     /// The MPC and the run: samples and summary.
