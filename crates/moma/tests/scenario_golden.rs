@@ -103,6 +103,29 @@ fn run_simulate(path: &Path) -> BTreeMap<String, Vec<f64>> {
                 );
             }
             out.insert("control_ticks".into(), vec![r.control_ticks as f64]);
+            if let Some(m) = cl.law.mpc_run() {
+                // The MPC's figures but its wall-clock solve times.
+                let s = &m.summary;
+                let v = &s.planned_violations;
+                out.insert(
+                    "mpc".into(),
+                    vec![
+                        s.solves as f64,
+                        s.iterations_mean,
+                        s.iterations_max as f64,
+                        v.torque,
+                        v.wheel_speed,
+                        v.joint_speed,
+                        v.joint_position,
+                        v.zmp,
+                        v.clearance,
+                        s.min_zmp_margin,
+                        s.min_clearance,
+                        s.max_torque_excess,
+                        opt(s.min_ee_error),
+                    ],
+                );
+            }
         }
         Run::Space(sr) => {
             let r = free_floating::run(&sr.model, &sr.q0, &sr.v0, &sr.settings)

@@ -6,7 +6,8 @@ mod mpc_common;
 
 use moma::collision::Scene;
 use moma::control::mpc::{KnotReference, MpcSettings};
-use moma::sim::mpc_loop::{MpcLoopSettings, MpcRun, run_mpc_loop};
+use moma::sim::mpc_loop::{MpcLoopSettings, run_mpc_loop};
+use moma::sim::mpc_run::MpcRun;
 use moma::sim::wheeled_system::WheeledSystem;
 use nalgebra::{Matrix3, Vector3};
 
@@ -142,4 +143,67 @@ fn tip_over_constraint_keeps_the_zmp_margin_that_the_unconstrained_mpc_loses() {
         "{}",
         kept.summary.min_zmp_margin
     );
+}
+
+/// `scenarios/mpc_reach_on_the_move.toml`, read by `moma::sim_config` and run by the
+/// closed loop of `moma simulate`, is the closed loop of [`reach_on_the_move`]: every
+/// solve starts from the same state and applies the same torques, to the last bit (the
+/// solve times, wall-clock, excepted).
+#[test]
+fn the_shipped_scenario_is_the_reach_on_the_move_loop() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/mpc_reach_on_the_move.toml");
+    let sc = moma::sim_config::load(&path).unwrap();
+    let moma::sim_config::Run::Closed(mut cl) = moma::sim_config::prepare(&sc, &path).unwrap()
+    else {
+        panic!("not a closed loop");
+    };
+    let res = cl.run(&mut |_| {}).unwrap();
+    let from_file = cl.law.mpc_run().unwrap();
+    let mut s = MpcSettings::default();
+    s.weights.ee_orientation = 0.0;
+    let direct = reach_on_the_move(s, 5.0);
+    assert_eq!(from_file.samples.len(), direct.samples.len());
+    for (a, b) in from_file.samples.iter().zip(&direct.samples) {
+        assert_eq!((a.t, &a.q, &a.v, &a.torque), (b.t, &b.q, &b.v, &b.torque));
+        assert_eq!(a.solve.iterations, b.solve.iterations, "t = {}", a.t);
+        assert_eq!(a.solve.violations, b.solve.violations, "t = {}", a.t);
+        assert_eq!(
+            (a.zmp_margin, a.clearance, a.ee_error),
+            (b.zmp_margin, b.clearance, b.ee_error)
+        );
+    }
+    let (f, d) = (&from_file.summary, &direct.summary);
+    assert_eq!(f.min_zmp_margin, d.min_zmp_margin);
+    assert_eq!(f.min_clearance, d.min_clearance);
+    assert_eq!(f.min_ee_error, d.min_ee_error);
+    assert_eq!(f.planned_violations, d.planned_violations);
+    // The law's errors and signals as recorded by the loop.
+    assert_eq!(
+        res.error_names,
+        [
+            "ee_position [m]",
+            "base_x [m]",
+            "base_y [m]",
+            "base_heading [rad]"
+        ]
+    );
+    assert_eq!(
+        res.signal_names,
+        [
+            "solve_time [s]",
+            "iterations [1]",
+            "planned_zmp_margin [m]",
+            "clearance [m]"
+        ]
+    );
+    // Recorded every 50 ms, after the solve of that tick: the tick's iterations and, at
+    // t = 2 s (sample 40), the base's error to x = 0.6 m.
+    let row = res.signal_row(40);
+    assert_eq!(row[1], direct.samples[40].solve.iterations as f64);
+    assert_eq!(row[3], direct.samples[40].clearance);
+    let e = res.error_row(40);
+    assert_eq!(e[0], direct.samples[40].ee_error.unwrap());
+    assert_eq!(e[1], direct.samples[40].q[0] - 0.3 * 2.0);
+    assert!(res.error_row(0)[0].is_nan(), "no target before t = 1 s");
 }

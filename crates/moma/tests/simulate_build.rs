@@ -36,7 +36,10 @@ fn every_shipped_scenario_builds_its_run() {
             continue;
         }
         let run = prepare(&sc, &path).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let want = if name.starts_with("control_") || name.starts_with("uncertainty_") {
+        let want = if ["control_", "uncertainty_", "mpc_"]
+            .iter()
+            .any(|p| name.starts_with(p))
+        {
             "closed"
         } else if name.starts_with("space_") {
             "space"
@@ -113,6 +116,57 @@ fn errors_name_the_file_and_the_field() {
     );
     assert!(
         m.ends_with("space_capture.toml: space.capture.inertia_diagonal must not be negative"),
+        "{m}"
+    );
+}
+
+/// Law `mpc`: a key the `[controller.mpc]` table does not have, a horizon that is not a
+/// positive number of stages or of seconds, and the law on a robot that is not a URDF
+/// robot on a differential drive each get a message naming the file and the field.
+#[test]
+fn mpc_errors_name_the_file_and_the_field() {
+    let file = "mpc_reach_on_the_move.toml";
+    let path = scenarios().join(file);
+    let text = std::fs::read_to_string(&path).unwrap().replacen(
+        "stages = 20",
+        "stages = 20\nhorizon = 1.0",
+        1,
+    );
+    let parsed: moma::Result<Scenario> = moma::sim_config::schema::parse_scenario(&text, &path);
+    let Err(e) = parsed else {
+        panic!("an unknown key parsed")
+    };
+    let m = e.to_string();
+    assert!(m.contains("mpc_reach_on_the_move.toml"), "{m}");
+    assert!(m.contains("unknown field `horizon`"), "{m}");
+    let m = message(file, "stages = 20", "stages = -5");
+    assert!(
+        m.contains(
+            "mpc_reach_on_the_move.toml: controller.mpc.stages must be between 1 and 10000, got -5"
+        ),
+        "{m}"
+    );
+    let m = message(file, "dt = 0.05", "dt = -0.05");
+    assert!(
+        m.contains(
+            "mpc_reach_on_the_move.toml: controller.mpc.dt must be a positive finite number, got -0.05"
+        ),
+        "{m}"
+    );
+    let m = message(file, "ee_orientation = 0.0", "ee_orientation = -1.0");
+    assert!(
+        m.contains("controller.mpc.weights.ee_orientation must not be negative, got -1"),
+        "{m}"
+    );
+    let m = message(
+        "control_m5_pd_plus.toml",
+        "law = \"pd_plus\"",
+        "law = \"mpc\"",
+    );
+    assert!(
+        m.contains(
+            "control_m5_pd_plus.toml: law mpc drives a URDF robot on a differential drive (robot.kind = \"urdf\")"
+        ),
         "{m}"
     );
 }

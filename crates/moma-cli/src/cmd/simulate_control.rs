@@ -3,7 +3,8 @@
 //! pursuit drive a wheeled URDF robot through an inner computed-torque loop (their
 //! reference may be a path planned on a map); `coordinated` coordinates the platform
 //! with two arm joints so the end effector tracks its reference; `osc` drives
-//! an end-effector point of a wheeled URDF robot through the reduced model; `pd_plus`,
+//! an end-effector point of a wheeled URDF robot through the reduced model; `mpc` is the
+//! whole-body MPC (its solves summarised in the summary's `mpc` object); `pd_plus`,
 //! `computed_torque` and the `decoupled_*` laws run on the chapter's model m5. Writes the
 //! open-loop files plus `control.csv`, `tracking_error.svg` and `lyapunov.svg`, and a
 //! summary with the Lyapunov monitor and the saturation report. Schema:
@@ -85,6 +86,70 @@ struct ControlSummary {
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     stability: Option<super::simulate_stability::StabilitySummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mpc: Option<MpcOut>,
+}
+
+#[derive(Debug, Serialize)]
+struct Percentiles {
+    median: f64,
+    p90: f64,
+    p99: f64,
+    max: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct IterationsOut {
+    mean: f64,
+    max: usize,
+}
+
+/// The `mpc` section: the solves of law `mpc` and what its torques did (the MPC's
+/// model under the applied torques, at every control tick).
+#[derive(Debug, Serialize)]
+struct MpcOut {
+    solves: usize,
+    solve_time_s: Percentiles,
+    iterations: IterationsOut,
+    /// Largest violation of each constraint kind over every planned horizon.
+    max_planned_violation: std::collections::BTreeMap<&'static str, f64>,
+    min_zmp_margin: f64,
+    min_clearance: f64,
+    max_torque_excess: f64,
+    wheel_speed_excess: f64,
+    joint_speed_excess: f64,
+    joint_position_excess: f64,
+    min_ee_error: Option<f64>,
+    ee_reached_at: Option<f64>,
+    base_speed_at_reach: Option<f64>,
+}
+
+/// The `mpc` section of a run whose law is the MPC.
+fn mpc_out(cl: &ClosedLoop) -> Option<MpcOut> {
+    let s = cl.law.mpc_run()?.summary;
+    Some(MpcOut {
+        solves: s.solves,
+        solve_time_s: Percentiles {
+            median: s.solve_time_p50,
+            p90: s.solve_time_p90,
+            p99: s.solve_time_p99,
+            max: s.solve_time_max,
+        },
+        iterations: IterationsOut {
+            mean: s.iterations_mean,
+            max: s.iterations_max,
+        },
+        max_planned_violation: s.planned_violations.pairs().into_iter().collect(),
+        min_zmp_margin: s.min_zmp_margin,
+        min_clearance: s.min_clearance,
+        max_torque_excess: s.max_torque_excess,
+        wheel_speed_excess: s.wheel_speed_excess,
+        joint_speed_excess: s.joint_speed_excess,
+        joint_position_excess: s.joint_position_excess,
+        min_ee_error: s.min_ee_error,
+        ee_reached_at: s.ee_reached_at,
+        base_speed_at_reach: s.base_speed_at_reach,
+    })
 }
 
 /// `t, errors…, V, V̇_analytic` per sample.
@@ -274,6 +339,7 @@ fn control_summary(
         steps_per_second: if wall > 0.0 { steps as f64 / wall } else { 0.0 },
         files: Vec::new(),
         stability: None,
+        mpc: mpc_out(cl),
     }
 }
 

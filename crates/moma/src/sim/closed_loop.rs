@@ -22,6 +22,7 @@ use crate::control::lyapunov::{LyapunovMonitor, LyapunovReport};
 use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
 use crate::sim::monitor::{Monitor, MonitorLimits};
+use crate::sim::mpc_run::MpcRun;
 use crate::sim::recorder::Recorder;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::settings::IntegratorSettings;
@@ -81,6 +82,12 @@ pub trait FeedbackLaw {
     /// As [`FeedbackLaw::control`].
     fn signals(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) -> Result<()> {
         Ok(())
+    }
+    /// What a law that solves a model-predictive control problem at each tick recorded:
+    /// one sample per solve and their summary ([`crate::sim::mpc_law::MpcLaw`]); `None`
+    /// for the other laws.
+    fn mpc_run(&self) -> Option<MpcRun> {
+        None
     }
 }
 

@@ -29,8 +29,9 @@
 //!   dynamics, reduced OSC to an arm on the platform, the task-space laws to m5 (whose
 //!   task controller calls `control::task::pd_plus`); [`coordinated`] runs coordinated
 //!   base/arm control on a wheeled URDF robot through the same inner loop (the law solved
-//!   on the measured frame position and reduced Jacobian); [`mpc_loop`] runs the
-//!   whole-body MPC. A planned platform reference comes from `mission::planned`, one layer
+//!   on the measured frame position and reduced Jacobian); [`mpc_law`] makes the
+//!   whole-body MPC a law (computed torque of its first planned input, one
+//!   [`mpc_run::MpcSample`] per solve), which [`mpc_loop`] runs at a fixed period. A planned platform reference comes from `mission::planned`, one layer
 //!   up.
 //! * The stepping loop and per-sample recording shared by the open- and closed-loop runs
 //!   are in `stepping`; [`recorder::Recorder`] holds what the CLI's writers read.
@@ -52,7 +53,9 @@ pub mod free_floating;
 pub mod lift_off;
 pub mod model_mismatch;
 pub mod monitor;
+pub mod mpc_law;
 pub mod mpc_loop;
+pub mod mpc_run;
 pub mod recorder;
 pub mod reduced_system;
 pub mod settings;

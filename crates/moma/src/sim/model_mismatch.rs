@@ -15,6 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::error::{Error, Result};
 use crate::multibody::Model;
 use crate::sim::closed_loop::{FeedbackLaw, Observation, SaturationFlags};
+use crate::sim::mpc_run::MpcRun;
 use crate::spatial::Inertia;
 
 /// A point mass attached to a link.
@@ -192,6 +193,9 @@ impl FeedbackLaw for NoisyMeasurement {
     }
     fn signals(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) -> Result<()> {
         self.inner.signals(t, q, v, out)
+    }
+    fn mpc_run(&self) -> Option<MpcRun> {
+        self.inner.mpc_run()
     }
 }
 

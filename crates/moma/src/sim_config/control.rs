@@ -3,7 +3,8 @@
 //! wheeled URDF robot through an inner computed-torque loop (their reference may be a
 //! path planned on a map, `mission::planned`); `coordinated` coordinates the platform
 //! with two arm joints; `osc` drives an end-effector point of a wheeled URDF robot
-//! through the reduced model, or of a fixed-base arm; `pd_plus`, `computed_torque` and
+//! through the reduced model, or of a fixed-base arm; `mpc` is the whole-body MPC
+//! (its table in [`crate::sim_config::mpc`]); `pd_plus`, `computed_torque` and
 //! the `decoupled_*` laws run on the chapter's model m5. Schema: `docs/simulate.md`.
 
 use std::path::Path;
@@ -33,6 +34,7 @@ use crate::sim::feedback::{
 };
 use crate::sim::fixed_base::FixedBaseSystem;
 use crate::sim::reduced_system::ReducedSystem;
+use crate::sim_config::mpc::{LineReach, MpcSpec, mpc_law};
 use crate::sim_config::schema::RobotSpec;
 
 /// Most waypoints a reference may list.
@@ -86,6 +88,9 @@ pub struct ControllerSpec {
     /// Largest final tracking-error norm counted as success (exit status 3 otherwise).
     #[serde(default)]
     pub goal_tolerance: Option<f64>,
+    /// The whole-body MPC's settings (`mpc`).
+    #[serde(default)]
+    pub mpc: Option<MpcSpec>,
 }
 
 /// Differential-drive limits of a time parameterisation.
@@ -184,6 +189,17 @@ pub enum ReferenceSpec {
         /// Platform limits of the timing.
         timing: TimingSpec,
     },
+    /// `mpc`: the base along +x at `vr` (as `line`) and, from `target_from` on, the end
+    /// effector at `target`.
+    LineReach {
+        /// Base speed (m/s).
+        vr: f64,
+        /// End-effector target (m, world).
+        target: [f64; 3],
+        /// Time the target becomes active (s, default 0).
+        #[serde(default)]
+        target_from: f64,
+    },
     /// m5 laws: `x_d(t) = x_ref + amplitude ⊙ sin(omega ⊙ t)` in the task coordinates.
     TaskSinusoid {
         /// x_ref.
@@ -206,6 +222,7 @@ impl ReferenceSpec {
             Self::EeLine { .. } => "ee_line",
             Self::EeCircle { .. } => "ee_circle",
             Self::EeWaypoints { .. } => "ee_waypoints",
+            Self::LineReach { .. } => "line_reach",
             Self::TaskSinusoid { .. } => "task_sinusoid",
         }
     }
@@ -689,19 +706,22 @@ fn build_loop(
         bail!("[reference] is missing: law {law} needs one");
     };
     check_limits(c)?;
+    if c.mpc.is_some() && law != "mpc" {
+        bail!("controller.mpc does not apply to law {law} (only to law mpc)");
+    }
     if law == "osc"
         && let RobotSpec::FixedBase { urdf } = &sc.robot
     {
         return fixed_osc_loop(sc, base_dir, c, r, urdf);
     }
-    if PLATFORM_LAWS.contains(&law) || law == "osc" || law == "coordinated" {
+    if PLATFORM_LAWS.contains(&law) || ["osc", "coordinated", "mpc"].contains(&law) {
         return wheeled_loop(sc, base_dir, c, r, warnings);
     }
     if M5_LAWS.contains(&law) {
         return m5_loop(sc, c, r);
     }
     bail!(
-        "controller.law = \"{law}\": unknown law (expected one of {}, osc, coordinated, {})",
+        "controller.law = \"{law}\": unknown law (expected one of {}, osc, coordinated, mpc, {})",
         PLATFORM_LAWS.join(", "),
         M5_LAWS.join(", ")
     )
@@ -794,6 +814,7 @@ fn wheeled_loop(
     }
     let arm0: Vec<f64> = wm.arm_dofs().iter().map(|&d| q0[d]).collect();
     let ctl: Box<dyn FeedbackLaw> = match law {
+        "mpc" => whole_body_mpc(&wm, c, r, &path, &q0, base_dir)?,
         "coordinated" => coordinated_law(&wm, c, r, arm0)?,
         "osc" => osc_law(&wm, c, r, arm0)?,
         _ => {
@@ -822,6 +843,55 @@ fn wheeled_loop(
         ctl,
         format!("URDF {}", urdf.display()),
     ))
+}
+
+/// `mpc`: the whole-body MPC, solved once per control period.
+fn whole_body_mpc(
+    wm: &crate::mobile::WheeledModel,
+    c: &ControllerSpec,
+    r: &ReferenceSpec,
+    urdf: &Path,
+    q0: &[f64],
+    base_dir: &Path,
+) -> Result<Box<dyn FeedbackLaw>> {
+    let law = c.law.as_str();
+    let mut not_taken = not_for_osc(c).to_vec();
+    not_taken.extend([
+        ("max_torque", c.max_torque.is_some()),
+        ("posture", c.posture.is_some()),
+        ("gains", !c.gains.is_empty()),
+    ]);
+    only_for(law, &not_taken)?;
+    if c.period.is_none() {
+        bail!("controller.period: missing (law mpc solves once per control period)");
+    }
+    let spec = c
+        .mpc
+        .as_ref()
+        .ok_or_else(|| err!("[controller.mpc]: missing (law mpc needs at least its joints)"))?;
+    let frame = c
+        .frame
+        .as_deref()
+        .ok_or_else(|| err!("controller.frame: missing (law mpc needs the end-effector frame)"))?;
+    let ReferenceSpec::LineReach {
+        vr,
+        target,
+        target_from,
+    } = r
+    else {
+        return Err(wrong_reference(law, r, "line_reach"));
+    };
+    finite("reference.vr", &[*vr])?;
+    finite("reference.target", target)?;
+    if !(target_from.is_finite() && *target_from >= 0.0) {
+        bail!("reference.target_from must be a finite number >= 0, got {target_from}");
+    }
+    let reference = LineReach {
+        vr: *vr,
+        target: *target,
+        target_from: *target_from,
+    };
+    mpc_law(spec, frame, wm, urdf, q0, reference, base_dir)
 }
 
 /// The arm posture a law holds: `controller.posture`, else the initial arm joints.

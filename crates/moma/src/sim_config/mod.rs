@@ -25,6 +25,7 @@ use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, SimulationOptions};
 
 pub mod contact;
 pub mod control;
+pub mod mpc;
 pub mod robot;
 pub mod rolling_plant;
 pub mod schema;

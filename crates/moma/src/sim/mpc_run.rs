@@ -1,0 +1,151 @@
+//! What the whole-body MPC did in closed loop: one [`MpcSample`] per control period (the
+//! solve report, the torques applied and what they did on the MPC's model of the robot:
+//! ZMP margin, clearance, torque beyond the limits before clipping, end-effector error)
+//! and the run's [`MpcRunSummary`] (solve-time percentiles, iterations, the largest
+//! planned violations and the closed loop's extremes).
+
+use nalgebra::DVector;
+
+use crate::control::mpc::{MpcRobot, SolveReport, Violations};
+
+/// One control period.
+#[derive(Clone, Debug)]
+pub struct MpcSample {
+    /// Time at the start of the period (s).
+    pub t: f64,
+    /// Configuration at that time.
+    pub q: Vec<f64>,
+    /// Reduced velocity.
+    pub v: Vec<f64>,
+    /// Torques applied over the period (clipped to the limits).
+    pub torque: Vec<f64>,
+    /// The solve.
+    pub solve: SolveReport,
+    /// ZMP margin of the state and of the acceleration the applied torques give on the
+    /// MPC's model (the plant's, unless the plant is perturbed) (m); `None` at lift-off.
+    pub zmp_margin: Option<f64>,
+    /// Smallest distance over the enabled self pairs and the scene (m; `∞` without
+    /// geometry).
+    pub clearance: f64,
+    /// Largest torque beyond its limit that the MPC asked for (clipped before applying).
+    pub torque_excess: f64,
+    /// End-effector position error to the reference at `t`, if it has a target (m).
+    pub ee_error: Option<f64>,
+}
+
+/// Percentiles of the solve times and the closed loop's extremes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MpcRunSummary {
+    /// Number of solves.
+    pub solves: usize,
+    /// Solve time percentiles (s): 50th, 90th, 99th, and the largest.
+    pub solve_time_p50: f64,
+    /// 90th percentile.
+    pub solve_time_p90: f64,
+    /// 99th percentile.
+    pub solve_time_p99: f64,
+    /// Largest.
+    pub solve_time_max: f64,
+    /// Mean and largest iterations per solve.
+    pub iterations_mean: f64,
+    /// Largest.
+    pub iterations_max: usize,
+    /// Largest violation per kind over every planned horizon.
+    pub planned_violations: Violations,
+    /// Smallest ZMP margin of the plant (m).
+    pub min_zmp_margin: f64,
+    /// Smallest clearance of the plant (m).
+    pub min_clearance: f64,
+    /// Largest torque excess asked for (clipped).
+    pub max_torque_excess: f64,
+    /// Largest wheel rate beyond its limit in the plant (rad/s).
+    pub wheel_speed_excess: f64,
+    /// Largest joint speed beyond its limit in the plant.
+    pub joint_speed_excess: f64,
+    /// Largest joint position beyond its limit in the plant.
+    pub joint_position_excess: f64,
+    /// Smallest end-effector error over the run (m), if a target was set.
+    pub min_ee_error: Option<f64>,
+    /// First time the end-effector error fell below 2 cm (s).
+    pub ee_reached_at: Option<f64>,
+    /// Platform speed `|v|` at that time (m/s): non-zero when the arm reached on the move.
+    pub base_speed_at_reach: Option<f64>,
+}
+
+/// A closed-loop run: samples and summary; `q`, `v` end at the final state.
+#[derive(Clone, Debug)]
+pub struct MpcRun {
+    /// One sample per period.
+    pub samples: Vec<MpcSample>,
+    /// Summary.
+    pub summary: MpcRunSummary,
+}
+
+/// The `p`-th percentile (nearest rank) of sorted values.
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
+    sorted[rank.clamp(1, sorted.len()) - 1]
+}
+
+/// The summary of a run's samples (`robot`: the MPC's robot, for its limits).
+#[must_use]
+pub fn summarize(robot: &MpcRobot, samples: &[MpcSample]) -> MpcRunSummary {
+    let mut times: Vec<f64> = samples.iter().map(|s| s.solve.time.as_secs_f64()).collect();
+    times.sort_by(f64::total_cmp);
+    let n = samples.len().max(1) as f64;
+    let mut planned = Violations::default();
+    let (mut wheel, mut speed, mut pos): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    for s in samples {
+        planned = planned.max(&s.solve.violations);
+        let mut xs = DVector::zeros(robot.nx());
+        robot.state_from_plant(&s.q, &s.v, &mut xs);
+        let nc = robot.n_moved();
+        let rates = robot.wheel_map * nalgebra::Vector2::new(xs[3 + nc], xs[4 + nc]);
+        wheel = wheel.max(rates.amax() - robot.wheel_rate_limit);
+        for i in 0..nc {
+            speed = speed.max(xs[5 + nc + i].abs() - robot.speed_limit[i]);
+            pos = pos
+                .max(xs[3 + i] - robot.upper[i])
+                .max(robot.lower[i] - xs[3 + i]);
+        }
+    }
+    let reached = samples
+        .iter()
+        .find(|s| s.ee_error.is_some_and(|e| e < 0.02));
+    MpcRunSummary {
+        solves: samples.len(),
+        solve_time_p50: percentile(&times, 50.0),
+        solve_time_p90: percentile(&times, 90.0),
+        solve_time_p99: percentile(&times, 99.0),
+        solve_time_max: times.last().copied().unwrap_or(f64::NAN),
+        iterations_mean: samples
+            .iter()
+            .map(|s| s.solve.iterations as f64)
+            .sum::<f64>()
+            / n,
+        iterations_max: samples
+            .iter()
+            .map(|s| s.solve.iterations)
+            .max()
+            .unwrap_or(0),
+        planned_violations: planned,
+        min_zmp_margin: samples
+            .iter()
+            .map(|s| s.zmp_margin.unwrap_or(f64::NEG_INFINITY))
+            .fold(f64::INFINITY, f64::min),
+        min_clearance: samples
+            .iter()
+            .map(|s| s.clearance)
+            .fold(f64::INFINITY, f64::min),
+        max_torque_excess: samples.iter().map(|s| s.torque_excess).fold(0.0, f64::max),
+        wheel_speed_excess: wheel.max(0.0),
+        joint_speed_excess: speed.max(0.0),
+        joint_position_excess: pos.max(0.0),
+        min_ee_error: samples.iter().filter_map(|s| s.ee_error).reduce(f64::min),
+        ee_reached_at: reached.map(|s| s.t),
+        base_speed_at_reach: reached.map(|s| s.v[0].abs()),
+    }
+}
