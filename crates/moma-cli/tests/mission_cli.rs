@@ -2,15 +2,9 @@
 //! set (exit 0); a sealed goal writes it too with `reached: false` (exit 3); input errors
 //! exit 1 with one message and no output.
 
-use std::path::Path;
-
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
+use cli_common::{moma, scenarios, summary, temp_dir};
 
 const OUTPUTS: &[&str] = &[
     "summary.json",

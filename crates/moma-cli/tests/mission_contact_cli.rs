@@ -2,15 +2,9 @@
 //! goal and its summary says what the contacts did (nothing lifted off or slid); bad
 //! contact parameters exit 1 naming the file and the field, with no output.
 
-use std::path::Path;
-
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
+use cli_common::{moma, scenarios, summary, temp_dir};
 
 #[test]
 fn the_contact_mission_reaches_its_goal_and_reports_its_contacts() {

@@ -1,15 +1,9 @@
 //! `moma simulate`: the bundled default scenario runs with no argument, the chapter
 //! scenarios run, and bad scenario files fail with a clear message and no output.
 
-use std::path::Path;
-
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
+use cli_common::{moma, scenarios, summary, temp_dir};
 
 #[test]
 fn default_scenario_runs_without_an_argument() {

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
+use cli_common::{moma, scenarios, summary, temp_dir};
 
 fn run(scenario: &Path, out: &Path) -> std::process::Output {
     moma()
@@ -18,10 +18,6 @@ fn run(scenario: &Path, out: &Path) -> std::process::Output {
         .arg(out)
         .output()
         .unwrap()
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
 
 fn f(v: &serde_json::Value) -> f64 {

@@ -6,11 +6,7 @@ use std::path::{Path, PathBuf};
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
+use cli_common::{moma, scenarios, summary, temp_dir};
 
 fn run(scenario: &Path, out: &Path) -> std::process::Output {
     moma()

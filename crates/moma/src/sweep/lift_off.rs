@@ -12,7 +12,9 @@ use std::path::Path;
 use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
 
-use super::{Parameter, Value, Values, file_error, joint_coordinate, num, require_numbers};
+use super::{
+    Parameter, Value, Values, file_error, joint_parameter, num, require_numbers, study_section,
+};
 use super::{resolve, set_joints};
 use crate::contact::{ContactPlant, ContactSpec, WheelSpec};
 use crate::error::{Error, Result};
@@ -99,12 +101,7 @@ fn parameter_slots(
     for p in params {
         let slot = match p.name.as_str() {
             "payload" => Slot::Payload,
-            n if n.starts_with("q.") => Slot::Joint(joint_coordinate(
-                model,
-                path,
-                &format!("parameters.\"{n}\""),
-                &n[2..],
-            )?),
+            n if n.starts_with("q.") => Slot::Joint(joint_parameter(model, path, n)?),
             n => {
                 return Err(file_error(
                     path,
@@ -170,9 +167,7 @@ impl LiftOffStudy {
         params: &[Parameter],
         files: &dyn Loader,
     ) -> Result<Self> {
-        let spec: Spec = section
-            .try_into()
-            .map_err(|e: toml::de::Error| file_error(path, "lift_off", e.message()))?;
+        let spec: Spec = study_section(path, "lift_off", section)?;
         let model = files.urdf(&resolve(dir, &spec.robot), RootJoint::FreeFlyer)?;
         let mut posture = neutral(&model);
         set_joints(

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::{Parameter, Value, file_error, num, require_numbers, resolve};
+use super::{Parameter, Value, file_error, num, require_numbers, resolve, study_section};
 use crate::error::Result;
 use crate::mission::scenario::Loader;
 use crate::mission::{self, MissionFile};
@@ -80,9 +80,7 @@ impl MissionStudy {
         params: &[Parameter],
         files: &dyn Loader,
     ) -> Result<Self> {
-        let spec: Spec = section
-            .try_into()
-            .map_err(|e: toml::de::Error| file_error(path, "mission", e.message()))?;
+        let spec: Spec = study_section(path, "mission", section)?;
         let scenario = resolve(dir, &spec.scenario);
         let m = mission::scenario::load_with(&scenario, files)?;
         let mut slots = Vec::with_capacity(params.len());

@@ -227,6 +227,18 @@ impl std::fmt::Debug for Sweep {
     }
 }
 
+/// A study's table (`[mission]`, `[stability]`, …) of sweep file `path` as its schema
+/// `T`; errors name the file and the table.
+pub(crate) fn study_section<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    table: &str,
+    section: toml::Value,
+) -> Result<T> {
+    section
+        .try_into()
+        .map_err(|e: toml::de::Error| file_error(path, table, e.message()))
+}
+
 /// The error for `field` of sweep file `path`.
 pub(crate) fn file_error(path: &Path, field: &str, message: impl std::fmt::Display) -> Error {
     Error::parse(path, format!("{field}: {message}"))
@@ -867,6 +879,15 @@ pub(crate) fn joint_coordinate(
         ));
     }
     Ok(model.idx_q[id.0])
+}
+
+/// q index of the joint a `"q.JOINT"` sweep parameter names (`name` starts with `q.`).
+pub(crate) fn joint_parameter(
+    model: &crate::multibody::Model,
+    path: &Path,
+    name: &str,
+) -> Result<usize> {
+    joint_coordinate(model, path, &format!("parameters.\"{name}\""), &name[2..])
 }
 
 /// Sets the joints a posture table (`{ JOINT = value, ... }`, field `at`) lists in `q`.

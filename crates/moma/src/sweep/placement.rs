@@ -10,7 +10,9 @@ use std::sync::Arc;
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Deserialize;
 
-use super::{Parameter, Value, file_error, num, require_names, require_numbers, resolve};
+use super::{
+    Parameter, Value, file_error, num, require_names, require_numbers, resolve, study_section,
+};
 use crate::error::Result;
 use crate::ik::IkOptions;
 use crate::ik::model::ModelFrame;
@@ -204,9 +206,7 @@ impl PlacementStudy {
         params: &[Parameter],
         files: &dyn Loader,
     ) -> Result<Self> {
-        let spec: Spec = section
-            .try_into()
-            .map_err(|e: toml::de::Error| file_error(path, "placement", e.message()))?;
+        let spec: Spec = study_section(path, "placement", section)?;
         let model = Arc::new(files.urdf(&resolve(dir, &spec.robot), RootJoint::Fixed)?);
         let frame = match &spec.frame {
             Some(n) => model

@@ -18,8 +18,8 @@ use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
 
 use super::{
-    Parameter, Value, Values, file_error, joint_coordinate, num, require_names, require_numbers,
-    resolve, set_joints,
+    Parameter, Value, Values, file_error, joint_parameter, num, require_names, require_numbers,
+    resolve, set_joints, study_section,
 };
 use crate::error::Result;
 use crate::mission::scenario::Loader;
@@ -252,12 +252,7 @@ fn parameter_slots(
             "yaw_rate" => Slot::YawRate,
             "yaw_accel" => Slot::YawAccel,
             "payload" => Slot::Payload,
-            n if n.starts_with("q.") => Slot::Joint(joint_coordinate(
-                model,
-                path,
-                &format!("parameters.\"{n}\""),
-                &n[2..],
-            )?),
+            n if n.starts_with("q.") => Slot::Joint(joint_parameter(model, path, n)?),
             n => {
                 return Err(file_error(
                     path,
@@ -291,9 +286,7 @@ impl StabilityStudy {
         params: &[Parameter],
         files: &dyn Loader,
     ) -> Result<Self> {
-        let spec: Spec = section
-            .try_into()
-            .map_err(|e: toml::de::Error| file_error(path, "stability", e.message()))?;
+        let spec: Spec = study_section(path, "stability", section)?;
         let robot = resolve(dir, &spec.robot);
         let mut model = files.urdf(&robot, RootJoint::Planar)?;
         if let Some(g) = spec.gravity {

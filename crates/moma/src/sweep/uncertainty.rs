@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::{Parameter, Table, Value, file_error, num, require_numbers, resolve};
+use super::{Parameter, Table, Value, file_error, num, require_numbers, resolve, study_section};
 use crate::contact::PlantKind;
 use crate::error::{Error, Result};
 use crate::sim::stability_monitor::{first_crossing, first_slip};
@@ -94,9 +94,7 @@ impl UncertaintyStudy {
         section: toml::Value,
         params: &[Parameter],
     ) -> Result<Self> {
-        let spec: Spec = section
-            .try_into()
-            .map_err(|e: toml::de::Error| file_error(path, "uncertainty", e.message()))?;
+        let spec: Spec = study_section(path, "uncertainty", section)?;
         let scenario_path = resolve(dir, &spec.scenario);
         let text = std::fs::read_to_string(&scenario_path).map_err(|source| Error::Io {
             path: scenario_path.clone(),
