@@ -26,6 +26,7 @@ mod model;
 mod motion;
 mod place;
 mod planning;
+mod simulate;
 mod sweep;
 
 create_exception!(
@@ -102,5 +103,6 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     motion::register(m)?;
     place::register(m)?;
     sweep::register(m)?;
+    simulate::register(m)?;
     Ok(())
 }
