@@ -41,6 +41,17 @@ pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
     MomaError::new_err(e.to_string())
 }
 
+/// An error and its causes joined by `": "`, as the command line prints it.
+pub(crate) fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
+    text
+}
+
 /// A JSON value (of a serialised library report) as Python objects: objects become
 /// dicts (in field order), arrays lists, integers int, other numbers float, null None.
 pub(crate) fn json_to_py<'py>(

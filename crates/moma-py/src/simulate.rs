@@ -2,7 +2,7 @@
 //! (the library's `sim_config` dispatch), its recorded samples as numpy arrays and the
 //! summary values its results hold.
 
-use crate::{err, json_to_py};
+use crate::{chain, err, json_to_py};
 use moma::contact::PlantKind;
 use moma::sim::contact_run::SETTLE_TIME;
 use moma::sim::mpc_run::MpcReport;
@@ -15,7 +15,7 @@ use pyo3::types::PyDict;
 use serde_json::{Map, Value, json};
 use std::path::{Path, PathBuf};
 
-/// Row-major samples: `rows` rows of `cols` values.
+/// Named columns of row-major samples (one row per recorded sample).
 struct Table {
     names: Vec<String>,
     values: Vec<f64>,
@@ -47,17 +47,6 @@ fn recorded(rec: &Recorder, doc: &mut Map<String, Value>) -> (Vec<f64>, Table, T
         table(&rec.v_names, &rec.v),
         table(&rec.u_names, &rec.u),
     )
-}
-
-/// An error and its causes joined by `": "`, as the command line prints it.
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        text = format!("{text}: {c}");
-        cause = c.source();
-    }
-    text
 }
 
 /// `"{path}: {what}: {cause}"`, as the command line prints a failed run.
