@@ -26,6 +26,7 @@ mod model;
 mod motion;
 mod place;
 mod planning;
+mod simulate;
 mod sweep;
 
 create_exception!(
@@ -38,6 +39,17 @@ create_exception!(
 /// A library error as a Python `MomaError`.
 pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
     MomaError::new_err(e.to_string())
+}
+
+/// An error and its causes joined by `": "`, as the command line prints it.
+pub(crate) fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
+    text
 }
 
 /// A JSON value (of a serialised library report) as Python objects: objects become
@@ -102,5 +114,6 @@ fn _moma(m: &Bound<'_, PyModule>) -> PyResult<()> {
     motion::register(m)?;
     place::register(m)?;
     sweep::register(m)?;
+    simulate::register(m)?;
     Ok(())
 }

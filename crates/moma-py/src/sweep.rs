@@ -1,7 +1,7 @@
 //! Sweeps (`moma.Sweep`, `moma.Table`, used by the `moma.sweep` Python module) and
 //! missions (`moma.run_mission`).
 
-use crate::{err, json_to_py};
+use crate::{chain, err, json_to_py};
 use moma::sweep::{Sweep, Table, Value, merge};
 use pyo3::IntoPyObjectExt;
 use pyo3::prelude::*;
@@ -209,12 +209,7 @@ fn run_mission<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny
             Ok((m, r))
         })
         .map_err(|e| {
-            let mut text = e.to_string();
-            let mut cause = std::error::Error::source(&e);
-            while let Some(c) = cause {
-                text = format!("{text}: {c}");
-                cause = c.source();
-            }
+            let text = chain(&e);
             let file = path.display().to_string();
             if text.contains(&file) {
                 err(text)

@@ -17,6 +17,7 @@ use crate::output::write_dir;
 use crate::svg_plots::line_chart;
 use anyhow::{Context, Result, anyhow};
 use moma::sim::closed_loop::ClosedLoopResult;
+use moma::sim::mpc_run::MpcReport;
 use moma::sim::settings::IntegratorSettings;
 use moma::sim::stability_monitor::StabilityMonitor;
 use moma::sim_config::{ClosedLoop, ControllerSpec};
@@ -87,69 +88,12 @@ struct ControlSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     stability: Option<super::simulate_stability::StabilitySummary>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    mpc: Option<MpcOut>,
-}
-
-#[derive(Debug, Serialize)]
-struct Percentiles {
-    median: f64,
-    p90: f64,
-    p99: f64,
-    max: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct IterationsOut {
-    mean: f64,
-    max: usize,
-}
-
-/// The `mpc` section: the solves of law `mpc` and what its torques did (the MPC's
-/// model under the applied torques, at every control tick).
-#[derive(Debug, Serialize)]
-struct MpcOut {
-    solves: usize,
-    solve_time_s: Percentiles,
-    iterations: IterationsOut,
-    /// Largest violation of each constraint kind over every planned horizon.
-    max_planned_violation: std::collections::BTreeMap<&'static str, f64>,
-    min_zmp_margin: f64,
-    min_clearance: f64,
-    max_torque_excess: f64,
-    wheel_speed_excess: f64,
-    joint_speed_excess: f64,
-    joint_position_excess: f64,
-    min_ee_error: Option<f64>,
-    ee_reached_at: Option<f64>,
-    base_speed_at_reach: Option<f64>,
+    mpc: Option<MpcReport>,
 }
 
 /// The `mpc` section of a run whose law is the MPC.
-fn mpc_out(cl: &ClosedLoop) -> Option<MpcOut> {
-    let s = cl.law.mpc_run()?.summary;
-    Some(MpcOut {
-        solves: s.solves,
-        solve_time_s: Percentiles {
-            median: s.solve_time_p50,
-            p90: s.solve_time_p90,
-            p99: s.solve_time_p99,
-            max: s.solve_time_max,
-        },
-        iterations: IterationsOut {
-            mean: s.iterations_mean,
-            max: s.iterations_max,
-        },
-        max_planned_violation: s.planned_violations.pairs().into_iter().collect(),
-        min_zmp_margin: s.min_zmp_margin,
-        min_clearance: s.min_clearance,
-        max_torque_excess: s.max_torque_excess,
-        wheel_speed_excess: s.wheel_speed_excess,
-        joint_speed_excess: s.joint_speed_excess,
-        joint_position_excess: s.joint_position_excess,
-        min_ee_error: s.min_ee_error,
-        ee_reached_at: s.ee_reached_at,
-        base_speed_at_reach: s.base_speed_at_reach,
-    })
+fn mpc_out(cl: &ClosedLoop) -> Option<MpcReport> {
+    Some(MpcReport::from(&cl.law.mpc_run()?.summary))
 }
 
 /// `t, errors…, V, V̇_analytic` per sample.

@@ -287,6 +287,12 @@ def run_mission(path: Path) -> dict[str, Any]:
     """Runs a mission file end to end; the summary dict with the run's wall times
     (`wall_time_s`, `wall_time`), no files written."""
 
+def simulate(path: Path) -> dict[str, Any]:
+    """Runs a `moma simulate` scenario file as the command does; `t` (n,), `q`, `v`, `u`
+    (n rows each) with their names, `errors` and `error_names` with a controller, and the
+    summary values of the run (`mpc` for law mpc, `contact` for the contact plant); no
+    files written."""
+
 def to_pinocchio(
     model: Model,
     q: ArrayLike,

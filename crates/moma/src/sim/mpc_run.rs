@@ -2,7 +2,8 @@
 //! solve report, the torques applied and what they did on the MPC's model of the robot:
 //! ZMP margin, clearance, torque beyond the limits before clipping, end-effector error)
 //! and the run's [`MpcRunSummary`] (solve-time percentiles, iterations, the largest
-//! planned violations and the closed loop's extremes).
+//! planned violations and the closed loop's extremes), and that summary as the `mpc`
+//! object of a run's report ([`MpcReport`]).
 
 use nalgebra::DVector;
 
@@ -70,6 +71,88 @@ pub struct MpcRunSummary {
     pub ee_reached_at: Option<f64>,
     /// Platform speed `|v|` at that time (m/s): non-zero when the arm reached on the move.
     pub base_speed_at_reach: Option<f64>,
+}
+
+/// Percentiles of the solve times (s), in [`MpcReport`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SolveTimes {
+    /// 50th percentile.
+    pub median: f64,
+    /// 90th percentile.
+    pub p90: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// Iterations per solve, in [`MpcReport`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct IterationCounts {
+    /// Mean.
+    pub mean: f64,
+    /// Largest.
+    pub max: usize,
+}
+
+/// An [`MpcRunSummary`] in the form of the `mpc` object of `moma simulate`'s summary
+/// (and of the Python package's `simulate`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MpcReport {
+    /// Number of solves.
+    pub solves: usize,
+    /// Solve time percentiles (s).
+    pub solve_time_s: SolveTimes,
+    /// Iterations per solve.
+    pub iterations: IterationCounts,
+    /// Largest violation of each constraint kind over every planned horizon.
+    pub max_planned_violation: std::collections::BTreeMap<&'static str, f64>,
+    /// Smallest ZMP margin of the plant (m).
+    pub min_zmp_margin: f64,
+    /// Smallest clearance of the plant (m).
+    pub min_clearance: f64,
+    /// Largest torque excess asked for (clipped).
+    pub max_torque_excess: f64,
+    /// Largest wheel rate beyond its limit in the plant (rad/s).
+    pub wheel_speed_excess: f64,
+    /// Largest joint speed beyond its limit in the plant.
+    pub joint_speed_excess: f64,
+    /// Largest joint position beyond its limit in the plant.
+    pub joint_position_excess: f64,
+    /// Smallest end-effector error over the run (m), if a target was set.
+    pub min_ee_error: Option<f64>,
+    /// First time the end-effector error fell below 2 cm (s).
+    pub ee_reached_at: Option<f64>,
+    /// Platform speed at that time (m/s).
+    pub base_speed_at_reach: Option<f64>,
+}
+
+impl From<&MpcRunSummary> for MpcReport {
+    fn from(s: &MpcRunSummary) -> Self {
+        Self {
+            solves: s.solves,
+            solve_time_s: SolveTimes {
+                median: s.solve_time_p50,
+                p90: s.solve_time_p90,
+                p99: s.solve_time_p99,
+                max: s.solve_time_max,
+            },
+            iterations: IterationCounts {
+                mean: s.iterations_mean,
+                max: s.iterations_max,
+            },
+            max_planned_violation: s.planned_violations.pairs().into_iter().collect(),
+            min_zmp_margin: s.min_zmp_margin,
+            min_clearance: s.min_clearance,
+            max_torque_excess: s.max_torque_excess,
+            wheel_speed_excess: s.wheel_speed_excess,
+            joint_speed_excess: s.joint_speed_excess,
+            joint_position_excess: s.joint_position_excess,
+            min_ee_error: s.min_ee_error,
+            ee_reached_at: s.ee_reached_at,
+            base_speed_at_reach: s.base_speed_at_reach,
+        }
+    }
 }
 
 /// A closed-loop run: samples and summary; `q`, `v` end at the final state.
