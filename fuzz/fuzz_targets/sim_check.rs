@@ -135,19 +135,7 @@ fn build_and_run(text: &str) {
     }
     match run {
         Run::Open(mut ol) => {
-            let observer = ol
-                .monitor
-                .as_mut()
-                .map(|m| m as &mut dyn moma::sim::wheeled::SampleObserver);
-            let _ = moma::sim::wheeled::simulate_observed(
-                ol.system.as_mut(),
-                &ol.input,
-                &ol.q0,
-                &ol.v0,
-                &ol.options,
-                &mut |_| {},
-                observer,
-            );
+            let _ = ol.run(&mut |_| {});
         }
         Run::Closed(mut cl) => {
             if let Ok(res) = cl.run(&mut |_| {})

@@ -4,10 +4,11 @@
 
 use crate::{chain, err, json_to_py};
 use moma::contact::PlantKind;
+use moma::ode::StepStats;
 use moma::sim::contact_run::SETTLE_TIME;
+use moma::sim::monitor::Monitor;
 use moma::sim::mpc_run::MpcReport;
 use moma::sim::recorder::Recorder;
-use moma::sim::wheeled::{SampleObserver, simulate_observed};
 use moma::sim_config::{Run, prepare};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -50,6 +51,22 @@ fn recorded(rec: &Recorder, doc: &mut Map<String, Value>) -> (Vec<f64>, Table, T
 }
 
 /// `"{path}: {what}: {cause}"`, as the command line prints a failed run.
+/// The energy and constraint monitors and the step counts, as the CLI's summary has them.
+fn monitored(monitor: &Monitor, stats: &StepStats, doc: &mut Map<String, Value>) {
+    doc.insert("max_energy_error".into(), json!(monitor.max_energy_error));
+    doc.insert(
+        "relative_energy_error".into(),
+        json!(monitor.relative_energy_error()),
+    );
+    doc.insert(
+        "max_constraint_residual".into(),
+        json!(monitor.max_residual),
+    );
+    doc.insert("accepted_steps".into(), json!(stats.accepted));
+    doc.insert("rejected_steps".into(), json!(stats.rejected));
+    doc.insert("rhs_evaluations".into(), json!(stats.rhs_evals));
+}
+
 fn failed(path: &Path, what: &str, e: &moma::Error) -> String {
     format!("{}: {what}: {}", path.display(), chain(e))
 }
@@ -126,17 +143,9 @@ fn run_scenario(path: &Path) -> Result<Outcome, String> {
     }
     match prepare(&sc, path).map_err(lib)? {
         Run::Open(mut ol) => {
-            let observer = ol.monitor.as_mut().map(|m| m as &mut dyn SampleObserver);
-            let res = simulate_observed(
-                ol.system.as_mut(),
-                &ol.input,
-                &ol.q0,
-                &ol.v0,
-                &ol.options,
-                &mut |_| {},
-                observer,
-            )
-            .map_err(|e| failed(path, "simulation failed", &e))?;
+            let res = ol
+                .run(&mut |_| {})
+                .map_err(|e| failed(path, "simulation failed", &e))?;
             let rec = &res.recorder;
             let last = rec.len() - 1;
             doc.insert("robot".into(), json!(ol.robot_name));
@@ -150,21 +159,7 @@ fn run_scenario(path: &Path) -> Result<Outcome, String> {
                 json!(rec.kinetic[last] + rec.potential[last]),
             );
             doc.insert("input_work".into(), json!(rec.work[last]));
-            doc.insert(
-                "max_energy_error".into(),
-                json!(res.monitor.max_energy_error),
-            );
-            doc.insert(
-                "relative_energy_error".into(),
-                json!(res.monitor.relative_energy_error()),
-            );
-            doc.insert(
-                "max_constraint_residual".into(),
-                json!(res.monitor.max_residual),
-            );
-            doc.insert("accepted_steps".into(), json!(res.stats.accepted));
-            doc.insert("rejected_steps".into(), json!(res.stats.rejected));
-            doc.insert("rhs_evaluations".into(), json!(res.stats.rhs_evals));
+            monitored(&res.monitor, &res.stats, &mut doc);
             doc.insert("stopped_at".into(), json!(res.stopped_at));
             Ok(Outcome {
                 doc,
@@ -200,21 +195,7 @@ fn run_scenario(path: &Path) -> Result<Outcome, String> {
             doc.insert("error_names".into(), json!(res.error_names));
             doc.insert("final_error".into(), json!(res.error_row(rec.len() - 1)));
             doc.insert("goal_tolerance".into(), json!(c.goal_tolerance));
-            doc.insert(
-                "max_energy_error".into(),
-                json!(res.monitor.max_energy_error),
-            );
-            doc.insert(
-                "relative_energy_error".into(),
-                json!(res.monitor.relative_energy_error()),
-            );
-            doc.insert(
-                "max_constraint_residual".into(),
-                json!(res.monitor.max_residual),
-            );
-            doc.insert("accepted_steps".into(), json!(res.stats.accepted));
-            doc.insert("rejected_steps".into(), json!(res.stats.rejected));
-            doc.insert("rhs_evaluations".into(), json!(res.stats.rhs_evals));
+            monitored(&res.monitor, &res.stats, &mut doc);
             if let Some(m) = cl.law.mpc_run() {
                 let report = MpcReport::from(&m.summary);
                 doc.insert("mpc".into(), value(&report)?);

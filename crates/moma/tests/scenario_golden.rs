@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 use moma::mission;
 use moma::sim::free_floating;
 use moma::sim::recorder::Recorder;
-use moma::sim::wheeled::{SampleObserver, simulate_observed};
 use moma::sim_config::{Run, load, prepare};
 
 type Golden = BTreeMap<String, BTreeMap<String, Vec<f64>>>;
@@ -61,17 +60,9 @@ fn run_simulate(path: &Path) -> BTreeMap<String, Vec<f64>> {
     let mut out = BTreeMap::new();
     match prepare(&sc, path).unwrap_or_else(|e| panic!("{name}: {e}")) {
         Run::Open(mut ol) => {
-            let observer = ol.monitor.as_mut().map(|m| m as &mut dyn SampleObserver);
-            let r = simulate_observed(
-                ol.system.as_mut(),
-                &ol.input,
-                &ol.q0,
-                &ol.v0,
-                &ol.options,
-                &mut |_| {},
-                observer,
-            )
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let r = ol
+                .run(&mut |_| {})
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             recorder_rows(&r.recorder, &mut out);
             out.insert(
                 "monitor".into(),

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use moma::sim::settings::IntegratorSettings;
-use moma::sim::wheeled::{SimulationResult, simulate_observed};
+use moma::sim::wheeled::SimulationResult;
 use moma::sim_config::{OpenLoop, Run};
 use serde::Serialize;
 
@@ -130,23 +130,11 @@ pub fn run(args: Args) -> Result<()> {
 /// Simulates an open-loop run with a progress bar on a terminal.
 fn simulate_with_progress(ol: &mut OpenLoop) -> moma::Result<SimulationResult> {
     let bar = progress_bar(ol.options.duration);
-    let observer = ol
-        .monitor
-        .as_mut()
-        .map(|m| m as &mut dyn moma::sim::wheeled::SampleObserver);
-    let result = simulate_observed(
-        ol.system.as_mut(),
-        &ol.input,
-        &ol.q0,
-        &ol.v0,
-        &ol.options,
-        &mut |t| {
-            if let Some(pb) = &bar {
-                pb.set_position((t * 1000.0).round() as u64);
-            }
-        },
-        observer,
-    );
+    let result = ol.run(&mut |t| {
+        if let Some(pb) = &bar {
+            pb.set_position((t * 1000.0).round() as u64);
+        }
+    });
     if let Some(pb) = &bar {
         pb.finish_and_clear();
     }

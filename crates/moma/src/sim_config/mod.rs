@@ -21,7 +21,9 @@ use crate::error::{Error, Result};
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::settings::InputProfile;
 use crate::sim::stability_monitor::StabilityMonitor;
-use crate::sim::wheeled::{MAX_RECORDED_SAMPLES, SimulationOptions};
+use crate::sim::wheeled::{
+    MAX_RECORDED_SAMPLES, SampleObserver, SimulationOptions, SimulationResult, simulate_observed,
+};
 
 pub mod contact;
 pub mod control;
@@ -136,6 +138,26 @@ pub struct OpenLoop {
     pub input: InputProfile,
     /// Duration, integrator, recording interval and limits.
     pub options: SimulationOptions,
+}
+
+impl OpenLoop {
+    /// Runs the input profile from the initial state, the `[stability]` monitor (if any)
+    /// observing every recorded sample; `progress` gets the simulated time as it advances.
+    ///
+    /// # Errors
+    /// As [`simulate_observed`].
+    pub fn run(&mut self, progress: &mut dyn FnMut(f64)) -> Result<SimulationResult> {
+        let observer = self.monitor.as_mut().map(|m| m as &mut dyn SampleObserver);
+        simulate_observed(
+            self.system.as_mut(),
+            &self.input,
+            &self.q0,
+            &self.v0,
+            &self.options,
+            progress,
+            observer,
+        )
+    }
 }
 
 /// What a scenario runs: chosen by its robot and tables.
