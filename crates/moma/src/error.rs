@@ -189,3 +189,8 @@ pub(crate) fn chain(e: &dyn std::error::Error) -> String {
     }
     s
 }
+
+/// `"{path}: {what}"`.
+pub(crate) fn at(path: &std::path::Path, what: &str) -> String {
+    format!("{}: {what}", path.display())
+}

@@ -15,7 +15,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result, chain};
+use crate::error::{Error, Result, at, chain};
 use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
 use crate::sim::model_mismatch::{ModelPerturbation, NoisyMeasurement, Payload, standard_normal};
@@ -310,11 +310,6 @@ pub fn with_noise(
     let noisy = NoisyMeasurement::new(law, std_q, std_v, spec.draw().noise_seed)
         .map_err(|e| Error::Scenario(at(path, &format!("uncertainty.sensor_noise: {e}"))))?;
     Ok(Box::new(noisy))
-}
-
-/// `"{path}: {what}"`.
-fn at(path: &Path, what: &str) -> String {
-    format!("{}: {what}", path.display())
 }
 
 #[cfg(test)]

@@ -61,7 +61,7 @@ macro_rules! err {
 }
 pub(crate) use err;
 
-pub(crate) use crate::error::chain;
+pub(crate) use crate::error::{at, chain};
 
 /// Puts what was being done in front of an error: `"{what}: {error and its causes}"`.
 pub(crate) trait Context<T> {
@@ -158,11 +158,6 @@ pub enum Run {
     Closed(Box<ClosedLoop>),
     /// A free-floating robot.
     Space(Box<SpaceRun>),
-}
-
-/// `"{path}: {what}"`.
-pub(crate) fn at(path: &Path, what: &str) -> String {
-    format!("{}: {what}", path.display())
 }
 
 /// Both run kinds that take `[uncertainty]` refuse it without a `[controller]`.
