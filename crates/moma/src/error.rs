@@ -177,3 +177,20 @@ pub fn ensure_len(field: &str, expected: usize, got: usize) -> Result<()> {
         })
     }
 }
+
+/// The message of `e` followed by its causes, joined by `": "`.
+pub(crate) fn chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        cause = c.source();
+    }
+    s
+}
+
+/// `"{path}: {what}"`.
+pub(crate) fn at(path: &std::path::Path, what: &str) -> String {
+    format!("{}: {what}", path.display())
+}

@@ -544,7 +544,8 @@ impl<'m> Runner<'m> {
                 ContactLoop::new(c, self.wm, sim.dt, self.m.file.start.pose[2])
             })
             .transpose()?;
-        let mut ws = Workspace::new(self.wm, self.m.file.limits.mu, contact)?;
+        let plant = self.m.plant_robot.as_ref().unwrap_or(self.wm);
+        let mut ws = Workspace::new(self.wm, plant, self.m.file.limits.mu, contact)?;
         let act = Actuators::new(self.wm)?;
         let c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
@@ -779,8 +780,9 @@ impl<'m> Runner<'m> {
             nq,
             nr,
         };
-        let stepped = if evaluated {
-            // the first stage is the state's evaluation under the torques just formed
+        let stepped = if evaluated && self.m.plant_robot.is_none() {
+            // the first stage is the state's evaluation under the torques just formed (on
+            // the law's model, which is the plant's unless [uncertainty] perturbs it)
             let cd = &ws.control_dynamics;
             ws.first_stage[..nq].copy_from_slice(cd.qdot.as_slice());
             ws.first_stage[nq..nq + nr].copy_from_slice(cd.reduced.vdot.as_slice());
@@ -1293,7 +1295,7 @@ impl<'m> Runner<'m> {
                     slip,
                 })
             }
-            None if evaluated => monitors(self.wm, ws, t),
+            None if evaluated => monitors(self.wm, self.m.plant_robot.is_some(), ws, t),
             None => None,
         };
         let side = arm_side(&self.wm.model, ws, &c.chain, ee);
@@ -1329,14 +1331,20 @@ impl<'m> Runner<'m> {
     }
 }
 
-/// The stability and slip monitors (the one set of [`StabilityMonitor`]) at the step's
-/// state, from the dynamics the step evaluated under the applied torques; `None` if the
-/// multipliers or the loads cannot be formed.
-fn monitors(wm: &WheeledModel, ws: &mut Workspace, t: f64) -> Option<Monitors> {
-    lagrange_multipliers(wm, &mut ws.control_dynamics, &ws.q_now).ok()?;
-    ws.monitor
-        .sample_evaluated(t, ws.q_now.as_slice(), &mut ws.control_dynamics, &ws.u)
-        .ok()?;
+/// The stability and slip monitors (the one set of [`StabilityMonitor`], on the plant's
+/// robot) at the step's state, from the dynamics the step evaluated under the applied
+/// torques, or, when `[uncertainty]` perturbs the plant (`perturbed`), from the plant's
+/// own dynamics; `None` if the multipliers or the loads cannot be formed.
+fn monitors(wm: &WheeledModel, perturbed: bool, ws: &mut Workspace, t: f64) -> Option<Monitors> {
+    let q = ws.q_now.as_slice();
+    if perturbed {
+        ws.monitor.sample(t, q, ws.v_now.as_slice(), &ws.u).ok()?;
+    } else {
+        lagrange_multipliers(wm, &mut ws.control_dynamics, &ws.q_now).ok()?;
+        ws.monitor
+            .sample_evaluated(t, q, &mut ws.control_dynamics, &ws.u)
+            .ok()?;
+    }
     let tr = &ws.monitor.trace;
     let last = |xs: &[Option<f64>]| xs.last().copied().flatten();
     Some(Monitors {
@@ -1476,7 +1484,12 @@ struct Workspace {
 }
 
 impl Workspace {
-    fn new(wm: &WheeledModel, mu: f64, contact: Option<ContactLoop>) -> Result<Self> {
+    fn new(
+        wm: &WheeledModel,
+        plant: &WheeledModel,
+        mu: f64,
+        contact: Option<ContactLoop>,
+    ) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
         let settings = StabilitySettings {
@@ -1486,10 +1499,10 @@ impl Workspace {
             stop_at_tip: false,
         };
         Ok(Self {
-            sys: WheeledSystem::new(wm.clone()),
+            sys: WheeledSystem::new(plant.clone()),
             control_dynamics: WheeledData::new(wm),
             data: Data::new(model),
-            monitor: StabilityMonitor::new(wm, settings)?,
+            monitor: StabilityMonitor::new(plant, settings)?,
             rk: Rk4::new(nq + nr + 1),
             first_stage: vec![0.0; nq + nr + 1],
             q_now: DVector::zeros(nq),

@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
 use crate::multibody::{FrameIndex, RootJoint};
 use crate::planning::LoadedMap;
+use crate::sim::uncertainty::{UncertaintySpec, perturb};
 
 /// The mission file as written.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -47,6 +48,10 @@ pub struct MissionFile {
     /// `[contact]` table of `moma simulate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactSpec>,
+    /// How the plant differs from the model the controller keeps (the `[uncertainty]`
+    /// table of `moma simulate`; rolling plant only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<UncertaintySpec>,
     /// Outputs.
     #[serde(default)]
     pub output: OutputSpec,
@@ -413,6 +418,10 @@ pub struct Mission {
     pub package_dirs: Vec<PathBuf>,
     /// The contact plant, built and checked (`simulation.plant = "contact"`).
     pub contact: Option<MissionContact>,
+    /// The rolling plant's robot with the `[uncertainty]` draw applied (`None` without
+    /// the table: the plant is [`Mission::robot`]). The planner, reference, law and
+    /// computed torque keep [`Mission::robot`].
+    pub plant_robot: Option<WheeledModel>,
 }
 
 /// Reads and validates a mission file.
@@ -555,6 +564,7 @@ pub fn from_file_with(
     let (transport, q_arm0) = arm_postures(&file, &robot, path)?;
     let footprint = mission_footprint(&file, path, &map, &robot, geometry.as_ref(), &transport)?;
     let contact = contact_plant(&file, path, base, &robot, &q_arm0, files)?;
+    let plant_robot = perturbed_plant(&file, path, &robot)?;
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -574,7 +584,46 @@ pub fn from_file_with(
         footprint,
         package_dirs,
         contact,
+        plant_robot,
     })
+}
+
+/// The rolling plant's robot under the file's `[uncertainty]` draw (`None` without the
+/// table). The contact plant and sensor noise are refused here, naming the field.
+fn perturbed_plant(
+    file: &MissionFile,
+    path: &Path,
+    robot: &WheeledModel,
+) -> Result<Option<WheeledModel>> {
+    let Some(spec) = &file.uncertainty else {
+        return Ok(None);
+    };
+    spec.check()
+        .map_err(|e| Error::parse(path, crate::error::chain(&e)))?;
+    if file.simulation.plant == PlantKind::Contact {
+        return Err(field_err(
+            path,
+            "uncertainty",
+            "a mission perturbs the rolling plant only (simulation.plant = \"rolling\")",
+        ));
+    }
+    if spec.has_noise() {
+        return Err(field_err(
+            path,
+            "uncertainty.sensor_noise",
+            "a mission takes no sensor noise (its law measures the plant's state)",
+        ));
+    }
+    if spec.mu.is_some() {
+        return Err(field_err(
+            path,
+            "uncertainty.mu",
+            "the wheels' friction is drawn for the contact plant only",
+        ));
+    }
+    let mut plant = robot.clone();
+    perturb(&spec.draw(), &mut plant.model, path)?;
+    Ok(Some(plant))
 }
 
 /// The contact plant of `simulation.plant = "contact"` (the robot description loaded

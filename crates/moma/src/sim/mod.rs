@@ -61,6 +61,7 @@ pub mod reduced_system;
 pub mod settings;
 pub mod stability_monitor;
 mod stepping;
+pub mod uncertainty;
 pub mod wheeled;
 pub mod wheeled_system;
 

@@ -6,7 +6,7 @@
 //! [`NoisyMeasurement`].
 //!
 //! What is drawn (the values of a perturbation, the seed of the noise) is the caller's
-//! (`sim_config::uncertainty` reads and draws them from a scenario's `[uncertainty]`).
+//! (`sim::uncertainty` reads and draws them from a file's `[uncertainty]`).
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};

@@ -61,17 +61,7 @@ macro_rules! err {
 }
 pub(crate) use err;
 
-/// The message of `e` followed by its causes, joined by `": "`.
-pub(crate) fn chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        s.push_str(": ");
-        s.push_str(&c.to_string());
-        cause = c.source();
-    }
-    s
-}
+pub(crate) use crate::error::{at, chain};
 
 /// Puts what was being done in front of an error: `"{what}: {error and its causes}"`.
 pub(crate) trait Context<T> {
@@ -168,11 +158,6 @@ pub enum Run {
     Closed(Box<ClosedLoop>),
     /// A free-floating robot.
     Space(Box<SpaceRun>),
-}
-
-/// `"{path}: {what}"`.
-pub(crate) fn at(path: &Path, what: &str) -> String {
-    format!("{}: {what}", path.display())
 }
 
 /// Both run kinds that take `[uncertainty]` refuse it without a `[controller]`.
