@@ -80,7 +80,7 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
     // the nominal (rolling) model.
     let mut params = spec.params();
     if let Some(draw) = crate::sim_config::uncertainty::contact_draw(sc, path)? {
-        crate::sim_config::uncertainty::perturb(&draw, &mut model, path)?;
+        crate::sim::uncertainty::perturb(&draw, &mut model, path)?;
         params.mu = draw.mu.unwrap_or(params.mu);
     }
     let (q_names, v_names) = (robot.q_names(), robot.v_names());
@@ -88,9 +88,7 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
     let (q0, v0, driver, record_interval) = if sc.controller.is_some() || sc.reference.is_some() {
         let cl = closed_loop(sc, path, base_dir)?;
         let law = match &sc.uncertainty {
-            Some(u) => {
-                crate::sim_config::uncertainty::with_noise(u, cl.law, (&q_names, &v_names), path)?
-            }
+            Some(u) => crate::sim::uncertainty::with_noise(u, cl.law, (&q_names, &v_names), path)?,
             None => cl.law,
         };
         let driver = ContactDriver::Law {

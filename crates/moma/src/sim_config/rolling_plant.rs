@@ -6,9 +6,9 @@
 
 use std::path::Path;
 
-use super::uncertainty::{UncertaintySpec, perturb, with_noise};
 use super::{at, bail, chain};
 use crate::error::{Error, Result};
+use crate::sim::uncertainty::{UncertaintySpec, perturb, with_noise};
 
 /// A wheeled URDF robot's table: the URDF, its drive, wheel joints and casters.
 type WheeledUrdf<'a> = (

@@ -79,7 +79,7 @@ pub struct Scenario<
     /// How the plant differs from the controller's model, and the measurement noise
     /// (closed loop on a wheeled URDF robot; docs/simulate.md).
     #[serde(default)]
-    pub uncertainty: Option<crate::sim_config::uncertainty::UncertaintySpec>,
+    pub uncertainty: Option<crate::sim::uncertainty::UncertaintySpec>,
 }
 
 /// The robot of a scenario.

@@ -1,5 +1,5 @@
 //! The `[uncertainty]` table of a closed-loop `moma simulate` scenario. Its schema,
-//! checks, seeded draw and application ([`perturb`], [`with_noise`]) are
+//! checks, seeded draw and application (`perturb`, `with_noise`) are
 //! [`crate::sim::uncertainty`]'s, shared with `moma mission`; here, the contact plant's
 //! draw of a scenario. Schema in `docs/simulate.md`.
 
@@ -7,10 +7,7 @@ use std::path::Path;
 
 use super::{UNCERTAINTY_NEEDS_CONTROLLER, at, bail, chain};
 use crate::error::{Error, Result};
-pub use crate::sim::uncertainty::{
-    Dist, Draw, NORMAL_TRUNCATION, PayloadSpec, SensorNoiseSpec, UncertaintySpec, perturb,
-    with_noise,
-};
+use crate::sim::uncertainty::Draw;
 
 /// The `[uncertainty]` draw of a `plant = "contact"` scenario (`None` without the
 /// table), checked: the scenario must be closed loop.

@@ -21,7 +21,7 @@ use super::{Parameter, Table, Value, file_error, num, require_numbers, resolve, 
 use crate::contact::PlantKind;
 use crate::error::{Error, Result};
 use crate::sim::stability_monitor::{first_crossing, first_slip};
-use crate::sim_config::uncertainty::Dist;
+use crate::sim::uncertainty::Dist;
 use crate::sim_config::{Run, Scenario};
 
 /// Result columns.
