@@ -8,17 +8,7 @@ use std::path::{Path, PathBuf};
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, summary, temp_dir};
-
-fn run(scenario: &Path, out: &Path) -> std::process::Output {
-    moma()
-        .args(["simulate", "--quiet"])
-        .arg(scenario)
-        .arg("--output")
-        .arg(out)
-        .output()
-        .unwrap()
-}
+use cli_common::{scenarios, simulate as run, summary, temp_dir};
 
 fn f(v: &serde_json::Value) -> f64 {
     v.as_f64().unwrap()

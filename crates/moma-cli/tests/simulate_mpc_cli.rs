@@ -4,21 +4,9 @@
 //! ZMP margin and clearance), with the law's signals in `control.csv`; a bad
 //! `[controller.mpc]` fails with one message naming the file and field, and no output.
 
-use std::path::Path;
-
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
-
-fn run(scenario: &Path, out: &Path) -> std::process::Output {
-    moma()
-        .args(["simulate", "--quiet"])
-        .arg(scenario)
-        .arg("--output")
-        .arg(out)
-        .output()
-        .unwrap()
-}
+use cli_common::{scenarios, simulate as run, temp_dir};
 
 fn f(v: &serde_json::Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))

@@ -6,17 +6,7 @@ use std::path::{Path, PathBuf};
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, summary, temp_dir};
-
-fn run(scenario: &Path, out: &Path) -> std::process::Output {
-    moma()
-        .args(["simulate", "--quiet"])
-        .arg(scenario)
-        .arg("--output")
-        .arg(out)
-        .output()
-        .unwrap()
-}
+use cli_common::{scenarios, simulate as run, summary, temp_dir};
 
 /// The extended brake scenario with its `[stability]` table replaced by `table`, written
 /// into `dir` (the URDF path made absolute).

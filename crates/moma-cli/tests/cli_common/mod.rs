@@ -31,3 +31,14 @@ pub fn temp_dir(tag: &str) -> PathBuf {
 pub fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
+
+/// `moma simulate --quiet SCENARIO --output OUT`, its output captured.
+pub fn simulate(scenario: &Path, out: &Path) -> std::process::Output {
+    moma()
+        .args(["simulate", "--quiet"])
+        .arg(scenario)
+        .arg("--output")
+        .arg(out)
+        .output()
+        .unwrap()
+}
