@@ -44,6 +44,19 @@ pub struct SaturationFlags {
     pub torque: bool,
 }
 
+/// Clips every input to `[-limit, limit]`; true when one was clipped (the torque flag of
+/// [`SaturationFlags`]).
+pub(crate) fn clip_inputs(u: &mut [f64], limit: f64) -> bool {
+    let mut hit = false;
+    for x in u.iter_mut() {
+        if x.abs() > limit {
+            *x = x.signum() * limit;
+            hit = true;
+        }
+    }
+    hit
+}
+
 /// What the controller reports at a recorded sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Observation {
