@@ -4,16 +4,28 @@
 //! enabled self pairs. The state is the one the closed loop of `tests/sim_mpc.rs`
 //! reaches at t = 2.5 s (gripper reaching beside the path, base moving); each iteration
 //! is one warm-started solve from it (4 iterations at most).
+//!
+//! Beside it, the quadratic program of one iteration (the stage models at the warm
+//! start: variables `δu_0, δx_1, …, δu_{N−1}, δx_N`, the linearised dynamics as
+//! equalities, the input bounds as inequalities) solved two ways: the solver's own
+//! Riccati backward pass (`Solver::backward_pass`, box-DDP stage QPs) and the interior-
+//! point solver `clarabel` on the sparse form built from the same stage models.
 
 #[path = "../tests/mpc_common/mod.rs"]
 mod mpc_common;
 
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, ZeroConeT,
+};
 use criterion::{Criterion, criterion_group, criterion_main};
 use moma::collision::Scene;
-use moma::control::mpc::{KnotReference, MpcSettings};
+use moma::control::mpc::{
+    KnotReference, MpcSettings, OptimalControlProblem, Solver, StageModel, Trajectory,
+};
 use moma::sim::mpc_loop::{MpcLoopSettings, run_mpc_loop};
 use moma::sim::wheeled_system::WheeledSystem;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
 use std::hint::black_box;
 
 fn bench_mpc(c: &mut Criterion) {
@@ -51,9 +63,168 @@ fn bench_mpc(c: &mut Criterion) {
     let last = run.samples.last().unwrap();
     let (q, v) = (last.q.clone(), last.v.clone());
     mpc.set_reference(last.t, reference);
+    // One iteration's QP at the warm start of the next solve (on a copy, so that the
+    // solve benchmark below starts from the same state).
+    let mut mpc_qp = mpc.clone();
+    let mpc_qp = &mut mpc_qp;
+    let robot = &mpc_qp.problem.robot;
+    let (nx, nu, n) = (robot.nx(), robot.nu(), mpc_qp.problem.horizon());
+    let mut x0 = DVector::zeros(nx);
+    robot.state_from_plant(&q, &v, &mut x0);
+    let mut traj: Trajectory = mpc_qp.solution.clone();
+    let mut riccati = Solver::new(nx, nu, n);
+    riccati
+        .linearize(&mut mpc_qp.problem, &x0, &mut traj)
+        .unwrap();
+    let (lo, hi) = {
+        let (l, h) = mpc_qp.problem.input_bounds(0);
+        (l.clone(), h.clone())
+    };
+    let stages = riccati.stages().to_vec();
+    riccati.backward_pass(&mpc_qp.problem, &traj, 0.0).unwrap();
+    let qp = StepQp::new(&stages, &traj, &lo, &hi);
+    let z = qp.solve();
+    let du0 = DVector::from_column_slice(&z[..nu]);
+    println!(
+        "first input step: Riccati {:.6?}, clarabel {:.6?}, largest difference {:.3e}",
+        riccati.feedforward[0].as_slice(),
+        du0.as_slice(),
+        (&riccati.feedforward[0] - &du0).amax()
+    );
+    c.bench_function("mpc/qp_riccati", |b| {
+        b.iter(|| black_box(riccati.backward_pass(&mpc_qp.problem, &traj, 0.0).unwrap()));
+    });
+    c.bench_function("mpc/qp_clarabel", |b| {
+        b.iter(|| black_box(StepQp::new(&stages, &traj, &lo, &hi).solve()));
+    });
+
     c.bench_function("mpc/fetch_1s_all_constraints", |b| {
         b.iter(|| black_box(mpc.solve(black_box(&q), black_box(&v)).unwrap()));
     });
+}
+
+/// The QP of one iteration in `clarabel`'s form, `min ½zᵀPz + qᵀz, A z + s = b`, with
+/// `z = [δu_0, δx_1, δu_1, …, δu_{N−1}, δx_N]` (δx_0 = 0: the state is measured).
+struct StepQp {
+    p: CscMatrix<f64>,
+    q: Vec<f64>,
+    a: CscMatrix<f64>,
+    b: Vec<f64>,
+    equalities: usize,
+    inequalities: usize,
+}
+
+impl StepQp {
+    fn new(stages: &[StageModel], traj: &Trajectory, lo: &DVector<f64>, hi: &DVector<f64>) -> Self {
+        let n = traj.us.len();
+        let (nx, nu) = (traj.xs[0].len(), traj.us[0].len());
+        let w = nx + nu;
+        let nz = n * w;
+        let iu = |k: usize| k * w;
+        let ix = |k: usize| (k - 1) * w + nu; // k ≥ 1
+        let (mut pi, mut pj, mut pv) = (Vec::new(), Vec::new(), Vec::new());
+        let mut push_p = |r: usize, c: usize, v: f64| {
+            if v != 0.0 && r <= c {
+                pi.push(r);
+                pj.push(c);
+                pv.push(v);
+            }
+        };
+        let mut q = vec![0.0; nz];
+        for (k, s) in stages.iter().enumerate() {
+            if k < n {
+                for i in 0..nu {
+                    q[iu(k) + i] += s.lu[i];
+                    for j in 0..nu {
+                        push_p(iu(k) + i, iu(k) + j, s.luu[(i, j)]);
+                    }
+                }
+            }
+            if k >= 1 {
+                for i in 0..nx {
+                    q[ix(k) + i] += s.lx[i];
+                    for j in 0..nx {
+                        push_p(ix(k) + i, ix(k) + j, s.lxx[(i, j)]);
+                    }
+                    if k < n {
+                        for j in 0..nu {
+                            push_p(ix(k) + i, iu(k) + j, s.lux[(j, i)]);
+                        }
+                    }
+                }
+            }
+        }
+        let p = CscMatrix::new_from_triplets(nz, nz, pi, pj, pv);
+        // δx_{k+1} − A_k δx_k − B_k δu_k = 0, then ±δu_k ≤ bounds.
+        let (mut ai, mut aj, mut av) = (Vec::new(), Vec::new(), Vec::new());
+        let mut b = Vec::new();
+        for (k, s) in stages.iter().enumerate().take(n) {
+            for r in 0..nx {
+                let row = b.len();
+                ai.push(row);
+                aj.push(ix(k + 1) + r);
+                av.push(1.0);
+                for c in 0..nu {
+                    if s.b[(r, c)] != 0.0 {
+                        ai.push(row);
+                        aj.push(iu(k) + c);
+                        av.push(-s.b[(r, c)]);
+                    }
+                }
+                if k >= 1 {
+                    for c in 0..nx {
+                        if s.a[(r, c)] != 0.0 {
+                            ai.push(row);
+                            aj.push(ix(k) + c);
+                            av.push(-s.a[(r, c)]);
+                        }
+                    }
+                }
+                b.push(0.0);
+            }
+        }
+        let equalities = b.len();
+        for k in 0..n {
+            for i in 0..nu {
+                for (sign, bound) in [(1.0, hi[i] - traj.us[k][i]), (-1.0, traj.us[k][i] - lo[i])] {
+                    ai.push(b.len());
+                    aj.push(iu(k) + i);
+                    av.push(sign);
+                    b.push(bound);
+                }
+            }
+        }
+        let inequalities = b.len() - equalities;
+        let a = CscMatrix::new_from_triplets(b.len(), nz, ai, aj, av);
+        Self {
+            p,
+            q,
+            a,
+            b,
+            equalities,
+            inequalities,
+        }
+    }
+
+    fn solve(&self) -> Vec<f64> {
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .build()
+            .unwrap();
+        let cones = [
+            ZeroConeT(self.equalities),
+            NonnegativeConeT(self.inequalities),
+        ];
+        let mut solver =
+            DefaultSolver::new(&self.p, &self.q, &self.a, &self.b, &cones, settings).unwrap();
+        solver.solve();
+        assert!(
+            matches!(solver.solution.status, SolverStatus::Solved),
+            "{:?}",
+            solver.solution.status
+        );
+        solver.solution.x.clone()
+    }
 }
 
 criterion_group! {

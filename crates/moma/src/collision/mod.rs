@@ -68,6 +68,6 @@ pub use gjk::PairDistance;
 pub use gradient::{ClosestPair, closest_pair, min_distance_gradient, scene_distance_derivative};
 pub use point_cloud::read_points;
 pub use scene::{
-    Scene, SceneData, SceneObject, SceneOptions, compute_scene_distances, point_cloud_object,
-    read_scene, scene_collision, voxel_object,
+    Scene, SceneData, SceneObject, SceneOptions, compute_scene_distances,
+    compute_scene_distances_below, point_cloud_object, read_scene, scene_collision, voxel_object,
 };

@@ -216,6 +216,21 @@ pub fn compute_scene_distances(
     scene: &Scene,
     sd: &mut SceneData,
 ) -> f64 {
+    compute_scene_distances_below(gm, gd, scene, sd, f64::INFINITY)
+}
+
+/// [`compute_scene_distances`] for the link–object pairs closer than `cutoff` (m): the
+/// search starts with `cutoff` as its best distance, so a link whose bounding balls are
+/// at least `cutoff` from an object costs one ball–box test and no distance query. A
+/// pair at `cutoff` or farther gets a distance of `+∞` (it is not the closest); the
+/// others get the same distance as with no cutoff.
+pub fn compute_scene_distances_below(
+    gm: &GeometryModel,
+    gd: &mut GeometryData,
+    scene: &Scene,
+    sd: &mut SceneData,
+    cutoff: f64,
+) -> f64 {
     let no = scene.objects.len();
     let mut min = f64::INFINITY;
     sd.closest = None;
@@ -223,7 +238,7 @@ pub fn compute_scene_distances(
         for (o, obj) in scene.objects.iter().enumerate() {
             let k = l * no + o;
             let mut best = PairDistance {
-                distance: f64::INFINITY,
+                distance: cutoff,
                 witness_a: Vector3::zeros(),
                 witness_b: Vector3::zeros(),
                 normal: Vector3::z(),
@@ -298,6 +313,9 @@ pub fn compute_scene_distances(
                         }
                     }
                 }
+            }
+            if best.distance >= cutoff {
+                best.distance = f64::INFINITY;
             }
             sd.results[k] = best;
             if best.distance < min {

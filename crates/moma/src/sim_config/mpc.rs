@@ -95,6 +95,9 @@ pub struct MpcSpec {
     /// Augmented-Lagrangian penalty (default 1000).
     #[serde(default)]
     pub penalty: Option<f64>,
+    /// Largest augmented-Lagrangian multiplier (default 1000).
+    #[serde(default)]
+    pub max_multiplier: Option<f64>,
     /// Length scaling the ZMP and clearance constraints (m, default 0.02).
     #[serde(default)]
     pub length_scale: Option<f64>,
@@ -200,6 +203,11 @@ fn settings(spec: &MpcSpec) -> Result<MpcSettings> {
             &mut s.max_joint_acceleration,
         ),
         ("penalty", spec.penalty, &mut s.constraints.penalty),
+        (
+            "max_multiplier",
+            spec.max_multiplier,
+            &mut s.constraints.max_multiplier,
+        ),
         (
             "length_scale",
             spec.length_scale,

@@ -10,7 +10,11 @@
 //! ```
 //!
 //! with gradient `max(0, λ + ρ c) ∇c` and Gauss–Newton Hessian `ρ ∇c ∇cᵀ` where active;
-//! after each MPC solve the multipliers move to `max(0, λ + ρ c)`.
+//! after each MPC solve the multipliers move to `max(0, λ + ρ c)`, capped at
+//! [`ConstraintSettings::max_multiplier`] (a safeguarded augmented Lagrangian: a
+//! constraint the plan cannot meet, such as a clearance already below its set value at
+//! the measured state, would otherwise raise its multiplier by `ρ c` at every solve
+//! without bound, and the cost it dominates would leave the line search no step).
 //!
 //! Kinds, per knot (state constraints from knot 1 on, since `x_0` is measured; the
 //! input–state ones at knots 0 … N − 1):
@@ -52,6 +56,8 @@ pub struct ConstraintSettings {
     pub torque_fraction: f64,
     /// Penalty ρ.
     pub penalty: f64,
+    /// Largest multiplier (the multipliers are kept in `[0, max_multiplier]`).
+    pub max_multiplier: f64,
     /// Length that scales the ZMP and clearance constraints (m).
     pub length_scale: f64,
     /// Self pairs farther apart than this at the start of a solve are not checked in
@@ -67,6 +73,7 @@ impl Default for ConstraintSettings {
             position_margin: 0.02,
             torque_fraction: 1.0,
             penalty: 1000.0,
+            max_multiplier: 1000.0,
             length_scale: 0.02,
             activation_distance: 0.25,
         }
@@ -106,12 +113,12 @@ impl ConstraintSet {
         }
     }
 
-    /// Moves every multiplier to `max(0, λ + ρ c)`.
-    pub fn update(&mut self, penalty: f64) {
+    /// Moves every multiplier to `λ + ρ c` kept in `[0, max_multiplier]`.
+    pub fn update(&mut self, penalty: f64, max_multiplier: f64) {
         for (l, c) in self.lambda.iter_mut().zip(&self.value) {
             for (li, &ci) in l.iter_mut().zip(c.iter()) {
                 if ci.is_finite() {
-                    *li = (*li + penalty * ci).max(0.0);
+                    *li = (*li + penalty * ci).clamp(0.0, max_multiplier);
                 }
             }
         }

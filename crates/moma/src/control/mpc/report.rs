@@ -70,6 +70,9 @@ pub struct SolveReport {
     pub time: Duration,
     /// Solver iterations.
     pub iterations: usize,
+    /// Line-search rollouts (each a pass over the horizon, or the part of one before it
+    /// could no longer be accepted).
+    pub rollouts: usize,
     /// Total cost (including the augmented-Lagrangian terms).
     pub cost: f64,
     /// Whether the solver met its tolerance within its iteration budget.

@@ -19,7 +19,7 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3};
 
 use crate::collision::{
     GeometryData, GeometryModel, PairSelection, Scene, SceneData, closest_pair, compute_distances,
-    compute_scene_distances, min_distance_gradient, update_geometry_placements,
+    compute_scene_distances_below, min_distance_gradient, update_geometry_placements,
 };
 use crate::error::{Error, Result};
 use crate::kinematics::{
@@ -276,9 +276,14 @@ pub struct KnotValues {
 pub struct KnotWorkspace {
     wd: WheeledData,
     sd: StabilityData,
-    /// The robot's geometry with only the self pairs of the current solve enabled, its
+    /// The robot's geometry with only the self pairs of the current knot enabled, its
     /// workspace and the scene's.
     geometry: Option<(GeometryModel, GeometryData, SceneData)>,
+    /// The self pairs selected for the current solve ([`select_pairs`]).
+    selected: Vec<bool>,
+    /// Distance at or beyond which a pair is not queried ([`evaluate_knot`]); `+∞`:
+    /// every selected pair; `−∞`: none (the clearance is not needed).
+    pub distance_cutoff: f64,
     q: DVector<f64>,
     v_r: DVector<f64>,
     a_r: DVector<f64>,
@@ -313,6 +318,11 @@ impl KnotWorkspace {
                     SceneData::new(&c.geometry, &c.scene),
                 )
             }),
+            selected: robot
+                .clearance
+                .as_ref()
+                .map_or_else(Vec::new, |c| c.geometry.enabled.clone()),
+            distance_cutoff: f64::INFINITY,
             q: DVector::zeros(wm.model.nq),
             v_r: DVector::zeros(nr),
             a_r: DVector::zeros(nr),
@@ -345,16 +355,39 @@ impl KnotWorkspace {
 /// farther apart cannot come within the clearance before the next solve re-selects
 /// them, and each pair skipped saves one distance query per knot evaluation.
 pub fn select_pairs(robot: &MpcRobot, ws: &mut KnotWorkspace, q: &DVector<f64>, activation: f64) {
-    let (Some(c), Some((active, gd, _))) = (&robot.clearance, &mut ws.geometry) else {
+    let (Some(c), Some((_, gd, _))) = (&robot.clearance, &mut ws.geometry) else {
         return;
     };
     let model = &robot.wheeled.model;
     crate::kinematics::forward_kinematics(model, &mut ws.wd.data, q);
     update_geometry_placements(&c.geometry, &ws.wd.data, gd);
     compute_distances(&c.geometry, gd, PairSelection::Enabled);
-    for (p, on) in active.enabled.iter_mut().enumerate() {
+    for (p, on) in ws.selected.iter_mut().enumerate() {
         *on = c.geometry.enabled[p]
             && (gd.results[p].distance < activation || gd.results[p].distance.is_nan());
+    }
+}
+
+/// Enables in `active` the pairs of `selected` that the bounding balls of their shapes
+/// (at the placements in `gd`) cannot keep `cutoff` apart: a lower bound of a pair's
+/// distance is the smallest gap between the balls of its two links' shapes.
+fn cull_pairs(active: &mut GeometryModel, gd: &GeometryData, selected: &[bool], cutoff: f64) {
+    for p in 0..active.pairs.len() {
+        active.enabled[p] = selected[p] && {
+            let [la, lb] = active.pairs[p];
+            let (a, b) = (&active.links[la], &active.links[lb]);
+            let mut gap = f64::INFINITY;
+            for i in a.first..a.first + a.count {
+                let (oi, pi) = (&active.objects[i], &gd.placements[i]);
+                let ci = pi.act_point(&oi.bounding_centre);
+                for j in b.first..b.first + b.count {
+                    let (oj, pj) = (&active.objects[j], &gd.placements[j]);
+                    let cj = pj.act_point(&oj.bounding_centre);
+                    gap = gap.min((ci - cj).norm() - oi.bounding_radius - oj.bounding_radius);
+                }
+            }
+            gap < cutoff
+        };
     }
 }
 
@@ -445,12 +478,21 @@ pub fn evaluate_knot(
         }
     }
     // Clearance.
+    // Pairs at least `cutoff` apart (by their bounding balls) are not queried; when every
+    // pair is, the distance is reported as `cutoff` with a zero gradient.
     vals.distance = f64::INFINITY;
     vals.distance_dx.fill(0.0);
-    if let (Some(c), Some((active, gd, scd))) = (&robot.clearance, &mut ws.geometry) {
+    let cutoff = ws.distance_cutoff;
+    if let (Some(c), Some((active, gd, scd)), false) = (
+        &robot.clearance,
+        &mut ws.geometry,
+        cutoff == f64::NEG_INFINITY,
+    ) {
         update_geometry_placements(active, data, gd);
+        cull_pairs(active, gd, &ws.selected, cutoff);
         compute_distances(active, gd, PairSelection::Enabled);
-        compute_scene_distances(active, gd, &c.scene, scd);
+        compute_scene_distances_below(active, gd, &c.scene, scd, cutoff);
+        vals.distance = cutoff;
         if !derivatives {
             if let Some((_, d)) = closest_pair(gd, &c.scene, scd) {
                 vals.distance = d;

@@ -32,6 +32,11 @@ pub struct SolverOptions {
     pub mu_max: f64,
     /// Step lengths tried by the line search, largest first.
     pub line_search: Vec<f64>,
+    /// When no step length is accepted: `false` raises the regularisation and iterates
+    /// again; `true` ends the solve there, with the trajectory it has (a real-time
+    /// budget: from μ = 0 the next μ, 10⁻⁶, is too small against `Q_uu` to change the
+    /// step, so the next iteration would repeat the same rejected rollouts).
+    pub stop_on_failed_line_search: bool,
 }
 
 impl Default for SolverOptions {
@@ -43,6 +48,7 @@ impl Default for SolverOptions {
             mu_min: 1e-9,
             mu_max: 1e10,
             line_search: vec![1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125],
+            stop_on_failed_line_search: false,
         }
     }
 }
@@ -78,6 +84,9 @@ pub struct SolveStats {
     pub converged: bool,
     /// Regularisation at the end.
     pub mu: f64,
+    /// Forward rollouts of the line search (whole, or stopped once they could no longer
+    /// be accepted).
+    pub rollouts: usize,
 }
 
 /// The iLQR workspace.
@@ -160,6 +169,106 @@ impl Solver {
         traj: &mut Trajectory,
         opts: &SolverOptions,
     ) -> Result<SolveStats> {
+        self.roll_out_guess(problem, x0, traj)?;
+        let mut mu = opts.mu_init;
+        let mut stats = SolveStats::default();
+        let mut cost = 0.0;
+        let mut need_model = true;
+        #[allow(unused_assignments)]
+        for it in 0..opts.max_iterations {
+            if need_model {
+                cost = self.approximate_all(problem, traj)?;
+                need_model = false;
+            }
+            stats.iterations = it + 1;
+            // Backward pass, raising μ until every stage's QP is convex.
+            let (d1, d2) = loop {
+                if let Some(d) = self.backward_pass(problem, traj, mu) {
+                    break d;
+                }
+                mu = (mu * 10.0).max(1e-6);
+                if mu > opts.mu_max {
+                    stats.cost = cost;
+                    stats.mu = mu;
+                    return Ok(stats);
+                }
+            };
+            if -(d1 + 0.5 * d2) < opts.tolerance {
+                stats.converged = true;
+                break;
+            }
+            let mut accepted = false;
+            for &alpha in &opts.line_search {
+                let expected = -(alpha * d1 + 0.5 * alpha * alpha * d2);
+                // Costs above this are rejected, so the rollout may stop once it is sure
+                // to exceed it.
+                let limit = cost - 1e-4 * expected.max(0.0);
+                let new_cost = self.forward(problem, traj, alpha, limit)?;
+                stats.rollouts += 1;
+                if new_cost.is_finite()
+                    && cost - new_cost >= 1e-4 * expected.max(0.0)
+                    && new_cost < cost
+                {
+                    std::mem::swap(traj, &mut self.trial);
+                    cost = new_cost;
+                    accepted = true;
+                    break;
+                }
+            }
+            if accepted {
+                mu = if mu * 0.1 < opts.mu_min {
+                    0.0
+                } else {
+                    mu * 0.1
+                };
+                need_model = true;
+            } else {
+                if opts.stop_on_failed_line_search {
+                    break;
+                }
+                mu = (mu * 10.0).max(1e-6);
+                if mu > opts.mu_max {
+                    break;
+                }
+            }
+        }
+        stats.cost = cost;
+        stats.mu = mu;
+        Ok(stats)
+    }
+
+    /// The linearisation the first iteration of [`Solver::solve`] works on: `traj`'s
+    /// inputs projected onto the bounds and rolled out from `x0`, and every stage's
+    /// model there (read with [`Solver::stages`]); returns the total cost. With
+    /// [`Solver::backward_pass`] it is one iteration's quadratic program and its Riccati
+    /// solution, for comparing that pass with other QP solvers on the same problem.
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn linearize<P: OptimalControlProblem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        x0: &DVector<f64>,
+        traj: &mut Trajectory,
+    ) -> Result<f64> {
+        self.roll_out_guess(problem, x0, traj)?;
+        self.approximate_all(problem, traj)
+    }
+
+    /// The stage models of the last linearisation (N + 1, the last terminal).
+    #[must_use]
+    pub fn stages(&self) -> &[StageModel] {
+        &self.stages
+    }
+
+    /// Checks the dimensions, projects the guess onto the bounds, rolls it out from `x0`
+    /// and sums the lower bounds of the stages left (for stopping hopeless rollouts).
+    fn roll_out_guess<P: OptimalControlProblem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        x0: &DVector<f64>,
+        traj: &mut Trajectory,
+    ) -> Result<()> {
         if problem.nx() != self.nx || problem.nu() != self.nu || problem.horizon() != self.n {
             return Err(Error::invalid(
                 "solver",
@@ -191,86 +300,28 @@ impl Solver {
         for k in (0..=self.n).rev() {
             self.rest_bound[k] = self.rest_bound[k + 1] + problem.cost_lower_bound(k);
         }
-        let mut mu = opts.mu_init;
-        let mut stats = SolveStats::default();
-        let mut cost = 0.0;
-        let mut need_model = true;
-        #[allow(unused_assignments)]
-        for it in 0..opts.max_iterations {
-            if need_model {
-                cost = 0.0;
-                for k in 0..self.n {
-                    cost += problem.approximate(
-                        k,
-                        &traj.xs[k],
-                        Some(&traj.us[k]),
-                        &mut self.stages[k],
-                    )?;
-                }
-                cost += problem.approximate(
-                    self.n,
-                    &traj.xs[self.n],
-                    None,
-                    &mut self.stages[self.n],
-                )?;
-                need_model = false;
-            }
-            stats.iterations = it + 1;
-            // Backward pass, raising μ until every stage's QP is convex.
-            let (d1, d2) = loop {
-                if let Some(d) = self.backward(problem, traj, mu) {
-                    break d;
-                }
-                mu = (mu * 10.0).max(1e-6);
-                if mu > opts.mu_max {
-                    stats.cost = cost;
-                    stats.mu = mu;
-                    return Ok(stats);
-                }
-            };
-            if -(d1 + 0.5 * d2) < opts.tolerance {
-                stats.converged = true;
-                break;
-            }
-            let mut accepted = false;
-            for &alpha in &opts.line_search {
-                let expected = -(alpha * d1 + 0.5 * alpha * alpha * d2);
-                // Costs above this are rejected, so the rollout may stop once it is sure
-                // to exceed it.
-                let limit = cost - 1e-4 * expected.max(0.0);
-                let new_cost = self.forward(problem, traj, alpha, limit)?;
-                if new_cost.is_finite()
-                    && cost - new_cost >= 1e-4 * expected.max(0.0)
-                    && new_cost < cost
-                {
-                    std::mem::swap(traj, &mut self.trial);
-                    cost = new_cost;
-                    accepted = true;
-                    break;
-                }
-            }
-            if accepted {
-                mu = if mu * 0.1 < opts.mu_min {
-                    0.0
-                } else {
-                    mu * 0.1
-                };
-                need_model = true;
-            } else {
-                mu = (mu * 10.0).max(1e-6);
-                if mu > opts.mu_max {
-                    break;
-                }
-            }
-        }
-        stats.cost = cost;
-        stats.mu = mu;
-        Ok(stats)
+        Ok(())
     }
 
-    /// The Riccati backward pass with regularisation `mu`; returns the expected-decrease
-    /// coefficients `(Σ kᵀQu, Σ kᵀQuu k)`, or `None` when a stage QP is not convex.
-    fn backward<P: OptimalControlProblem + ?Sized>(
+    /// Every stage's model along `traj` into `self.stages`; returns the total cost.
+    fn approximate_all<P: OptimalControlProblem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        traj: &Trajectory,
+    ) -> Result<f64> {
+        let mut cost = 0.0;
+        for k in 0..self.n {
+            cost += problem.approximate(k, &traj.xs[k], Some(&traj.us[k]), &mut self.stages[k])?;
+        }
+        cost += problem.approximate(self.n, &traj.xs[self.n], None, &mut self.stages[self.n])?;
+        Ok(cost)
+    }
+
+    /// The Riccati backward pass over the stage models with regularisation `mu`: the
+    /// feed-forward steps and gains (`feedforward`, `gains`) of the quadratic program of
+    /// the stage models at `traj`; returns the expected-decrease coefficients
+    /// `(Σ kᵀQu, Σ kᵀQuu k)`, or `None` when a stage QP is not convex.
+    pub fn backward_pass<P: OptimalControlProblem + ?Sized>(
         &mut self,
         problem: &P,
         traj: &Trajectory,

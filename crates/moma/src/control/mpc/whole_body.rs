@@ -58,6 +58,7 @@ impl Default for MpcSettings {
             solver: SolverOptions {
                 max_iterations: 4,
                 tolerance: 1e-6,
+                stop_on_failed_line_search: true,
                 ..SolverOptions::default()
             },
         }
@@ -84,9 +85,30 @@ pub struct MpcProblem {
     hi: DVector<f64>,
     min_zmp: Vec<f64>,
     min_clearance: Vec<f64>,
+    /// Query every selected pair, whatever its distance (the report's pass).
+    exact_distances: bool,
 }
 
 impl MpcProblem {
+    /// The distance at or beyond which knot `k`'s clearance row is inactive, so that
+    /// pairs that far apart need no query: the row `c = (d_min − d) / ℓ` enters only
+    /// where `λ + ρ c > 0`, that is `d < d_min + λ ℓ / ρ`; beyond it the term, its
+    /// derivatives and the multiplier step are the same whatever `d` is. `−∞` (no query)
+    /// at knot 0, whose state is measured, and without a clearance constraint; `+∞`
+    /// (every pair) when `exact_distances` is set, for the reported clearance.
+    fn distance_cutoff(&self, k: usize) -> f64 {
+        let s = &self.settings.constraints;
+        match s.clearance {
+            Some(_) if k == 0 => f64::NEG_INFINITY,
+            None => f64::NEG_INFINITY,
+            Some(_) if self.exact_distances => f64::INFINITY,
+            Some(d) => {
+                let lambda = self.constraints.lambda[k][self.constraints.lambda[k].len() - 1];
+                d + lambda.max(0.0) * s.length_scale / s.penalty
+            }
+        }
+    }
+
     /// Evaluates knot `k` and its costs and constraint terms.
     fn knot(
         &mut self,
@@ -95,6 +117,7 @@ impl MpcProblem {
         u: Option<&DVector<f64>>,
         mut out: Option<&mut StageModel>,
     ) -> Result<f64> {
+        self.ws.distance_cutoff = self.distance_cutoff(k);
         evaluate_knot(&self.robot, &mut self.ws, &self.hold, x, u, out.is_some())?;
         let vals = &self.ws.values;
         self.min_zmp[k] = if u.is_some() {
@@ -296,6 +319,7 @@ impl WholeBodyMpc {
             hi,
             min_zmp: vec![f64::INFINITY; n + 1],
             min_clearance: vec![f64::INFINITY; n + 1],
+            exact_distances: false,
             robot,
             settings,
         };
@@ -356,14 +380,21 @@ impl WholeBodyMpc {
         // Values of the returned trajectory (the cost pass refreshes the constraint
         // values without touching the multipliers).
         let n = self.problem.settings.stages;
+        self.problem.exact_distances = true;
+        let mut pass = Ok(0.0);
         for k in 0..=n {
             let u = (k < n).then(|| &self.solution.us[k]);
-            self.problem.knot(k, &self.solution.xs[k], u, None)?;
+            pass = self.problem.knot(k, &self.solution.xs[k], u, None);
+            if pass.is_err() {
+                break;
+            }
         }
+        self.problem.exact_distances = false;
+        pass?;
         // One multiplier step per solve, at the returned trajectory's values.
-        self.problem
-            .constraints
-            .update(self.problem.settings.constraints.penalty);
+        let cs = &self.problem.settings.constraints;
+        let (penalty, cap) = (cs.penalty, cs.max_multiplier);
+        self.problem.constraints.update(penalty, cap);
         let mut v = Violations::default();
         for row in &self.problem.constraints.violation {
             v = v.max(&Violations::from_array(*row));
@@ -371,6 +402,7 @@ impl WholeBodyMpc {
         Ok(SolveReport {
             time: start.elapsed(),
             iterations: stats.iterations,
+            rollouts: stats.rollouts,
             cost: stats.cost,
             converged: stats.converged,
             violations: v,
@@ -398,6 +430,7 @@ impl WholeBodyMpc {
     /// What the model reports.
     pub fn first_torques(&mut self, tau: &mut [f64], clip: bool) -> Result<()> {
         let p = &mut self.problem;
+        p.ws.distance_cutoff = f64::NEG_INFINITY;
         evaluate_knot(
             &p.robot,
             &mut p.ws,
