@@ -3,17 +3,42 @@
 //! taken from the robot's collision geometry at its transport posture (`robot.footprint
 //! = "robot"`).
 //!
-//! The mission's planner (D* Lite on a disk-dilated grid, `plan.rs`) takes a disk, so the
-//! robot's footprint enters as the radius of the smallest disk about the base frame origin
-//! that holds the footprint polygon ([`crate::collision::footprint`]: the convex hull of
-//! every collision shape projected on the ground), plus the file's padding. The polygon is
-//! kept for the summary.
+//! A typed radius is planned as that disk. The robot's footprint is the polygon
+//! [`crate::collision::footprint`] gives (the convex hull of every collision shape
+//! projected on the ground): the mission searches the C-space of the largest disk about
+//! the driven-axle midpoint inside it ([`MissionFootprint::planning_polygon`], a lower
+//! bound: a pose that disk blocks, the polygon blocks at every heading) and checks the
+//! smoothed, timed path with the polygon at each sample's heading (`plan.rs`,
+//! [`crate::planning::footprint_clearance`]); [`MissionFootprint::radius`], the disk about
+//! the base frame origin that holds the polygon, plus the padding, is the fallback when
+//! no path the polygon passes is found.
 
 use nalgebra::DVector;
 
 use crate::collision::{GeometryData, GeometryModel, footprint, update_geometry_placements};
 use crate::mobile::WheeledModel;
 use crate::multibody::Data;
+use crate::planning::costmap::Footprint;
+
+/// The collision geometry of `robot` placed with its arm joints at `arm` (one angle per
+/// [`WheeledModel::arm_dofs`] entry), the other joints (the wheels) at zero and the
+/// planar root at q = 0, which puts the base frame on the world frame.
+pub(crate) fn placed_at_posture(
+    robot: &WheeledModel,
+    gm: &GeometryModel,
+    arm: &[f64],
+) -> GeometryData {
+    let model = &robot.model;
+    let mut q = DVector::zeros(model.nq);
+    for (&i, &a) in robot.arm_dofs().iter().zip(arm) {
+        q[i] = a;
+    }
+    let mut data = Data::new(model);
+    crate::kinematics::forward_kinematics(model, &mut data, &q);
+    let mut gd = GeometryData::new(gm);
+    update_geometry_placements(gm, &data, &mut gd);
+    gd
+}
 
 /// Where the mission's footprint came from.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,16 +83,7 @@ impl MissionFootprint {
     /// the disk about the base frame origin that holds it, grown by `padding`.
     #[must_use]
     pub fn from_robot(robot: &WheeledModel, gm: &GeometryModel, arm: &[f64], padding: f64) -> Self {
-        let model = &robot.model;
-        let mut q = DVector::zeros(model.nq);
-        for (&i, &a) in robot.arm_dofs().iter().zip(arm) {
-            q[i] = a;
-        }
-        let mut data = Data::new(model);
-        crate::kinematics::forward_kinematics(model, &mut data, &q);
-        let mut gd = GeometryData::new(gm);
-        update_geometry_placements(gm, &data, &mut gd);
-        // The planar root at q = 0 puts the base frame on the world frame.
+        let gd = placed_at_posture(robot, gm, arm);
         let polygon: Vec<[f64; 2]> = footprint(gm, &gd, &mut Vec::new())
             .iter()
             .map(|p| [p.x, p.y])
@@ -81,6 +97,33 @@ impl MissionFootprint {
                 padding,
             },
         }
+    }
+
+    /// The padding (m) the footprint keeps from the obstacles: the file's for the
+    /// robot's polygon, 0 for a typed radius (the radius covers it).
+    #[must_use]
+    pub fn padding(&self) -> f64 {
+        match &self.source {
+            FootprintSource::Radius => 0.0,
+            FootprintSource::Robot { padding, .. } => *padding,
+        }
+    }
+
+    /// The robot's polygon for the heading-aware check, with the base frame origin `d`
+    /// ahead of the driven-axle midpoint: the polygon in the base frame and the radius
+    /// of the largest disk about the axle midpoint inside it (m, before the padding).
+    /// `None` for a typed radius, and for a polygon that does not hold the axle midpoint
+    /// strictly inside (that disk would not be a lower bound; the mission then plans on
+    /// the circumscribed disk).
+    #[must_use]
+    pub fn planning_polygon(&self, d: f64) -> Option<(Footprint, f64)> {
+        let FootprintSource::Robot { polygon, .. } = &self.source else {
+            return None;
+        };
+        let about_axle = Footprint::new(polygon.iter().map(|p| [p[0] + d, p[1]]).collect()).ok()?;
+        let inscribed = about_axle.inscribed_radius();
+        (inscribed > 0.0).then_some(())?;
+        Some((Footprint::new(polygon.clone()).ok()?, inscribed))
     }
 
     /// The footprint as `summary.json` reports it: `source` (`"footprint_radius"` or

@@ -7,7 +7,8 @@
 //!
 //! | step | what runs |
 //! | --- | --- |
-//! | map → C-space | [`crate::planning::load_map`], the distance transform, disk dilation by `footprint_radius` + ½ cell |
+//! | map → C-space | [`crate::planning::load_map`] plus the `[[map.boxes]]` the robot cannot pass under ([`heights`]), the distance transform, disk dilation by `footprint_radius` + ½ cell (with the robot's footprint polygon: by the largest disk about the axle inside it) |
+//! | footprint polygon | every sample of a timed path checked with the polygon at its heading ([`crate::planning::footprint_clearance`]); colliding cells blocked and re-planned, the circumscribed disk as the fallback |
 //! | search | [`crate::planning::dstar_lite::DStarLite`] from the start pose's cell to the goal's cell |
 //! | path → motion | curvature-bounded smoothing from the exact start pose to the exact goal pose ([`crate::planning::curvature::smooth_diff_drive`]), then near time-optimal timing under v, ω, a, α and the tip-over accelerations ([`crate::stability::acceleration_limits`] of the transport posture, times `tip_fraction`; [`crate::planning::trajectory::time_parameterize_curve`]), re-plans continuing from the current speed |
 //! | off-axle base (`d ≠ 0`) | search, smoothing, timing and Kanayama work on the driven-axle midpoint (base pose − d·heading), the unicycle point whose speed and yaw rate are the reduced platform inputs; its C-space is dilated by `footprint_radius + |d|` (the footprint disk about the base frame at every heading); reference, tracking error, paths and tolerances are reported for the base frame |
@@ -30,9 +31,12 @@
 //!   every normal path; the fuzz targets hand in the shipped files parsed once, and sweeps
 //!   pass theirs through `Sweep::from_toml_str_with`).
 //! * `plan` owns the known world: the occupancy mask (map plus appeared obstacles), its
-//!   distance transform (for the clearance monitor) and one D* Lite on the
+//!   distance transform (for the clearance monitor), one D* Lite on the
 //!   footprint-dilated C-space, so an obstacle is `move_start` + `set_blocked` and a
-//!   re-plan one incremental `compute`.
+//!   re-plan one incremental `compute`, and the footprint polygon's check.
+//! * [`footprint`] gives the footprint (a typed disk or the robot's polygon at the
+//!   transport posture); [`heights`] checks `[[map.boxes]]` in 3-D and rasterises the
+//!   ones the robot cannot pass under.
 //! * [`mod@reference`] turns a cell path into timed samples (curvature-bounded smoothing from
 //!   the exact poses, then `time_parameterize_curve` under the platform and tip-over
 //!   limits from the current speed).
@@ -44,6 +48,7 @@
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 pub mod footprint;
+pub mod heights;
 pub(crate) mod plan;
 pub mod planned;
 mod plant;
@@ -62,7 +67,8 @@ pub use scenario::{Mission, MissionFile, load};
 /// `reached`, `reason`, `time_to_goal`, `simulated_time`, `replans`, the stability,
 /// clearance, tracking and slip extremes, `final_pose_error` ([m, rad]),
 /// `end_effector_error`, saturation counts, energies, `tip_over_limits`,
-/// `timing_acceleration` and `samples`; on the contact plant `contact` (first lift-off,
+/// `timing_acceleration` and `samples`; with `map.boxes` the 3-D verdict of each box
+/// (`boxes`: `clearance`, `blocked`); on the contact plant `contact` (first lift-off,
 /// first slip, per-contact totals, largest tilt). Non-finite or missing values are `null`.
 /// `moma mission` adds its timing and file keys to this map; the Python package returns
 /// it as it is.
@@ -118,6 +124,9 @@ pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_
         serde_json::Value::Object(map) => map,
         _ => unreachable!("json! of an object literal is an object"),
     };
+    if !m.boxes.is_empty() {
+        map.insert("boxes".into(), json!(m.boxes));
+    }
     if let Some(c) = &r.contact {
         map.insert(
             "contact".into(),

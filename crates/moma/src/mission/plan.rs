@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::planning::dstar_lite::DStarLite;
+use crate::planning::footprint_clearance::ConvexFootprint;
 use crate::planning::{OccupancyGrid, SearchGrid, distance_transform};
 
 /// Per-cell state of the world the robot knows: obstacles of the map plus the obstacles
@@ -21,6 +22,37 @@ pub(crate) struct Planner {
     pub r_cells: f64,
     pub dstar: DStarLite,
     pub goal_cell: (usize, usize),
+    /// The footprint polygon the paths are checked with (`robot.footprint = "robot"`),
+    /// `None` for a disk.
+    pub polygon: Option<PolygonCheck>,
+}
+
+/// The heading-aware check of the robot's footprint polygon against the occupied cells
+/// (nav2's approach: the C-space is a cheap lower bound, here the largest disk about the
+/// driven-axle midpoint inside the polygon; each pose of the smoothed, timed path is then
+/// checked with the polygon at its heading).
+pub(crate) struct PolygonCheck {
+    /// The polygon about the base frame origin, in cells.
+    pub footprint: ConvexFootprint,
+    /// The padding the polygon must keep from the obstacles (cells).
+    pub padding: f64,
+    /// The base frame origin's offset ahead of the axle midpoint (cells).
+    pub d: f64,
+    /// Scratch of the placed vertices.
+    placed: Vec<[f64; 2]>,
+}
+
+impl PolygonCheck {
+    /// The check of `footprint` (cells, about the base frame origin) with `padding` and
+    /// the base frame `d` cells ahead of the axle midpoint.
+    pub fn new(footprint: ConvexFootprint, padding: f64, d: f64) -> Self {
+        Self {
+            footprint,
+            padding,
+            d,
+            placed: Vec::new(),
+        }
+    }
 }
 
 /// A path of cells `(x, y)`, start to goal.
@@ -48,9 +80,11 @@ impl Planner {
     /// Start or goal outside the map, a footprint that fits nowhere, start or goal where
     /// the footprint does not fit (all input errors). An unreachable goal is not an
     /// error: the returned path is `None`.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         grid: &OccupancyGrid,
         unknown_is_obstacle: bool,
+        field: &str,
         footprint_radius: f64,
         axle_offset: f64,
         start: [f64; 2],
@@ -73,7 +107,7 @@ impl Planner {
         };
         if blocked.iter().all(|&b| b) {
             return Err(Error::invalid(
-                "robot.footprint_radius",
+                field,
                 format!(
                     "a footprint of radius {footprint_radius} m fits nowhere on the map (every \
                      cell lies within that distance of an obstacle or unknown cell){offset_note}"
@@ -123,6 +157,7 @@ impl Planner {
                 r_cells,
                 dstar,
                 goal_cell,
+                polygon: None,
             },
             path,
             timing,
@@ -172,6 +207,114 @@ impl Planner {
             self.dstar.set_blocked(c, true)?;
         }
         Ok((newly, clock.elapsed().as_secs_f64()))
+    }
+
+    /// The world pose `[x, y, θ]` in the grid's continuous cell coordinates and frame.
+    fn to_cells(grid: &OccupancyGrid, pose: [f64; 3]) -> [f64; 3] {
+        let [fx, fy] = grid.world_to_cell_f(pose[0], pose[1]);
+        let yaw0 = if grid.kind == crate::planning::MapKind::Ros {
+            grid.origin[2]
+        } else {
+            0.0
+        };
+        [fx, fy, pose[2] - yaw0]
+    }
+
+    /// `true` when the footprint with the axle midpoint at the world pose `axle`
+    /// collides: the polygon at the pose's heading comes closer than its padding to an
+    /// occupied cell; without a polygon, the axle midpoint's C-space cell is blocked.
+    pub fn axle_collides(&mut self, grid: &OccupancyGrid, axle: [f64; 3]) -> bool {
+        let [fx, fy, th] = Self::to_cells(grid, axle);
+        let Some(pc) = self.polygon.as_mut() else {
+            return self.blocked_at(fx, fy);
+        };
+        let (s, c) = th.sin_cos();
+        let base = [fx + pc.d * c, fy + pc.d * s, th];
+        pc.footprint
+            .clearance(
+                &self.occupied,
+                self.width,
+                self.height,
+                base,
+                pc.padding,
+                &mut pc.placed,
+            )
+            .is_some_and(|d| d < pc.padding)
+    }
+
+    /// The clearance (m) of the footprint with the base frame at the world pose `base`:
+    /// the polygon's signed distance to the nearest occupied cell less the padding, exact
+    /// within `exact` m of the polygon; without a polygon, the distance from the disk of
+    /// radius `r_foot` about the base frame origin ([`Planner::obstacle_distance`]).
+    /// Beyond the exact range a lower bound from the distance transform; infinite on a
+    /// map without occupied cells.
+    pub fn clearance(
+        &mut self,
+        grid: &OccupancyGrid,
+        base: [f64; 3],
+        r_foot: f64,
+        exact: f64,
+    ) -> f64 {
+        let res = grid.resolution;
+        let [fx, fy, th] = Self::to_cells(grid, base);
+        let Some(pc) = self.polygon.as_mut() else {
+            return self
+                .obstacle_distance(fx, fy, (r_foot + exact) / res)
+                .map_or(f64::INFINITY, |d| d * res - r_foot);
+        };
+        let near = pc.footprint.clearance(
+            &self.occupied,
+            self.width,
+            self.height,
+            [fx, fy, th],
+            exact / res,
+            &mut pc.placed,
+        );
+        let (circ, pad) = (pc.footprint.circumscribed(), pc.padding);
+        let cells = match near {
+            Some(d) => Some(d),
+            // the disk about the base that holds the polygon bounds it from below
+            None => self
+                .obstacle_distance(fx, fy, 0.0)
+                .map(|d| (d - circ).max(exact / res)),
+        };
+        cells.map_or(f64::INFINITY, |d| (d - pad) * res)
+    }
+
+    /// Blocks `cell` in the C-space (a pose there collided at the heading it was driven
+    /// with); the goal's cell stays free. `false` when it is the goal's.
+    pub fn block(&mut self, cell: (usize, usize)) -> Result<bool> {
+        if cell == self.goal_cell {
+            return Ok(false);
+        }
+        self.dstar.set_blocked(cell, true)?;
+        Ok(true)
+    }
+
+    /// Replaces the C-space by the obstacles dilated by `radius` (m, about the axle
+    /// midpoint), the appeared obstacles included, with the search's start at `start`
+    /// and no polygon check: the fallback when the polygon's lower bound gives no path
+    /// the polygon passes. `false` when the goal's cell is blocked there.
+    pub fn use_disk(
+        &mut self,
+        radius: f64,
+        resolution: f64,
+        start: (usize, usize),
+    ) -> Result<bool> {
+        self.r_cells = radius / resolution + 0.5;
+        let blocked: Vec<bool> = self
+            .dist
+            .iter()
+            .map(|&d| f64::from(d) <= self.r_cells)
+            .collect();
+        self.polygon = None;
+        if blocked[self.goal_cell.1 * self.width + self.goal_cell.0] {
+            return Ok(false);
+        }
+        let sgrid = SearchGrid::from_obstacles(&blocked, self.width, self.height)?;
+        self.dstar = DStarLite::new(&sgrid, start, self.goal_cell)?;
+        self.move_start(start)?;
+        Ok(true)
     }
 
     /// Moves the planner's start to `cell`, or to the nearest free cell within two cells

@@ -102,6 +102,7 @@ pub fn plan_platform_reference(
     let (planner, cells, _) = Planner::new(
         grid,
         r.unknown_is_obstacle,
+        "robot.footprint_radius",
         r.footprint_radius,
         // the reference is planned for the point the platform law tracks (its base frame)
         0.0,

@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 
-use super::plan::{Planner, SearchTiming};
+use super::plan::{Planner, PolygonCheck, SearchTiming};
 use super::plant::{ContactLoop, start_configuration};
 use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
 use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
@@ -19,6 +19,7 @@ use crate::mobile::wheeled::{
 use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::{Data, JointType};
 use crate::ode::{OdeSystem, Rk4};
+use crate::planning::footprint_clearance::ConvexFootprint;
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::computed_torque::ComputedTorque;
 use crate::sim::contact_run::ContactTally;
@@ -35,6 +36,9 @@ const ARRIVE_TIMEOUT: f64 = 8.0;
 const REACH_SETTLE: f64 = 5.0;
 /// Distance (m) beyond the footprint within which the clearance is exact.
 const EXACT_CLEARANCE: f64 = 1.0;
+/// Re-plans with the colliding cells blocked before the footprint polygon's search
+/// falls back to the circumscribed disk.
+const POLYGON_REPAIRS: usize = 10;
 
 /// One re-plan (or the first plan) of a run.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -51,7 +55,7 @@ pub struct PlanRecord {
     pub duration: f64,
     /// D* Lite wall time (s) and expanded cells.
     pub search: SearchTiming,
-    /// Smoothing + time parameterisation wall time (s).
+    /// Smoothing + time parameterisation (+ the footprint polygon's check) wall time (s).
     pub smoothing_timing_s: f64,
     /// Forward speed the timing started from (m/s).
     pub v_start: f64,
@@ -122,7 +126,7 @@ pub struct Samples {
 pub struct WallTimes {
     /// Map → C-space → first search, plus every re-plan's search.
     pub planning_s: f64,
-    /// Every smoothing and time parameterisation.
+    /// Every smoothing and time parameterisation, with the footprint polygon's checks.
     pub smoothing_timing_s: f64,
     /// The closed-loop simulation with its monitors (planning excluded).
     pub simulation_s: f64,
@@ -379,14 +383,50 @@ impl<'m> Runner<'m> {
         let clock = Instant::now();
         let d = m.robot.base.drive.d;
         let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(f.goal.pose, d));
-        let (planner, first_path, first_search) = Planner::new(
-            &m.map.grid,
+        let grid = &m.map.grid;
+        let polygon = m.footprint.planning_polygon(d);
+        // the polygon: searched on the largest disk about the axle midpoint inside it
+        // (padded), each path then checked with the polygon; a disk: dilated by it
+        let (field, radius, offset) = match &polygon {
+            Some((_, inscribed)) => ("robot.footprint", inscribed + m.footprint.padding(), 0.0),
+            None if m.file.robot.footprint.is_some() => ("robot.footprint", m.footprint.radius, d),
+            None => ("robot.footprint_radius", m.footprint.radius, d),
+        };
+        let (mut planner, first_path, first_search) = Planner::new(
+            grid,
             f.map.unknown_is_obstacle,
-            m.footprint.radius,
-            d,
+            field,
+            radius,
+            offset,
             [s0[0], s0[1]],
             [g0[0], g0[1]],
         )?;
+        if let Some((fp, _)) = polygon {
+            let res = grid.resolution;
+            planner.polygon = Some(PolygonCheck::new(
+                ConvexFootprint::new(&fp, res)?,
+                m.footprint.padding() / res,
+                d / res,
+            ));
+            for (what, pose, axle) in [
+                ("start.pose", f.start.pose, s0),
+                ("goal.pose", f.goal.pose, g0),
+            ] {
+                if planner.axle_collides(grid, axle) {
+                    return Err(Error::invalid(
+                        what,
+                        format!(
+                            "the robot's footprint polygon at ({}, {}, {} rad) overlaps an \
+                             obstacle or comes closer to one than the padding ({} m)",
+                            pose[0],
+                            pose[1],
+                            pose[2],
+                            m.footprint.padding()
+                        ),
+                    ));
+                }
+            }
+        }
         let planning_s = clock.elapsed().as_secs_f64();
         let tip = transport_tip_limits(m)?;
         let l = &f.limits;
@@ -451,19 +491,130 @@ impl<'m> Runner<'m> {
         cells: Vec<(usize, usize)>,
         start: TimingStart,
         trigger: &str,
-        search: SearchTiming,
+        mut search: SearchTiming,
     ) -> bool {
-        match self.time_cells(&cells, &start) {
-            Some(Ok((r, st))) => {
+        match self.checked_reference(cells, &start, &mut search) {
+            Some(Ok((cells, r, st))) => {
                 self.adopt(cells, r, start.t0, start.v, trigger, search, st);
                 true
             }
-            Some(Err(e)) => {
-                self.fail(start.t0, format!("the path could not be timed: {e}"));
+            Some(Err(reason)) => {
+                self.fail(start.t0, reason);
                 false
             }
             None => false,
         }
+    }
+
+    /// Smooths and times `cells` from `start` ([`Runner::time_cells`]) and, with the
+    /// robot's footprint polygon, checks every sample with the polygon at its heading:
+    /// the axle cells of the samples that collide are blocked and D* Lite re-plans, up to
+    /// [`POLYGON_REPAIRS`] times; then the search falls back to the circumscribed disk
+    /// (`MissionFootprint::radius` about the base frame, `+ |d|` about the axle). The
+    /// cells, reference and smoothing wall time it ends with, or the reason there is
+    /// none (`None`: no timing accelerations, already reported).
+    fn checked_reference(
+        &mut self,
+        mut cells: Vec<(usize, usize)>,
+        start: &TimingStart,
+        search: &mut SearchTiming,
+    ) -> Option<std::result::Result<(Vec<(usize, usize)>, Reference, f64), String>> {
+        let mut smoothing_s = 0.0;
+        let mut repaired = 0;
+        let mut polygon = self.planner.polygon.is_some();
+        loop {
+            let (r, st) = match self.time_cells(&cells, start)? {
+                Ok(x) => x,
+                Err(e) => return Some(Err(format!("the path could not be timed: {e}"))),
+            };
+            let clock = Instant::now();
+            let bad = if polygon {
+                self.colliding_cells(&r)
+            } else {
+                Vec::new()
+            };
+            let check_s = clock.elapsed().as_secs_f64();
+            self.wall.smoothing_timing_s += check_s;
+            smoothing_s += st + check_s;
+            if bad.is_empty() {
+                if repaired > 0 {
+                    let text = format!(
+                        "the footprint polygon collided along the path: {repaired} re-plan(s) \
+                         with the colliding cells blocked"
+                    );
+                    self.event(start.t0, "footprint", text);
+                }
+                return Some(Ok((cells, r, smoothing_s)));
+            }
+            let clock = Instant::now();
+            let mut blocked = false;
+            if repaired < POLYGON_REPAIRS {
+                let robot = self.planner.dstar.start();
+                for c in bad.into_iter().filter(|&c| c != robot) {
+                    blocked |= self.planner.block(c).unwrap_or(false);
+                }
+            }
+            let (path, timing) = if blocked {
+                repaired += 1;
+                self.planner.replan()
+            } else {
+                // the polygon's lower bound gives no path it passes: the circumscribed disk
+                polygon = false;
+                let grid = &self.m.map.grid;
+                let radius = self.m.footprint.radius + self.wm.base.drive.d.abs();
+                let sc = self.cell_of(start.pose);
+                let text = format!(
+                    "the footprint polygon collides along every path found ({repaired} \
+                     re-plan(s)): planning on the circumscribed disk of radius {:.3} m",
+                    self.m.footprint.radius
+                );
+                self.event(start.t0, "footprint", text);
+                match self.planner.use_disk(radius, grid.resolution, sc) {
+                    Ok(true) => self.planner.replan(),
+                    _ => (None, SearchTiming::default()),
+                }
+            };
+            let dt = clock.elapsed().as_secs_f64();
+            search.search_s += dt;
+            search.expanded += timing.expanded;
+            self.wall.planning_s += dt;
+            match path {
+                Some(p) => cells = p,
+                None => {
+                    return Some(Err(
+                        "the goal is unreachable: no path on the configuration space that the \
+                         robot's footprint polygon passes at the headings it is driven with"
+                            .to_string(),
+                    ));
+                }
+            }
+        }
+    }
+
+    /// The cell of a world point (clamped to the map).
+    fn cell_of(&self, p: [f64; 3]) -> (usize, usize) {
+        let grid = &self.m.map.grid;
+        let [fx, fy] = grid.world_to_cell_f(p[0], p[1]);
+        (
+            (fx.floor().max(0.0) as usize).min(grid.width - 1),
+            (fy.floor().max(0.0) as usize).min(grid.height - 1),
+        )
+    }
+
+    /// The axle cells of the samples of `r` where the footprint collides
+    /// ([`Planner::axle_collides`]), each once.
+    fn colliding_cells(&mut self, r: &Reference) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for s in &r.samples {
+            let p = [s.x, s.y, s.theta];
+            if self.planner.axle_collides(&self.m.map.grid, p) {
+                let c = self.cell_of(p);
+                if !out.contains(&c) {
+                    out.push(c);
+                }
+            }
+        }
+        out
     }
 
     /// Smooths and times `cells` from `start` (`None` without timing accelerations),
@@ -875,12 +1026,13 @@ impl<'m> Runner<'m> {
             st.phase = Phase::Done;
             return false;
         }
+        let planner = &mut self.planner;
         let affected = st.phase == Phase::Drive
             && self.reference.as_ref().is_some_and(|r| {
-                r.samples.iter().filter(|s| s.t >= t).any(|s| {
-                    let [cx, cy] = grid.world_to_cell_f(s.x, s.y);
-                    self.planner.blocked_at(cx, cy)
-                })
+                r.samples
+                    .iter()
+                    .filter(|s| s.t >= t)
+                    .any(|s| planner.axle_collides(grid, [s.x, s.y, s.theta]))
             });
         if affected {
             self.replan_after_obstacle(st, oi, ot, t, axle, v, s_time);
@@ -925,8 +1077,8 @@ impl<'m> Runner<'m> {
         };
         let trigger = format!("obstacle {oi}");
         let old = self.reference.take();
-        let (cells, r, st_s, stop) = match self.time_cells(&cells, &start) {
-            Some(Ok((r, st_s))) => {
+        let (cells, r, st_s, stop) = match self.checked_reference(cells, &start, &mut timing) {
+            Some(Ok((cells, r, st_s))) => {
                 // a new path that does not admit the current speed at its start would be
                 // braked onto past its limits (ω_max): stop along the old path instead,
                 // then follow a path planned from there
@@ -939,8 +1091,8 @@ impl<'m> Runner<'m> {
                     None => (cells, r, st_s, None),
                 }
             }
-            Some(Err(e)) => {
-                self.fail(t, format!("the path could not be timed: {e}"));
+            Some(Err(reason)) => {
+                self.fail(t, reason);
                 st.phase = Phase::Done;
                 return;
             }
@@ -986,10 +1138,10 @@ impl<'m> Runner<'m> {
         let mut samples = brake_along(old, t, v, &self.limits, &accel, REF_DT).ok()?;
         self.wall.smoothing_timing_s += clock.elapsed().as_secs_f64();
         let grid = &self.m.map.grid;
-        if samples.iter().any(|p| {
-            let [cx, cy] = grid.world_to_cell_f(p.x, p.y);
-            self.planner.blocked_at(cx, cy)
-        }) {
+        if samples
+            .iter()
+            .any(|p| self.planner.axle_collides(grid, [p.x, p.y, p.theta]))
+        {
             return None;
         }
         let stop = *samples.last().expect("a timed stop has samples");
@@ -1011,7 +1163,7 @@ impl<'m> Runner<'m> {
             pose: [stop.x, stop.y, stop.theta],
             v: 0.0,
         };
-        let (mut r, st) = self.time_cells(&cells, &from_stop)?.ok()?;
+        let (cells, mut r, st) = self.checked_reference(cells, &from_stop, timing)?.ok()?;
         samples.pop();
         samples.append(&mut r.samples);
         r.samples = samples;
@@ -1300,12 +1452,12 @@ impl<'m> Runner<'m> {
         };
         let side = arm_side(&self.wm.model, ws, &c.chain, ee);
         let (q, r) = (&ws.q_now, &st.cur_ref);
-        let res = c.res;
-        let [fx, fy] = self.m.map.grid.world_to_cell_f(q[0], q[1]);
-        let clearance = self
-            .planner
-            .obstacle_distance(fx, fy, (c.r_foot + EXACT_CLEARANCE) / res)
-            .map_or(f64::INFINITY, |d| d * res - c.r_foot);
+        let clearance = self.planner.clearance(
+            &self.m.map.grid,
+            [q[0], q[1], q[2]],
+            c.r_foot,
+            EXACT_CLEARANCE,
+        );
         let te = (q[0] - r.x).hypot(q[1] - r.y);
         let m = mon.unwrap_or_default();
         let s = &mut self.samples;
@@ -1586,7 +1738,6 @@ struct Controller {
     h: f64,
     time_limit: f64,
     rec_every: usize,
-    res: f64,
     r_foot: f64,
     /// The base frame's goal pose.
     goal: [f64; 3],
@@ -1647,7 +1798,6 @@ impl Controller {
             h: f.simulation.dt,
             time_limit,
             rec_every,
-            res: m.map.grid.resolution,
             r_foot: m.footprint.radius,
             goal: f.goal.pose,
             d,

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::footprint::MissionFootprint;
+use super::heights::{BoxSpec, BoxVerdict, place_boxes};
 use super::plant::{MissionContact, start_configuration};
 use crate::collision::{GeometryModel, GeometryOptions};
 use crate::contact::{ContactSpec, PlantKind};
@@ -69,6 +70,10 @@ pub struct MapSpec {
     /// Treat unknown cells as obstacles (default `true`).
     #[serde(default = "yes")]
     pub unknown_is_obstacle: bool,
+    /// `[[map.boxes]]`: obstacles with heights, checked in 3-D against the robot at its
+    /// transport posture ([`super::heights`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub boxes: Vec<BoxSpec>,
 }
 
 /// `[robot]`.
@@ -412,8 +417,11 @@ pub struct Mission {
     pub q_arm0: Vec<f64>,
     /// Output folder, resolved against the mission file's folder.
     pub output_dir: PathBuf,
-    /// The footprint disk the configuration space and the clearance use.
+    /// The footprint the configuration space and the clearance use.
     pub footprint: MissionFootprint,
+    /// The verdict of each of `map.boxes` (in file order); the blocked ones are
+    /// occupied cells of [`Mission::map`].
+    pub boxes: Vec<BoxVerdict>,
     /// `robot.package_dirs`, resolved against the mission file's folder.
     pub package_dirs: Vec<PathBuf>,
     /// The contact plant, built and checked (`simulation.plant = "contact"`).
@@ -465,7 +473,7 @@ pub trait Loader {
     /// As [`crate::io::urdf::model_from_urdf_file`].
     fn urdf(&self, path: &Path, root: RootJoint) -> Result<crate::multibody::Model>;
     /// The collision geometry of `model`, loaded from the URDF at `path`
-    /// ([`GeometryModel::from_urdf`]; read only for `drive = "urdf"` and
+    /// ([`GeometryModel::from_urdf`]; read only for `drive = "urdf"`, `map.boxes` and
     /// `footprint = "robot"`).
     ///
     /// # Errors
@@ -558,11 +566,26 @@ pub fn from_file_with(
     check_limits_and_gains(&file, path)?;
     check_simulation(&file, path)?;
     check_obstacles_and_robot(&file, path)?;
-    let map = load_mission_map(&file, path, base, files)?;
+    let mut map = load_mission_map(&file, path, base, files)?;
     let package_dirs = package_dirs(&file, path, base)?;
     let (robot, ee_frame, geometry) = load_robot(&file, path, base, &package_dirs, files)?;
     let (transport, q_arm0) = arm_postures(&file, &robot, path)?;
     let footprint = mission_footprint(&file, path, &map, &robot, geometry.as_ref(), &transport)?;
+    let boxes = match &geometry {
+        Some(gm) => place_boxes(
+            &mut map.grid,
+            &file.map.boxes,
+            &robot,
+            gm,
+            &transport,
+            footprint.padding(),
+        )
+        .map_err(|e| match e {
+            Error::InvalidInput { field, message } => field_err(path, &field, message),
+            other => other,
+        })?,
+        None => Vec::new(),
+    };
     let contact = contact_plant(&file, path, base, &robot, &q_arm0, files)?;
     let plant_robot = perturbed_plant(&file, path, &robot)?;
     let name = file.name.clone().unwrap_or_else(|| {
@@ -582,6 +605,7 @@ pub fn from_file_with(
         q_arm0,
         output_dir,
         footprint,
+        boxes,
         package_dirs,
         contact,
         plant_robot,
@@ -882,7 +906,10 @@ fn load_robot(
         .map_err(|e| field_err(path, "robot.urdf", e))?;
     model.gravity = nalgebra::Vector3::new(0.0, 0.0, -file.robot.gravity.unwrap_or(9.81));
     let casters = mission_casters(file, path, base)?;
-    let geometry = if file.robot.drive == DriveSource::Urdf || file.robot.footprint.is_some() {
+    let geometry = if file.robot.drive == DriveSource::Urdf
+        || file.robot.footprint.is_some()
+        || !file.map.boxes.is_empty()
+    {
         let options = GeometryOptions {
             package_dirs: package_dirs.to_vec(),
             srdf: None,

@@ -52,6 +52,7 @@ pub mod costmap;
 pub mod curvature;
 pub mod dstar_lite;
 pub mod edt;
+pub mod footprint_clearance;
 pub mod grid;
 pub mod grid3;
 pub mod joint_space;
