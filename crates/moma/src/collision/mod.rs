@@ -43,6 +43,7 @@
 //!   pair's normal (the previous query's to start), which skips a whole layer of voxels
 //!   at once.
 
+pub mod ball_cover;
 pub mod convex;
 pub mod exact;
 pub mod footprint;
