@@ -42,7 +42,10 @@
 //!   prunes subtrees by its bounding ball and by a separating-axis bound along the best
 //!   pair's normal (the previous query's to start), which skips a whole layer of voxels
 //!   at once.
+//! * [`ball_cover`] covers a hull with a few balls (one per slab along its longest axis),
+//!   a cheap lower bound on its distances that the arm planner's check tries before GJK.
 
+pub mod ball_cover;
 pub mod convex;
 pub mod exact;
 pub mod footprint;

@@ -21,10 +21,13 @@
 //! δ)`). The end state is checked first, then the start, then the middles of what is still
 //! uncovered, coarse to fine. A segment that passes keeps half the margin at every state of
 //! it, not only at the checked ones, up to the accuracy of the distances (1e-12 m). Pairs
-//! are not computed when their bounding balls, their world axis-aligned boxes (robot
-//! objects against each other or against a scene shape), or the distance found at an
-//! earlier state of the same segment less the most it can have closed since, already
-//! cover the stretch found so far; the blocks go
+//! are not computed when a lower bound already covers the stretch found so far: a ball
+//! around each link against the other link's ball or the scene object's box (all of that
+//! link's pairs with it at once), their bounding balls, their world axis-aligned boxes
+//! (robot objects against each other or against a scene shape), the balls of their hulls'
+//! covers ([`crate::collision::ball_cover`]: every ball clear means the hull is), or the
+//! distance found at an earlier state of the same segment less the most it can have closed
+//! since; the blocks go
 //! best first (the one that limited the last state, then by the stretch their balls vouch
 //! for), and GJK stops once a separating plane shows the distance covers it.
 //!
@@ -38,8 +41,9 @@
 //! hold the meshes: a positive hull distance is a positive mesh distance.
 
 use super::group::JointGroup;
+use crate::collision::ball_cover::{MAX_SLABS, hull_ball_cover};
 use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_above, signed_distance};
-use crate::collision::{GeometryModel, Scene};
+use crate::collision::{Convex, GeometryModel, Scene};
 use crate::kinematics;
 use crate::multibody::{Data, Model};
 use crate::planning::{JointSpace, StateValidity};
@@ -77,6 +81,21 @@ struct Block {
     /// Row of coefficients (pair of links, or link against the scene).
     row: usize,
     /// Its object pairs: `entries[first..first + count]`.
+    first: usize,
+    count: usize,
+}
+
+/// The moving blocks of one link against one other link or one scene object, under one
+/// bounding test: the link's ball against the other link's ball or the object's box.
+#[derive(Clone, Copy, Debug)]
+struct Cluster {
+    /// The robot link.
+    link: usize,
+    /// The other link (`Other::Robot` holds a link index here) or scene object
+    /// (`Other::Scene(object, _)`).
+    other: Other,
+    row: usize,
+    /// Its blocks: `moving[first..first + count]`.
     first: usize,
     count: usize,
 }
@@ -130,6 +149,21 @@ pub struct ClearanceChecker<'a> {
     entries: Vec<(usize, Other)>,
     /// Blocks whose gap can change.
     moving: Vec<Block>,
+    /// The moving blocks by link and other link or scene object.
+    clusters: Vec<Cluster>,
+    /// Per link: a ball holding all its objects (joint frame), and its world centre at
+    /// the placed state.
+    link_balls: Vec<Ball>,
+    link_centres: Vec<Vector3<f64>>,
+    /// Per scene object: the box holding all its shapes.
+    scene_boxes: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Balls whose union holds each robot object (joint frame; a hull's slabs, else its
+    /// bounding ball): `cover[cover_of[i].0..][..cover_of[i].1]`, their world centres
+    /// valid where `cover_stamp` is `state_stamp`.
+    cover: Vec<Ball>,
+    cover_of: Vec<(usize, usize)>,
+    cover_centres: Vec<Vector3<f64>>,
+    cover_stamp: Vec<u64>,
     /// Blocks that never move.
     fixed: Vec<Block>,
     /// `rows × dim` coefficients.
@@ -227,9 +261,59 @@ impl<'a> ClearanceChecker<'a> {
             }
             link_groups.push(mine);
         }
+        let mut cover = Vec::new();
+        let mut cover_of = Vec::new();
+        for (o, ball) in gm.objects.iter().zip(&object_balls) {
+            let first = cover.len();
+            if let Convex::Hull {
+                vertices,
+                neighbours,
+            } = &o.shape
+            {
+                let (_, half) = o.shape.local_aabb();
+                let mut sides = [half.x, half.y, half.z];
+                sides.sort_unstable_by(|a, b| b.total_cmp(a));
+                let slabs = if sides[1] > 0.0 {
+                    ((2.0 * sides[0] / sides[1]).ceil() as usize).clamp(1, MAX_SLABS)
+                } else {
+                    MAX_SLABS
+                };
+                for (centre, radius) in hull_ball_cover(vertices, neighbours, slabs) {
+                    cover.push(Ball {
+                        joint: o.joint.0,
+                        centre: o.placement.act_point(&centre),
+                        radius,
+                    });
+                }
+            } else {
+                cover.push(*ball);
+            }
+            cover_of.push((first, cover.len() - first));
+        }
+        let link_balls: Vec<Ball> = gm
+            .links
+            .iter()
+            .map(|link| enclosing_ball(&object_balls[link.first..link.first + link.count]))
+            .collect();
+        let scene_boxes: Vec<(Vector3<f64>, Vector3<f64>)> = scene
+            .objects
+            .iter()
+            .map(|obj| {
+                obj.shapes.iter().fold(
+                    (
+                        Vector3::repeat(f64::INFINITY),
+                        Vector3::repeat(f64::NEG_INFINITY),
+                    ),
+                    |(lo, hi), s| (lo.inf(&s.aabb.0), hi.sup(&s.aabb.1)),
+                )
+            })
+            .collect();
         let mut coeff = Vec::new();
         let mut entries = Vec::new();
         let (mut moving, mut fixed) = (Vec::new(), Vec::new());
+        let mut clusters = Vec::new();
+        // The moving blocks added so far.
+        let mut n_moving = 0usize;
         let mut add_block =
             |row: usize,
              still: bool,
@@ -269,13 +353,24 @@ impl<'a> ClearanceChecker<'a> {
             let still = row_values.iter().all(|c| *c == 0.0);
             coeff.extend_from_slice(&row_values);
             let row = coeff.len() / dim - 1;
+            let first = n_moving;
             for (ga, ra) in &link_groups[la] {
                 for (gb, rb) in &link_groups[lb] {
                     let mut pairs = ra
                         .clone()
                         .flat_map(|i| rb.clone().map(move |j| (i, Other::Robot(j))));
                     add_block(row, still, *ga, Other::Robot(*gb), &mut pairs);
+                    n_moving += usize::from(!still);
                 }
+            }
+            if !still {
+                clusters.push(Cluster {
+                    link: la,
+                    other: Other::Robot(lb),
+                    row,
+                    first,
+                    count: n_moving - first,
+                });
             }
         }
         if !scene.objects.is_empty() {
@@ -284,12 +379,23 @@ impl<'a> ClearanceChecker<'a> {
                 let still = row_values.iter().all(|c| *c == 0.0);
                 coeff.extend_from_slice(row_values);
                 let row = coeff.len() / dim - 1;
-                for (ga, ra) in &link_groups[l] {
-                    for (o, obj) in scene.objects.iter().enumerate() {
-                        for s in 0..obj.shapes.len() {
+                for (o, obj) in scene.objects.iter().enumerate() {
+                    let first = n_moving;
+                    for s in 0..obj.shapes.len() {
+                        for (ga, ra) in &link_groups[l] {
                             let mut pairs = ra.clone().map(|i| (i, Other::Scene(o, s)));
                             add_block(row, still, *ga, Other::Scene(o, s), &mut pairs);
+                            n_moving += usize::from(!still);
                         }
+                    }
+                    if !still {
+                        clusters.push(Cluster {
+                            link: l,
+                            other: Other::Scene(o, 0),
+                            row,
+                            first,
+                            count: n_moving - first,
+                        });
                     }
                 }
             }
@@ -331,6 +437,14 @@ impl<'a> ClearanceChecker<'a> {
             groups,
             entries,
             moving,
+            clusters,
+            link_centres: vec![Vector3::zeros(); link_balls.len()],
+            link_balls,
+            scene_boxes,
+            cover_centres: vec![Vector3::zeros(); cover.len()],
+            cover_stamp: vec![0; gm.objects.len()],
+            cover,
+            cover_of,
             fixed,
             coeff,
             tube_norm,
@@ -392,6 +506,9 @@ impl<'a> ClearanceChecker<'a> {
         for (c, g) in self.group_centres.iter_mut().zip(&self.groups) {
             *c = self.data.world_from_joint[g.joint].act_point(&g.centre);
         }
+        for (c, b) in self.link_centres.iter_mut().zip(&self.link_balls) {
+            *c = self.data.world_from_joint[b.joint].act_point(&b.centre);
+        }
         self.state_stamp += 1;
     }
 
@@ -415,6 +532,19 @@ impl<'a> ClearanceChecker<'a> {
         }
     }
 
+    /// The gap between cluster `c`'s bounds: its link's ball and the other link's ball or
+    /// the scene object's box, at the placed state.
+    fn cluster_gap(&self, c: &Cluster) -> f64 {
+        let (ca, ra) = (self.link_centres[c.link], self.link_balls[c.link].radius);
+        match c.other {
+            Other::Robot(l) => (ca - self.link_centres[l]).norm() - ra - self.link_balls[l].radius,
+            Other::Scene(o, _) => {
+                let (lo, hi) = &self.scene_boxes[o];
+                (lo - ca).sup(&(ca - hi)).sup(&Vector3::zeros()).norm() - ra
+            }
+        }
+    }
+
     /// The gap between the bounding balls of robot object `a` and `b` (a robot object or
     /// a scene shape's box), at the placed state.
     fn object_gap(&mut self, a: usize, b: Other) -> f64 {
@@ -425,6 +555,41 @@ impl<'a> ClearanceChecker<'a> {
                 (ca - self.object_centre(j)).norm() - ra - self.object_balls[j].radius
             }
             Other::Scene(o, s) => self.box_gap(&ca, o, s) - ra,
+        }
+    }
+
+    /// Places robot object `i`'s cover balls at the placed state (once per state); their
+    /// range in `cover`.
+    fn place_cover(&mut self, i: usize) -> std::ops::Range<usize> {
+        let (first, count) = self.cover_of[i];
+        if self.cover_stamp[i] != self.state_stamp {
+            for k in first..first + count {
+                let b = &self.cover[k];
+                self.cover_centres[k] = self.data.world_from_joint[b.joint].act_point(&b.centre);
+            }
+            self.cover_stamp[i] = self.state_stamp;
+        }
+        first..first + count
+    }
+
+    /// Whether the cover balls of robot object `a` all lie farther than `bound` from `b`'s
+    /// (a robot object's cover balls, or a scene shape's box), a proof that the pair is
+    /// farther apart than `bound`, at the placed state.
+    fn cover_clears(&mut self, a: usize, b: Other, bound: f64) -> bool {
+        let mine = self.place_cover(a);
+        match b {
+            Other::Robot(j) => {
+                let theirs = self.place_cover(j);
+                mine.into_iter().all(|i| {
+                    let (ci, ri) = (self.cover_centres[i], self.cover[i].radius);
+                    theirs.clone().all(|k| {
+                        (ci - self.cover_centres[k]).norm() - ri - self.cover[k].radius > bound
+                    })
+                })
+            }
+            Other::Scene(o, s) => mine
+                .into_iter()
+                .all(|i| self.box_gap(&self.cover_centres[i], o, s) - self.cover[i].radius > bound),
         }
     }
 
@@ -516,26 +681,34 @@ impl<'a> ClearanceChecker<'a> {
         // step found so far (and every block after it) is not computed.
         let mut step = need;
         self.order.clear();
-        for bi in 0..self.moving.len() {
-            let block = self.moving[bi];
+        for ci in 0..self.clusters.len() {
+            let cluster = self.clusters[ci];
             let (rate, extra) = (
-                self.rate[block.row],
-                self.margin + tube * self.tube_norm[block.row],
+                self.rate[cluster.row],
+                self.margin + tube * self.tube_norm[cluster.row],
             );
             let slack = extra - 0.5 * self.margin;
-            let gap = self.group_gap(block.a, block.b);
-            if gap > (slack + step * rate).max(extra) {
+            let bound = (slack + step * rate).max(extra);
+            // The link's ball clears the other link or object: so do all its blocks.
+            if self.cluster_gap(&cluster) > bound {
                 continue;
             }
-            // The block that limited the last state goes first.
-            let vouched = if bi == self.last_limiting {
-                -1.0
-            } else if gap <= extra {
-                0.0
-            } else {
-                (gap - slack) / rate
-            };
-            self.order.push((vouched, bi));
+            for bi in cluster.first..cluster.first + cluster.count {
+                let block = self.moving[bi];
+                let gap = self.group_gap(block.a, block.b);
+                if gap > bound {
+                    continue;
+                }
+                // The block that limited the last state goes first.
+                let vouched = if bi == self.last_limiting {
+                    -1.0
+                } else if gap <= extra {
+                    0.0
+                } else {
+                    (gap - slack) / rate
+                };
+                self.order.push((vouched, bi));
+            }
         }
         self.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
         for o in 0..self.order.len() {
@@ -562,7 +735,7 @@ impl<'a> ClearanceChecker<'a> {
                 if block.count > 1 && self.object_gap(a, b) > bound {
                     continue;
                 }
-                if self.object_box_gap(a, b) > bound {
+                if self.object_box_gap(a, b) > bound || self.cover_clears(a, b, bound) {
                     continue;
                 }
                 // Above `bound` a lower bound is enough (GJK stops early).

@@ -41,7 +41,7 @@ pub struct MotionOptions {
     /// The largest joint-space distance between the blend states the timing checks; each
     /// checked state vouches for half of it around it.
     pub resolution: f64,
-    /// RRT-Connect's longest step; `None`: 0.2 × the box diagonal.
+    /// RRT-Connect's longest step (joint-space norm); `None`: 0.2 × the box diagonal.
     pub max_step: Option<f64>,
     /// The search checks its steps state by state this far apart (joint-space norm,
     /// each state clear of the margin) and runs the continuous check only on the segments
@@ -65,8 +65,9 @@ pub struct MotionOptions {
 
 impl MotionOptions {
     /// The defaults for a group of `dim` joints: 1 s, seed 0, a 2 mm margin, blends
-    /// checked every 0.01 rad (or m), search steps probed every 0.25 rad (or m) and
-    /// checked continuously on the paths found, 200 IK seeds for up to 4 solutions, 100 shortcut
+    /// checked every 0.01 rad (or m), search steps of at most 1 rad (or m; Fetch's arm box
+    /// diagonal is about 13) probed every 0.25 rad (or m) and checked continuously on the
+    /// paths found, 200 IK seeds for up to 4 solutions, 100 shortcut
     /// attempts, 1 rad/s² (m/s²) on every joint, blends within 0.1, samples every 10 ms.
     #[must_use]
     pub fn new(dim: usize) -> Self {
@@ -75,7 +76,7 @@ impl MotionOptions {
             seed: 0,
             margin: 2e-3,
             resolution: 0.01,
-            max_step: None,
+            max_step: Some(1.0),
             search_resolution: Some(0.25),
             ik_attempts: 200,
             ik_solutions: 4,
