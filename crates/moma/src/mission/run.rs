@@ -664,21 +664,26 @@ impl<'m> Runner<'m> {
         let t = st.k as f64 * c.h;
         st.t = t;
         match &mut ws.contact {
-            Some(cl) => cl.measure(&mut ws.q_now, &mut ws.v_now),
+            Some(cl) => cl.measure(&mut ws.q_plant, &mut ws.v_plant),
             None => {
-                ws.q_now.copy_from_slice(&x[..nq]);
-                ws.v_now.copy_from_slice(&x[nq..nq + nr]);
+                ws.q_plant.copy_from_slice(&x[..nq]);
+                ws.v_plant.copy_from_slice(&x[nq..nq + nr]);
             }
         }
-        // sensor noise: the law measures q_now, v_now; the plant's state is kept for the
-        // record, the monitors and the energy
-        if let Some(noise) = &mut ws.noise {
-            ws.q_true.copy_from(&ws.q_now);
-            ws.v_true.copy_from(&ws.v_now);
-            let (q, v) = (ws.q_true.as_slice(), ws.v_true.as_slice());
-            if let Err(e) = noise.measure(q, v, ws.q_now.as_mut_slice(), ws.v_now.as_mut_slice()) {
-                self.fail(t, format!("the measurement failed: {e}"));
-                st.phase = Phase::Done;
+        // what the law measures: the plant's state, through the sensor noise if any (the
+        // record, the monitors and the energy keep the plant's own)
+        match &mut ws.noise {
+            Some(noise) => {
+                let (q, v) = (ws.q_plant.as_slice(), ws.v_plant.as_slice());
+                let (qm, vm) = (ws.q_now.as_mut_slice(), ws.v_now.as_mut_slice());
+                if let Err(e) = noise.measure(q, v, qm, vm) {
+                    self.fail(t, format!("the measurement failed: {e}"));
+                    st.phase = Phase::Done;
+                }
+            }
+            None => {
+                ws.q_now.copy_from(&ws.q_plant);
+                ws.v_now.copy_from(&ws.v_plant);
             }
         }
         let pose = [ws.q_now[0], ws.q_now[1], ws.q_now[2]];
@@ -769,7 +774,7 @@ impl<'m> Runner<'m> {
         }
 
         // actuator energy over the step (rates at its start)
-        let v_plant = ws.plant_state().1;
+        let v_plant = &ws.v_plant;
         st.energy += c.act.absolute_power(&ws.u, v_plant, v_plant[0], v_plant[1]) * c.h;
 
         // the contact plant: the torques held over the control period
@@ -1299,18 +1304,13 @@ impl<'m> Runner<'m> {
         ee: Vector3<f64>,
         evaluated: bool,
     ) -> Option<(Option<f64>, f64)> {
-        let q = ws.plant_state().0;
-        let pose = [q[0], q[1], q[2]];
+        let pose = [ws.q_plant[0], ws.q_plant[1], ws.q_plant[2]];
         let mon = match &mut ws.contact {
             Some(cl) => Some(cl.monitors(pose)),
             None if evaluated => monitors(self.wm, self.m.plant_robot.is_some(), ws, t),
             None => None,
         };
-        let (q, v) = if ws.noise.is_some() {
-            (&ws.q_true, &ws.v_true)
-        } else {
-            (&ws.q_now, &ws.v_now)
-        };
+        let (q, v) = (&ws.q_plant, &ws.v_plant);
         let side = arm_side(&self.wm.model, &mut ws.data, q, &c.chain, ee);
         let r = &st.cur_ref;
         let res = c.res;
@@ -1350,14 +1350,9 @@ impl<'m> Runner<'m> {
 /// a noisy state, from the plant's own dynamics at its state; `None` if the multipliers
 /// or the loads cannot be formed.
 fn monitors(wm: &WheeledModel, perturbed: bool, ws: &mut Workspace, t: f64) -> Option<Monitors> {
-    let q = ws.q_now.as_slice();
+    let q = ws.q_plant.as_slice();
     if perturbed || ws.noise.is_some() {
-        let (q, v) = if ws.noise.is_some() {
-            (ws.q_true.as_slice(), ws.v_true.as_slice())
-        } else {
-            (q, ws.v_now.as_slice())
-        };
-        ws.monitor.sample(t, q, v, &ws.u).ok()?;
+        ws.monitor.sample(t, q, ws.v_plant.as_slice(), &ws.u).ok()?;
     } else {
         lagrange_multipliers(wm, &mut ws.control_dynamics, &ws.q_now).ok()?;
         ws.monitor
@@ -1481,9 +1476,10 @@ struct Workspace {
     rk: Rk4,
     /// The integrator's first stage `[q̇, v̇, Qᵀq̇]` at the step's state.
     first_stage: Vec<f64>,
-    /// The configuration q of the step's state.
+    /// The configuration q the law measured at the step (the plant's, with sensor noise
+    /// if any).
     q_now: DVector<f64>,
-    /// The reduced velocity v = [v, ω, q̇_arm] of the step's state.
+    /// The reduced velocity v = [v, ω, q̇_arm] the law measured at the step.
     v_now: DVector<f64>,
     /// The actuator inputs (wheel torques, then arm torques), held over the step.
     u: Vec<f64>,
@@ -1492,11 +1488,13 @@ struct Workspace {
     a_des: DVector<f64>,
     /// The contact plant, when the mission runs on it (else the plant is `sys`).
     contact: Option<ContactLoop>,
-    /// The `[uncertainty]` sensor noise on `q_now`, `v_now`; the plant's own state is then
-    /// `q_true`, `v_true`.
+    /// The `[uncertainty]` sensor noise between the plant's state and what the law
+    /// measures (`q_now`, `v_now`).
     noise: Option<SensorNoise>,
-    q_true: DVector<f64>,
-    v_true: DVector<f64>,
+    /// The plant's configuration (reduced coordinates) at the step.
+    q_plant: DVector<f64>,
+    /// The plant's reduced velocity at the step.
+    v_plant: DVector<f64>,
     /// The end effector's frame Jacobian (full velocity coordinates).
     jac: Matrix6xX<f64>,
     /// Ṅ_C.
@@ -1508,15 +1506,6 @@ struct Workspace {
 }
 
 impl Workspace {
-    /// The plant's state `(q, v)` of the step: what the law measured, without its noise.
-    fn plant_state(&self) -> (&DVector<f64>, &DVector<f64>) {
-        if self.noise.is_some() {
-            (&self.q_true, &self.v_true)
-        } else {
-            (&self.q_now, &self.v_now)
-        }
-    }
-
     fn new(
         wm: &WheeledModel,
         plant: &WheeledModel,
@@ -1546,8 +1535,8 @@ impl Workspace {
             a_des: DVector::zeros(nr),
             contact,
             noise,
-            q_true: DVector::zeros(nq),
-            v_true: DVector::zeros(nr),
+            q_plant: DVector::zeros(nq),
+            v_plant: DVector::zeros(nr),
             jac: Matrix6xX::zeros(model.nv),
             ndot: DMatrix::zeros(model.nv, nr),
             ndot_v: DVector::zeros(model.nv),
