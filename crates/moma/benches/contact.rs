@@ -8,32 +8,16 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use moma::contact::{CasterSpec, ContactParams, ContactPlant, ContactState, WheelSpec};
-use moma::io::urdf::model_from_urdf_file;
-use moma::multibody::RootJoint;
+use moma::contact::{ContactParams, ContactState};
+
+#[path = "../tests/contact_common/mod.rs"]
+mod contact_common;
+use contact_common::{diffdrive_arm_plant, standing};
 
 fn bench(c: &mut Criterion) {
-    let model = model_from_urdf_file(
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenarios/robots/diffdrive_arm.urdf"
-        ),
-        RootJoint::FreeFlyer,
-    )
-    .expect("robot");
-    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
-        joint: j.into(),
-        radius: 0.08,
-    });
-    let casters = [CasterSpec {
-        frame: "caster".into(),
-        radius: 0.03,
-    }];
-    let plant =
-        ContactPlant::new(model, &wheels, &casters, ContactParams::default()).expect("plant");
+    let plant = diffdrive_arm_plant(ContactParams::default());
     let arm = [0.0, 0.3, 0.5];
-    let mut q0 = vec![0.0, 0.0, 0.08, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
-    q0.extend_from_slice(&arm);
+    let q0 = standing(arm);
     let mut st = ContactState::new(&plant, &q0, &vec![0.0; plant.model.nv]).expect("state");
     // Settle for 0.5 s with the arm held by a PD law; the timed run then drives with
     // wheel torques (0.25, 0.45) N·m (all three contacts loaded, the wheels rolling) and

@@ -3,10 +3,11 @@
 //! `bench/mujoco_contact_compare.py` replaying the scenarios of the `contact_rollout`
 //! example on `bench/mujoco_contact.xml`). The scenarios are restated here.
 
-use moma::contact::{CasterSpec, ContactParams, ContactPlant, ContactState, WheelSpec};
-use moma::io::urdf::model_from_urdf_file;
-use moma::multibody::RootJoint;
+use moma::contact::{ContactParams, ContactPlant, ContactState};
 use serde_json::Value;
+
+mod contact_common;
+use contact_common::{diffdrive_arm_plant, standing};
 
 const KP: f64 = 200.0;
 const KD: f64 = 20.0;
@@ -19,22 +20,10 @@ fn reference() -> Value {
 }
 
 fn plant(mu: f64) -> ContactPlant {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenarios/robots/diffdrive_arm.urdf");
-    let model = model_from_urdf_file(path, RootJoint::FreeFlyer).unwrap();
-    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
-        joint: j.into(),
-        radius: 0.08,
-    });
-    let casters = [CasterSpec {
-        frame: "caster".into(),
-        radius: 0.03,
-    }];
-    let params = ContactParams {
+    diffdrive_arm_plant(ContactParams {
         mu,
         ..ContactParams::default()
-    };
-    ContactPlant::new(model, &wheels, &casters, params).unwrap()
+    })
 }
 
 /// Wheel torques linear between knots `[t, left, right]`, held after the last.
@@ -61,8 +50,7 @@ fn run(
     mut each: impl FnMut(&ContactPlant, &ContactState),
 ) {
     let p = plant(mu);
-    let mut q0 = vec![0.0, 0.0, 0.08, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
-    q0.extend_from_slice(&arm);
+    let q0 = standing(arm);
     let mut st = ContactState::new(&p, &q0, &vec![0.0; p.model.nv]).unwrap();
     let n = (duration / p.params.dt).round() as usize;
     let mut u = [0.0; 5];

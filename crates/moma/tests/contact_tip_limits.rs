@@ -20,22 +20,22 @@
 //! tipping over the caster unloads exactly them: at that limit their normal load, and so
 //! their friction, is zero, so a brake cannot reach it on this robot. It is not tested.
 
-use moma::contact::{CasterSpec, ContactParams, ContactPlant, WheelSpec};
+use moma::contact::{ContactParams, ContactPlant};
 use moma::dynamics::center_of_mass;
-use moma::io::urdf::model_from_urdf_file;
-use moma::multibody::{Data, Model, RootJoint};
+use moma::multibody::{Data, Model};
 use moma::sim::lift_off::{LiftOffProblem, LiftOffSettings};
 use moma::sim::model_mismatch::Payload;
 use moma::spatial::Inertia;
 use moma::stability::{SupportPolygon, acceleration_limits};
 use nalgebra::{DVector, Matrix3, Vector2, Vector3};
 
+mod contact_common;
+use contact_common::{diffdrive_arm_model, diffdrive_arm_plant, standing};
+
 const G: f64 = 9.81;
 
 fn model(payload: f64) -> Model {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenarios/robots/diffdrive_arm.urdf");
-    let mut m = model_from_urdf_file(path, RootJoint::FreeFlyer).unwrap();
+    let mut m = diffdrive_arm_model();
     if payload > 0.0 {
         // A point mass at the tool (0.3 m along the forearm from the elbow).
         let j = m.joint_id("elbow_joint").unwrap().0;
@@ -45,33 +45,18 @@ fn model(payload: f64) -> Model {
 }
 
 fn plant() -> ContactPlant {
-    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
-        joint: j.into(),
-        radius: 0.08,
-    });
-    let casters = [CasterSpec {
-        frame: "caster".into(),
-        radius: 0.03,
-    }];
-    let params = ContactParams {
+    diffdrive_arm_plant(ContactParams {
         mu: 2.0,
         slip_velocity: 0.1,
         ..ContactParams::default()
-    };
-    ContactPlant::new(model(0.0), &wheels, &casters, params).unwrap()
-}
-
-fn q0(arm: [f64; 3]) -> Vec<f64> {
-    let mut q = vec![0.0, 0.0, 0.08, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
-    q.extend_from_slice(&arm);
-    q
+    })
 }
 
 /// The predicted forward limit (m/s²) of the posture at rest on the ground.
 fn predicted_forward_limit(payload: f64, arm: [f64; 3]) -> f64 {
     let m = model(payload);
     let mut data = Data::new(&m);
-    let com = center_of_mass(&m, &mut data, &DVector::from_vec(q0(arm)));
+    let com = center_of_mass(&m, &mut data, &DVector::from_vec(standing(arm)));
     let support = SupportPolygon::from_points(&[
         Vector2::new(-0.1, 0.25),
         Vector2::new(-0.1, -0.25),
@@ -98,7 +83,7 @@ fn problem(payload: f64, arm: [f64; 3]) -> LiftOffProblem {
     };
     let p = LiftOffProblem::new(
         &plant(),
-        &q0(arm)[7..],
+        &standing(arm)[7..],
         (payload > 0.0).then_some(&tool),
         Vector2::new(1.0, 0.0),
     )

@@ -1,8 +1,12 @@
 //! `moma mission` with an `[uncertainty]` table: the plant is built from the perturbed
-//! model while the planner, reference, law and computed torque keep the nominal one. A
-//! payload of 0 kg leaves the default mission as it was; a heavy payload on the tool
-//! changes what the plant does (its smallest ZMP margin); the draw depends on the seed
-//! only; a bad table names the file and the `uncertainty.*` field.
+//! model while the planner, reference, law and computed torque keep the nominal one, and
+//! the law measures the plant's state through the table's sensor noise. A payload of 0 kg
+//! or noise of zero leaves the default mission as it was; a heavy payload on the tool
+//! changes what the plant does (its smallest ZMP margin); noise changes what the law
+//! does, the same way for the same seed; on the contact plant the draw perturbs the
+//! plant's model and its wheels' μ, and a μ below what the mission's turns need makes
+//! the wheels slide; the draw depends on the seed only; a bad table names the file and
+//! the `uncertainty.*` field.
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +18,12 @@ fn scenarios() -> PathBuf {
 
 /// The default mission with `table` appended, validated as if it were the file.
 fn with_table(table: &str) -> moma::Result<Mission> {
-    let path = scenarios().join("mission.toml");
+    with_table_in("mission.toml", table)
+}
+
+/// The mission `name` with `table` appended, validated as if it were the file.
+fn with_table_in(name: &str, table: &str) -> moma::Result<Mission> {
+    let path = scenarios().join(name);
     let text = std::fs::read_to_string(&path).unwrap();
     let file: MissionFile = toml::from_str(&format!("{text}\n{table}\n")).expect("parses");
     from_file(file, &path, &scenarios())
@@ -102,7 +111,12 @@ fn a_bad_table_names_the_file_and_field() {
     let e = err("[uncertainty]\nseed = 1\nlink_mass_scale = 0.0");
     assert!(e.contains("uncertainty.link_mass_scale"), "{e}");
     let e = err("[uncertainty]\nseed = 1\nsensor_noise = { v = [0.01, 0.01] }");
-    assert!(e.contains("uncertainty.sensor_noise"), "{e}");
+    assert!(
+        e.contains("mission.toml") && e.contains("uncertainty.sensor_noise.v: expected"),
+        "{e}"
+    );
+    let e = err("[uncertainty]\nseed = 1\nsensor_noise = { q = [0.01, -0.01] }");
+    assert!(e.contains("uncertainty.sensor_noise.q[1]"), "{e}");
     let e = err("[uncertainty]\nseed = 1\nmu = 0.5");
     assert!(e.contains("uncertainty.mu"), "{e}");
     // unknown keys are refused by the table's schema
@@ -116,19 +130,141 @@ fn a_bad_table_names_the_file_and_field() {
     );
 }
 
+/// `sensor_noise = { q = [σ_q…], v = [σ_v…] }` with one deviation per coordinate and
+/// velocity of `m`'s robot, each `q` and `v` (the base pose and speeds only, the joints
+/// exact).
+fn noise_table(m: &Mission, seed: u64, q: f64, v: f64) -> String {
+    let (nq, nv) = (m.robot.q_names().len(), m.robot.v_names().len());
+    let list = |n: usize, base: usize, s: f64| {
+        let xs: Vec<String> = (0..n)
+            .map(|i| if i < base { s } else { 0.0 }.to_string())
+            .collect();
+        xs.join(", ")
+    };
+    format!(
+        "[uncertainty]\nseed = {seed}\nsensor_noise = {{ q = [{}], v = [{}] }}",
+        list(nq, 3, q),
+        list(nv, 2, v)
+    )
+}
+
 #[test]
-fn the_contact_plant_refuses_the_table() {
-    let path = scenarios().join("mission_contact.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let file: MissionFile = toml::from_str(&format!(
-        "{text}\n[uncertainty]\nseed = 1\npayload = {{ link = \"tool0\", mass = 1.0 }}\n"
-    ))
-    .unwrap();
-    let e = from_file(file, &path, &scenarios())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("mission_contact.toml") && e.contains("uncertainty") && e.contains("rolling"),
-        "{e}"
+fn noise_of_zero_changes_nothing_and_seeded_noise_is_reproducible() {
+    let nominal_m = mission::load(&scenarios().join("mission.toml")).unwrap();
+    let nominal = run(&nominal_m);
+    // zero deviations: no noise, no perturbation; the run is the nominal one bit for bit
+    let zero_m = with_table(&noise_table(&nominal_m, 3, 0.0, 0.0)).unwrap();
+    assert!(zero_m.sensor_noise.is_none() && zero_m.plant_robot.is_none());
+    assert_eq!(run(&zero_m).samples, nominal.samples);
+    // 5 mm / 5 mrad on the measured pose, 2 cm/s / 2 cm rad/s on the measured speeds
+    let noisy_m = with_table(&noise_table(&nominal_m, 3, 0.005, 0.02)).unwrap();
+    assert!(noisy_m.sensor_noise.is_some() && noisy_m.plant_robot.is_none());
+    let noisy = run(&noisy_m);
+    let again = run(&noisy_m);
+    assert_eq!(noisy.samples, again.samples, "the same seed runs the same");
+    let other = run(&with_table(&noise_table(&nominal_m, 4, 0.005, 0.02)).unwrap());
+    assert_ne!(
+        noisy.samples.q, other.samples.q,
+        "another seed, other noise"
     );
+    assert_ne!(noisy.samples.q, nominal.samples.q);
+    // the record is the plant's true state: the noise makes the law's torques rough, not
+    // the recorded path; the base still reaches its goal
+    let rough = |r: &MissionResult| {
+        r.samples
+            .u
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).abs())
+            .fold(0.0, f64::max)
+    };
+    eprintln!(
+        "noisy: reached {} ({:?}), largest tracking error {:?} m (nominal {:?}), largest \
+         wheel-torque step {} N m (nominal {}), smallest ZMP margin {:?} (nominal {:?})",
+        noisy.reached,
+        noisy.reason,
+        noisy.max_tracking_error(),
+        nominal.max_tracking_error(),
+        rough(&noisy),
+        rough(&nominal),
+        noisy.min_zmp_margin(),
+        nominal.min_zmp_margin()
+    );
+    assert!(rough(&noisy) > 2.0 * rough(&nominal));
+    assert!(noisy.events.iter().any(|e| e.kind == "arrived"));
+}
+
+#[test]
+fn on_the_contact_plant_the_draw_perturbs_the_plant_and_its_friction() {
+    let nominal_m = mission::load(&scenarios().join("mission_contact.toml")).unwrap();
+    let nominal_mass = nominal_m.contact.as_ref().unwrap().plant.model.total_mass();
+    // a payload and μ drawn for the plant; the law's model is the nominal one
+    let m = with_table_in(
+        "mission_contact.toml",
+        "[uncertainty]\nseed = 2\nmu = { uniform = [0.8, 0.9] }\n\
+         payload = { link = \"tool0\", mass = 1.5 }",
+    )
+    .unwrap();
+    let plant = &m.contact.as_ref().unwrap().plant;
+    assert!((plant.model.total_mass() - nominal_mass - 1.5).abs() < 1e-9);
+    assert_eq!(
+        m.robot.model.total_mass(),
+        nominal_m.robot.model.total_mass()
+    );
+    assert!(m.plant_robot.is_none());
+    let mu = plant.params.mu;
+    assert!((0.8..=0.9).contains(&mu), "{mu}");
+    // what the mission needs: the rolling mission's friction demand (its slip ratio times
+    // limits.mu), largest where it drives straight (|ω| < 0.05 rad/s: accelerating and
+    // braking) and where it turns. A μ drawn between the two makes the wheels slide, and
+    // first in a turn.
+    let rolling = run(&mission::load(&scenarios().join("mission.toml")).unwrap());
+    let (mut straight, mut turn) = (0.0f64, 0.0f64);
+    for (ratio, w) in rolling
+        .samples
+        .slip_ratio
+        .iter()
+        .zip(&rolling.samples.omega)
+    {
+        let need = ratio.unwrap_or(0.0) * rolling_mu();
+        if w.abs() < 0.05 {
+            straight = straight.max(need);
+        } else {
+            turn = turn.max(need);
+        }
+    }
+    assert!(straight < turn, "straight {straight}, turn {turn}");
+    let between = |f: f64| straight + f * (turn - straight);
+    let low = format!(
+        "[uncertainty]\nseed = 2\nmu = {{ uniform = [{}, {}] }}",
+        between(0.25),
+        between(0.4)
+    );
+    let slippery_m = with_table_in("mission_contact.toml", &low).unwrap();
+    let r = run(&slippery_m);
+    let tally = r.contact.as_ref().unwrap();
+    let slip = tally.first_slip.as_ref().expect("the wheels slide");
+    let k = r.samples.t.partition_point(|t| *t < slip.t);
+    let w = r.samples.omega[k];
+    eprintln!(
+        "friction needed: {straight} straight, {turn} in a turn; drawn μ {}: first slip at \
+         {} s ('{}', ω = {w} rad/s), reached {}",
+        slippery_m.contact.as_ref().unwrap().plant.params.mu,
+        slip.t,
+        slip.contact,
+        r.reached
+    );
+    assert!(w.abs() > 0.1, "the first slip is in a turn: ω = {w} rad/s");
+    assert!(r.events.iter().any(|e| e.kind == "slip"));
+    // and the nominal μ = 1 does not
+    let fine = run(&m);
+    assert_eq!(fine.contact.as_ref().unwrap().first_slip, None);
+}
+
+/// `limits.mu` of the default mission (the friction its slip monitor divides by).
+fn rolling_mu() -> f64 {
+    mission::load(&scenarios().join("mission.toml"))
+        .unwrap()
+        .file
+        .limits
+        .mu
 }

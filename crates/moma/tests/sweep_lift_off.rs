@@ -5,21 +5,18 @@
 //! (`sim::lift_off`) on the point's posture and payload; the shipped sweep loads; bad
 //! input names the file and the field.
 
-use moma::contact::{CasterSpec, ContactParams, ContactPlant, WheelSpec};
-use moma::io::urdf::model_from_urdf_file;
-use moma::multibody::RootJoint;
+use moma::contact::ContactParams;
 use moma::sim::lift_off::{LiftOffSettings, lift_off_acceleration};
 use moma::sim::model_mismatch::Payload;
 use moma::sweep::{Sweep, Value};
 use nalgebra::{Vector2, Vector3};
 use std::path::{Path, PathBuf};
 
+mod contact_common;
+use contact_common::{diffdrive_arm_plant, diffdrive_arm_urdf};
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn robot() -> PathBuf {
-    root().join("scenarios/robots/diffdrive_arm.urdf")
 }
 
 /// A lift-off sweep file over `params` with the `[lift_off]` section's extra lines.
@@ -35,7 +32,7 @@ contact = {{ mu = 2.0, slip_velocity = 0.1, casters = [{{ frame = "caster", radi
 payload_frame = "tool"
 {extra}
 "#,
-        robot().display()
+        diffdrive_arm_urdf().display()
     )
 }
 
@@ -78,21 +75,11 @@ fn the_simulated_lift_off_is_the_predicted_limit_within_five_percent() {
     }
     // A row is the library's search on the point's posture and payload (point 1: the
     // shoulder at 1.5 rad, the elbow at 0.6 rad, 2 kg at the tool).
-    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
-        joint: j.into(),
-        radius: 0.08,
-    });
-    let casters = [CasterSpec {
-        frame: "caster".into(),
-        radius: 0.03,
-    }];
-    let params = ContactParams {
+    let plant = diffdrive_arm_plant(ContactParams {
         mu: 2.0,
         slip_velocity: 0.1,
         ..ContactParams::default()
-    };
-    let model = model_from_urdf_file(robot(), RootJoint::FreeFlyer).unwrap();
-    let plant = ContactPlant::new(model, &wheels, &casters, params).unwrap();
+    });
     let payload = Payload {
         link: "tool".into(),
         mass: 2.0,

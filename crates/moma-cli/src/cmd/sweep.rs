@@ -31,8 +31,9 @@ pub struct Args {
     /// No progress bar and no summary line.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Uncertainty study: also write the per-group summary (success rate, smallest ZMP
-    /// margin, seeds that tipped or slipped) as JSON, atomically.
+    /// Uncertainty study, or mission study over seeds: also write the per-group summary
+    /// (success rate, smallest ZMP margin, seeds that tipped or slipped) as JSON,
+    /// atomically.
     #[arg(long)]
     pub summary: Option<PathBuf>,
     /// Lift-off study: also draw the simulated against the predicted lift-off
@@ -123,11 +124,17 @@ pub fn run(args: Args) -> Result<()> {
         None => (1, 1),
     };
     let sweep = Sweep::from_file(&path)?;
-    if args.summary.is_some() && sweep.study() != "uncertainty" {
+    if args.summary.is_some() && !sweep.has_summary() {
         bail!(
-            "--summary: only the uncertainty study has a summary ({} is a {} study)",
+            "--summary: only the uncertainty study and a mission study over seeds have a \
+             summary ({} is a {} study{})",
             path.display(),
-            sweep.study()
+            sweep.study(),
+            if sweep.study() == "mission" {
+                " without a seed parameter"
+            } else {
+                ""
+            }
         );
     }
     if args.figure.is_some() && sweep.study() != "lift_off" {
@@ -153,7 +160,7 @@ pub fn run(args: Args) -> Result<()> {
         pb.finish_and_clear();
     }
     // Everything is computed before anything is written.
-    let summary = if sweep.study() == "uncertainty" {
+    let summary = if sweep.has_summary() {
         Some(moma::sweep::summarize(&table)?)
     } else {
         None

@@ -310,4 +310,11 @@ impl ContactState {
     pub fn joint_velocities(&self) -> &[f64] {
         &self.v.as_slice()[6..]
     }
+
+    /// The accelerations `v̇` of the last step (at its start, under the contact forces of
+    /// [`ContactState::contacts`]); zero before the first step.
+    #[must_use]
+    pub fn acceleration(&self) -> &DVector<f64> {
+        &self.data.ddq
+    }
 }

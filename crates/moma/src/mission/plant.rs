@@ -7,8 +7,11 @@
 //! ([`ReducedMap::to_reduced`], as `moma simulate` does); its torques are held over the
 //! control period `simulation.dt` while the contact plant takes `simulation.dt /
 //! contact.dt` steps. The monitors report what the contact plant did: the ZMP is the
-//! centre of pressure of its normal forces (on flat ground the two coincide), the slip
-//! ratio each wheel's friction over μ N, lift-off and slip the plant's own flags
+//! centre of pressure of its normal forces (on flat ground the two coincide), the
+//! Force-Angle and Moment-Height measures those of [`crate::stability::evaluate`] on the
+//! plant's own model and state (free-flyer configuration, velocity and the last step's
+//! acceleration, the support carried with its base on the ground z = 0), the slip ratio
+//! each wheel's friction over μ N, lift-off and slip the plant's own flags
 //! ([`ContactTally`]).
 
 use nalgebra::{DVector, Vector2};
@@ -17,9 +20,12 @@ use crate::contact::{ContactPlant, ContactSpec, ContactState};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::mobile::WheeledModel;
-use crate::multibody::Model;
+use crate::multibody::{Data, Model};
 use crate::sim::contact_run::{ContactTally, ReducedMap, contact_plant_of};
-use crate::stability::SupportPolygon;
+use crate::stability::{
+    BodySet, ExternalLoads, StabilityData, StabilityModel, SupportAttachment, SupportPolygon,
+    evaluate,
+};
 
 /// The contact plant of a mission, checked before the run: the plant, the map between
 /// its free-flyer state and the mission's reduced coordinates, and its start state (on
@@ -121,20 +127,45 @@ pub(super) struct ContactLoop {
     placed: SupportPolygon,
     news_lift: bool,
     news_slip: bool,
+    /// The stability measures on the plant's model: the support in base axes on z = 0,
+    /// their workspace and the kinematics workspace.
+    stability: StabilityModel,
+    stability_data: StabilityData,
+    data: Data,
+}
+
+/// The stability and slip monitors of one sample (of either plant).
+#[derive(Clone, Copy, Default)]
+pub(super) struct Monitors {
+    /// ZMP margin (m); on the contact plant the centre of pressure against the support.
+    pub zmp: Option<f64>,
+    /// Force-Angle minimum (rad).
+    pub force_angle: Option<f64>,
+    /// Moment-Height minimum.
+    pub mhs: Option<f64>,
+    /// Larger drive-wheel slip ratio.
+    pub slip: Option<f64>,
 }
 
 impl ContactLoop {
     /// The run of `setup` under the control period `control_dt`, on the support of
     /// `robot`, its heading measured on from the start pose's `heading` (any angle, as
-    /// the rolling model's θ).
+    /// the rolling model's θ); the Moment-Height measure over `bodies`.
     pub fn new(
         setup: &MissionContact,
         robot: &WheeledModel,
         control_dt: f64,
         heading: f64,
+        bodies: &BodySet,
     ) -> Result<Self> {
         let support = SupportPolygon::from_wheeled_model(robot)?;
+        let on_ground = SupportPolygon::from_points_at_height(support.vertices_xy(), 0.0)?;
+        let model = &setup.plant.model;
+        let stability = StabilityModel::new(model, on_ground, SupportAttachment::Base, bodies)?;
         Ok(Self {
+            stability_data: StabilityData::new(&stability),
+            stability,
+            data: Data::new(model),
             tally: ContactTally::new(&setup.plant),
             plant: setup.plant.clone(),
             map: setup.map.clone(),
@@ -207,9 +238,27 @@ impl ContactLoop {
 
     /// The monitors of the present state: the ZMP margin (the centre of pressure of the
     /// normal forces against the support polygon placed at the measured pose `(x, y,
-    /// θ)`; `None` when nothing touches the ground) and the larger drive-wheel slip
-    /// ratio |F_t| / (μ N) (`None` when a wheel carries no load).
-    pub fn monitors(&mut self, pose: [f64; 3]) -> (Option<f64>, Option<f64>) {
+    /// θ)`; `None` when nothing touches the ground), the Force-Angle and Moment-Height
+    /// minima of [`evaluate`] on the plant's state with the last step's accelerations
+    /// (`None` before the first step), and the larger drive-wheel slip ratio |F_t| / (μ
+    /// N) (`None` when a wheel carries no load). Does not allocate.
+    pub fn monitors(&mut self, pose: [f64; 3]) -> Monitors {
+        let (force_angle, mhs) = if self.state.t > 0.0 {
+            let st = &self.state;
+            let r = evaluate(
+                &self.plant.model,
+                &mut self.data,
+                &self.stability,
+                &mut self.stability_data,
+                &st.q,
+                &st.v,
+                st.acceleration(),
+                &ExternalLoads::NONE,
+            );
+            (r.force_angle_min, r.mhs_min)
+        } else {
+            (None, None)
+        };
         let reports = &self.state.contacts;
         let total: f64 = reports.iter().map(|r| r.normal).sum();
         let zmp = (total > 0.0).then(|| {
@@ -232,6 +281,11 @@ impl ContactLoop {
             .iter()
             .map(|r| (r.normal > 0.0).then(|| r.friction.norm() / (mu * r.normal)))
             .try_fold(0.0f64, |a, s| s.map(|s| a.max(s)));
-        (zmp, slip)
+        Monitors {
+            zmp,
+            force_angle,
+            mhs,
+            slip,
+        }
     }
 }

@@ -5,7 +5,7 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 
 use super::plan::{Planner, PolygonCheck, SearchTiming};
-use super::plant::{ContactLoop, start_configuration};
+use super::plant::{ContactLoop, Monitors, start_configuration};
 use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
 use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
 use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
@@ -23,6 +23,7 @@ use crate::planning::footprint_clearance::ConvexFootprint;
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::computed_torque::ComputedTorque;
 use crate::sim::contact_run::ContactTally;
+use crate::sim::model_mismatch::SensorNoise;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
 use crate::sim::wheeled_system::WheeledSystem;
@@ -692,11 +693,12 @@ impl<'m> Runner<'m> {
             .as_ref()
             .map(|c| {
                 let sim = &self.m.file.simulation;
-                ContactLoop::new(c, self.wm, sim.dt, self.m.file.start.pose[2])
+                ContactLoop::new(c, self.wm, sim.dt, self.m.file.start.pose[2], &BodySet::All)
             })
             .transpose()?;
         let plant = self.m.plant_robot.as_ref().unwrap_or(self.wm);
-        let mut ws = Workspace::new(self.wm, plant, self.m.file.limits.mu, contact)?;
+        let noise = self.m.sensor_noise.clone();
+        let mut ws = Workspace::new(self.wm, plant, self.m.file.limits.mu, contact, noise)?;
         let act = Actuators::new(self.wm)?;
         let c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
@@ -813,10 +815,26 @@ impl<'m> Runner<'m> {
         let t = st.k as f64 * c.h;
         st.t = t;
         match &mut ws.contact {
-            Some(cl) => cl.measure(&mut ws.q_now, &mut ws.v_now),
+            Some(cl) => cl.measure(&mut ws.q_plant, &mut ws.v_plant),
             None => {
-                ws.q_now.copy_from_slice(&x[..nq]);
-                ws.v_now.copy_from_slice(&x[nq..nq + nr]);
+                ws.q_plant.copy_from_slice(&x[..nq]);
+                ws.v_plant.copy_from_slice(&x[nq..nq + nr]);
+            }
+        }
+        // what the law measures: the plant's state, through the sensor noise if any (the
+        // record, the monitors and the energy keep the plant's own)
+        match &mut ws.noise {
+            Some(noise) => {
+                let (q, v) = (ws.q_plant.as_slice(), ws.v_plant.as_slice());
+                let (qm, vm) = (ws.q_now.as_mut_slice(), ws.v_now.as_mut_slice());
+                if let Err(e) = noise.measure(q, v, qm, vm) {
+                    self.fail(t, format!("the measurement failed: {e}"));
+                    st.phase = Phase::Done;
+                }
+            }
+            None => {
+                ws.q_now.copy_from(&ws.q_plant);
+                ws.v_now.copy_from(&ws.v_plant);
             }
         }
         let pose = [ws.q_now[0], ws.q_now[1], ws.q_now[2]];
@@ -907,7 +925,8 @@ impl<'m> Runner<'m> {
         }
 
         // actuator energy over the step (rates at its start)
-        st.energy += c.act.absolute_power(&ws.u, &ws.v_now, v, w) * c.h;
+        let v_plant = &ws.v_plant;
+        st.energy += c.act.absolute_power(&ws.u, v_plant, v_plant[0], v_plant[1]) * c.h;
 
         // the contact plant: the torques held over the control period
         if let Some(cl) = &mut ws.contact {
@@ -931,7 +950,7 @@ impl<'m> Runner<'m> {
             nq,
             nr,
         };
-        let stepped = if evaluated && self.m.plant_robot.is_none() {
+        let stepped = if evaluated && self.m.plant_robot.is_none() && ws.noise.is_none() {
             // the first stage is the state's evaluation under the torques just formed (on
             // the law's model, which is the plant's unless [uncertainty] perturbs it)
             let cd = &ws.control_dynamics;
@@ -1437,21 +1456,15 @@ impl<'m> Runner<'m> {
         ee: Vector3<f64>,
         evaluated: bool,
     ) -> Option<(Option<f64>, f64)> {
+        let pose = [ws.q_plant[0], ws.q_plant[1], ws.q_plant[2]];
         let mon = match &mut ws.contact {
-            Some(cl) => {
-                let (zmp, slip) = cl.monitors([ws.q_now[0], ws.q_now[1], ws.q_now[2]]);
-                Some(Monitors {
-                    zmp,
-                    force_angle: None,
-                    mhs: None,
-                    slip,
-                })
-            }
+            Some(cl) => Some(cl.monitors(pose)),
             None if evaluated => monitors(self.wm, self.m.plant_robot.is_some(), ws, t),
             None => None,
         };
-        let side = arm_side(&self.wm.model, ws, &c.chain, ee);
-        let (q, r) = (&ws.q_now, &st.cur_ref);
+        let (q, v) = (&ws.q_plant, &ws.v_plant);
+        let side = arm_side(&self.wm.model, &mut ws.data, q, &c.chain, ee);
+        let r = &st.cur_ref;
         let clearance = self.planner.clearance(
             &self.m.map.grid,
             [q[0], q[1], q[2]],
@@ -1463,8 +1476,8 @@ impl<'m> Runner<'m> {
         let s = &mut self.samples;
         s.t.push(t);
         s.q.push(q.as_slice().to_vec());
-        s.v.push(ws.v_now[0]);
-        s.omega.push(ws.v_now[1]);
+        s.v.push(v[0]);
+        s.omega.push(v[1]);
         s.v_ref.push(r.v);
         s.omega_ref.push(r.omega);
         s.ref_xy.push([r.x, r.y]);
@@ -1485,12 +1498,13 @@ impl<'m> Runner<'m> {
 
 /// The stability and slip monitors (the one set of [`StabilityMonitor`], on the plant's
 /// robot) at the step's state, from the dynamics the step evaluated under the applied
-/// torques, or, when `[uncertainty]` perturbs the plant (`perturbed`), from the plant's
-/// own dynamics; `None` if the multipliers or the loads cannot be formed.
+/// torques, or, when `[uncertainty]` perturbs the plant (`perturbed`) or the law measured
+/// a noisy state, from the plant's own dynamics at its state; `None` if the multipliers
+/// or the loads cannot be formed.
 fn monitors(wm: &WheeledModel, perturbed: bool, ws: &mut Workspace, t: f64) -> Option<Monitors> {
-    let q = ws.q_now.as_slice();
-    if perturbed {
-        ws.monitor.sample(t, q, ws.v_now.as_slice(), &ws.u).ok()?;
+    let q = ws.q_plant.as_slice();
+    if perturbed || ws.noise.is_some() {
+        ws.monitor.sample(t, q, ws.v_plant.as_slice(), &ws.u).ok()?;
     } else {
         lagrange_multipliers(wm, &mut ws.control_dynamics, &ws.q_now).ok()?;
         ws.monitor
@@ -1614,9 +1628,10 @@ struct Workspace {
     rk: Rk4,
     /// The integrator's first stage `[q̇, v̇, Qᵀq̇]` at the step's state.
     first_stage: Vec<f64>,
-    /// The configuration q of the step's state.
+    /// The configuration q the law measured at the step (the plant's, with sensor noise
+    /// if any).
     q_now: DVector<f64>,
-    /// The reduced velocity v = [v, ω, q̇_arm] of the step's state.
+    /// The reduced velocity v = [v, ω, q̇_arm] the law measured at the step.
     v_now: DVector<f64>,
     /// The actuator inputs (wheel torques, then arm torques), held over the step.
     u: Vec<f64>,
@@ -1625,6 +1640,13 @@ struct Workspace {
     a_des: DVector<f64>,
     /// The contact plant, when the mission runs on it (else the plant is `sys`).
     contact: Option<ContactLoop>,
+    /// The `[uncertainty]` sensor noise between the plant's state and what the law
+    /// measures (`q_now`, `v_now`).
+    noise: Option<SensorNoise>,
+    /// The plant's configuration (reduced coordinates) at the step.
+    q_plant: DVector<f64>,
+    /// The plant's reduced velocity at the step.
+    v_plant: DVector<f64>,
     /// The end effector's frame Jacobian (full velocity coordinates).
     jac: Matrix6xX<f64>,
     /// Ṅ_C.
@@ -1641,6 +1663,7 @@ impl Workspace {
         plant: &WheeledModel,
         mu: f64,
         contact: Option<ContactLoop>,
+        noise: Option<SensorNoise>,
     ) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
@@ -1663,6 +1686,9 @@ impl Workspace {
             zero_u: vec![0.0; nu],
             a_des: DVector::zeros(nr),
             contact,
+            noise,
+            q_plant: DVector::zeros(nq),
+            v_plant: DVector::zeros(nr),
             jac: Matrix6xX::zeros(model.nv),
             ndot: DMatrix::zeros(model.nv, nr),
             ndot_v: DVector::zeros(model.nv),
@@ -2037,25 +2063,16 @@ fn end_effector_kinematics(m: &Mission, ws: &mut Workspace) -> EeState {
     ee
 }
 
-/// The stability and slip monitors of one sample.
-#[derive(Clone, Copy, Default)]
-struct Monitors {
-    zmp: Option<f64>,
-    force_angle: Option<f64>,
-    mhs: Option<f64>,
-    slip: Option<f64>,
-}
-
 /// The arm chain (joint origins, then the end effector `ee`) in the base x–z plane, from
-/// the forward kinematics at the workspace's configuration.
+/// the forward kinematics at the configuration `q` (`data` its workspace).
 fn arm_side(
     model: &crate::multibody::Model,
-    ws: &mut Workspace,
+    data: &mut Data,
+    q: &DVector<f64>,
     chain: &[usize],
     ee: Vector3<f64>,
 ) -> Vec<[f64; 2]> {
-    let q = &ws.q_now;
-    crate::kinematics::forward_kinematics(model, &mut ws.data, q);
+    crate::kinematics::forward_kinematics(model, data, q);
     let (sn, cs) = q[2].sin_cos();
     let to_base = |p: &Vector3<f64>| {
         let dx = p.x - q[0];
@@ -2064,7 +2081,7 @@ fn arm_side(
     };
     let mut side: Vec<[f64; 2]> = chain
         .iter()
-        .map(|&j| to_base(&ws.data.world_from_joint[j].translation))
+        .map(|&j| to_base(&data.world_from_joint[j].translation))
         .collect();
     side.push(to_base(&ee));
     side

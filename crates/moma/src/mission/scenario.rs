@@ -17,7 +17,8 @@ use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
 use crate::multibody::{FrameIndex, RootJoint};
 use crate::planning::LoadedMap;
-use crate::sim::uncertainty::{UncertaintySpec, perturb};
+use crate::sim::model_mismatch::{ModelPerturbation, SensorNoise};
+use crate::sim::uncertainty::{Draw, UncertaintySpec, perturb, sensor_noise};
 
 /// The mission file as written.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -49,8 +50,9 @@ pub struct MissionFile {
     /// `[contact]` table of `moma simulate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactSpec>,
-    /// How the plant differs from the model the controller keeps (the `[uncertainty]`
-    /// table of `moma simulate`; rolling plant only).
+    /// How the plant differs from the model the controller keeps and the noise on what it
+    /// measures (the `[uncertainty]` table of `moma simulate`; `mu` on the contact plant
+    /// only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<UncertaintySpec>,
     /// Outputs.
@@ -427,9 +429,12 @@ pub struct Mission {
     /// The contact plant, built and checked (`simulation.plant = "contact"`).
     pub contact: Option<MissionContact>,
     /// The rolling plant's robot with the `[uncertainty]` draw applied (`None` without
-    /// the table: the plant is [`Mission::robot`]). The planner, reference, law and
+    /// the table, or when it leaves the model as it is: the plant is [`Mission::robot`]). The planner, reference, law and
     /// computed torque keep [`Mission::robot`].
     pub plant_robot: Option<WheeledModel>,
+    /// The `[uncertainty]` noise on the state the law measures (`None` without a positive
+    /// deviation), at the start of its sequence.
+    pub sensor_noise: Option<SensorNoise>,
 }
 
 /// Reads and validates a mission file.
@@ -586,8 +591,18 @@ pub fn from_file_with(
         })?,
         None => Vec::new(),
     };
-    let contact = contact_plant(&file, path, base, &robot, &q_arm0, files)?;
-    let plant_robot = perturbed_plant(&file, path, &robot)?;
+    let draw = uncertainty_draw(&file, path)?;
+    let contact = contact_plant(&file, path, base, &robot, &q_arm0, draw.as_ref(), files)?;
+    let plant_robot = match (&draw, file.simulation.plant) {
+        (Some(d), PlantKind::Rolling) if d.perturbation != ModelPerturbation::default() => {
+            Some(perturbed_robot(d, path, &robot)?)
+        }
+        _ => None,
+    };
+    let sensor_noise = match &file.uncertainty {
+        Some(spec) => sensor_noise(spec, (&robot.q_names(), &robot.v_names()), path)?,
+        None => None,
+    };
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -609,56 +624,46 @@ pub fn from_file_with(
         package_dirs,
         contact,
         plant_robot,
+        sensor_noise,
     })
 }
 
-/// The rolling plant's robot under the file's `[uncertainty]` draw (`None` without the
-/// table). The contact plant and sensor noise are refused here, naming the field.
-fn perturbed_plant(
-    file: &MissionFile,
-    path: &Path,
-    robot: &WheeledModel,
-) -> Result<Option<WheeledModel>> {
+/// The file's `[uncertainty]` draw, checked (`None` without the table); `mu` is refused
+/// on the rolling plant, naming the field.
+fn uncertainty_draw(file: &MissionFile, path: &Path) -> Result<Option<Draw>> {
     let Some(spec) = &file.uncertainty else {
         return Ok(None);
     };
     spec.check()
         .map_err(|e| Error::parse(path, crate::error::chain(&e)))?;
-    if file.simulation.plant == PlantKind::Contact {
-        return Err(field_err(
-            path,
-            "uncertainty",
-            "a mission perturbs the rolling plant only (simulation.plant = \"rolling\")",
-        ));
-    }
-    if spec.has_noise() {
-        return Err(field_err(
-            path,
-            "uncertainty.sensor_noise",
-            "a mission takes no sensor noise (its law measures the plant's state)",
-        ));
-    }
-    if spec.mu.is_some() {
+    if spec.mu.is_some() && file.simulation.plant == PlantKind::Rolling {
         return Err(field_err(
             path,
             "uncertainty.mu",
             "the wheels' friction is drawn for the contact plant only",
         ));
     }
+    Ok(Some(spec.draw()))
+}
+
+/// The rolling plant's robot under the draw `draw`.
+fn perturbed_robot(draw: &Draw, path: &Path, robot: &WheeledModel) -> Result<WheeledModel> {
     let mut plant = robot.clone();
-    perturb(&spec.draw(), &mut plant.model, path)?;
-    Ok(Some(plant))
+    perturb(draw, &mut plant.model, path)?;
+    Ok(plant)
 }
 
 /// The contact plant of `simulation.plant = "contact"` (the robot description loaded
-/// again on a free-flyer root, the `[contact]` table), started at the start pose and arm
-/// posture and checked there; `None` for the rolling plant, which takes no `[contact]`.
+/// again on a free-flyer root, the `[contact]` table), its model and μ under the
+/// `[uncertainty]` draw `draw`, started at the start pose and arm posture and checked
+/// there; `None` for the rolling plant, which takes no `[contact]`.
 fn contact_plant(
     file: &MissionFile,
     path: &Path,
     base: &Path,
     robot: &WheeledModel,
     q_arm0: &[f64],
+    draw: Option<&Draw>,
     files: &dyn Loader,
 ) -> Result<Option<MissionContact>> {
     let spec = match (file.simulation.plant, &file.contact) {
@@ -683,8 +688,13 @@ fn contact_plant(
         .urdf(&base.join(&file.robot.urdf), RootJoint::FreeFlyer)
         .map_err(|e| field_err(path, "robot.urdf", e))?;
     model.gravity = robot.model.gravity;
+    let mut spec = spec.clone();
+    if let Some(d) = draw {
+        perturb(d, &mut model, path)?;
+        spec.mu = d.mu.or(spec.mu);
+    }
     let q0 = start_configuration(robot, file.start.pose, q_arm0);
-    MissionContact::new(robot, model, spec, &q0, file.simulation.dt)
+    MissionContact::new(robot, model, &spec, &q0, file.simulation.dt)
         .map(Some)
         .map_err(|e| Error::parse(path, e.to_string()))
 }

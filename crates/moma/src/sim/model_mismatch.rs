@@ -99,34 +99,26 @@ impl ModelPerturbation {
     }
 }
 
-/// A feedback law that measures the state with additive zero-mean Gaussian noise: at
-/// every [`FeedbackLaw::control`] call, `q + σ_q ⊙ n_q` and `v + σ_v ⊙ n_v` with fresh
-/// standard normal `n` (Box–Muller on a ChaCha8 generator of the given seed) go to the
-/// inner law. The tracking error and signals it reports ([`FeedbackLaw::observe`],
-/// [`FeedbackLaw::signals`]) are those of the true state. Does not allocate after
-/// construction.
-pub struct NoisyMeasurement {
-    inner: Box<dyn FeedbackLaw>,
+/// Additive zero-mean Gaussian noise on a measured state: each call of
+/// [`SensorNoise::measure`] gives `q + σ_q ⊙ n_q` and `v + σ_v ⊙ n_v` with fresh standard
+/// normal `n` (Box–Muller on a ChaCha8 generator of the given seed; the coordinates
+/// first, then the velocities, in order). A clone continues the same sequence. Does not
+/// allocate.
+#[derive(Clone, Debug)]
+pub struct SensorNoise {
     std_q: Vec<f64>,
     std_v: Vec<f64>,
     rng: ChaCha8Rng,
-    q: Vec<f64>,
-    v: Vec<f64>,
 }
 
-impl NoisyMeasurement {
-    /// Wraps `inner` with per-coordinate standard deviations `std_q` (one per
-    /// configuration coordinate) and `std_v` (one per velocity), noise drawn from `seed`.
+impl SensorNoise {
+    /// Per-coordinate standard deviations `std_q` (one per configuration coordinate) and
+    /// `std_v` (one per velocity), noise drawn from `seed`.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] naming `std_q[i]` / `std_v[i]` for a negative or non-finite
     /// deviation.
-    pub fn new(
-        inner: Box<dyn FeedbackLaw>,
-        std_q: Vec<f64>,
-        std_v: Vec<f64>,
-        seed: u64,
-    ) -> Result<Self> {
+    pub fn new(std_q: Vec<f64>, std_v: Vec<f64>, seed: u64) -> Result<Self> {
         for (name, xs) in [("std_q", &std_q), ("std_v", &std_v)] {
             if let Some(i) = xs.iter().position(|s| !(s.is_finite() && *s >= 0.0)) {
                 return Err(Error::invalid(
@@ -135,15 +127,74 @@ impl NoisyMeasurement {
                 ));
             }
         }
-        let (nq, nv) = (std_q.len(), std_v.len());
         Ok(Self {
-            inner,
             std_q,
             std_v,
             rng: ChaCha8Rng::seed_from_u64(seed),
+        })
+    }
+
+    /// Number of coordinates and of velocities it measures.
+    #[must_use]
+    pub fn sizes(&self) -> (usize, usize) {
+        (self.std_q.len(), self.std_v.len())
+    }
+
+    /// Writes the measurement of the state `(q, v)` into `(q_out, v_out)`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming `sensor noise` if a length differs from
+    /// [`SensorNoise::sizes`].
+    pub fn measure(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        q_out: &mut [f64],
+        v_out: &mut [f64],
+    ) -> Result<()> {
+        let (nq, nv) = self.sizes();
+        if [q.len(), q_out.len()] != [nq; 2] || [v.len(), v_out.len()] != [nv; 2] {
+            return Err(Error::invalid(
+                "sensor noise",
+                format!(
+                    "deviations for {nq} coordinates and {nv} velocities, the state has {} and {}",
+                    q.len(),
+                    v.len()
+                ),
+            ));
+        }
+        for ((m, x), s) in q_out.iter_mut().zip(q).zip(&self.std_q) {
+            *m = x + s * standard_normal(&mut self.rng);
+        }
+        for ((m, x), s) in v_out.iter_mut().zip(v).zip(&self.std_v) {
+            *m = x + s * standard_normal(&mut self.rng);
+        }
+        Ok(())
+    }
+}
+
+/// A feedback law that measures the state through [`SensorNoise`]: at every
+/// [`FeedbackLaw::control`] call the noisy state goes to the inner law. The tracking
+/// error and signals it reports ([`FeedbackLaw::observe`], [`FeedbackLaw::signals`]) are
+/// those of the true state. Does not allocate after construction.
+pub struct NoisyMeasurement {
+    inner: Box<dyn FeedbackLaw>,
+    noise: SensorNoise,
+    q: Vec<f64>,
+    v: Vec<f64>,
+}
+
+impl NoisyMeasurement {
+    /// Wraps `inner` with `noise`.
+    #[must_use]
+    pub fn new(inner: Box<dyn FeedbackLaw>, noise: SensorNoise) -> Self {
+        let (nq, nv) = noise.sizes();
+        Self {
+            inner,
+            noise,
             q: vec![0.0; nq],
             v: vec![0.0; nv],
-        })
+        }
     }
 }
 
@@ -165,24 +216,7 @@ impl FeedbackLaw for NoisyMeasurement {
         self.inner.has_lyapunov()
     }
     fn control(&mut self, t: f64, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<SaturationFlags> {
-        if q.len() != self.q.len() || v.len() != self.v.len() {
-            return Err(Error::invalid(
-                "sensor noise",
-                format!(
-                    "deviations for {} coordinates and {} velocities, the state has {} and {}",
-                    self.q.len(),
-                    self.v.len(),
-                    q.len(),
-                    v.len()
-                ),
-            ));
-        }
-        for ((m, x), s) in self.q.iter_mut().zip(q).zip(&self.std_q) {
-            *m = x + s * standard_normal(&mut self.rng);
-        }
-        for ((m, x), s) in self.v.iter_mut().zip(v).zip(&self.std_v) {
-            *m = x + s * standard_normal(&mut self.rng);
-        }
+        self.noise.measure(q, v, &mut self.q, &mut self.v)?;
         self.inner.control(t, &self.q, &self.v, u)
     }
     fn observe(&mut self, t: f64, q: &[f64], v: &[f64], error: &mut [f64]) -> Result<Observation> {

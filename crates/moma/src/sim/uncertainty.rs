@@ -18,7 +18,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result, at, chain};
 use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
-use crate::sim::model_mismatch::{ModelPerturbation, NoisyMeasurement, Payload, standard_normal};
+use crate::sim::model_mismatch::{
+    ModelPerturbation, NoisyMeasurement, Payload, SensorNoise, standard_normal,
+};
 
 /// An [`Error::Scenario`] with a formatted message.
 macro_rules! bail {
@@ -271,20 +273,35 @@ pub fn perturb(draw: &Draw, model: &mut Model, path: &Path) -> Result<()> {
     })
 }
 
-/// Wraps `law` in the table's sensor noise (unchanged without noise): `nq` and `nv` are
-/// the measured state's sizes, `names` its coordinate and velocity names for the error
-/// of a wrong length.
+/// Wraps `law` in the table's sensor noise ([`sensor_noise`]; unchanged without noise).
 ///
 /// # Errors
-/// [`Error::Scenario`] naming `uncertainty.sensor_noise.q` / `.v` for a wrong length.
+/// As [`sensor_noise`].
 pub fn with_noise(
     spec: &UncertaintySpec,
     law: Box<dyn FeedbackLaw>,
     names: (&[String], &[String]),
     path: &Path,
 ) -> Result<Box<dyn FeedbackLaw>> {
+    Ok(match sensor_noise(spec, names, path)? {
+        Some(noise) => Box::new(NoisyMeasurement::new(law, noise)),
+        None => law,
+    })
+}
+
+/// The table's sensor noise on a measured state whose coordinate and velocity names are
+/// `names` (their counts are the sizes; the names make the error of a wrong length),
+/// seeded by the draw; `None` when no deviation is positive.
+///
+/// # Errors
+/// [`Error::Scenario`] naming `uncertainty.sensor_noise.q` / `.v` for a wrong length.
+pub fn sensor_noise(
+    spec: &UncertaintySpec,
+    names: (&[String], &[String]),
+    path: &Path,
+) -> Result<Option<SensorNoise>> {
     let Some(n) = spec.sensor_noise.as_ref().filter(|_| spec.has_noise()) else {
-        return Ok(law);
+        return Ok(None);
     };
     let mut stds = Vec::with_capacity(2);
     for (field, given, want) in [("q", &n.q, names.0), ("v", &n.v, names.1)] {
@@ -307,9 +324,9 @@ pub fn with_noise(
     }
     let std_v = stds.pop().unwrap_or_default();
     let std_q = stds.pop().unwrap_or_default();
-    let noisy = NoisyMeasurement::new(law, std_q, std_v, spec.draw().noise_seed)
-        .map_err(|e| Error::Scenario(at(path, &format!("uncertainty.sensor_noise: {e}"))))?;
-    Ok(Box::new(noisy))
+    SensorNoise::new(std_q, std_v, spec.draw().noise_seed)
+        .map(Some)
+        .map_err(|e| Error::Scenario(at(path, &format!("uncertainty.sensor_noise: {e}"))))
 }
 
 #[cfg(test)]

@@ -1,17 +1,31 @@
 //! The mission study: one full mission run ([`crate::mission::run`]) per point, with the
-//! scenario's start, goal, first obstacle and limits taken from the point. Each point
-//! re-validates the modified scenario as `moma mission` would; a point whose scenario is
-//! invalid (a start off the map, say) or whose run fails is a row with `reached = false`
-//! and the message in `reason`, so one bad corner of a sweep does not stop it.
+//! scenario's start, goal, first obstacle and limits taken from the point, its contact
+//! plant's parameters (`"contact.mu"`, `"contact.stiffness"`, `"contact.damping"`,
+//! `"contact.slip_velocity"`, `"contact.dt"`, with `simulation.plant = "contact"`) and
+//! its `[uncertainty]` seed (`seed`). Each point re-validates the modified scenario as
+//! `moma mission` would; a point whose scenario is invalid (a start off the map, say) or
+//! whose run fails is a row with `reached = false` and the message in `reason`, so one
+//! bad corner of a sweep does not stop it.
+//!
+//! Tip, lift-off and slip: `tipped` at the first recorded sample whose ZMP margin reaches
+//! zero (on the contact plant its centre of pressure reaches the support's boundary; on
+//! the rolling plant an undefined ZMP counts too); `lift_off` at the first contact to lose
+//! its load (contact plant only: with more than three contacts one may lift while the
+//! robot stands); `slipped` at the first `slip` event (contact plant: a wheel slides;
+//! rolling plant: a driven wheel's friction demand above `limits.mu`).
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::{Parameter, Value, file_error, num, require_numbers, resolve, study_section};
+use super::{
+    Parameter, Value, file_error, num, require_numbers, require_seeds, resolve, study_section,
+};
+use crate::contact::ContactSpec;
 use crate::error::Result;
 use crate::mission::scenario::Loader;
 use crate::mission::{self, MissionFile};
+use crate::sim::stability_monitor::first_crossing;
 
 /// Result columns of the mission study (the summary's fields).
 pub(super) const RESULTS: &[&str] = &[
@@ -29,11 +43,18 @@ pub(super) const RESULTS: &[&str] = &[
     "torque_saturated_steps",
     "speed_saturated_steps",
     "input_work",
+    "tipped",
+    "tip_time",
+    "lift_off_time",
+    "lift_off_contact",
+    "slipped",
+    "slip_time",
 ];
 
 const NAMES: &str = "start_x, start_y, start_yaw, goal_x, goal_y, goal_yaw, obstacle_t, \
                      obstacle_x, obstacle_y, obstacle_radius, v_max, omega_max, a_max, \
-                     alpha_max, mu, tip_fraction";
+                     alpha_max, mu, tip_fraction, \"contact.mu\", \"contact.stiffness\", \
+                     \"contact.damping\", \"contact.slip_velocity\", \"contact.dt\", seed";
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -59,6 +80,12 @@ enum Slot {
     AlphaMax,
     Mu,
     TipFraction,
+    ContactMu,
+    ContactStiffness,
+    ContactDamping,
+    ContactSlipVelocity,
+    ContactDt,
+    Seed,
 }
 
 /// The prepared study: the scenario as loaded (validated once at load).
@@ -102,6 +129,12 @@ impl MissionStudy {
                 "alpha_max" => Slot::AlphaMax,
                 "mu" => Slot::Mu,
                 "tip_fraction" => Slot::TipFraction,
+                "contact.mu" => Slot::ContactMu,
+                "contact.stiffness" => Slot::ContactStiffness,
+                "contact.damping" => Slot::ContactDamping,
+                "contact.slip_velocity" => Slot::ContactSlipVelocity,
+                "contact.dt" => Slot::ContactDt,
+                "seed" => Slot::Seed,
                 n => {
                     return Err(file_error(
                         path,
@@ -123,6 +156,38 @@ impl MissionStudy {
                         scenario.display()
                     ),
                 ));
+            }
+            let contact = matches!(
+                slot,
+                Slot::ContactMu
+                    | Slot::ContactStiffness
+                    | Slot::ContactDamping
+                    | Slot::ContactSlipVelocity
+                    | Slot::ContactDt
+            );
+            if contact && m.contact.is_none() {
+                return Err(file_error(
+                    path,
+                    &format!("parameters.\"{}\"", p.name),
+                    format!(
+                        "the scenario {} runs the rolling plant: the contact parameters need \
+                         simulation.plant = \"contact\" and its [contact] table",
+                        scenario.display()
+                    ),
+                ));
+            }
+            if matches!(slot, Slot::Seed) {
+                if m.file.uncertainty.is_none() {
+                    return Err(file_error(
+                        path,
+                        "parameters.seed",
+                        format!(
+                            "the scenario {} has no [uncertainty] table to seed",
+                            scenario.display()
+                        ),
+                    ));
+                }
+                require_seeds(path, p)?;
             }
             require_numbers(path, p)?;
             slots.push(slot);
@@ -169,6 +234,16 @@ impl MissionStudy {
                 Slot::AlphaMax => f.limits.alpha_max = x,
                 Slot::Mu => f.limits.mu = x,
                 Slot::TipFraction => f.limits.tip_fraction = x,
+                Slot::ContactMu => contact(&mut f).mu = Some(x),
+                Slot::ContactStiffness => contact(&mut f).stiffness = Some(x),
+                Slot::ContactDamping => contact(&mut f).damping = Some(x),
+                Slot::ContactSlipVelocity => contact(&mut f).slip_velocity = Some(x),
+                Slot::ContactDt => contact(&mut f).dt = Some(x),
+                Slot::Seed => {
+                    if let Some(u) = f.uncertainty.as_mut() {
+                        u.seed = x as u64;
+                    }
+                }
             }
         }
         let outcome = mission::scenario::from_file(f, &self.path, &self.base)
@@ -190,6 +265,15 @@ impl MissionStudy {
                 row.push(Value::Int(r.torque_saturated_steps as i64));
                 row.push(Value::Int(r.speed_saturated_steps as i64));
                 row.push(Value::Float(r.input_work));
+                let tip = first_crossing(&r.samples.t, &r.samples.zmp_margin, r.contact.is_none());
+                row.push(Value::Bool(tip.is_some()));
+                row.push(Value::opt(tip.map(|c| c.time)));
+                let lift = r.contact.as_ref().and_then(|c| c.first_lift_off.as_ref());
+                row.push(Value::opt(lift.map(|e| e.t)));
+                row.push(lift.map_or(Value::Missing, |e| Value::Text(e.contact.clone())));
+                let slip = r.events.iter().find(|e| e.kind == "slip").map(|e| e.t);
+                row.push(Value::Bool(slip.is_some()));
+                row.push(Value::opt(slip));
             }
             Err(reason) => {
                 row.push(Value::Bool(false));
@@ -199,4 +283,12 @@ impl MissionStudy {
         }
         Ok(())
     }
+}
+
+/// The file's `[contact]` table (present: a contact parameter is refused at load
+/// without it).
+fn contact(f: &mut MissionFile) -> &mut ContactSpec {
+    f.contact
+        .as_mut()
+        .expect("checked at load: the scenario has a [contact] table")
 }

@@ -573,6 +573,17 @@ impl Sweep {
         &self.study_name
     }
 
+    /// True if [`summarize`] summarises its table: an uncertainty study, or a mission
+    /// study over seeds (a `seed` parameter).
+    #[must_use]
+    pub fn has_summary(&self) -> bool {
+        match self.study_name.as_str() {
+            "uncertainty" => true,
+            "mission" => self.parameters.iter().any(|p| p.name == "seed"),
+            _ => false,
+        }
+    }
+
     /// The sweep file.
     #[must_use]
     pub fn source(&self) -> &Path {
@@ -820,6 +831,26 @@ pub(crate) fn num(v: &Value) -> f64 {
         Value::Int(i) => *i as f64,
         _ => f64::NAN,
     }
+}
+
+/// Checks that parameter `p` lists seeds: whole numbers from 0 to `u64::MAX`.
+pub(crate) fn require_seeds(path: &Path, p: &Parameter) -> Result<()> {
+    let seeds = match &p.values {
+        Values::List(v) => v.iter().all(|x| {
+            matches!(x, Value::Float(_) | Value::Int(_))
+                && num(x).fract() == 0.0
+                && (0.0..=u64::MAX as f64).contains(&num(x))
+        }),
+        Values::Linspace { .. } => false,
+    };
+    if !seeds {
+        return Err(file_error(
+            path,
+            &format!("parameters.{}", p.name),
+            "expected a list of whole numbers (seeds), e.g. seed = [0, 1, 2]",
+        ));
+    }
+    Ok(())
 }
 
 /// Checks that every value of parameter `p` is a number.

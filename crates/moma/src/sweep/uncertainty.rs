@@ -17,7 +17,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::{Parameter, Table, Value, file_error, num, require_numbers, resolve, study_section};
+use super::{
+    Parameter, Table, Value, file_error, num, require_numbers, require_seeds, resolve,
+    study_section,
+};
 use crate::contact::PlantKind;
 use crate::error::{Error, Result};
 use crate::sim::stability_monitor::{first_crossing, first_slip};
@@ -114,7 +117,7 @@ impl UncertaintyStudy {
                 }
             });
             require_numbers(path, p)?;
-            let (lo, hi) = match &p.values {
+            let (lo, _) = match &p.values {
                 super::Values::Linspace { lo, hi, .. } => (*lo, *hi),
                 super::Values::List(v) => v
                     .iter()
@@ -131,17 +134,7 @@ impl UncertaintyStudy {
                 ));
             }
             if p.name == "seed" {
-                let whole = match &p.values {
-                    super::Values::List(v) => v.iter().all(|x| num(x).fract() == 0.0),
-                    super::Values::Linspace { .. } => false,
-                };
-                if !whole || hi > u64::MAX as f64 {
-                    return Err(file_error(
-                        path,
-                        "parameters.seed",
-                        "expected a list of whole numbers (seeds), e.g. seed = [0, 1, 2]",
-                    ));
-                }
+                require_seeds(path, p)?;
             }
         }
         if !slots.iter().any(|s| matches!(s, Slot::Seed)) {
@@ -371,28 +364,34 @@ fn cell_bool(v: &Value) -> Option<bool> {
     }
 }
 
-/// Summarises an uncertainty study's table (as run, or read back from its CSV): per
-/// combination of the parameters other than `seed` (in the order they first appear),
-/// the success rate, the smallest ZMP margin with its seed, the seeds that tipped and
-/// those that slipped.
+/// Summarises the table of an uncertainty study, or of a mission study over seeds (as
+/// run, or read back from its CSV): per combination of the parameters other than `seed`
+/// (in the order they first appear), the success rate (`success`; a mission's
+/// `reached`), the smallest ZMP margin with its seed, the seeds that tipped and those
+/// that slipped.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] naming the column if the table lacks one of the study's
 /// columns or a cell is not of its type.
 pub fn summarize(table: &Table) -> Result<Vec<SeedSummary>> {
     let col = |name: &str| {
-        table
-            .column(name)
-            .ok_or_else(|| Error::invalid(name, "no such column: not an uncertainty study's table"))
+        table.column(name).ok_or_else(|| {
+            Error::invalid(
+                name,
+                "no such column: not the table of an uncertainty study or of a mission study \
+                 over seeds",
+            )
+        })
     };
-    let (seed, success, margin, tipped, slipped) = (
+    let success = col("success").or_else(|_| col("reached"))?;
+    let (seed, margin, tipped, slipped) = (
         col("seed")?,
-        col("success")?,
         col("min_zmp_margin")?,
         col("tipped")?,
         col("slipped")?,
     );
-    let first_result = col("success")?;
+    // the parameters sit between the index and the first result
+    let first_result = success;
     let group_cols: Vec<usize> = (1..first_result).filter(|&c| c != seed).collect();
     let mut out: Vec<SeedSummary> = Vec::new();
     let mut successes: Vec<usize> = Vec::new();

@@ -1,0 +1,52 @@
+//! Shared test fixture: the contact plant of `scenarios/robots/diffdrive_arm.urdf` (the
+//! three-joint arm on a differential drive): the robot on a free-flyer root, its two drive
+//! wheels as disks of radius [`WHEEL_RADIUS`] and its ball caster (frame `caster`) as a
+//! sphere of radius [`CASTER_RADIUS`]. Used by the contact tests and `benches/contact.rs`.
+#![allow(dead_code)]
+
+use moma::contact::{CasterSpec, ContactParams, ContactPlant, WheelSpec};
+use moma::io::urdf::model_from_urdf_file;
+use moma::multibody::{Model, RootJoint};
+
+/// Radius of the drive wheels (m), the description's.
+pub const WHEEL_RADIUS: f64 = 0.08;
+/// Radius of the ball caster (m).
+pub const CASTER_RADIUS: f64 = 0.03;
+
+/// The description's path.
+pub fn diffdrive_arm_urdf() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/robots/diffdrive_arm.urdf")
+}
+
+/// The robot on a free-flyer root.
+pub fn diffdrive_arm_model() -> Model {
+    model_from_urdf_file(diffdrive_arm_urdf(), RootJoint::FreeFlyer).expect("diffdrive_arm.urdf")
+}
+
+/// The contact plant on `model` (the robot on a free-flyer root, possibly changed by the
+/// caller) with the contact parameters `params`.
+pub fn diffdrive_arm_plant_on(model: Model, params: ContactParams) -> ContactPlant {
+    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
+        joint: j.into(),
+        radius: WHEEL_RADIUS,
+    });
+    let casters = [CasterSpec {
+        frame: "caster".into(),
+        radius: CASTER_RADIUS,
+    }];
+    ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
+}
+
+/// The contact plant of the unchanged robot with the contact parameters `params`.
+pub fn diffdrive_arm_plant(params: ContactParams) -> ContactPlant {
+    diffdrive_arm_plant_on(diffdrive_arm_model(), params)
+}
+
+/// The configuration standing on the ground at the origin, level and heading along x, the
+/// wheels at 0 and the arm joints at `arm`.
+pub fn standing(arm: [f64; 3]) -> Vec<f64> {
+    let mut q = vec![0.0, 0.0, WHEEL_RADIUS, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
+    q.extend_from_slice(&arm);
+    q
+}
