@@ -320,8 +320,8 @@ fn mission_report(
         },
         footprint_radius: m.footprint.radius,
         start: f.start.pose,
-        goal: f.goal.pose,
-        end_effector_target: f.goal.end_effector,
+        goal: r.goal_pose,
+        end_effector_target: m.goal().and_then(|g| g.end_effector),
         plans: r
             .plans
             .iter()

@@ -50,6 +50,7 @@ mod plant;
 pub mod reference;
 mod run;
 pub mod scenario;
+pub mod task;
 
 pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
@@ -70,16 +71,15 @@ pub use scenario::{Mission, MissionFile, load};
 pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_json::Value> {
     use serde_json::json;
     let fin = |x: Option<f64>| x.filter(|v| v.is_finite());
-    let f = &m.file;
     let last = r.samples.t.len().saturating_sub(1);
     let final_pose_error = r.samples.q.get(last).map(|q| {
-        let g = f.goal.pose;
+        let g = r.goal_pose;
         [
             (q[0] - g[0]).hypot(q[1] - g[1]),
             crate::control::wrap_angle(g[2] - q[2]).abs(),
         ]
     });
-    let ee_error = f.goal.end_effector.and_then(|target| {
+    let ee_error = m.goal().and_then(|g| g.end_effector).and_then(|target| {
         r.samples.ee.get(last).map(|e| {
             ((e[0] - target[0]).powi(2) + (e[1] - target[1]).powi(2) + (e[2] - target[2]).powi(2))
                 .sqrt()
@@ -113,6 +113,9 @@ pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_
         },
         "timing_acceleration": r.timing_acceleration,
         "samples": r.samples.t.len(),
+        "min_scene_distance": r.task.as_ref().and_then(|t| fin(t.min_scene_distance)),
+        "min_self_distance": r.task.as_ref().and_then(|t| fin(t.min_self_distance)),
+        "task": r.task,
     });
     let mut map = match doc {
         serde_json::Value::Object(map) => map,

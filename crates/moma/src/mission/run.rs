@@ -7,7 +7,10 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 use super::plan::{Planner, SearchTiming};
 use super::plant::{ContactLoop, start_configuration};
 use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
-use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
+use super::scenario::{GoalSpec, MAX_SAMPLES, MAX_STEPS, Mission};
+use super::task::{
+    ARM_MARGIN, ArmPlanRecord, DistanceMonitor, PayloadRecord, PlacementChoice, Task, TaskResult,
+};
 use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
@@ -17,7 +20,7 @@ use crate::mobile::wheeled::{
     reduced_forward_dynamics_under_inputs,
 };
 use crate::mobile::{WheeledData, WheeledModel};
-use crate::multibody::{Data, JointType};
+use crate::multibody::Data;
 use crate::ode::{OdeSystem, Rk4};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::computed_torque::ComputedTorque;
@@ -35,6 +38,15 @@ const ARRIVE_TIMEOUT: f64 = 8.0;
 const REACH_SETTLE: f64 = 5.0;
 /// Distance (m) beyond the footprint within which the clearance is exact.
 const EXACT_CLEARANCE: f64 = 1.0;
+/// Time allowed after an arm trajectory ends to settle on its last state (s).
+const ARM_SETTLE: f64 = 3.0;
+/// An arm motion has ended when every group joint is this close to its last state (rad
+/// or m) and moves slower than [`ARM_SETTLED_RATE`].
+const ARM_SETTLED: f64 = 0.01;
+/// Joint rate (rad/s or m/s) below which a settled arm joint counts as at rest.
+const ARM_SETTLED_RATE: f64 = 0.02;
+/// Tolerances of the base at a task's placement (m, rad).
+const PLACEMENT_TOLERANCE: [f64; 2] = [0.05, 0.05];
 
 /// One re-plan (or the first plan) of a run.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -113,7 +125,8 @@ pub struct Samples {
     pub arm_side: Vec<Vec<[f64; 2]>>,
     /// Actuator energy so far ∫ Σ |u_j · rate_j| dt (J).
     pub energy: Vec<f64>,
-    /// Mission phase: `drive`, `arrive`, `reach`, `done`.
+    /// Mission phase: `drive`, `arrive`, `reach`, with a `[task]` `approach`, `grasp`,
+    /// `retreat`; `done`.
     pub phase: Vec<&'static str>,
 }
 
@@ -168,6 +181,11 @@ pub struct MissionResult {
     /// On the contact plant (`simulation.plant = "contact"`): the first lift-off and the
     /// first slip, per-contact totals and the largest tilt; `None` on the rolling plant.
     pub contact: Option<ContactTally>,
+    /// The base pose the run drove to: `[goal]`'s, or with `[task]` the placement (the
+    /// start pose when none was found).
+    pub goal_pose: [f64; 3],
+    /// With `[task]`: the placement, the arm plans, the payload and the distances.
+    pub task: Option<TaskResult>,
 }
 
 impl MissionResult {
@@ -241,7 +259,20 @@ enum Phase {
     Drive,
     Arrive,
     Reach,
+    /// A `[task]`'s arm motion.
+    Arm(ArmStage),
     Done,
+}
+
+/// The arm motions of a pick, in order.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum ArmStage {
+    /// To the pre-grasp.
+    Approach,
+    /// From the pre-grasp to the grasp.
+    Grasp,
+    /// With the object, back to the transport posture.
+    Retreat,
 }
 
 impl Phase {
@@ -250,8 +281,62 @@ impl Phase {
             Phase::Drive => "drive",
             Phase::Arrive => "arrive",
             Phase::Reach => "reach",
+            Phase::Arm(ArmStage::Approach) => "approach",
+            Phase::Arm(ArmStage::Grasp) => "grasp",
+            Phase::Arm(ArmStage::Retreat) => "retreat",
             Phase::Done => "done",
         }
+    }
+}
+
+/// An arm motion being tracked: its trajectory from `t0` and its last state.
+struct ArmMotion {
+    t0: f64,
+    trajectory: crate::motion::MotionTrajectory,
+}
+
+impl ArmMotion {
+    /// The group's reference (q, q̇, q̈) at mission time `t` (linear between samples;
+    /// q̈ the difference of the bracketing rates), written into `q` (full configuration),
+    /// `qd` and `qdd` (group order).
+    fn at(
+        &self,
+        t: f64,
+        group: &crate::motion::JointGroup,
+        q: &mut [f64],
+        qd: &mut [f64],
+        qdd: &mut [f64],
+    ) {
+        let tr = &self.trajectory;
+        let s = (t - self.t0).clamp(0.0, tr.duration);
+        let n = tr.t.len();
+        if n < 2 {
+            q.copy_from_slice(&tr.q[0]);
+            qd.fill(0.0);
+            qdd.fill(0.0);
+            return;
+        }
+        let k = tr.t.partition_point(|&ti| ti <= s).clamp(1, n - 1);
+        let (a, b) = (k - 1, k);
+        let h = (tr.t[b] - tr.t[a]).max(f64::MIN_POSITIVE);
+        let w = ((s - tr.t[a]) / h).clamp(0.0, 1.0);
+        q.copy_from_slice(&tr.q[a]);
+        for (j, &i) in group.q_index.iter().enumerate() {
+            q[i] = tr.q[a][i] + w * (tr.q[b][i] - tr.q[a][i]);
+            let (va, vb) = (tr.qd[a][j], tr.qd[b][j]);
+            if t - self.t0 >= tr.duration {
+                qd[j] = 0.0;
+                qdd[j] = 0.0;
+            } else {
+                qd[j] = va + w * (vb - va);
+                qdd[j] = (vb - va) / h;
+            }
+        }
+    }
+
+    /// The last state of the trajectory (full configuration).
+    fn last(&self) -> &[f64] {
+        self.trajectory.q.last().expect("a trajectory has samples")
     }
 }
 
@@ -331,18 +416,7 @@ pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
 
 /// The joints of the arm chain that ends at the end-effector frame (root side first).
 fn arm_chain(m: &Mission) -> Vec<usize> {
-    let model = &m.robot.model;
-    let mut j = model.frames[m.ee_frame.0].parent_joint.0;
-    let mut chain = Vec::new();
-    while j != 0 {
-        if model.joint_types[j] != JointType::Planar && m.robot.arm_dofs().contains(&model.idx_v[j])
-        {
-            chain.push(j);
-        }
-        j = model.parents[j].0;
-    }
-    chain.reverse();
-    chain
+    super::task::arm_chain(&m.robot, m.ee_frame)
 }
 
 /// Runs a mission.
@@ -358,7 +432,12 @@ pub fn run(m: &Mission) -> Result<MissionResult> {
 
 struct Runner<'m> {
     m: &'m Mission,
+    /// The law's robot: the mission's, with a `[task]`'s payload once grasped.
     wm: &'m WheeledModel,
+    /// The base goal: `[goal]`, or a `[task]`'s placement.
+    goal: GoalSpec,
+    /// A `[task]`'s record so far.
+    task: Option<TaskResult>,
     planner: Planner,
     first_path: Option<Vec<(usize, usize)>>,
     first_search: SearchTiming,
@@ -378,7 +457,17 @@ impl<'m> Runner<'m> {
         let f = &m.file;
         let clock = Instant::now();
         let d = m.robot.base.drive.d;
-        let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(f.goal.pose, d));
+        let (goal, task, failure) = match &m.task {
+            None => (
+                m.goal()
+                    .cloned()
+                    .ok_or_else(|| Error::parse(&m.path, "goal: missing"))?,
+                None,
+                None,
+            ),
+            Some(task) => choose_placement(m, task)?,
+        };
+        let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(goal.pose, d));
         let (planner, first_path, first_search) = Planner::new(
             &m.map.grid,
             f.map.unknown_is_obstacle,
@@ -414,6 +503,8 @@ impl<'m> Runner<'m> {
         Ok(Self {
             m,
             wm: &m.robot,
+            goal,
+            task,
             planner,
             first_path,
             first_search,
@@ -428,7 +519,7 @@ impl<'m> Runner<'m> {
             events: Vec::new(),
             samples: Samples::default(),
             reference: None,
-            failure: None,
+            failure,
         })
     }
 
@@ -480,7 +571,7 @@ impl<'m> Runner<'m> {
             self.planner.dstar.grid(),
             cells,
             start,
-            axle_pose(self.m.file.goal.pose, self.wm.base.drive.d),
+            axle_pose(self.goal.pose, self.wm.base.drive.d),
             self.wm.base.drive.d,
             &self.limits,
             &accel,
@@ -531,6 +622,209 @@ impl<'m> Runner<'m> {
         self.reference = Some(r);
     }
 
+    /// A `[task]`'s arm motion: planned on entry from the measured state, tracked in
+    /// joint space by computed torque while the platform holds; once it settles, the next
+    /// motion (the payload attached after the grasp). `false` when the run ends here.
+    #[allow(clippy::too_many_arguments)]
+    fn arm_step(
+        &mut self,
+        c: &Controller,
+        st: &mut LoopState,
+        ws: &mut Workspace,
+        stage: ArmStage,
+        t: f64,
+        v: f64,
+        w: f64,
+    ) -> bool {
+        let m = self.m;
+        let task = m.task.as_ref().expect("arm phases have a task");
+        st.cur_ref = c.goal_sample(t);
+        if st.arm.is_none() {
+            let clock = Instant::now();
+            let planned = self.plan_arm(task, stage, t, ws.q_now.as_slice());
+            st.excluded += clock.elapsed().as_secs_f64();
+            match planned {
+                Ok(motion) => st.arm = Some(motion),
+                Err(reason) => {
+                    self.fail(t, reason);
+                    st.phase = Phase::Done;
+                    return false;
+                }
+            }
+        }
+        let g = &task.group;
+        let (end, settled) = {
+            let motion = st.arm.as_ref().expect("planned above");
+            motion.at(t, g, &mut ws.q_ref, &mut ws.qd_ref, &mut ws.qdd_ref);
+            let last = motion.last();
+            let settled = g.q_index.iter().zip(&c.group_slots).all(|(&i, &k2)| {
+                (ws.q_now[i] - last[i]).abs() <= ARM_SETTLED
+                    && ws.v_now[2 + k2].abs() <= ARM_SETTLED_RATE
+            });
+            (motion.t0 + motion.trajectory.duration, settled)
+        };
+        c.arm_law(ws, v, w);
+        if t < end {
+            return true;
+        }
+        let name = Phase::Arm(stage).name();
+        if settled {
+            st.arm = None;
+            self.event(t, "arm", format!("{name} motion done"));
+            match stage {
+                ArmStage::Approach => st.phase = Phase::Arm(ArmStage::Grasp),
+                ArmStage::Grasp => {
+                    self.attach_payload(task, ws, st, t);
+                    st.phase = Phase::Arm(ArmStage::Retreat);
+                }
+                ArmStage::Retreat => {
+                    self.event(
+                        t,
+                        "reached",
+                        format!(
+                            "picked '{}', arm back in the transport posture",
+                            task.object
+                        ),
+                    );
+                    st.time_to_goal = Some(t);
+                    st.phase = Phase::Done;
+                }
+            }
+            st.phase_t0 = t;
+        } else if t > end + ARM_SETTLE {
+            self.fail(
+                t,
+                format!(
+                    "the arm did not settle at the end of its {name} motion within {ARM_SETTLE} s \
+                     (each joint within {ARM_SETTLED} of its last state)"
+                ),
+            );
+            st.phase = Phase::Done;
+            return false;
+        }
+        true
+    }
+
+    /// Plans the arm motion of `stage` from `q` (the measured state, its group joints
+    /// clamped into the joint box) among the task's scene; records the plan.
+    fn plan_arm(
+        &mut self,
+        task: &Task,
+        stage: ArmStage,
+        t: f64,
+        q: &[f64],
+    ) -> std::result::Result<ArmMotion, String> {
+        use crate::motion::{MotionGoal, MotionOptions, MotionProblem, plan_motion};
+        let m = self.m;
+        let g = &task.group;
+        let mut start = q.to_vec();
+        for (j, &i) in g.q_index.iter().enumerate() {
+            start[i] = start[i].clamp(g.lower[j], g.upper[j]);
+        }
+        let (scene, goal) = match stage {
+            ArmStage::Approach => (&task.scene, MotionGoal::Pose(task.pre_grasp.clone())),
+            ArmStage::Grasp => (&task.scene, MotionGoal::Pose(task.grasp.clone())),
+            ArmStage::Retreat => {
+                let mut goal = start.clone();
+                for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
+                    if g.q_index.contains(&i) {
+                        goal[i] = m.transport[k];
+                    }
+                }
+                (&task.scene_after_grasp, MotionGoal::State(goal))
+            }
+        };
+        let mut options = MotionOptions::new(g.dim());
+        options.time_limit = std::time::Duration::from_secs_f64(task.planning_time);
+        options.seed = task.seed;
+        options.margin = ARM_MARGIN;
+        let problem = MotionProblem {
+            model: &m.robot.model,
+            geometry: &task.geometry,
+            scene,
+            group: g,
+        };
+        let name = Phase::Arm(stage).name();
+        let mut record = ArmPlanRecord {
+            stage: name.to_string(),
+            t,
+            solved: false,
+            reason: None,
+            planning_time_s: 0.0,
+            checks: 0,
+            duration: None,
+            min_distance: None,
+        };
+        let out = match plan_motion(&problem, &start, &goal, &options) {
+            Err(e) => Err(format!("the {name} motion could not be planned: {e}")),
+            Ok(r) => {
+                record.planning_time_s = r.planning_time.as_secs_f64();
+                record.checks = r.checks;
+                record.duration = r.trajectory.as_ref().map(|tr| tr.duration);
+                record.min_distance = r.closest.as_ref().map(|c| c.distance);
+                match (r.not_solved, r.trajectory) {
+                    (None, Some(trajectory)) => Ok(ArmMotion { t0: t, trajectory }),
+                    (Some(why), _) => Err(format!("the {name} motion was not solved: {why}")),
+                    (None, None) => Err(format!("the {name} motion has no trajectory")),
+                }
+            }
+        };
+        record.solved = out.is_ok();
+        record.reason = out.as_ref().err().cloned();
+        if let Ok(a) = &out {
+            self.wall.planning_s += record.planning_time_s;
+            self.event(
+                t,
+                "arm_plan",
+                format!(
+                    "{name} motion planned in {:.3} s ({} checks): {:.2} s",
+                    record.planning_time_s, record.checks, a.trajectory.duration
+                ),
+            );
+        }
+        if let Some(tr) = &mut self.task {
+            tr.arm_plans.push(record);
+        }
+        out
+    }
+
+    /// Attaches the picked object: the law, the plant and the monitors take the robot
+    /// with the payload from now on; the ZMP margin at this state without and with it is
+    /// recorded.
+    fn attach_payload(&mut self, task: &'m Task, ws: &mut Workspace, st: &mut LoopState, t: f64) {
+        let zmp = |ws: &mut Workspace| {
+            ws.monitor
+                .sample(t, ws.q_now.as_slice(), ws.v_now.as_slice(), &ws.u)
+                .ok()?;
+            ws.monitor.trace.zmp_margin.last().copied().flatten()
+        };
+        let without = zmp(ws);
+        self.wm = &task.payload_robot;
+        let attached = ws.attach(self.wm, self.m.file.limits.mu);
+        let with = attached.ok().and_then(|()| zmp(ws));
+        st.grasped = true;
+        let fmt = |z: Option<f64>| z.map_or("undefined".to_string(), |z| format!("{z:.4} m"));
+        self.event(
+            t,
+            "payload",
+            format!(
+                "'{}' attached ({} kg): ZMP margin {} without it, {} with it",
+                task.object,
+                task.mass,
+                fmt(without),
+                fmt(with)
+            ),
+        );
+        if let Some(tr) = &mut self.task {
+            tr.payload = Some(PayloadRecord {
+                t,
+                mass: task.mass,
+                zmp_margin_without: without,
+                zmp_margin_with: with,
+            });
+        }
+    }
+
     fn run(mut self) -> Result<MissionResult> {
         let mut x = initial_state(self.m);
         self.first_plan();
@@ -545,19 +839,31 @@ impl<'m> Runner<'m> {
             })
             .transpose()?;
         let plant = self.m.plant_robot.as_ref().unwrap_or(self.wm);
-        let mut ws = Workspace::new(self.wm, plant, self.m.file.limits.mu, contact)?;
+        let mut ws = Workspace::new(
+            self.wm,
+            plant,
+            self.m.file.limits.mu,
+            contact,
+            self.m.task.as_ref(),
+        )?;
         let act = Actuators::new(self.wm)?;
         let c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
         while let Flow::Next | Flow::Retry = self.step(&c, &mut ws, &mut st, &mut x) {}
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
-        Ok(self.finish(&st, &x, ws.contact.take()))
+        let distances = ws.distances.take();
+        Ok(self.finish(&st, &x, ws.contact.take(), distances))
     }
 
     /// The plan at t = 0 (or the reason there is none: a posture that tips at rest, an
     /// unreachable goal, a path that cannot be timed).
     fn first_plan(&mut self) {
+        if let Some(reason) = &self.failure {
+            let reason = reason.clone();
+            self.event(0.0, "failed", reason);
+            return;
+        }
         if self.timing_accel.is_none() {
             let why = if self.tip.forward.is_none() || self.tip.backward.is_none() {
                 "the transport posture tips the robot at rest (its ZMP lies outside the support \
@@ -723,6 +1029,12 @@ impl<'m> Runner<'m> {
             Phase::Reach => {
                 if !self.reach(c, st, ws, &ee, t, v, w) {
                     // record the state on the next pass, in phase `done`
+                    return Flow::Retry;
+                }
+                false
+            }
+            Phase::Arm(stage) => {
+                if !self.arm_step(c, st, ws, stage, t, v, w) {
                     return Flow::Retry;
                 }
                 false
@@ -1052,8 +1364,7 @@ impl<'m> Runner<'m> {
         v: f64,
         w: f64,
     ) {
-        let m = self.m;
-        let g = &m.file.goal;
+        let g = self.goal.clone();
         if st.phase == Phase::Drive {
             let r = self.reference.as_ref().expect("drive has a reference");
             if t >= r.t_end() {
@@ -1074,6 +1385,9 @@ impl<'m> Runner<'m> {
                 );
                 if g.end_effector.is_some() {
                     st.phase = Phase::Reach;
+                    st.phase_t0 = t;
+                } else if self.m.task.is_some() {
+                    st.phase = Phase::Arm(ArmStage::Approach);
                     st.phase_t0 = t;
                 } else {
                     st.time_to_goal = Some(t);
@@ -1111,8 +1425,7 @@ impl<'m> Runner<'m> {
         v: f64,
         w: f64,
     ) -> bool {
-        let m = self.m;
-        let g = &m.file.goal;
+        let g = self.goal.clone();
         let target = Vector3::from(g.end_effector.expect("reach has a target"));
         let traj = *st.ee_traj.get_or_insert_with(|| {
             let dist = (target - ee.p).norm();
@@ -1181,6 +1494,7 @@ impl<'m> Runner<'m> {
         ee: Vector3<f64>,
         evaluated: bool,
     ) {
+        self.check_arm_distances(ws, st, t);
         let Some((slip, clear)) = self.record(c, ws, st, t, ee, evaluated) else {
             return;
         };
@@ -1209,6 +1523,34 @@ impl<'m> Runner<'m> {
         }
     }
 
+    /// During a `[task]`'s arm motions: the distances of the state to the scene (without
+    /// the object once grasped) and between the robot's links; a distance ≤ 0 is a touch
+    /// and ends the run.
+    fn check_arm_distances(&mut self, ws: &mut Workspace, st: &mut LoopState, t: f64) {
+        let (Phase::Arm(_), Some(task), Some(dm)) =
+            (st.phase, self.m.task.as_ref(), ws.distances.as_mut())
+        else {
+            return;
+        };
+        let (d_scene, d_self) = dm.sample(task, &self.m.robot, ws.q_now.as_slice(), st.grasped);
+        let touch = if d_scene <= 0.0 {
+            dm.min_scene
+                .as_ref()
+                .map(|(d, [l, o])| format!("link '{l}' touches scene object '{o}' ({d:.4} m)"))
+        } else if d_self <= 0.0 {
+            dm.min_self
+                .as_ref()
+                .map(|(d, [a, b])| format!("link '{a}' touches link '{b}' ({d:.4} m)"))
+        } else {
+            None
+        };
+        if let Some(what) = touch {
+            self.event(t, "contact", what.clone());
+            self.fail(t, format!("collision: {what}"));
+            st.phase = Phase::Done;
+        }
+    }
+
     /// The smallest ZMP margin of the recorded samples as an event.
     fn min_zmp_event(&mut self) {
         if let Some((i, mz)) = self
@@ -1229,7 +1571,23 @@ impl<'m> Runner<'m> {
     }
 
     /// The result of the finished loop.
-    fn finish(mut self, st: &LoopState, x: &[f64], contact: Option<ContactLoop>) -> MissionResult {
+    fn finish(
+        mut self,
+        st: &LoopState,
+        x: &[f64],
+        contact: Option<ContactLoop>,
+        distances: Option<DistanceMonitor>,
+    ) -> MissionResult {
+        if let (Some(tr), Some(dm)) = (&mut self.task, distances) {
+            if let Some((d, pair)) = dm.min_scene {
+                tr.min_scene_distance = Some(d);
+                tr.closest_scene_pair = Some(pair);
+            }
+            if let Some((d, pair)) = dm.min_self {
+                tr.min_self_distance = Some(d);
+                tr.closest_self_pair = Some(pair);
+            }
+        }
         self.min_zmp_event();
         self.events.sort_by(|a, b| a.t.total_cmp(&b.t));
         let reached = self.failure.is_none() && st.time_to_goal.is_some();
@@ -1270,6 +1628,8 @@ impl<'m> Runner<'m> {
                 .map_or(x[model.nq + wm.nr()], |c| c.input_work),
             wall: self.wall,
             contact: contact.map(|c| c.tally.finish()),
+            goal_pose: self.goal.pose,
+            task: self.task,
         }
     }
 
@@ -1401,6 +1761,10 @@ struct LoopState {
     /// Planning wall time spent inside the loop (s).
     excluded: f64,
     next_obstacle: usize,
+    /// A `[task]`'s arm motion being tracked.
+    arm: Option<ArmMotion>,
+    /// The picked object is attached.
+    grasped: bool,
 }
 
 impl LoopState {
@@ -1436,8 +1800,81 @@ impl LoopState {
             },
             excluded: 0.0,
             next_obstacle: 0,
+            arm: None,
+            grasped: false,
         }
     }
+}
+
+/// A `[task]`'s base goal: the best-ranked placement
+/// ([`crate::motion::placement::place_base`], the arm at the transport posture) that the
+/// base's planner reaches from the start (the footprint fits there and a path leads
+/// there), with the task's record; or the start pose and the reason there is none.
+fn choose_placement(
+    m: &Mission,
+    task: &Task,
+) -> Result<(GoalSpec, Option<TaskResult>, Option<String>)> {
+    let clock = Instant::now();
+    let f = &m.file;
+    let posture = start_configuration(&m.robot, [0.0; 3], &m.transport);
+    let placement = task.placements(&m.robot, &posture)?;
+    let time_s = clock.elapsed().as_secs_f64();
+    let goal_at =
+        |pose: [f64; 3]| GoalSpec::base_pose(pose, PLACEMENT_TOLERANCE[0], PLACEMENT_TOLERANCE[1]);
+    let mut result = TaskResult {
+        object: task.object.clone(),
+        scene_pose: task.scene_pose,
+        placement: None,
+        arm_plans: Vec::new(),
+        payload: None,
+        min_scene_distance: None,
+        closest_scene_pair: None,
+        min_self_distance: None,
+        closest_self_pair: None,
+    };
+    if let Some(reason) = placement.failure() {
+        return Ok((
+            goal_at(f.start.pose),
+            Some(result),
+            Some(format!("no placement for the pick: {reason}")),
+        ));
+    }
+    let d = m.robot.base.drive.d;
+    let s0 = axle_pose(f.start.pose, d);
+    for (rank, c) in placement.candidates.iter().enumerate() {
+        let g0 = axle_pose(c.base, d);
+        let reached = Planner::new(
+            &m.map.grid,
+            f.map.unknown_is_obstacle,
+            m.footprint.radius,
+            d,
+            [s0[0], s0[1]],
+            [g0[0], g0[1]],
+        );
+        if let Ok((_, Some(_), _)) = reached {
+            result.placement = Some(PlacementChoice {
+                base: c.base,
+                rank,
+                candidates: placement.candidates.len(),
+                score: c.score,
+                manipulability: c.manipulability,
+                clearance: c.clearance,
+                tip_over_margin: c.tip_over_margin,
+                counts: placement.counts,
+                time_s,
+            });
+            return Ok((goal_at(c.base), Some(result), None));
+        }
+    }
+    let n = placement.candidates.len();
+    Ok((
+        goal_at(f.start.pose),
+        Some(result),
+        Some(format!(
+            "none of the {n} best placements that reach the grasp can be reached by the base: \
+             the footprint does not fit there or no path leads there"
+        )),
+    ))
 }
 
 /// The plant state at the start: the start pose, the start arm posture, at rest (the
@@ -1481,6 +1918,14 @@ struct Workspace {
     ndot_v: DVector<f64>,
     /// The end effector's reduced position Jacobian J N_C (3 × nr).
     ee_jacobian: DMatrix<f64>,
+    /// A `[task]`'s distance monitor of the arm motions.
+    distances: Option<DistanceMonitor>,
+    /// The arm motion's reference: configuration (full), group rates and accelerations.
+    q_ref: Vec<f64>,
+    /// Group joint rates of the reference.
+    qd_ref: Vec<f64>,
+    /// Group joint accelerations of the reference.
+    qdd_ref: Vec<f64>,
 }
 
 impl Workspace {
@@ -1489,20 +1934,16 @@ impl Workspace {
         plant: &WheeledModel,
         mu: f64,
         contact: Option<ContactLoop>,
+        task: Option<&Task>,
     ) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
-        let settings = StabilitySettings {
-            mu: Some(mu),
-            bodies: BodySet::All,
-            ground_z: None,
-            stop_at_tip: false,
-        };
+        let dim = task.map_or(0, |t| t.group.dim());
         Ok(Self {
             sys: WheeledSystem::new(plant.clone()),
             control_dynamics: WheeledData::new(wm),
             data: Data::new(model),
-            monitor: StabilityMonitor::new(plant, settings)?,
+            monitor: StabilityMonitor::new(plant, monitor_settings(mu))?,
             rk: Rk4::new(nq + nr + 1),
             first_stage: vec![0.0; nq + nr + 1],
             q_now: DVector::zeros(nq),
@@ -1515,7 +1956,29 @@ impl Workspace {
             ndot: DMatrix::zeros(model.nv, nr),
             ndot_v: DVector::zeros(model.nv),
             ee_jacobian: DMatrix::zeros(3, nr),
+            distances: task.map(|t| DistanceMonitor::new(t, wm)),
+            q_ref: vec![0.0; nq],
+            qd_ref: vec![0.0; dim],
+            qdd_ref: vec![0.0; dim],
         })
+    }
+
+    /// The plant and the monitors take `robot` (the same joints, other inertias: the
+    /// payload attached).
+    fn attach(&mut self, robot: &WheeledModel, mu: f64) -> Result<()> {
+        self.sys = WheeledSystem::new(robot.clone());
+        self.monitor = StabilityMonitor::new(robot, monitor_settings(mu))?;
+        Ok(())
+    }
+}
+
+/// The settings of the mission's stability and slip monitor.
+fn monitor_settings(mu: f64) -> StabilitySettings {
+    StabilitySettings {
+        mu: Some(mu),
+        bodies: BodySet::All,
+        ground_z: None,
+        stop_at_tip: false,
     }
 }
 
@@ -1615,6 +2078,8 @@ struct Controller {
     chain: Vec<usize>,
     /// (index, time) of the obstacles in the order they appear.
     obstacles: Vec<(usize, f64)>,
+    /// A `[task]`'s group joints as arm slots (indices into `arm`).
+    group_slots: Vec<usize>,
 }
 
 impl Controller {
@@ -1640,6 +2105,17 @@ impl Controller {
             .collect();
         obstacles.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
         let d = wm.base.drive.d;
+        let group_slots = m.task.as_ref().map_or_else(Vec::new, |t| {
+            t.group
+                .q_index
+                .iter()
+                .map(|i| {
+                    arm.iter()
+                        .position(|a| a == i)
+                        .expect("the group is the arm chain")
+                })
+                .collect()
+        });
         Ok(Self {
             nq: model.nq,
             nr: wm.nr(),
@@ -1649,14 +2125,14 @@ impl Controller {
             rec_every,
             res: m.map.grid.resolution,
             r_foot: m.footprint.radius,
-            goal: f.goal.pose,
+            goal: r.goal.pose,
             d,
-            goal_axle: axle_pose(f.goal.pose, d),
+            goal_axle: axle_pose(r.goal.pose, d),
             arm,
             q_t,
             kan,
             arrive: Aicardi::new(c.kx, 2.0, 1.0)?,
-            pos_tol: f.goal.position_tolerance,
+            pos_tol: r.goal.position_tolerance,
             kx: c.kx,
             ks: c.speed_gain,
             wn: c.arm_frequency,
@@ -1669,7 +2145,27 @@ impl Controller {
             act,
             chain: arm_chain(m),
             obstacles,
+            group_slots,
         })
+    }
+
+    /// A `[task]`'s arm motion: the platform's speeds to zero, each group joint onto the
+    /// reference in the workspace (q̈ = q̈_r + 2ωₙ (q̇_r − q̇) + ωₙ² (q_r − q)), the other
+    /// arm joints held at the transport posture. Writes the desired accelerations.
+    fn arm_law(&self, ws: &mut Workspace, v: f64, w: f64) {
+        let (ks, wn) = (self.ks, self.wn);
+        let a_des = &mut ws.a_des;
+        a_des[0] = -ks * v;
+        a_des[1] = -ks * w;
+        for (k2, &i) in self.arm.iter().enumerate() {
+            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.q_now[i]) - 2.0 * wn * ws.v_now[2 + k2];
+        }
+        for (j, &k2) in self.group_slots.iter().enumerate() {
+            let i = self.arm[k2];
+            a_des[2 + k2] = ws.qdd_ref[j]
+                + 2.0 * wn * (ws.qd_ref[j] - ws.v_now[2 + k2])
+                + wn * wn * (ws.q_ref[i] - ws.q_now[i]);
+        }
     }
 
     /// The reference sample of the goal pose at rest.
