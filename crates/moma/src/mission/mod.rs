@@ -15,6 +15,7 @@
 //! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period; or, with `simulation.plant = "contact"`, the contact plant ([`crate::contact`]) stepped at its own `dt` under the same held torques, measured through the reduced coordinates (`plant`) |
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |
 //! | goal | the base settles on the goal pose, then task-space inverse dynamics on the reduced model brings the end effector along a minimum-jerk line to its target while the platform holds still |
+//! | pick (`[task]`) | the base goal is the best placement ([`crate::motion::placement::place_base`]) the planner reaches; the torso-arm motions to pre-grasp, grasp and back ([`crate::motion::plan_motion`]) tracked in joint space by the same computed torque, the platform held; the payload attached to the law's, plant's and monitors' model; the distances to the scene and between links monitored; then the drive on to `[goal]`, if any |
 //! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (the axle's lateral multiplier and the wheels' longitudinal forces against μ N, `stability::loads`), torque and speed saturation, tracking error, clearance, energy |
 //!
 //! A run that starts but cannot finish (an unreachable or sealed goal, a posture under
@@ -41,6 +42,9 @@
 //!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
 //! * `plant` builds and checks the contact plant of `simulation.plant = "contact"` at load
 //!   ([`MissionContact`]) and steps it in the loop, with its monitors and events.
+//! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under its
+//!   outline; the grasp; the geometry; the payload robot) and holds its distance monitor
+//!   and result records.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 pub mod footprint;

@@ -394,17 +394,41 @@ fn base_reference(mut r: RefSample, d: f64) -> RefSample {
     r
 }
 
+/// The tip-over limits the timing may use (`tip_fraction` of them): a side no edge limits
+/// is unbounded; a posture that tips at rest (or has no room to accelerate) cannot be
+/// timed (`None`).
+fn timing_acceleration(tip: &AccelerationLimits, tip_fraction: f64) -> Option<TipOverAcceleration> {
+    match (tip.forward, tip.backward) {
+        (Some(fw), Some(bw)) if fw > 0.0 && bw > 0.0 => {
+            let side = |x: Option<f64>| x.map_or(f64::INFINITY, |a| tip_fraction * a);
+            Some(TipOverAcceleration {
+                forward: tip_fraction * fw,
+                backward: tip_fraction * bw,
+                left: side(tip.left),
+                right: side(tip.right),
+            })
+            .filter(|t| t.left > 0.0 && t.right > 0.0)
+        }
+        _ => None,
+    }
+}
+
 /// The tip-over acceleration limits of the robot in its transport posture, at rest, in
 /// base axes.
 pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
-    let model = &m.robot.model;
+    tip_limits_of(m, &m.robot)
+}
+
+/// [`transport_tip_limits`] of `robot` (the mission's, or with a `[task]`'s payload).
+fn tip_limits_of(m: &Mission, robot: &WheeledModel) -> Result<AccelerationLimits> {
+    let model = &robot.model;
     let mut q = DVector::zeros(model.nq);
     for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
         q[i] = m.transport[k];
     }
     let mut data = Data::new(model);
     let com = crate::dynamics::center_of_mass(model, &mut data, &q);
-    let support = SupportPolygon::from_wheeled_model(&m.robot)?;
+    let support = SupportPolygon::from_wheeled_model(robot)?;
     Ok(crate::stability::acceleration_limits(
         model.total_mass(),
         &com,
@@ -438,6 +462,8 @@ struct Runner<'m> {
     goal: GoalSpec,
     /// A `[task]`'s record so far.
     task: Option<TaskResult>,
+    /// A `[task]`'s `[goal]`, driven on to after the pick.
+    drive_on: Option<GoalSpec>,
     planner: Planner,
     first_path: Option<Vec<(usize, usize)>>,
     first_search: SearchTiming,
@@ -485,26 +511,13 @@ impl<'m> Runner<'m> {
             a_max: l.a_max,
             alpha_max: l.alpha_max,
         };
-        // the tip-over limits the timing may use: a side no edge limits is unbounded; a
-        // posture that tips at rest (or has no room to accelerate) cannot be timed
-        let timing_accel = match (tip.forward, tip.backward) {
-            (Some(fw), Some(bw)) if fw > 0.0 && bw > 0.0 => {
-                let side = |x: Option<f64>| x.map_or(f64::INFINITY, |a| l.tip_fraction * a);
-                Some(TipOverAcceleration {
-                    forward: l.tip_fraction * fw,
-                    backward: l.tip_fraction * bw,
-                    left: side(tip.left),
-                    right: side(tip.right),
-                })
-                .filter(|t| t.left > 0.0 && t.right > 0.0)
-            }
-            _ => None,
-        };
+        let timing_accel = timing_acceleration(&tip, l.tip_fraction);
         Ok(Self {
             m,
             wm: &m.robot,
             goal,
             task,
+            drive_on: m.task.as_ref().and(m.goal().cloned()),
             planner,
             first_path,
             first_search,
@@ -628,11 +641,12 @@ impl<'m> Runner<'m> {
     #[allow(clippy::too_many_arguments)]
     fn arm_step(
         &mut self,
-        c: &Controller,
+        c: &mut Controller,
         st: &mut LoopState,
         ws: &mut Workspace,
         stage: ArmStage,
         t: f64,
+        axle: [f64; 3],
         v: f64,
         w: f64,
     ) -> bool {
@@ -678,16 +692,25 @@ impl<'m> Runner<'m> {
                     st.phase = Phase::Arm(ArmStage::Retreat);
                 }
                 ArmStage::Retreat => {
-                    self.event(
-                        t,
-                        "reached",
-                        format!(
-                            "picked '{}', arm back in the transport posture",
-                            task.object
-                        ),
+                    st.picked = true;
+                    let text = format!(
+                        "picked '{}', arm back in the transport posture",
+                        task.object
                     );
-                    st.time_to_goal = Some(t);
-                    st.phase = Phase::Done;
+                    match self.drive_on.take() {
+                        Some(goal) => {
+                            self.event(t, "picked", text);
+                            if !self.drive_on_to(c, st, t, axle, goal) {
+                                st.phase = Phase::Done;
+                                return false;
+                            }
+                        }
+                        None => {
+                            self.event(t, "reached", text);
+                            st.time_to_goal = Some(t);
+                            st.phase = Phase::Done;
+                        }
+                    }
                 }
             }
             st.phase_t0 = t;
@@ -702,6 +725,108 @@ impl<'m> Runner<'m> {
             st.phase = Phase::Done;
             return false;
         }
+        true
+    }
+
+    /// After the pick: plans from the placement to `goal` (the map with the obstacles
+    /// that have appeared), times the path from the robot's pose at rest under the
+    /// tip-over limits of the transport posture with the payload, and drives on. `false`
+    /// (with the reason) when no path leads there or it cannot be timed.
+    fn drive_on_to(
+        &mut self,
+        c: &mut Controller,
+        st: &mut LoopState,
+        t: f64,
+        axle: [f64; 3],
+        goal: GoalSpec,
+    ) -> bool {
+        let m = self.m;
+        let f = &m.file;
+        let d = self.wm.base.drive.d;
+        let clock = Instant::now();
+        // the search leaves from the placement's cell (free on the configuration space:
+        // the base was planned there), the timing from where the base stands
+        let from = axle_pose(self.goal.pose, d);
+        let to = axle_pose(goal.pose, d);
+        let planned = Planner::new(
+            &m.map.grid,
+            f.map.unknown_is_obstacle,
+            m.footprint.radius,
+            d,
+            [from[0], from[1]],
+            [to[0], to[1]],
+        );
+        let (mut planner, mut path, search) = match planned {
+            Ok(p) => p,
+            Err(e) => {
+                self.fail(t, format!("driving on to the goal: {e}"));
+                return false;
+            }
+        };
+        // the obstacles that have appeared so far
+        let grid = &m.map.grid;
+        let [fx, fy] = grid.world_to_cell_f(from[0], from[1]);
+        let cell = (
+            (fx.floor().max(0.0) as usize).min(grid.width - 1),
+            (fy.floor().max(0.0) as usize).min(grid.height - 1),
+        );
+        if st.next_obstacle > 0 {
+            for &(oi, _) in &c.obstacles[..st.next_obstacle] {
+                let o = f.obstacles[oi];
+                let centre = grid.world_to_cell_f(o.center[0], o.center[1]);
+                if let Err(e) = planner.add_disk(centre, o.radius / grid.resolution, cell) {
+                    self.fail(t, format!("driving on to the goal: {e}"));
+                    return false;
+                }
+            }
+            path = planner.replan().0;
+        }
+        let s = clock.elapsed().as_secs_f64();
+        self.wall.planning_s += s;
+        st.excluded += s;
+        let Some(cells) = path else {
+            self.fail(
+                t,
+                "the goal is unreachable from the placement: no collision-free path on the \
+                 configuration space"
+                    .to_string(),
+            );
+            return false;
+        };
+        self.planner = planner;
+        self.goal = goal;
+        match tip_limits_of(m, self.wm) {
+            Ok(tip) => self.tip = tip,
+            Err(e) => {
+                self.fail(t, format!("driving on to the goal: {e}"));
+                return false;
+            }
+        }
+        self.timing_accel = timing_acceleration(&self.tip, f.limits.tip_fraction);
+        if self.timing_accel.is_none() {
+            self.fail(
+                t,
+                "the transport posture with the payload leaves no acceleration that keeps \
+                 the ZMP inside the support"
+                    .to_string(),
+            );
+            return false;
+        }
+        c.retarget(&self.goal, &self.tip);
+        let start = TimingStart {
+            t0: t,
+            pose: axle,
+            v: 0.0,
+        };
+        if !self.make_reference(cells, start, "drive on", search) {
+            return false;
+        }
+        let dur = self.plans.last().map_or(0.0, |p| p.duration);
+        if f.simulation.time_limit.is_none() {
+            c.time_limit = c.time_limit.max(t + 3.0 * dur + 30.0);
+        }
+        self.event(t, "plan", format!("drive on to the goal: {dur:.2} s"));
+        st.phase = Phase::Drive;
         true
     }
 
@@ -847,10 +972,10 @@ impl<'m> Runner<'m> {
             self.m.task.as_ref(),
         )?;
         let act = Actuators::new(self.wm)?;
-        let c = Controller::new(&self, act, time_limit, rec_every)?;
+        let mut c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
-        while let Flow::Next | Flow::Retry = self.step(&c, &mut ws, &mut st, &mut x) {}
+        while let Flow::Next | Flow::Retry = self.step(&mut c, &mut ws, &mut st, &mut x) {}
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
         let distances = ws.distances.take();
         Ok(self.finish(&st, &x, ws.contact.take(), distances))
@@ -959,7 +1084,7 @@ impl<'m> Runner<'m> {
     /// the torques, the record with its monitors, one integration step.
     fn step(
         &mut self,
-        c: &Controller,
+        c: &mut Controller,
         ws: &mut Workspace,
         st: &mut LoopState,
         x: &mut [f64],
@@ -1034,7 +1159,7 @@ impl<'m> Runner<'m> {
                 false
             }
             Phase::Arm(stage) => {
-                if !self.arm_step(c, st, ws, stage, t, v, w) {
+                if !self.arm_step(c, st, ws, stage, t, axle, v, w) {
                     return Flow::Retry;
                 }
                 false
@@ -1386,7 +1511,7 @@ impl<'m> Runner<'m> {
                 if g.end_effector.is_some() {
                     st.phase = Phase::Reach;
                     st.phase_t0 = t;
-                } else if self.m.task.is_some() {
+                } else if self.m.task.is_some() && !st.picked {
                     st.phase = Phase::Arm(ArmStage::Approach);
                     st.phase_t0 = t;
                 } else {
@@ -1765,6 +1890,8 @@ struct LoopState {
     arm: Option<ArmMotion>,
     /// The picked object is attached.
     grasped: bool,
+    /// The pick is done (the arm back in the transport posture).
+    picked: bool,
 }
 
 impl LoopState {
@@ -1802,6 +1929,7 @@ impl LoopState {
             next_obstacle: 0,
             arm: None,
             grasped: false,
+            picked: false,
         }
     }
 }
@@ -2147,6 +2275,19 @@ impl Controller {
             obstacles,
             group_slots,
         })
+    }
+
+    /// Drives on to `goal` with the tip-over guards of `tip` (a `[task]`'s drive on).
+    fn retarget(&mut self, goal: &GoalSpec, tip: &AccelerationLimits) {
+        self.goal = goal.pose;
+        self.goal_axle = axle_pose(goal.pose, self.d);
+        self.pos_tol = goal.position_tolerance;
+        let (tip_f, tip_b) = match (tip.forward, tip.backward) {
+            (Some(a), Some(b)) => (a, b),
+            _ => (0.0, 0.0),
+        };
+        self.a_guard_f = self.a_guard_f.min(0.95 * tip_f);
+        self.a_guard_b = self.a_guard_b.min(0.95 * tip_b);
     }
 
     /// A `[task]`'s arm motion: the platform's speeds to zero, each group joint onto the

@@ -645,9 +645,9 @@ pub fn from_file_with(
     })
 }
 
-/// `[goal]` is required without `[task]`; with it, the goal of the base is the chosen
-/// placement, and the contact plant and `[uncertainty]` are not offered (the payload is
-/// attached to the rolling plant's model).
+/// `[goal]` is required without `[task]`; with it, the goal is optional (the base drives
+/// on to it after the pick) and takes no end-effector target, and the contact plant and
+/// `[uncertainty]` are not offered (the payload is attached to the rolling plant's model).
 fn check_goal_and_task(file: &MissionFile, path: &Path) -> Result<()> {
     match (&file.goal, &file.task) {
         (None, None) => Err(field_err(
@@ -655,11 +655,11 @@ fn check_goal_and_task(file: &MissionFile, path: &Path) -> Result<()> {
             "goal",
             "missing: give [goal] (or a [task] to pick)",
         )),
-        (Some(_), Some(_)) => Err(field_err(
+        (Some(g), Some(_)) if g.end_effector.is_some() => Err(field_err(
             path,
-            "goal",
-            "a mission with [task] ends with the pick: its base goal is the placement, so \
-             it takes no [goal]",
+            "goal.end_effector",
+            "a mission with [task] drives on to the goal pose after the pick; it takes no \
+             end-effector target",
         )),
         (_, Some(_)) if file.simulation.plant == PlantKind::Contact => Err(field_err(
             path,
