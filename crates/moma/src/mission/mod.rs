@@ -68,7 +68,8 @@ pub use scenario::{Mission, MissionFile, load};
 /// clearance, tracking and slip extremes, `final_pose_error` ([m, rad]),
 /// `end_effector_error`, saturation counts, energies, `tip_over_limits`,
 /// `timing_acceleration` and `samples`; on the contact plant `contact` (first lift-off,
-/// first slip, per-contact totals, largest tilt). Non-finite or missing values are `null`.
+/// first slip, per-contact totals, largest tilt); `min_scene_distance`,
+/// `min_self_distance` and, with a `[task]`, `task` ([`task::TaskResult`]). Non-finite or missing values are `null`.
 /// `moma mission` adds its timing and file keys to this map; the Python package returns
 /// it as it is.
 #[must_use]
