@@ -847,7 +847,7 @@ fn mission_replan_case() -> MissionReplan {
         .world_to_cell("start", f.start.pose[0], f.start.pose[1])
         .unwrap();
     let gc = grid
-        .world_to_cell("goal", f.goal.pose[0], f.goal.pose[1])
+        .world_to_cell("goal", m.goal().unwrap().pose[0], m.goal().unwrap().pose[1])
         .unwrap();
     let mut planner = DStarLite::new(&cs, sc, gc).unwrap();
     planner.compute().expect("goal reachable");
@@ -888,7 +888,7 @@ fn mission_replan_case() -> MissionReplan {
         occupied,
         start: [q[0], q[1], q[2]],
         v0: rp.v_start,
-        goal: f.goal.pose,
+        goal: m.goal().unwrap().pose,
         kappas: [l.kappa_max, 2.0 * l.kappa_max, 4.0 * l.kappa_max],
         limits: DiffDriveLimits {
             v_max: l.v_max,

@@ -278,7 +278,7 @@ fn mission_report(
 ) -> Result<crate::report::MissionReport> {
     use crate::report::{
         MAX_FRAMES, MissionReport, ReportEvent, ReportMap, ReportObstacle, ReportPlan,
-        ReportSamples, RobotShapes,
+        ReportSamples, RobotShapes, scene_shapes,
     };
     let urdf = m
         .path
@@ -287,7 +287,14 @@ fn mission_report(
         .join(&m.file.robot.urdf);
     let model = &m.robot.model;
     let view3d = RobotShapes::from_urdf(&urdf, model, &m.package_dirs)
-        .and_then(|shapes| shapes.view(model, &r.samples.t, &r.samples.q, MAX_FRAMES, Vec::new()))
+        .and_then(|shapes| {
+            // a [task]'s scene at its place on the map
+            let scene = m
+                .task
+                .as_ref()
+                .map_or_else(Vec::new, |t| scene_shapes(&t.scene));
+            shapes.view(model, &r.samples.t, &r.samples.q, MAX_FRAMES, scene)
+        })
         .map_err(|e| anyhow!("{}: the 3-D view: {e}", m.path.display()))?;
     let g = &m.map.grid;
     let cells = g
@@ -320,8 +327,8 @@ fn mission_report(
         },
         footprint_radius: m.footprint.radius,
         start: f.start.pose,
-        goal: f.goal.pose,
-        end_effector_target: f.goal.end_effector,
+        goal: r.goal_pose,
+        end_effector_target: m.goal().and_then(|g| g.end_effector),
         plans: r
             .plans
             .iter()

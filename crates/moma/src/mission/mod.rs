@@ -16,6 +16,7 @@
 //! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period; or, with `simulation.plant = "contact"`, the contact plant ([`crate::contact`]) stepped at its own `dt` under the same held torques, measured through the reduced coordinates (`plant`) |
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |
 //! | goal | the base settles on the goal pose, then task-space inverse dynamics on the reduced model brings the end effector along a minimum-jerk line to its target while the platform holds still |
+//! | pick (`[task]`) | the base goal is the best placement ([`crate::motion::placement::place_base`]) the planner reaches; the torso-arm motions to pre-grasp, grasp and back ([`crate::motion::plan_motion`]) tracked in joint space by the same computed torque, the platform held; the payload attached to the law's, plant's and monitors' model; the distances to the scene and between links monitored; then the drive on to `[goal]`, if any |
 //! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (the axle's lateral multiplier and the wheels' longitudinal forces against μ N, `stability::loads`), torque and speed saturation, tracking error, clearance, energy |
 //!
 //! A run that starts but cannot finish (an unreachable or sealed goal, a posture under
@@ -45,6 +46,9 @@
 //!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
 //! * `plant` builds and checks the contact plant of `simulation.plant = "contact"` at load
 //!   ([`MissionContact`]) and steps it in the loop, with its monitors and events.
+//! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under its
+//!   outline; the grasp; the geometry; the payload robot) and holds its distance monitor
+//!   and result records.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 pub mod footprint;
@@ -55,6 +59,7 @@ mod plant;
 pub mod reference;
 mod run;
 pub mod scenario;
+pub mod task;
 
 pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
@@ -69,23 +74,24 @@ pub use scenario::{Mission, MissionFile, load};
 /// `end_effector_error`, saturation counts, energies, `tip_over_limits`,
 /// `timing_acceleration` and `samples`; with `map.boxes` the 3-D verdict of each box
 /// (`boxes`: `clearance`, `blocked`); on the contact plant `contact` (first lift-off,
-/// first slip, per-contact totals, largest tilt). Non-finite or missing values are `null`.
+/// first slip, per-contact totals, largest tilt); `min_scene_distance`,
+/// `min_self_distance` and, with a `[task]`, `task` ([`task::TaskResult`]). Non-finite
+/// or missing values are `null`.
 /// `moma mission` adds its timing and file keys to this map; the Python package returns
 /// it as it is.
 #[must_use]
 pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_json::Value> {
     use serde_json::json;
     let fin = |x: Option<f64>| x.filter(|v| v.is_finite());
-    let f = &m.file;
     let last = r.samples.t.len().saturating_sub(1);
     let final_pose_error = r.samples.q.get(last).map(|q| {
-        let g = f.goal.pose;
+        let g = r.goal_pose;
         [
             (q[0] - g[0]).hypot(q[1] - g[1]),
             crate::control::wrap_angle(g[2] - q[2]).abs(),
         ]
     });
-    let ee_error = f.goal.end_effector.and_then(|target| {
+    let ee_error = m.goal().and_then(|g| g.end_effector).and_then(|target| {
         r.samples.ee.get(last).map(|e| {
             ((e[0] - target[0]).powi(2) + (e[1] - target[1]).powi(2) + (e[2] - target[2]).powi(2))
                 .sqrt()
@@ -119,6 +125,9 @@ pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_
         },
         "timing_acceleration": r.timing_acceleration,
         "samples": r.samples.t.len(),
+        "min_scene_distance": r.task.as_ref().and_then(|t| fin(t.min_scene_distance)),
+        "min_self_distance": r.task.as_ref().and_then(|t| fin(t.min_self_distance)),
+        "task": r.task,
     });
     let mut map = match doc {
         serde_json::Value::Object(map) => map,

@@ -7,7 +7,10 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 use super::plan::{Planner, PolygonCheck, SearchTiming};
 use super::plant::{ContactLoop, Monitors, start_configuration};
 use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
-use super::scenario::{MAX_SAMPLES, MAX_STEPS, Mission};
+use super::scenario::{GoalSpec, MAX_SAMPLES, MAX_STEPS, Mission};
+use super::task::{
+    ARM_MARGIN, ArmPlanRecord, DistanceMonitor, PayloadRecord, PlacementChoice, Task, TaskResult,
+};
 use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
@@ -17,7 +20,7 @@ use crate::mobile::wheeled::{
     reduced_forward_dynamics_under_inputs,
 };
 use crate::mobile::{WheeledData, WheeledModel};
-use crate::multibody::{Data, JointType};
+use crate::multibody::Data;
 use crate::ode::{OdeSystem, Rk4};
 use crate::planning::footprint_clearance::ConvexFootprint;
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
@@ -40,6 +43,15 @@ const EXACT_CLEARANCE: f64 = 1.0;
 /// Re-plans with the colliding cells blocked before the footprint polygon's search
 /// falls back to the circumscribed disk.
 const POLYGON_REPAIRS: usize = 10;
+/// Time allowed after an arm trajectory ends to settle on its last state (s).
+const ARM_SETTLE: f64 = 3.0;
+/// An arm motion has ended when every group joint is this close to its last state (rad
+/// or m) and moves slower than [`ARM_SETTLED_RATE`].
+const ARM_SETTLED: f64 = 0.01;
+/// Joint rate (rad/s or m/s) below which a settled arm joint counts as at rest.
+const ARM_SETTLED_RATE: f64 = 0.02;
+/// Tolerances of the base at a task's placement (m, rad).
+const PLACEMENT_TOLERANCE: [f64; 2] = [0.05, 0.05];
 
 /// One re-plan (or the first plan) of a run.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -118,7 +130,8 @@ pub struct Samples {
     pub arm_side: Vec<Vec<[f64; 2]>>,
     /// Actuator energy so far ∫ Σ |u_j · rate_j| dt (J).
     pub energy: Vec<f64>,
-    /// Mission phase: `drive`, `arrive`, `reach`, `done`.
+    /// Mission phase: `drive`, `arrive`, `reach`, with a `[task]` `approach`, `grasp`,
+    /// `retreat`; `done`.
     pub phase: Vec<&'static str>,
 }
 
@@ -173,6 +186,11 @@ pub struct MissionResult {
     /// On the contact plant (`simulation.plant = "contact"`): the first lift-off and the
     /// first slip, per-contact totals and the largest tilt; `None` on the rolling plant.
     pub contact: Option<ContactTally>,
+    /// The base pose the run drove to: `[goal]`'s, or with `[task]` the placement (the
+    /// start pose when none was found).
+    pub goal_pose: [f64; 3],
+    /// With `[task]`: the placement, the arm plans, the payload and the distances.
+    pub task: Option<TaskResult>,
 }
 
 impl MissionResult {
@@ -246,7 +264,20 @@ enum Phase {
     Drive,
     Arrive,
     Reach,
+    /// A `[task]`'s arm motion.
+    Arm(ArmStage),
     Done,
+}
+
+/// The arm motions of a pick, in order.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum ArmStage {
+    /// To the pre-grasp.
+    Approach,
+    /// From the pre-grasp to the grasp.
+    Grasp,
+    /// With the object, back to the transport posture.
+    Retreat,
 }
 
 impl Phase {
@@ -255,8 +286,62 @@ impl Phase {
             Phase::Drive => "drive",
             Phase::Arrive => "arrive",
             Phase::Reach => "reach",
+            Phase::Arm(ArmStage::Approach) => "approach",
+            Phase::Arm(ArmStage::Grasp) => "grasp",
+            Phase::Arm(ArmStage::Retreat) => "retreat",
             Phase::Done => "done",
         }
+    }
+}
+
+/// An arm motion being tracked: its trajectory from `t0` and its last state.
+struct ArmMotion {
+    t0: f64,
+    trajectory: crate::motion::MotionTrajectory,
+}
+
+impl ArmMotion {
+    /// The group's reference (q, q̇, q̈) at mission time `t` (linear between samples;
+    /// q̈ the difference of the bracketing rates), written into `q` (full configuration),
+    /// `qd` and `qdd` (group order).
+    fn at(
+        &self,
+        t: f64,
+        group: &crate::motion::JointGroup,
+        q: &mut [f64],
+        qd: &mut [f64],
+        qdd: &mut [f64],
+    ) {
+        let tr = &self.trajectory;
+        let s = (t - self.t0).clamp(0.0, tr.duration);
+        let n = tr.t.len();
+        if n < 2 {
+            q.copy_from_slice(&tr.q[0]);
+            qd.fill(0.0);
+            qdd.fill(0.0);
+            return;
+        }
+        let k = tr.t.partition_point(|&ti| ti <= s).clamp(1, n - 1);
+        let (a, b) = (k - 1, k);
+        let h = (tr.t[b] - tr.t[a]).max(f64::MIN_POSITIVE);
+        let w = ((s - tr.t[a]) / h).clamp(0.0, 1.0);
+        q.copy_from_slice(&tr.q[a]);
+        for (j, &i) in group.q_index.iter().enumerate() {
+            q[i] = tr.q[a][i] + w * (tr.q[b][i] - tr.q[a][i]);
+            let (va, vb) = (tr.qd[a][j], tr.qd[b][j]);
+            if t - self.t0 >= tr.duration {
+                qd[j] = 0.0;
+                qdd[j] = 0.0;
+            } else {
+                qd[j] = va + w * (vb - va);
+                qdd[j] = (vb - va) / h;
+            }
+        }
+    }
+
+    /// The last state of the trajectory (full configuration).
+    fn last(&self) -> &[f64] {
+        self.trajectory.q.last().expect("a trajectory has samples")
     }
 }
 
@@ -295,6 +380,43 @@ fn path_length(p: &[[f64; 2]]) -> f64 {
 
 /// The pose of the driven-axle midpoint P0 (the unicycle point) of a base pose
 /// `[x, y, θ]` whose origin lies `d` ahead of it: `[x − d cos θ, y − d sin θ, θ]`.
+/// The mission's planner between two axle-midpoint poses. With the robot's footprint
+/// polygon: searched on the largest disk about the axle midpoint inside it (padded), and
+/// every path it gives checked with the polygon at each heading; with a disk: the map
+/// dilated by it (and `|d|`).
+fn mission_planner(
+    m: &Mission,
+    from: [f64; 3],
+    to: [f64; 3],
+) -> Result<(Planner, Option<super::plan::CellPath>, SearchTiming)> {
+    let d = m.robot.base.drive.d;
+    let grid = &m.map.grid;
+    let polygon = m.footprint.planning_polygon(d);
+    let (field, radius, offset) = match &polygon {
+        Some((_, inscribed)) => ("robot.footprint", inscribed + m.footprint.padding(), 0.0),
+        None if m.file.robot.footprint.is_some() => ("robot.footprint", m.footprint.radius, d),
+        None => ("robot.footprint_radius", m.footprint.radius, d),
+    };
+    let (mut planner, path, search) = Planner::new(
+        grid,
+        m.file.map.unknown_is_obstacle,
+        field,
+        radius,
+        offset,
+        [from[0], from[1]],
+        [to[0], to[1]],
+    )?;
+    if let Some((fp, _)) = polygon {
+        let res = grid.resolution;
+        planner.polygon = Some(PolygonCheck::new(
+            ConvexFootprint::new(&fp, res)?,
+            m.footprint.padding() / res,
+            d / res,
+        ));
+    }
+    Ok((planner, path, search))
+}
+
 fn axle_pose(base: [f64; 3], d: f64) -> [f64; 3] {
     if d == 0.0 {
         return base;
@@ -314,17 +436,41 @@ fn base_reference(mut r: RefSample, d: f64) -> RefSample {
     r
 }
 
+/// The tip-over limits the timing may use (`tip_fraction` of them): a side no edge limits
+/// is unbounded; a posture that tips at rest (or has no room to accelerate) cannot be
+/// timed (`None`).
+fn timing_acceleration(tip: &AccelerationLimits, tip_fraction: f64) -> Option<TipOverAcceleration> {
+    match (tip.forward, tip.backward) {
+        (Some(fw), Some(bw)) if fw > 0.0 && bw > 0.0 => {
+            let side = |x: Option<f64>| x.map_or(f64::INFINITY, |a| tip_fraction * a);
+            Some(TipOverAcceleration {
+                forward: tip_fraction * fw,
+                backward: tip_fraction * bw,
+                left: side(tip.left),
+                right: side(tip.right),
+            })
+            .filter(|t| t.left > 0.0 && t.right > 0.0)
+        }
+        _ => None,
+    }
+}
+
 /// The tip-over acceleration limits of the robot in its transport posture, at rest, in
 /// base axes.
 pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
-    let model = &m.robot.model;
+    tip_limits_of(m, &m.robot)
+}
+
+/// [`transport_tip_limits`] of `robot` (the mission's, or with a `[task]`'s payload).
+fn tip_limits_of(m: &Mission, robot: &WheeledModel) -> Result<AccelerationLimits> {
+    let model = &robot.model;
     let mut q = DVector::zeros(model.nq);
     for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
         q[i] = m.transport[k];
     }
     let mut data = Data::new(model);
     let com = crate::dynamics::center_of_mass(model, &mut data, &q);
-    let support = SupportPolygon::from_wheeled_model(&m.robot)?;
+    let support = SupportPolygon::from_wheeled_model(robot)?;
     Ok(crate::stability::acceleration_limits(
         model.total_mass(),
         &com,
@@ -336,18 +482,7 @@ pub fn transport_tip_limits(m: &Mission) -> Result<AccelerationLimits> {
 
 /// The joints of the arm chain that ends at the end-effector frame (root side first).
 fn arm_chain(m: &Mission) -> Vec<usize> {
-    let model = &m.robot.model;
-    let mut j = model.frames[m.ee_frame.0].parent_joint.0;
-    let mut chain = Vec::new();
-    while j != 0 {
-        if model.joint_types[j] != JointType::Planar && m.robot.arm_dofs().contains(&model.idx_v[j])
-        {
-            chain.push(j);
-        }
-        j = model.parents[j].0;
-    }
-    chain.reverse();
-    chain
+    super::task::arm_chain(&m.robot, m.ee_frame)
 }
 
 /// Runs a mission.
@@ -363,7 +498,14 @@ pub fn run(m: &Mission) -> Result<MissionResult> {
 
 struct Runner<'m> {
     m: &'m Mission,
+    /// The law's robot: the mission's, with a `[task]`'s payload once grasped.
     wm: &'m WheeledModel,
+    /// The base goal: `[goal]`, or a `[task]`'s placement.
+    goal: GoalSpec,
+    /// A `[task]`'s record so far.
+    task: Option<TaskResult>,
+    /// A `[task]`'s `[goal]`, driven on to after the pick.
+    drive_on: Option<GoalSpec>,
     planner: Planner,
     first_path: Option<Vec<(usize, usize)>>,
     first_search: SearchTiming,
@@ -383,35 +525,23 @@ impl<'m> Runner<'m> {
         let f = &m.file;
         let clock = Instant::now();
         let d = m.robot.base.drive.d;
-        let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(f.goal.pose, d));
-        let grid = &m.map.grid;
-        let polygon = m.footprint.planning_polygon(d);
-        // the polygon: searched on the largest disk about the axle midpoint inside it
-        // (padded), each path then checked with the polygon; a disk: dilated by it
-        let (field, radius, offset) = match &polygon {
-            Some((_, inscribed)) => ("robot.footprint", inscribed + m.footprint.padding(), 0.0),
-            None if m.file.robot.footprint.is_some() => ("robot.footprint", m.footprint.radius, d),
-            None => ("robot.footprint_radius", m.footprint.radius, d),
+        let (goal, task, failure) = match &m.task {
+            None => (
+                m.goal()
+                    .cloned()
+                    .ok_or_else(|| Error::parse(&m.path, "goal: missing"))?,
+                None,
+                None,
+            ),
+            Some(task) => choose_placement(m, task)?,
         };
-        let (mut planner, first_path, first_search) = Planner::new(
-            grid,
-            f.map.unknown_is_obstacle,
-            field,
-            radius,
-            offset,
-            [s0[0], s0[1]],
-            [g0[0], g0[1]],
-        )?;
-        if let Some((fp, _)) = polygon {
-            let res = grid.resolution;
-            planner.polygon = Some(PolygonCheck::new(
-                ConvexFootprint::new(&fp, res)?,
-                m.footprint.padding() / res,
-                d / res,
-            ));
+        let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(goal.pose, d));
+        let grid = &m.map.grid;
+        let (mut planner, first_path, first_search) = mission_planner(m, s0, g0)?;
+        if planner.polygon.is_some() {
             for (what, pose, axle) in [
                 ("start.pose", f.start.pose, s0),
-                ("goal.pose", f.goal.pose, g0),
+                ("goal.pose", goal.pose, g0),
             ] {
                 if planner.axle_collides(grid, axle) {
                     return Err(Error::invalid(
@@ -437,24 +567,13 @@ impl<'m> Runner<'m> {
             a_max: l.a_max,
             alpha_max: l.alpha_max,
         };
-        // the tip-over limits the timing may use: a side no edge limits is unbounded; a
-        // posture that tips at rest (or has no room to accelerate) cannot be timed
-        let timing_accel = match (tip.forward, tip.backward) {
-            (Some(fw), Some(bw)) if fw > 0.0 && bw > 0.0 => {
-                let side = |x: Option<f64>| x.map_or(f64::INFINITY, |a| l.tip_fraction * a);
-                Some(TipOverAcceleration {
-                    forward: l.tip_fraction * fw,
-                    backward: l.tip_fraction * bw,
-                    left: side(tip.left),
-                    right: side(tip.right),
-                })
-                .filter(|t| t.left > 0.0 && t.right > 0.0)
-            }
-            _ => None,
-        };
+        let timing_accel = timing_acceleration(&tip, l.tip_fraction);
         Ok(Self {
             m,
             wm: &m.robot,
+            goal,
+            task,
+            drive_on: m.task.as_ref().and(m.goal().cloned()),
             planner,
             first_path,
             first_search,
@@ -469,7 +588,7 @@ impl<'m> Runner<'m> {
             events: Vec::new(),
             samples: Samples::default(),
             reference: None,
-            failure: None,
+            failure,
         })
     }
 
@@ -632,7 +751,7 @@ impl<'m> Runner<'m> {
             self.planner.dstar.grid(),
             cells,
             start,
-            axle_pose(self.m.file.goal.pose, self.wm.base.drive.d),
+            axle_pose(self.goal.pose, self.wm.base.drive.d),
             self.wm.base.drive.d,
             &self.limits,
             &accel,
@@ -683,6 +802,314 @@ impl<'m> Runner<'m> {
         self.reference = Some(r);
     }
 
+    /// A `[task]`'s arm motion: planned on entry from the measured state, tracked in
+    /// joint space by computed torque while the platform holds; once it settles, the next
+    /// motion (the payload attached after the grasp). `false` when the run ends here.
+    #[allow(clippy::too_many_arguments)]
+    fn arm_step(
+        &mut self,
+        c: &mut Controller,
+        st: &mut LoopState,
+        ws: &mut Workspace,
+        stage: ArmStage,
+        t: f64,
+        axle: [f64; 3],
+        v: f64,
+        w: f64,
+    ) -> bool {
+        let m = self.m;
+        let task = m.task.as_ref().expect("arm phases have a task");
+        st.cur_ref = c.goal_sample(t);
+        if st.arm.is_none() {
+            let clock = Instant::now();
+            let planned = self.plan_arm(task, stage, t, ws.q_now.as_slice());
+            st.excluded += clock.elapsed().as_secs_f64();
+            match planned {
+                Ok(motion) => st.arm = Some(motion),
+                Err(reason) => {
+                    self.fail(t, reason);
+                    st.phase = Phase::Done;
+                    return false;
+                }
+            }
+        }
+        let g = &task.group;
+        let (end, settled) = {
+            let motion = st.arm.as_ref().expect("planned above");
+            motion.at(t, g, &mut ws.q_ref, &mut ws.qd_ref, &mut ws.qdd_ref);
+            let last = motion.last();
+            let settled = g.q_index.iter().zip(&c.group_slots).all(|(&i, &k2)| {
+                (ws.q_now[i] - last[i]).abs() <= ARM_SETTLED
+                    && ws.v_now[2 + k2].abs() <= ARM_SETTLED_RATE
+            });
+            (motion.t0 + motion.trajectory.duration, settled)
+        };
+        c.arm_law(ws, v, w);
+        if t < end {
+            return true;
+        }
+        let name = Phase::Arm(stage).name();
+        if settled {
+            st.arm = None;
+            self.event(t, "arm", format!("{name} motion done"));
+            match stage {
+                ArmStage::Approach => st.phase = Phase::Arm(ArmStage::Grasp),
+                ArmStage::Grasp => {
+                    self.attach_payload(task, ws, st, t);
+                    st.phase = Phase::Arm(ArmStage::Retreat);
+                }
+                ArmStage::Retreat => {
+                    st.picked = true;
+                    let text = format!(
+                        "picked '{}', arm back in the transport posture",
+                        task.object
+                    );
+                    match self.drive_on.take() {
+                        Some(goal) => {
+                            self.event(t, "picked", text);
+                            if !self.drive_on_to(c, st, t, axle, goal) {
+                                st.phase = Phase::Done;
+                                return false;
+                            }
+                        }
+                        None => {
+                            self.event(t, "reached", text);
+                            st.time_to_goal = Some(t);
+                            st.phase = Phase::Done;
+                        }
+                    }
+                }
+            }
+            st.phase_t0 = t;
+        } else if t > end + ARM_SETTLE {
+            self.fail(
+                t,
+                format!(
+                    "the arm did not settle at the end of its {name} motion within {ARM_SETTLE} s \
+                     (each joint within {ARM_SETTLED} of its last state)"
+                ),
+            );
+            st.phase = Phase::Done;
+            return false;
+        }
+        true
+    }
+
+    /// After the pick: plans from the placement to `goal` (the map with the obstacles
+    /// that have appeared), times the path from the robot's pose at rest under the
+    /// tip-over limits of the transport posture with the payload, and drives on. `false`
+    /// (with the reason) when no path leads there or it cannot be timed.
+    fn drive_on_to(
+        &mut self,
+        c: &mut Controller,
+        st: &mut LoopState,
+        t: f64,
+        axle: [f64; 3],
+        goal: GoalSpec,
+    ) -> bool {
+        let m = self.m;
+        let f = &m.file;
+        let d = self.wm.base.drive.d;
+        let clock = Instant::now();
+        // the search leaves from the placement's cell (free on the configuration space:
+        // the base was planned there), the timing from where the base stands
+        let from = axle_pose(self.goal.pose, d);
+        let to = axle_pose(goal.pose, d);
+        let planned = mission_planner(m, from, to);
+        let (mut planner, mut path, search) = match planned {
+            Ok(p) => p,
+            Err(e) => {
+                self.fail(t, format!("driving on to the goal: {e}"));
+                return false;
+            }
+        };
+        // the obstacles that have appeared so far
+        let grid = &m.map.grid;
+        let [fx, fy] = grid.world_to_cell_f(from[0], from[1]);
+        let cell = (
+            (fx.floor().max(0.0) as usize).min(grid.width - 1),
+            (fy.floor().max(0.0) as usize).min(grid.height - 1),
+        );
+        if st.next_obstacle > 0 {
+            for &(oi, _) in &c.obstacles[..st.next_obstacle] {
+                let o = f.obstacles[oi];
+                let centre = grid.world_to_cell_f(o.center[0], o.center[1]);
+                if let Err(e) = planner.add_disk(centre, o.radius / grid.resolution, cell) {
+                    self.fail(t, format!("driving on to the goal: {e}"));
+                    return false;
+                }
+            }
+            path = planner.replan().0;
+        }
+        let s = clock.elapsed().as_secs_f64();
+        self.wall.planning_s += s;
+        st.excluded += s;
+        let Some(cells) = path else {
+            self.fail(
+                t,
+                "the goal is unreachable from the placement: no collision-free path on the \
+                 configuration space"
+                    .to_string(),
+            );
+            return false;
+        };
+        self.planner = planner;
+        self.goal = goal;
+        match tip_limits_of(m, self.wm) {
+            Ok(tip) => self.tip = tip,
+            Err(e) => {
+                self.fail(t, format!("driving on to the goal: {e}"));
+                return false;
+            }
+        }
+        self.timing_accel = timing_acceleration(&self.tip, f.limits.tip_fraction);
+        if self.timing_accel.is_none() {
+            self.fail(
+                t,
+                "the transport posture with the payload leaves no acceleration that keeps \
+                 the ZMP inside the support"
+                    .to_string(),
+            );
+            return false;
+        }
+        c.retarget(&self.goal, &self.tip);
+        let start = TimingStart {
+            t0: t,
+            pose: axle,
+            v: 0.0,
+        };
+        if !self.make_reference(cells, start, "drive on", search) {
+            return false;
+        }
+        let dur = self.plans.last().map_or(0.0, |p| p.duration);
+        if f.simulation.time_limit.is_none() {
+            c.time_limit = c.time_limit.max(t + 3.0 * dur + 30.0);
+        }
+        self.event(t, "plan", format!("drive on to the goal: {dur:.2} s"));
+        st.phase = Phase::Drive;
+        true
+    }
+
+    /// Plans the arm motion of `stage` from `q` (the measured state, its group joints
+    /// clamped into the joint box) among the task's scene; records the plan.
+    fn plan_arm(
+        &mut self,
+        task: &Task,
+        stage: ArmStage,
+        t: f64,
+        q: &[f64],
+    ) -> std::result::Result<ArmMotion, String> {
+        use crate::motion::{MotionGoal, MotionOptions, MotionProblem, plan_motion};
+        let m = self.m;
+        let g = &task.group;
+        let mut start = q.to_vec();
+        for (j, &i) in g.q_index.iter().enumerate() {
+            start[i] = start[i].clamp(g.lower[j], g.upper[j]);
+        }
+        let (scene, goal) = match stage {
+            ArmStage::Approach => (&task.scene, MotionGoal::Pose(task.pre_grasp.clone())),
+            ArmStage::Grasp => (&task.scene, MotionGoal::Pose(task.grasp.clone())),
+            ArmStage::Retreat => {
+                let mut goal = start.clone();
+                for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
+                    if g.q_index.contains(&i) {
+                        goal[i] = m.transport[k];
+                    }
+                }
+                (&task.scene_after_grasp, MotionGoal::State(goal))
+            }
+        };
+        let mut options = MotionOptions::new(g.dim());
+        options.time_limit = std::time::Duration::from_secs_f64(task.planning_time);
+        options.seed = task.seed;
+        options.margin = ARM_MARGIN;
+        let problem = MotionProblem {
+            model: &m.robot.model,
+            geometry: &task.geometry,
+            scene,
+            group: g,
+        };
+        let name = Phase::Arm(stage).name();
+        let mut record = ArmPlanRecord {
+            stage: name.to_string(),
+            t,
+            solved: false,
+            reason: None,
+            planning_time_s: 0.0,
+            checks: 0,
+            duration: None,
+            min_distance: None,
+        };
+        let out = match plan_motion(&problem, &start, &goal, &options) {
+            Err(e) => Err(format!("the {name} motion could not be planned: {e}")),
+            Ok(r) => {
+                record.planning_time_s = r.planning_time.as_secs_f64();
+                record.checks = r.checks;
+                record.duration = r.trajectory.as_ref().map(|tr| tr.duration);
+                record.min_distance = r.closest.as_ref().map(|c| c.distance);
+                match (r.not_solved, r.trajectory) {
+                    (None, Some(trajectory)) => Ok(ArmMotion { t0: t, trajectory }),
+                    (Some(why), _) => Err(format!("the {name} motion was not solved: {why}")),
+                    (None, None) => Err(format!("the {name} motion has no trajectory")),
+                }
+            }
+        };
+        record.solved = out.is_ok();
+        record.reason = out.as_ref().err().cloned();
+        if let Ok(a) = &out {
+            self.wall.planning_s += record.planning_time_s;
+            self.event(
+                t,
+                "arm_plan",
+                format!(
+                    "{name} motion planned in {:.3} s ({} checks): {:.2} s",
+                    record.planning_time_s, record.checks, a.trajectory.duration
+                ),
+            );
+        }
+        if let Some(tr) = &mut self.task {
+            tr.arm_plans.push(record);
+        }
+        out
+    }
+
+    /// Attaches the picked object: the law, the plant and the monitors take the robot
+    /// with the payload from now on; the ZMP margin at this state without and with it is
+    /// recorded.
+    fn attach_payload(&mut self, task: &'m Task, ws: &mut Workspace, st: &mut LoopState, t: f64) {
+        let zmp = |ws: &mut Workspace| {
+            ws.monitor
+                .sample(t, ws.q_now.as_slice(), ws.v_now.as_slice(), &ws.u)
+                .ok()?;
+            ws.monitor.trace.zmp_margin.last().copied().flatten()
+        };
+        let without = zmp(ws);
+        self.wm = &task.payload_robot;
+        let attached = ws.attach(self.wm, self.m.file.limits.mu);
+        let with = attached.ok().and_then(|()| zmp(ws));
+        st.grasped = true;
+        let fmt = |z: Option<f64>| z.map_or("undefined".to_string(), |z| format!("{z:.4} m"));
+        self.event(
+            t,
+            "payload",
+            format!(
+                "'{}' attached ({} kg): ZMP margin {} without it, {} with it",
+                task.object,
+                task.mass,
+                fmt(without),
+                fmt(with)
+            ),
+        );
+        if let Some(tr) = &mut self.task {
+            tr.payload = Some(PayloadRecord {
+                t,
+                mass: task.mass,
+                zmp_margin_without: without,
+                zmp_margin_with: with,
+            });
+        }
+    }
+
     fn run(mut self) -> Result<MissionResult> {
         let mut x = initial_state(self.m);
         self.first_plan();
@@ -698,19 +1125,32 @@ impl<'m> Runner<'m> {
             .transpose()?;
         let plant = self.m.plant_robot.as_ref().unwrap_or(self.wm);
         let noise = self.m.sensor_noise.clone();
-        let mut ws = Workspace::new(self.wm, plant, self.m.file.limits.mu, contact, noise)?;
+        let mut ws = Workspace::new(
+            self.wm,
+            plant,
+            self.m.file.limits.mu,
+            contact,
+            noise,
+            self.m.task.as_ref(),
+        )?;
         let act = Actuators::new(self.wm)?;
-        let c = Controller::new(&self, act, time_limit, rec_every)?;
+        let mut c = Controller::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
-        while let Flow::Next | Flow::Retry = self.step(&c, &mut ws, &mut st, &mut x) {}
+        while let Flow::Next | Flow::Retry = self.step(&mut c, &mut ws, &mut st, &mut x) {}
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
-        Ok(self.finish(&st, &x, ws.contact.take()))
+        let distances = ws.distances.take();
+        Ok(self.finish(&st, &x, ws.contact.take(), distances))
     }
 
     /// The plan at t = 0 (or the reason there is none: a posture that tips at rest, an
     /// unreachable goal, a path that cannot be timed).
     fn first_plan(&mut self) {
+        if let Some(reason) = &self.failure {
+            let reason = reason.clone();
+            self.event(0.0, "failed", reason);
+            return;
+        }
         if self.timing_accel.is_none() {
             let why = if self.tip.forward.is_none() || self.tip.backward.is_none() {
                 "the transport posture tips the robot at rest (its ZMP lies outside the support \
@@ -806,7 +1246,7 @@ impl<'m> Runner<'m> {
     /// the torques, the record with its monitors, one integration step.
     fn step(
         &mut self,
-        c: &Controller,
+        c: &mut Controller,
         ws: &mut Workspace,
         st: &mut LoopState,
         x: &mut [f64],
@@ -892,6 +1332,12 @@ impl<'m> Runner<'m> {
             Phase::Reach => {
                 if !self.reach(c, st, ws, &ee, t, v, w) {
                     // record the state on the next pass, in phase `done`
+                    return Flow::Retry;
+                }
+                false
+            }
+            Phase::Arm(stage) => {
+                if !self.arm_step(c, st, ws, stage, t, axle, v, w) {
                     return Flow::Retry;
                 }
                 false
@@ -1223,8 +1669,7 @@ impl<'m> Runner<'m> {
         v: f64,
         w: f64,
     ) {
-        let m = self.m;
-        let g = &m.file.goal;
+        let g = self.goal.clone();
         if st.phase == Phase::Drive {
             let r = self.reference.as_ref().expect("drive has a reference");
             if t >= r.t_end() {
@@ -1245,6 +1690,9 @@ impl<'m> Runner<'m> {
                 );
                 if g.end_effector.is_some() {
                     st.phase = Phase::Reach;
+                    st.phase_t0 = t;
+                } else if self.m.task.is_some() && !st.picked {
+                    st.phase = Phase::Arm(ArmStage::Approach);
                     st.phase_t0 = t;
                 } else {
                     st.time_to_goal = Some(t);
@@ -1282,8 +1730,7 @@ impl<'m> Runner<'m> {
         v: f64,
         w: f64,
     ) -> bool {
-        let m = self.m;
-        let g = &m.file.goal;
+        let g = self.goal.clone();
         let target = Vector3::from(g.end_effector.expect("reach has a target"));
         let traj = *st.ee_traj.get_or_insert_with(|| {
             let dist = (target - ee.p).norm();
@@ -1352,6 +1799,7 @@ impl<'m> Runner<'m> {
         ee: Vector3<f64>,
         evaluated: bool,
     ) {
+        self.check_arm_distances(ws, st, t);
         let Some((slip, clear)) = self.record(c, ws, st, t, ee, evaluated) else {
             return;
         };
@@ -1380,6 +1828,34 @@ impl<'m> Runner<'m> {
         }
     }
 
+    /// During a `[task]`'s arm motions: the distances of the state to the scene (without
+    /// the object once grasped) and between the robot's links; a distance ≤ 0 is a touch
+    /// and ends the run.
+    fn check_arm_distances(&mut self, ws: &mut Workspace, st: &mut LoopState, t: f64) {
+        let (Phase::Arm(_), Some(task), Some(dm)) =
+            (st.phase, self.m.task.as_ref(), ws.distances.as_mut())
+        else {
+            return;
+        };
+        let (d_scene, d_self) = dm.sample(task, &self.m.robot, ws.q_now.as_slice(), st.grasped);
+        let touch = if d_scene <= 0.0 {
+            dm.min_scene
+                .as_ref()
+                .map(|(d, [l, o])| format!("link '{l}' touches scene object '{o}' ({d:.4} m)"))
+        } else if d_self <= 0.0 {
+            dm.min_self
+                .as_ref()
+                .map(|(d, [a, b])| format!("link '{a}' touches link '{b}' ({d:.4} m)"))
+        } else {
+            None
+        };
+        if let Some(what) = touch {
+            self.event(t, "contact", what.clone());
+            self.fail(t, format!("collision: {what}"));
+            st.phase = Phase::Done;
+        }
+    }
+
     /// The smallest ZMP margin of the recorded samples as an event.
     fn min_zmp_event(&mut self) {
         if let Some((i, mz)) = self
@@ -1400,7 +1876,23 @@ impl<'m> Runner<'m> {
     }
 
     /// The result of the finished loop.
-    fn finish(mut self, st: &LoopState, x: &[f64], contact: Option<ContactLoop>) -> MissionResult {
+    fn finish(
+        mut self,
+        st: &LoopState,
+        x: &[f64],
+        contact: Option<ContactLoop>,
+        distances: Option<DistanceMonitor>,
+    ) -> MissionResult {
+        if let (Some(tr), Some(dm)) = (&mut self.task, distances) {
+            if let Some((d, pair)) = dm.min_scene {
+                tr.min_scene_distance = Some(d);
+                tr.closest_scene_pair = Some(pair);
+            }
+            if let Some((d, pair)) = dm.min_self {
+                tr.min_self_distance = Some(d);
+                tr.closest_self_pair = Some(pair);
+            }
+        }
         self.min_zmp_event();
         self.events.sort_by(|a, b| a.t.total_cmp(&b.t));
         let reached = self.failure.is_none() && st.time_to_goal.is_some();
@@ -1441,6 +1933,8 @@ impl<'m> Runner<'m> {
                 .map_or(x[model.nq + wm.nr()], |c| c.input_work),
             wall: self.wall,
             contact: contact.map(|c| c.tally.finish()),
+            goal_pose: self.goal.pose,
+            task: self.task,
         }
     }
 
@@ -1567,6 +2061,12 @@ struct LoopState {
     /// Planning wall time spent inside the loop (s).
     excluded: f64,
     next_obstacle: usize,
+    /// A `[task]`'s arm motion being tracked.
+    arm: Option<ArmMotion>,
+    /// The picked object is attached.
+    grasped: bool,
+    /// The pick is done (the arm back in the transport posture).
+    picked: bool,
 }
 
 impl LoopState {
@@ -1602,8 +2102,75 @@ impl LoopState {
             },
             excluded: 0.0,
             next_obstacle: 0,
+            arm: None,
+            grasped: false,
+            picked: false,
         }
     }
+}
+
+/// A `[task]`'s base goal: the best-ranked placement
+/// ([`crate::motion::placement::place_base`], the arm at the transport posture) that the
+/// base's planner reaches from the start (the footprint fits there and a path leads
+/// there), with the task's record; or the start pose and the reason there is none.
+fn choose_placement(
+    m: &Mission,
+    task: &Task,
+) -> Result<(GoalSpec, Option<TaskResult>, Option<String>)> {
+    let clock = Instant::now();
+    let f = &m.file;
+    let posture = start_configuration(&m.robot, [0.0; 3], &m.transport);
+    let placement = task.placements(&m.robot, &posture)?;
+    let time_s = clock.elapsed().as_secs_f64();
+    let goal_at =
+        |pose: [f64; 3]| GoalSpec::base_pose(pose, PLACEMENT_TOLERANCE[0], PLACEMENT_TOLERANCE[1]);
+    let mut result = TaskResult {
+        object: task.object.clone(),
+        scene_pose: task.scene_pose,
+        placement: None,
+        arm_plans: Vec::new(),
+        payload: None,
+        min_scene_distance: None,
+        closest_scene_pair: None,
+        min_self_distance: None,
+        closest_self_pair: None,
+    };
+    if let Some(reason) = placement.failure() {
+        return Ok((
+            goal_at(f.start.pose),
+            Some(result),
+            Some(format!("no placement for the pick: {reason}")),
+        ));
+    }
+    let d = m.robot.base.drive.d;
+    let s0 = axle_pose(f.start.pose, d);
+    for (rank, c) in placement.candidates.iter().enumerate() {
+        let g0 = axle_pose(c.base, d);
+        let reached = mission_planner(m, s0, g0);
+        if let Ok((_, Some(_), _)) = reached {
+            result.placement = Some(PlacementChoice {
+                base: c.base,
+                rank,
+                candidates: placement.candidates.len(),
+                score: c.score,
+                manipulability: c.manipulability,
+                clearance: c.clearance,
+                tip_over_margin: c.tip_over_margin,
+                counts: placement.counts,
+                time_s,
+            });
+            return Ok((goal_at(c.base), Some(result), None));
+        }
+    }
+    let n = placement.candidates.len();
+    Ok((
+        goal_at(f.start.pose),
+        Some(result),
+        Some(format!(
+            "none of the {n} best placements that reach the grasp can be reached by the base: \
+             the footprint does not fit there or no path leads there"
+        )),
+    ))
 }
 
 /// The plant state at the start: the start pose, the start arm posture, at rest (the
@@ -1655,6 +2222,14 @@ struct Workspace {
     ndot_v: DVector<f64>,
     /// The end effector's reduced position Jacobian J N_C (3 × nr).
     ee_jacobian: DMatrix<f64>,
+    /// A `[task]`'s distance monitor of the arm motions.
+    distances: Option<DistanceMonitor>,
+    /// The arm motion's reference: configuration (full), group rates and accelerations.
+    q_ref: Vec<f64>,
+    /// Group joint rates of the reference.
+    qd_ref: Vec<f64>,
+    /// Group joint accelerations of the reference.
+    qdd_ref: Vec<f64>,
 }
 
 impl Workspace {
@@ -1664,20 +2239,16 @@ impl Workspace {
         mu: f64,
         contact: Option<ContactLoop>,
         noise: Option<SensorNoise>,
+        task: Option<&Task>,
     ) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
-        let settings = StabilitySettings {
-            mu: Some(mu),
-            bodies: BodySet::All,
-            ground_z: None,
-            stop_at_tip: false,
-        };
+        let dim = task.map_or(0, |t| t.group.dim());
         Ok(Self {
             sys: WheeledSystem::new(plant.clone()),
             control_dynamics: WheeledData::new(wm),
             data: Data::new(model),
-            monitor: StabilityMonitor::new(plant, settings)?,
+            monitor: StabilityMonitor::new(plant, monitor_settings(mu))?,
             rk: Rk4::new(nq + nr + 1),
             first_stage: vec![0.0; nq + nr + 1],
             q_now: DVector::zeros(nq),
@@ -1693,7 +2264,29 @@ impl Workspace {
             ndot: DMatrix::zeros(model.nv, nr),
             ndot_v: DVector::zeros(model.nv),
             ee_jacobian: DMatrix::zeros(3, nr),
+            distances: task.map(|t| DistanceMonitor::new(t, wm)),
+            q_ref: vec![0.0; nq],
+            qd_ref: vec![0.0; dim],
+            qdd_ref: vec![0.0; dim],
         })
+    }
+
+    /// The plant and the monitors take `robot` (the same joints, other inertias: the
+    /// payload attached).
+    fn attach(&mut self, robot: &WheeledModel, mu: f64) -> Result<()> {
+        self.sys = WheeledSystem::new(robot.clone());
+        self.monitor = StabilityMonitor::new(robot, monitor_settings(mu))?;
+        Ok(())
+    }
+}
+
+/// The settings of the mission's stability and slip monitor.
+fn monitor_settings(mu: f64) -> StabilitySettings {
+    StabilitySettings {
+        mu: Some(mu),
+        bodies: BodySet::All,
+        ground_z: None,
+        stop_at_tip: false,
     }
 }
 
@@ -1792,6 +2385,8 @@ struct Controller {
     chain: Vec<usize>,
     /// (index, time) of the obstacles in the order they appear.
     obstacles: Vec<(usize, f64)>,
+    /// A `[task]`'s group joints as arm slots (indices into `arm`).
+    group_slots: Vec<usize>,
 }
 
 impl Controller {
@@ -1817,6 +2412,17 @@ impl Controller {
             .collect();
         obstacles.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
         let d = wm.base.drive.d;
+        let group_slots = m.task.as_ref().map_or_else(Vec::new, |t| {
+            t.group
+                .q_index
+                .iter()
+                .map(|i| {
+                    arm.iter()
+                        .position(|a| a == i)
+                        .expect("the group is the arm chain")
+                })
+                .collect()
+        });
         Ok(Self {
             nq: model.nq,
             nr: wm.nr(),
@@ -1825,14 +2431,14 @@ impl Controller {
             time_limit,
             rec_every,
             r_foot: m.footprint.radius,
-            goal: f.goal.pose,
+            goal: r.goal.pose,
             d,
-            goal_axle: axle_pose(f.goal.pose, d),
+            goal_axle: axle_pose(r.goal.pose, d),
             arm,
             q_t,
             kan,
             arrive: Aicardi::new(c.kx, 2.0, 1.0)?,
-            pos_tol: f.goal.position_tolerance,
+            pos_tol: r.goal.position_tolerance,
             kx: c.kx,
             ks: c.speed_gain,
             wn: c.arm_frequency,
@@ -1845,7 +2451,40 @@ impl Controller {
             act,
             chain: arm_chain(m),
             obstacles,
+            group_slots,
         })
+    }
+
+    /// Drives on to `goal` with the tip-over guards of `tip` (a `[task]`'s drive on).
+    fn retarget(&mut self, goal: &GoalSpec, tip: &AccelerationLimits) {
+        self.goal = goal.pose;
+        self.goal_axle = axle_pose(goal.pose, self.d);
+        self.pos_tol = goal.position_tolerance;
+        let (tip_f, tip_b) = match (tip.forward, tip.backward) {
+            (Some(a), Some(b)) => (a, b),
+            _ => (0.0, 0.0),
+        };
+        self.a_guard_f = self.a_guard_f.min(0.95 * tip_f);
+        self.a_guard_b = self.a_guard_b.min(0.95 * tip_b);
+    }
+
+    /// A `[task]`'s arm motion: the platform's speeds to zero, each group joint onto the
+    /// reference in the workspace (q̈ = q̈_r + 2ωₙ (q̇_r − q̇) + ωₙ² (q_r − q)), the other
+    /// arm joints held at the transport posture. Writes the desired accelerations.
+    fn arm_law(&self, ws: &mut Workspace, v: f64, w: f64) {
+        let (ks, wn) = (self.ks, self.wn);
+        let a_des = &mut ws.a_des;
+        a_des[0] = -ks * v;
+        a_des[1] = -ks * w;
+        for (k2, &i) in self.arm.iter().enumerate() {
+            a_des[2 + k2] = wn * wn * (self.q_t[i] - ws.q_now[i]) - 2.0 * wn * ws.v_now[2 + k2];
+        }
+        for (j, &k2) in self.group_slots.iter().enumerate() {
+            let i = self.arm[k2];
+            a_des[2 + k2] = ws.qdd_ref[j]
+                + 2.0 * wn * (ws.qd_ref[j] - ws.v_now[2 + k2])
+                + wn * wn * (ws.q_ref[i] - ws.q_now[i]);
+        }
     }
 
     /// The reference sample of the goal pose at rest.

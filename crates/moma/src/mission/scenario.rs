@@ -11,6 +11,10 @@ use serde::{Deserialize, Serialize};
 use super::footprint::MissionFootprint;
 use super::heights::{BoxSpec, BoxVerdict, place_boxes};
 use super::plant::{MissionContact, start_configuration};
+use super::task::{
+    Task, TaskSpec, block_scene_outline, load_task, object_under_footprint, scene_outlines,
+    task_geometry_options,
+};
 use crate::collision::{GeometryModel, GeometryOptions};
 use crate::contact::{ContactSpec, PlantKind};
 use crate::error::{Error, Result};
@@ -33,8 +37,9 @@ pub struct MissionFile {
     pub robot: RobotSpec,
     /// Start state.
     pub start: StartSpec,
-    /// Goal.
-    pub goal: GoalSpec,
+    /// Goal (required without `[task]`; with it, not taken: the base goal is the placement).
+    #[serde(default)]
+    pub goal: Option<GoalSpec>,
     /// Platform limits (the mission's own table).
     pub limits: LimitsSpec,
     /// Obstacles that appear during the run.
@@ -55,6 +60,9 @@ pub struct MissionFile {
     /// only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<UncertaintySpec>,
+    /// A pick: a scene placed on the map, the object, its grasp and mass (`[task]`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<TaskSpec>,
     /// Outputs.
     #[serde(default)]
     pub output: OutputSpec,
@@ -262,6 +270,20 @@ pub struct GoalSpec {
     pub end_effector_tolerance: f64,
 }
 
+impl GoalSpec {
+    /// A base pose to reach with the given tolerances, without an end-effector target.
+    #[must_use]
+    pub fn base_pose(pose: [f64; 3], position_tolerance: f64, heading_tolerance: f64) -> Self {
+        Self {
+            pose,
+            end_effector: None,
+            position_tolerance,
+            heading_tolerance,
+            end_effector_tolerance: default_ee_tol(),
+        }
+    }
+}
+
 /// `[limits]`.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -435,6 +457,16 @@ pub struct Mission {
     /// The `[uncertainty]` noise on the state the law measures (`None` without a positive
     /// deviation), at the start of its sequence.
     pub sensor_noise: Option<SensorNoise>,
+    /// The pick of `[task]`, loaded (its scene's outline already blocks [`Mission::map`]).
+    pub task: Option<Task>,
+}
+
+impl Mission {
+    /// The file's `[goal]` (always present without `[task]`).
+    #[must_use]
+    pub fn goal(&self) -> Option<&GoalSpec> {
+        self.file.goal.as_ref()
+    }
 }
 
 /// Reads and validates a mission file.
@@ -571,6 +603,7 @@ pub fn from_file_with(
     check_limits_and_gains(&file, path)?;
     check_simulation(&file, path)?;
     check_obstacles_and_robot(&file, path)?;
+    check_goal_and_task(&file, path)?;
     let mut map = load_mission_map(&file, path, base, files)?;
     let package_dirs = package_dirs(&file, path, base)?;
     let (robot, ee_frame, geometry) = load_robot(&file, path, base, &package_dirs, files)?;
@@ -603,6 +636,29 @@ pub fn from_file_with(
         Some(spec) => sensor_noise(spec, (&robot.q_names(), &robot.v_names()), path)?,
         None => None,
     };
+    let task = match &file.task {
+        None => None,
+        Some(spec) => {
+            let options = task_geometry_options(spec, base, &package_dirs);
+            let gm = files
+                .geometry(&robot.model, &base.join(&file.robot.urdf), &options)
+                .map_err(|e| field_err(path, "task.srdf (collision geometry)", e))?;
+            let urdf = base.join(&file.robot.urdf);
+            let task = load_task(
+                spec,
+                path,
+                base,
+                &robot,
+                ee_frame,
+                &transport,
+                &urdf,
+                &package_dirs,
+                gm,
+            )?;
+            place_scene_on_map(&task, &file, path, &mut map, footprint.radius)?;
+            Some(task)
+        }
+    };
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -625,7 +681,64 @@ pub fn from_file_with(
         contact,
         plant_robot,
         sensor_noise,
+        task,
     })
+}
+
+/// `[goal]` is required without `[task]`; with it, the goal is optional (the base drives
+/// on to it after the pick) and takes no end-effector target, and the contact plant and
+/// `[uncertainty]` are not offered (the payload is attached to the rolling plant's model).
+fn check_goal_and_task(file: &MissionFile, path: &Path) -> Result<()> {
+    match (&file.goal, &file.task) {
+        (None, None) => Err(field_err(
+            path,
+            "goal",
+            "missing: give [goal] (or a [task] to pick)",
+        )),
+        (Some(g), Some(_)) if g.end_effector.is_some() => Err(field_err(
+            path,
+            "goal.end_effector",
+            "a mission with [task] drives on to the goal pose after the pick; it takes no \
+             end-effector target",
+        )),
+        (_, Some(_)) if file.simulation.plant == PlantKind::Contact => Err(field_err(
+            path,
+            "simulation.plant",
+            "a [task] runs on the rolling plant (\"rolling\")",
+        )),
+        (_, Some(_)) if file.uncertainty.is_some() => Err(field_err(
+            path,
+            "uncertainty",
+            "a [task] takes no [uncertainty] (its payload is the model's own)",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Blocks the map cells under the task scene's outline; a scene object where the
+/// footprint stands at the start is an error naming the object.
+fn place_scene_on_map(
+    task: &Task,
+    file: &MissionFile,
+    path: &Path,
+    map: &mut LoadedMap,
+    footprint_radius: f64,
+) -> Result<()> {
+    let outlines = scene_outlines(&task.scene);
+    let s = file.start.pose;
+    if let Some((id, d)) = object_under_footprint(&outlines, [s[0], s[1]], footprint_radius) {
+        return Err(field_err(
+            path,
+            "task.pose",
+            format!(
+                "scene object '{id}' overlaps the start pose: its outline lies {d:.3} m from \
+                 ({}, {}), within the footprint radius {footprint_radius} m",
+                s[0], s[1]
+            ),
+        ));
+    }
+    block_scene_outline(&mut map.grid, &outlines);
+    Ok(())
 }
 
 /// The file's `[uncertainty]` draw, checked (`None` without the table); `mu` is refused
@@ -710,12 +823,6 @@ fn check_limits_and_gains(file: &MissionFile, path: &Path) -> Result<()> {
         ("limits.alpha_max", l.alpha_max),
         ("limits.mu", l.mu),
         ("limits.kappa_max", l.kappa_max),
-        ("goal.position_tolerance", file.goal.position_tolerance),
-        ("goal.heading_tolerance", file.goal.heading_tolerance),
-        (
-            "goal.end_effector_tolerance",
-            file.goal.end_effector_tolerance,
-        ),
         ("simulation.dt", file.simulation.dt),
         (
             "simulation.record_interval",
@@ -750,9 +857,18 @@ fn check_limits_and_gains(file: &MissionFile, path: &Path) -> Result<()> {
         positive(path, n, x)?;
     }
     finite(path, "start.pose", &file.start.pose)?;
-    finite(path, "goal.pose", &file.goal.pose)?;
-    if let Some(ee) = &file.goal.end_effector {
-        finite(path, "goal.end_effector", ee)?;
+    if let Some(g) = &file.goal {
+        for (n, x) in [
+            ("goal.position_tolerance", g.position_tolerance),
+            ("goal.heading_tolerance", g.heading_tolerance),
+            ("goal.end_effector_tolerance", g.end_effector_tolerance),
+        ] {
+            positive(path, n, x)?;
+        }
+        finite(path, "goal.pose", &g.pose)?;
+        if let Some(ee) = &g.end_effector {
+            finite(path, "goal.end_effector", ee)?;
+        }
     }
     Ok(())
 }

@@ -221,9 +221,21 @@ impl MissionStudy {
                 Slot::StartX => f.start.pose[0] = x,
                 Slot::StartY => f.start.pose[1] = x,
                 Slot::StartYaw => f.start.pose[2] = x,
-                Slot::GoalX => f.goal.pose[0] = x,
-                Slot::GoalY => f.goal.pose[1] = x,
-                Slot::GoalYaw => f.goal.pose[2] = x,
+                Slot::GoalX => {
+                    if let Some(g) = &mut f.goal {
+                        g.pose[0] = x;
+                    }
+                }
+                Slot::GoalY => {
+                    if let Some(g) = &mut f.goal {
+                        g.pose[1] = x;
+                    }
+                }
+                Slot::GoalYaw => {
+                    if let Some(g) = &mut f.goal {
+                        g.pose[2] = x;
+                    }
+                }
                 Slot::ObstacleT => f.obstacles[0].t = x,
                 Slot::ObstacleX => f.obstacles[0].center[0] = x,
                 Slot::ObstacleY => f.obstacles[0].center[1] = x,

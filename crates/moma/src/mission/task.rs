@@ -1,0 +1,710 @@
+//! The pick task of a mission (`[task]`): a MoveIt scene placed on the map, the object to
+//! pick with its grasp and mass, and what the run needs of them.
+//!
+//! At load ([`load_task`]): the scene is read (poses in its own frame, `world` or the
+//! robot's root link) and placed on the map at `task.pose`; the grasp comes from a
+//! MotionBenchMaker goal query or an offset from the object; the robot's collision
+//! geometry is read with the SRDF's disabled pairs; the joint group is the end effector's
+//! arm chain; the robot with the object as a point mass on the grasp frame's body is
+//! built for after the grasp. The scene's outline on the ground blocks the map cells it
+//! covers ([`block_scene_outline`]), and a scene object where the footprint stands at the
+//! start is an input error naming the object.
+//!
+//! In the run (`run.rs`): [`Task::placements`] ranks the base poses
+//! ([`crate::motion::placement::place_base`]), the run drives to the best one its planner
+//! reaches, plans and tracks the arm motions, attaches the payload, and monitors the
+//! distances of the executed motion ([`DistanceMonitor`]).
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::collision::footprint::hull_2d;
+use crate::collision::{
+    GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneObject,
+    SceneOptions, compute_distances, compute_scene_distances, outline_points, read_scene,
+    update_geometry_placements,
+};
+use crate::error::{Error, Result};
+use crate::mobile::WheeledModel;
+use crate::motion::grasp_query::read_grasp_query;
+use crate::motion::placement::{
+    Payload, Placement, PlacementOptions, PlacementProblem, place_base,
+};
+use crate::motion::{GoalPose, JointGroup, MeshSource, surface_links_for_start};
+use crate::multibody::{Data, FrameIndex, FrameKind, JointType};
+use crate::planning::OccupancyGrid;
+use crate::spatial::{Inertia, SE3};
+use crate::stability::SupportPolygon;
+
+/// `[task]` as written.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpec {
+    /// MoveIt planning-scene YAML (MotionBenchMaker's schema), relative to the mission
+    /// file; poses in `world` or the robot's root link, both meaning the scene's frame.
+    pub scene: PathBuf,
+    /// The scene's frame on the map `[x, y, yaw]` (m, rad).
+    pub pose: [f64; 3],
+    /// The object to pick: a scene object's id (one shape).
+    pub object: String,
+    /// A MotionBenchMaker query file whose goal query `query_index` is the grasp of the
+    /// end effector (relative to the mission file); or `grasp`.
+    #[serde(default)]
+    pub query: Option<PathBuf>,
+    /// Which goal query of `query` (from 0).
+    #[serde(default)]
+    pub query_index: usize,
+    /// The grasp as the end effector's pose in the object's frame
+    /// `[x, y, z, qx, qy, qz, qw]` (tolerances 0.01 m, 0.01 rad); or `query`.
+    #[serde(default)]
+    pub grasp: Option<[f64; 7]>,
+    /// The object's mass (kg).
+    pub mass: f64,
+    /// SRDF whose disabled pairs the arm's collision checks skip (relative to the mission
+    /// file).
+    #[serde(default)]
+    pub srdf: Option<PathBuf>,
+    /// Base positions the placement searches `[x0, y0, x1, y1]` (map frame, m); default:
+    /// the square around the grasp as wide as the arm's reach.
+    #[serde(default)]
+    pub area: Option<[f64; 4]>,
+    /// Placement grid step (m).
+    #[serde(default = "default_step")]
+    pub step: f64,
+    /// Placement headings per grid cell.
+    #[serde(default = "default_headings")]
+    pub headings: usize,
+    /// The pre-grasp: the grasp moved back this far along the end effector's x axis (m).
+    #[serde(default = "default_approach")]
+    pub approach: f64,
+    /// Longest planning time of each arm motion (s).
+    #[serde(default = "default_planning_time")]
+    pub planning_time: f64,
+    /// Seed of the placement's IK seeds and of the arm planner.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn default_step() -> f64 {
+    0.1
+}
+fn default_headings() -> usize {
+    16
+}
+fn default_approach() -> f64 {
+    0.1
+}
+fn default_planning_time() -> f64 {
+    5.0
+}
+
+/// The tolerances of a `grasp` offset (m, rad): those of a query without its own.
+const GRASP_TOLERANCE: [f64; 2] = [0.01, 0.01];
+/// The clearance every arm-plan state keeps from the scene and between links (m).
+pub const ARM_MARGIN: f64 = 0.005;
+
+/// A validated task, ready for the run.
+#[derive(Debug, Clone)]
+pub struct Task {
+    /// The scene placed on the map (world frame).
+    pub scene: Scene,
+    /// The scene without the picked object (the object travels with the gripper).
+    pub scene_after_grasp: Scene,
+    /// The scene as read, in its own frame (for the report).
+    pub scene_pose: [f64; 3],
+    /// The picked object's id.
+    pub object: String,
+    /// The grasp of the end effector (world).
+    pub grasp: GoalPose,
+    /// The pre-grasp: the grasp moved back along the end effector's x axis.
+    pub pre_grasp: GoalPose,
+    /// The object's centre in the grasp frame (m).
+    pub object_in_grasp: Vector3<f64>,
+    /// The object's mass (kg).
+    pub mass: f64,
+    /// The robot's collision geometry (with the SRDF's disabled pairs), the links whose
+    /// hulls touch at the transport posture swapped for their mesh surfaces: the arm
+    /// planner's and the distance monitor's.
+    pub geometry: GeometryModel,
+    /// The same with convex hulls only: the placement search's (a grasping posture clear
+    /// of the hulls is clear of the meshes inside them).
+    pub hull_geometry: GeometryModel,
+    /// The joints that reach: the end effector's arm chain.
+    pub group: JointGroup,
+    /// The robot with the object as a point mass on the grasp frame's body.
+    pub payload_robot: WheeledModel,
+    /// The placement search's options.
+    pub placement: PlacementOptions,
+    /// Longest planning time per arm motion (s).
+    pub planning_time: f64,
+    /// The arm planner's seed.
+    pub seed: u64,
+}
+
+fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
+    Error::parse(path, format!("{field}: {msg}"))
+}
+
+/// Loads `[task]`: the scene on the map, the grasp, the geometry, the group and the
+/// payload robot (module docs). `transport` is the transport posture (one angle per arm
+/// dof): links whose convex hulls touch there are swapped for their mesh surfaces
+/// ([`crate::motion::surface_links_for_start`], as `moma motion` does at its start), so
+/// the posture the arm leaves from and returns to is clear.
+///
+/// # Errors
+/// Naming the file and the `task.*` field: an unreadable scene, query or SRDF, an
+/// unknown object (listing the scene's), both or neither of `query` and `grasp`, a query
+/// for another object, a non-finite pose or grasp, a mass that is not ≥ 0, a step,
+/// heading count, approach or planning time out of range, an area of the wrong shape, a
+/// scene object where the footprint stands at the start.
+#[allow(clippy::too_many_arguments)]
+pub fn load_task(
+    spec: &TaskSpec,
+    path: &Path,
+    base: &Path,
+    robot: &WheeledModel,
+    ee_frame: FrameIndex,
+    transport: &[f64],
+    urdf: &Path,
+    package_dirs: &[PathBuf],
+    geometry: GeometryModel,
+) -> Result<Task> {
+    check_numbers(spec, path)?;
+    let model = &robot.model;
+    let mut world_frames = vec!["world".to_string()];
+    if let Some(f) = model.frames.iter().find(|f| f.kind == FrameKind::Body) {
+        world_frames.push(f.name.clone());
+    }
+    let local = read_scene(
+        &base.join(&spec.scene),
+        &SceneOptions {
+            world_frames,
+            package_dirs: package_dirs.to_vec(),
+        },
+    )
+    .map_err(|e| field_err(path, "task.scene", e))?;
+    let on_map = SE3::from_xyz_rpy([spec.pose[0], spec.pose[1], 0.0], [0.0, 0.0, spec.pose[2]]);
+    let scene = placed(&local, &on_map).map_err(|e| field_err(path, "task.scene", e))?;
+    let Some(obj) = scene.objects.iter().find(|o| o.id == spec.object) else {
+        let ids: Vec<&str> = scene.objects.iter().map(|o| o.id.as_str()).collect();
+        return Err(field_err(
+            path,
+            "task.object",
+            format!(
+                "'{}' is not in the scene (its objects: {})",
+                spec.object,
+                ids.join(", ")
+            ),
+        ));
+    };
+    let (target, tolerance, object_in_grasp) = match (&spec.query, &spec.grasp) {
+        (Some(_), Some(_)) | (None, None) => {
+            return Err(field_err(
+                path,
+                "task.query",
+                "give the grasp either as a query file (task.query) or as task.grasp, one of them",
+            ));
+        }
+        (Some(q), None) => {
+            let g = read_grasp_query(&base.join(q), spec.query_index, &scene)
+                .map_err(|e| field_err(path, "task.query", e))?;
+            if g.object != spec.object {
+                return Err(field_err(
+                    path,
+                    "task.query",
+                    format!(
+                        "goal query {} grasps '{}', not task.object '{}'",
+                        spec.query_index, g.object, spec.object
+                    ),
+                ));
+            }
+            (
+                g.target,
+                [g.position_tolerance, g.orientation_tolerance],
+                g.object_in_grasp,
+            )
+        }
+        (None, Some(g)) => {
+            let [shape] = obj.shapes.as_slice() else {
+                return Err(field_err(
+                    path,
+                    "task.object",
+                    format!(
+                        "'{}' has {} shapes; a grasp offset is taken from the pose of its one shape",
+                        spec.object,
+                        obj.shapes.len()
+                    ),
+                ));
+            };
+            let quat = Quaternion::new(g[6], g[3], g[4], g[5]);
+            if quat.norm() < 1e-9 {
+                return Err(field_err(path, "task.grasp", "a zero quaternion"));
+            }
+            let offset = Isometry3::from_parts(
+                Translation3::new(g[0], g[1], g[2]),
+                UnitQuaternion::from_quaternion(quat),
+            );
+            (
+                shape.pose.to_isometry() * offset,
+                GRASP_TOLERANCE,
+                offset.inverse().translation.vector,
+            )
+        }
+    };
+    let grasp = GoalPose {
+        frame: ee_frame,
+        target,
+        position_tolerance: tolerance[0],
+        orientation_tolerance: tolerance[1],
+    };
+    let pre_grasp = GoalPose {
+        target: target * Translation3::new(-spec.approach, 0.0, 0.0),
+        ..grasp.clone()
+    };
+    let group = JointGroup::new(
+        model,
+        &arm_chain(robot, ee_frame)
+            .iter()
+            .map(|&j| model.names[j].as_str())
+            .collect::<Vec<_>>(),
+    )
+    .map_err(|e| field_err(path, "robot.end_effector", e))?;
+    let posture = super::plant::start_configuration(robot, [0.0; 3], transport);
+    let hull_geometry = geometry;
+    let (geometry, _) = surface_links_for_start(
+        model,
+        &hull_geometry,
+        &Scene::default(),
+        &group,
+        &posture,
+        ARM_MARGIN,
+        &MeshSource {
+            urdf: urdf.to_path_buf(),
+            package_dirs: package_dirs.to_vec(),
+        },
+    )
+    .map_err(|e| field_err(path, "robot.transport_posture (mesh surfaces)", e))?;
+    let payload_robot = with_payload(robot, ee_frame, spec.mass, &object_in_grasp);
+    let mut scene_after_grasp = scene.clone();
+    scene_after_grasp.objects.retain(|o| o.id != spec.object);
+    Ok(Task {
+        scene,
+        scene_after_grasp,
+        scene_pose: spec.pose,
+        object: spec.object.clone(),
+        grasp,
+        pre_grasp,
+        object_in_grasp,
+        mass: spec.mass,
+        geometry,
+        hull_geometry,
+        group,
+        payload_robot,
+        placement: PlacementOptions {
+            area: spec.area,
+            step: spec.step,
+            headings: spec.headings,
+            seed: spec.seed,
+            ..PlacementOptions::default()
+        },
+        planning_time: spec.planning_time,
+        seed: spec.seed,
+    })
+}
+
+/// The collision geometry `[task]` plans with: the URDF's, with the SRDF's disabled pairs.
+pub(super) fn task_geometry_options(
+    spec: &TaskSpec,
+    base: &Path,
+    package_dirs: &[PathBuf],
+) -> GeometryOptions {
+    GeometryOptions {
+        package_dirs: package_dirs.to_vec(),
+        srdf: spec.srdf.as_ref().map(|s| base.join(s)),
+    }
+}
+
+fn check_numbers(spec: &TaskSpec, path: &Path) -> Result<()> {
+    let finite = |field: &str, xs: &[f64]| match crate::error::first_non_finite(xs) {
+        Some(i) => Err(field_err(
+            path,
+            field,
+            format!("entry {i} is not a finite number"),
+        )),
+        None => Ok(()),
+    };
+    finite("task.pose", &spec.pose)?;
+    if let Some(g) = &spec.grasp {
+        finite("task.grasp", g)?;
+    }
+    if !(spec.mass.is_finite() && spec.mass >= 0.0) {
+        return Err(field_err(
+            path,
+            "task.mass",
+            format!("{} is not a mass in kg (≥ 0)", spec.mass),
+        ));
+    }
+    for (field, v) in [
+        ("task.step", spec.step),
+        ("task.planning_time", spec.planning_time),
+    ] {
+        if let Some(problem) = crate::error::not_positive_finite(v) {
+            return Err(field_err(path, field, problem));
+        }
+    }
+    if !(spec.approach.is_finite() && spec.approach >= 0.0) {
+        return Err(field_err(
+            path,
+            "task.approach",
+            format!("{} is not a distance ≥ 0", spec.approach),
+        ));
+    }
+    if spec.headings == 0 {
+        return Err(field_err(path, "task.headings", "must be at least 1"));
+    }
+    if let Some(a) = &spec.area {
+        finite("task.area", a)?;
+        if a[2] <= a[0] || a[3] <= a[1] {
+            return Err(field_err(
+                path,
+                "task.area",
+                format!("expected [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {a:?}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `local` with every shape moved by `on_map`.
+fn placed(local: &Scene, on_map: &SE3) -> Result<Scene> {
+    let objects = local
+        .objects
+        .iter()
+        .map(|o| {
+            let shapes = o
+                .shapes
+                .iter()
+                .map(|s| (on_map.compose(&s.pose), s.shape.clone()))
+                .collect();
+            SceneObject::new(o.id.clone(), shapes)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Scene { objects })
+}
+
+/// The joints of the chain from the base to the end effector that the mission's arm
+/// holds (the torso and arm; not the planar root), root side first.
+pub(super) fn arm_chain(robot: &WheeledModel, ee_frame: FrameIndex) -> Vec<usize> {
+    let model = &robot.model;
+    let mut j = model.frames[ee_frame.0].parent_joint.0;
+    let mut chain = Vec::new();
+    while j != 0 {
+        if model.joint_types[j] != JointType::Planar && robot.arm_dofs().contains(&model.idx_v[j]) {
+            chain.push(j);
+        }
+        j = model.parents[j].0;
+    }
+    chain.reverse();
+    chain
+}
+
+/// `robot` with a point mass `mass` at `offset` in the frame `frame` added to the frame's
+/// body.
+fn with_payload(
+    robot: &WheeledModel,
+    frame: FrameIndex,
+    mass: f64,
+    offset: &Vector3<f64>,
+) -> WheeledModel {
+    let mut out = robot.clone();
+    let fr = &robot.model.frames[frame.0];
+    let at = fr.placement.act_point(offset);
+    let j = fr.parent_joint.0;
+    out.model.inertias[j] = robot.model.inertias[j] + Inertia::point_mass(mass, at);
+    out
+}
+
+/// The outlines of the scene's shapes on the ground: one convex polygon per shape
+/// (counter-clockwise, world frame), with the id of its object.
+pub fn scene_outlines(scene: &Scene) -> Vec<(String, Vec<Vector2<f64>>)> {
+    let mut out = Vec::new();
+    let mut points = Vec::new();
+    for o in &scene.objects {
+        for s in &o.shapes {
+            points.clear();
+            outline_points(&s.shape, &s.pose, &mut points);
+            out.push((o.id.clone(), hull_2d(points.iter().map(|p| p.xy()))));
+        }
+    }
+    out
+}
+
+/// Distance from `p` to the convex polygon `poly` (counter-clockwise), 0 inside.
+fn polygon_distance(poly: &[Vector2<f64>], p: &Vector2<f64>) -> f64 {
+    match poly.len() {
+        0 => f64::INFINITY,
+        1 => (p - poly[0]).norm(),
+        n => {
+            let mut inside = n >= 3;
+            let mut best = f64::INFINITY;
+            for k in 0..n {
+                let (a, b) = (poly[k], poly[(k + 1) % n]);
+                let e = b - a;
+                let w = p - a;
+                if e.x * w.y - e.y * w.x < 0.0 {
+                    inside = false;
+                }
+                let s = (w.dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+                best = best.min((w - e * s).norm());
+            }
+            if inside { 0.0 } else { best }
+        }
+    }
+}
+
+/// Marks the map cells the scene's outlines cover as occupied: a cell whose centre lies
+/// within half a cell diagonal of a shape's outline on the ground (so every cell the
+/// outline touches), whatever the shape's height. Returns the number of cells newly
+/// marked.
+pub fn block_scene_outline(
+    grid: &mut OccupancyGrid,
+    outlines: &[(String, Vec<Vector2<f64>>)],
+) -> usize {
+    let res = grid.resolution;
+    let reach = 0.5 * std::f64::consts::SQRT_2 * res;
+    let mut marked = 0;
+    for (_, poly) in outlines {
+        let (mut lo, mut hi) = (
+            Vector2::repeat(f64::INFINITY),
+            Vector2::repeat(f64::NEG_INFINITY),
+        );
+        for p in poly {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        // the cells of the outline's box (the map may be rotated: scan the box's corners)
+        let mut c_lo = [f64::INFINITY; 2];
+        let mut c_hi = [f64::NEG_INFINITY; 2];
+        for (x, y) in [(lo.x, lo.y), (lo.x, hi.y), (hi.x, lo.y), (hi.x, hi.y)] {
+            let c = grid.world_to_cell_f(x, y);
+            for i in 0..2 {
+                c_lo[i] = c_lo[i].min(c[i]);
+                c_hi[i] = c_hi[i].max(c[i]);
+            }
+        }
+        let span = |lo: f64, hi: f64, n: usize| {
+            let a = (lo - 2.0).floor().max(0.0) as usize;
+            let b = ((hi + 2.0).ceil().max(0.0) as usize).min(n);
+            a..b
+        };
+        for cy in span(c_lo[1], c_hi[1], grid.height) {
+            for cx in span(c_lo[0], c_hi[0], grid.width) {
+                let [wx, wy] = grid.cell_to_world(cx as f64 + 0.5, cy as f64 + 0.5);
+                if polygon_distance(poly, &Vector2::new(wx, wy)) <= reach {
+                    let i = grid.index(cx, cy);
+                    if grid.cells[i] != crate::planning::grid::OCCUPIED {
+                        grid.cells[i] = crate::planning::grid::OCCUPIED;
+                        marked += 1;
+                    }
+                }
+            }
+        }
+    }
+    marked
+}
+
+/// The first scene object whose outline comes within `radius` of `at` (world), with the
+/// distance: where the footprint would stand in it.
+pub fn object_under_footprint(
+    outlines: &[(String, Vec<Vector2<f64>>)],
+    at: [f64; 2],
+    radius: f64,
+) -> Option<(String, f64)> {
+    let p = Vector2::new(at[0], at[1]);
+    outlines.iter().find_map(|(id, poly)| {
+        let d = polygon_distance(poly, &p);
+        (d <= radius).then(|| (id.clone(), d))
+    })
+}
+
+impl Task {
+    /// Ranks the base poses from which the group reaches the grasp
+    /// ([`crate::motion::placement::place_base`]), the arm's other joints at `posture`
+    /// (a full configuration), with the payload.
+    ///
+    /// # Errors
+    /// As [`crate::motion::placement::place_base`].
+    pub fn placements(&self, robot: &WheeledModel, posture: &[f64]) -> Result<Placement> {
+        let support = SupportPolygon::from_wheeled_base(&robot.base)?;
+        place_base(
+            &PlacementProblem {
+                model: &robot.model,
+                geometry: &self.hull_geometry,
+                scene: &self.scene,
+                group: &self.group,
+                posture,
+                support: &support,
+                grasp: &self.grasp,
+                payload: Payload {
+                    mass: self.mass,
+                    offset: self.object_in_grasp,
+                },
+            },
+            &self.placement,
+        )
+    }
+}
+
+/// The smallest distances of the executed arm motion to the scene and between the
+/// robot's enabled link pairs (the collision module's signed distances on the convex
+/// hulls), with the pair of each.
+#[derive(Debug, Clone)]
+pub struct DistanceMonitor {
+    data: Data,
+    gd: GeometryData,
+    sd: SceneData,
+    sd_after: SceneData,
+    q: DVector<f64>,
+    /// Smallest robot–scene distance so far (m) and its link and object.
+    pub min_scene: Option<(f64, [String; 2])>,
+    /// Smallest distance between enabled link pairs so far (m) and the links.
+    pub min_self: Option<(f64, [String; 2])>,
+}
+
+impl DistanceMonitor {
+    /// The monitor of `task` on `robot`.
+    #[must_use]
+    pub fn new(task: &Task, robot: &WheeledModel) -> Self {
+        Self {
+            data: Data::new(&robot.model),
+            gd: GeometryData::new(&task.geometry),
+            sd: SceneData::new(&task.geometry, &task.scene),
+            sd_after: SceneData::new(&task.geometry, &task.scene_after_grasp),
+            q: DVector::zeros(robot.model.nq),
+            min_scene: None,
+            min_self: None,
+        }
+    }
+
+    /// The distances at `q` (full configuration) to the scene (`grasped`: without the
+    /// picked object) and between links; updates the minima and returns both (m).
+    pub fn sample(
+        &mut self,
+        task: &Task,
+        robot: &WheeledModel,
+        q: &[f64],
+        grasped: bool,
+    ) -> (f64, f64) {
+        let gm = &task.geometry;
+        self.q.copy_from_slice(q);
+        crate::kinematics::forward_kinematics(&robot.model, &mut self.data, &self.q);
+        update_geometry_placements(gm, &self.data, &mut self.gd);
+        let d_self = compute_distances(gm, &mut self.gd, PairSelection::Enabled);
+        let (scene, sd) = if grasped {
+            (&task.scene_after_grasp, &mut self.sd_after)
+        } else {
+            (&task.scene, &mut self.sd)
+        };
+        let d_scene = compute_scene_distances(gm, &mut self.gd, scene, sd);
+        let links = &gm.links;
+        if self.min_scene.as_ref().is_none_or(|m| d_scene < m.0)
+            && let Some(k) = sd.closest
+        {
+            let no = scene.objects.len();
+            self.min_scene = Some((
+                d_scene,
+                [links[k / no].name.clone(), scene.objects[k % no].id.clone()],
+            ));
+        }
+        if self.min_self.as_ref().is_none_or(|m| d_self < m.0)
+            && let Some(i) = self.gd.closest
+        {
+            let [a, b] = gm.pairs[i];
+            self.min_self = Some((d_self, [links[a].name.clone(), links[b].name.clone()]));
+        }
+        (d_scene, d_self)
+    }
+}
+
+/// The placement the run drove to.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PlacementChoice {
+    /// Base pose `[x, y, θ]` (world).
+    pub base: [f64; 3],
+    /// Its rank among the candidates (0: the best): the better-ranked ones the base could
+    /// not reach on the map (the footprint does not fit there, or no path leads there).
+    pub rank: usize,
+    /// Candidates ranked.
+    pub candidates: usize,
+    /// Its score, manipulability, clearance (m) and tip-over margin with the payload (m).
+    pub score: f64,
+    /// Yoshikawa's manipulability of the grasping posture.
+    pub manipulability: f64,
+    /// Clearance of the grasping posture (m).
+    pub clearance: f64,
+    /// ZMP margin of the grasping posture at rest with the payload (m).
+    pub tip_over_margin: f64,
+    /// Per-stage counts of the search.
+    pub counts: crate::motion::placement::PlacementCounts,
+    /// Wall time of the search (s).
+    pub time_s: f64,
+}
+
+/// One arm motion of the pick.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ArmPlanRecord {
+    /// `approach` (to the pre-grasp), `grasp`, or `retreat` (to the transport posture).
+    pub stage: String,
+    /// Mission time it was planned at (s).
+    pub t: f64,
+    /// Whether it was solved.
+    pub solved: bool,
+    /// Why not.
+    pub reason: Option<String>,
+    /// Planning wall time (s).
+    pub planning_time_s: f64,
+    /// States checked for collision.
+    pub checks: u64,
+    /// Duration of the timed trajectory (s).
+    pub duration: Option<f64>,
+    /// The planner's smallest distance along the plan (m).
+    pub min_distance: Option<f64>,
+}
+
+/// The payload attached at the grasp.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PayloadRecord {
+    /// Mission time (s).
+    pub t: f64,
+    /// Mass (kg).
+    pub mass: f64,
+    /// The ZMP margin at that state without and with the payload (m).
+    pub zmp_margin_without: Option<f64>,
+    /// With the payload (m).
+    pub zmp_margin_with: Option<f64>,
+}
+
+/// What the pick did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TaskResult {
+    /// The object.
+    pub object: String,
+    /// The scene's pose on the map `[x, y, yaw]`.
+    pub scene_pose: [f64; 3],
+    /// The placement driven to (`None`: none found or reachable).
+    pub placement: Option<PlacementChoice>,
+    /// The arm motions planned.
+    pub arm_plans: Vec<ArmPlanRecord>,
+    /// The payload attach.
+    pub payload: Option<PayloadRecord>,
+    /// Smallest robot–scene distance along the executed arm motions (m), and the pair.
+    pub min_scene_distance: Option<f64>,
+    /// Link and scene object at it.
+    pub closest_scene_pair: Option<[String; 2]>,
+    /// Smallest distance between enabled link pairs along the executed arm motions (m).
+    pub min_self_distance: Option<f64>,
+    /// Links at it.
+    pub closest_self_pair: Option<[String; 2]>,
+}
