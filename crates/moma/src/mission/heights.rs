@@ -125,17 +125,16 @@ pub fn slab_clearance(gm: &GeometryModel, gd: &mut GeometryData, z: [f64; 2]) ->
 }
 
 /// Marks occupied every cell of `grid` that the ground outline of `objects` overlaps
-/// (per object, the convex hull of its shapes projected on the ground,
-/// [`outline_points`]); returns the number of cells newly occupied. The rasteriser of
-/// scene objects placed on a mission's map (cells off the map are ignored).
+/// (per shape, the convex hull of the shape projected on the ground, [`outline_points`]);
+/// returns the number of cells newly occupied. The one rasteriser of scene objects placed
+/// on a mission's map: the boxes the robot cannot pass under and a `[task]`'s furniture
+/// (cells off the map are ignored).
 pub fn block_scene_footprint(grid: &mut OccupancyGrid, objects: &[SceneObject]) -> usize {
     let mut points = Vec::new();
     let mut newly = 0;
-    for o in objects {
+    for s in objects.iter().flat_map(|o| &o.shapes) {
         points.clear();
-        for s in &o.shapes {
-            outline_points(&s.shape, &s.pose, &mut points);
-        }
+        outline_points(&s.shape, &s.pose, &mut points);
         let hull: Vec<[f64; 2]> = hull_2d(points.iter().map(|p| p.xy()))
             .iter()
             .map(|p| grid.world_to_cell_f(p.x, p.y))

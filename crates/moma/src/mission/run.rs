@@ -417,6 +417,9 @@ fn mission_planner(
     Ok((planner, path, search))
 }
 
+/// A checked plan: the cells, the timed reference and the smoothing wall time (s).
+type CheckedReference = (Vec<(usize, usize)>, Reference, f64);
+
 fn axle_pose(base: [f64; 3], d: f64) -> [f64; 3] {
     if d == 0.0 {
         return base;
@@ -638,7 +641,7 @@ impl<'m> Runner<'m> {
         mut cells: Vec<(usize, usize)>,
         start: &TimingStart,
         search: &mut SearchTiming,
-    ) -> Option<std::result::Result<(Vec<(usize, usize)>, Reference, f64), String>> {
+    ) -> Option<std::result::Result<CheckedReference, String>> {
         let mut smoothing_s = 0.0;
         let mut repaired = 0;
         let mut polygon = self.planner.polygon.is_some();

@@ -9,11 +9,10 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::footprint::MissionFootprint;
-use super::heights::{BoxSpec, BoxVerdict, place_boxes};
+use super::heights::{BoxSpec, BoxVerdict, block_scene_footprint, place_boxes};
 use super::plant::{MissionContact, start_configuration};
 use super::task::{
-    Task, TaskSpec, block_scene_outline, load_task, object_under_footprint, scene_outlines,
-    task_geometry_options,
+    Task, TaskSpec, load_task, object_under_footprint, scene_outlines, task_geometry_options,
 };
 use crate::collision::{GeometryModel, GeometryOptions};
 use crate::contact::{ContactSpec, PlantKind};
@@ -737,7 +736,7 @@ fn place_scene_on_map(
             ),
         ));
     }
-    block_scene_outline(&mut map.grid, &outlines);
+    block_scene_footprint(&mut map.grid, &task.scene.objects);
     Ok(())
 }
 

@@ -7,7 +7,7 @@
 //! geometry is read with the SRDF's disabled pairs; the joint group is the end effector's
 //! arm chain; the robot with the object as a point mass on the grasp frame's body is
 //! built for after the grasp. The scene's outline on the ground blocks the map cells it
-//! covers ([`block_scene_outline`]), and a scene object where the footprint stands at the
+//! covers ([`super::heights::block_scene_footprint`]), and a scene object where the footprint stands at the
 //! start is an input error naming the object.
 //!
 //! In the run (`run.rs`): [`Task::placements`] ranks the base poses
@@ -34,7 +34,6 @@ use crate::motion::placement::{
 };
 use crate::motion::{GoalPose, JointGroup, MeshSource, surface_links_for_start};
 use crate::multibody::{Data, FrameIndex, FrameKind, JointType};
-use crate::planning::OccupancyGrid;
 use crate::spatial::{Inertia, SE3};
 use crate::stability::SupportPolygon;
 
@@ -462,57 +461,6 @@ fn polygon_distance(poly: &[Vector2<f64>], p: &Vector2<f64>) -> f64 {
             if inside { 0.0 } else { best }
         }
     }
-}
-
-/// Marks the map cells the scene's outlines cover as occupied: a cell whose centre lies
-/// within half a cell diagonal of a shape's outline on the ground (so every cell the
-/// outline touches), whatever the shape's height. Returns the number of cells newly
-/// marked.
-pub fn block_scene_outline(
-    grid: &mut OccupancyGrid,
-    outlines: &[(String, Vec<Vector2<f64>>)],
-) -> usize {
-    let res = grid.resolution;
-    let reach = 0.5 * std::f64::consts::SQRT_2 * res;
-    let mut marked = 0;
-    for (_, poly) in outlines {
-        let (mut lo, mut hi) = (
-            Vector2::repeat(f64::INFINITY),
-            Vector2::repeat(f64::NEG_INFINITY),
-        );
-        for p in poly {
-            lo = lo.inf(p);
-            hi = hi.sup(p);
-        }
-        // the cells of the outline's box (the map may be rotated: scan the box's corners)
-        let mut c_lo = [f64::INFINITY; 2];
-        let mut c_hi = [f64::NEG_INFINITY; 2];
-        for (x, y) in [(lo.x, lo.y), (lo.x, hi.y), (hi.x, lo.y), (hi.x, hi.y)] {
-            let c = grid.world_to_cell_f(x, y);
-            for i in 0..2 {
-                c_lo[i] = c_lo[i].min(c[i]);
-                c_hi[i] = c_hi[i].max(c[i]);
-            }
-        }
-        let span = |lo: f64, hi: f64, n: usize| {
-            let a = (lo - 2.0).floor().max(0.0) as usize;
-            let b = ((hi + 2.0).ceil().max(0.0) as usize).min(n);
-            a..b
-        };
-        for cy in span(c_lo[1], c_hi[1], grid.height) {
-            for cx in span(c_lo[0], c_hi[0], grid.width) {
-                let [wx, wy] = grid.cell_to_world(cx as f64 + 0.5, cy as f64 + 0.5);
-                if polygon_distance(poly, &Vector2::new(wx, wy)) <= reach {
-                    let i = grid.index(cx, cy);
-                    if grid.cells[i] != crate::planning::grid::OCCUPIED {
-                        grid.cells[i] = crate::planning::grid::OCCUPIED;
-                        marked += 1;
-                    }
-                }
-            }
-        }
-    }
-    marked
 }
 
 /// The first scene object whose outline comes within `radius` of `at` (world), with the
