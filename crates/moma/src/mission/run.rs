@@ -53,6 +53,14 @@ const ARM_SETTLED_RATE: f64 = 0.02;
 /// Tolerances of the base at a task's placement (m, rad).
 const PLACEMENT_TOLERANCE: [f64; 2] = [0.05, 0.05];
 
+/// A path the footprint passes: its cells, its timed reference and the wall time (s) of
+/// its smoothing, timing and checks.
+struct CheckedPath {
+    cells: Vec<(usize, usize)>,
+    reference: Reference,
+    smoothing_s: f64,
+}
+
 /// One re-plan (or the first plan) of a run.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct PlanRecord {
@@ -417,9 +425,6 @@ fn mission_planner(
     Ok((planner, path, search))
 }
 
-/// A checked plan: the cells, the timed reference and the smoothing wall time (s).
-type CheckedReference = (Vec<(usize, usize)>, Reference, f64);
-
 fn axle_pose(base: [f64; 3], d: f64) -> [f64; 3] {
     if d == 0.0 {
         return base;
@@ -617,8 +622,16 @@ impl<'m> Runner<'m> {
         mut search: SearchTiming,
     ) -> bool {
         match self.checked_reference(cells, &start, &mut search) {
-            Some(Ok((cells, r, st))) => {
-                self.adopt(cells, r, start.t0, start.v, trigger, search, st);
+            Some(Ok(p)) => {
+                self.adopt(
+                    p.cells,
+                    p.reference,
+                    start.t0,
+                    start.v,
+                    trigger,
+                    search,
+                    p.smoothing_s,
+                );
                 true
             }
             Some(Err(reason)) => {
@@ -641,7 +654,7 @@ impl<'m> Runner<'m> {
         mut cells: Vec<(usize, usize)>,
         start: &TimingStart,
         search: &mut SearchTiming,
-    ) -> Option<std::result::Result<CheckedReference, String>> {
+    ) -> Option<std::result::Result<CheckedPath, String>> {
         let mut smoothing_s = 0.0;
         let mut repaired = 0;
         let mut polygon = self.planner.polygon.is_some();
@@ -667,7 +680,11 @@ impl<'m> Runner<'m> {
                     );
                     self.event(start.t0, "footprint", text);
                 }
-                return Some(Ok((cells, r, smoothing_s)));
+                return Some(Ok(CheckedPath {
+                    cells,
+                    reference: r,
+                    smoothing_s,
+                }));
             }
             let clock = Instant::now();
             let mut blocked = false;
@@ -1546,7 +1563,11 @@ impl<'m> Runner<'m> {
         let trigger = format!("obstacle {oi}");
         let old = self.reference.take();
         let (cells, r, st_s, stop) = match self.checked_reference(cells, &start, &mut timing) {
-            Some(Ok((cells, r, st_s))) => {
+            Some(Ok(CheckedPath {
+                cells,
+                reference: r,
+                smoothing_s: st_s,
+            })) => {
                 // a new path that does not admit the current speed at its start would be
                 // braked onto past its limits (ω_max): stop along the old path instead,
                 // then follow a path planned from there
@@ -1631,7 +1652,11 @@ impl<'m> Runner<'m> {
             pose: [stop.x, stop.y, stop.theta],
             v: 0.0,
         };
-        let (cells, mut r, st) = self.checked_reference(cells, &from_stop, timing)?.ok()?;
+        let CheckedPath {
+            cells,
+            reference: mut r,
+            smoothing_s: st,
+        } = self.checked_reference(cells, &from_stop, timing)?.ok()?;
         samples.pop();
         samples.append(&mut r.samples);
         r.samples = samples;
