@@ -75,7 +75,7 @@ pub use scenario::{Mission, MissionFile, load};
 /// `timing_acceleration` and `samples`; with `map.boxes` the 3-D verdict of each box
 /// (`boxes`: `clearance`, `blocked`); on the contact plant `contact` (first lift-off,
 /// first slip, per-contact totals, largest tilt); `min_scene_distance`,
-/// `min_self_distance` and, with a `[task]`, `task` ([`task::TaskResult`]). Non-finite
+/// `min_self_distance` and, with a `[task]`, `task` ([`task::TaskResult`], whose placement and arm plans carry their wall-clock planning times). Non-finite
 /// or missing values are `null`.
 /// `moma mission` adds its timing and file keys to this map; the Python package returns
 /// it as it is.
