@@ -4,7 +4,7 @@
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, summary, temp_dir};
+use cli_common::{mission, moma, scenarios, summary, temp_dir};
 
 const OUTPUTS: &[&str] = &[
     "summary.json",
@@ -103,12 +103,7 @@ fn default_mission_runs_without_an_argument_and_reaches_its_goal() {
 fn sealed_goal_writes_everything_and_exits_3() {
     let work = temp_dir("sealed");
     let out = work.join("out");
-    let run = moma()
-        .args(["mission", "--quiet", "--output"])
-        .arg(&out)
-        .arg(scenarios().join("mission_sealed.toml"))
-        .output()
-        .unwrap();
+    let run = mission(&scenarios().join("mission_sealed.toml"), &out);
     assert_eq!(
         run.status.code(),
         Some(3),
@@ -131,12 +126,7 @@ fn shipped_offset_mission_reaches_its_goal_with_the_base_frame_off_the_axle() {
     // d = 0.12: planned and tracked on the axle midpoint, reported for the base frame
     let work = temp_dir("offset");
     let out = work.join("out");
-    let run = moma()
-        .args(["mission", "--quiet", "--output"])
-        .arg(&out)
-        .arg(scenarios().join("mission_offset.toml"))
-        .output()
-        .unwrap();
+    let run = mission(&scenarios().join("mission_offset.toml"), &out);
     assert!(
         run.status.success(),
         "{}",
@@ -197,12 +187,7 @@ fn input_errors_exit_1_with_no_output() {
         let file = work.join("bad.toml");
         std::fs::write(&file, body).unwrap();
         let out = work.join(format!("out-{tag}"));
-        let run = moma()
-            .args(["mission", "--quiet", "--output"])
-            .arg(&out)
-            .arg(&file)
-            .output()
-            .unwrap();
+        let run = mission(&file, &out);
         let err = String::from_utf8_lossy(&run.stderr);
         assert_eq!(run.status.code(), Some(1), "{tag}: {err}");
         assert!(err.contains(needle), "{tag}: {err}");

@@ -4,18 +4,13 @@
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, summary, temp_dir};
+use cli_common::{mission, scenarios, summary, temp_dir};
 
 #[test]
 fn the_contact_mission_reaches_its_goal_and_reports_its_contacts() {
     let work = temp_dir("contact");
     let out = work.join("out");
-    let run = moma()
-        .args(["mission", "--quiet", "--output"])
-        .arg(&out)
-        .arg(scenarios().join("mission_contact.toml"))
-        .output()
-        .unwrap();
+    let run = mission(&scenarios().join("mission_contact.toml"), &out);
     assert!(
         run.status.success(),
         "{}",
@@ -83,12 +78,7 @@ fn bad_contact_parameters_exit_1_naming_the_field() {
         let path = work.join(format!("{tag}.toml"));
         std::fs::write(&path, text.replacen("mu = 1.0", to, 1)).unwrap();
         let out = work.join(format!("out-{tag}"));
-        let run = moma()
-            .args(["mission", "--quiet", "--output"])
-            .arg(&out)
-            .arg(&path)
-            .output()
-            .unwrap();
+        let run = mission(&path, &out);
         assert_eq!(run.status.code(), Some(1), "{tag}");
         let err = String::from_utf8_lossy(&run.stderr);
         assert!(err.contains(field), "{tag}: {err}");

@@ -6,17 +6,12 @@
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, temp_dir};
+use cli_common::{edited_scenario, mission, scenarios, temp_dir};
 
 #[test]
 fn fetch_mission_reaches_its_goal_with_the_robots_footprint() {
     let out = temp_dir("run").join("out");
-    let run = moma()
-        .args(["mission", "--quiet", "--output"])
-        .arg(&out)
-        .arg(scenarios().join("mission_fetch.toml"))
-        .output()
-        .unwrap();
+    let run = mission(&scenarios().join("mission_fetch.toml"), &out);
     assert!(
         run.status.success(),
         "{}",
@@ -39,24 +34,16 @@ fn fetch_mission_reaches_its_goal_with_the_robots_footprint() {
 /// The Fetch mission with `from` replaced by `to`, written next to a copy of the paths it
 /// names (relative to the scenarios folder, so the copy sits there too).
 fn bad(tag: &str, from: &str, to: &str, field: &str) {
-    let text = std::fs::read_to_string(scenarios().join("mission_fetch.toml")).unwrap();
-    assert!(text.contains(from), "{from}");
-    let path = scenarios().join(format!("bad_fetch_{tag}_{}.tmp.toml", std::process::id()));
-    std::fs::write(&path, text.replace(from, to)).unwrap();
+    let path = edited_scenario("mission_fetch.toml", tag, from, to);
     let out = temp_dir(tag).join("out");
-    let run = moma()
-        .args(["mission", "--quiet", "--output"])
-        .arg(&out)
-        .arg(&path)
-        .output()
-        .unwrap();
+    let run = mission(&path, &out);
     let _ = std::fs::remove_file(&path);
     let err = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "{tag}: {err}");
     assert!(run.stdout.is_empty(), "{tag}");
     assert!(!out.exists(), "{tag}: no output on an input error");
     assert!(
-        err.contains(&format!("bad_fetch_{tag}")) && err.contains(field),
+        err.contains(&format!("mission_fetch_{tag}")) && err.contains(field),
         "{tag}: {err}"
     );
 }

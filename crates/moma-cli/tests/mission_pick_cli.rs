@@ -4,22 +4,14 @@
 
 mod cli_common;
 
-use cli_common::{moma, scenarios, summary, temp_dir};
+use cli_common::{edited_scenario, mission, summary, temp_dir};
 
 /// Runs the pick mission with `from` replaced by `to` (written next to the original, so
 /// its relative paths hold); returns the exit code, standard error and output folder.
 fn run_with(tag: &str, from: &str, to: &str) -> (Option<i32>, String, std::path::PathBuf) {
-    let text = std::fs::read_to_string(scenarios().join("mission_fetch_pick.toml")).unwrap();
-    assert!(text.contains(from), "{from}");
-    let path = scenarios().join(format!("pick_{tag}_{}.tmp.toml", std::process::id()));
-    std::fs::write(&path, text.replace(from, to)).unwrap();
+    let path = edited_scenario("mission_fetch_pick.toml", tag, from, to);
     let out = temp_dir(tag).join("out");
-    let run = moma()
-        .args(["mission", "--quiet", "--output"])
-        .arg(&out)
-        .arg(&path)
-        .output()
-        .unwrap();
+    let run = mission(&path, &out);
     let _ = std::fs::remove_file(&path);
     (
         run.status.code(),

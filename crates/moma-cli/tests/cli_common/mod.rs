@@ -42,3 +42,25 @@ pub fn simulate(scenario: &Path, out: &Path) -> std::process::Output {
         .output()
         .unwrap()
 }
+
+/// `moma mission --quiet --output OUT MISSION`, its output captured.
+pub fn mission(file: &Path, out: &Path) -> std::process::Output {
+    moma()
+        .args(["mission", "--quiet", "--output"])
+        .arg(out)
+        .arg(file)
+        .output()
+        .unwrap()
+}
+
+/// A copy of the shipped scenario `name` with `from` (which must occur) replaced by `to`,
+/// written beside it (so its relative paths hold) as `STEM_TAG_PID.tmp.toml`; the caller
+/// removes it.
+pub fn edited_scenario(name: &str, tag: &str, from: &str, to: &str) -> PathBuf {
+    let text = std::fs::read_to_string(scenarios().join(name)).unwrap();
+    assert!(text.contains(from), "{from}");
+    let stem = name.trim_end_matches(".toml");
+    let path = scenarios().join(format!("{stem}_{tag}_{}.tmp.toml", std::process::id()));
+    std::fs::write(&path, text.replace(from, to)).unwrap();
+    path
+}
