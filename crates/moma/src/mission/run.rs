@@ -828,7 +828,7 @@ impl<'m> Runner<'m> {
     #[allow(clippy::too_many_arguments)]
     fn arm_step(
         &mut self,
-        c: &mut Controller,
+        c: &mut RunSettings,
         st: &mut LoopState,
         ws: &mut Workspace,
         stage: ArmStage,
@@ -921,7 +921,7 @@ impl<'m> Runner<'m> {
     /// (with the reason) when no path leads there or it cannot be timed.
     fn drive_on_to(
         &mut self,
-        c: &mut Controller,
+        c: &mut RunSettings,
         st: &mut LoopState,
         t: f64,
         axle: [f64; 3],
@@ -1154,7 +1154,7 @@ impl<'m> Runner<'m> {
             self.m.task.as_ref(),
         )?;
         let act = Actuators::new(self.wm)?;
-        let mut c = Controller::new(&self, act, time_limit, rec_every)?;
+        let mut c = RunSettings::new(&self, act, time_limit, rec_every)?;
         let mut st = LoopState::new(&self);
         let sim_clock = Instant::now();
         while let Flow::Next | Flow::Retry = self.step(&mut c, &mut ws, &mut st, &mut x) {}
@@ -1266,7 +1266,7 @@ impl<'m> Runner<'m> {
     /// the torques, the record with its monitors, one integration step.
     fn step(
         &mut self,
-        c: &mut Controller,
+        c: &mut RunSettings,
         ws: &mut Workspace,
         st: &mut LoopState,
         x: &mut [f64],
@@ -1442,7 +1442,7 @@ impl<'m> Runner<'m> {
     /// if it blocks the rest of the reference.
     fn obstacle_arrivals(
         &mut self,
-        c: &Controller,
+        c: &RunSettings,
         st: &mut LoopState,
         t: f64,
         axle: [f64; 3],
@@ -1690,7 +1690,7 @@ impl<'m> Runner<'m> {
     /// limit.
     fn phase_transitions(
         &mut self,
-        c: &Controller,
+        c: &RunSettings,
         st: &mut LoopState,
         t: f64,
         pose: [f64; 3],
@@ -1750,7 +1750,7 @@ impl<'m> Runner<'m> {
     #[allow(clippy::too_many_arguments)]
     fn reach(
         &mut self,
-        c: &Controller,
+        c: &RunSettings,
         st: &mut LoopState,
         ws: &mut Workspace,
         ee: &EeState,
@@ -1820,7 +1820,7 @@ impl<'m> Runner<'m> {
     /// ends the run as a collision).
     fn record_and_check(
         &mut self,
-        c: &Controller,
+        c: &RunSettings,
         ws: &mut Workspace,
         st: &mut LoopState,
         t: f64,
@@ -1971,7 +1971,7 @@ impl<'m> Runner<'m> {
     /// the step's dynamics under the applied torques are in the workspace.
     fn record(
         &mut self,
-        c: &Controller,
+        c: &RunSettings,
         ws: &mut Workspace,
         st: &LoopState,
         t: f64,
@@ -2376,9 +2376,11 @@ impl Actuators {
     }
 }
 
-/// What the loop needs of the mission, fixed for the run: sizes, the goal, the gains and
-/// guards of the control laws, the actuators, the obstacle schedule.
-struct Controller {
+/// The run's settings (not a control law: the laws are Kanayama, Aicardi and the computed
+/// torque it holds): sizes, the goal, the gains and guards of the laws, the actuators, the
+/// obstacle schedule; fixed for the run but the time limit, which a pick's drive on
+/// extends.
+struct RunSettings {
     nq: usize,
     nr: usize,
     na: usize,
@@ -2417,7 +2419,7 @@ struct Controller {
     group_slots: Vec<usize>,
 }
 
-impl Controller {
+impl RunSettings {
     fn new(r: &Runner<'_>, act: Actuators, time_limit: f64, rec_every: usize) -> Result<Self> {
         let (m, wm, f) = (r.m, r.wm, &r.m.file);
         let model = &wm.model;
