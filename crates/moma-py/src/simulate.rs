@@ -7,7 +7,6 @@ use moma::contact::PlantKind;
 use moma::ode::StepStats;
 use moma::sim::contact_run::SETTLE_TIME;
 use moma::sim::monitor::Monitor;
-use moma::sim::mpc_run::MpcReport;
 use moma::sim::recorder::Recorder;
 use moma::sim_config::{Run, prepare};
 use numpy::{PyArray1, PyArrayMethods};
@@ -197,8 +196,7 @@ fn run_scenario(path: &Path) -> Result<Outcome, String> {
             doc.insert("goal_tolerance".into(), json!(c.goal_tolerance));
             monitored(&res.monitor, &res.stats, &mut doc);
             if let Some(m) = cl.law.mpc_run() {
-                let report = MpcReport::from(&m.summary);
-                doc.insert("mpc".into(), value(&report)?);
+                doc.insert("mpc".into(), value(&m.summary)?);
             }
             Ok(Outcome {
                 doc,

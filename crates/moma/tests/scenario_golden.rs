@@ -102,8 +102,8 @@ fn run_simulate(path: &Path) -> BTreeMap<String, Vec<f64>> {
                     "mpc".into(),
                     vec![
                         s.solves as f64,
-                        s.iterations_mean,
-                        s.iterations_max as f64,
+                        s.iterations.mean,
+                        s.iterations.max as f64,
                         v.torque,
                         v.wheel_speed,
                         v.joint_speed,

@@ -17,7 +17,7 @@ use crate::output::write_dir;
 use crate::svg_plots::line_chart;
 use anyhow::{Context, Result, anyhow};
 use moma::sim::closed_loop::ClosedLoopResult;
-use moma::sim::mpc_run::MpcReport;
+use moma::sim::mpc_run::MpcRunSummary;
 use moma::sim::settings::IntegratorSettings;
 use moma::sim::stability_monitor::StabilityMonitor;
 use moma::sim_config::{ClosedLoop, ControllerSpec};
@@ -88,12 +88,12 @@ struct ControlSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     stability: Option<super::simulate_stability::StabilitySummary>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    mpc: Option<MpcReport>,
+    mpc: Option<MpcRunSummary>,
 }
 
 /// The `mpc` section of a run whose law is the MPC.
-fn mpc_out(cl: &ClosedLoop) -> Option<MpcReport> {
-    Some(MpcReport::from(&cl.law.mpc_run()?.summary))
+fn mpc_out(cl: &ClosedLoop) -> Option<MpcRunSummary> {
+    Some(cl.law.mpc_run()?.summary.clone())
 }
 
 /// `t, errors…, V, V̇_analytic` per sample.

@@ -2,8 +2,8 @@
 //! solve report, the torques applied and what they did on the MPC's model of the robot:
 //! ZMP margin, clearance, torque beyond the limits before clipping, end-effector error)
 //! and the run's [`MpcRunSummary`] (solve-time percentiles, iterations, the largest
-//! planned violations and the closed loop's extremes), and that summary as the `mpc`
-//! object of a run's report ([`MpcReport`]).
+//! planned violations and the closed loop's extremes), which serialises as the `mpc`
+//! object of a run's report.
 
 use nalgebra::DVector;
 
@@ -34,24 +34,21 @@ pub struct MpcSample {
     pub ee_error: Option<f64>,
 }
 
-/// Percentiles of the solve times and the closed loop's extremes.
-#[derive(Clone, Debug, PartialEq)]
+/// Percentiles of the solve times and the closed loop's extremes; serialised, the `mpc`
+/// object of `moma simulate`'s summary (and of the Python package's `simulate`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct MpcRunSummary {
     /// Number of solves.
     pub solves: usize,
-    /// Solve time percentiles (s): 50th, 90th, 99th, and the largest.
-    pub solve_time_p50: f64,
-    /// 90th percentile.
-    pub solve_time_p90: f64,
-    /// 99th percentile.
-    pub solve_time_p99: f64,
-    /// Largest.
-    pub solve_time_max: f64,
-    /// Mean and largest iterations per solve.
-    pub iterations_mean: f64,
-    /// Largest.
-    pub iterations_max: usize,
+    /// Solve time percentiles (s).
+    pub solve_time_s: SolveTimes,
+    /// Iterations per solve.
+    pub iterations: IterationCounts,
     /// Largest violation per kind over every planned horizon.
+    #[serde(
+        rename = "max_planned_violation",
+        serialize_with = "violations_by_kind"
+    )]
     pub planned_violations: Violations,
     /// Smallest ZMP margin of the plant (m).
     pub min_zmp_margin: f64,
@@ -73,7 +70,7 @@ pub struct MpcRunSummary {
     pub base_speed_at_reach: Option<f64>,
 }
 
-/// Percentiles of the solve times (s), in [`MpcReport`].
+/// Percentiles of the solve times (s), in [`MpcRunSummary`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct SolveTimes {
     /// 50th percentile.
@@ -86,7 +83,7 @@ pub struct SolveTimes {
     pub max: f64,
 }
 
-/// Iterations per solve, in [`MpcReport`].
+/// Iterations per solve, in [`MpcRunSummary`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct IterationCounts {
     /// Mean.
@@ -95,64 +92,10 @@ pub struct IterationCounts {
     pub max: usize,
 }
 
-/// An [`MpcRunSummary`] in the form of the `mpc` object of `moma simulate`'s summary
-/// (and of the Python package's `simulate`).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct MpcReport {
-    /// Number of solves.
-    pub solves: usize,
-    /// Solve time percentiles (s).
-    pub solve_time_s: SolveTimes,
-    /// Iterations per solve.
-    pub iterations: IterationCounts,
-    /// Largest violation of each constraint kind over every planned horizon.
-    pub max_planned_violation: std::collections::BTreeMap<&'static str, f64>,
-    /// Smallest ZMP margin of the plant (m).
-    pub min_zmp_margin: f64,
-    /// Smallest clearance of the plant (m).
-    pub min_clearance: f64,
-    /// Largest torque excess asked for (clipped).
-    pub max_torque_excess: f64,
-    /// Largest wheel rate beyond its limit in the plant (rad/s).
-    pub wheel_speed_excess: f64,
-    /// Largest joint speed beyond its limit in the plant.
-    pub joint_speed_excess: f64,
-    /// Largest joint position beyond its limit in the plant.
-    pub joint_position_excess: f64,
-    /// Smallest end-effector error over the run (m), if a target was set.
-    pub min_ee_error: Option<f64>,
-    /// First time the end-effector error fell below 2 cm (s).
-    pub ee_reached_at: Option<f64>,
-    /// Platform speed at that time (m/s).
-    pub base_speed_at_reach: Option<f64>,
-}
-
-impl From<&MpcRunSummary> for MpcReport {
-    fn from(s: &MpcRunSummary) -> Self {
-        Self {
-            solves: s.solves,
-            solve_time_s: SolveTimes {
-                median: s.solve_time_p50,
-                p90: s.solve_time_p90,
-                p99: s.solve_time_p99,
-                max: s.solve_time_max,
-            },
-            iterations: IterationCounts {
-                mean: s.iterations_mean,
-                max: s.iterations_max,
-            },
-            max_planned_violation: s.planned_violations.pairs().into_iter().collect(),
-            min_zmp_margin: s.min_zmp_margin,
-            min_clearance: s.min_clearance,
-            max_torque_excess: s.max_torque_excess,
-            wheel_speed_excess: s.wheel_speed_excess,
-            joint_speed_excess: s.joint_speed_excess,
-            joint_position_excess: s.joint_position_excess,
-            min_ee_error: s.min_ee_error,
-            ee_reached_at: s.ee_reached_at,
-            base_speed_at_reach: s.base_speed_at_reach,
-        }
-    }
+/// [`Violations`] as a map from kind to its largest value, sorted by kind.
+fn violations_by_kind<S: serde::Serializer>(v: &Violations, out: S) -> Result<S::Ok, S::Error> {
+    let map: std::collections::BTreeMap<&'static str, f64> = v.pairs().into_iter().collect();
+    serde::Serialize::serialize(&map, out)
 }
 
 /// A closed-loop run: samples and summary; `q`, `v` end at the final state.
@@ -200,20 +143,24 @@ pub fn summarize(robot: &MpcRobot, samples: &[MpcSample]) -> MpcRunSummary {
         .find(|s| s.ee_error.is_some_and(|e| e < 0.02));
     MpcRunSummary {
         solves: samples.len(),
-        solve_time_p50: percentile(&times, 50.0),
-        solve_time_p90: percentile(&times, 90.0),
-        solve_time_p99: percentile(&times, 99.0),
-        solve_time_max: times.last().copied().unwrap_or(f64::NAN),
-        iterations_mean: samples
-            .iter()
-            .map(|s| s.solve.iterations as f64)
-            .sum::<f64>()
-            / n,
-        iterations_max: samples
-            .iter()
-            .map(|s| s.solve.iterations)
-            .max()
-            .unwrap_or(0),
+        solve_time_s: SolveTimes {
+            median: percentile(&times, 50.0),
+            p90: percentile(&times, 90.0),
+            p99: percentile(&times, 99.0),
+            max: times.last().copied().unwrap_or(f64::NAN),
+        },
+        iterations: IterationCounts {
+            mean: samples
+                .iter()
+                .map(|s| s.solve.iterations as f64)
+                .sum::<f64>()
+                / n,
+            max: samples
+                .iter()
+                .map(|s| s.solve.iterations)
+                .max()
+                .unwrap_or(0),
+        },
         planned_violations: planned,
         min_zmp_margin: samples
             .iter()
