@@ -139,6 +139,8 @@ pub(super) struct ContactLoop {
 pub(super) struct Monitors {
     /// ZMP margin (m); on the contact plant the centre of pressure against the support.
     pub zmp: Option<f64>,
+    /// The support edge of that margin (the stability monitor's base-frame numbering).
+    pub zmp_edge: Option<usize>,
     /// Force-Angle minimum (rad).
     pub force_angle: Option<f64>,
     /// Moment-Height minimum.
@@ -238,7 +240,8 @@ impl ContactLoop {
 
     /// The monitors of the present state: the ZMP margin (the centre of pressure of the
     /// normal forces against the support polygon placed at the measured pose `(x, y,
-    /// θ)`; `None` when nothing touches the ground), the Force-Angle and Moment-Height
+    /// θ)`; `None` when nothing touches the ground) and its edge (the nearest, the lowest
+    /// index among equal distances), the Force-Angle and Moment-Height
     /// minima of [`evaluate`] on the plant's state with the last step's accelerations
     /// (`None` before the first step), and the larger drive-wheel slip ratio |F_t| / (μ
     /// N) (`None` when a wheel carries no load). Does not allocate.
@@ -261,7 +264,7 @@ impl ContactLoop {
         };
         let reports = &self.state.contacts;
         let total: f64 = reports.iter().map(|r| r.normal).sum();
-        let zmp = (total > 0.0).then(|| {
+        let nearest = (total > 0.0).then(|| {
             let cop = reports
                 .iter()
                 .fold(Vector2::zeros(), |a, r| a + r.point.xy() * r.normal)
@@ -271,9 +274,9 @@ impl ContactLoop {
             (0..self.placed.len())
                 .map(|i| {
                     let e = self.placed.edge(i);
-                    e.inward.xy().dot(&(cop - e.from.xy()))
+                    (i, e.inward.xy().dot(&(cop - e.from.xy())))
                 })
-                .fold(f64::INFINITY, f64::min)
+                .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
         });
         let mu = self.plant.params.mu;
         let wheels = self.plant.wheel_dofs().len();
@@ -282,7 +285,8 @@ impl ContactLoop {
             .map(|r| (r.normal > 0.0).then(|| r.friction.norm() / (mu * r.normal)))
             .try_fold(0.0f64, |a, s| s.map(|s| a.max(s)));
         Monitors {
-            zmp,
+            zmp: nearest.map(|(_, m)| m),
+            zmp_edge: nearest.map(|(i, _)| i),
             force_angle,
             mhs,
             slip,

@@ -117,6 +117,10 @@ pub struct Samples {
     /// the centre of pressure of its normal forces inside the support, `None` while no
     /// contact is loaded.
     pub zmp_margin: Vec<Option<f64>>,
+    /// The support edge of that margin, an index into [`MissionResult::support_edges`]
+    /// (on the contact plant the edge nearest the centre of pressure); `None` where the
+    /// margin is.
+    pub zmp_critical_edge: Vec<Option<usize>>,
     /// Smallest Force-Angle measure (rad).
     pub force_angle_min: Vec<Option<f64>>,
     /// Smallest Moment-Height measure.
@@ -199,6 +203,9 @@ pub struct MissionResult {
     pub goal_pose: [f64; 3],
     /// With `[task]`: the placement, the arm plans, the payload and the distances.
     pub task: Option<TaskResult>,
+    /// The support polygon's edges (numbered in the base frame, as the stability
+    /// monitor's), each named `edge A-B` by its two contacts (wheel joints, casters).
+    pub support_edges: Vec<String>,
 }
 
 impl MissionResult {
@@ -1160,7 +1167,10 @@ impl<'m> Runner<'m> {
         while let Flow::Next | Flow::Retry = self.step(&mut c, &mut ws, &mut st, &mut x) {}
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
         let distances = ws.distances.take();
-        Ok(self.finish(&st, &x, ws.contact.take(), distances))
+        let edges = (0..ws.monitor.edges().len())
+            .map(|i| ws.monitor.edge_label(i))
+            .collect();
+        Ok(self.finish(&st, &x, ws.contact.take(), distances, edges))
     }
 
     /// The plan at t = 0 (or the reason there is none: a posture that tips at rest, an
@@ -1910,6 +1920,7 @@ impl<'m> Runner<'m> {
         x: &[f64],
         contact: Option<ContactLoop>,
         distances: Option<DistanceMonitor>,
+        support_edges: Vec<String>,
     ) -> MissionResult {
         if let (Some(tr), Some(dm)) = (&mut self.task, distances) {
             if let Some((d, pair)) = dm.min_scene {
@@ -1963,6 +1974,7 @@ impl<'m> Runner<'m> {
             contact: contact.map(|c| c.tally.finish()),
             goal_pose: self.goal.pose,
             task: self.task,
+            support_edges,
         }
     }
 
@@ -2004,6 +2016,7 @@ impl<'m> Runner<'m> {
         s.omega_ref.push(r.omega);
         s.ref_xy.push([r.x, r.y]);
         s.zmp_margin.push(m.zmp);
+        s.zmp_critical_edge.push(m.zmp_edge);
         s.force_angle_min.push(m.force_angle);
         s.mhs_min.push(m.mhs);
         s.clearance.push(clearance);
@@ -2037,6 +2050,7 @@ fn monitors(wm: &WheeledModel, perturbed: bool, ws: &mut Workspace, t: f64) -> O
     let last = |xs: &[Option<f64>]| xs.last().copied().flatten();
     Some(Monitors {
         zmp: last(&tr.zmp_margin),
+        zmp_edge: tr.critical_edge.last().copied().flatten(),
         force_angle: last(&tr.force_angle_min),
         mhs: last(&tr.mhs_min),
         slip: tr.wheels.last().and_then(|w| {

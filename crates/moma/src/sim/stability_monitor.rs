@@ -317,6 +317,16 @@ impl StabilityMonitor {
         &self.edges
     }
 
+    /// Edge `i` named by its two contacts, `edge A-B` (the sweeps' `tip_contact`).
+    #[must_use]
+    pub fn edge_label(&self, i: usize) -> String {
+        let e = self.edges[i];
+        format!(
+            "edge {}-{}",
+            self.contact_names[e.from], self.contact_names[e.to]
+        )
+    }
+
     /// The rule of the normal loads (`None` before the first sample).
     #[must_use]
     pub fn load_rule(&self) -> Option<LoadRule> {

@@ -13,7 +13,8 @@ use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
 
 use super::{
-    Parameter, Value, Values, file_error, joint_parameter, num, require_numbers, study_section,
+    Parameter, Value, file_error, joint_parameter, num, require_non_negative, require_numbers,
+    study_section,
 };
 use super::{resolve, set_joints};
 use crate::contact::{ContactPlant, ContactSpec, WheelSpec};
@@ -112,17 +113,7 @@ fn parameter_slots(
         };
         require_numbers(path, p)?;
         if matches!(slot, Slot::Payload) {
-            let negative = match &p.values {
-                Values::Linspace { lo, .. } => *lo < 0.0,
-                Values::List(v) => v.iter().any(|x| num(x) < 0.0),
-            };
-            if negative {
-                return Err(file_error(
-                    path,
-                    "parameters.payload",
-                    "must be >= 0 kg (0: no payload)",
-                ));
-            }
+            require_non_negative(path, p, " kg (0: no payload)")?;
         }
         slots.push(slot);
     }

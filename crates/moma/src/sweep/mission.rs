@@ -1,31 +1,37 @@
 //! The mission study: one full mission run ([`crate::mission::run`]) per point, with the
 //! scenario's start, goal, first obstacle and limits taken from the point, its contact
 //! plant's parameters (`"contact.mu"`, `"contact.stiffness"`, `"contact.damping"`,
-//! `"contact.slip_velocity"`, `"contact.dt"`, with `simulation.plant = "contact"`) and
-//! its `[uncertainty]` seed (`seed`). Each point re-validates the modified scenario as
-//! `moma mission` would; a point whose scenario is invalid (a start off the map, say) or
-//! whose run fails is a row with `reached = false` and the message in `reason`, so one
-//! bad corner of a sweep does not stop it.
+//! `"contact.slip_velocity"`, `"contact.dt"`, with `simulation.plant = "contact"`), its
+//! `[uncertainty]` seed (`seed`) and payload (`"uncertainty.payload.mass"`,
+//! `"uncertainty.payload.position[i]"`: the point's value replaces that distribution; the
+//! seed still draws the rest). Each point re-validates the modified scenario as `moma
+//! mission` would; a point whose scenario is invalid (a start off the map, say) or whose
+//! run fails is a row with `reached = false` and the message in `reason`, so one bad
+//! corner of a sweep does not stop it.
 //!
 //! Tip, lift-off and slip: `tipped` at the first recorded sample whose ZMP margin reaches
 //! zero (on the contact plant its centre of pressure reaches the support's boundary; on
-//! the rolling plant an undefined ZMP counts too); `lift_off` at the first contact to lose
-//! its load (contact plant only: with more than three contacts one may lift while the
-//! robot stands); `slipped` at the first `slip` event (contact plant: a wheel slides;
-//! rolling plant: a driven wheel's friction demand above `limits.mu`).
+//! the rolling plant an undefined ZMP counts too), `tip_contact` the support edge of that
+//! sample's margin (`edge A-B` by its two contacts, as the uncertainty study names the
+//! edge on the rolling plant); `lift_off` at the first contact to lose its load (contact
+//! plant only: with more than three contacts one may lift while the robot stands);
+//! `slipped` at the first `slip` event (contact plant: a wheel slides; rolling plant: a
+//! driven wheel's friction demand above `limits.mu`).
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
 use super::{
-    Parameter, Value, file_error, num, require_numbers, require_seeds, resolve, study_section,
+    Parameter, Value, file_error, num, require_non_negative, require_numbers, require_seeds,
+    resolve, study_section,
 };
 use crate::contact::ContactSpec;
 use crate::error::Result;
 use crate::mission::scenario::Loader;
 use crate::mission::{self, MissionFile};
 use crate::sim::stability_monitor::first_crossing;
+use crate::sim::uncertainty::{Dist, PayloadSpec};
 
 /// Result columns of the mission study (the summary's fields).
 pub(super) const RESULTS: &[&str] = &[
@@ -45,6 +51,7 @@ pub(super) const RESULTS: &[&str] = &[
     "input_work",
     "tipped",
     "tip_time",
+    "tip_contact",
     "lift_off_time",
     "lift_off_contact",
     "slipped",
@@ -54,7 +61,9 @@ pub(super) const RESULTS: &[&str] = &[
 const NAMES: &str = "start_x, start_y, start_yaw, goal_x, goal_y, goal_yaw, obstacle_t, \
                      obstacle_x, obstacle_y, obstacle_radius, v_max, omega_max, a_max, \
                      alpha_max, mu, tip_fraction, \"contact.mu\", \"contact.stiffness\", \
-                     \"contact.damping\", \"contact.slip_velocity\", \"contact.dt\", seed";
+                     \"contact.damping\", \"contact.slip_velocity\", \"contact.dt\", seed, \
+                     \"uncertainty.payload.mass\", \"uncertainty.payload.position[0]\" \
+                     ([1], [2])";
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -86,6 +95,9 @@ enum Slot {
     ContactSlipVelocity,
     ContactDt,
     Seed,
+    PayloadMass,
+    /// Coordinate `i` of `uncertainty.payload.position`.
+    PayloadPosition(usize),
 }
 
 /// The prepared study: the scenario as loaded (validated once at load).
@@ -135,6 +147,10 @@ impl MissionStudy {
                 "contact.slip_velocity" => Slot::ContactSlipVelocity,
                 "contact.dt" => Slot::ContactDt,
                 "seed" => Slot::Seed,
+                "uncertainty.payload.mass" => Slot::PayloadMass,
+                "uncertainty.payload.position[0]" => Slot::PayloadPosition(0),
+                "uncertainty.payload.position[1]" => Slot::PayloadPosition(1),
+                "uncertainty.payload.position[2]" => Slot::PayloadPosition(2),
                 n => {
                     return Err(file_error(
                         path,
@@ -189,7 +205,26 @@ impl MissionStudy {
                 }
                 require_seeds(path, p)?;
             }
+            let payload = matches!(slot, Slot::PayloadMass | Slot::PayloadPosition(_));
+            if payload
+                && m.file
+                    .uncertainty
+                    .as_ref()
+                    .is_none_or(|u| u.payload.is_none())
+            {
+                return Err(file_error(
+                    path,
+                    &format!("parameters.\"{}\"", p.name),
+                    format!(
+                        "the scenario {} has no uncertainty.payload to vary",
+                        scenario.display()
+                    ),
+                ));
+            }
             require_numbers(path, p)?;
+            if matches!(slot, Slot::PayloadMass) {
+                require_non_negative(path, p, " kg")?;
+            }
             slots.push(slot);
         }
         let base = scenario
@@ -256,6 +291,8 @@ impl MissionStudy {
                         u.seed = x as u64;
                     }
                 }
+                Slot::PayloadMass => payload(&mut f).mass = Dist::Fixed(x),
+                Slot::PayloadPosition(i) => payload(&mut f).position[*i] = Dist::Fixed(x),
             }
         }
         let outcome = mission::scenario::from_file(f, &self.path, &self.base)
@@ -280,6 +317,8 @@ impl MissionStudy {
                 let tip = first_crossing(&r.samples.t, &r.samples.zmp_margin, r.contact.is_none());
                 row.push(Value::Bool(tip.is_some()));
                 row.push(Value::opt(tip.map(|c| c.time)));
+                let edge = tip.and_then(|c| r.samples.zmp_critical_edge[c.sample]);
+                row.push(edge.map_or(Value::Missing, |e| Value::Text(r.support_edges[e].clone())));
                 let lift = r.contact.as_ref().and_then(|c| c.first_lift_off.as_ref());
                 row.push(Value::opt(lift.map(|e| e.t)));
                 row.push(lift.map_or(Value::Missing, |e| Value::Text(e.contact.clone())));
@@ -295,6 +334,15 @@ impl MissionStudy {
         }
         Ok(())
     }
+}
+
+/// The file's `uncertainty.payload` (present: a payload parameter is refused at load
+/// without it).
+fn payload(f: &mut MissionFile) -> &mut PayloadSpec {
+    f.uncertainty
+        .as_mut()
+        .and_then(|u| u.payload.as_mut())
+        .expect("checked at load: the scenario has an uncertainty.payload")
 }
 
 /// The file's `[contact]` table (present: a contact parameter is refused at load

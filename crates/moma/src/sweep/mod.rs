@@ -869,6 +869,23 @@ pub(crate) fn require_numbers(path: &Path, p: &Parameter) -> Result<()> {
     Ok(())
 }
 
+/// Checks that no value of parameter `p` (numbers: [`require_numbers`] first) is below
+/// zero; `unit` follows the bound in the message (`" kg"`).
+pub(crate) fn require_non_negative(path: &Path, p: &Parameter, unit: &str) -> Result<()> {
+    let lo = match &p.values {
+        Values::Linspace { lo, hi, .. } => lo.min(*hi),
+        Values::List(v) => v.iter().map(num).fold(f64::INFINITY, f64::min),
+    };
+    if lo < 0.0 {
+        return Err(file_error(
+            path,
+            &format!("parameters.{}", p.name),
+            format!("must be >= 0{unit}, got {lo}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Checks that every value of parameter `p` is one of `names` (their positions are
 /// looked up at evaluation).
 pub(crate) fn require_names(path: &Path, p: &Parameter, names: &[String]) -> Result<()> {

@@ -18,8 +18,8 @@ use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
 
 use super::{
-    Parameter, Value, Values, file_error, joint_parameter, num, require_names, require_numbers,
-    resolve, set_joints, study_section,
+    Parameter, Value, file_error, joint_parameter, num, require_names, require_non_negative,
+    require_numbers, resolve, set_joints, study_section,
 };
 use crate::error::Result;
 use crate::mission::scenario::Loader;
@@ -265,13 +265,7 @@ fn parameter_slots(
             require_numbers(path, p)?;
         }
         if matches!(slot, Slot::Payload) {
-            let negative = match &p.values {
-                Values::Linspace { lo, .. } => *lo < 0.0,
-                Values::List(v) => v.iter().any(|x| num(x) < 0.0),
-            };
-            if negative {
-                return Err(file_error(path, "parameters.payload", "must be >= 0 kg"));
-            }
+            require_non_negative(path, p, " kg")?;
         }
         slots.push(slot);
     }

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::{
-    Parameter, Table, Value, file_error, num, require_numbers, require_seeds, resolve,
-    study_section,
+    Parameter, Table, Value, file_error, num, require_non_negative, require_numbers, require_seeds,
+    resolve, study_section,
 };
 use crate::contact::PlantKind;
 use crate::error::{Error, Result};
@@ -117,22 +117,7 @@ impl UncertaintyStudy {
                 }
             });
             require_numbers(path, p)?;
-            let (lo, _) = match &p.values {
-                super::Values::Linspace { lo, hi, .. } => (*lo, *hi),
-                super::Values::List(v) => v
-                    .iter()
-                    .map(num)
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-                        (a.min(x), b.max(x))
-                    }),
-            };
-            if lo < 0.0 {
-                return Err(file_error(
-                    path,
-                    &format!("parameters.{}", p.name),
-                    format!("must be >= 0, got {lo}"),
-                ));
-            }
+            require_non_negative(path, p, "")?;
             if p.name == "seed" {
                 require_seeds(path, p)?;
             }
@@ -285,14 +270,7 @@ fn run_seed(sc: &Scenario, path: &Path) -> Result<Outcome> {
                     let tip = first_crossing(&tr.times, &tr.zmp_margin, true).map(|c| {
                         (
                             c.time,
-                            tr.critical_edge[c.sample].map(|e| {
-                                let e = mon.edges()[e];
-                                format!(
-                                    "edge {}-{}",
-                                    mon.contact_names()[e.from],
-                                    mon.contact_names()[e.to]
-                                )
-                            }),
+                            tr.critical_edge[c.sample].map(|e| mon.edge_label(e)),
                         )
                     });
                     (
