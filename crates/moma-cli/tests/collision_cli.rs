@@ -598,3 +598,89 @@ fn exact_meshes_match_coal_and_touch_at_zero() {
         assert_eq!(s["in_collision"], want["in_collision_enabled_mesh"]);
     }
 }
+
+#[test]
+fn a_scene_with_exact_meshes_matches_coal_and_touches_at_zero() {
+    let reference: Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{DATA}/collision/fetch_scene_public.json")).unwrap(),
+    )
+    .unwrap();
+    // The table scene: the tucked default state, one whose arm is in the table (coal:
+    // seven link meshes cross it) and one 7.6 cm clear of it.
+    let pick: Vec<&Value> = ["mbm_fetch_default", "random_002", "random_003"]
+        .iter()
+        .map(|label| {
+            reference["states"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|s| s["scene"] == "table_pick" && s["label"] == *label)
+                .unwrap()
+        })
+        .collect();
+    let states_file = tmp("exact_scene_states.json");
+    let qs: Vec<Value> = pick
+        .iter()
+        .map(|s| serde_json::json!({"q": s["q"]}))
+        .collect();
+    std::fs::write(
+        &states_file,
+        serde_json::json!({ "states": qs }).to_string(),
+    )
+    .unwrap();
+    let (urdf, srdf, pkg) = (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    );
+    let scene = format!("{DATA}/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml");
+    let out = tmp("exact_scene_out.json");
+    let mut args = fetch_args(&urdf, &srdf, &pkg);
+    args.extend([
+        "--scene",
+        &scene,
+        "--states",
+        states_file.to_str().unwrap(),
+        "--layout",
+        "pinocchio",
+        "--mesh",
+        "exact",
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    let o = moma(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(got["mesh"], "exact");
+    let ref_pairs = reference["scenes"]["table_pick"]["pairs"]
+        .as_array()
+        .unwrap();
+    let mut touching = 0;
+    for (s, want) in got["states"].as_array().unwrap().iter().zip(&pick) {
+        let pairs = s["pairs"].as_array().unwrap();
+        assert_eq!(pairs.len(), 76 + ref_pairs.len());
+        let mut touches = false;
+        for (k, p) in ref_pairs.iter().enumerate() {
+            let mine = pairs
+                .iter()
+                .find(|x| x["a"] == p[0] && x["b"] == p[1])
+                .unwrap_or_else(|| panic!("pair {p} missing"));
+            let d = mine["distance"].as_f64().unwrap();
+            let w = want["distance_mesh"][k].as_f64().unwrap();
+            if w > 0.0 {
+                assert!((d - w).abs() <= 1e-6, "{p}: {d} vs coal {w}");
+            } else {
+                assert_eq!(d, 0.0, "{p}: coal's triangles cross the object");
+                touches = true;
+                touching += 1;
+            }
+        }
+        let min = s["min_distance"].as_f64().unwrap();
+        assert!(min >= 0.0);
+        assert_eq!(s["in_collision"].as_bool().unwrap(), min == 0.0);
+        if touches {
+            assert!(s["in_collision"].as_bool().unwrap());
+        }
+    }
+    assert_eq!(touching, 7);
+}

@@ -4,10 +4,10 @@
 use crate::err;
 use crate::model::{PyModel, Vec1, check_state, load};
 use moma::collision::{
-    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData,
-    SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
-    compute_scene_distances, footprint as world_footprint, footprint_in, min_distance_gradient,
-    read_scene, update_geometry_placements,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene,
+    SceneData, SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
+    compute_exact_scene_distances, compute_scene_distances, footprint as world_footprint,
+    footprint_in, min_distance_gradient, read_scene, update_geometry_placements,
 };
 use moma::motion::MeshSource;
 use moma::multibody::Data;
@@ -123,9 +123,10 @@ impl PyScene {
 /// world frame), `min_distance`, `in_collision` (min < 0) and `closest` (a, b); with
 /// `gradient=True` also `gradient` (nv,): the derivative of `min_distance` (the closest
 /// pair's signed distance) with respect to the velocity coordinates (∂d/∂q for a fixed
-/// or planar root). `mesh="exact"` measures the self pairs between the links' triangle
-/// meshes (surface distances, 0 where triangles touch; `in_collision` when the minimum
-/// is 0) instead of their convex hulls (`"convex"`, the default).
+/// or planar root). `mesh="exact"` measures with the triangle meshes, the links' and the
+/// scene's (surface distances, 0 where triangles touch; scene primitives are solid, 0
+/// where a link's triangle enters one; `in_collision` when the minimum is 0) instead of
+/// their convex hulls (`"convex"`, the default).
 #[pyfunction]
 #[pyo3(signature = (model, geom, q, scene = None, all_pairs = false, gradient = false, mesh = "convex"))]
 #[allow(clippy::too_many_arguments)]
@@ -139,9 +140,14 @@ pub(crate) fn distances<'py>(
     gradient: bool,
     mesh: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let empty = Scene::default();
+    let scene = scene.as_ref().map_or(&empty, |s| &s.inner);
     let exact = match mesh {
         "convex" => None,
-        "exact" => Some(ExactGeometry::new(&geom.inner).map_err(err)?),
+        "exact" => Some((
+            ExactGeometry::new(&geom.inner).map_err(err)?,
+            ExactScene::new(scene).map_err(err)?,
+        )),
         other => {
             return Err(err(moma::Error::invalid(
                 "distances: mesh",
@@ -154,8 +160,6 @@ pub(crate) fn distances<'py>(
     let mut qv = DVector::zeros(m.nq);
     load("distances", "q", q.as_array(), &mut qv)?;
     check_state(m, || "distances".into(), qv.as_slice(), None, None, None)?;
-    let empty = Scene::default();
-    let scene = scene.as_ref().map_or(&empty, |s| &s.inner);
     let mut data = Data::new(m);
     let mut gd = GeometryData::new(gm);
     let mut sd = SceneData::new(gm, scene);
@@ -171,10 +175,15 @@ pub(crate) fn distances<'py>(
         PairSelection::Enabled
     };
     match &exact {
-        Some(ex) => compute_exact_distances(gm, ex, &mut gd, which),
-        None => compute_distances(gm, &mut gd, which),
+        Some((ex, exs)) => {
+            compute_exact_distances(gm, ex, &mut gd, which);
+            compute_exact_scene_distances(gm, ex, &mut gd, scene, exs, &mut sd)
+        }
+        None => {
+            compute_distances(gm, &mut gd, which);
+            compute_scene_distances(gm, &mut gd, scene, &mut sd)
+        }
     };
-    compute_scene_distances(gm, &mut gd, scene, &mut sd);
     let mut names = Vec::new();
     let mut results = Vec::new();
     for (p, &[a, b]) in gm.pairs.iter().enumerate() {

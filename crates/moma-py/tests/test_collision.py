@@ -152,3 +152,21 @@ def test_exact_meshes_match_coal(fetch):
     assert n == 76 and out["in_collision"] and out["min_distance"] == 0.0
     with pytest.raises(moma.MomaError, match="'hull' is not"):
         moma.distances(model, geom, q, mesh="hull")
+
+
+def test_exact_meshes_against_a_scene_match_coal(fetch):
+    model, geom = fetch
+    ref = json.loads((DATA / "collision" / "fetch_scene_public.json").read_text())
+    scene = moma.Scene.from_yaml(
+        DATA / "scenes/motion_bench_maker/configs/scenes/cage/scene_cage.yaml",
+        world_frames=["base_link"],
+    )
+    # a cage state whose arm crosses the bars (coal: six link meshes touch them)
+    state = next(s for s in ref["states"] if s["scene"] == "cage" and s["label"] == "random_001")
+    q = moma.from_pinocchio(model, np.array(state["q"]))["q"]
+    out = moma.distances(model, geom, q, scene=scene, mesh="exact")
+    got = dict(zip(out["pairs"], out["distance"]))
+    for (link, obj), want in zip(ref["scenes"]["cage"]["pairs"], state["distance_mesh"]):
+        d = got[(link, obj)]
+        assert (d == 0.0) if want == 0.0 else abs(d - want) <= 1e-6, (link, obj, d, want)
+    assert out["in_collision"] and out["min_distance"] == 0.0

@@ -1,24 +1,31 @@
 //! Exact triangle-mesh distances (`collision::exact`) against coal 3.0.3's distances
-//! between Fetch's BVH meshes (through Pinocchio 4.1.0): `distance_mesh` of the 76
-//! SRDF-enabled link pairs of every state of `tests/data/collision/fetch_self_public.json`
-//! (see its SOURCES.md), 0 where triangles intersect. (Every one of the 210 pairs of the
-//! 20 states agrees too, worst 3.6e-11 m, but takes a minute: mesh–mesh queries cost
+//! between Fetch's BVH meshes (through Pinocchio 4.1.0), `distance_mesh` (0 where
+//! triangles intersect; see tests/data/collision/SOURCES.md): the 76 SRDF-enabled link
+//! pairs of every state of `fetch_self_public.json`, and every (link, object) pair of
+//! the three MotionBenchMaker scenes of `fetch_scene_public.json` (the link meshes
+//! against solid boxes and cylinders); a link mesh placed in the scene as a mesh object
+//! is measured by its triangles, as the link itself. (Every one of the 210 self pairs of
+//! the 20 states agrees too, worst 3.6e-11 m, but takes a minute: mesh–mesh queries cost
 //! milliseconds.)
 
 use moma::collision::{
-    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairSelection,
-    compute_exact_distances, update_geometry_placements,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairSelection,
+    SceneData, SceneOptions, compute_exact_distances, compute_exact_scene_distances,
+    compute_scene_distances, read_scene, update_geometry_placements,
 };
 use moma::kinematics::forward_kinematics;
-use moma::multibody::{Data, RootJoint};
-use nalgebra::DVector;
+use moma::multibody::{Data, Model, RootJoint};
+use nalgebra::{DVector, Rotation3, UnitQuaternion};
 use serde_json::Value;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-#[test]
-fn fetch_mesh_distances_match_coal() {
-    let data_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
-    let dir = data_dir.join("robots/fetch");
+fn data_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
+
+/// Fetch on a fixed base, its geometry with the SRDF, and its exact shapes.
+fn fetch() -> (Model, GeometryModel, ExactGeometry) {
+    let dir = data_dir().join("robots/fetch");
     let urdf = dir.join("fetch_description/robots/fetch.urdf");
     let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
     let opts = GeometryOptions {
@@ -27,8 +34,28 @@ fn fetch_mesh_distances_match_coal() {
     };
     let gm = GeometryModel::from_urdf(&model, &urdf, &opts).unwrap();
     let ex = ExactGeometry::new(&gm).unwrap();
-    let text = std::fs::read_to_string(data_dir.join("collision/fetch_self_public.json")).unwrap();
-    let r: Value = serde_json::from_str(&text).unwrap();
+    (model, gm, ex)
+}
+
+/// A reference state's configuration (moma layout) from its `q_by_joint`.
+fn q_of(model: &Model, s: &Value) -> DVector<f64> {
+    let mut q = DVector::zeros(model.nq);
+    for (name, v) in s["q_by_joint"].as_object().unwrap() {
+        let j = model.joint_id(name).unwrap();
+        q[model.idx_q[j.0]] = v.as_f64().unwrap();
+    }
+    q
+}
+
+fn reference(file: &str) -> Value {
+    let text = std::fs::read_to_string(data_dir().join("collision").join(file)).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn fetch_mesh_distances_match_coal() {
+    let (model, gm, ex) = fetch();
+    let r = reference("fetch_self_public.json");
     let pairs: Vec<usize> = r["pairs"]
         .as_array()
         .unwrap()
@@ -46,11 +73,7 @@ fn fetch_mesh_distances_match_coal() {
     let mut gd = GeometryData::new(&gm);
     let (mut worst, mut zeros, mut checked) = (0.0_f64, 0, 0);
     for s in r["states"].as_array().unwrap() {
-        let mut q = DVector::zeros(model.nq);
-        for (name, v) in s["q_by_joint"].as_object().unwrap() {
-            let j = model.joint_id(name).unwrap();
-            q[model.idx_q[j.0]] = v.as_f64().unwrap();
-        }
+        let q = q_of(&model, s);
         forward_kinematics(&model, &mut data, &q);
         update_geometry_placements(&gm, &data, &mut gd);
         compute_exact_distances(&gm, &ex, &mut gd, PairSelection::Enabled);
@@ -79,4 +102,193 @@ fn fetch_mesh_distances_match_coal() {
     }
     eprintln!("{checked} pairs, {zeros} touching, worst error {worst:e} m");
     assert!(checked == 76 * 20 && zeros > 0, "{checked} {zeros}");
+}
+
+#[test]
+fn fetch_scene_mesh_distances_match_coal() {
+    let (model, gm, ex) = fetch();
+    let r = reference("fetch_scene_public.json");
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    let opts = SceneOptions {
+        world_frames: vec!["base_link".into()],
+        package_dirs: vec![],
+    };
+    let (mut worst, mut separated, mut touching) = (0.0_f64, 0, 0);
+    for (name, sc) in r["scenes"].as_object().unwrap() {
+        let yaml = data_dir()
+            .join("scenes/motion_bench_maker")
+            .join(sc["scene_yaml"].as_str().unwrap());
+        let scene = read_scene(&yaml, &opts).unwrap();
+        let exs = ExactScene::new(&scene).unwrap();
+        let mut sd = SceneData::new(&gm, &scene);
+        let pairs = sc["pairs"].as_array().unwrap();
+        assert_eq!(pairs.len(), gm.links.len() * scene.objects.len(), "{name}");
+        for s in r["states"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["scene"] == name.as_str())
+        {
+            forward_kinematics(&model, &mut data, &q_of(&model, s));
+            update_geometry_placements(&gm, &data, &mut gd);
+            let min = compute_exact_scene_distances(&gm, &ex, &mut gd, &scene, &exs, &mut sd);
+            let mut want_min = f64::INFINITY;
+            for (k, p) in pairs.iter().enumerate() {
+                let l = gm.link_index(p[0].as_str().unwrap()).unwrap();
+                let o = scene.objects.iter().position(|o| o.id == p[1]).unwrap();
+                let got = &sd.results[l * scene.objects.len() + o];
+                let want = s["distance_mesh"][k].as_f64().unwrap();
+                want_min = want_min.min(want);
+                let label = format!("{name} {} {p}", s["label"]);
+                if want > 0.0 {
+                    let err = (got.distance - want).abs();
+                    assert!(
+                        err <= 1e-6,
+                        "{label}: exact {} vs coal {want}",
+                        got.distance
+                    );
+                    worst = worst.max(err);
+                    separated += 1;
+                    // the witnesses are the distance apart
+                    assert!(((got.witness_b - got.witness_a).norm() - got.distance).abs() < 1e-9);
+                } else {
+                    assert_eq!(got.distance, 0.0, "{label}: coal's triangles intersect");
+                    touching += 1;
+                }
+                // never below the hulls' distance
+                let convex = s["distance_convex"][k].as_f64().unwrap();
+                assert!(got.distance >= convex - 1e-9, "{label}");
+            }
+            assert!(
+                (min - want_min).abs() <= 1e-6,
+                "{name}: min {min} vs {want_min}"
+            );
+        }
+    }
+    eprintln!("{separated} separated pairs (worst error {worst:e} m), {touching} touching");
+    assert!(separated > 5000 && touching > 0, "{separated} {touching}");
+}
+
+#[test]
+fn a_link_mesh_placed_in_the_scene_is_measured_by_its_triangles() {
+    // MotionBenchMaker's tucked default state: the torso's hull overlaps the shoulder
+    // (coal: -0.0246 m) while the meshes are 0.0273 m apart.
+    let (model, gm, ex) = fetch();
+    let r = reference("fetch_self_public.json");
+    let s = r["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["label"] == "mbm_fetch_default")
+        .unwrap();
+    let k = r["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|p| p[0] == "torso_lift_link" && p[1] == "shoulder_lift_link")
+        .unwrap();
+    let (want_mesh, want_convex) = (
+        s["distance_mesh"][k].as_f64().unwrap(),
+        s["distance_convex"][k].as_f64().unwrap(),
+    );
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    forward_kinematics(&model, &mut data, &q_of(&model, s));
+    update_geometry_placements(&gm, &data, &mut gd);
+    // the torso's mesh as a scene object, where the torso stands
+    let torso = &gm.links[gm.link_index("torso_lift_link").unwrap()];
+    assert_eq!(torso.count, 1);
+    let pose = gd.placements[torso.first];
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(pose.rotation));
+    let t = pose.translation;
+    let yaml = format!(
+        "world:\n  collision_objects:\n    - header:\n        frame_id: world\n      \
+         id: torso_copy\n      meshes:\n        - resource: \
+         package://fetch_description/meshes/torso_lift_link_collision.STL\n      \
+         mesh_poses:\n        - position: [{}, {}, {}]\n          \
+         orientation: [{}, {}, {}, {}]\n",
+        t.x, t.y, t.z, q.i, q.j, q.k, q.w
+    );
+    let dir = std::env::temp_dir().join(format!("moma_collision_exact_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("torso_copy.yaml");
+    std::fs::write(&file, yaml).unwrap();
+    let scene = read_scene(
+        &file,
+        &SceneOptions {
+            world_frames: vec!["world".into()],
+            package_dirs: vec![data_dir().join("robots/fetch")],
+        },
+    )
+    .unwrap();
+    let shoulder = gm.link_index("shoulder_lift_link").unwrap();
+    let mut sd = SceneData::new(&gm, &scene);
+    compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
+    let hull = sd.results[shoulder].distance;
+    assert!(
+        (hull - want_convex).abs() <= 1e-6,
+        "{hull} vs coal {want_convex}"
+    );
+    compute_exact_scene_distances(
+        &gm,
+        &ex,
+        &mut gd,
+        &scene,
+        &ExactScene::new(&scene).unwrap(),
+        &mut sd,
+    );
+    let exact = sd.results[shoulder];
+    assert!(
+        (exact.distance - want_mesh).abs() <= 1e-6,
+        "{} vs coal {want_mesh}",
+        exact.distance
+    );
+    // the torso itself touches its copy
+    assert_eq!(
+        sd.results[gm.link_index("torso_lift_link").unwrap()].distance,
+        0.0
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_link_mesh_inside_a_solid_box_is_at_zero() {
+    use moma::collision::{Convex, Scene, SceneObject};
+    let (model, gm, ex) = fetch();
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    forward_kinematics(&model, &mut data, &DVector::zeros(model.nq));
+    update_geometry_placements(&gm, &data, &mut gd);
+    // a box around the gripper's bounding ball: no triangle reaches its faces
+    let gripper = &gm.links[gm.link_index("gripper_link").unwrap()];
+    let o = &gm.objects[gripper.first];
+    let centre = gd.placements[gripper.first].act_point(&o.bounding_centre);
+    let half = nalgebra::Vector3::repeat(o.bounding_radius + 0.01);
+    let scene = Scene {
+        objects: vec![
+            SceneObject::new(
+                "case",
+                vec![(
+                    moma::spatial::SE3::from_translation(centre),
+                    Convex::Box { half },
+                )],
+            )
+            .unwrap(),
+        ],
+    };
+    let mut sd = SceneData::new(&gm, &scene);
+    let g = gm.link_index("gripper_link").unwrap();
+    compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
+    // the hull is inside by at least the 1 cm margin
+    assert!(sd.results[g].distance < -0.01, "{}", sd.results[g].distance);
+    compute_exact_scene_distances(
+        &gm,
+        &ex,
+        &mut gd,
+        &scene,
+        &ExactScene::new(&scene).unwrap(),
+        &mut sd,
+    );
+    assert_eq!(sd.results[g].distance, 0.0);
 }

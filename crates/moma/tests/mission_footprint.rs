@@ -160,3 +160,75 @@ fn a_box_with_bad_numbers_is_refused_naming_the_field() {
     .to_string();
     assert!(err.contains("map.boxes[0].size"), "{err}");
 }
+
+/// A `w` × `h` map of 5 cm cells with a 1 m thick wall (cells x = 80–99) pierced by `n`
+/// Z-shaped slots 9 cells (0.45 m) wide — in at cells y = 20 + 24 k to 28 + 24 k, up 10
+/// cells in the wall's middle, out — which the long base's inscribed disk (0.2 m) passes
+/// and its 1 m chassis cannot turn, the wall ending at cell y = `top`; written as a P2
+/// image into `dir`.
+fn slotted_wall(dir: &Path, n: i64, top: i64, w: i64, h: i64) -> PathBuf {
+    let mut text = format!("P2\n{w} {h}\n255\n");
+    for row in 0..h {
+        // image rows run from the top; y from the bottom
+        let y = h - 1 - row;
+        for x in 0..w {
+            let in_box =
+                |x0: i64, x1: i64, y0: i64, y1: i64| x >= x0 && x < x1 && y >= y0 && y < y1;
+            let slot = (0..n).any(|k| {
+                let y0 = 20 + 24 * k;
+                in_box(80, 95, y0, y0 + 9)
+                    || in_box(86, 95, y0, y0 + 19)
+                    || in_box(86, 100, y0 + 10, y0 + 19)
+            });
+            let wall = in_box(80, 100, 0, top) && !slot;
+            text.push_str(if wall { "0 " } else { "254 " });
+        }
+        text.push('\n');
+    }
+    let path = dir.join("slotted_wall.pgm");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn after_ten_repairs_the_search_falls_back_to_the_circumscribed_disk() {
+    let dir = std::env::temp_dir().join(format!("moma_footprint_fallback_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // eleven slots the polygon collides in, the way round above y = 14.5 m
+    let map = slotted_wall(&dir, 11, 290, 180, 320);
+    let path = data().join("narrow_passage.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace(
+            "file = \"narrow_passage.pgm\"",
+            &format!("file = {:?}", map.display().to_string()),
+        )
+        .replace("[1.5, 2.0, 0.0]", "[2.0, 1.225, 0.0]")
+        .replace("[6.5, 2.0, 0.0]", "[7.0, 1.725, 0.0]")
+        // corners tight enough for the smoothing to follow a slot's one-cell C-space
+        .replace("mu = 0.6", "mu = 0.6\nkappa_max = 20.0");
+    let m = from_file(parse_file(&text, &path).unwrap(), &path, &data()).unwrap();
+    let r = run(&m).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    eprintln!("DBG {:?} {:?}", r.reached, r.reason);
+    for e in &r.events {
+        eprintln!("DBG {} {}", e.kind, e.text);
+    }
+    let events: Vec<&str> = r
+        .events
+        .iter()
+        .filter(|e| e.kind == "footprint")
+        .map(|e| e.text.as_str())
+        .collect();
+    assert_eq!(
+        events,
+        [
+            "the footprint polygon collides along every path found (10 re-plan(s)): planning \
+          on the circumscribed disk of radius 0.539 m"
+        ],
+    );
+    // the disk's path goes round the wall's end and reaches the goal
+    assert!(r.reached, "{:?}", r.reason);
+    assert!(r.samples.q.iter().any(|q| q[1] > 14.5), "round the wall");
+    assert!(r.min_clearance().unwrap() > 0.0);
+}

@@ -9,10 +9,11 @@
 use super::common::{Layout, LayoutConv, load_model, parse_root, read_states};
 use anyhow::{Context, Result};
 use moma::collision::{
-    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairDistance, PairSelection,
-    Scene, SceneData, SceneOptions, base_ground_pose, compute_distances, compute_exact_distances,
-    compute_scene_distances, footprint, footprint_in, min_distance_gradient, outline_points,
-    point_cloud_object, read_points, read_scene, update_geometry_placements, voxel_object,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairDistance,
+    PairSelection, Scene, SceneData, SceneOptions, base_ground_pose, compute_distances,
+    compute_exact_distances, compute_exact_scene_distances, compute_scene_distances, footprint,
+    footprint_in, min_distance_gradient, outline_points, point_cloud_object, read_points,
+    read_scene, update_geometry_placements, voxel_object,
 };
 use moma::kinematics;
 use moma::multibody::{Data, FrameKind, RootJoint};
@@ -63,10 +64,10 @@ pub struct Args {
     /// pinocchio (continuous joints as cos, sin; planar root [x, y, cos θ, sin θ]).
     #[arg(long, value_enum, default_value_t = Layout::Moma)]
     pub layout: Layout,
-    /// Link meshes as their convex hulls (signed distances, negative when overlapping)
-    /// or exactly, as their triangles (surface distances, 0 where triangles touch or
-    /// cross, as coal's between BVH meshes; self pairs only: the links keep their hulls
-    /// against the scene).
+    /// Meshes (the links' and the scene's) as their convex hulls (signed distances,
+    /// negative when overlapping) or exactly, as their triangles (surface distances, 0
+    /// where triangles touch or cross, as coal's between BVH meshes; scene primitives and
+    /// voxels are solid: 0 where a link's triangle touches or enters one).
     #[arg(long, value_enum, default_value_t = MeshMode::Convex)]
     pub mesh: MeshMode,
     /// List and check every link pair, not only the enabled ones (not adjacent, not
@@ -100,7 +101,7 @@ pub struct Args {
 pub enum MeshMode {
     /// Each mesh as its convex hull.
     Convex,
-    /// Each mesh as its triangles (self pairs).
+    /// Each mesh as its triangles.
     Exact,
 }
 
@@ -199,7 +200,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut first_placements = None;
     let mut scratch = Vec::new();
     let exact = match args.mesh {
-        MeshMode::Exact => Some(ExactGeometry::new(&gm)?),
+        MeshMode::Exact => Some((ExactGeometry::new(&gm)?, ExactScene::new(&scene)?)),
         MeshMode::Convex => None,
     };
     let mut out_states = Vec::with_capacity(states.len());
@@ -219,10 +220,15 @@ pub fn run(args: Args) -> Result<()> {
             first_placements = Some(gd.placements.clone());
         }
         match &exact {
-            Some(ex) => compute_exact_distances(&gm, ex, &mut gd, which),
-            None => compute_distances(&gm, &mut gd, which),
+            Some((ex, exs)) => {
+                compute_exact_distances(&gm, ex, &mut gd, which);
+                compute_exact_scene_distances(&gm, ex, &mut gd, &scene, exs, &mut sd)
+            }
+            None => {
+                compute_distances(&gm, &mut gd, which);
+                compute_scene_distances(&gm, &mut gd, &scene, &mut sd)
+            }
         };
-        compute_scene_distances(&gm, &mut gd, &scene, &mut sd);
         let mut pairs = Vec::new();
         for (p, &[a, b]) in gm.pairs.iter().enumerate() {
             if args.all_pairs || gm.enabled[p] {

@@ -100,7 +100,7 @@ def distances(
     gradient: bool = False,
     mesh: Literal["convex", "exact"] = "convex",
 ) -> dict[str, Any]:
-    """Signed distances: keys pairs, distance (n,), witness_a, witness_b (n, 3), min_distance, in_collision, closest; gradient (nv,) of min_distance with gradient=True; mesh="exact" for triangle-mesh self distances."""
+    """Signed distances: keys pairs, distance (n,), witness_a, witness_b (n, 3), min_distance, in_collision, closest; gradient (nv,) of min_distance with gradient=True; mesh="exact" for triangle-mesh distances (self and scene pairs)."""
 
 def footprint(
     model: Model, geom: GeometryModel, q: ArrayLike, frame: Optional[Literal["base", "world"]] = None

@@ -1,27 +1,43 @@
-//! Exact distances between the links' triangle meshes (the `--mesh exact` option), with
-//! `parry3d-f64`'s triangle-mesh queries: a mesh element is its triangles (not its convex
-//! hull), a primitive is parry's shape of the same size. As coal's distance between
-//! BVH models, the result is the surface distance: `0` when triangles touch or cross,
-//! and positive for a mesh entirely inside another one without a crossing. parry's
-//! types (glam) are converted at this file's boundary.
+//! Exact distances with the triangle meshes (the `--mesh exact` option): a mesh element is
+//! its triangles (not its convex hull), a primitive is itself, for the link pairs
+//! ([`compute_exact_distances`]) and the (link, scene object) pairs
+//! ([`compute_exact_scene_distances`], scene meshes as their triangles, primitives and
+//! voxels as themselves). Mesh against mesh is `parry3d-f64`'s triangle-mesh query (glam
+//! converted at this file's boundary); mesh against primitive is the nearest triangle by
+//! this module's GJK. As coal's distance between BVH models, the result is the surface
+//! distance: `0` when triangles touch or cross, and positive for a mesh entirely inside
+//! another one without a crossing; a primitive is solid, so a mesh inside a box is at
+//! `0`, a box inside a mesh (no triangle reaching it) at its distance to the nearest
+//! triangle.
 
 use super::convex::Convex;
 use super::geometry_data::{GeometryData, PairSelection};
 use super::geometry_model::GeometryModel;
-use super::gjk::PairDistance;
+use super::gjk::{EpaWorkspace, PairDistance, WarmStart, signed_distance};
+use super::mesh::TriangleMesh;
+use super::scene::{Scene, SceneData, nearest_in_scene, world_aabb};
 use crate::spatial::SE3;
 use crate::{Error, Result};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose, Rot3, Vector as GVec};
 use parry3d_f64::query::{ClosestPoints, closest_points};
-use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, SharedShape, TriMesh};
+use parry3d_f64::shape::{SharedShape, TriMesh};
+use std::sync::Arc;
+
+/// One exact shape: a mesh's triangles, or a convex primitive as itself.
+#[derive(Clone)]
+enum Exact {
+    /// The triangles, as parry's `TriMesh` (for mesh–mesh queries) and as read (for
+    /// triangle–primitive queries with this module's GJK).
+    Mesh(SharedShape, Arc<TriangleMesh>),
+    /// A primitive (box, cylinder, sphere, capsule), measured with this module's GJK.
+    Solid(Convex),
+}
 
 /// The exact shapes of a [`GeometryModel`]'s objects (aligned with `objects`).
 #[derive(Clone)]
 pub struct ExactGeometry {
-    shapes: Vec<SharedShape>,
-    /// `object_from_shape`: parry's cylinders run along y, ours along z.
-    offsets: Vec<SE3>,
+    shapes: Vec<Exact>,
 }
 
 impl std::fmt::Debug for ExactGeometry {
@@ -42,6 +58,30 @@ fn pose(m: &SE3) -> Pose {
     )
 }
 
+/// The exact shape of `shape` (with its mesh's triangles when it is a mesh's hull);
+/// `what` names it in the error.
+fn exact_shape(
+    shape: &Convex,
+    mesh: Option<&Arc<TriangleMesh>>,
+    what: &dyn Fn() -> String,
+) -> Result<Exact> {
+    match (mesh, shape) {
+        (Some(mesh), _) => {
+            let tri = TriMesh::new(
+                mesh.vertices.iter().map(g).collect(),
+                mesh.triangles.clone(),
+            )
+            .map_err(|e| Error::invalid(what(), format!("no exact triangle mesh: {e}")))?;
+            Ok(Exact::Mesh(SharedShape::new(tri), Arc::clone(mesh)))
+        }
+        (None, Convex::Hull { .. }) => Err(Error::invalid(
+            what(),
+            "a hull without its mesh has no exact shape",
+        )),
+        (None, primitive) => Ok(Exact::Solid(primitive.clone())),
+    }
+}
+
 impl ExactGeometry {
     /// Builds the exact shapes: each mesh element's triangles as a parry `TriMesh`, each
     /// primitive as parry's.
@@ -49,74 +89,163 @@ impl ExactGeometry {
     /// # Errors
     /// [`Error::InvalidInput`] naming the link of a mesh parry refuses (no triangle).
     pub fn new(gm: &GeometryModel) -> Result<Self> {
-        let mut shapes = Vec::with_capacity(gm.objects.len());
-        let mut offsets = Vec::with_capacity(gm.objects.len());
-        for o in &gm.objects {
-            let mut offset = SE3::identity();
-            let shape = match (&o.mesh, &o.shape) {
-                (Some(mesh), _) => {
-                    let tri = TriMesh::new(
-                        mesh.vertices.iter().map(g).collect(),
-                        mesh.triangles.clone(),
-                    )
-                    .map_err(|e| {
-                        Error::invalid(
-                            format!("link '{}' mesh", gm.links[o.link].name),
-                            format!("no exact triangle mesh: {e}"),
-                        )
-                    })?;
-                    SharedShape::new(tri)
-                }
-                (None, Convex::Box { half }) => SharedShape::new(Cuboid::new(g(half))),
-                (None, Convex::Sphere { radius }) => SharedShape::new(Ball::new(*radius)),
-                (
-                    None,
-                    Convex::Capsule {
-                        radius,
-                        half_length,
-                    },
-                ) => SharedShape::new(Capsule::new_z(*half_length, *radius)),
-                (
-                    None,
-                    Convex::Cylinder {
-                        radius,
-                        half_height,
-                    },
-                ) => {
-                    // parry's y axis onto ours z: a quarter turn about x.
-                    offset.rotation = *Rotation3::from_axis_angle(
-                        &Vector3::x_axis(),
-                        std::f64::consts::FRAC_PI_2,
-                    )
-                    .matrix();
-                    SharedShape::new(Cylinder::new(*half_height, *radius))
-                }
-                (None, Convex::Hull { .. }) => {
-                    return Err(Error::invalid(
-                        format!("link '{}'", gm.links[o.link].name),
-                        "a hull without its mesh has no exact shape",
-                    ));
-                }
-            };
-            shapes.push(shape);
-            offsets.push(offset);
-        }
-        Ok(ExactGeometry { shapes, offsets })
+        let shapes = gm
+            .objects
+            .iter()
+            .map(|o| {
+                let what = || format!("link '{}' mesh", gm.links[o.link].name);
+                exact_shape(&o.shape, o.mesh.as_ref(), &what)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(ExactGeometry { shapes })
     }
 }
 
-/// Exact distance between objects `i` and `j` at the placements of `gd`.
-fn object_distance(ex: &ExactGeometry, gd: &GeometryData, i: usize, j: usize) -> PairDistance {
-    let pa = gd.placements[i] * ex.offsets[i];
-    let pb = gd.placements[j] * ex.offsets[j];
-    let (ga, gb) = (pose(&pa), pose(&pb));
-    let touching = PairDistance {
-        distance: 0.0,
-        witness_a: pa.translation,
-        witness_b: pa.translation,
+/// The exact shapes of a [`Scene`]'s objects: per object, per shape (aligned with
+/// `SceneObject::shapes`) the mesh's triangles for a mesh, the primitive itself
+/// otherwise (a voxel is its box).
+#[derive(Clone)]
+pub struct ExactScene {
+    /// `objects[o][s]`: the exact shape.
+    objects: Vec<Vec<Exact>>,
+}
+
+impl std::fmt::Debug for ExactScene {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ExactScene({} objects)", self.objects.len())
+    }
+}
+
+impl ExactScene {
+    /// Builds the exact shapes of `scene`'s objects.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the scene object of a mesh parry refuses, or of a
+    /// hull given without its mesh.
+    pub fn new(scene: &Scene) -> Result<Self> {
+        let objects = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let what = || format!("scene object '{}'", o.id);
+                o.shapes
+                    .iter()
+                    .map(|s| exact_shape(&s.shape, s.mesh.as_ref(), &what))
+                    .collect::<Result<Vec<_>>>()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(ExactScene { objects })
+    }
+}
+
+/// Exact distance between `a` at `pose_a` and `b` at `pose_b` (world placements): the
+/// surface distance with the world closest points, `0` when they touch or cross. Two
+/// meshes: parry's triangle-mesh query. A mesh and a primitive: the nearest triangle to
+/// the solid primitive by this module's GJK (parry's triangle–cuboid closest points come
+/// from separating axes and can miss an edge–vertex distance by millimetres). Two
+/// primitives: their GJK distance, `0` when they overlap.
+fn exact_distance(
+    a: &Exact,
+    pose_a: &SE3,
+    b: &Exact,
+    pose_b: &SE3,
+    epa: &mut EpaWorkspace,
+) -> PairDistance {
+    match (a, b) {
+        (Exact::Mesh(ta, _), Exact::Mesh(tb, _)) => mesh_mesh(ta, pose_a, tb, pose_b),
+        (Exact::Mesh(_, m), Exact::Solid(c)) => mesh_solid(m, pose_a, c, pose_b, epa),
+        (Exact::Solid(c), Exact::Mesh(_, m)) => {
+            let r = mesh_solid(m, pose_b, c, pose_a, epa);
+            PairDistance {
+                witness_a: r.witness_b,
+                witness_b: r.witness_a,
+                normal: -r.normal,
+                ..r
+            }
+        }
+        (Exact::Solid(ca), Exact::Solid(cb)) => {
+            let r = signed_distance(ca, pose_a, cb, pose_b, &mut WarmStart::default(), epa);
+            clamp_touching(r)
+        }
+    }
+}
+
+/// A GJK/EPA result as a surface distance: overlapping is touching (distance 0, no
+/// normal).
+fn clamp_touching(r: PairDistance) -> PairDistance {
+    if r.distance > 0.0 {
+        r
+    } else {
+        PairDistance {
+            distance: 0.0,
+            normal: Vector3::zeros(),
+            ..r
+        }
+    }
+}
+
+/// The nearest of `mesh`'s triangles (at `pose_m`) to the solid `c` (at `pose_c`):
+/// triangles in the order of the gap between their bounding box and `c`'s, each a
+/// three-vertex hull measured by GJK, until the gap reaches the best distance; `0` at
+/// the first triangle that touches or enters `c`.
+fn mesh_solid(
+    mesh: &TriangleMesh,
+    pose_m: &SE3,
+    c: &Convex,
+    pose_c: &SE3,
+    epa: &mut EpaWorkspace,
+) -> PairDistance {
+    let (lo, hi) = world_aabb(c, pose_c);
+    let mut order: Vec<(f64, usize)> = mesh
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let w = t.map(|i| pose_m.act_point(&mesh.vertices[i as usize]));
+            let tlo = w[0].inf(&w[1]).inf(&w[2]);
+            let thi = w[0].sup(&w[1]).sup(&w[2]);
+            let gap = (tlo - hi).sup(&(lo - thi)).sup(&Vector3::zeros()).norm();
+            (gap, k)
+        })
+        .collect();
+    order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut best = PairDistance {
+        distance: f64::INFINITY,
+        witness_a: pose_m.translation,
+        witness_b: pose_c.translation,
         normal: Vector3::zeros(),
     };
-    match closest_points(&ga, &*ex.shapes[i].0, &gb, &*ex.shapes[j].0, f64::MAX) {
+    for (gap, k) in order {
+        if gap >= best.distance {
+            break;
+        }
+        let tri = Convex::Hull {
+            vertices: mesh.triangles[k]
+                .iter()
+                .map(|&i| mesh.vertices[i as usize])
+                .collect(),
+            neighbours: Vec::new(),
+        };
+        let r = signed_distance(&tri, pose_m, c, pose_c, &mut WarmStart::default(), epa);
+        if r.distance <= 0.0 {
+            return clamp_touching(r);
+        }
+        if r.distance < best.distance {
+            best = r;
+        }
+    }
+    best
+}
+
+/// Exact distance between two triangle meshes (parry), `0` when they touch or cross.
+fn mesh_mesh(a: &SharedShape, pose_a: &SE3, b: &SharedShape, pose_b: &SE3) -> PairDistance {
+    let touching = PairDistance {
+        distance: 0.0,
+        witness_a: pose_a.translation,
+        witness_b: pose_a.translation,
+        normal: Vector3::zeros(),
+    };
+    match closest_points(&pose(pose_a), &*a.0, &pose(pose_b), &*b.0, f64::MAX) {
         Ok(ClosestPoints::WithinMargin(a, b)) => {
             let (wa, wb) = (Vector3::new(a.x, a.y, a.z), Vector3::new(b.x, b.y, b.z));
             let d = (wb - wa).norm();
@@ -135,8 +264,7 @@ fn object_distance(ex: &ExactGeometry, gd: &GeometryData, i: usize, j: usize) ->
                 }
             }
         }
-        // Intersecting (or a pair parry cannot answer, which none of the shapes built
-        // above is): touching.
+        // Intersecting: touching.
         _ => touching,
     }
 }
@@ -163,7 +291,13 @@ pub fn compute_exact_distances(
         let mut best: Option<PairDistance> = None;
         for i in a.first..a.first + a.count {
             for j in b.first..b.first + b.count {
-                let r = object_distance(ex, gd, i, j);
+                let r = exact_distance(
+                    &ex.shapes[i],
+                    &gd.placements[i],
+                    &ex.shapes[j],
+                    &gd.placements[j],
+                    &mut gd.epa,
+                );
                 if best.is_none_or(|b| r.distance < b.distance) {
                     best = Some(r);
                 }
@@ -178,4 +312,32 @@ pub fn compute_exact_distances(
         }
     }
     min
+}
+
+/// Exact distances between every link and every scene object (after
+/// `update_geometry_placements`), into `sd.results` as
+/// [`compute_scene_distances`](super::scene::compute_scene_distances) does for the convex
+/// shapes, by the same nearest search in each object's tree (its bounds, taken from the
+/// convex hulls, are lower bounds on the meshes' distances): a link mesh against a
+/// primitive or a voxel is the distance from its triangles to the solid primitive (`0`
+/// when a triangle touches or enters it), against a scene mesh the distance between the
+/// two triangle sets. Returns the minimum and sets `sd.closest`. Allocates (parry's
+/// traversal), unlike the convex queries.
+pub fn compute_exact_scene_distances(
+    gm: &GeometryModel,
+    ex: &ExactGeometry,
+    gd: &mut GeometryData,
+    scene: &Scene,
+    exs: &ExactScene,
+    sd: &mut SceneData,
+) -> f64 {
+    nearest_in_scene(gm, gd, scene, sd, f64::INFINITY, |q| {
+        exact_distance(
+            &ex.shapes[q.object],
+            q.pose,
+            &exs.objects[q.scene_object][q.shape],
+            &scene.objects[q.scene_object].shapes[q.shape].pose,
+            q.epa,
+        )
+    })
 }

@@ -34,10 +34,14 @@
 //! * Enabled pairs: not joined by one URDF joint, not on the same moma joint (fixed to
 //!   each other), not disabled by the SRDF; on Fetch this leaves exactly the 76 pairs that
 //!   the SRDF alone leaves (MoveIt's SRDF already disables the adjacent and fixed pairs).
-//! * Exact triangle-mesh distances ([`exact`], the `--mesh exact` option) are parry's: its
-//!   `TriMesh` against parry's primitives, glam converted at that file's boundary; they
-//!   match coal's BVH distances to 3.6e-11 m on Fetch, but allocate and cost milliseconds
-//!   per mesh pair, so the hull path stays the default.
+//! * Exact triangle-mesh distances ([`exact`], the `--mesh exact` option), for link pairs
+//!   and for (link, scene object) pairs (through the scene's own nearest search, whose
+//!   hull bounds hold for the meshes inside the hulls): mesh–mesh by parry's `TriMesh`
+//!   (glam converted at that file's boundary), mesh–primitive by [`gjk`] on the nearest
+//!   triangles (parry's triangle–cuboid closest points come from separating axes and
+//!   missed an edge–vertex distance by 2.5 mm on Fetch). They match coal's BVH distances
+//!   to 3.6e-11 m (self) and 6.6e-11 m (scenes) on Fetch, but allocate and cost
+//!   milliseconds per mesh pair, so the hull path stays the default.
 //! * Scene objects ([`scene`]) keep a bounding-volume tree each; a link's nearest search
 //!   prunes subtrees by its bounding ball and by a separating-axis bound along the best
 //!   pair's normal (the previous query's to start), which skips a whole layer of voxels
@@ -60,7 +64,9 @@ pub mod srdf;
 pub mod urdf_geometry;
 
 pub use convex::Convex;
-pub use exact::{ExactGeometry, compute_exact_distances};
+pub use exact::{
+    ExactGeometry, ExactScene, compute_exact_distances, compute_exact_scene_distances,
+};
 pub use footprint::{base_ground_pose, footprint, footprint_in, outline_points};
 pub use geometry_data::{
     GeometryData, PairSelection, compute_collision, compute_distances, distance_derivative,

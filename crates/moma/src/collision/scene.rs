@@ -5,8 +5,8 @@
 use super::convex::Convex;
 use super::geometry_data::GeometryData;
 use super::geometry_model::GeometryModel;
-use super::gjk::{PairDistance, WarmStart, overlaps, signed_distance};
-use super::mesh::{convex_hull_vertices, read_mesh};
+use super::gjk::{EpaWorkspace, PairDistance, WarmStart, overlaps, signed_distance};
+use super::mesh::{TriangleMesh, convex_hull_vertices, read_mesh};
 use super::urdf_geometry::resolve_uri;
 use crate::planning::grid3::Grid3;
 use crate::spatial::SE3;
@@ -14,6 +14,7 @@ use crate::{Error, Result};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// One shape of a scene object, placed in the world.
 #[derive(Clone, Debug)]
@@ -24,6 +25,9 @@ pub struct SceneShape {
     pub shape: Convex,
     /// World-axis-aligned bounding box (min, max).
     pub aabb: (Vector3<f64>, Vector3<f64>),
+    /// For a mesh (whose `shape` is its convex hull), its triangles in the shape's frame,
+    /// for exact distances ([`super::exact`]); `None` for primitives and voxels.
+    pub mesh: Option<Arc<TriangleMesh>>,
 }
 
 /// A named scene object: its shapes and a bounding-volume tree over them.
@@ -60,6 +64,18 @@ impl SceneObject {
     /// # Errors
     /// [`Error::InvalidInput`] naming the object when it has no shape.
     pub fn new(id: impl Into<String>, shapes: Vec<(SE3, Convex)>) -> Result<Self> {
+        Self::with_meshes(id, shapes.into_iter().map(|(p, s)| (p, s, None)).collect())
+    }
+
+    /// An object from world-placed shapes, each a mesh's convex hull with the mesh's
+    /// triangles or a shape without a mesh (builds its tree).
+    ///
+    /// # Errors
+    /// As [`SceneObject::new`].
+    pub fn with_meshes(
+        id: impl Into<String>,
+        shapes: Vec<(SE3, Convex, Option<Arc<TriangleMesh>>)>,
+    ) -> Result<Self> {
         let id = id.into();
         if shapes.is_empty() {
             return Err(Error::invalid(
@@ -75,10 +91,11 @@ impl SceneObject {
         }
         let mut shapes: Vec<SceneShape> = shapes
             .into_iter()
-            .map(|(pose, shape)| SceneShape {
+            .map(|(pose, shape, mesh)| SceneShape {
                 aabb: world_aabb(&shape, &pose),
                 pose,
                 shape,
+                mesh,
             })
             .collect();
         let mut nodes = Vec::with_capacity(2 * shapes.len() / LEAF_SIZE + 2);
@@ -99,7 +116,8 @@ impl SceneObject {
     }
 }
 
-fn world_aabb(shape: &Convex, pose: &SE3) -> (Vector3<f64>, Vector3<f64>) {
+/// World-axis-aligned bounding box (min, max) of `shape` placed at `pose`.
+pub(super) fn world_aabb(shape: &Convex, pose: &SE3) -> (Vector3<f64>, Vector3<f64>) {
     let (c, h) = shape.local_aabb();
     let centre = pose.act_point(&c);
     let r = pose.rotation.abs() * h;
@@ -231,6 +249,45 @@ pub fn compute_scene_distances_below(
     sd: &mut SceneData,
     cutoff: f64,
 ) -> f64 {
+    nearest_in_scene(gm, gd, scene, sd, cutoff, |q| {
+        let s = &scene.objects[q.scene_object].shapes[q.shape];
+        signed_distance(
+            &gm.objects[q.object].shape,
+            q.pose,
+            &s.shape,
+            &s.pose,
+            q.warm,
+            q.epa,
+        )
+    })
+}
+
+/// One distance query of [`nearest_in_scene`]: robot object `object` (index into
+/// `GeometryModel::objects`) at `pose` against shape `shape` of scene object
+/// `scene_object`, with that link–object pair's warm start and the EPA buffers.
+pub(super) struct LeafQuery<'a> {
+    pub object: usize,
+    pub pose: &'a SE3,
+    pub scene_object: usize,
+    pub shape: usize,
+    pub warm: &'a mut WarmStart,
+    pub epa: &'a mut EpaWorkspace,
+}
+
+/// The branch-and-bound nearest search of [`compute_scene_distances_below`] with the
+/// distance of one robot object to one scene shape given by `leaf` (GJK/EPA on the
+/// convex shapes, or the exact triangle-mesh distance of [`super::exact`]). The bounds
+/// are those of the robot object's convex shape (its bounding ball, its support value
+/// along an axis), lower bounds on the distance of anything inside it, so `leaf` may
+/// measure any shape that lies within the convex one.
+pub(super) fn nearest_in_scene(
+    gm: &GeometryModel,
+    gd: &mut GeometryData,
+    scene: &Scene,
+    sd: &mut SceneData,
+    cutoff: f64,
+    mut leaf: impl FnMut(LeafQuery<'_>) -> PairDistance,
+) -> f64 {
     let no = scene.objects.len();
     let mut min = f64::INFINITY;
     sd.closest = None;
@@ -275,27 +332,27 @@ pub fn compute_scene_distances_below(
                     }
                     match node.leaf {
                         Some((first, count)) => {
-                            for s in &obj.shapes[first..first + count] {
+                            for (si, s) in obj.shapes[first..first + count].iter().enumerate() {
                                 if bound(&axis, reach, &s.aabb.0, &s.aabb.1)
                                     >= best.distance - PRUNE_TOLERANCE
                                 {
                                     continue;
                                 }
-                                let r = signed_distance(
-                                    &go.shape,
-                                    &pose,
-                                    &s.shape,
-                                    &s.pose,
-                                    &mut sd.warm[k],
-                                    &mut gd.epa,
-                                );
+                                let r = leaf(LeafQuery {
+                                    object: i,
+                                    pose: &pose,
+                                    scene_object: o,
+                                    shape: first + si,
+                                    warm: &mut sd.warm[k],
+                                    epa: &mut gd.epa,
+                                });
                                 if r.distance < best.distance {
                                     best = r;
-                                    // Apart, the witness on the link is its support
-                                    // point along the normal.
+                                    // Apart, the normal separates the robot object
+                                    // from the shapes beyond the best one's distance.
                                     if many && r.distance > 0.0 {
                                         axis = r.normal;
-                                        reach = r.normal.dot(&r.witness_a);
+                                        reach = support_value(&go.shape, &pose, &axis, &mut hint);
                                     }
                                 }
                             }
@@ -532,7 +589,7 @@ pub fn scene_from_str(text: &str, path: &Path, opts: &SceneOptions) -> Result<Sc
         for (i, (p, pose)) in o.primitives.iter().zip(&o.primitive_poses).enumerate() {
             let pose = parse_pose(pose).map_err(|m| at(format!("primitive_poses[{i}]: {m}")))?;
             let shape = primitive(p).map_err(|m| at(format!("primitives[{i}]: {m}")))?;
-            shapes.push((pose, shape));
+            shapes.push((pose, shape, None));
         }
         for (i, (m, pose)) in o.meshes.iter().zip(&o.mesh_poses).enumerate() {
             let pose = parse_pose(pose).map_err(|e| at(format!("mesh_poses[{i}]: {e}")))?;
@@ -546,12 +603,15 @@ pub fn scene_from_str(text: &str, path: &Path, opts: &SceneOptions) -> Result<Sc
                     vertices: hull.vertices,
                     neighbours: hull.neighbours,
                 },
+                Some(Arc::new(mesh)),
             ));
         }
         if shapes.is_empty() {
             return Err(at("has no primitive and no mesh".into()));
         }
-        scene.objects.push(SceneObject::new(o.id.clone(), shapes)?);
+        scene
+            .objects
+            .push(SceneObject::with_meshes(o.id.clone(), shapes)?);
     }
     Ok(scene)
 }

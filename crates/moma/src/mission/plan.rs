@@ -283,6 +283,17 @@ impl Planner {
 
     /// Blocks `cell` in the C-space (a pose there collided at the heading it was driven
     /// with); the goal's cell stays free. `false` when it is the goal's.
+    ///
+    /// The block holds at every heading, stricter than the collision found: D* Lite
+    /// searches the (x, y) cells only, and the heading a path has in a cell is not the
+    /// search's but the smoothing's (the tangent of the curvature-bounded path through
+    /// the cells, known only after the search). A (cell, heading) block needs a search
+    /// over (x, y, θ), as `planning::costmap::astar_footprint` does for `moma plan`, at
+    /// the number of headings times the states and without D* Lite's incremental
+    /// repair. What the cell block costs: a cell the polygon passes at another heading
+    /// is lost to every later path of the mission, so a passage entered at a wrong angle
+    /// may be closed for good; the search then goes round, or after `POLYGON_REPAIRS`
+    /// falls back to the circumscribed disk (`docs/mission.md`).
     pub fn block(&mut self, cell: (usize, usize)) -> Result<bool> {
         if cell == self.goal_cell {
             return Ok(false);

@@ -680,7 +680,8 @@ impl<'m> Runner<'m> {
             self.wall.smoothing_timing_s += check_s;
             smoothing_s += st + check_s;
             if bad.is_empty() {
-                if repaired > 0 {
+                // after the fallback to the disk its own event has said how it ended
+                if repaired > 0 && polygon {
                     let text = format!(
                         "the footprint polygon collided along the path: {repaired} re-plan(s) \
                          with the colliding cells blocked"
