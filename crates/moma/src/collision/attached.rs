@@ -119,7 +119,9 @@ mod tests {
                 half: Vector3::repeat(0.1),
             },
         );
-        let carried = gm.with_attached("cube", joint, &[cube], &[hand]).unwrap();
+        let carried = gm
+            .with_attached("cube", joint, std::slice::from_ref(&cube), &[hand])
+            .unwrap();
         let c = carried.link_index("cube").unwrap();
         assert_eq!(c, gm.links.len());
         let flag = |a: usize| {
@@ -148,7 +150,10 @@ mod tests {
             "{}",
             gd.results[p].distance
         );
-        assert!(gm.with_attached("hand", joint, &[cube], &[]).is_err());
+        assert!(
+            gm.with_attached("hand", joint, std::slice::from_ref(&cube), &[])
+                .is_err()
+        );
         assert!(gm.with_attached("x", joint, &[], &[]).is_err());
     }
 }
