@@ -170,3 +170,70 @@ fn a_query_file_gives_the_grasp_of_its_object() {
     let (cx, cy) = g.world_to_cell("shelf", 6.0, 8.0).unwrap();
     assert!(g.cells[g.index(cx, cy)] >= 100);
 }
+
+/// The pick mission with the shipped scene plus `extra` (MoveIt YAML collision objects,
+/// in the scene's frame), written to a fresh folder.
+fn with_scene_objects(tag: &str, extra: &str) -> moma::Result<moma::mission::Mission> {
+    let dir = std::env::temp_dir().join(format!("moma-pick-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let shipped =
+        std::fs::read_to_string(root().join("scenarios/scenes/bookshelf_small_can1.yaml")).unwrap();
+    let scene = dir.join("scene.yaml");
+    std::fs::write(&scene, format!("{}\n{extra}", shipped.trim_end())).unwrap();
+    let path = mission_path();
+    let text = std::fs::read_to_string(&path).unwrap().replace(
+        "scene = \"scenes/bookshelf_small_can1.yaml\"",
+        &format!("scene = {:?}", scene.display().to_string()),
+    );
+    let f = scenario::parse_file(&text, &path)?;
+    scenario::from_file(f, &path, path.parent().unwrap())
+}
+
+/// A MoveIt YAML box object.
+fn box_yaml(id: &str, size: [f64; 3], at: [f64; 3]) -> String {
+    format!(
+        "    - header: {{frame_id: base_link}}\n      id: {id}\n      primitives:\n        - type: box\n          dimensions: {size:?}\n      primitive_poses:\n        - position: {at:?}\n          orientation: [0.0, 0.0, 0.0, 1.0]\n"
+    )
+}
+
+#[test]
+fn a_table_top_the_robot_clears_is_left_off_the_map_its_legs_are_not() {
+    // a table over the start (2.5, 3.0), the scene's frame at (5, 8): its top at
+    // z 1.45-1.5 m, well above Fetch with the arm tucked, and one leg 0.8 m from the start
+    let table = |z: f64| {
+        box_yaml("table_top", [1.6, 1.6, 0.05], [-2.5, -5.0, z])
+            + &box_yaml("table_leg", [0.05, 0.05, 1.45], [-1.8, -5.4, 0.725])
+    };
+    let m = with_scene_objects("table", &table(1.475)).unwrap();
+    let task = m.task.as_ref().unwrap();
+    let ids: Vec<&str> = task.scene.objects.iter().map(|o| o.id.as_str()).collect();
+    let verdict = |id: &str| task.heights[ids.iter().position(|&i| i == id).unwrap()];
+    let (top, leg) = (verdict("table_top"), verdict("table_leg"));
+    assert!(!top.blocked && top.clearance > 0.2, "{top:?}");
+    assert!(leg.blocked && leg.clearance < 0.0, "{leg:?}");
+    // the shelf's boards and sides, at the robot's height, stay obstacles
+    assert!(verdict("shelf_bottom").blocked && verdict("side_left").blocked);
+    let g = &m.map.grid;
+    let cell = |x: f64, y: f64| {
+        let (cx, cy) = g.world_to_cell("table", x, y).unwrap();
+        g.cells[g.index(cx, cy)]
+    };
+    // under the top, away from the leg: as free as the map has it
+    let bare = load(&mission_path()).unwrap();
+    let b = &bare.map.grid;
+    for (x, y) in [(2.5, 3.0), (2.0, 2.5), (3.0, 3.5)] {
+        let (cx, cy) = b.world_to_cell("table", x, y).unwrap();
+        assert_eq!(cell(x, y), b.cells[b.index(cx, cy)], "({x}, {y})");
+    }
+    assert!(cell(2.5, 3.0) < 100);
+    // under the leg: blocked
+    assert!(cell(3.2, 2.6) >= 100);
+    // the same top at table height (z 0.7-0.75 m) is an obstacle where the robot starts
+    let err = with_scene_objects("low-table", &table(0.725))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("task.pose") && err.contains("'table_top'"),
+        "{err}"
+    );
+}

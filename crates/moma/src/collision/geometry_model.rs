@@ -251,7 +251,7 @@ impl GeometryModel {
     }
 }
 
-fn bounding_radius_about(shape: &Convex, centre: &Vector3<f64>) -> f64 {
+pub(super) fn bounding_radius_about(shape: &Convex, centre: &Vector3<f64>) -> f64 {
     match shape {
         Convex::Hull { vertices, .. } => vertices
             .iter()

@@ -46,9 +46,14 @@
 //!   prunes subtrees by its bounding ball and by a separating-axis bound along the best
 //!   pair's normal (the previous query's to start), which skips a whole layer of voxels
 //!   at once.
+//! * An object the robot carries ([`attached`], MoveIt's attached collision object) is
+//!   one more link of the model, fixed to the carrying joint, its pairs with the touch
+//!   links disabled; a scene object may allow links to touch it
+//!   ([`SceneObject::touch_links`], MoveIt's allowed-collision entries).
 //! * [`ball_cover`] covers a hull with a few balls (one per slab along its longest axis),
 //!   a cheap lower bound on its distances that the arm planner's check tries before GJK.
 
+pub mod attached;
 pub mod ball_cover;
 pub mod convex;
 pub mod exact;

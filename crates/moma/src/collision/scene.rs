@@ -37,6 +37,10 @@ pub struct SceneObject {
     pub id: String,
     /// Its shapes, in the tree's leaf order.
     pub shapes: Vec<SceneShape>,
+    /// Robot links allowed to touch it (MoveIt's allowed-collision entries for this
+    /// object): their distances to it are neither computed nor checked. Empty from
+    /// [`SceneObject::new`].
+    pub touch_links: Vec<String>,
     /// The tree: node `k` has box `nodes[k]`; leaves hold a range of `shapes`.
     nodes: Vec<BvhNode>,
 }
@@ -106,7 +110,18 @@ impl SceneObject {
             child: 0,
         });
         build(&mut shapes, 0, 0, &mut nodes);
-        Ok(SceneObject { id, shapes, nodes })
+        Ok(SceneObject {
+            id,
+            shapes,
+            touch_links: Vec::new(),
+            nodes,
+        })
+    }
+
+    /// Whether the link named `link` may touch this object ([`SceneObject::touch_links`]).
+    #[must_use]
+    pub fn allows(&self, link: &str) -> bool {
+        self.touch_links.iter().any(|l| l == link)
     }
 
     /// World bounding box of the whole object.
@@ -220,7 +235,8 @@ impl SceneData {
 }
 
 /// Signed distances between every link and every scene object (after
-/// `update_geometry_placements`), into `sd.results`; returns the minimum. Each
+/// `update_geometry_placements`), into `sd.results`; returns the minimum. A pair the
+/// object allows ([`SceneObject::touch_links`]) gets `+∞`. Each
 /// link–object distance is a nearest search in the object's tree: a subtree is skipped
 /// when a lower bound on its distance is not below the best found so far (less
 /// [`PRUNE_TOLERANCE`]). The bound is the larger of the gap between the shape's bounding
@@ -294,6 +310,10 @@ pub(super) fn nearest_in_scene(
     for (l, link) in gm.links.iter().enumerate() {
         for (o, obj) in scene.objects.iter().enumerate() {
             let k = l * no + o;
+            if obj.allows(&link.name) {
+                sd.results[k].distance = f64::INFINITY;
+                continue;
+            }
             let mut best = PairDistance {
                 distance: cutoff,
                 witness_a: Vector3::zeros(),
@@ -404,7 +424,8 @@ fn box_min_along(n: &Vector3<f64>, lo: &Vector3<f64>, hi: &Vector3<f64>) -> f64 
 }
 
 /// Whether some link overlaps some scene object, stopping at the first overlap: the
-/// `(link, object)` indices.
+/// `(link, object)` indices. Pairs the object allows ([`SceneObject::touch_links`]) are
+/// skipped.
 pub fn scene_collision(
     gm: &GeometryModel,
     gd: &GeometryData,
@@ -415,6 +436,9 @@ pub fn scene_collision(
     for (l, link) in gm.links.iter().enumerate() {
         for (o, obj) in scene.objects.iter().enumerate() {
             let k = l * no + o;
+            if obj.allows(&link.name) {
+                continue;
+            }
             // A separating axis to start with: the last distance query's normal.
             let mut axis = sd.results[k].normal;
             if !(axis.iter().all(|x| x.is_finite()) && (axis.norm() - 1.0).abs() < 1e-9) {

@@ -1,10 +1,12 @@
 //! Obstacles with heights: boxes placed on the map (`[[map.boxes]]`: a pose `[x, y, yaw]`
-//! on the map, a size and a z range), each checked once at load in 3-D against the
-//! robot's collision geometry at the transport posture, then rasterised into the map as
-//! blocked, or left out when the robot passes under it.
+//! on the map, a size and a z range) and the objects of a `[task]`'s scene, each checked
+//! once at load in 3-D against the robot's collision geometry at the transport posture
+//! ([`block_by_height`]), then rasterised into the map as blocked, or left out when the
+//! robot passes under it.
 //!
 //! The check: the robot, placed anywhere on the map at any heading, meets a box spanning
-//! z₀..z₁ exactly when some of its geometry lies within the horizontal slab z₀ ≤ z ≤ z₁
+//! z₀..z₁ (a scene object: its bounding box's z extent) exactly when some of its
+//! geometry lies within the horizontal slab z₀ ≤ z ≤ z₁
 //! (the planner may put any part of the robot under the box's outline). So the verdict
 //! is the signed distance ([`crate::collision::compute_scene_distances`]) from the robot's
 //! geometry to that slab, taken over the whole footprint: a box whose slab the robot
@@ -152,7 +154,7 @@ pub fn block_scene_footprint(grid: &mut OccupancyGrid, objects: &[SceneObject]) 
 
 /// Checks each box of `boxes` against `robot`'s geometry `gm` at the arm posture
 /// `transport` and blocks on `grid` those whose slab the robot does not clear by more
-/// than `padding` (m); the verdicts in file order.
+/// than `padding` (m); the verdicts in file order ([`block_by_height`]).
 ///
 /// # Errors
 /// A box with invalid numbers (named `map.boxes[k]`).
@@ -164,27 +166,56 @@ pub fn place_boxes(
     transport: &[f64],
     padding: f64,
 ) -> Result<Vec<BoxVerdict>> {
-    for (k, b) in boxes.iter().enumerate() {
-        b.check(&format!("map.boxes[{k}]"))?;
-    }
-    if boxes.is_empty() {
-        return Ok(Vec::new());
+    let objects = boxes
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            let field = format!("map.boxes[{k}]");
+            b.check(&field)?;
+            b.object(&field)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(block_by_height(
+        grid, &objects, robot, gm, transport, padding,
+    ))
+}
+
+/// The one rasteriser of objects with heights on a mission's map (`[[map.boxes]]` and a
+/// `[task]`'s scene): each object's height range (its bounding box's z extent) is a slab,
+/// checked once against `robot`'s geometry `gm` at the arm posture `transport`
+/// ([`slab_clearance`]); the objects whose slab the robot does not clear by more than
+/// `padding` (m) block the cells of their ground outline ([`block_scene_footprint`]), the
+/// others (a table top the robot passes under) are left off the map. The verdicts in
+/// the order of `objects`.
+pub fn block_by_height(
+    grid: &mut OccupancyGrid,
+    objects: &[SceneObject],
+    robot: &WheeledModel,
+    gm: &GeometryModel,
+    transport: &[f64],
+    padding: f64,
+) -> Vec<BoxVerdict> {
+    if objects.is_empty() {
+        return Vec::new();
     }
     let mut gd = placed_at_posture(robot, gm, transport);
-    let mut verdicts = Vec::with_capacity(boxes.len());
     let mut blocked = Vec::new();
-    for (k, b) in boxes.iter().enumerate() {
-        let clearance = slab_clearance(gm, &mut gd, b.z);
-        let v = BoxVerdict {
-            clearance,
-            // (a distance that is not a number blocks)
-            blocked: clearance.is_nan() || clearance <= padding,
-        };
-        if v.blocked {
-            blocked.push(b.object(&format!("map.boxes[{k}]"))?);
-        }
-        verdicts.push(v);
-    }
+    let verdicts = objects
+        .iter()
+        .map(|o| {
+            let (lo, hi) = o.aabb();
+            let clearance = slab_clearance(gm, &mut gd, [lo.z, hi.z]);
+            let v = BoxVerdict {
+                clearance,
+                // (a distance that is not a number blocks)
+                blocked: clearance.is_nan() || clearance <= padding,
+            };
+            if v.blocked {
+                blocked.push(o.clone());
+            }
+            v
+        })
+        .collect();
     block_scene_footprint(grid, &blocked);
-    Ok(verdicts)
+    verdicts
 }

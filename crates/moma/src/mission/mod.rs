@@ -7,7 +7,7 @@
 //!
 //! | step | what runs |
 //! | --- | --- |
-//! | map → C-space | [`crate::planning::load_map`] plus the `[[map.boxes]]` the robot cannot pass under ([`heights`]), the distance transform, disk dilation by `footprint_radius` + ½ cell (with the robot's footprint polygon: by the largest disk about the axle inside it) |
+//! | map → C-space | [`crate::planning::load_map`] plus the `[[map.boxes]]` and `[task]` scene objects the robot cannot pass under ([`heights`]), the distance transform, disk dilation by `footprint_radius` + ½ cell (with the robot's footprint polygon: by the largest disk about the axle inside it) |
 //! | footprint polygon | every sample of a timed path checked with the polygon at its heading ([`crate::planning::footprint_clearance`]); colliding cells blocked and re-planned, the circumscribed disk as the fallback |
 //! | search | [`crate::planning::dstar_lite::DStarLite`] from the start pose's cell to the goal's cell |
 //! | path → motion | curvature-bounded smoothing from the exact start pose to the exact goal pose ([`crate::planning::curvature::smooth_diff_drive`]), then near time-optimal timing under v, ω, a, α and the tip-over accelerations ([`crate::stability::acceleration_limits`] of the transport posture, times `tip_fraction`; [`crate::planning::trajectory::time_parameterize_curve`]), re-plans continuing from the current speed |
@@ -36,8 +36,8 @@
 //!   footprint-dilated C-space, so an obstacle is `move_start` + `set_blocked` and a
 //!   re-plan one incremental `compute`, and the footprint polygon's check.
 //! * [`footprint`] gives the footprint (a typed disk or the robot's polygon at the
-//!   transport posture); [`heights`] checks `[[map.boxes]]` in 3-D and rasterises the
-//!   ones the robot cannot pass under.
+//!   transport posture); [`heights`] checks `[[map.boxes]]` and a `[task]`'s scene
+//!   objects in 3-D and rasterises the ones the robot cannot pass under.
 //! * [`mod@reference`] turns a cell path into timed samples (curvature-bounded smoothing from
 //!   the exact poses, then `time_parameterize_curve` under the platform and tip-over
 //!   limits from the current speed).
@@ -46,8 +46,8 @@
 //!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
 //! * `plant` builds and checks the contact plant of `simulation.plant = "contact"` at load
 //!   ([`MissionContact`]) and steps it in the loop, with its monitors and events.
-//! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under its
-//!   outline; the grasp; the geometry; the payload robot) and holds its distance monitor
+//! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under the
+//!   outline of the objects the robot cannot pass under; the grasp; the geometry; the payload robot) and holds its distance monitor
 //!   and result records.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 

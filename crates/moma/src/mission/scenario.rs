@@ -9,12 +9,12 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::footprint::MissionFootprint;
-use super::heights::{BoxSpec, BoxVerdict, block_scene_footprint, place_boxes};
+use super::heights::{BoxSpec, BoxVerdict, block_by_height, place_boxes};
 use super::plant::{MissionContact, start_configuration};
 use super::task::{
     Task, TaskSpec, load_task, object_under_footprint, scene_outlines, task_geometry_options,
 };
-use crate::collision::{GeometryModel, GeometryOptions};
+use crate::collision::{GeometryModel, GeometryOptions, Scene};
 use crate::contact::{ContactSpec, PlantKind};
 use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
@@ -643,7 +643,7 @@ pub fn from_file_with(
                 .geometry(&robot.model, &base.join(&file.robot.urdf), &options)
                 .map_err(|e| field_err(path, "task.srdf (collision geometry)", e))?;
             let urdf = base.join(&file.robot.urdf);
-            let task = load_task(
+            let mut task = load_task(
                 spec,
                 path,
                 base,
@@ -654,7 +654,14 @@ pub fn from_file_with(
                 &package_dirs,
                 gm,
             )?;
-            place_scene_on_map(&task, &file, path, &mut map, footprint.radius)?;
+            place_scene_on_map(
+                &mut task,
+                &file,
+                path,
+                &mut map,
+                (&robot, transport.as_slice()),
+                &footprint,
+            )?;
             Some(task)
         }
     };
@@ -714,16 +721,39 @@ fn check_goal_and_task(file: &MissionFile, path: &Path) -> Result<()> {
     }
 }
 
-/// Blocks the map cells under the task scene's outline; a scene object where the
-/// footprint stands at the start is an error naming the object.
+/// Blocks the map cells under the outline of the task scene's objects that the robot
+/// cannot pass under at its transport posture ([`block_by_height`], the verdicts into
+/// `task.heights`); such an object where the footprint stands at the start is an error
+/// naming the object.
 fn place_scene_on_map(
-    task: &Task,
+    task: &mut Task,
     file: &MissionFile,
     path: &Path,
     map: &mut LoadedMap,
-    footprint_radius: f64,
+    (robot, transport): (&WheeledModel, &[f64]),
+    footprint: &MissionFootprint,
 ) -> Result<()> {
-    let outlines = scene_outlines(&task.scene);
+    let footprint_radius = footprint.radius;
+    let mut grid = map.grid.clone();
+    task.heights = block_by_height(
+        &mut grid,
+        &task.scene.objects,
+        robot,
+        &task.hull_geometry,
+        transport,
+        footprint.padding(),
+    );
+    let blocking = Scene {
+        objects: task
+            .scene
+            .objects
+            .iter()
+            .zip(&task.heights)
+            .filter(|(_, v)| v.blocked)
+            .map(|(o, _)| o.clone())
+            .collect(),
+    };
+    let outlines = scene_outlines(&blocking);
     let s = file.start.pose;
     if let Some((id, d)) = object_under_footprint(&outlines, [s[0], s[1]], footprint_radius) {
         return Err(field_err(
@@ -736,7 +766,7 @@ fn place_scene_on_map(
             ),
         ));
     }
-    block_scene_footprint(&mut map.grid, &task.scene.objects);
+    map.grid = grid;
     Ok(())
 }
 

@@ -6,9 +6,10 @@
 //! MotionBenchMaker goal query or an offset from the object; the robot's collision
 //! geometry is read with the SRDF's disabled pairs; the joint group is the end effector's
 //! arm chain; the robot with the object as a point mass on the grasp frame's body is
-//! built for after the grasp. The scene's outline on the ground blocks the map cells it
-//! covers ([`super::heights::block_scene_footprint`]), and a scene object where the footprint stands at the
-//! start is an input error naming the object.
+//! built for after the grasp. The outline on the ground of each scene object the robot
+//! cannot pass under at its transport posture blocks the map cells it covers
+//! ([`super::heights::block_by_height`]: a table top the robot clears is left off), and
+//! such an object where the footprint stands at the start is an input error naming it.
 //!
 //! In the run (`run.rs`): [`Task::placements`] ranks the base poses
 //! ([`crate::motion::placement::place_base`]), the run drives to the best one its planner
@@ -113,6 +114,10 @@ pub struct Task {
     pub scene_after_grasp: Scene,
     /// The scene as read, in its own frame (for the report).
     pub scene_pose: [f64; 3],
+    /// Per object of `scene` (in its order), the 3-D check of its height range against
+    /// the robot at the transport posture; the blocked ones are on the map
+    /// ([`super::heights::block_by_height`]).
+    pub heights: Vec<super::heights::BoxVerdict>,
     /// The picked object's id.
     pub object: String,
     /// The grasp of the end effector (world).
@@ -292,6 +297,7 @@ pub fn load_task(
         scene,
         scene_after_grasp,
         scene_pose: spec.pose,
+        heights: Vec::new(),
         object: spec.object.clone(),
         grasp,
         pre_grasp,

@@ -13,6 +13,8 @@
 //! the joints above one link and not the other count: a joint above both moves the two
 //! rigidly together. Each pair `p` gets a row of coefficients `c_p` (one per group joint),
 //! and a pair whose row is all zero never moves; it is checked once, with the start state.
+//! A link–object pair the scene object allows ([`crate::collision::SceneObject::touch_links`])
+//! is not checked.
 //!
 //! **Segments** (`a → b`, `δ = |b − a|`): at a checked state every pair's signed distance
 //! `d_p` must exceed the margin, and pair `p` then stays at least half the margin apart for
@@ -380,6 +382,9 @@ impl<'a> ClearanceChecker<'a> {
                 coeff.extend_from_slice(row_values);
                 let row = coeff.len() / dim - 1;
                 for (o, obj) in scene.objects.iter().enumerate() {
+                    if obj.allows(&gm.links[l].name) {
+                        continue;
+                    }
                     let first = n_moving;
                     for s in 0..obj.shapes.len() {
                         for (ga, ra) in &link_groups[l] {
@@ -478,6 +483,15 @@ impl<'a> ClearanceChecker<'a> {
         if margin.is_finite() && margin >= 0.0 {
             self.margin = margin;
         }
+    }
+
+    /// Sets the joints outside the group from the full configuration `q` (its group
+    /// entries are ignored: each check places the group's state).
+    ///
+    /// # Panics
+    /// If `q` is not of the model's length.
+    pub fn set_fixed_joints(&mut self, q: &[f64]) {
+        self.q.copy_from_slice(q);
     }
 
     /// The weighted radius each state checked by `is_valid` vouches for (module docs).
