@@ -416,6 +416,45 @@ fn root_constrained_aba_equals_the_joint_space_route_on_panda() {
     }
 }
 
+/// The reduced inverse dynamics by one RNEA undoes the reduced forward dynamics (CRBA and
+/// Cholesky): at the acceleration that an input gives, `Mr v̇_r + cr + Gr` is that
+/// input's reduced force `Qr`, and q̈ is the forward dynamics' q̈.
+#[test]
+fn reduced_inverse_dynamics_undoes_the_forward_dynamics_on_panda() {
+    use moma::mobile::wheeled::{reduced_forward_dynamics_crba, reduced_inverse_dynamics};
+    let path = format!(
+        "{}/tests/data/pinocchio/urdf/panda.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let model = model_from_urdf_file(path, RootJoint::Planar).unwrap();
+    for d in [0.2, 0.0, -0.3] {
+        let wm = WheeledModel::new(
+            model.clone(),
+            WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap()),
+        )
+        .unwrap();
+        let mut wd = WheeledData::new(&wm);
+        let mut force = DVector::zeros(wm.nr());
+        for k in 0..5 {
+            let q = DVector::from_fn(wm.model.nq, |i, _| ((i * 7 + k * 3) as f64 * 0.37).sin());
+            let v = DVector::from_fn(wm.nr(), |i, _| ((i * 5 + k) as f64 * 0.53).cos());
+            let u: Vec<f64> = (0..wm.nu())
+                .map(|i| ((i + k) as f64 * 0.71).sin())
+                .collect();
+            let vdot = reduced_forward_dynamics_crba(&wm, &mut wd, &q, &v, &u)
+                .unwrap()
+                .clone();
+            let (qr, qdd) = (wd.reduced.force.clone(), wd.reduced.qddot.clone());
+            reduced_inverse_dynamics(&wm, &mut wd, &q, &v, &vdot, &mut force);
+            assert!(
+                (&force - &qr).norm() < 1e-9 * (1.0 + qr.norm()),
+                "d={d}: {force} vs {qr}"
+            );
+            assert!((&wd.reduced.qddot - &qdd).norm() < 1e-9 * (1.0 + qdd.norm()));
+        }
+    }
+}
+
 /// The full-coordinate DAE (index 1: `[H Cᵀ; C 0][q̈; λ] = [Q − h − G; −Ċ q̇]`, state
 /// `[q, q̇]`) integrated independently gives the same trajectory and multipliers as the
 /// reduced-coordinate simulator.

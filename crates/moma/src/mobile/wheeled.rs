@@ -460,10 +460,9 @@ pub(crate) fn check_state(wm: &WheeledModel, q: &DVector<f64>, v_r: &DVector<f64
 /// Reduced forward dynamics by the joint-space route, for any wheel set-up: v̇_r in
 /// `wd.reduced.vdot`, q̈ in `wd.reduced.qddot`, Mr in `wd.reduced.mass_matrix`.
 ///
-/// One CRBA for H, one RNEA with `a = Ṅ_C v` for `H Ṅ_C v + h + G`, and
-/// `Mr = N_Cᵀ H N_C` formed blockwise from the sparsity of N_C (the arm block of Mr is
-/// the arm block of H; only the two platform columns are products). Reports
-/// [`Error::Singular`] if Mr is not positive definite. Does not allocate.
+/// The terms of [`reduced_dynamics_terms_crba`], then `Mr v̇_r = Qr − (cr + Gr)` by
+/// Cholesky. Reports [`Error::Singular`] if Mr is not positive definite. Does not
+/// allocate.
 ///
 /// # Panics
 /// On wrong vector lengths.
@@ -474,6 +473,33 @@ pub fn reduced_forward_dynamics_crba<'d>(
     v_r: &DVector<f64>,
     u: &[f64],
 ) -> Result<&'d DVector<f64>> {
+    reduced_dynamics_terms_crba(wm, wd, q, v_r, u);
+    wd.reduced.solve_reduced()?;
+    wd.reduced.qddot.copy_from(&wd.nd_v);
+    wd.reduced.qddot.gemv(1.0, &wd.basis, &wd.reduced.vdot, 1.0);
+    Ok(&wd.reduced.vdot)
+}
+
+/// The terms of the reduced dynamics at `(q, v_r)` under `u`, without solving for the
+/// acceleration: Mr in `wd.reduced.mass_matrix`, cr + Gr in `wd.reduced.velocity_terms`
+/// (`gravity` zero), Qr in `wd.reduced.force`, N_C and Ṅ_C in `wd.basis` and
+/// `wd.basis_dot`, q̇ in `wd.qdot` and Ṅ_C v in `wd.nd_v` (`wd.reduced.vdot` and `qddot`
+/// are left as they were). For a caller that needs the inverse dynamics
+/// `Mr v̇_r + cr + Gr` of its own accelerations, not the forward dynamics.
+///
+/// One CRBA for H, one RNEA with `a = Ṅ_C v` for `H Ṅ_C v + h + G`, and
+/// `Mr = N_Cᵀ H N_C` formed blockwise from the sparsity of N_C (the arm block of Mr is
+/// the arm block of H; only the two platform columns are products). Does not allocate.
+///
+/// # Panics
+/// On wrong vector lengths.
+pub fn reduced_dynamics_terms_crba(
+    wm: &WheeledModel,
+    wd: &mut WheeledData,
+    q: &DVector<f64>,
+    v_r: &DVector<f64>,
+    u: &[f64],
+) {
     check_state(wm, q, v_r, u);
     let model = &wm.model;
     admissible_velocity_basis(wm, q, &mut wd.basis);
@@ -537,11 +563,37 @@ pub fn reduced_forward_dynamics_crba<'d>(
         gr.fill(0.0);
         project(wm, basis, &wd.force, qr);
         debug_assert_eq!(mr.nrows(), nr);
-        red.solve_reduced()?;
     }
-    wd.reduced.qddot.copy_from(&wd.nd_v);
-    wd.reduced.qddot.gemv(1.0, &wd.basis, &wd.reduced.vdot, 1.0);
-    Ok(&wd.reduced.vdot)
+}
+
+/// The reduced inverse dynamics `Mr v̇_r + cr + Gr` at `(q, v_r)` with the reduced
+/// acceleration `a_r`, into `out` (nr), by one RNEA instead of a CRBA: with
+/// `q̈ = N_C v̇_r + Ṅ_C v_r` (left in `wd.reduced.qddot`), `N_Cᵀ (H q̈ + h + G)` is the
+/// same sum (`Mr = N_Cᵀ H N_C`, `cr + Gr = N_Cᵀ (H Ṅ_C v + h + G)`). N_C, Ṅ_C and q̇ are
+/// left in `wd.basis`, `wd.basis_dot` and `wd.qdot`. Does not allocate.
+///
+/// # Panics
+/// On wrong vector lengths.
+pub fn reduced_inverse_dynamics(
+    wm: &WheeledModel,
+    wd: &mut WheeledData,
+    q: &DVector<f64>,
+    v_r: &DVector<f64>,
+    a_r: &DVector<f64>,
+    out: &mut DVector<f64>,
+) {
+    assert_eq!(q.len(), wm.model.nq, "q length");
+    assert_eq!(v_r.len(), wm.nr(), "v_r length");
+    assert_eq!(a_r.len(), wm.nr(), "a_r length");
+    assert_eq!(out.len(), wm.nr(), "out length");
+    admissible_velocity_basis(wm, q, &mut wd.basis);
+    wd.basis.mul_to(v_r, &mut wd.qdot);
+    admissible_velocity_basis_dot(wm, q, wd.qdot[2], &mut wd.basis_dot);
+    let qddot = &mut wd.reduced.qddot;
+    wd.basis_dot.mul_to(v_r, qddot);
+    qddot.gemv(1.0, &wd.basis, a_r, 1.0);
+    let tau = rnea(&wm.model, &mut wd.data, q, &wd.qdot, &wd.reduced.qddot);
+    project(wm, &wd.basis, tau, out);
 }
 
 /// The reduced forward dynamics of the state last evaluated in `wd` by

@@ -69,6 +69,16 @@ pub fn box_object(id: &str, centre: [f64; 3], half: [f64; 3]) -> SceneObject {
     .unwrap()
 }
 
+/// The SRDF of the MPC's Fetch, `scenarios/fetch_mpc.srdf`: Fetch's, with the pair
+/// `torso_lift_link`–`shoulder_lift_link` disabled too (their hulls are under 0.02 m apart
+/// in every posture, so no clearance of 0.03 m can hold for them; see that file).
+pub fn mpc_srdf() -> String {
+    format!(
+        "{}/../../scenarios/fetch_mpc.srdf",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
 /// The MPC's view of Fetch with `scene` (`None`: no clearance constraint).
 pub fn fetch_robot(scene: Option<Scene>) -> MpcRobot {
     let wm = fetch_wheeled();
@@ -80,7 +90,7 @@ pub fn fetch_robot(scene: Option<Scene>) -> MpcRobot {
         let urdf = format!("{dir}/fetch_description/robots/fetch.urdf");
         let opts = GeometryOptions {
             package_dirs: vec![dir.clone().into()],
-            srdf: Some(format!("{dir}/fetch.srdf").into()),
+            srdf: Some(mpc_srdf().into()),
         };
         let geometry = GeometryModel::from_urdf(&wm.model, urdf.as_ref(), &opts).unwrap();
         Clearance { geometry, scene }

@@ -95,6 +95,11 @@ pub struct ConstraintSet {
     pub value: Vec<DVector<f64>>,
     /// Physical violation per kind (`max(0, ·)` in SI units) per knot: `[k][kind]`.
     pub violation: Vec<[f64; 6]>,
+    /// `value` as of the last [`ConstraintSet::keep`]: the rows of the trajectory the
+    /// solver returned, which [`ConstraintSet::update`] steps the multipliers from.
+    pub kept_value: Vec<DVector<f64>>,
+    /// `violation` as of the last [`ConstraintSet::keep`].
+    pub kept_violation: Vec<[f64; 6]>,
     gx: DVector<f64>,
     gu: DVector<f64>,
 }
@@ -108,14 +113,26 @@ impl ConstraintSet {
             lambda: vec![DVector::zeros(m); n + 1],
             value: vec![DVector::from_element(m, f64::NEG_INFINITY); n + 1],
             violation: vec![[0.0; 6]; n + 1],
+            kept_value: vec![DVector::from_element(m, f64::NEG_INFINITY); n + 1],
+            kept_violation: vec![[0.0; 6]; n + 1],
             gx: DVector::zeros(robot.nx()),
             gu: DVector::zeros(robot.nu()),
         }
     }
 
-    /// Moves every multiplier to `λ + ρ c` kept in `[0, max_multiplier]`.
+    /// Keeps the values and violations of the last evaluation of every knot (no
+    /// allocation).
+    pub fn keep(&mut self) {
+        for (kept, v) in self.kept_value.iter_mut().zip(&self.value) {
+            kept.copy_from(v);
+        }
+        self.kept_violation.copy_from_slice(&self.violation);
+    }
+
+    /// Moves every multiplier to `λ + ρ c` kept in `[0, max_multiplier]`, with the
+    /// values `c` of the last [`ConstraintSet::keep`].
     pub fn update(&mut self, penalty: f64, max_multiplier: f64) {
-        for (l, c) in self.lambda.iter_mut().zip(&self.value) {
+        for (l, c) in self.lambda.iter_mut().zip(&self.kept_value) {
             for (li, &ci) in l.iter_mut().zip(c.iter()) {
                 if ci.is_finite() {
                     *li = (*li + penalty * ci).clamp(0.0, max_multiplier);

@@ -101,4 +101,9 @@ pub trait OptimalControlProblem {
     }
     /// Lower and upper bounds of `u_k` (`±∞` for a free component).
     fn input_bounds(&self, k: usize) -> (&DVector<f64>, &DVector<f64>);
+    /// Called by the solver after every pass that evaluated all the knots of the
+    /// trajectory it keeps (its models, or an accepted line-search rollout): what the
+    /// problem recorded in that pass describes the trajectory the solve returns, unless
+    /// a later pass is kept. The default does nothing.
+    fn keep_evaluation(&mut self) {}
 }

@@ -81,6 +81,8 @@ pub struct SolveReport {
     pub violations: Violations,
     /// Smallest ZMP margin over the planned trajectory (m).
     pub min_zmp_margin: f64,
-    /// Smallest clearance over the planned trajectory (m).
+    /// Smallest clearance over the planned trajectory (m), where it is below the
+    /// distance beyond which the knot's clearance row is inactive (at least the set
+    /// value; pairs farther apart are not queried), else that distance.
     pub min_clearance: f64,
 }

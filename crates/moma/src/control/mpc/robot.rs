@@ -27,7 +27,8 @@ use crate::kinematics::{
 };
 use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::{
-    WheeledData, actuation_matrix, admissible_velocity_basis, reduced_forward_dynamics_crba,
+    WheeledData, actuation_matrix, admissible_velocity_basis, reduced_dynamics_terms_crba,
+    reduced_inverse_dynamics,
 };
 use crate::multibody::FrameIndex;
 use crate::spatial::{Inertia, Motion, SE3};
@@ -281,6 +282,8 @@ pub struct KnotWorkspace {
     geometry: Option<(GeometryModel, GeometryData, SceneData)>,
     /// The self pairs selected for the current solve ([`select_pairs`]).
     selected: Vec<bool>,
+    /// Each self pair's last query, which bounds its distance now ([`cull_pairs`]).
+    history: PairHistory,
     /// Distance at or beyond which a pair is not queried ([`evaluate_knot`]); `+∞`:
     /// every selected pair; `−∞`: none (the clearance is not needed).
     pub distance_cutoff: f64,
@@ -322,6 +325,10 @@ impl KnotWorkspace {
                 .clearance
                 .as_ref()
                 .map_or_else(Vec::new, |c| c.geometry.enabled.clone()),
+            history: robot
+                .clearance
+                .as_ref()
+                .map_or_else(PairHistory::default, |c| PairHistory::new(&c.geometry)),
             distance_cutoff: f64::INFINITY,
             q: DVector::zeros(wm.model.nq),
             v_r: DVector::zeros(nr),
@@ -362,16 +369,97 @@ pub fn select_pairs(robot: &MpcRobot, ws: &mut KnotWorkspace, q: &DVector<f64>, 
     crate::kinematics::forward_kinematics(model, &mut ws.wd.data, q);
     update_geometry_placements(&c.geometry, &ws.wd.data, gd);
     compute_distances(&c.geometry, gd, PairSelection::Enabled);
+    ws.history.record(&c.geometry, gd);
     for (p, on) in ws.selected.iter_mut().enumerate() {
         *on = c.geometry.enabled[p]
             && (gd.results[p].distance < activation || gd.results[p].distance.is_nan());
     }
 }
 
-/// Enables in `active` the pairs of `selected` that the bounding balls of their shapes
-/// (at the placements in `gd`) cannot keep `cutoff` apart: a lower bound of a pair's
-/// distance is the smallest gap between the balls of its two links' shapes.
-fn cull_pairs(active: &mut GeometryModel, gd: &GeometryData, selected: &[bool], cutoff: f64) {
+/// The last distance query of each self pair: its distance and where its objects were
+/// then. A pair whose objects have since moved by at most `δ_a` and `δ_b` is at least
+/// `d − δ_a − δ_b` apart now (each point of a shape moved by at most its shape's `δ`).
+#[derive(Clone, Debug, Default)]
+struct PairHistory {
+    /// Distance of the last query per pair (`NaN`: none yet).
+    distance: Vec<f64>,
+    /// Placements of the pair's objects then, link a's then link b's, from `offsets[p]`.
+    placements: Vec<SE3>,
+    offsets: Vec<usize>,
+}
+
+impl PairHistory {
+    fn new(gm: &GeometryModel) -> Self {
+        let mut offsets = vec![0];
+        for &[a, b] in &gm.pairs {
+            let n = gm.links[a].count + gm.links[b].count;
+            offsets.push(offsets[offsets.len() - 1] + n);
+        }
+        Self {
+            distance: vec![f64::NAN; gm.pairs.len()],
+            placements: vec![SE3::identity(); offsets[offsets.len() - 1]],
+            offsets,
+        }
+    }
+
+    /// Records the pairs `gm` enables (those the last `compute_distances` queried).
+    fn record(&mut self, gm: &GeometryModel, gd: &GeometryData) {
+        for p in 0..gm.pairs.len() {
+            if !gm.enabled[p] {
+                continue;
+            }
+            self.distance[p] = gd.results[p].distance;
+            let mut slot = self.offsets[p];
+            for link in gm.pairs[p] {
+                let l = &gm.links[link];
+                for i in l.first..l.first + l.count {
+                    self.placements[slot] = gd.placements[i];
+                    slot += 1;
+                }
+            }
+        }
+    }
+
+    /// A lower bound of pair `p`'s distance at the placements in `gd` (`−∞` if never
+    /// queried): the last distance less how far each link's objects may have moved, a
+    /// point of an object moving by at most `|P c − P' c| + ‖R − R'‖_F r` for its bounding
+    /// ball `(c, r)` between placements `P'` and `P`. A micrometre is taken off for the
+    /// rounding of the query and of this bound.
+    fn lower_bound(&self, gm: &GeometryModel, gd: &GeometryData, p: usize) -> f64 {
+        let then = self.distance[p];
+        if !then.is_finite() {
+            return f64::NEG_INFINITY;
+        }
+        let mut slot = self.offsets[p];
+        let mut moved = 0.0;
+        for link in gm.pairs[p] {
+            let l = &gm.links[link];
+            let mut most: f64 = 0.0;
+            for i in l.first..l.first + l.count {
+                let (o, was, now) = (&gm.objects[i], &self.placements[slot], &gd.placements[i]);
+                let shift = (now.act_point(&o.bounding_centre) - was.act_point(&o.bounding_centre))
+                    .norm()
+                    + (now.rotation - was.rotation).norm() * o.bounding_radius;
+                most = most.max(shift);
+                slot += 1;
+            }
+            moved += most;
+        }
+        then - moved - 1e-6
+    }
+}
+
+/// Enables in `active` the pairs of `selected` that may be closer than `cutoff` at the
+/// placements in `gd`: a pair is skipped when a lower bound of its distance is at least
+/// `cutoff`, the larger of the smallest gap between the bounding balls of its two links'
+/// shapes and its last query less the motion since ([`PairHistory::lower_bound`]).
+fn cull_pairs(
+    active: &mut GeometryModel,
+    gd: &GeometryData,
+    selected: &[bool],
+    history: &PairHistory,
+    cutoff: f64,
+) {
     for p in 0..active.pairs.len() {
         active.enabled[p] = selected[p] && {
             let [la, lb] = active.pairs[p];
@@ -386,7 +474,7 @@ fn cull_pairs(active: &mut GeometryModel, gd: &GeometryData, selected: &[bool], 
                     gap = gap.min((ci - cj).norm() - oi.bounding_radius - oj.bounding_radius);
                 }
             }
-            gap < cutoff
+            gap < cutoff && history.lower_bound(active, gd, p) < cutoff
         };
     }
 }
@@ -402,9 +490,6 @@ fn x_column(robot: &MpcRobot, dof: usize) -> Option<usize> {
 
 /// Evaluates the knot `(x, u)` (`u = None`: a terminal knot, zero acceleration) over the
 /// held configuration `hold` into `ws.values`; with `derivatives`, also every gradient.
-///
-/// # Errors
-/// [`Error::Singular`] if the reduced mass matrix is not positive definite.
 pub fn evaluate_knot(
     robot: &MpcRobot,
     ws: &mut KnotWorkspace,
@@ -412,19 +497,18 @@ pub fn evaluate_knot(
     x: &DVector<f64>,
     u: Option<&DVector<f64>>,
     derivatives: bool,
-) -> Result<()> {
+) {
     let wm = &robot.wheeled;
     let model = &wm.model;
     robot.expand(hold, x, u, &mut ws.q, &mut ws.v_r, &mut ws.a_r);
-    // Mr and cr + Gr at (q, v_r) (zero input: the reduced force is then 0).
-    reduced_forward_dynamics_crba(wm, &mut ws.wd, &ws.q, &ws.v_r, &ws.zero_u)?;
-    let red = &ws.wd.reduced;
-    red.mass_matrix.mul_to(&ws.a_r, &mut ws.reduced_force);
-    ws.reduced_force += &red.velocity_terms;
     let vals = &mut ws.values;
-    robot.torque_map.mul_to(&ws.reduced_force, &mut vals.torque);
     if derivatives {
-        // ∂τ/∂u = (N_Cᵀ S)⁻¹ Mr[:, moved columns].
+        // Mr and cr + Gr at (q, v_r) (no forward dynamics: the torques are inverse
+        // dynamics), and ∂τ/∂u = (N_Cᵀ S)⁻¹ Mr[:, moved columns].
+        reduced_dynamics_terms_crba(wm, &mut ws.wd, &ws.q, &ws.v_r, &ws.zero_u);
+        let red = &ws.wd.reduced;
+        red.mass_matrix.mul_to(&ws.a_r, &mut ws.reduced_force);
+        ws.reduced_force += &red.velocity_terms;
         let nc = robot.n_moved();
         for c in 0..2 + nc {
             let rc = if c < 2 { c } else { robot.reduced[c - 2] };
@@ -436,7 +520,18 @@ pub fn evaluate_knot(
                 vals.torque_du[(i, c)] = s;
             }
         }
+    } else {
+        // The same sum by one RNEA, without Mr.
+        reduced_inverse_dynamics(
+            wm,
+            &mut ws.wd,
+            &ws.q,
+            &ws.v_r,
+            &ws.a_r,
+            &mut ws.reduced_force,
+        );
     }
+    robot.torque_map.mul_to(&ws.reduced_force, &mut vals.torque);
     // q̈ = N_C v̇_r + Ṅ_C v_r; the ZMP of (q, q̇, q̈).
     ws.wd.basis.mul_to(&ws.a_r, &mut ws.qddot);
     ws.qddot.gemv(1.0, &ws.wd.basis_dot, &ws.v_r, 1.0);
@@ -489,8 +584,9 @@ pub fn evaluate_knot(
         cutoff == f64::NEG_INFINITY,
     ) {
         update_geometry_placements(active, data, gd);
-        cull_pairs(active, gd, &ws.selected, cutoff);
+        cull_pairs(active, gd, &ws.selected, &ws.history, cutoff);
         compute_distances(active, gd, PairSelection::Enabled);
+        ws.history.record(active, gd);
         compute_scene_distances_below(active, gd, &c.scene, scd, cutoff);
         vals.distance = cutoff;
         if !derivatives {
@@ -587,7 +683,6 @@ pub fn evaluate_knot(
             }
         }
     }
-    Ok(())
 }
 
 /// The point-mass ZMP on the ground.

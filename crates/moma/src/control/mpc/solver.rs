@@ -113,6 +113,10 @@ pub struct Solver {
     qux: DMatrix<f64>,
     vxx_a: DMatrix<f64>,
     vxx_b: DMatrix<f64>,
+    /// Aᵀ, Bᵀ and Kᵀ of the stage (the products with a transpose as plain products).
+    a_t: DMatrix<f64>,
+    b_t: DMatrix<f64>,
+    gains_t: DMatrix<f64>,
     lo: DVector<f64>,
     hi: DVector<f64>,
     qp: BoxQp,
@@ -145,6 +149,9 @@ impl Solver {
             qux: DMatrix::zeros(nu, nx),
             vxx_a: DMatrix::zeros(nx, nx),
             vxx_b: DMatrix::zeros(nx, nu),
+            a_t: DMatrix::zeros(nx, nx),
+            b_t: DMatrix::zeros(nu, nx),
+            gains_t: DMatrix::zeros(nx, nu),
             lo: DVector::zeros(nu),
             hi: DVector::zeros(nu),
             qp: BoxQp::new(nu),
@@ -178,6 +185,7 @@ impl Solver {
         for it in 0..opts.max_iterations {
             if need_model {
                 cost = self.approximate_all(problem, traj)?;
+                problem.keep_evaluation();
                 need_model = false;
             }
             stats.iterations = it + 1;
@@ -210,6 +218,7 @@ impl Solver {
                     && new_cost < cost
                 {
                     std::mem::swap(traj, &mut self.trial);
+                    problem.keep_evaluation();
                     cost = new_cost;
                     accepted = true;
                     break;
@@ -338,15 +347,19 @@ impl Solver {
             self.qx.gemv_tr(1.0, &s.a, &self.vx, 1.0);
             self.qu.copy_from(&s.lu);
             self.qu.gemv_tr(1.0, &s.b, &self.vx, 1.0);
-            // Vxx A and Vxx B.
+            // Vxx A and Vxx B; Qxx = lxx + Aᵀ Vxx A, Quu = luu + Bᵀ Vxx B,
+            // Qux = lux + Bᵀ Vxx A (the transposes formed once: a product of two plain
+            // matrices is the blocked kernel, one with a transpose a loop of dots).
             self.vxx.mul_to(&s.a, &mut self.vxx_a);
             self.vxx.mul_to(&s.b, &mut self.vxx_b);
+            s.a.transpose_to(&mut self.a_t);
+            s.b.transpose_to(&mut self.b_t);
             self.qxx.copy_from(&s.lxx);
-            self.qxx.gemm_tr(1.0, &s.a, &self.vxx_a, 1.0);
+            self.qxx.gemm(1.0, &self.a_t, &self.vxx_a, 1.0);
             self.quu.copy_from(&s.luu);
-            self.quu.gemm_tr(1.0, &s.b, &self.vxx_b, 1.0);
+            self.quu.gemm(1.0, &self.b_t, &self.vxx_b, 1.0);
             self.qux.copy_from(&s.lux);
-            self.qux.gemm_tr(1.0, &s.b, &self.vxx_a, 1.0);
+            self.qux.gemm(1.0, &self.b_t, &self.vxx_a, 1.0);
             for i in 0..self.nu {
                 self.quu[(i, i)] += mu;
             }
@@ -391,13 +404,17 @@ impl Solver {
             self.vx.gemv_tr(1.0, gains, &self.tmp_u, 1.0);
             self.vx.gemv_tr(1.0, gains, &self.qu, 1.0);
             self.vx.gemv_tr(1.0, &self.qux, kff, 1.0);
-            // Vxx = Qxx + Kᵀ Quu K + Kᵀ Qux + Quxᵀ K.
+            // Vxx = Qxx + Kᵀ Quu K + Kᵀ Qux + Quxᵀ K, formed as Qxx + Kᵀ (Quu K + 2 Qux),
+            // whose symmetric part (below) is the same matrix: Kᵀ Qux + Quxᵀ K is the
+            // symmetric part of 2 Kᵀ Qux.
             self.quu.mul_to(gains, &mut self.tmp_ux);
+            for (t, q) in self.tmp_ux.iter_mut().zip(self.qux.iter()) {
+                *t += 2.0 * q;
+            }
+            gains.transpose_to(&mut self.gains_t);
             self.vxx.copy_from(&self.qxx);
-            self.vxx.gemm_tr(1.0, gains, &self.tmp_ux, 1.0);
-            self.vxx.gemm_tr(1.0, gains, &self.qux, 1.0);
-            self.vxx.gemm_tr(1.0, &self.qux, gains, 1.0);
-            // Symmetrise against rounding.
+            self.vxx.gemm(1.0, &self.gains_t, &self.tmp_ux, 1.0);
+            // Symmetrise (the step above, and rounding).
             self.tmp_xx.copy_from(&self.vxx);
             for i in 0..self.nx {
                 for j in 0..self.nx {

@@ -83,10 +83,12 @@ pub struct MpcProblem {
     ws: KnotWorkspace,
     lo: DVector<f64>,
     hi: DVector<f64>,
+    /// Per knot, the ZMP margin and clearance of the last evaluation.
     min_zmp: Vec<f64>,
     min_clearance: Vec<f64>,
-    /// Query every selected pair, whatever its distance (the report's pass).
-    exact_distances: bool,
+    /// The same as of the last [`OptimalControlProblem::keep_evaluation`].
+    kept_min_zmp: Vec<f64>,
+    kept_min_clearance: Vec<f64>,
 }
 
 impl MpcProblem {
@@ -94,14 +96,12 @@ impl MpcProblem {
     /// pairs that far apart need no query: the row `c = (d_min − d) / ℓ` enters only
     /// where `λ + ρ c > 0`, that is `d < d_min + λ ℓ / ρ`; beyond it the term, its
     /// derivatives and the multiplier step are the same whatever `d` is. `−∞` (no query)
-    /// at knot 0, whose state is measured, and without a clearance constraint; `+∞`
-    /// (every pair) when `exact_distances` is set, for the reported clearance.
+    /// at knot 0, whose state is measured, and without a clearance constraint.
     fn distance_cutoff(&self, k: usize) -> f64 {
         let s = &self.settings.constraints;
         match s.clearance {
             Some(_) if k == 0 => f64::NEG_INFINITY,
             None => f64::NEG_INFINITY,
-            Some(_) if self.exact_distances => f64::INFINITY,
             Some(d) => {
                 let lambda = self.constraints.lambda[k][self.constraints.lambda[k].len() - 1];
                 d + lambda.max(0.0) * s.length_scale / s.penalty
@@ -118,7 +118,7 @@ impl MpcProblem {
         mut out: Option<&mut StageModel>,
     ) -> Result<f64> {
         self.ws.distance_cutoff = self.distance_cutoff(k);
-        evaluate_knot(&self.robot, &mut self.ws, &self.hold, x, u, out.is_some())?;
+        evaluate_knot(&self.robot, &mut self.ws, &self.hold, x, u, out.is_some());
         let vals = &self.ws.values;
         self.min_zmp[k] = if u.is_some() {
             vals.zmp_margin.unwrap_or(f64::NEG_INFINITY)
@@ -248,6 +248,14 @@ impl OptimalControlProblem for MpcProblem {
     fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
         (&self.lo, &self.hi)
     }
+    /// Keeps the constraint rows, violations, ZMP margins and clearances of the pass:
+    /// the report and the multiplier step of the solve read them, with no pass of
+    /// their own over the returned trajectory.
+    fn keep_evaluation(&mut self) {
+        self.constraints.keep();
+        self.kept_min_zmp.copy_from_slice(&self.min_zmp);
+        self.kept_min_clearance.copy_from_slice(&self.min_clearance);
+    }
 }
 
 /// The whole-body MPC: problem, solver workspace and the last solution.
@@ -319,7 +327,8 @@ impl WholeBodyMpc {
             hi,
             min_zmp: vec![f64::INFINITY; n + 1],
             min_clearance: vec![f64::INFINITY; n + 1],
-            exact_distances: false,
+            kept_min_zmp: vec![f64::INFINITY; n + 1],
+            kept_min_clearance: vec![f64::INFINITY; n + 1],
             robot,
             settings,
         };
@@ -377,26 +386,13 @@ impl WholeBodyMpc {
             self.solver
                 .solve(&mut self.problem, &self.x0, &mut self.solution, &opts)?;
         self.solved_once = true;
-        // Values of the returned trajectory (the cost pass refreshes the constraint
-        // values without touching the multipliers).
-        let n = self.problem.settings.stages;
-        self.problem.exact_distances = true;
-        let mut pass = Ok(0.0);
-        for k in 0..=n {
-            let u = (k < n).then(|| &self.solution.us[k]);
-            pass = self.problem.knot(k, &self.solution.xs[k], u, None);
-            if pass.is_err() {
-                break;
-            }
-        }
-        self.problem.exact_distances = false;
-        pass?;
-        // One multiplier step per solve, at the returned trajectory's values.
+        // One multiplier step per solve, at the returned trajectory's values (those of
+        // the solver's last kept pass over it).
         let cs = &self.problem.settings.constraints;
         let (penalty, cap) = (cs.penalty, cs.max_multiplier);
         self.problem.constraints.update(penalty, cap);
         let mut v = Violations::default();
-        for row in &self.problem.constraints.violation {
+        for row in &self.problem.constraints.kept_violation {
             v = v.max(&Violations::from_array(*row));
         }
         Ok(SolveReport {
@@ -408,13 +404,13 @@ impl WholeBodyMpc {
             violations: v,
             min_zmp_margin: self
                 .problem
-                .min_zmp
+                .kept_min_zmp
                 .iter()
                 .copied()
                 .fold(f64::INFINITY, f64::min),
             min_clearance: self
                 .problem
-                .min_clearance
+                .kept_min_clearance
                 .iter()
                 .copied()
                 .fold(f64::INFINITY, f64::min),
@@ -438,7 +434,7 @@ impl WholeBodyMpc {
             &self.x0,
             Some(&self.solution.us[0]),
             false,
-        )?;
+        );
         for (i, t) in tau.iter_mut().enumerate() {
             let v = p.ws.values.torque[i];
             let lim = p.robot.torque_limit[i];
