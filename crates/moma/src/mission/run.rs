@@ -1344,7 +1344,8 @@ impl<'m> Runner<'m> {
 
         // end-effector kinematics in reduced coordinates (for the reach phase and the
         // record)
-        let need_ee = st.phase == Phase::Reach || st.k.is_multiple_of(c.rec_every);
+        let need_ee =
+            matches!(st.phase, Phase::Reach | Phase::WholeBody) || st.k.is_multiple_of(c.rec_every);
         let ee = if need_ee {
             end_effector_kinematics(self.m, ws)
         } else {
