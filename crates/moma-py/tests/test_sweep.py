@@ -93,6 +93,19 @@ def test_run_mission_equals_cli_summary(moma_bin, tmp_path):
     assert "No such file or directory" in str(e.value), str(e.value)
 
 
+def test_run_mission_with_law_mpc_returns_the_mpc_object(moma_bin, tmp_path):
+    path = REPO / "scenarios" / "mission_pass_by.toml"
+    got = moma.run_mission(path)
+    out = tmp_path / "pass_by"
+    run_cli(moma_bin, "mission", path, "--output", out, "--quiet", parse=False)
+    cli = json.loads((out / "summary.json").read_text())
+    assert got["reached"] is True
+    mpc = got["mpc"]
+    assert mpc["solves"] == cli["mpc"]["solves"]
+    assert set(mpc["solve_time_s"]) == {"median", "p90", "p99", "max"}
+    assert mpc["min_ee_error"] <= 0.02
+
+
 def test_stability_sweep_is_the_whole_grid_with_the_zmp_affine_in_the_acceleration():
     # Every one of the 4 x 25 x 10 x 10 grid points exactly once, and the physics of each
     # slice along the forward acceleration a (posture, yaw rate and payload held): the

@@ -142,6 +142,10 @@ fn run_mission(path: &Path) -> BTreeMap<String, Vec<f64>> {
     let r = mission::run(&m).unwrap_or_else(|e| panic!("{name}: {e}"));
     let mut out = BTreeMap::new();
     let mut s = mission::summary(&m, &r);
+    // law mpc's figures but its wall-clock solve times
+    if let Some(mpc) = s.get_mut("mpc").and_then(|m| m.as_object_mut()) {
+        mpc.remove("solve_time_s");
+    }
     // a pick's figures but its wall-clock planning times
     if let Some(task) = s.get_mut("task").and_then(|t| t.as_object_mut()) {
         if let Some(p) = task.get_mut("placement").and_then(|p| p.as_object_mut()) {

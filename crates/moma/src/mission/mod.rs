@@ -17,6 +17,7 @@
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |
 //! | goal | the base settles on the goal pose, then task-space inverse dynamics on the reduced model brings the end effector along a minimum-jerk line to its target while the platform holds still |
 //! | pick (`[task]`) | the base goal is the best placement ([`crate::motion::placement::place_base`]) the planner reaches; the torso-arm motions to pre-grasp, grasp and back ([`crate::motion::plan_motion`]) tracked in joint space by the same computed torque, the platform held; the payload attached to the law's, plant's and monitors' model; the distances to the scene and between links monitored; then the drive on to `[goal]`, if any |
+//! | law `mpc` (`control.law = "mpc"`) | instead of tracking, arriving and reaching: the whole-body MPC of `[control.mpc]` (the schema of `moma simulate`'s `[controller.mpc]`, [`crate::sim::mpc_table`]) run as [`crate::sim::mpc_law::MpcLaw`] on the timed base reference and the end-effector target at once (`whole_body`), its torques held over `control.period`; done when the end effector has been within its tolerance and the base rests at the goal pose |
 //! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (the axle's lateral multiplier and the wheels' longitudinal forces against μ N, `stability::loads`), torque and speed saturation, tracking error, clearance, energy |
 //!
 //! A run that starts but cannot finish (an unreachable or sealed goal, a posture under
@@ -49,6 +50,8 @@
 //! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under the
 //!   outline of the objects the robot cannot pass under; the grasp; the geometry; the payload robot) and holds its distance monitor
 //!   and result records.
+//! * `whole_body` is law `mpc`: the MPC, the knot reference it reads from the current
+//!   plan and the target, and its solve period.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 pub mod footprint;
@@ -60,6 +63,7 @@ pub mod reference;
 mod run;
 pub mod scenario;
 pub mod task;
+mod whole_body;
 
 pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
@@ -75,7 +79,7 @@ pub use scenario::{Mission, MissionFile, load};
 /// `timing_acceleration` and `samples`; with `map.boxes` the 3-D verdict of each box
 /// (`boxes`: `clearance`, `blocked`); on the contact plant `contact` (first lift-off,
 /// first slip, per-contact totals, largest tilt); `min_scene_distance`,
-/// `min_self_distance` and, with a `[task]`, `task` ([`task::TaskResult`], whose placement and arm plans carry their wall-clock planning times). Non-finite
+/// `min_self_distance`, with law `mpc` `mpc` (the MPC's summary, as `moma simulate`'s) and, with a `[task]`, `task` ([`task::TaskResult`], whose placement and arm plans carry their wall-clock planning times). Non-finite
 /// or missing values are `null`.
 /// `moma mission` adds its timing and file keys to this map; the Python package returns
 /// it as it is.
@@ -135,6 +139,9 @@ pub fn summary(m: &Mission, r: &MissionResult) -> serde_json::Map<String, serde_
     };
     if !m.boxes.is_empty() {
         map.insert("boxes".into(), json!(m.boxes));
+    }
+    if let Some(mpc) = &r.mpc {
+        map.insert("mpc".into(), json!(mpc));
     }
     if let Some(c) = &r.contact {
         map.insert(

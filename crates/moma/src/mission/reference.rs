@@ -27,6 +27,17 @@ pub struct RefSample {
     pub alpha: f64,
 }
 
+/// The reference of the base frame origin for a reference sample of the axle midpoint
+/// (position moved `d` ahead along the reference heading; speeds as they are).
+pub(super) fn base_reference(mut r: RefSample, d: f64) -> RefSample {
+    if d != 0.0 {
+        let (s, c) = r.theta.sin_cos();
+        r.x += d * c;
+        r.y += d * s;
+    }
+    r
+}
+
 /// A timed reference: samples in increasing time.
 ///
 /// The reference is planned for the unicycle point of the platform, the driven-axle

@@ -6,11 +6,14 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix6xX, Vector2, Vector3};
 
 use super::plan::{Planner, PolygonCheck, SearchTiming};
 use super::plant::{ContactLoop, Monitors, start_configuration};
-use super::reference::{RefSample, Reference, TimingStart, brake_along, build_reference};
+use super::reference::{
+    RefSample, Reference, TimingStart, base_reference, brake_along, build_reference,
+};
 use super::scenario::{GoalSpec, MAX_SAMPLES, MAX_STEPS, Mission};
 use super::task::{
     ARM_MARGIN, ArmPlanRecord, DistanceMonitor, PayloadRecord, PlacementChoice, Task, TaskResult,
 };
+use super::whole_body::WholeBodyLaw;
 use crate::control::unicycle::{Aicardi, Kanayama, ReferenceSample};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
@@ -27,6 +30,7 @@ use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::computed_torque::ComputedTorque;
 use crate::sim::contact_run::ContactTally;
 use crate::sim::model_mismatch::SensorNoise;
+use crate::sim::mpc_run::MpcRunSummary;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
 use crate::sim::wheeled_system::WheeledSystem;
@@ -206,6 +210,10 @@ pub struct MissionResult {
     /// The support polygon's edges (numbered in the base frame, as the stability
     /// monitor's), each named `edge A-B` by its two contacts (wheel joints, casters).
     pub support_edges: Vec<String>,
+    /// Law `mpc`: the MPC's summary (solve times, iterations, violations), as `moma
+    /// simulate`'s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mpc: Option<MpcRunSummary>,
 }
 
 impl MissionResult {
@@ -281,6 +289,8 @@ enum Phase {
     Reach,
     /// A `[task]`'s arm motion.
     Arm(ArmStage),
+    /// Law `mpc`: drive and reach at once, up to the goal.
+    WholeBody,
     Done,
 }
 
@@ -296,6 +306,12 @@ enum ArmStage {
 }
 
 impl Phase {
+    /// The base follows the timed reference (which a blocking obstacle re-plans): `drive`,
+    /// and law `mpc`'s `whole_body`.
+    fn follows_reference(self) -> bool {
+        matches!(self, Phase::Drive | Phase::WholeBody)
+    }
+
     fn name(self) -> &'static str {
         match self {
             Phase::Drive => "drive",
@@ -304,6 +320,7 @@ impl Phase {
             Phase::Arm(ArmStage::Approach) => "approach",
             Phase::Arm(ArmStage::Grasp) => "grasp",
             Phase::Arm(ArmStage::Retreat) => "retreat",
+            Phase::WholeBody => "whole_body",
             Phase::Done => "done",
         }
     }
@@ -440,17 +457,6 @@ fn axle_pose(base: [f64; 3], d: f64) -> [f64; 3] {
     [base[0] - d * c, base[1] - d * s, base[2]]
 }
 
-/// The reference of the base frame origin for a reference sample of the axle midpoint
-/// (position moved `d` ahead along the reference heading; speeds as they are).
-fn base_reference(mut r: RefSample, d: f64) -> RefSample {
-    if d != 0.0 {
-        let (s, c) = r.theta.sin_cos();
-        r.x += d * c;
-        r.y += d * s;
-    }
-    r
-}
-
 /// The tip-over limits the timing may use (`tip_fraction` of them): a side no edge limits
 /// is unbounded; a posture that tips at rest (or has no room to accelerate) cannot be
 /// timed (`None`).
@@ -533,6 +539,8 @@ struct Runner<'m> {
     samples: Samples,
     reference: Option<Reference>,
     failure: Option<String>,
+    /// Law `mpc`.
+    whole_body: Option<WholeBodyLaw>,
 }
 
 impl<'m> Runner<'m> {
@@ -583,6 +591,16 @@ impl<'m> Runner<'m> {
             alpha_max: l.alpha_max,
         };
         let timing_accel = timing_acceleration(&tip, l.tip_fraction);
+        let whole_body = m.mpc.as_ref().map(|(mpc, every)| {
+            WholeBodyLaw::new(
+                mpc.clone(),
+                *every,
+                d,
+                goal.end_effector,
+                f.control.reach_radius.unwrap_or(1.0),
+                goal.end_effector_tolerance,
+            )
+        });
         Ok(Self {
             m,
             wm: &m.robot,
@@ -604,6 +622,7 @@ impl<'m> Runner<'m> {
             samples: Samples::default(),
             reference: None,
             failure,
+            whole_body,
         })
     }
 
@@ -1336,7 +1355,8 @@ impl<'m> Runner<'m> {
 
         // end-effector kinematics in reduced coordinates (for the reach phase and the
         // record)
-        let need_ee = st.phase == Phase::Reach || st.k.is_multiple_of(c.rec_every);
+        let need_ee =
+            matches!(st.phase, Phase::Reach | Phase::WholeBody) || st.k.is_multiple_of(c.rec_every);
         let ee = if need_ee {
             end_effector_kinematics(self.m, ws)
         } else {
@@ -1373,13 +1393,20 @@ impl<'m> Runner<'m> {
                 }
                 false
             }
+            Phase::WholeBody => {
+                if !self.whole_body_step(c, st, ws, t, pose, v, w) {
+                    return Flow::Retry;
+                }
+                false
+            }
             // the run ends at this sample: no step follows, so no torque is computed and
             // the record shows the input the plant last had (zero at t = 0)
             Phase::Done => false,
         };
 
         let last = st.phase == Phase::Done;
-        if !last {
+        // (law mpc wrote its own torques)
+        if !last && st.phase != Phase::WholeBody {
             let torque_clip =
                 c.act
                     .torque
@@ -1509,7 +1536,7 @@ impl<'m> Runner<'m> {
                 return false;
             }
         };
-        if newly.contains(&self.planner.goal_cell) && st.phase == Phase::Drive {
+        if newly.contains(&self.planner.goal_cell) && st.phase.follows_reference() {
             self.wall.planning_s += s_time;
             st.excluded += clock.elapsed().as_secs_f64();
             self.fail(
@@ -1523,7 +1550,7 @@ impl<'m> Runner<'m> {
             return false;
         }
         let planner = &mut self.planner;
-        let affected = st.phase == Phase::Drive
+        let affected = st.phase.follows_reference()
             && self.reference.as_ref().is_some_and(|r| {
                 r.samples
                     .iter()
@@ -1717,11 +1744,8 @@ impl<'m> Runner<'m> {
             }
         }
         if st.phase == Phase::Arrive {
-            let goal = c.goal;
-            let pe = (pose[0] - goal[0]).hypot(pose[1] - goal[1]);
-            let he = wrap_angle(goal[2] - pose[2]).abs();
-            let settled = v.abs() < 0.02 && w.abs() < 0.05;
-            if pe <= g.position_tolerance && he <= g.heading_tolerance && settled {
+            let (pe, he, arrived) = at_goal(c.goal, &g, pose, v, w);
+            if arrived {
                 self.event(
                     t,
                     "arrived",
@@ -1804,6 +1828,80 @@ impl<'m> Runner<'m> {
                     g.end_effector_tolerance
                 ),
             );
+            st.phase = Phase::Done;
+        }
+        true
+    }
+
+    /// Law `mpc`, one control step: the MPC tracks the current plan (a re-plan's from
+    /// its next solve on) and reaches for the target, its torques in `ws.u`; the run is
+    /// done once the end effector has been within its tolerance of the target and the
+    /// base rests at the goal pose after the reference has ended. It fails when that has
+    /// not happened [`ARRIVE_TIMEOUT`] + [`REACH_SETTLE`] after the reference's end, or
+    /// when the MPC fails (`false`: the run ends).
+    #[allow(clippy::too_many_arguments)]
+    fn whole_body_step(
+        &mut self,
+        c: &RunSettings,
+        st: &mut LoopState,
+        ws: &mut Workspace,
+        t: f64,
+        pose: [f64; 3],
+        v: f64,
+        w: f64,
+    ) -> bool {
+        let (Some(reference), Some(law)) = (self.reference.as_ref(), self.whole_body.as_mut())
+        else {
+            self.fail(t, "law mpc has no reference to track".to_string());
+            st.phase = Phase::Done;
+            return false;
+        };
+        law.track(reference, self.plans.len());
+        st.cur_ref = base_reference(reference.at(t), c.d);
+        let t_end = reference.t_end();
+        let (q, v_r) = (ws.q_now.as_slice(), ws.v_now.as_slice());
+        let tick = match law.tick(st.k, t, q, v_r, &mut ws.u) {
+            Ok(tick) => tick,
+            Err(e) => {
+                self.fail(t, format!("the MPC failed: {e}"));
+                st.phase = Phase::Done;
+                return false;
+            }
+        };
+        let (reached, min_error) = (law.reached(), law.min_ee_error);
+        self.saturation_events(st, t, tick.torque_clipped, false);
+        if let Some(e) = tick.touched {
+            self.event(
+                t,
+                "reached",
+                format!("end effector at its target: {e:.4} m off, the base at {v:.2} m/s"),
+            );
+        }
+        let g = self.goal.clone();
+        let (pe, he, arrived) = at_goal(c.goal, &g, pose, v, w);
+        if t >= t_end && arrived && reached {
+            self.event(
+                t,
+                "arrived",
+                format!("base at the goal: {pe:.3} m, {he:.3} rad off"),
+            );
+            st.time_to_goal = Some(t);
+            st.phase = Phase::Done;
+        } else if t > t_end + ARRIVE_TIMEOUT + REACH_SETTLE {
+            let why = if !reached {
+                format!(
+                    "the end effector came no closer than {min_error:.3} m to its target \
+                     (tolerance {} m)",
+                    g.end_effector_tolerance
+                )
+            } else {
+                format!(
+                    "the base stopped {pe:.3} m and {he:.3} rad from the goal pose \
+                     (tolerances {} m, {} rad)",
+                    g.position_tolerance, g.heading_tolerance
+                )
+            };
+            self.fail(t, why);
             st.phase = Phase::Done;
         }
         true
@@ -1976,6 +2074,7 @@ impl<'m> Runner<'m> {
             goal_pose: self.goal.pose,
             task: self.task,
             support_edges,
+            mpc: self.whole_body.as_ref().and_then(WholeBodyLaw::summary),
         }
     }
 
@@ -2120,6 +2219,8 @@ impl LoopState {
             t: 0.0,
             phase: if r.failure.is_some() {
                 Phase::Done
+            } else if r.whole_body.is_some() {
+                Phase::WholeBody
             } else {
                 Phase::Drive
             },
@@ -2661,6 +2762,16 @@ impl RunSettings {
         }
         true
     }
+}
+
+/// The base's distance and heading error (m, rad) to the base frame's goal pose `goal`,
+/// and whether it rests there within `g`'s tolerances.
+fn at_goal(goal: [f64; 3], g: &GoalSpec, pose: [f64; 3], v: f64, w: f64) -> (f64, f64, bool) {
+    let pe = (pose[0] - goal[0]).hypot(pose[1] - goal[1]);
+    let he = wrap_angle(goal[2] - pose[2]).abs();
+    let settled = v.abs() < 0.02 && w.abs() < 0.05;
+    let arrived = pe <= g.position_tolerance && he <= g.heading_tolerance && settled;
+    (pe, he, arrived)
 }
 
 /// The arrive phase's speed commands `[v, ω]` for the axle pose `axle` onto its goal pose

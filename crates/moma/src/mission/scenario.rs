@@ -16,11 +16,13 @@ use super::task::{
 };
 use crate::collision::{GeometryModel, GeometryOptions, Scene};
 use crate::contact::{ContactSpec, PlantKind};
+use crate::control::mpc::WholeBodyMpc;
 use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
 use crate::multibody::{FrameIndex, RootJoint};
 use crate::planning::LoadedMap;
 use crate::sim::model_mismatch::{ModelPerturbation, SensorNoise};
+use crate::sim::mpc_table::{MpcSpec, build_mpc};
 use crate::sim::uncertainty::{Draw, UncertaintySpec, perturb, sensor_noise};
 
 /// The mission file as written.
@@ -318,10 +320,25 @@ pub struct ObstacleSpec {
     pub radius: f64,
 }
 
-/// `[control]`: gains (all optional).
-#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+/// `control.law`: how the mission drives and reaches.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MissionLaw {
+    /// Kanayama's law on the timed reference with computed torque, Aicardi's to arrive,
+    /// then the task-space reach with the platform held (the gains below).
+    #[default]
+    DriveThenReach,
+    /// The whole-body MPC of `[control.mpc]` (the table of `moma simulate`'s
+    /// `[controller.mpc]`): the base reference and the end-effector target at once.
+    Mpc,
+}
+
+/// `[control]`: the law and its gains (all optional).
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ControlSpec {
+    /// The law (default `drive_then_reach`).
+    pub law: MissionLaw,
     /// Kanayama K_x (1/s).
     pub kx: f64,
     /// Kanayama K_y (1/m²).
@@ -334,6 +351,17 @@ pub struct ControlSpec {
     pub arm_frequency: f64,
     /// End-effector task natural frequency (rad/s).
     pub task_frequency: f64,
+    /// Law `mpc`: time between solves (s, default `control.mpc.dt`), a whole number of
+    /// `simulation.dt`; the torques are held in between.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub period: Option<f64>,
+    /// Law `mpc`: the end-effector target is set at the horizon's knots whose base
+    /// reference lies within this horizontal distance of it (m, default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reach_radius: Option<f64>,
+    /// Law `mpc`: the MPC's settings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mpc: Option<MpcSpec>,
 }
 
 impl Default for ControlSpec {
@@ -345,6 +373,10 @@ impl Default for ControlSpec {
             speed_gain: 20.0,
             arm_frequency: 12.0,
             task_frequency: 6.0,
+            law: MissionLaw::DriveThenReach,
+            period: None,
+            reach_radius: None,
+            mpc: None,
         }
     }
 }
@@ -458,6 +490,9 @@ pub struct Mission {
     pub sensor_noise: Option<SensorNoise>,
     /// The pick of `[task]`, loaded (its scene's outline already blocks [`Mission::map`]).
     pub task: Option<Task>,
+    /// Law `mpc`: the whole-body MPC built from `[control.mpc]`, its posture the start
+    /// configuration, and its solve period in control steps.
+    pub mpc: Option<(WholeBodyMpc, usize)>,
 }
 
 impl Mission {
@@ -665,6 +700,7 @@ pub fn from_file_with(
             Some(task)
         }
     };
+    let mpc = whole_body_mpc(&file, path, base, &robot, ee_frame, &q_arm0)?;
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -688,7 +724,92 @@ pub fn from_file_with(
         plant_robot,
         sensor_noise,
         task,
+        mpc,
     })
+}
+
+/// Law `mpc`: the whole-body MPC of `[control.mpc]` (checked as `moma simulate` checks
+/// `[controller.mpc]`, errors naming `control.mpc.*`) on the mission's robot, its end
+/// effector `robot.end_effector`, from the start configuration; and its solve period in
+/// control steps. `None` for the default law, which takes none of the MPC's keys. What
+/// law `mpc` does not run is refused, naming the field: a `[task]`, the contact plant,
+/// `[uncertainty]`.
+fn whole_body_mpc(
+    file: &MissionFile,
+    path: &Path,
+    base: &Path,
+    robot: &WheeledModel,
+    ee_frame: FrameIndex,
+    q_arm0: &[f64],
+) -> Result<Option<(WholeBodyMpc, usize)>> {
+    let c = &file.control;
+    if c.law == MissionLaw::DriveThenReach {
+        for (field, given) in [
+            ("control.mpc", c.mpc.is_some()),
+            ("control.period", c.period.is_some()),
+            ("control.reach_radius", c.reach_radius.is_some()),
+        ] {
+            if given {
+                return Err(field_err(
+                    path,
+                    field,
+                    "read only with control.law = \"mpc\"",
+                ));
+            }
+        }
+        return Ok(None);
+    }
+    let refused = [
+        ("task", file.task.is_some(), "law mpc runs no [task] pick"),
+        (
+            "simulation.plant",
+            file.simulation.plant == PlantKind::Contact,
+            "law mpc runs on the rolling plant (\"rolling\")",
+        ),
+        (
+            "uncertainty",
+            file.uncertainty.is_some(),
+            "law mpc takes no [uncertainty]",
+        ),
+    ];
+    if let Some((field, _, why)) = refused.iter().find(|r| r.1) {
+        return Err(field_err(path, field, why));
+    }
+    let spec = c.mpc.as_ref().ok_or_else(|| {
+        field_err(
+            path,
+            "control.mpc",
+            "missing: law mpc needs its table (at least its joints)",
+        )
+    })?;
+    let frame = &robot.model.frames[ee_frame.0].name;
+    let q0 = start_configuration(robot, file.start.pose, q_arm0);
+    let mpc = build_mpc(
+        spec,
+        "control.mpc",
+        frame,
+        "robot.end_effector",
+        robot,
+        &base.join(&file.robot.urdf),
+        q0.as_slice(),
+        base,
+    )
+    .map_err(|e| Error::parse(path, crate::error::chain(&e)))?;
+    let dt = file.simulation.dt;
+    let period = c.period.unwrap_or(mpc.problem.settings.dt);
+    positive(path, "control.period", period)?;
+    let steps = (period / dt).round();
+    if steps < 1.0 || (steps * dt - period).abs() > 1e-9 * period {
+        return Err(field_err(
+            path,
+            "control.period",
+            format!("must be a whole number of simulation.dt = {dt} s, got {period}"),
+        ));
+    }
+    if let Some(r) = c.reach_radius {
+        positive(path, "control.reach_radius", r)?;
+    }
+    Ok(Some((mpc, steps as usize)))
 }
 
 /// `[goal]` is required without `[task]`; with it, the goal is optional (the base drives

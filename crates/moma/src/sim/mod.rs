@@ -31,7 +31,8 @@
 //!   base/arm control on a wheeled URDF robot through the same inner loop (the law solved
 //!   on the measured frame position and reduced Jacobian); [`mpc_law`] makes the
 //!   whole-body MPC a law (computed torque of its first planned input, one
-//!   [`mpc_run::MpcSample`] per solve), which [`mpc_loop`] runs at a fixed period. A planned platform reference comes from `mission::planned`, one layer
+//!   [`mpc_run::MpcSample`] per solve), which [`mpc_loop`] runs at a fixed period; [`mpc_table`] is the MPC's settings table both
+//!   files share (`[controller.mpc]`, `[control.mpc]`) and builds the MPC from it. A planned platform reference comes from `mission::planned`, one layer
 //!   up.
 //! * The stepping loop and per-sample recording shared by the open- and closed-loop runs
 //!   are in `stepping`; [`recorder::Recorder`] holds what the CLI's writers read.
@@ -56,6 +57,7 @@ pub mod monitor;
 pub mod mpc_law;
 pub mod mpc_loop;
 pub mod mpc_run;
+pub mod mpc_table;
 pub mod recorder;
 pub mod reduced_system;
 pub mod settings;

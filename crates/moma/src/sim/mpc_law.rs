@@ -74,6 +74,12 @@ impl<R: FnMut(f64) -> KnotReference> MpcLaw<R> {
         }
     }
 
+    /// Tracks `reference` from the next tick on (a re-planned path, a target set or
+    /// dropped), warm-started from the last solution as every tick is.
+    pub fn set_reference(&mut self, reference: R) {
+        self.reference = reference;
+    }
+
     /// One sample per control tick so far.
     #[must_use]
     pub fn samples(&self) -> &[MpcSample] {

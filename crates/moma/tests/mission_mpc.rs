@@ -1,0 +1,165 @@
+//! `moma mission` with law `mpc` (`[control] law = "mpc"`, the whole-body MPC of
+//! `[control.mpc]`): the shipped `scenarios/mission_pass_by.toml` asks the arm to touch a
+//! point beside the path, 4.5 m before the goal; the MPC touches it on the move and the
+//! drive-then-reach law, on the same file, drives to the goal and cannot reach back. The
+//! default mission with law `mpc` (`scenarios/mission_mpc.toml`) re-plans round the crate
+//! and reaches its shelf target. What law `mpc` does not run is refused, naming the field.
+
+use std::path::{Path, PathBuf};
+
+use moma::mission::{self, Mission, MissionFile, MissionResult, scenario::from_file};
+
+fn scenarios() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
+}
+
+/// The shipped mission `name` with each `from` replaced by its `to`, validated as if it
+/// were the file.
+fn variant(name: &str, edits: &[(&str, &str)]) -> moma::Result<Mission> {
+    let path = scenarios().join(name);
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{name} lacks '{from}'");
+        text = text.replacen(from, to, 1);
+    }
+    let file: MissionFile = toml::from_str(&text).expect("parses");
+    from_file(file, &path, &scenarios())
+}
+
+fn run(m: &Mission) -> MissionResult {
+    mission::run(m).unwrap_or_else(|e| panic!("{}: {e}", m.name))
+}
+
+/// The text of `name` from `[control]` up to `[output]`: the law's keys.
+fn control_tables(name: &str) -> String {
+    let text = std::fs::read_to_string(scenarios().join(name)).unwrap();
+    let (a, b) = (
+        text.find("[control]").unwrap(),
+        text.find("[output]").unwrap(),
+    );
+    text[a..b].to_string()
+}
+
+fn event<'a>(r: &'a MissionResult, kind: &str) -> Option<&'a mission::Event> {
+    r.events.iter().find(|e| e.kind == kind)
+}
+
+#[test]
+fn the_pass_by_target_is_touched_on_the_move_by_the_mpc_and_missed_by_drive_then_reach() {
+    let name = "mission_pass_by.toml";
+    let m = mission::load(&scenarios().join(name)).unwrap();
+    let target = m.goal().unwrap().end_effector.unwrap();
+    let mpc = run(&m);
+    assert!(mpc.reached, "{:?}", mpc.reason);
+    assert!(
+        mpc.samples
+            .phase
+            .iter()
+            .all(|p| *p == "whole_body" || *p == "done")
+    );
+    // The touch: within the 2 cm tolerance, the base still driving, well before the goal.
+    let touch = event(&mpc, "reached").expect("a touch event");
+    let i = mpc.samples.t.iter().position(|&t| t >= touch.t).unwrap();
+    let base_speed = mpc.samples.v[i];
+    let x_at_touch = mpc.samples.q[i][0];
+    assert!(base_speed > 0.2, "base speed at the touch {base_speed}");
+    assert!(x_at_touch < 9.0, "touched at x = {x_at_touch}");
+    let s = mpc.mpc.as_ref().expect("the MPC's summary");
+    assert!(s.min_ee_error.unwrap() <= 0.02, "{s:?}");
+    assert!(s.solves > 100, "{s:?}");
+    // Upright and within the plan: the ZMP inside the support, the footprint clear.
+    assert!(mpc.min_zmp_margin().unwrap() > 0.0);
+    assert!(mpc.min_clearance().unwrap() > 0.0);
+
+    // The same file with the default law: drives to the goal, then cannot reach back.
+    let default = variant(
+        name,
+        &[(
+            &control_tables(name),
+            "[control]\nlaw = \"drive_then_reach\"\n\n",
+        )],
+    )
+    .unwrap();
+    let d = run(&default);
+    assert!(!d.reached);
+    let reason = d.reason.as_deref().unwrap();
+    assert!(reason.contains("end effector"), "{reason}");
+    assert!(d.mpc.is_none());
+    // Its closest approach over the run: about the 4.5 m back to the target.
+    let closest = d
+        .samples
+        .ee
+        .iter()
+        .map(|e| {
+            ((e[0] - target[0]).powi(2) + (e[1] - target[1]).powi(2) + (e[2] - target[2]).powi(2))
+                .sqrt()
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(closest > 0.3, "closest {closest}");
+}
+
+#[test]
+fn the_default_mission_with_the_mpc_replans_round_the_crate_and_reaches_the_shelf() {
+    let m = mission::load(&scenarios().join("mission_mpc.toml")).unwrap();
+    let r = run(&m);
+    assert!(r.reached, "{:?} {:?}", r.reason, r.events);
+    assert_eq!(r.replans(), 1, "the crate at t = 5 s");
+    assert!(r.min_clearance().unwrap() > 0.0);
+    assert!(r.min_zmp_margin().unwrap() > 0.0);
+    let s = r.mpc.as_ref().unwrap();
+    assert!(s.min_ee_error.unwrap() <= 0.02, "{s:?}");
+    let summary = mission::summary(&m, &r);
+    assert_eq!(summary["mpc"]["solves"], s.solves);
+}
+
+#[test]
+fn what_law_mpc_does_not_run_is_refused_naming_the_field() {
+    let mpc = control_tables("mission_mpc.toml");
+    let cases: Vec<(&str, Vec<(&str, String)>, &str)> = vec![
+        (
+            "mission_mpc.toml",
+            vec![("stages = 20", "stages = 0".into())],
+            "control.mpc.stages",
+        ),
+        (
+            "mission_mpc.toml",
+            vec![("dt = 0.05", "dt = -0.05".into())],
+            "control.mpc.dt",
+        ),
+        (
+            "mission_mpc.toml",
+            vec![("\"wrist_3_joint\"]", "\"no_such_joint\"]".into())],
+            "control.mpc.joints",
+        ),
+        (
+            "mission_mpc.toml",
+            vec![("period = 0.05", "period = 0.003".into())],
+            "control.period",
+        ),
+        (
+            "mission_mpc.toml",
+            vec![("reach_radius = 1.0", "reach_radius = -1.0".into())],
+            "control.reach_radius",
+        ),
+        (
+            "mission_mpc.toml",
+            vec![("law = \"mpc\"", "law = \"drive_then_reach\"".into())],
+            "control.mpc",
+        ),
+        (
+            "mission_contact.toml",
+            vec![("[simulation]", format!("{mpc}\n[simulation]"))],
+            "simulation.plant",
+        ),
+        (
+            "mission_fetch_pick.toml",
+            vec![("[output]", format!("{mpc}\n[output]"))],
+            "task",
+        ),
+    ];
+    for (name, edits, field) in cases {
+        let edits: Vec<(&str, &str)> = edits.iter().map(|(a, b)| (*a, b.as_str())).collect();
+        let e = variant(name, &edits).expect_err(field).to_string();
+        assert!(e.contains(field), "{name} {field}: {e}");
+    }
+}
