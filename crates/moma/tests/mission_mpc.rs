@@ -112,10 +112,13 @@ fn the_default_mission_with_the_mpc_replans_round_the_crate_and_reaches_the_shel
     assert_eq!(summary["mpc"]["solves"], s.solves);
 }
 
+/// A refused case: the shipped mission edited, and the field its error must name.
+type RefusedCase<'a> = (&'a str, Vec<(&'a str, String)>, &'a str);
+
 #[test]
 fn what_law_mpc_does_not_run_is_refused_naming_the_field() {
     let mpc = control_tables("mission_mpc.toml");
-    let cases: Vec<(&str, Vec<(&str, String)>, &str)> = vec![
+    let cases: Vec<RefusedCase> = vec![
         (
             "mission_mpc.toml",
             vec![("stages = 20", "stages = 0".into())],
