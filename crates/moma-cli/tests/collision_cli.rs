@@ -21,6 +21,26 @@ fn tmp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
+/// Fetch's URDF, SRDF and package folder (for its `package://` meshes) in the test data.
+fn fetch_files() -> (String, String, String) {
+    (
+        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
+        format!("{DATA}/robots/fetch/fetch.srdf"),
+        format!("{DATA}/robots/fetch"),
+    )
+}
+
+/// Writes a states file of the reference states' `q` (Pinocchio layout) as `name`.
+fn write_reference_states(name: &str, states: &[&Value]) -> PathBuf {
+    let file = tmp(name);
+    let qs: Vec<Value> = states
+        .iter()
+        .map(|s| serde_json::json!({"q": s["q"]}))
+        .collect();
+    std::fs::write(&file, serde_json::json!({ "states": qs }).to_string()).unwrap();
+    file
+}
+
 fn fetch_args<'a>(urdf: &'a str, srdf: &'a str, pkg: &'a str) -> Vec<&'a str> {
     vec![
         "collision",
@@ -46,21 +66,8 @@ fn fetch_against_coal_with_a_scene_and_a_figure() {
         .iter()
         .filter(|s| s["scene"] == "table_pick")
         .collect();
-    let states_file = tmp("states.json");
-    let qs: Vec<Value> = states
-        .iter()
-        .map(|s| serde_json::json!({"q": s["q"]}))
-        .collect();
-    std::fs::write(
-        &states_file,
-        serde_json::json!({ "states": qs }).to_string(),
-    )
-    .unwrap();
-    let (urdf, srdf, pkg) = (
-        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
-        format!("{DATA}/robots/fetch/fetch.srdf"),
-        format!("{DATA}/robots/fetch"),
-    );
+    let states_file = write_reference_states("states.json", &states);
+    let (urdf, srdf, pkg) = fetch_files();
     let scene = format!("{DATA}/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml");
     let (out, svg) = (tmp("out.json"), tmp("fig.svg"));
     let mut args = fetch_args(&urdf, &srdf, &pkg);
@@ -109,11 +116,7 @@ fn fetch_against_coal_with_a_scene_and_a_figure() {
 
 #[test]
 fn bad_input_exits_1_and_writes_nothing() {
-    let (urdf, srdf, pkg) = (
-        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
-        format!("{DATA}/robots/fetch/fetch.srdf"),
-        format!("{DATA}/robots/fetch"),
-    );
+    let (urdf, srdf, pkg) = fetch_files();
     let states = tmp("one.json");
     std::fs::write(
         &states,
@@ -175,11 +178,7 @@ fn run_fetch(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Va
 
 /// As [`run_fetch`] without the table scene.
 fn run_fetch_with(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Value, String) {
-    let (urdf, srdf, pkg) = (
-        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
-        format!("{DATA}/robots/fetch/fetch.srdf"),
-        format!("{DATA}/robots/fetch"),
-    );
+    let (urdf, srdf, pkg) = fetch_files();
     let states_file = tmp(&format!("{name}_states.json"));
     let qs: Vec<Value> = states
         .iter()
@@ -500,11 +499,7 @@ fn voxels_and_points_are_the_box_they_fill() {
         serde_json::json!({"states": [{"q": states[0]}]}).to_string(),
     )
     .unwrap();
-    let (urdf, srdf, pkg) = (
-        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
-        format!("{DATA}/robots/fetch/fetch.srdf"),
-        format!("{DATA}/robots/fetch"),
-    );
+    let (urdf, srdf, pkg) = fetch_files();
     let mut args = fetch_args(&urdf, &srdf, &pkg);
     args.extend([
         "--states",
@@ -541,21 +536,8 @@ fn exact_meshes_match_coal_and_touch_at_zero() {
                 .unwrap()
         })
         .collect();
-    let states_file = tmp("exact_states.json");
-    let qs: Vec<Value> = pick
-        .iter()
-        .map(|s| serde_json::json!({"q": s["q"]}))
-        .collect();
-    std::fs::write(
-        &states_file,
-        serde_json::json!({ "states": qs }).to_string(),
-    )
-    .unwrap();
-    let (urdf, srdf, pkg) = (
-        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
-        format!("{DATA}/robots/fetch/fetch.srdf"),
-        format!("{DATA}/robots/fetch"),
-    );
+    let states_file = write_reference_states("exact_states.json", &pick);
+    let (urdf, srdf, pkg) = fetch_files();
     let out = tmp("exact_out.json");
     let mut args = fetch_args(&urdf, &srdf, &pkg);
     args.extend([
@@ -618,21 +600,8 @@ fn a_scene_with_exact_meshes_matches_coal_and_touches_at_zero() {
                 .unwrap()
         })
         .collect();
-    let states_file = tmp("exact_scene_states.json");
-    let qs: Vec<Value> = pick
-        .iter()
-        .map(|s| serde_json::json!({"q": s["q"]}))
-        .collect();
-    std::fs::write(
-        &states_file,
-        serde_json::json!({ "states": qs }).to_string(),
-    )
-    .unwrap();
-    let (urdf, srdf, pkg) = (
-        format!("{DATA}/robots/fetch/fetch_description/robots/fetch.urdf"),
-        format!("{DATA}/robots/fetch/fetch.srdf"),
-        format!("{DATA}/robots/fetch"),
-    );
+    let states_file = write_reference_states("exact_scene_states.json", &pick);
+    let (urdf, srdf, pkg) = fetch_files();
     let scene = format!("{DATA}/scenes/motion_bench_maker/configs/scenes/table/scene_table.yaml");
     let out = tmp("exact_scene_out.json");
     let mut args = fetch_args(&urdf, &srdf, &pkg);
