@@ -379,27 +379,40 @@ fn driven_run_balances_energy_with_input_work() {
     assert!(res.monitor.max_residual < 1e-12);
 }
 
-#[test]
-fn root_constrained_aba_equals_the_joint_space_route_on_panda() {
-    use moma::mobile::wheeled::reduced_forward_dynamics_crba;
+/// Panda on a planar root over differential drives with the axle 0.2 m behind, on and
+/// 0.3 m ahead of the base origin: `(d, model)`.
+fn panda_on_diff_drives() -> Vec<(f64, WheeledModel)> {
     let path = format!(
         "{}/tests/data/pinocchio/urdf/panda.urdf",
         env!("CARGO_MANIFEST_DIR")
     );
     let model = model_from_urdf_file(path, RootJoint::Planar).unwrap();
-    for d in [0.2, 0.0, -0.3] {
-        let wm = WheeledModel::new(
-            model.clone(),
-            WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap()),
-        )
-        .unwrap();
+    [0.2, 0.0, -0.3]
+        .into_iter()
+        .map(|d| {
+            let base = WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap());
+            (d, WheeledModel::new(model.clone(), base).unwrap())
+        })
+        .collect()
+}
+
+/// The `k`-th of a fixed sequence of states and inputs `(q, v_r, u)` of `wm`.
+fn deterministic_state(wm: &WheeledModel, k: usize) -> (DVector<f64>, DVector<f64>, Vec<f64>) {
+    let q = DVector::from_fn(wm.model.nq, |i, _| ((i * 7 + k * 3) as f64 * 0.37).sin());
+    let v = DVector::from_fn(wm.nr(), |i, _| ((i * 5 + k) as f64 * 0.53).cos());
+    let u = (0..wm.nu())
+        .map(|i| ((i + k) as f64 * 0.71).sin())
+        .collect();
+    (q, v, u)
+}
+
+#[test]
+fn root_constrained_aba_equals_the_joint_space_route_on_panda() {
+    use moma::mobile::wheeled::reduced_forward_dynamics_crba;
+    for (d, wm) in panda_on_diff_drives() {
         let mut wd = WheeledData::new(&wm);
         for k in 0..5 {
-            let q = DVector::from_fn(wm.model.nq, |i, _| ((i * 7 + k * 3) as f64 * 0.37).sin());
-            let v = DVector::from_fn(wm.nr(), |i, _| ((i * 5 + k) as f64 * 0.53).cos());
-            let u: Vec<f64> = (0..wm.nu())
-                .map(|i| ((i + k) as f64 * 0.71).sin())
-                .collect();
+            let (q, v, u) = deterministic_state(&wm, k);
             let fast = reduced_forward_dynamics(&wm, &mut wd, &q, &v, &u)
                 .unwrap()
                 .clone();
@@ -422,25 +435,11 @@ fn root_constrained_aba_equals_the_joint_space_route_on_panda() {
 #[test]
 fn reduced_inverse_dynamics_undoes_the_forward_dynamics_on_panda() {
     use moma::mobile::wheeled::{reduced_forward_dynamics_crba, reduced_inverse_dynamics};
-    let path = format!(
-        "{}/tests/data/pinocchio/urdf/panda.urdf",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let model = model_from_urdf_file(path, RootJoint::Planar).unwrap();
-    for d in [0.2, 0.0, -0.3] {
-        let wm = WheeledModel::new(
-            model.clone(),
-            WheeledBase::new(DiffDrive::new(0.1, 0.3, d).unwrap()),
-        )
-        .unwrap();
+    for (d, wm) in panda_on_diff_drives() {
         let mut wd = WheeledData::new(&wm);
         let mut force = DVector::zeros(wm.nr());
         for k in 0..5 {
-            let q = DVector::from_fn(wm.model.nq, |i, _| ((i * 7 + k * 3) as f64 * 0.37).sin());
-            let v = DVector::from_fn(wm.nr(), |i, _| ((i * 5 + k) as f64 * 0.53).cos());
-            let u: Vec<f64> = (0..wm.nu())
-                .map(|i| ((i + k) as f64 * 0.71).sin())
-                .collect();
+            let (q, v, u) = deterministic_state(&wm, k);
             let vdot = reduced_forward_dynamics_crba(&wm, &mut wd, &q, &v, &u)
                 .unwrap()
                 .clone();
