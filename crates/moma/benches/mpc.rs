@@ -9,7 +9,9 @@
 //! start: variables `δu_0, δx_1, …, δu_{N−1}, δx_N`, the linearised dynamics as
 //! equalities, the input bounds as inequalities) solved two ways: the solver's own
 //! Riccati backward pass (`Solver::backward_pass`, box-DDP stage QPs) and the interior-
-//! point solver `clarabel` on the sparse form built from the same stage models.
+//! point solver `clarabel` on the sparse form built from the same stage models, and, with
+//! `--features bench-osqp` (OSQP is C, built with CMake), the operator-splitting solver
+//! OSQP on that same sparse form.
 
 #[path = "../tests/mpc_common/mod.rs"]
 mod mpc_common;
@@ -97,6 +99,19 @@ fn bench_mpc(c: &mut Criterion) {
     c.bench_function("mpc/qp_clarabel", |b| {
         b.iter(|| black_box(StepQp::new(&stages, &traj, &lo, &hi).solve()));
     });
+    #[cfg(feature = "bench-osqp")]
+    {
+        let z = qp.solve_osqp();
+        let du0 = DVector::from_column_slice(&z[..nu]);
+        println!(
+            "first input step: osqp {:.6?}, largest difference to Riccati {:.3e}",
+            du0.as_slice(),
+            (&riccati.feedforward[0] - &du0).amax()
+        );
+        c.bench_function("mpc/qp_osqp", |b| {
+            b.iter(|| black_box(StepQp::new(&stages, &traj, &lo, &hi).solve_osqp()));
+        });
+    }
 
     c.bench_function("mpc/fetch_1s_all_constraints", |b| {
         b.iter(|| black_box(mpc.solve(black_box(&q), black_box(&v)).unwrap()));
@@ -224,6 +239,43 @@ impl StepQp {
             solver.solution.status
         );
         solver.solution.x.clone()
+    }
+
+    /// The same QP by OSQP, `l ≤ A z ≤ u`: the equalities with `l = u = b`, the
+    /// inequalities with `l = −∞` (OSQP's infinity, 1e30); default settings, silent, set up
+    /// and solved each time as clarabel is.
+    #[cfg(feature = "bench-osqp")]
+    fn solve_osqp(&self) -> Vec<f64> {
+        fn csc(m: &CscMatrix<f64>) -> osqp::CscMatrix<'_> {
+            osqp::CscMatrix {
+                nrows: m.m,
+                ncols: m.n,
+                indptr: m.colptr.as_slice().into(),
+                indices: m.rowval.as_slice().into(),
+                data: m.nzval.as_slice().into(),
+            }
+        }
+        let lower: Vec<f64> = (0..self.b.len())
+            .map(|i| {
+                if i < self.equalities {
+                    self.b[i]
+                } else {
+                    -1e30
+                }
+            })
+            .collect();
+        let settings = osqp::Settings::default().verbose(false);
+        let mut problem = osqp::Problem::new(
+            csc(&self.p),
+            &self.q,
+            csc(&self.a),
+            &lower,
+            &self.b,
+            &settings,
+        )
+        .unwrap();
+        let status = problem.solve();
+        status.x().expect("OSQP solved the QP").to_vec()
     }
 }
 
