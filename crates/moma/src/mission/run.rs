@@ -1868,7 +1868,7 @@ impl<'m> Runner<'m> {
                 return false;
             }
         };
-        let (reached, min_error) = (law.reached(), law.min_ee_error);
+        let reached = law.reached();
         self.saturation_events(st, t, tick.torque_clipped, false);
         if let Some(e) = tick.touched {
             self.event(
@@ -1877,8 +1877,7 @@ impl<'m> Runner<'m> {
                 format!("end effector at its target: {e:.4} m off, the base at {v:.2} m/s"),
             );
         }
-        let g = self.goal.clone();
-        let (pe, he, arrived) = at_goal(c.goal, &g, pose, v, w);
+        let (pe, he, arrived) = at_goal(c.goal, &self.goal, pose, v, w);
         if t >= t_end && arrived && reached {
             self.event(
                 t,
@@ -1888,7 +1887,12 @@ impl<'m> Runner<'m> {
             st.time_to_goal = Some(t);
             st.phase = Phase::Done;
         } else if t > t_end + ARRIVE_TIMEOUT + REACH_SETTLE {
+            let g = &self.goal;
             let why = if !reached {
+                let min_error = self
+                    .whole_body
+                    .as_ref()
+                    .map_or(f64::INFINITY, WholeBodyLaw::min_ee_error);
                 format!(
                     "the end effector came no closer than {min_error:.3} m to its target \
                      (tolerance {} m)",

@@ -47,8 +47,6 @@ pub(super) struct WholeBodyLaw {
     plans: Option<usize>,
     /// Mission time the end effector first came within the tolerance (s).
     pub touched_at: Option<f64>,
-    /// Smallest end-effector error so far (m; `∞` while the target is not set).
-    pub min_ee_error: f64,
     /// The last solve's torques were clipped.
     clipped: bool,
 }
@@ -75,7 +73,6 @@ impl WholeBodyLaw {
             tolerance,
             plans: None,
             touched_at: None,
-            min_ee_error: f64::INFINITY,
             clipped: false,
         }
     }
@@ -120,17 +117,27 @@ impl WholeBodyLaw {
         self.clipped = self.law.control(t, q, v, u)?.torque;
         let error = self.law.samples().last().and_then(|s| s.ee_error);
         let mut touched = None;
-        if let Some(e) = error {
-            self.min_ee_error = self.min_ee_error.min(e);
-            if self.touched_at.is_none() && e <= self.tolerance {
-                self.touched_at = Some(t);
-                touched = Some(e);
-            }
+        if let Some(e) = error
+            && self.touched_at.is_none()
+            && e <= self.tolerance
+        {
+            self.touched_at = Some(t);
+            touched = Some(e);
         }
         Ok(Tick {
             torque_clipped: self.clipped,
             touched,
         })
+    }
+
+    /// The smallest end-effector error of the solves so far (m; `∞` while the target is
+    /// not set), from the law's own samples.
+    pub(super) fn min_ee_error(&self) -> f64 {
+        self.law
+            .samples()
+            .iter()
+            .filter_map(|s| s.ee_error)
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The end effector has been within its tolerance of the target, or there is none.
