@@ -7,6 +7,7 @@ use moma::ik::model::ModelFrame;
 use moma::ik::tasks::TaskRows;
 use moma::mobile::DiffDrive;
 use moma::multibody::{Model, RootJoint};
+use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -50,6 +51,37 @@ pub fn read_states(path: &Path, allowed: &[&str]) -> Result<Vec<State>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read states file", path.display()))?;
     Ok(moma::io::states::parse_states(&text, path, allowed)?)
+}
+
+/// One state's `q`, `v`, `a` and `tau` as vectors (an absent one is zero), after
+/// [`moma::kinematics::check_state`] checks their lengths and values against `model`;
+/// `src` names the state in errors.
+pub fn state_vectors(model: &Model, s: &State, src: &str) -> Result<[DVector<f64>; 4]> {
+    moma::kinematics::check_state(
+        model,
+        src,
+        Some(&s.q),
+        s.v.as_deref(),
+        s.a.as_deref(),
+        s.tau.as_deref(),
+    )?;
+    let or_zero = |x: &Option<Vec<f64>>| {
+        x.as_ref().map_or_else(
+            || DVector::zeros(model.nv),
+            |x| DVector::from_column_slice(x),
+        )
+    };
+    Ok([
+        DVector::from_column_slice(&s.q),
+        or_zero(&s.v),
+        or_zero(&s.a),
+        or_zero(&s.tau),
+    ])
+}
+
+/// A matrix as a list of its rows (the JSON outputs' layout).
+pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    m.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
 /// Reads the text of a states file (the error names the file).

@@ -4,12 +4,14 @@
 //! each state, and with `--frame` those of the frame's placement, velocity and
 //! acceleration. Schema: `docs/cli.md`.
 
-use super::common::{Layout, LayoutConv, State, load_model, parse_root, read_states};
+use super::common::{
+    Layout, LayoutConv, State, load_model, parse_root, read_states, rows, state_vectors,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use moma::dynamics::{self, DerivativeData, FrameDerivativeData};
-use moma::kinematics::{self, ReferenceFrame};
+use moma::kinematics::ReferenceFrame;
 use moma::multibody::{FrameIndex, Model, RootJoint};
-use nalgebra::{DMatrix, DVector, Matrix6xX};
+use nalgebra::{DVector, Matrix6xX};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -100,10 +102,6 @@ struct Output {
     states: Vec<StateOut>,
 }
 
-fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    m.row_iter().map(|r| r.iter().copied().collect()).collect()
-}
-
 /// Runs `moma derivatives`.
 pub fn run(args: Args) -> Result<()> {
     let model = load_model(&args.urdf, args.root)?;
@@ -158,20 +156,7 @@ fn evaluate_state(
     conv: &LayoutConv,
 ) -> Result<StateOut> {
     let nv = model.nv;
-    kinematics::check_state(
-        model,
-        src,
-        Some(&s.q),
-        s.v.as_deref(),
-        s.a.as_deref(),
-        s.tau.as_deref(),
-    )?;
-    let q = DVector::from_column_slice(&s.q);
-    let get = |x: &Option<Vec<f64>>| {
-        x.as_ref()
-            .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x))
-    };
-    let (v, a, tau) = (get(&s.v), get(&s.a), get(&s.tau));
+    let [q, v, a, tau] = state_vectors(model, s, src)?;
     let (qs, vs) = (q.as_slice(), v.as_slice());
     dynamics::rnea_derivatives(model, dd, &q, &v, &a);
     let mut rnea = [

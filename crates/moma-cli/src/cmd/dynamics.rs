@@ -3,7 +3,9 @@
 //! CoM, centroidal map and one frame's placement and Jacobian for each state. Schema:
 //! `docs/cli.md`.
 
-use super::common::{Layout, LayoutConv, State, load_model, parse_root, read_states};
+use super::common::{
+    Layout, LayoutConv, State, load_model, parse_root, read_states, rows, state_vectors,
+};
 use anyhow::{Context, Result, bail};
 use moma::dynamics;
 use moma::kinematics::{self, ReferenceFrame};
@@ -92,10 +94,6 @@ struct Output {
     states: Vec<StateOut>,
 }
 
-fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    m.row_iter().map(|r| r.iter().copied().collect()).collect()
-}
-
 /// Runs `moma dynamics`.
 pub fn run(args: Args) -> Result<()> {
     let mut model = load_model(&args.urdf, args.root)?;
@@ -154,20 +152,7 @@ fn evaluate_state(
     conv: &LayoutConv,
 ) -> Result<StateOut> {
     let nv = model.nv;
-    kinematics::check_state(
-        model,
-        src,
-        Some(&s.q),
-        s.v.as_deref(),
-        s.a.as_deref(),
-        s.tau.as_deref(),
-    )?;
-    let q = DVector::from_column_slice(&s.q);
-    let get = |x: &Option<Vec<f64>>| {
-        x.as_ref()
-            .map_or_else(|| DVector::zeros(nv), |x| DVector::from_column_slice(x))
-    };
-    let (v, a, tau) = (get(&s.v), get(&s.a), get(&s.tau));
+    let [q, v, a, tau] = state_vectors(model, s, src)?;
     let qs = q.as_slice();
     let rnea_tau = conv.v_out(qs, dynamics::rnea(model, data, &q, &v, &a).as_slice());
     let crba_m = rows(&conv.matrix_out(qs, dynamics::crba(model, data, &q)));
