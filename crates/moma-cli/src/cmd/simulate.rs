@@ -101,14 +101,7 @@ fn render(
             super::simulate_stability::plots(mon, &mut files);
         }
     }
-    summary.files = files
-        .iter()
-        .map(|(name, _)| name.clone())
-        .chain(std::iter::once("summary.json".to_string()))
-        .collect();
-    let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
-    json.push('\n');
-    files.push(("summary.json".to_string(), json.into_bytes()));
+    super::simulate_common::push_summary(&mut files, summary, |s, names| s.files = names)?;
     Ok(files)
 }
 

@@ -6,7 +6,9 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
+use anyhow::{Context, Result};
 use moma::sim::recorder::Recorder;
+use serde::Serialize;
 
 use crate::svg_plots::{Series, line_chart, path_chart};
 
@@ -220,4 +222,24 @@ pub(super) fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
     } else {
         None
     }
+}
+
+/// Ends a run's output: `set_files` receives the name of every file in `files` and of
+/// `summary.json` (so the summary lists itself), then the summary, pretty JSON, is appended
+/// as `summary.json`.
+pub fn push_summary<S: Serialize>(
+    files: &mut Vec<(String, Vec<u8>)>,
+    summary: &mut S,
+    set_files: impl FnOnce(&mut S, Vec<String>),
+) -> Result<()> {
+    let names = files
+        .iter()
+        .map(|(name, _)| name.clone())
+        .chain(std::iter::once("summary.json".to_string()))
+        .collect();
+    set_files(summary, names);
+    let mut json = serde_json::to_string_pretty(summary).context("serialising the summary")?;
+    json.push('\n');
+    files.push(("summary.json".to_string(), json.into_bytes()));
+    Ok(())
 }

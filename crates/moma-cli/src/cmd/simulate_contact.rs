@@ -169,14 +169,7 @@ pub fn run(path: &Path, sc: &Scenario, args: &Args) -> Result<()> {
     if sc.output.plots {
         plots(&res, &mut files);
     }
-    summary.files = files
-        .iter()
-        .map(|(n, _)| n.clone())
-        .chain(std::iter::once("summary.json".to_string()))
-        .collect();
-    let mut json = serde_json::to_string_pretty(&summary).context("serialising the summary")?;
-    json.push('\n');
-    files.push(("summary.json".to_string(), json.into_bytes()));
+    super::simulate_common::push_summary(&mut files, &mut summary, |s, names| s.files = names)?;
     write_dir(&dir, &files)?;
     if !args.quiet {
         crate::output::print_json(&summary)?;
