@@ -24,14 +24,14 @@ use crate::mobile::wheeled::{
 };
 use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::Data;
-use crate::ode::{OdeSystem, Rk4};
+use crate::ode::Rk4;
 use crate::planning::footprint_clearance::ConvexFootprint;
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
 use crate::sim::computed_torque::ComputedTorque;
 use crate::sim::contact_run::ContactTally;
+use crate::sim::held_input::HeldInputOde;
 use crate::sim::model_mismatch::SensorNoise;
 use crate::sim::mpc_run::MpcRunSummary;
-use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
 use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{AccelerationLimits, BodySet, SupportPolygon};
@@ -256,29 +256,6 @@ impl MissionResult {
             .flatten()
             .copied()
             .reduce(f64::max)
-    }
-}
-
-/// The plant under a zero-order-hold input.
-struct Plant<'a> {
-    sys: &'a mut WheeledSystem,
-    u: &'a [f64],
-    nq: usize,
-    nr: usize,
-}
-
-impl OdeSystem for Plant<'_> {
-    fn dim(&self) -> usize {
-        self.nq + self.nr + 1
-    }
-    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
-        let (q, rest) = x.split_at(self.nq);
-        let v = &rest[..self.nr];
-        let (qd, rest_d) = dx.split_at_mut(self.nq);
-        let (vd, wd) = rest_d.split_at_mut(self.nr);
-        self.sys.dynamics(q, v, self.u, qd, vd)?;
-        wd[0] = self.sys.input_power(q, v, self.u)?;
-        Ok(())
     }
 }
 
@@ -1448,11 +1425,9 @@ impl<'m> Runner<'m> {
         }
 
         // integrate one step
-        let mut plant = Plant {
-            sys: &mut ws.sys,
+        let mut plant = HeldInputOde {
+            system: &mut ws.sys,
             u: &ws.u,
-            nq,
-            nr,
         };
         let stepped = if evaluated && self.m.plant_robot.is_none() && ws.noise.is_none() {
             // the first stage is the state's evaluation under the torques just formed (on
