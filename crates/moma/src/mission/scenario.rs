@@ -102,7 +102,7 @@ pub struct RobotSpec {
     pub wheel_joints: Option<[String; 2]>,
     /// Passive casters, as in `moma simulate` (at least one when given).
     #[serde(default)]
-    pub casters: Option<Vec<CasterSpec>>,
+    pub casters: Option<Vec<Caster>>,
     /// Radius (m) of the disk that covers the base, for the configuration space (or
     /// `footprint`).
     #[serde(default)]
@@ -228,16 +228,6 @@ pub struct DriveSpec {
     /// finite value, negative behind it). The mission plans and tracks the axle midpoint
     /// (the unicycle point); see [`super::reference::Reference`].
     pub d: f64,
-}
-
-/// A passive caster (support point in the base frame).
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct CasterSpec {
-    /// Name.
-    pub name: String,
-    /// Contact point `[x, y]` in the base frame (m).
-    pub position: [f64; 2],
 }
 
 /// `[start]`.
@@ -1097,7 +1087,7 @@ fn check_obstacles_and_robot(file: &MissionFile, path: &Path) -> Result<()> {
         positive(path, &format!("{f}.radius"), o.radius)?;
     }
     if let Some(list) = &file.robot.casters
-        && let Some(problem) = crate::mobile::caster_list_problem(&casters_of(list))
+        && let Some(problem) = crate::mobile::caster_list_problem(list)
     {
         return Err(Error::parse(path, format!("robot.casters{problem}")));
     }
@@ -1122,16 +1112,6 @@ fn load_mission_map(
         .map(&map_path, file.map.resolution)
         .map_err(|e| field_err(path, "map.file", e))?;
     Ok(map)
-}
-
-/// `robot.casters` as the mobile module's casters.
-fn casters_of(list: &[CasterSpec]) -> Vec<Caster> {
-    list.iter()
-        .map(|c| Caster {
-            name: c.name.clone(),
-            position: c.position,
-        })
-        .collect()
 }
 
 /// `robot.package_dirs` resolved against the mission file's folder; each must be a folder.
@@ -1159,7 +1139,7 @@ fn mission_casters(file: &MissionFile, path: &Path, base: &Path) -> Result<Vec<C
             "robot.casters_file",
             "give the casters either in robot.casters or in a casters file, not both",
         )),
-        (Some(list), None) => Ok(casters_of(list)),
+        (Some(list), None) => Ok(list.clone()),
         (None, Some(f)) => crate::mobile::read_casters(&base.join(f))
             .map_err(|e| field_err(path, "robot.casters_file", e)),
         (None, None) => Ok(Vec::new()),
