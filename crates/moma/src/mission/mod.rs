@@ -27,7 +27,8 @@
 //! # Files
 //!
 //! * [`scenario`] parses and validates the mission file (serde with unknown keys refused,
-//!   every count bounded before allocation) into a [`Mission`]: the loaded map, the
+//!   every count bounded before allocation; the tables and the checks that need only the
+//!   file are `schema`'s, re-exported by `scenario`) into a [`Mission`]: the loaded map, the
 //!   `WheeledModel`, the end-effector frame and the arm postures. The map and URDF are
 //!   parsed through a [`scenario::Loader`] (the file system, [`scenario::FileSystem`], on
 //!   every normal path; the fuzz targets hand in the shipped files parsed once, and sweeps
@@ -79,6 +80,7 @@ mod replan;
 mod result;
 mod run;
 pub mod scenario;
+mod schema;
 pub mod task;
 mod tip_over;
 mod whole_body;
