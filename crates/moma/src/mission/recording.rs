@@ -186,12 +186,7 @@ impl Runner<'_> {
 /// torques, or, when `[uncertainty]` perturbs the plant (`perturbed`) or the law measured
 /// a noisy state, from the plant's own dynamics at its state; `None` if the multipliers
 /// or the loads cannot be formed.
-fn monitors(
-    wm: &WheeledModel,
-    perturbed: bool,
-    ws: &mut Workspace,
-    t: f64,
-) -> Option<Monitors> {
+fn monitors(wm: &WheeledModel, perturbed: bool, ws: &mut Workspace, t: f64) -> Option<Monitors> {
     let q = ws.q_plant.as_slice();
     if perturbed || ws.noise.is_some() {
         ws.monitor.sample(t, q, ws.v_plant.as_slice(), &ws.u).ok()?;
