@@ -27,14 +27,15 @@
 //! # Files
 //!
 //! * [`scenario`] parses and validates the mission file (serde with unknown keys refused,
-//!   every count bounded before allocation) into a [`Mission`]: the loaded map, the
+//!   every count bounded before allocation; the tables and the checks that need only the
+//!   file are `schema`'s, re-exported by `scenario`) into a [`Mission`]: the loaded map, the
 //!   `WheeledModel`, the end-effector frame and the arm postures. The map and URDF are
 //!   parsed through a [`scenario::Loader`] (the file system, [`scenario::FileSystem`], on
 //!   every normal path; the fuzz targets hand in the shipped files parsed once, and sweeps
 //!   pass theirs through `Sweep::from_toml_str_with`).
 //! * `plan` owns the known world: the occupancy mask (map plus appeared obstacles), its
 //!   distance transform (for the clearance monitor), one D* Lite on the
-//!   footprint-dilated C-space, so an obstacle is `move_start` + `set_blocked` and a
+//!   footprint-dilated C-space (`mission_planner` sets it up for the mission's footprint), so an obstacle is `move_start` + `set_blocked` and a
 //!   re-plan one incremental `compute`, and the footprint polygon's check.
 //! * [`footprint`] gives the footprint (a typed disk or the robot's polygon at the
 //!   transport posture); [`heights`] checks `[[map.boxes]]` and a `[task]`'s scene
@@ -43,8 +44,17 @@
 //!   the exact poses, then `time_parameterize_curve` under the platform and tip-over
 //!   limits from the current speed).
 //! * `run` is the closed loop at a fixed control period equal to the RK4 step (the step
-//!   by step is in `ARCHITECTURE.md`); its results are plain columns ([`Samples`]), plans
-//!   and events, which the CLI turns into CSV, JSON, SVGs and the report.
+//!   by step is in `ARCHITECTURE.md`): the `Runner`, its preparation, its step and its
+//!   finish. The step's parts are files of their own: `replan` (a path smoothed, timed
+//!   and checked into the reference; obstacles appearing and the re-plans they trigger),
+//!   `arrival` (the phases' ends, the reach, law `mpc`'s step), `pick` (a `[task]`'s arm
+//!   motions, the payload, the drive on), `recording` (samples, monitors and their
+//!   events), `laws` (the platform, reach and arm laws with their gains and guards),
+//!   `arm_motion` (the arm's references), `workspace` (the loop's buffers and the
+//!   actuators), `tip_over` (the transport posture's tip-over limits, [`transport_tip_limits`])
+//!   and `placement` (a `[task]`'s base goal). The results (`result`) are plain columns
+//!   ([`Samples`]), plans and events, which the CLI turns into CSV, JSON, SVGs and the
+//!   report.
 //! * `plant` builds and checks the contact plant of `simulation.plant = "contact"` at load
 //!   ([`MissionContact`]) and steps it in the loop, with its monitors and events.
 //! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under the
@@ -54,23 +64,36 @@
 //!   plan and the target, and its solve period.
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
+mod arm_motion;
+mod arrival;
 pub mod footprint;
 pub mod heights;
+mod laws;
+mod pick;
+mod placement;
 pub(crate) mod plan;
 pub mod planned;
 mod plant;
+mod recording;
 pub mod reference;
+mod replan;
+mod result;
 mod run;
 pub mod scenario;
+mod schema;
 pub mod task;
+mod tip_over;
 mod whole_body;
+mod workspace;
 
 pub use footprint::{FootprintSource, MissionFootprint};
 pub use plan::SearchTiming;
 pub use plant::MissionContact;
 pub use reference::{RefSample, Reference};
-pub use run::{Event, MissionResult, PlanRecord, Samples, WallTimes, run, transport_tip_limits};
+pub use result::{Event, MissionResult, PlanRecord, Samples, WallTimes};
+pub use run::run;
 pub use scenario::{Mission, MissionFile, load};
+pub use tip_over::transport_tip_limits;
 
 /// The summary of a finished mission that does not depend on how it was run: `mission`,
 /// `reached`, `reason`, `time_to_goal`, `simulated_time`, `replans`, the stability,

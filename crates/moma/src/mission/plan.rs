@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use super::scenario::Mission;
 use crate::error::{Error, Result};
 use crate::planning::dstar_lite::DStarLite;
 use crate::planning::footprint_clearance::ConvexFootprint;
@@ -428,4 +429,41 @@ impl Planner {
             (dc - std::f64::consts::SQRT_2).max(0.0)
         })
     }
+}
+
+/// The mission's planner between two axle-midpoint poses. With the robot's footprint
+/// polygon: searched on the largest disk about the axle midpoint inside it (padded), and
+/// every path it gives checked with the polygon at each heading; with a disk: the map
+/// dilated by it (and `|d|`).
+pub(super) fn mission_planner(
+    m: &Mission,
+    from: [f64; 3],
+    to: [f64; 3],
+) -> Result<(Planner, Option<CellPath>, SearchTiming)> {
+    let d = m.robot.base.drive.d;
+    let grid = &m.map.grid;
+    let polygon = m.footprint.planning_polygon(d);
+    let (field, radius, offset) = match &polygon {
+        Some((_, inscribed)) => ("robot.footprint", inscribed + m.footprint.padding(), 0.0),
+        None if m.file.robot.footprint.is_some() => ("robot.footprint", m.footprint.radius, d),
+        None => ("robot.footprint_radius", m.footprint.radius, d),
+    };
+    let (mut planner, path, search) = Planner::new(
+        grid,
+        m.file.map.unknown_is_obstacle,
+        field,
+        radius,
+        offset,
+        [from[0], from[1]],
+        [to[0], to[1]],
+    )?;
+    if let Some((fp, _)) = polygon {
+        let res = grid.resolution;
+        planner.polygon = Some(PolygonCheck::new(
+            ConvexFootprint::new(&fp, res)?,
+            m.footprint.padding() / res,
+            d / res,
+        ));
+    }
+    Ok((planner, path, search))
 }

@@ -27,6 +27,16 @@ pub struct RefSample {
     pub alpha: f64,
 }
 
+/// The pose of the driven-axle midpoint P0 (the unicycle point) of a base pose
+/// `[x, y, θ]` whose origin lies `d` ahead of it: `[x − d cos θ, y − d sin θ, θ]`.
+pub(super) fn axle_pose(base: [f64; 3], d: f64) -> [f64; 3] {
+    if d == 0.0 {
+        return base;
+    }
+    let (s, c) = base[2].sin_cos();
+    [base[0] - d * c, base[1] - d * s, base[2]]
+}
+
 /// The reference of the base frame origin for a reference sample of the axle midpoint
 /// (position moved `d` ahead along the reference heading; speeds as they are).
 pub(super) fn base_reference(mut r: RefSample, d: f64) -> RefSample {

@@ -161,14 +161,7 @@ fn object_rim_radius(shape: &Convex, placement: &crate::spatial::SE3, axis: &Vec
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CastersFile {
-    casters: Vec<CasterEntry>,
-}
-
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CasterEntry {
-    name: String,
-    position: [f64; 2],
+    casters: Vec<Caster>,
 }
 
 /// Reads a casters file: TOML with one `[[casters]]` table per caster, `name` and
@@ -205,14 +198,7 @@ pub fn casters_from_str(text: &str, path: &Path) -> Result<Vec<Caster>> {
         });
         parse(format!("{at}{}", e.message().trim().replace('\n', "; ")))
     })?;
-    let casters: Vec<Caster> = file
-        .casters
-        .into_iter()
-        .map(|c| Caster {
-            name: c.name,
-            position: c.position,
-        })
-        .collect();
+    let casters = file.casters;
     if let Some(problem) = caster_list_problem(&casters) {
         return Err(parse(format!("casters{problem}")));
     }

@@ -38,8 +38,13 @@ use crate::multibody::{Data, FrameIndex, JointType, Model, RootJoint};
 
 /// A passive caster: a support contact point of the base. It adds no kinematic
 /// constraint (a caster swivels freely) but belongs to the support polygon
-/// ([`WheeledBase::support_points`]) that tip-over and stability analyses read.
+/// ([`WheeledBase::support_points`]) that tip-over and stability analyses read. It is
+/// also the caster table of every file that lists casters (`name`, `position`; unknown
+/// keys refused): a casters file ([`crate::mobile::read_casters`]), `moma simulate`'s
+/// `robot.casters` and `moma mission`'s; [`crate::mobile::caster_list_problem`] checks a
+/// list.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Caster {
     /// A name for reports.
     pub name: String,

@@ -21,6 +21,7 @@
 use crate::control::lyapunov::{LyapunovMonitor, LyapunovReport};
 use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
+use crate::sim::held_input::HeldInputOde;
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::mpc_run::MpcRun;
 use crate::sim::recorder::Recorder;
@@ -214,20 +215,17 @@ impl OdeSystem for LoopOde<'_> {
     }
 
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
-        let (nq, nv) = (self.system.nq(), self.system.nv());
-        let (q, rest) = x.split_at(nq);
-        let v = &rest[..nv];
         if self.continuous {
-            let f = self.law.control(t, q, v, &mut self.u)?;
+            let (nq, nv) = (self.system.nq(), self.system.nv());
+            let (q, rest) = x.split_at(nq);
+            let f = self.law.control(t, q, &rest[..nv], &mut self.u)?;
             self.saturation.add(t, f);
         }
-        let (qd, rest_d) = dx.split_at_mut(nq);
-        let (vd, wd) = rest_d.split_at_mut(nv);
-        self.system
-            .dynamics(q, v, &self.u, qd, vd)
-            .map_err(|e| e.singular_at_time(t))?;
-        wd[0] = self.system.input_power(q, v, &self.u)?;
-        Ok(())
+        HeldInputOde {
+            system: &mut *self.system,
+            u: &self.u,
+        }
+        .rhs(t, x, dx)
     }
 }
 

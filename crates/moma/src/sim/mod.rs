@@ -34,8 +34,10 @@
 //!   [`mpc_run::MpcSample`] per solve), which [`mpc_loop`] runs at a fixed period; [`mpc_table`] is the MPC's settings table both
 //!   files share (`[controller.mpc]`, `[control.mpc]`) and builds the MPC from it. A planned platform reference comes from `mission::planned`, one layer
 //!   up.
-//! * The stepping loop and per-sample recording shared by the open- and closed-loop runs
-//!   are in `stepping`; [`recorder::Recorder`] holds what the CLI's writers read.
+//! * The plant ODE `[q, v, W]` under held inputs is [`held_input::HeldInputOde`], the one
+//!   right-hand side of the open loop, the closed loop and `moma mission`. The stepping
+//!   loop and per-sample recording shared by the open- and closed-loop runs are in
+//!   `stepping`; [`recorder::Recorder`] holds what the CLI's writers read.
 //! * [`computed_torque::ComputedTorque`] is the one map from a desired reduced
 //!   acceleration (or force) to the wheel and joint torques of a wheeled robot, used by
 //!   the inner loop, OSC, the coordinated law and the mission.
@@ -51,6 +53,7 @@ pub mod coordinated;
 pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
+pub mod held_input;
 pub mod lift_off;
 pub mod model_mismatch;
 pub mod monitor;

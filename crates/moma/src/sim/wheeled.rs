@@ -11,6 +11,7 @@
 
 use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
+use crate::sim::held_input::HeldInputOde;
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::recorder::Recorder;
 use crate::sim::reduced_system::ReducedSystem;
@@ -57,17 +58,12 @@ impl<S: ReducedSystem + ?Sized> OdeSystem for ReducedOde<'_, S> {
     }
 
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
-        let (nq, nv) = (self.system.nq(), self.system.nv());
         self.input.eval(t, &mut self.u);
-        let (q, rest) = x.split_at(nq);
-        let v = &rest[..nv];
-        let (qd, rest_d) = dx.split_at_mut(nq);
-        let (vd, wd) = rest_d.split_at_mut(nv);
-        self.system
-            .dynamics(q, v, &self.u, qd, vd)
-            .map_err(|e| e.singular_at_time(t))?;
-        wd[0] = self.system.input_power(q, v, &self.u)?;
-        Ok(())
+        HeldInputOde {
+            system: &mut *self.system,
+            u: &self.u,
+        }
+        .rhs(t, x, dx)
     }
 }
 

@@ -7,9 +7,10 @@ use std::path::Path;
 use super::{Context, bail, finite};
 use crate::closed_form::ChapterModel;
 use crate::error::Result;
+use crate::mobile::Caster;
 use crate::sim::chapter_models::chapter_system;
 use crate::sim::reduced_system::ReducedSystem;
-use crate::sim_config::schema::{CasterSpec, DriveSpec, RobotSpec};
+use crate::sim_config::schema::{DriveSpec, RobotSpec};
 
 /// Builds the robot of a scenario and the name the summary gives it; `base_dir` resolves
 /// relative URDF paths. A free-floating robot is refused (the space run builds it).
@@ -134,23 +135,17 @@ pub fn build_wheeled_model(
     path: &Path,
     drive: &DriveSpec,
     wheel_joints: Option<[String; 2]>,
-    casters: &[CasterSpec],
+    casters: &[Caster],
     gravity: Option<f64>,
 ) -> Result<crate::mobile::WheeledModel> {
-    use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
+    use crate::mobile::{DiffDrive, WheeledBase, WheeledModel};
     let dd = DiffDrive::new(drive.r_w, drive.b, drive.d).ctx("robot.drive")?;
     for c in casters {
         finite(&format!("robot.casters '{}' position", c.name), &c.position)?;
     }
     let base = WheeledBase {
         drive: dd,
-        casters: casters
-            .iter()
-            .map(|c| Caster {
-                name: c.name.clone(),
-                position: c.position,
-            })
-            .collect(),
+        casters: casters.to_vec(),
         wheel_joints,
     };
     let mut model =

@@ -15,7 +15,7 @@ type WheeledUrdf<'a> = (
     &'a Path,
     &'a super::schema::DriveSpec,
     &'a Option<[String; 2]>,
-    &'a [super::schema::CasterSpec],
+    &'a [crate::mobile::Caster],
 );
 
 /// The robot of a scenario with `[uncertainty]`, which must be a URDF robot on a wheeled

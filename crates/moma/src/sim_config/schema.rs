@@ -9,6 +9,8 @@ use serde::Deserialize;
 
 use crate::contact::{ContactSpec, PlantKind};
 use crate::error::{Error, Result};
+/// `robot.drive`: the mission file's table, the same `{ r_w, b, d }`.
+pub use crate::mission::scenario::DriveSpec;
 use crate::sim::monitor::MonitorLimits;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::settings::{ChannelProfile, InputProfile, IntegratorSettings};
@@ -97,7 +99,7 @@ pub enum RobotSpec {
         wheel_joints: Option<[String; 2]>,
         /// Passive casters (optional).
         #[serde(default)]
-        casters: Vec<CasterSpec>,
+        casters: Vec<crate::mobile::Caster>,
     },
     /// A URDF arm with a fixed base (every joint actuated).
     FixedBase {
@@ -119,28 +121,6 @@ pub enum RobotSpec {
         /// Its parameters (names as in docs/simulate.md).
         params: toml::Table,
     },
-}
-
-/// Differential-drive geometry.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DriveSpec {
-    /// Wheel radius (m).
-    pub r_w: f64,
-    /// Half track (m).
-    pub b: f64,
-    /// Base origin ahead of the axle midpoint (m).
-    pub d: f64,
-}
-
-/// A passive caster.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CasterSpec {
-    /// Name.
-    pub name: String,
-    /// Contact point in the base frame `[x, y]` (m).
-    pub position: [f64; 2],
 }
 
 /// Initial configuration and reduced velocity (default: zeros).
