@@ -149,6 +149,9 @@ pub struct Samples {
     /// Mission phase: `drive`, `arrive`, `reach`, with a `[task]` `approach`, `grasp`,
     /// `retreat`; `done`.
     pub phase: Vec<&'static str>,
+    /// On the contact plant: each contact's normal force (N; the wheels, then the
+    /// casters, as [`ContactTally::totals`]); empty on the rolling plant.
+    pub contact_normal: Vec<Vec<f64>>,
 }
 
 /// Wall times of the run's parts (s).
@@ -2131,6 +2134,9 @@ impl<'m> Runner<'m> {
         s.arm_side.push(side);
         s.energy.push(st.energy);
         s.phase.push(st.phase.name());
+        if let Some(cl) = &ws.contact {
+            s.contact_normal.push(cl.normal_loads());
+        }
         mon.map(|m| (m.slip, clearance))
     }
 }
@@ -2419,10 +2425,13 @@ impl Workspace {
         })
     }
 
-    /// The plant and the monitors take `robot` (the same joints, other inertias: the
-    /// payload attached).
+    /// The plant (the contact plant too) and the monitors take `robot` (the same joints,
+    /// other inertias: the payload attached).
     fn attach(&mut self, robot: &WheeledModel, mu: f64) -> Result<()> {
         self.sys = WheeledSystem::new(robot.clone());
+        if let Some(cl) = &mut self.contact {
+            cl.attach(robot);
+        }
         self.monitor = StabilityMonitor::new(robot, monitor_settings(mu))?;
         Ok(())
     }
