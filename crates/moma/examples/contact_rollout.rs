@@ -123,10 +123,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 radius: 0.08,
             },
         ];
-        let casters = [CasterSpec {
-            frame: "caster".into(),
-            radius: 0.03,
-        }];
+        let casters = [CasterSpec::on_frame("caster", 0.03)];
         let plant = ContactPlant::new(model, &wheels, &casters, params)?;
         // [x, y, z, qx, qy, qz, qw, left, right, turret, shoulder, elbow]
         let mut q0 = vec![0.0, 0.0, 0.08, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0];

@@ -38,10 +38,7 @@ fn wheels() -> [WheelSpec; 2] {
 }
 
 fn casters() -> [CasterSpec; 1] {
-    [CasterSpec {
-        frame: "caster".into(),
-        radius: 0.03,
-    }]
+    [CasterSpec::on_frame("caster", 0.03)]
 }
 
 fn plant(params: ContactParams) -> ContactPlant {
@@ -427,7 +424,7 @@ fn bad_input_names_the_field() {
     ));
     assert!(e.contains("turret_joint_x"), "{e}");
     let mut c = casters();
-    c[0].frame = "nowhere".into();
+    c[0].frame = Some("nowhere".into());
     let e = err_text(ContactPlant::new(
         model(),
         &wheels(),

@@ -3,7 +3,8 @@
 //! by forward kinematics), attaches the can (the ZMP monitor's margin changes at the same
 //! state, the drive on is timed under the tip-over limits with it), retreats without
 //! touching the scene or itself and drives on to its goal; bad `[task]` input names the
-//! field (and the object).
+//! field (and the object); a transport posture that holds the grasped can inside the
+//! robot is refused at load.
 
 use moma::kinematics::{forward_kinematics, update_frame_placements};
 use moma::mission::{load, run, scenario, transport_tip_limits};
@@ -99,6 +100,29 @@ fn the_shipped_pick_mission_reaches_picks_and_never_touches() {
     assert!(tr.min_self_distance.unwrap() > 0.0);
     assert!(r.min_clearance().unwrap() > 0.0);
     assert!(r.min_zmp_margin().unwrap() > 0.0);
+}
+
+#[test]
+fn a_transport_posture_that_holds_the_can_inside_the_robot_is_refused() {
+    // the shipped file's posture before: the wrist flexed to 1.66 rad holds the can,
+    // attached at its grasp, 12.2 mm deep in the torso
+    let e = with(
+        "transport_posture = [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.30, 0.0]",
+        "transport_posture = [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.66, 0.0]",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("robot.transport_posture")
+            && e.contains("'Can2' held at its grasp")
+            && e.contains("enters 'torso_lift_link' by 12.2 mm"),
+        "{e}"
+    );
+    assert!(e.contains("mission_fetch_pick.toml"), "{e}");
+    // the same posture without a [task] carries nothing and loads (mission_fetch.toml's)
+    assert!(load(&root().join("scenarios/mission_fetch.toml")).is_ok());
+    // the shipped posture (the wrist flexed to 1.30 rad) holds it clear
+    assert!(load(&mission_path()).is_ok());
 }
 
 #[test]

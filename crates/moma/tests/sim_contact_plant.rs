@@ -1,8 +1,9 @@
 //! `plant = "contact"` in a `moma simulate` scenario (`moma::sim_config::contact`,
 //! `moma::sim::contact_run`): the shipped contact scenarios run, the coordinated law on the
 //! contact plant follows the rolling plant's run of the same file, the hard brake lifts the
-//! casters when the rolling run's ZMP leaves the support polygon, the state map round-trips
-//! through the rolling model's own velocity basis, and bad input names the field.
+//! casters when the rolling run's ZMP leaves the support polygon, a caster given by its
+//! position in a link is the caster on the frame there, the state map round-trips through
+//! the rolling model's own velocity basis, and bad input names the field.
 
 use std::path::{Path, PathBuf};
 
@@ -161,6 +162,54 @@ fn the_hard_brake_lifts_the_casters_when_the_rolling_runs_zmp_leaves_the_support
         "tucked: {:?}",
         tucked.first_lift_off
     );
+}
+
+#[test]
+fn a_caster_by_position_in_a_link_is_the_caster_on_the_frame_there() {
+    // brake_test_robot.urdf's caster frames sit on fixed joints of base_link at
+    // (−0.4, ±0.2, 0): the same casters by position give the same run to the bit, their
+    // columns named by the link and the position.
+    let (sc, path) = scenario("contact_brake_arm_extended.toml", |t| t);
+    let on_frames = run_contact(&sc, &path);
+    let (sp, path_p) = scenario("contact_brake_arm_extended.toml", |t| {
+        let t2 = t
+            .replace(
+                "{ frame = \"rear_left_caster\", radius = 0.0 }",
+                "{ link = \"base_link\", position = [-0.4, 0.2, 0.0], radius = 0.0 }",
+            )
+            .replace(
+                "{ frame = \"rear_right_caster\", radius = 0.0 }",
+                "{ link = \"base_link\", position = [-0.4, -0.2, 0.0], radius = 0.0 }",
+            );
+        assert_ne!(t, t2);
+        t2
+    });
+    let by_position = run_contact(&sp, &path_p);
+    assert_eq!(on_frames.rows, by_position.rows);
+    assert_eq!(
+        by_position.first_lift_off.as_ref().unwrap().t,
+        on_frames.first_lift_off.as_ref().unwrap().t
+    );
+    let n = column(&by_position, "normal_base_link [-0.4 0.2 0] [N]");
+    assert_eq!(n, column(&on_frames, "normal_rear_left_caster [N]"));
+    // a link the description lacks, and a frame given with a position, name the field
+    let e = contact_error("contact_brake_arm_extended.toml", |t| {
+        t.replace(
+            "{ frame = \"rear_left_caster\", radius = 0.0 }",
+            "{ link = \"rear_axle\", position = [-0.4, 0.2, 0.0], radius = 0.0 }",
+        )
+    });
+    assert!(
+        e.contains("contact.casters[0].link") && e.contains("no link 'rear_axle'"),
+        "{e}"
+    );
+    let e = contact_error("contact_brake_arm_extended.toml", |t| {
+        t.replace(
+            "{ frame = \"rear_right_caster\", radius = 0.0 }",
+            "{ frame = \"rear_right_caster\", position = [-0.4, -0.2, 0.0], radius = 0.0 }",
+        )
+    });
+    assert!(e.contains("contact.casters[1].position"), "{e}");
 }
 
 #[test]

@@ -61,13 +61,15 @@ pub struct ContactPlant {
 }
 
 impl ContactPlant {
-    /// Resolves `wheels` (revolute joints) and `casters` (frames) on `model`, whose root
-    /// must be a free flyer and every other joint one-dof, and checks `params`.
+    /// Resolves `wheels` (revolute joints) and `casters` (frames, or positions in links'
+    /// frames) on `model`, whose root must be a free flyer and every other joint one-dof,
+    /// and checks `params`.
     ///
     /// # Errors
     /// [`Error::Model`] for a wrong root; [`Error::InvalidInput`] naming the field
     /// (`contact.wheels[k].joint`, `contact.wheels[k].radius`,
-    /// `contact.casters[k].frame`, `contact.casters[k].radius`, `contact.mu`, …);
+    /// `contact.casters[k].frame`, `contact.casters[k].link`, `contact.casters[k].position`,
+    /// `contact.casters[k].radius`, `contact.mu`, …);
     /// [`Error::Unknown`] for a joint or frame the model lacks.
     pub fn new(
         model: Model,
@@ -124,19 +126,13 @@ impl ContactPlant {
             });
         }
         for (k, c) in casters.iter().enumerate() {
-            let f = model.frame_id(&c.frame).map_err(|_| {
-                Error::invalid(
-                    format!("contact.casters[{k}].frame"),
-                    format!("the model has no frame '{}'", c.frame),
-                )
-            })?;
+            let place = c.place(k, &model)?;
             check_radius(&format!("contact.casters[{k}].radius"), c.radius, true)?;
-            let fr = &model.frames[f.0];
             contacts.push(Contact {
-                name: c.frame.clone(),
-                body: fr.parent_joint.0,
+                name: place.name,
+                body: place.joint,
                 shape: Shape::Sphere {
-                    centre: fr.placement.translation,
+                    centre: place.centre,
                 },
                 radius: c.radius,
                 frictional: false,
@@ -176,7 +172,7 @@ impl ContactPlant {
             .collect())
     }
 
-    /// Name of contact `k` (the wheel joint or the caster frame).
+    /// Name of contact `k` (the wheel joint; the caster's frame, or `link [x y z]`).
     #[must_use]
     pub fn contact_name(&self, k: usize) -> &str {
         &self.contacts[k].name

@@ -44,7 +44,8 @@ pub struct ContactSpec {
     /// Largest penetration allowed at the start (m).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start_penetration_tol: Option<f64>,
-    /// The casters: a sphere of `radius` on the robot description's `frame`.
+    /// The casters: a sphere of `radius` on a `frame` of the robot description, or at
+    /// `position` in the frame of `link` ([`CasterSpec`]).
     pub casters: Vec<CasterSpec>,
 }
 

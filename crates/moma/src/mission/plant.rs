@@ -212,6 +212,20 @@ impl ContactLoop {
         Ok(())
     }
 
+    /// The normal force of each contact (N; the wheels, then the casters, in the order of
+    /// [`ContactPlant::contact_name`]) at the present state.
+    pub fn normal_loads(&self) -> Vec<f64> {
+        self.state.contacts.iter().map(|r| r.normal).collect()
+    }
+
+    /// The plant takes the bodies' inertias of `robot` (the mission's robot with other
+    /// inertias, the joints the same: a `[task]`'s payload attached at the grasp). The
+    /// root body (the planar joint's there, the free flyer's here) is the same link.
+    pub fn attach(&mut self, robot: &WheeledModel) {
+        let model = &mut self.plant.model;
+        model.inertias.clone_from(&robot.model.inertias);
+    }
+
     /// The first lift-off and the first slip, each once, when they have happened.
     pub fn news(&mut self) -> Vec<ContactNews> {
         let mut out = Vec::new();

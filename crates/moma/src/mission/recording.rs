@@ -177,6 +177,9 @@ impl Runner<'_> {
         s.arm_side.push(side);
         s.energy.push(st.energy);
         s.phase.push(st.phase.name());
+        if let Some(cl) = &ws.contact {
+            s.contact_normal.push(cl.normal_loads());
+        }
         mon.map(|m| (m.slip, clearance))
     }
 }

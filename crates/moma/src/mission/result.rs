@@ -92,6 +92,9 @@ pub struct Samples {
     /// Mission phase: `drive`, `arrive`, `reach`, with a `[task]` `approach`, `grasp`,
     /// `retreat`; `done`.
     pub phase: Vec<&'static str>,
+    /// On the contact plant: each contact's normal force (N; the wheels, then the
+    /// casters, as [`ContactTally::totals`]); empty on the rolling plant.
+    pub contact_normal: Vec<Vec<f64>>,
 }
 
 /// Wall times of the run's parts (s).

@@ -477,8 +477,9 @@ pub(super) fn positive(path: &Path, field: &str, x: f64) -> Result<()> {
 }
 
 /// `[goal]` is required without `[task]`; with it, the goal is optional (the base drives
-/// on to it after the pick) and takes no end-effector target, and the contact plant and
-/// `[uncertainty]` are not offered (the payload is attached to the rolling plant's model).
+/// on to it after the pick) and takes no end-effector target, and `[uncertainty]` is not
+/// offered (the payload is attached to the mission's own model and, on the contact plant,
+/// to the contact plant's).
 pub(super) fn check_goal_and_task(file: &MissionFile, path: &Path) -> Result<()> {
     match (&file.goal, &file.task) {
         (None, None) => Err(field_err(
@@ -491,11 +492,6 @@ pub(super) fn check_goal_and_task(file: &MissionFile, path: &Path) -> Result<()>
             "goal.end_effector",
             "a mission with [task] drives on to the goal pose after the pick; it takes no \
              end-effector target",
-        )),
-        (_, Some(_)) if file.simulation.plant == PlantKind::Contact => Err(field_err(
-            path,
-            "simulation.plant",
-            "a [task] runs on the rolling plant (\"rolling\")",
         )),
         (_, Some(_)) if file.uncertainty.is_some() => Err(field_err(
             path,

@@ -290,6 +290,22 @@ pub fn load_task(
         },
     )
     .map_err(|e| field_err(path, "robot.transport_posture (mesh surfaces)", e))?;
+    let grasp_pose = SE3::from_isometry(&target);
+    let carried = carried_geometry(model, &geometry, ee_frame, obj, &grasp_pose)
+        .map_err(|e| field_err(path, "task.object", e))?;
+    if let Some((link, depth)) = carried_object_touch(model, &carried, &posture) {
+        return Err(field_err(
+            path,
+            "robot.transport_posture",
+            format!(
+                "with '{}' held at its grasp (task.object, task.grasp) the object enters \
+                 '{link}' by {:.1} mm at this posture: choose a transport posture (or a \
+                 grasp) that holds it clear of the robot",
+                obj.id,
+                depth * 1e3
+            ),
+        ));
+    }
     let payload_robot = with_payload(robot, ee_frame, spec.mass, &object_in_grasp);
     let mut scene_after_grasp = scene.clone();
     scene_after_grasp.objects.retain(|o| o.id != spec.object);
@@ -413,6 +429,79 @@ pub(super) fn arm_chain(robot: &WheeledModel, ee_frame: FrameIndex) -> Vec<usize
     }
     chain.reverse();
     chain
+}
+
+/// The robot's geometry `geometry` with the picked object `object` attached as one more
+/// link, fixed to the body of the end effector `ee_frame` at its grasp: the object's
+/// shapes (world, scene as placed) seen from the end effector at `grasp` (its world pose
+/// at the grasp). The links it may touch: those on the end effector's body and on the
+/// bodies below it (the gripper and its fingers, which hold it) and the object's own
+/// `touch_links`.
+///
+/// # Errors
+/// As [`GeometryModel::with_attached`].
+fn carried_geometry(
+    model: &crate::multibody::Model,
+    geometry: &GeometryModel,
+    ee_frame: FrameIndex,
+    object: &SceneObject,
+    grasp: &SE3,
+) -> Result<GeometryModel> {
+    let fr = &model.frames[ee_frame.0];
+    let joint = fr.parent_joint;
+    let shapes: Vec<_> = object
+        .shapes
+        .iter()
+        .map(|s| {
+            (
+                fr.placement.compose(&grasp.inverse_compose(&s.pose)),
+                s.shape.clone(),
+            )
+        })
+        .collect();
+    let below_ee = |mut j: usize| loop {
+        if j == joint.0 {
+            return true;
+        }
+        if j == 0 {
+            return false;
+        }
+        j = model.parents[j].0;
+    };
+    let touch: Vec<usize> = geometry
+        .links
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| below_ee(l.joint.0) || object.touch_links.contains(&l.name))
+        .map(|(k, _)| k)
+        .collect();
+    geometry.with_attached(&object.id, joint, &shapes, &touch)
+}
+
+/// The link the held object (the last link of `carried`, [`carried_geometry`]) enters
+/// at the configuration `posture`, and how deep (m): the deepest of its enabled pairs by
+/// the collision module's signed distances (hulls, and the mesh surfaces of the swapped
+/// links); `None` when it touches nothing.
+fn carried_object_touch(
+    model: &crate::multibody::Model,
+    carried: &GeometryModel,
+    posture: &[f64],
+) -> Option<(String, f64)> {
+    let mut data = Data::new(model);
+    crate::kinematics::forward_kinematics(model, &mut data, &DVector::from_column_slice(posture));
+    let mut gd = GeometryData::new(carried);
+    update_geometry_placements(carried, &data, &mut gd);
+    compute_distances(carried, &mut gd, PairSelection::Enabled);
+    let held = carried.links.len() - 1;
+    carried
+        .pairs
+        .iter()
+        .enumerate()
+        .filter(|&(p, pair)| carried.enabled[p] && pair[1] == held)
+        .map(|(p, pair)| (gd.results[p].distance, pair[0]))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .filter(|&(d, _)| d <= 0.0)
+        .map(|(d, link)| (carried.links[link].name.clone(), -d))
 }
 
 /// `robot` with a point mass `mass` at `offset` in the frame `frame` added to the frame's

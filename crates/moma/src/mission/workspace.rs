@@ -115,10 +115,13 @@ impl Workspace {
         })
     }
 
-    /// The plant and the monitors take `robot` (the same joints, other inertias: the
-    /// payload attached).
+    /// The plant (the contact plant too) and the monitors take `robot` (the same joints,
+    /// other inertias: the payload attached).
     pub(super) fn attach(&mut self, robot: &WheeledModel, mu: f64) -> Result<()> {
         self.sys = WheeledSystem::new(robot.clone());
+        if let Some(cl) = &mut self.contact {
+            cl.attach(robot);
+        }
         self.monitor = StabilityMonitor::new(robot, monitor_settings(mu))?;
         Ok(())
     }

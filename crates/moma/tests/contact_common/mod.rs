@@ -31,10 +31,7 @@ pub fn diffdrive_arm_plant_on(model: Model, params: ContactParams) -> ContactPla
         joint: j.into(),
         radius: WHEEL_RADIUS,
     });
-    let casters = [CasterSpec {
-        frame: "caster".into(),
-        radius: CASTER_RADIUS,
-    }];
+    let casters = [CasterSpec::on_frame("caster", CASTER_RADIUS)];
     ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
 }
 
