@@ -4,29 +4,14 @@
 //! plant's own slip flag makes the event; bad contact parameters are errors naming the
 //! field before anything runs.
 
-use std::path::{Path, PathBuf};
+mod mission_common;
 
-use moma::mission::{self, Mission, MissionFile, MissionResult, scenario::from_file};
-
-fn scenarios() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
-}
-
-fn load(name: &str) -> Mission {
-    mission::load(&scenarios().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn run(m: &Mission) -> MissionResult {
-    mission::run(m).unwrap_or_else(|e| panic!("{}: {e}", m.name))
-}
+use mission_common::{load, run};
+use moma::mission::{self, Mission, MissionResult};
 
 /// `mission_contact.toml` with `from` replaced by `to`, validated as if it were the file.
 fn variant(from: &str, to: &str) -> moma::Result<Mission> {
-    let path = scenarios().join("mission_contact.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    assert!(text.contains(from), "mission_contact.toml lacks '{from}'");
-    let file: MissionFile = toml::from_str(&text.replacen(from, to, 1)).expect("parses");
-    from_file(file, &path, &scenarios())
+    mission_common::variant("mission_contact.toml", from, to)
 }
 
 /// Largest deviations of the contact run from the rolling run, sample by sample (the
@@ -185,13 +170,12 @@ fn bad_contact_input_names_the_field_before_running() {
         assert!(e.contains("mission_contact.toml"), "{to}: {e}");
     }
     // the contact plant needs its table
-    let path = scenarios().join("mission.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let file: MissionFile =
-        toml::from_str(&text.replace("[output]", "[simulation]\nplant = \"contact\"\n[output]"))
-            .unwrap();
-    let e = from_file(file, &path, &scenarios())
-        .unwrap_err()
-        .to_string();
+    let e = mission_common::variant(
+        "mission.toml",
+        "[output]",
+        "[simulation]\nplant = \"contact\"\n[output]",
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("simulation.plant"), "{e}");
 }

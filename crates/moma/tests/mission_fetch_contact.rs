@@ -6,34 +6,14 @@
 //! base on its wheels and casters, and the can's weight reaches the ground after the
 //! grasp. Casters given wrongly, or below the ground, are errors naming the field.
 
-use std::path::{Path, PathBuf};
-
 use moma::dynamics::center_of_mass;
-use moma::mission::{self, Mission, MissionResult, scenario};
+mod mission_common;
+
+use mission_common::{load, run, variant};
+use moma::mission::{Mission, MissionResult};
 use moma::multibody::Data;
 use moma::stability::{GravitoInertialWrench, contact_normal_loads};
 use nalgebra::{DVector, Vector2, Vector3};
-
-fn scenarios() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
-}
-
-fn load(name: &str) -> Mission {
-    mission::load(&scenarios().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn run(m: &Mission) -> MissionResult {
-    mission::run(m).unwrap_or_else(|e| panic!("{}: {e}", m.name))
-}
-
-/// `name` with `from` replaced by `to`, loaded as if it were the file.
-fn variant(name: &str, from: &str, to: &str) -> moma::Result<Mission> {
-    let path = scenarios().join(name);
-    let text = std::fs::read_to_string(&path).unwrap();
-    assert!(text.contains(from), "{name} lacks '{from}'");
-    let f = scenario::parse_file(&text.replace(from, to), &path)?;
-    scenario::from_file(f, &path, &scenarios())
-}
 
 /// The static normal loads of the rolling model's support (the two wheel contacts, then
 /// the casters of its casters file) at the reduced configuration `q`, at rest: the
@@ -236,13 +216,7 @@ fn casters_by_position_are_checked_by_field() {
         ),
     ];
     for (to, expected) in cases {
-        let path = scenarios().join(f);
-        let text = std::fs::read_to_string(&path).unwrap();
-        assert!(text.contains(first));
-        let e = scenario::parse_file(&text.replacen(first, to, 1), &path)
-            .and_then(|file| scenario::from_file(file, &path, &scenarios()))
-            .expect_err(to)
-            .to_string();
+        let e = variant(f, first, to).expect_err(to).to_string();
         assert!(e.contains(expected), "{to}: {e}");
         assert!(e.contains(f), "{to}: {e}");
     }
