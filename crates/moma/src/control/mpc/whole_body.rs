@@ -279,7 +279,7 @@ impl WholeBodyMpc {
     /// `q_start` (a full configuration of the robot's model).
     ///
     /// # Errors
-    /// [`Error::Invalid`] for a horizon shorter than one stage, a non-positive step or
+    /// [`Error::InvalidInput`] for a horizon shorter than one stage, a non-positive step or
     /// acceleration bound, or a configuration of the wrong length.
     pub fn new(robot: MpcRobot, settings: MpcSettings, q_start: &DVector<f64>) -> Result<Self> {
         if settings.stages == 0 {
@@ -359,7 +359,7 @@ impl WholeBodyMpc {
     /// after the first solve, starts from the previous solution shifted one stage.
     ///
     /// # Errors
-    /// [`Error::Invalid`] for states of the wrong length; what the model reports.
+    /// [`Error::InvalidInput`] for states of the wrong length; what the model reports.
     pub fn solve(&mut self, q: &[f64], v_r: &[f64]) -> Result<SolveReport> {
         let start = Instant::now();
         let robot = &self.problem.robot;
@@ -425,7 +425,7 @@ impl WholeBodyMpc {
     /// within the period.
     ///
     /// # Errors
-    /// [`Error::Invalid`] for states of the wrong length.
+    /// [`Error::InvalidInput`] for states of the wrong length.
     pub fn first_input_torques_at(
         &mut self,
         q: &[f64],
@@ -461,7 +461,8 @@ impl WholeBodyMpc {
     }
 }
 
-/// [`Error::Invalid`] unless `q` and `v_r` are a plant state of `robot` (nq and nr long).
+/// [`Error::InvalidInput`] unless `q` and `v_r` are a plant state of `robot` (nq and nr
+/// long).
 fn check_plant_state(robot: &MpcRobot, q: &[f64], v_r: &[f64]) -> Result<()> {
     let (nq, nr) = (robot.wheeled.model.nq, robot.wheeled.nr());
     if q.len() != nq || v_r.len() != nr {
