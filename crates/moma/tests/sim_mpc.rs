@@ -1,6 +1,7 @@
 //! The whole-body MPC in closed loop on Fetch's reduced-model plant: reaching a target
 //! beside the path while the base drives, and the tip-over constraint holding the ZMP
-//! margin where the unconstrained MPC lets it go negative.
+//! margin where the unconstrained MPC lets it go negative; the torques of a planned
+//! input, recomputed at a state the plant moved to, realising that input there.
 
 mod mpc_common;
 
@@ -9,7 +10,7 @@ use moma::control::mpc::{KnotReference, MpcSettings};
 use moma::sim::mpc_loop::{MpcLoopSettings, run_mpc_loop};
 use moma::sim::mpc_run::MpcRun;
 use moma::sim::wheeled_system::WheeledSystem;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
 
 /// The reach-on-the-move scenario: the base follows y = 0 at 0.3 m/s for the whole run;
 /// from t = 1 s the gripper is asked to a point 0.45 m right of the path at x = 1.0 m,
@@ -213,4 +214,64 @@ fn the_shipped_scenario_is_the_reach_on_the_move_loop() {
     assert_eq!(e[0], direct.samples[40].ee_error.unwrap());
     assert_eq!(e[1], direct.samples[40].q[0] - 0.3 * 2.0);
     assert!(res.error_row(0)[0].is_nan(), "no target before t = 1 s");
+}
+
+/// Between solves the torques of the planned input are recomputed at the measured state:
+/// there they give the planned acceleration `[v̇, ω̇, q̈_c]` (the plant's forward dynamics
+/// of them, not the inverse dynamics that made them), where the torques of the solve's
+/// state, held, give another.
+#[test]
+fn the_planned_input_is_realised_at_a_state_the_plant_moved_to() {
+    use moma::mobile::wheeled::{WheeledData, reduced_forward_dynamics_crba};
+    let (mut mpc, q0) = mpc_common::fetch_mpc(None, MpcSettings::default());
+    let nr = mpc.problem.robot.wheeled.nr();
+    let v0 = DVector::zeros(nr);
+    mpc.set_reference(0.0, |_| KnotReference {
+        base: [0.5, 0.0, 0.0],
+        end_effector: Some((Vector3::new(0.8, -0.3, 0.9), Matrix3::identity())),
+    });
+    mpc.solve(q0.as_slice(), v0.as_slice()).unwrap();
+    let input = mpc.first_input().clone();
+    let robot = mpc.problem.robot.clone();
+    let n = robot.n_moved();
+    assert!(input.amax() > 0.1, "a plan that moves: {input}");
+    // Where the plant is partway through the period: base and moved joints displaced and
+    // moving (the held joints stay put, as the MPC's model holds them).
+    let (mut q1, mut v1) = (q0.clone(), v0.clone());
+    q1[2] += 0.05;
+    v1[0] = 0.3;
+    v1[1] = -0.4;
+    for i in 0..n {
+        q1[robot.dofs[i]] += 0.02 * (i as f64 + 1.0);
+        v1[robot.reduced[i]] = 0.6 * if i % 2 == 0 { 1.0 } else { -1.0 };
+    }
+    let nu = robot.wheeled.nu();
+    let mut wd = WheeledData::new(&robot.wheeled);
+    let mut realised = |tau: &[f64]| {
+        reduced_forward_dynamics_crba(&robot.wheeled, &mut wd, &q1, &v1, tau)
+            .unwrap()
+            .clone()
+    };
+    let planned_error = |a: &DVector<f64>| {
+        let mut e: f64 = (a[0] - input[0]).abs().max((a[1] - input[1]).abs());
+        for i in 0..n {
+            e = e.max((a[robot.reduced[i]] - input[2 + i]).abs());
+        }
+        e
+    };
+    let mut tau_now = vec![0.0; nu];
+    mpc.first_input_torques_at(q1.as_slice(), v1.as_slice(), &mut tau_now, false)
+        .unwrap();
+    let a_now = realised(&tau_now);
+    assert!(planned_error(&a_now) < 1e-9, "{a_now} vs {input}");
+    let mut tau_held = vec![0.0; nu];
+    mpc.first_input_torques_at(q0.as_slice(), v0.as_slice(), &mut tau_held, false)
+        .unwrap();
+    let a_held = realised(&tau_held);
+    assert!(planned_error(&a_held) > 0.1, "{a_held} vs {input}");
+    // A state of the wrong length is an error, not a panic.
+    let e = mpc
+        .first_input_torques_at(&q1.as_slice()[1..], v1.as_slice(), &mut tau_now, false)
+        .unwrap_err();
+    assert!(e.to_string().contains("mpc state"), "{e}");
 }

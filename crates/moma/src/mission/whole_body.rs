@@ -27,7 +27,7 @@ type KnotSource = Box<dyn FnMut(f64) -> KnotReference>;
 /// What one control step of the law did.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Tick {
-    /// The torques applied over this step (the last solve's) were clipped at a limit.
+    /// The torques applied over this step were clipped at a limit.
     pub torque_clipped: bool,
     /// The end effector's error (m) when it first came within the tolerance, at this step.
     pub touched: Option<f64>,
@@ -47,8 +47,6 @@ pub(super) struct WholeBodyLaw {
     plans: Option<usize>,
     /// Mission time the end effector first came within the tolerance (s).
     pub touched_at: Option<f64>,
-    /// The last solve's torques were clipped.
-    clipped: bool,
 }
 
 impl WholeBodyLaw {
@@ -73,7 +71,6 @@ impl WholeBodyLaw {
             tolerance,
             plans: None,
             touched_at: None,
-            clipped: false,
         }
     }
 
@@ -95,8 +92,11 @@ impl WholeBodyLaw {
     }
 
     /// Control step `k` at time `t` from the measured `(q, v)`: every `every` steps a
-    /// solve, whose torques (clipped to the limits) it writes into `u`; in between `u`
-    /// keeps them.
+    /// solve; at every step the torques that realise the last solve's first planned input
+    /// at `(q, v)` (clipped to the limits) into `u`. Holding the planned acceleration
+    /// rather than the solve's torques keeps the plant on the plan between solves: on
+    /// Fetch a held torque let the light roll joints drift within the period and the
+    /// warehouse mission diverge.
     ///
     /// # Errors
     /// What the MPC reports.
@@ -110,11 +110,11 @@ impl WholeBodyLaw {
     ) -> Result<Tick> {
         if !k.is_multiple_of(self.every) {
             return Ok(Tick {
-                torque_clipped: self.clipped,
+                torque_clipped: self.law.hold_input(q, v, u)?,
                 touched: None,
             });
         }
-        self.clipped = self.law.control(t, q, v, u)?.torque;
+        let torque_clipped = self.law.control(t, q, v, u)?.torque;
         let error = self.law.samples().last().and_then(|s| s.ee_error);
         let mut touched = None;
         if let Some(e) = error
@@ -125,7 +125,7 @@ impl WholeBodyLaw {
             touched = Some(e);
         }
         Ok(Tick {
-            torque_clipped: self.clipped,
+            torque_clipped,
             touched,
         })
     }

@@ -5,14 +5,18 @@
 //! At each control tick the law sets the MPC's reference over the horizon from
 //! `reference(t)`, solves from the measured `(q, v)` (warm-started from the previous
 //! solution), and realises the first planned input `[v̇, ω̇, q̈_c]` as actuator torques
-//! by [`WholeBodyMpc::first_torques`]: the MPC's own computed torque on the reduced model,
-//! `(N_Cᵀ S)⁻¹ (Mr a + cr + Gr)` at the state the MPC solved from (the joints it does not
-//! move held: zero velocity and acceleration), the very torques its torque constraint
-//! bounds; they are clipped to the robot's torque limits. It then records one
-//! [`MpcSample`]: the solve report, the torques, the largest torque beyond its limit
-//! before clipping, the ZMP margin of the acceleration those torques give on the MPC's
-//! model of the robot at the measured state, the clearance (enabled self pairs and the
-//! scene) and the end-effector error.
+//! by [`WholeBodyMpc::first_input_torques_at`]: the MPC's own computed torque on the
+//! reduced model, `(N_Cᵀ S)⁻¹ (Mr a + cr + Gr)` at the state the MPC solved from (the
+//! joints it does not move held: zero velocity and acceleration), the very torques its
+//! torque constraint bounds; they are clipped to the robot's torque limits. It then
+//! records one [`MpcSample`]: the solve report, the torques, the largest torque beyond its
+//! limit before clipping, the ZMP margin of the acceleration those torques give on the
+//! MPC's model of the robot at the measured state, the clearance (enabled self pairs and
+//! the scene) and the end-effector error.
+//!
+//! A caller that applies torques more often than it solves (`moma mission`'s law `mpc`)
+//! calls [`MpcLaw::hold_input`] in between: the same inverse dynamics of the same planned
+//! input at the measured state, so it holds the planned acceleration, not the torques.
 //!
 //! Tracking errors: end-effector position error (NaN while no target is set) and the
 //! base pose error to the reference. Signals: solve time, iterations and planned ZMP
@@ -78,6 +82,32 @@ impl<R: FnMut(f64) -> KnotReference> MpcLaw<R> {
     /// dropped), warm-started from the last solution as every tick is.
     pub fn set_reference(&mut self, reference: R) {
         self.reference = reference;
+    }
+
+    /// Between solves: the torques that realise the last solve's first planned input
+    /// `[v̇, ω̇, q̈_c]` at the measured `(q, v)`
+    /// ([`WholeBodyMpc::first_input_torques_at`]), clipped to the limits as at a solve;
+    /// whether they were clipped. A caller that solves less often than it applies
+    /// torques holds the planned acceleration this way, the input the MPC's model holds
+    /// over a stage, instead of the solve's torques, which drift from it as the state
+    /// moves. Records no sample.
+    ///
+    /// # Errors
+    /// What the MPC reports (states of the wrong length).
+    pub fn hold_input(&mut self, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<bool> {
+        Ok(self.first_input_torques(q, v, u)? > 0.0)
+    }
+
+    /// The torques of the first planned input at `(q, v)`, clipped to the limits, into
+    /// `u`; the largest excess over a limit before clipping (≤ 0: none clipped).
+    fn first_input_torques(&mut self, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<f64> {
+        self.mpc.first_input_torques_at(q, v, u, false)?;
+        let mut excess = f64::NEG_INFINITY;
+        for (ui, &lim) in u.iter_mut().zip(self.mpc.problem.robot.torque_limit.iter()) {
+            excess = excess.max(ui.abs() - lim);
+            *ui = ui.clamp(-lim, lim);
+        }
+        Ok(excess)
     }
 
     /// One sample per control tick so far.
@@ -153,13 +183,8 @@ impl<R: FnMut(f64) -> KnotReference> FeedbackLaw for MpcLaw<R> {
         let solve = self.mpc.solve(q, v)?;
         // The torques of the first planned input: the MPC's own inverse dynamics of the
         // reduced model (those its torque constraint bounds), clipped to the limits.
-        self.mpc.first_torques(u, false)?;
+        let excess = self.first_input_torques(q, v, u)?;
         let robot = &self.mpc.problem.robot;
-        let mut excess: f64 = 0.0;
-        for (ui, &lim) in u.iter_mut().zip(robot.torque_limit.iter()) {
-            excess = excess.max(ui.abs() - lim);
-            *ui = ui.clamp(-lim, lim);
-        }
         // What these torques do: the acceleration, hence the ZMP, on the MPC's model.
         self.q.copy_from_slice(q);
         self.v.copy_from_slice(v);

@@ -267,6 +267,10 @@ pub struct WholeBodyMpc {
     /// The last solution (the warm start of the next solve).
     pub solution: Trajectory,
     x0: DVector<f64>,
+    /// The plant state of the last [`WholeBodyMpc::first_input_torques_at`]: MPC state
+    /// and full configuration (the held joints' positions).
+    x_now: DVector<f64>,
+    hold_now: DVector<f64>,
     solved_once: bool,
 }
 
@@ -275,7 +279,7 @@ impl WholeBodyMpc {
     /// `q_start` (a full configuration of the robot's model).
     ///
     /// # Errors
-    /// [`Error::Invalid`] for a horizon shorter than one stage, a non-positive step or
+    /// [`Error::InvalidInput`] for a horizon shorter than one stage, a non-positive step or
     /// acceleration bound, or a configuration of the wrong length.
     pub fn new(robot: MpcRobot, settings: MpcSettings, q_start: &DVector<f64>) -> Result<Self> {
         if settings.stages == 0 {
@@ -337,6 +341,8 @@ impl WholeBodyMpc {
             solver: Solver::new(nx, nu, n),
             solution: Trajectory::zeros(nx, nu, n),
             x0: DVector::zeros(nx),
+            x_now: DVector::zeros(nx),
+            hold_now: q_start.clone(),
             solved_once: false,
         })
     }
@@ -353,22 +359,11 @@ impl WholeBodyMpc {
     /// after the first solve, starts from the previous solution shifted one stage.
     ///
     /// # Errors
-    /// [`Error::Invalid`] for states of the wrong length; what the model reports.
+    /// [`Error::InvalidInput`] for states of the wrong length; what the model reports.
     pub fn solve(&mut self, q: &[f64], v_r: &[f64]) -> Result<SolveReport> {
         let start = Instant::now();
         let robot = &self.problem.robot;
-        if q.len() != robot.wheeled.model.nq || v_r.len() != robot.wheeled.nr() {
-            return Err(Error::invalid(
-                "mpc state",
-                format!(
-                    "q has {} (nq = {}), v has {} (nr = {})",
-                    q.len(),
-                    robot.wheeled.model.nq,
-                    v_r.len(),
-                    robot.wheeled.nr()
-                ),
-            ));
-        }
+        check_plant_state(robot, q, v_r)?;
         robot.state_from_plant(q, v_r, &mut self.x0);
         self.problem.hold.copy_from_slice(q);
         let p = &mut self.problem;
@@ -417,21 +412,37 @@ impl WholeBodyMpc {
         })
     }
 
-    /// The actuator torques that realise the first planned input at the state of the
-    /// last solve (inverse dynamics of the reduced model), written into `tau` (nu of the
-    /// full model: wheels, then every arm joint); held joints get the torque that keeps
-    /// their acceleration zero. Clipped to the limits when `clip`.
+    /// The actuator torques that realise the first planned input `[v̇, ω̇, q̈_c]` at the
+    /// plant state `(q, v_r)` (inverse dynamics of the reduced model), written into `tau`
+    /// (nu of the full model: wheels, then every arm joint); the joints the MPC does not
+    /// move are held at `q`'s positions and get the torque that keeps their acceleration
+    /// zero. Clipped to the limits when `clip`.
+    ///
+    /// At the state of the last solve these are the torques its torque constraint bounds.
+    /// Between solves, at the measured state, they keep the planned acceleration (the
+    /// input the MPC's model holds over a stage) where a torque held from the solve drifts
+    /// from it as the state moves: the velocity and gravity terms of a light joint change
+    /// within the period.
     ///
     /// # Errors
-    /// What the model reports.
-    pub fn first_torques(&mut self, tau: &mut [f64], clip: bool) -> Result<()> {
+    /// [`Error::InvalidInput`] for states of the wrong length.
+    pub fn first_input_torques_at(
+        &mut self,
+        q: &[f64],
+        v_r: &[f64],
+        tau: &mut [f64],
+        clip: bool,
+    ) -> Result<()> {
         let p = &mut self.problem;
+        check_plant_state(&p.robot, q, v_r)?;
+        p.robot.state_from_plant(q, v_r, &mut self.x_now);
+        self.hold_now.copy_from_slice(q);
         p.ws.distance_cutoff = f64::NEG_INFINITY;
         evaluate_knot(
             &p.robot,
             &mut p.ws,
-            &p.hold,
-            &self.x0,
+            &self.hold_now,
+            &self.x_now,
             Some(&self.solution.us[0]),
             false,
         );
@@ -448,4 +459,21 @@ impl WholeBodyMpc {
     pub fn first_input(&self) -> &DVector<f64> {
         &self.solution.us[0]
     }
+}
+
+/// [`Error::InvalidInput`] unless `q` and `v_r` are a plant state of `robot` (nq and nr
+/// long).
+fn check_plant_state(robot: &MpcRobot, q: &[f64], v_r: &[f64]) -> Result<()> {
+    let (nq, nr) = (robot.wheeled.model.nq, robot.wheeled.nr());
+    if q.len() != nq || v_r.len() != nr {
+        return Err(Error::invalid(
+            "mpc state",
+            format!(
+                "q has {} (nq = {nq}), v has {} (nr = {nr})",
+                q.len(),
+                v_r.len()
+            ),
+        ));
+    }
+    Ok(())
 }
