@@ -135,7 +135,7 @@ fn the_pick_runs_on_the_contact_plant_and_the_can_loads_the_ground() {
     assert!(r.reached, "{:?}", r.reason);
     let tr = r.task.as_ref().expect("a task record");
     let stages: Vec<&str> = tr.arm_plans.iter().map(|a| a.stage.as_str()).collect();
-    assert_eq!(stages, ["approach", "grasp", "retreat"]);
+    assert_eq!(stages, ["approach", "grasp", "lift", "retreat"]);
     assert!(tr.min_scene_distance.unwrap() > 0.0);
     assert!(tr.min_self_distance.unwrap() > 0.0);
     let tally = r.contact.as_ref().expect("a contact run has its tally");
@@ -153,7 +153,7 @@ fn the_pick_runs_on_the_contact_plant_and_the_can_loads_the_ground() {
     // the base held still on its wheels while the arm moved: within 1 cm of where the
     // approach began
     let arm: Vec<usize> = (0..s.t.len())
-        .filter(|&k| ["approach", "grasp", "retreat"].contains(&s.phase[k]))
+        .filter(|&k| ["approach", "grasp", "lift", "retreat"].contains(&s.phase[k]))
         .collect();
     let q0 = &s.q[arm[0]];
     let drift = arm

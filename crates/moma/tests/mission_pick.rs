@@ -1,10 +1,13 @@
 //! The shipped pick mission (`scenarios/mission_fetch_pick.toml`): Fetch drives to the
 //! placement its planner reaches, grasps Can2 on the bookshelf (the gripper at the grasp
 //! by forward kinematics), attaches the can (the ZMP monitor's margin changes at the same
-//! state, the drive on is timed under the tip-over limits with it), retreats without
-//! touching the scene or itself and drives on to its goal; bad `[task]` input names the
-//! field (and the object); a transport posture that holds the grasped can inside the
-//! robot is refused at load.
+//! state, the drive on is timed under the tip-over limits with it), lifts and retreats
+//! without touching the scene or itself and drives on to its goal; bad `[task]` input
+//! names the field (and the object); a transport posture that holds the grasped can inside
+//! the robot is refused at load. After the grasp the can is carried: the distance monitor
+//! measures it (naming it on a touch), the retreat is planned with it (a path planned
+//! without it would carry it through a lowered shelf board), and the drive on's footprint
+//! holds it.
 
 use moma::kinematics::{forward_kinematics, update_frame_placements};
 use moma::mission::{load, run, scenario, transport_tip_limits};
@@ -60,7 +63,7 @@ fn the_shipped_pick_mission_reaches_picks_and_never_touches() {
     assert!(p.base[1] >= area[1] - 1e-9 && p.base[1] <= area[3] + 1e-9);
     // three arm motions, each solved, in order
     let stages: Vec<&str> = tr.arm_plans.iter().map(|a| a.stage.as_str()).collect();
-    assert_eq!(stages, ["approach", "grasp", "retreat"]);
+    assert_eq!(stages, ["approach", "grasp", "lift", "retreat"]);
     assert!(tr.arm_plans.iter().all(|a| a.solved && a.checks > 0));
     // the payload is attached after the grasp motion, and the ZMP margin at that state
     // differs with it
@@ -89,7 +92,11 @@ fn the_shipped_pick_mission_reaches_picks_and_never_touches() {
     // the samples after the attach are the retreat's, then the drive on's
     let phases: Vec<&str> = r.samples.phase[k..].to_vec();
     let first_drive = phases.iter().position(|&ph| ph == "drive").unwrap();
-    assert!(phases[..first_drive].iter().all(|&ph| ph == "retreat"));
+    assert!(
+        phases[..first_drive]
+            .iter()
+            .all(|&ph| ph == "lift" || ph == "retreat")
+    );
     assert!(
         phases[first_drive..]
             .iter()
@@ -98,6 +105,34 @@ fn the_shipped_pick_mission_reaches_picks_and_never_touches() {
     // never touched: the executed arm motions kept clear of the scene and of itself
     assert!(tr.min_scene_distance.unwrap() > 0.0);
     assert!(tr.min_self_distance.unwrap() > 0.0);
+    // from the attach on the monitor measured the held can: its distances to the scene
+    // (but its support, the board it stands 10 mm into) and to the robot at every
+    // retreat sample, computed here on the carrying geometry, are no smaller than the
+    // monitor's minima, and the can kept clear
+    assert_eq!(task.support, ["shelf_bottom"]);
+    assert_eq!(tr.support, ["shelf_bottom"]);
+    let retreat: Vec<Vec<f64>> = (k..r.samples.t.len())
+        .filter(|&i| r.samples.phase[i] == "retreat")
+        .map(|i| r.samples.q[i].clone())
+        .collect();
+    let (can_scene, can_self) = can_distances_over(&m, &task.scene_after_grasp, &retreat);
+    eprintln!(
+        "the held can along the retreat: {can_scene} m from the scene, {can_self} m from the robot"
+    );
+    assert!(can_scene > 0.0 && can_self > 0.0, "{can_scene} {can_self}");
+    assert!(tr.min_scene_distance.unwrap() <= can_scene + 1e-9);
+    assert!(tr.min_self_distance.unwrap() <= can_self + 1e-9);
+    // the drive on went with the footprint that holds the can
+    assert_eq!(
+        tr.drive_on_footprint_radius,
+        Some(task.carrying_footprint.radius)
+    );
+    assert!(task.carrying_footprint.radius > m.footprint.radius);
+    assert!(r.events.iter().any(|e| {
+        e.kind == "footprint"
+            && e.text
+                .starts_with("driving on with 'Can2': the footprint holds it")
+    }));
     assert!(r.min_clearance().unwrap() > 0.0);
     assert!(r.min_zmp_margin().unwrap() > 0.0);
 }
@@ -198,12 +233,18 @@ fn a_query_file_gives_the_grasp_of_its_object() {
 /// The pick mission with the shipped scene plus `extra` (MoveIt YAML collision objects,
 /// in the scene's frame), written to a fresh folder.
 fn with_scene_objects(tag: &str, extra: &str) -> moma::Result<moma::mission::Mission> {
+    with_scene(tag, |shipped| format!("{}\n{extra}", shipped.trim_end()))
+}
+
+/// The pick mission with the shipped scene's text passed through `edit`, written to a
+/// fresh folder.
+fn with_scene(tag: &str, edit: impl Fn(&str) -> String) -> moma::Result<moma::mission::Mission> {
     let dir = std::env::temp_dir().join(format!("moma-pick-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let shipped =
         std::fs::read_to_string(root().join("scenarios/scenes/bookshelf_small_can1.yaml")).unwrap();
     let scene = dir.join("scene.yaml");
-    std::fs::write(&scene, format!("{}\n{extra}", shipped.trim_end())).unwrap();
+    std::fs::write(&scene, edit(&shipped)).unwrap();
     let path = mission_path();
     let text = std::fs::read_to_string(&path).unwrap().replace(
         "scene = \"scenes/bookshelf_small_can1.yaml\"",
@@ -259,5 +300,254 @@ fn a_table_top_the_robot_clears_is_left_off_the_map_its_legs_are_not() {
     assert!(
         err.contains("task.pose") && err.contains("'table_top'"),
         "{err}"
+    );
+}
+
+/// The configuration with the platform at the origin (the base frame on the world frame),
+/// the arm joints at `arm` (one per arm dof), the wheels at zero.
+fn at_posture(m: &moma::mission::Mission, arm: &[f64]) -> Vec<f64> {
+    let mut q = vec![0.0; m.robot.model.nq];
+    for (&i, &a) in m.robot.arm_dofs().iter().zip(arm) {
+        q[i] = a;
+    }
+    q
+}
+
+/// The world pose of the held can at the configuration `q`: the end effector's pose
+/// there composed with the can's pose seen from the grasp (forward kinematics, not the
+/// attached geometry).
+fn can_pose(m: &moma::mission::Mission, q: &[f64]) -> moma::spatial::SE3 {
+    let task = m.task.as_ref().unwrap();
+    let model = &m.robot.model;
+    let mut data = Data::new(model);
+    forward_kinematics(model, &mut data, &DVector::from_column_slice(q));
+    update_frame_placements(model, &mut data);
+    let ee = data.world_from_frame[task.grasp.frame.0];
+    let grasp = moma::spatial::SE3::from_isometry(&task.grasp.target);
+    let can = task.scene.objects.iter().find(|o| o.id == "Can2").unwrap();
+    ee.compose(&grasp.inverse_compose(&can.shapes[0].pose))
+}
+
+#[test]
+fn after_the_grasp_the_distance_monitor_measures_the_held_can() {
+    use moma::collision::{Convex, SceneObject};
+    use moma::mission::task::{DistanceMonitor, Holding};
+    let m = load(&mission_path()).unwrap();
+    let task = m.task.as_ref().unwrap();
+    // a 2 cm cube where the can is at the shipped transport posture (the can 46.6 mm
+    // clear of the robot): the robot alone clears it, the held can touches it
+    let q = at_posture(&m, &m.transport);
+    let cube = SceneObject::new(
+        "cube",
+        vec![(
+            can_pose(&m, &q),
+            Convex::Box {
+                half: nalgebra::Vector3::repeat(0.01),
+            },
+        )],
+    )
+    .unwrap();
+    let mut task = task.clone();
+    task.scene.objects.push(cube.clone());
+    task.scene_after_grasp.objects.push(cube);
+    let mut dm = DistanceMonitor::new(&task, &m.robot);
+    let (d_bare, _) = dm.sample(&task, &m.robot, &q, Holding::Nothing);
+    assert!(d_bare > 0.02 && dm.touch(&task).is_none(), "{d_bare}");
+    let (d_held, _) = dm.sample(&task, &m.robot, &q, Holding::Carrying);
+    assert!(d_held < -0.01, "{d_held}");
+    let why = dm.touch(&task).unwrap();
+    assert!(
+        why.starts_with("held object 'Can2' touches scene object 'cube'"),
+        "{why}"
+    );
+    assert_eq!(
+        dm.min_scene.as_ref().unwrap().1,
+        ["Can2".to_string(), "cube".to_string()]
+    );
+    // while lifting, the scene the lift checks (its support allowed to touch the can):
+    // the cube as the can's support is no touch
+    let mut support = task.scene_after_grasp.objects.last().unwrap().clone();
+    support.touch_links.push("Can2".into());
+    task.scene_lifting.objects.push(support);
+    let mut dm = DistanceMonitor::new(&task, &m.robot);
+    let (d_lifting, _) = dm.sample(&task, &m.robot, &q, Holding::Lifting);
+    assert!(d_lifting > 0.02 && dm.touch(&task).is_none(), "{d_lifting}");
+}
+
+#[test]
+fn the_drive_on_footprint_holds_the_can_where_it_sticks_out() {
+    use moma::mission::{FootprintSource, MissionFootprint};
+    let m = load(&mission_path()).unwrap();
+    let task = m.task.as_ref().unwrap();
+    let (bare, carrying) = (&m.footprint, &task.carrying_footprint);
+    let polygon = |f: &MissionFootprint| match &f.source {
+        FootprintSource::Robot { polygon, .. } => polygon.clone(),
+        FootprintSource::Radius => panic!("the shipped footprint is the robot's"),
+    };
+    let inside = |poly: &[[f64; 2]], p: [f64; 2]| {
+        (0..poly.len()).all(|k| {
+            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) >= -1e-12
+        })
+    };
+    // the can's rims at the transport posture (radius 0.03 m, 0.07 m above and below its
+    // centre), by forward kinematics: some of it outside the robot's polygon, all of it
+    // inside the carrying one
+    let can = can_pose(&m, &at_posture(&m, &m.transport));
+    let rims: Vec<[f64; 2]> = (0..64)
+        .flat_map(|k| {
+            let t = std::f64::consts::TAU * f64::from(k) / 64.0;
+            [-0.07, 0.07].map(|z| {
+                let p = can.act_point(&nalgebra::Vector3::new(0.03 * t.cos(), 0.03 * t.sin(), z));
+                [p.x, p.y]
+            })
+        })
+        .collect();
+    let (pb, pc) = (polygon(bare), polygon(carrying));
+    assert!(rims.iter().any(|&p| !inside(&pb, p)));
+    assert!(rims.iter().all(|&p| inside(&pc, p)));
+    // the robot's polygon lies inside the carrying one, which is larger
+    assert!(pb.iter().all(|&p| inside(&pc, p)));
+    assert!(
+        carrying.radius > bare.radius + 0.02,
+        "{} {}",
+        carrying.radius,
+        bare.radius
+    );
+    // where the can lies inside the polygon (a 1.2 m square about the base), the
+    // footprint is unchanged; a typed radius stays as typed
+    let square = MissionFootprint {
+        radius: 0.6f64.hypot(0.6),
+        source: FootprintSource::Robot {
+            polygon: vec![[-0.6, -0.6], [0.6, -0.6], [0.6, 0.6], [-0.6, 0.6]],
+            circumscribed: 0.6f64.hypot(0.6),
+            padding: 0.0,
+        },
+    };
+    assert_eq!(
+        square.carrying(&m.robot, &task.carried, &m.transport),
+        square
+    );
+    let typed = MissionFootprint::given(0.3);
+    assert_eq!(typed.carrying(&m.robot, &task.carried, &m.transport), typed);
+}
+
+/// The held can's smallest distance to `scene` and to the robot over the states `qs`
+/// (the carrying geometry, the can's own pairs only).
+fn can_distances_over(
+    m: &moma::mission::Mission,
+    scene: &moma::collision::Scene,
+    qs: &[Vec<f64>],
+) -> (f64, f64) {
+    use moma::collision::{
+        GeometryData, PairSelection, SceneData, compute_distances, compute_scene_distances,
+        update_geometry_placements,
+    };
+    let gm = &m.task.as_ref().unwrap().carried;
+    let can = gm.links.len() - 1;
+    let model = &m.robot.model;
+    let mut data = Data::new(model);
+    let mut gd = GeometryData::new(gm);
+    let mut sd = SceneData::new(gm, scene);
+    let no = scene.objects.len();
+    let (mut to_scene, mut to_robot) = (f64::INFINITY, f64::INFINITY);
+    for q in qs {
+        forward_kinematics(model, &mut data, &DVector::from_column_slice(q));
+        update_geometry_placements(gm, &data, &mut gd);
+        compute_distances(gm, &mut gd, PairSelection::Enabled);
+        compute_scene_distances(gm, &mut gd, scene, &mut sd);
+        for o in 0..no {
+            to_scene = to_scene.min(sd.results[can * no + o].distance);
+        }
+        for (p, pair) in gm.pairs.iter().enumerate() {
+            if gm.enabled[p] && pair[1] == can {
+                to_robot = to_robot.min(gd.results[p].distance);
+            }
+        }
+    }
+    (to_scene, to_robot)
+}
+
+#[test]
+fn the_retreat_is_planned_with_the_held_can() {
+    use moma::motion::plan::{MotionGoal, MotionOptions, MotionProblem, MotionResult, plan_motion};
+    // the shelf's top board 3 cm lower (its centre at z 1.27 m, not 1.30 m): the can,
+    // lifted, passes close under it on the way out
+    let m = with_scene("low-top", |shipped| {
+        let board = "        - position: [1.0, 0.0, 1.3]";
+        assert_eq!(shipped.matches(board).count(), 1);
+        shipped.replace(board, "        - position: [1.0, 0.0, 1.27]")
+    })
+    .unwrap();
+    let r = run(&m).unwrap();
+    assert!(r.reached, "{:?}", r.reason);
+    let task = m.task.as_ref().unwrap();
+    let tr = r.task.as_ref().unwrap();
+    // the run's retreat kept the can clear of the board (the monitor's closest pair)
+    assert_eq!(
+        tr.closest_scene_pair.as_ref().unwrap(),
+        &["Can2".to_string(), "shelf_top".to_string()]
+    );
+    let k = r
+        .samples
+        .phase
+        .iter()
+        .position(|&p| p == "retreat")
+        .unwrap();
+    let retreat: Vec<Vec<f64>> = (k..r.samples.t.len())
+        .filter(|&i| r.samples.phase[i] == "retreat")
+        .map(|i| r.samples.q[i].clone())
+        .collect();
+    let (executed, _) = can_distances_over(&m, &task.scene_after_grasp, &retreat);
+    assert!(executed > 0.0, "{executed}");
+    // the same retreat planned again from the state the lift ended in, with the can and
+    // without it: the path planned without it carries it through the board
+    let g = &task.group;
+    let mut start = r.samples.q[k - 1].clone();
+    for (j, &i) in g.q_index.iter().enumerate() {
+        start[i] = start[i].clamp(g.lower[j], g.upper[j]);
+    }
+    let mut goal = start.clone();
+    for (a, &i) in m.robot.arm_dofs().iter().enumerate() {
+        if g.q_index.contains(&i) {
+            goal[i] = m.transport[a];
+        }
+    }
+    let mut options = MotionOptions::new(g.dim());
+    options.time_limit = std::time::Duration::from_secs_f64(task.planning_time);
+    options.margin = moma::mission::task::ARM_MARGIN;
+    let plan = |geometry| {
+        let problem = MotionProblem {
+            model: &m.robot.model,
+            geometry,
+            scene: &task.scene_after_grasp,
+            group: g,
+        };
+        let out =
+            plan_motion(&problem, &start, &MotionGoal::State(goal.clone()), &options).unwrap();
+        assert!(out.not_solved.is_none(), "{:?}", out.not_solved);
+        out
+    };
+    let states = |o: &MotionResult| {
+        let mut qs = o.path.clone();
+        qs.extend(o.trajectory.as_ref().unwrap().q.iter().cloned());
+        qs
+    };
+    let with = plan(&task.carried);
+    let without = plan(&task.geometry);
+    let (with_scene, with_robot) = can_distances_over(&m, &task.scene_after_grasp, &states(&with));
+    let (without_scene, _) = can_distances_over(&m, &task.scene_after_grasp, &states(&without));
+    eprintln!(
+        "the can: {executed} m from the scene along the executed retreat; planned with it \
+         {with_scene} m, without it {without_scene} m"
+    );
+    assert!(without_scene < 0.0, "{without_scene}");
+    assert!(with_scene >= 0.5 * options.margin, "{with_scene}");
+    // the plan's smallest distance counts the can's pairs
+    let closest = with.closest.as_ref().unwrap();
+    assert!(closest.distance <= with_scene.min(with_robot) + 1e-12);
+    assert_eq!(
+        (closest.link.as_str(), closest.other.as_str()),
+        ("Can2", "shelf_top")
     );
 }

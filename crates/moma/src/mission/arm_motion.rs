@@ -11,16 +11,19 @@ pub(super) enum ArmStage {
     Approach,
     /// From the pre-grasp to the grasp.
     Grasp,
+    /// With the object, straight up off its support.
+    Lift,
     /// With the object, back to the transport posture.
     Retreat,
 }
 
 impl ArmStage {
-    /// The phase's name in the record: `approach`, `grasp`, `retreat`.
+    /// The phase's name in the record: `approach`, `grasp`, `lift`, `retreat`.
     pub(super) fn name(self) -> &'static str {
         match self {
             ArmStage::Approach => "approach",
             ArmStage::Grasp => "grasp",
+            ArmStage::Lift => "lift",
             ArmStage::Retreat => "retreat",
         }
     }

@@ -13,9 +13,12 @@
 //! the base frame origin that holds the polygon, plus the padding, is the fallback when
 //! no path the polygon passes is found.
 
-use nalgebra::DVector;
+use nalgebra::{DVector, Vector2};
 
-use crate::collision::{GeometryData, GeometryModel, footprint, update_geometry_placements};
+use crate::collision::footprint::hull_2d;
+use crate::collision::{
+    GeometryData, GeometryModel, footprint, outline_points, update_geometry_placements,
+};
 use crate::mobile::WheeledModel;
 use crate::multibody::Data;
 use crate::planning::costmap::Footprint;
@@ -95,6 +98,57 @@ impl MissionFootprint {
                 polygon,
                 circumscribed,
                 padding,
+            },
+        }
+    }
+
+    /// The footprint while carrying: with the robot's polygon, the convex hull of it and
+    /// of the held object's collision shapes (the last link of `carried`, the robot's
+    /// geometry with the object attached) projected on the ground with the arm joints at
+    /// `arm`, the platform at the origin; the same footprint when the object's outline
+    /// lies inside the polygon. A typed radius is kept as typed (it is taken to cover
+    /// what the robot carries).
+    #[must_use]
+    pub fn carrying(&self, robot: &WheeledModel, carried: &GeometryModel, arm: &[f64]) -> Self {
+        let FootprintSource::Robot {
+            polygon, padding, ..
+        } = &self.source
+        else {
+            return self.clone();
+        };
+        let Some(held) = carried.links.last() else {
+            return self.clone();
+        };
+        let gd = placed_at_posture(robot, carried, arm);
+        let mut points = Vec::new();
+        for k in held.first..held.first + held.count {
+            outline_points(&carried.objects[k].shape, &gd.placements[k], &mut points);
+        }
+        let outside = |p: &Vector2<f64>| {
+            let n = polygon.len();
+            n < 3
+                || (0..n).any(|k| {
+                    let (a, b) = (polygon[k], polygon[(k + 1) % n]);
+                    (b[0] - a[0]) * (p.y - a[1]) - (b[1] - a[1]) * (p.x - a[0]) < 0.0
+                })
+        };
+        if !points.iter().map(|p| p.xy()).any(|p| outside(&p)) {
+            return self.clone();
+        }
+        let hull = hull_2d(
+            polygon
+                .iter()
+                .map(|p| Vector2::new(p[0], p[1]))
+                .chain(points.iter().map(|p| p.xy())),
+        );
+        let polygon: Vec<[f64; 2]> = hull.iter().map(|p| [p.x, p.y]).collect();
+        let circumscribed = polygon.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+        Self {
+            radius: circumscribed + padding,
+            source: FootprintSource::Robot {
+                polygon,
+                circumscribed,
+                padding: *padding,
             },
         }
     }

@@ -1,10 +1,12 @@
 //! A `[task]`'s pick in the loop: each arm motion planned on entry from the measured
-//! state and tracked while the platform holds, the payload attached after the grasp, and
-//! the drive on to `[goal]` once the arm is back in the transport posture.
+//! state and tracked while the platform holds, the payload attached after the grasp, the
+//! object lifted off its support and carried back to the transport posture, and the
+//! drive on to `[goal]` with the footprint that holds it.
 
 use std::time::Instant;
 
 use super::arm_motion::{ArmMotion, ArmStage};
+use super::footprint::MissionFootprint;
 use super::laws::RunSettings;
 use super::plan::mission_planner;
 use super::reference::{TimingStart, axle_pose};
@@ -79,8 +81,9 @@ impl<'m> Runner<'m> {
                 ArmStage::Approach => st.phase = Phase::Arm(ArmStage::Grasp),
                 ArmStage::Grasp => {
                     self.attach_payload(task, ws, st, t);
-                    st.phase = Phase::Arm(ArmStage::Retreat);
+                    st.phase = Phase::Arm(ArmStage::Lift);
                 }
+                ArmStage::Lift => st.phase = Phase::Arm(ArmStage::Retreat),
                 ArmStage::Retreat => {
                     st.picked = true;
                     let text = format!(
@@ -118,8 +121,9 @@ impl<'m> Runner<'m> {
         true
     }
 
-    /// After the pick: plans from the placement to `goal` (the map with the obstacles
-    /// that have appeared), times the path from the robot's pose at rest under the
+    /// After the pick: plans from where the base stands (or the placement) to `goal`
+    /// with the footprint that holds the object (the map with the obstacles that have
+    /// appeared), times the path from the robot's pose at rest under the
     /// tip-over limits of the transport posture with the payload, and drives on. `false`
     /// (with the reason) when no path leads there or it cannot be timed.
     pub(super) fn drive_on_to(
@@ -134,11 +138,19 @@ impl<'m> Runner<'m> {
         let f = &m.file;
         let d = self.wm.base.drive.d;
         let clock = Instant::now();
-        // the search leaves from the placement's cell (free on the configuration space:
-        // the base was planned there), the timing from where the base stands
-        let from = axle_pose(self.goal.pose, d);
+        // the search leaves from where the base stands, or, when that cell is not free on
+        // the configuration space, from the placement's cell (free: the base was planned
+        // there); the timing from where the base stands
         let to = axle_pose(goal.pose, d);
-        let planned = mission_planner(m, from, to);
+        let task = m.task.as_ref().expect("the drive on follows a pick");
+        let footprint = &task.carrying_footprint;
+        let (from, planned) = match mission_planner(m, footprint, axle, to) {
+            Ok(p) => (axle, Ok(p)),
+            Err(_) => {
+                let placement = axle_pose(self.goal.pose, d);
+                (placement, mission_planner(m, footprint, placement, to))
+            }
+        };
         let (mut planner, mut path, search) = match planned {
             Ok(p) => p,
             Err(e) => {
@@ -177,6 +189,12 @@ impl<'m> Runner<'m> {
             return false;
         };
         self.planner = planner;
+        self.footprint = footprint;
+        c.r_foot = footprint.radius;
+        self.event(t, "footprint", carrying_text(task, &m.footprint));
+        if let Some(tr) = &mut self.task {
+            tr.drive_on_footprint_radius = Some(footprint.radius);
+        }
         self.goal = goal;
         match tip_limits_of(m, self.wm) {
             Ok(tip) => self.tip = tip,
@@ -214,7 +232,9 @@ impl<'m> Runner<'m> {
     }
 
     /// Plans the arm motion of `stage` from `q` (the measured state, its group joints
-    /// clamped into the joint box) among the task's scene; records the plan.
+    /// clamped into the joint box) among the task's scene; the lift and the retreat
+    /// carrying the object, among the scene without it (the lift's support allowed to
+    /// touch it); records the plan.
     pub(super) fn plan_arm(
         &mut self,
         task: &Task,
@@ -229,9 +249,22 @@ impl<'m> Runner<'m> {
         for (j, &i) in g.q_index.iter().enumerate() {
             start[i] = start[i].clamp(g.lower[j], g.upper[j]);
         }
-        let (scene, goal) = match stage {
-            ArmStage::Approach => (&task.scene, MotionGoal::Pose(task.pre_grasp.clone())),
-            ArmStage::Grasp => (&task.scene, MotionGoal::Pose(task.grasp.clone())),
+        let (geometry, scene, goal) = match stage {
+            ArmStage::Approach => (
+                &task.geometry,
+                &task.scene,
+                MotionGoal::Pose(task.pre_grasp.clone()),
+            ),
+            ArmStage::Grasp => (
+                &task.geometry,
+                &task.scene,
+                MotionGoal::Pose(task.grasp.clone()),
+            ),
+            ArmStage::Lift => (
+                &task.carried,
+                &task.scene_lifting,
+                MotionGoal::Pose(task.lift.clone()),
+            ),
             ArmStage::Retreat => {
                 let mut goal = start.clone();
                 for (k, &i) in m.robot.arm_dofs().iter().enumerate() {
@@ -239,7 +272,11 @@ impl<'m> Runner<'m> {
                         goal[i] = m.transport[k];
                     }
                 }
-                (&task.scene_after_grasp, MotionGoal::State(goal))
+                (
+                    &task.carried,
+                    &task.scene_after_grasp,
+                    MotionGoal::State(goal),
+                )
             }
         };
         let mut options = MotionOptions::new(g.dim());
@@ -248,7 +285,7 @@ impl<'m> Runner<'m> {
         options.margin = ARM_MARGIN;
         let problem = MotionProblem {
             model: &m.robot.model,
-            geometry: &task.geometry,
+            geometry,
             scene,
             group: g,
         };
@@ -318,11 +355,23 @@ impl<'m> Runner<'m> {
         let with = attached.ok().and_then(|()| zmp(ws));
         st.grasped = true;
         let fmt = |z: Option<f64>| z.map_or("undefined".to_string(), |z| format!("{z:.4} m"));
+        let support = if task.support.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; it may touch its support ({}) until lifted",
+                task.support
+                    .iter()
+                    .map(|s| format!("'{s}'"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        };
         self.event(
             t,
             "payload",
             format!(
-                "'{}' attached ({} kg): ZMP margin {} without it, {} with it",
+                "'{}' attached ({} kg): ZMP margin {} without it, {} with it{support}",
                 task.object,
                 task.mass,
                 fmt(without),
@@ -337,5 +386,24 @@ impl<'m> Runner<'m> {
                 zmp_margin_with: with,
             });
         }
+    }
+}
+
+/// The drive on's `footprint` event: the footprint with the held object against the
+/// mission's `bare` one.
+fn carrying_text(task: &Task, bare: &MissionFootprint) -> String {
+    let fp = &task.carrying_footprint;
+    if fp == bare {
+        format!(
+            "driving on with '{}': it lies inside the robot's footprint at the transport \
+             posture, the footprint is unchanged (radius {:.4} m)",
+            task.object, bare.radius
+        )
+    } else {
+        format!(
+            "driving on with '{}': the footprint holds it at the transport posture, radius \
+             {:.4} m ({:.4} m without it)",
+            task.object, fp.radius, bare.radius
+        )
     }
 }

@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use super::footprint::MissionFootprint;
 use super::scenario::Mission;
 use crate::error::{Error, Result};
 use crate::planning::dstar_lite::DStarLite;
@@ -431,22 +432,24 @@ impl Planner {
     }
 }
 
-/// The mission's planner between two axle-midpoint poses. With the robot's footprint
-/// polygon: searched on the largest disk about the axle midpoint inside it (padded), and
-/// every path it gives checked with the polygon at each heading; with a disk: the map
-/// dilated by it (and `|d|`).
+/// The mission's planner between two axle-midpoint poses for `footprint` (the mission's,
+/// or a `[task]`'s while carrying). With the robot's footprint polygon: searched on the
+/// largest disk about the axle midpoint inside it (padded), and every path it gives
+/// checked with the polygon at each heading; with a disk: the map dilated by it (and
+/// `|d|`).
 pub(super) fn mission_planner(
     m: &Mission,
+    footprint: &MissionFootprint,
     from: [f64; 3],
     to: [f64; 3],
 ) -> Result<(Planner, Option<CellPath>, SearchTiming)> {
     let d = m.robot.base.drive.d;
     let grid = &m.map.grid;
-    let polygon = m.footprint.planning_polygon(d);
+    let polygon = footprint.planning_polygon(d);
     let (field, radius, offset) = match &polygon {
-        Some((_, inscribed)) => ("robot.footprint", inscribed + m.footprint.padding(), 0.0),
-        None if m.file.robot.footprint.is_some() => ("robot.footprint", m.footprint.radius, d),
-        None => ("robot.footprint_radius", m.footprint.radius, d),
+        Some((_, inscribed)) => ("robot.footprint", inscribed + footprint.padding(), 0.0),
+        None if m.file.robot.footprint.is_some() => ("robot.footprint", footprint.radius, d),
+        None => ("robot.footprint_radius", footprint.radius, d),
     };
     let (mut planner, path, search) = Planner::new(
         grid,
@@ -461,7 +464,7 @@ pub(super) fn mission_planner(
         let res = grid.resolution;
         planner.polygon = Some(PolygonCheck::new(
             ConvexFootprint::new(&fp, res)?,
-            m.footprint.padding() / res,
+            footprint.padding() / res,
             d / res,
         ));
     }

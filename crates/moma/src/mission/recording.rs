@@ -5,9 +5,11 @@
 
 use nalgebra::{DVector, Vector3};
 
+use super::arm_motion::ArmStage;
 use super::laws::RunSettings;
 use super::plant::Monitors;
 use super::run::{LoopState, Phase, Runner};
+use super::task::Holding;
 use super::workspace::Workspace;
 use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::lagrange_multipliers;
@@ -81,28 +83,23 @@ impl Runner<'_> {
         }
     }
 
-    /// During a `[task]`'s arm motions: the distances of the state to the scene (without
-    /// the object once grasped) and between the robot's links; a distance ≤ 0 is a touch
-    /// and ends the run.
+    /// During a `[task]`'s arm motions: the distances of the state to the scene and
+    /// between the robot's links (once grasped, carrying the object, the scene without
+    /// it, its support allowed during the lift); a distance ≤ 0 is a touch and ends the
+    /// run.
     pub(super) fn check_arm_distances(&mut self, ws: &mut Workspace, st: &mut LoopState, t: f64) {
         let (Phase::Arm(_), Some(task), Some(dm)) =
             (st.phase, self.m.task.as_ref(), ws.distances.as_mut())
         else {
             return;
         };
-        let (d_scene, d_self) = dm.sample(task, &self.m.robot, ws.q_now.as_slice(), st.grasped);
-        let touch = if d_scene <= 0.0 {
-            dm.min_scene
-                .as_ref()
-                .map(|(d, [l, o])| format!("link '{l}' touches scene object '{o}' ({d:.4} m)"))
-        } else if d_self <= 0.0 {
-            dm.min_self
-                .as_ref()
-                .map(|(d, [a, b])| format!("link '{a}' touches link '{b}' ({d:.4} m)"))
-        } else {
-            None
+        let holding = match st.phase {
+            _ if !st.grasped => Holding::Nothing,
+            Phase::Arm(ArmStage::Lift) => Holding::Lifting,
+            _ => Holding::Carrying,
         };
-        if let Some(what) = touch {
+        dm.sample(task, &self.m.robot, ws.q_now.as_slice(), holding);
+        if let Some(what) = dm.touch(task) {
             self.event(t, "contact", what.clone());
             self.fail(t, format!("collision: {what}"));
             st.phase = Phase::Done;

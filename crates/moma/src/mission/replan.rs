@@ -124,8 +124,11 @@ impl Runner<'_> {
             let clock = Instant::now();
             let mut blocked = false;
             if repaired < POLYGON_REPAIRS {
+                // neither the search's start cell nor the one the base stands in (the
+                // timing's start, off the search's after a drive on from a placement)
                 let robot = self.planner.dstar.start();
-                for c in bad.into_iter().filter(|&c| c != robot) {
+                let here = self.cell_of(start.pose);
+                for c in bad.into_iter().filter(|&c| c != robot && c != here) {
                     blocked |= self.planner.block(c).unwrap_or(false);
                 }
             }
@@ -136,12 +139,12 @@ impl Runner<'_> {
                 // the polygon's lower bound gives no path it passes: the circumscribed disk
                 polygon = false;
                 let grid = &self.m.map.grid;
-                let radius = self.m.footprint.radius + self.wm.base.drive.d.abs();
+                let radius = self.footprint.radius + self.wm.base.drive.d.abs();
                 let sc = self.cell_of(start.pose);
                 let text = format!(
                     "the footprint polygon collides along every path found ({repaired} \
                      re-plan(s)): planning on the circumscribed disk of radius {:.3} m",
-                    self.m.footprint.radius
+                    self.footprint.radius
                 );
                 self.event(start.t0, "footprint", text);
                 match self.planner.use_disk(radius, grid.resolution, sc) {

@@ -90,7 +90,7 @@ pub struct Samples {
     /// Actuator energy so far ∫ Σ |u_j · rate_j| dt (J).
     pub energy: Vec<f64>,
     /// Mission phase: `drive`, `arrive`, `reach`, with a `[task]` `approach`, `grasp`,
-    /// `retreat`; `done`.
+    /// `lift`, `retreat`; `done`.
     pub phase: Vec<&'static str>,
     /// On the contact plant: each contact's normal force (N; the wheels, then the
     /// casters, as [`ContactTally::totals`]); empty on the rolling plant.

@@ -9,6 +9,7 @@
 use std::time::Instant;
 
 use super::arm_motion::{ArmMotion, ArmStage, EeTrajectory};
+use super::footprint::MissionFootprint;
 use super::laws::{EeState, RunSettings, end_effector_kinematics};
 use super::placement::choose_placement;
 use super::plan::{Planner, SearchTiming, mission_planner};
@@ -84,6 +85,9 @@ pub(super) struct Runner<'m> {
     pub(super) m: &'m Mission,
     /// The law's robot: the mission's, with a `[task]`'s payload once grasped.
     pub(super) wm: &'m WheeledModel,
+    /// The footprint planned and monitored with: the mission's, a `[task]`'s carrying one
+    /// on the drive on.
+    pub(super) footprint: &'m MissionFootprint,
     /// The base goal: `[goal]`, or a `[task]`'s placement.
     pub(super) goal: GoalSpec,
     /// A `[task]`'s record so far.
@@ -123,7 +127,7 @@ impl<'m> Runner<'m> {
         };
         let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(goal.pose, d));
         let grid = &m.map.grid;
-        let (mut planner, first_path, first_search) = mission_planner(m, s0, g0)?;
+        let (mut planner, first_path, first_search) = mission_planner(m, &m.footprint, s0, g0)?;
         if planner.polygon.is_some() {
             for (what, pose, axle) in [
                 ("start.pose", f.start.pose, s0),
@@ -167,6 +171,7 @@ impl<'m> Runner<'m> {
         Ok(Self {
             m,
             wm: &m.robot,
+            footprint: &m.footprint,
             goal,
             task,
             drive_on: m.task.as_ref().and(m.goal().cloned()),

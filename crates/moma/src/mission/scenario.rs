@@ -226,6 +226,7 @@ pub fn from_file_with(
                 &urdf,
                 &package_dirs,
                 gm,
+                &footprint,
             )?;
             place_scene_on_map(
                 &mut task,

@@ -11,6 +11,11 @@
 //! ([`super::heights::block_by_height`]: a table top the robot clears is left off), and
 //! such an object where the footprint stands at the start is an input error naming it.
 //!
+//! The object is attached to the end effector's geometry once ([`Task::carried`]): the
+//! transport posture is checked with it at load, the lift and the retreat are planned
+//! with it, the distance monitor measures with it after the grasp, and the drive on's
+//! footprint holds its outline at the transport posture ([`Task::carrying_footprint`]).
+//!
 //! In the run (`run.rs`): [`Task::placements`] ranks the base poses
 //! ([`crate::motion::placement::place_base`]), the run drives to the best one its planner
 //! reaches, plans and tracks the arm motions, attaches the payload, and monitors the
@@ -22,6 +27,7 @@ use nalgebra::{DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vec
 use serde::{Deserialize, Serialize};
 
 use crate::collision::footprint::hull_2d;
+use crate::collision::gjk::{EpaWorkspace, WarmStart, signed_distance};
 use crate::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneObject,
     SceneOptions, compute_distances, compute_scene_distances, outline_points, read_scene,
@@ -79,6 +85,10 @@ pub struct TaskSpec {
     /// The pre-grasp: the grasp moved back this far along the end effector's x axis (m).
     #[serde(default = "default_approach")]
     pub approach: f64,
+    /// The lift: the grasp moved up this far (world z, m), the object's support allowed
+    /// to touch it on the way.
+    #[serde(default = "default_lift")]
+    pub lift: f64,
     /// Longest planning time of each arm motion (s).
     #[serde(default = "default_planning_time")]
     pub planning_time: f64,
@@ -96,6 +106,9 @@ fn default_headings() -> usize {
 fn default_approach() -> f64 {
     0.1
 }
+fn default_lift() -> f64 {
+    0.05
+}
 fn default_planning_time() -> f64 {
     5.0
 }
@@ -110,8 +123,17 @@ pub const ARM_MARGIN: f64 = 0.005;
 pub struct Task {
     /// The scene placed on the map (world frame).
     pub scene: Scene,
-    /// The scene without the picked object (the object travels with the gripper).
+    /// The scene without the picked object (the object travels with the gripper): the
+    /// retreat's.
     pub scene_after_grasp: Scene,
+    /// The same with the object's support ([`Task::support`]) allowed to touch the held
+    /// object: the lift's.
+    pub scene_lifting: Scene,
+    /// The scene objects the picked object rests on or in at its scene pose: those within
+    /// the grasp's position tolerance of it (the held object may sit that far off its
+    /// scene pose once grasped). Their pairs with the held object are not checked during
+    /// the lift (MoveIt's support surface of a pick).
+    pub support: Vec<String>,
     /// The scene as read, in its own frame (for the report).
     pub scene_pose: [f64; 3],
     /// Per object of `scene` (in its order), the 3-D check of its height range against
@@ -124,6 +146,8 @@ pub struct Task {
     pub grasp: GoalPose,
     /// The pre-grasp: the grasp moved back along the end effector's x axis.
     pub pre_grasp: GoalPose,
+    /// The lift: the grasp moved up (world z).
+    pub lift: GoalPose,
     /// The object's centre in the grasp frame (m).
     pub object_in_grasp: Vector3<f64>,
     /// The object's mass (kg).
@@ -135,6 +159,13 @@ pub struct Task {
     /// The same with convex hulls only: the placement search's (a grasping posture clear
     /// of the hulls is clear of the meshes inside them).
     pub hull_geometry: GeometryModel,
+    /// `geometry` with the picked object as one more link (the last), fixed to the end
+    /// effector's body at the grasp (`carried_geometry`): what the lift and the retreat
+    /// are planned with and the distance monitor measures once the object is grasped.
+    pub carried: GeometryModel,
+    /// The drive on's footprint: the mission's with the held object at the transport
+    /// posture ([`super::footprint::MissionFootprint::carrying`]).
+    pub carrying_footprint: super::footprint::MissionFootprint,
     /// The joints that reach: the end effector's arm chain.
     pub group: JointGroup,
     /// The robot with the object as a point mass on the grasp frame's body.
@@ -155,13 +186,15 @@ fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
 /// payload robot (module docs). `transport` is the transport posture (one angle per arm
 /// dof): links whose convex hulls touch there are swapped for their mesh surfaces
 /// ([`crate::motion::surface_links_for_start`], as `moma motion` does at its start), so
-/// the posture the arm leaves from and returns to is clear.
+/// the posture the arm leaves from and returns to is clear. The robot's geometry carrying
+/// the object is built once, checked at the transport posture, and `footprint` (the
+/// mission's) grown by the object's outline there for the drive on.
 ///
 /// # Errors
 /// Naming the file and the `task.*` field: an unreadable scene, query or SRDF, an
 /// unknown object (listing the scene's), both or neither of `query` and `grasp`, a query
 /// for another object, a non-finite pose or grasp, a mass that is not ≥ 0, a step,
-/// heading count, approach or planning time out of range, an area of the wrong shape, a
+/// heading count, approach, lift or planning time out of range, an area of the wrong shape, a
 /// scene object where the footprint stands at the start.
 #[allow(clippy::too_many_arguments)]
 pub fn load_task(
@@ -174,6 +207,7 @@ pub fn load_task(
     urdf: &Path,
     package_dirs: &[PathBuf],
     geometry: GeometryModel,
+    footprint: &super::footprint::MissionFootprint,
 ) -> Result<Task> {
     check_numbers(spec, path)?;
     let model = &robot.model;
@@ -267,6 +301,10 @@ pub fn load_task(
         target: target * Translation3::new(-spec.approach, 0.0, 0.0),
         ..grasp.clone()
     };
+    let lift = GoalPose {
+        target: Translation3::new(0.0, 0.0, spec.lift) * target,
+        ..grasp.clone()
+    };
     let group = JointGroup::new(
         model,
         &arm_chain(robot, ee_frame)
@@ -307,20 +345,33 @@ pub fn load_task(
         ));
     }
     let payload_robot = with_payload(robot, ee_frame, spec.mass, &object_in_grasp);
+    let support = support_of(&scene, obj, tolerance[0]);
     let mut scene_after_grasp = scene.clone();
     scene_after_grasp.objects.retain(|o| o.id != spec.object);
+    let mut scene_lifting = scene_after_grasp.clone();
+    for o in &mut scene_lifting.objects {
+        if support.contains(&o.id) {
+            o.touch_links.push(obj.id.clone());
+        }
+    }
+    let carrying_footprint = footprint.carrying(robot, &carried, transport);
     Ok(Task {
         scene,
         scene_after_grasp,
+        scene_lifting,
+        support,
         scene_pose: spec.pose,
         heights: Vec::new(),
         object: spec.object.clone(),
         grasp,
         pre_grasp,
+        lift,
         object_in_grasp,
         mass: spec.mass,
         geometry,
         hull_geometry,
+        carried,
+        carrying_footprint,
         group,
         payload_robot,
         placement: PlacementOptions {
@@ -370,6 +421,7 @@ fn check_numbers(spec: &TaskSpec, path: &Path) -> Result<()> {
     for (field, v) in [
         ("task.step", spec.step),
         ("task.planning_time", spec.planning_time),
+        ("task.lift", spec.lift),
     ] {
         if let Some(problem) = crate::error::not_positive_finite(v) {
             return Err(field_err(path, field, problem));
@@ -504,6 +556,29 @@ fn carried_object_touch(
         .map(|(d, link)| (carried.links[link].name.clone(), -d))
 }
 
+/// The ids of the scene objects (other than `object`) that come within `tolerance` (m)
+/// of `object`'s shapes as the scene places them (signed distances of the collision
+/// module): what it rests on or in.
+fn support_of(scene: &Scene, object: &SceneObject, tolerance: f64) -> Vec<String> {
+    let (mut warm, mut epa) = (WarmStart::default(), EpaWorkspace::default());
+    scene
+        .objects
+        .iter()
+        .filter(|o| o.id != object.id)
+        .filter(|o| {
+            o.shapes.iter().any(|s| {
+                object.shapes.iter().any(|h| {
+                    warm = WarmStart::default();
+                    signed_distance(&h.shape, &h.pose, &s.shape, &s.pose, &mut warm, &mut epa)
+                        .distance
+                        <= tolerance
+                })
+            })
+        })
+        .map(|o| o.id.clone())
+        .collect()
+}
+
 /// `robot` with a point mass `mass` at `offset` in the frame `frame` added to the frame's
 /// body.
 fn with_payload(
@@ -602,17 +677,25 @@ impl Task {
 
 /// The smallest distances of the executed arm motion to the scene and between the
 /// robot's enabled link pairs (the collision module's signed distances on the convex
-/// hulls), with the pair of each.
+/// hulls and the swapped links' mesh surfaces), with the pair of each: before the grasp
+/// with the robot's geometry against the whole scene, after it with the geometry carrying
+/// the object ([`Task::carried`]) against the scene without it ([`Holding`]).
 #[derive(Debug, Clone)]
 pub struct DistanceMonitor {
     data: Data,
     gd: GeometryData,
+    gd_carried: GeometryData,
     sd: SceneData,
     sd_after: SceneData,
     q: DVector<f64>,
-    /// Smallest robot–scene distance so far (m) and its link and object.
+    /// The last sample: its scene and self distances, what it held, and the closest
+    /// (link, object) and link pair indices.
+    last: LastSample,
+    /// Smallest robot–scene distance so far (m) and its link (or the held object) and
+    /// scene object.
     pub min_scene: Option<(f64, [String; 2])>,
-    /// Smallest distance between enabled link pairs so far (m) and the links.
+    /// Smallest distance between enabled link pairs so far (m) and the links (the held
+    /// object as the second one of its pairs).
     pub min_self: Option<(f64, [String; 2])>,
 }
 
@@ -623,34 +706,90 @@ impl DistanceMonitor {
         Self {
             data: Data::new(&robot.model),
             gd: GeometryData::new(&task.geometry),
+            gd_carried: GeometryData::new(&task.carried),
             sd: SceneData::new(&task.geometry, &task.scene),
-            sd_after: SceneData::new(&task.geometry, &task.scene_after_grasp),
+            sd_after: SceneData::new(&task.carried, &task.scene_after_grasp),
             q: DVector::zeros(robot.model.nq),
+            last: LastSample::default(),
             min_scene: None,
             min_self: None,
         }
     }
 
-    /// The distances at `q` (full configuration) to the scene (`grasped`: without the
-    /// picked object) and between links; updates the minima and returns both (m).
+    /// What the last [`DistanceMonitor::sample`] touched (a distance ≤ 0), as the run's
+    /// reason states it: the scene before the links, the held object named as such
+    /// (`held object 'Can2' touches scene object '<id>' (<distance> m)`); `None` when it
+    /// touched nothing.
+    #[must_use]
+    pub fn touch(&self, task: &Task) -> Option<String> {
+        let l = &self.last;
+        let grasped = l.holding != Holding::Nothing;
+        let scene = l.holding.scene(task);
+        let gm = if grasped {
+            &task.carried
+        } else {
+            &task.geometry
+        };
+        let held = gm.links.len() - 1;
+        let link = |k: usize| {
+            if grasped && k == held {
+                format!("held object '{}'", gm.links[k].name)
+            } else {
+                format!("link '{}'", gm.links[k].name)
+            }
+        };
+        if l.scene_distance <= 0.0
+            && let Some(k) = l.scene_pair
+        {
+            let no = scene.objects.len();
+            return Some(format!(
+                "{} touches scene object '{}' ({:.4} m)",
+                link(k / no),
+                scene.objects[k % no].id,
+                l.scene_distance
+            ));
+        }
+        if l.self_distance <= 0.0
+            && let Some(i) = l.self_pair
+        {
+            let [a, b] = gm.pairs[i];
+            return Some(format!(
+                "{} touches {} ({:.4} m)",
+                link(a),
+                link(b),
+                l.self_distance
+            ));
+        }
+        None
+    }
+
+    /// The distances at `q` (full configuration) to the scene and between links, holding
+    /// `holding`; updates the minima and returns both (m).
     pub fn sample(
         &mut self,
         task: &Task,
         robot: &WheeledModel,
         q: &[f64],
-        grasped: bool,
+        holding: Holding,
     ) -> (f64, f64) {
-        let gm = &task.geometry;
+        let scene = holding.scene(task);
+        let (gm, gd, sd) = if holding == Holding::Nothing {
+            (&task.geometry, &mut self.gd, &mut self.sd)
+        } else {
+            (&task.carried, &mut self.gd_carried, &mut self.sd_after)
+        };
         self.q.copy_from_slice(q);
         crate::kinematics::forward_kinematics(&robot.model, &mut self.data, &self.q);
-        update_geometry_placements(gm, &self.data, &mut self.gd);
-        let d_self = compute_distances(gm, &mut self.gd, PairSelection::Enabled);
-        let (scene, sd) = if grasped {
-            (&task.scene_after_grasp, &mut self.sd_after)
-        } else {
-            (&task.scene, &mut self.sd)
+        update_geometry_placements(gm, &self.data, gd);
+        let d_self = compute_distances(gm, gd, PairSelection::Enabled);
+        let d_scene = compute_scene_distances(gm, gd, scene, sd);
+        self.last = LastSample {
+            scene_distance: d_scene,
+            self_distance: d_self,
+            holding,
+            scene_pair: sd.closest,
+            self_pair: gd.closest,
         };
-        let d_scene = compute_scene_distances(gm, &mut self.gd, scene, sd);
         let links = &gm.links;
         if self.min_scene.as_ref().is_none_or(|m| d_scene < m.0)
             && let Some(k) = sd.closest
@@ -662,12 +801,60 @@ impl DistanceMonitor {
             ));
         }
         if self.min_self.as_ref().is_none_or(|m| d_self < m.0)
-            && let Some(i) = self.gd.closest
+            && let Some(i) = gd.closest
         {
             let [a, b] = gm.pairs[i];
             self.min_self = Some((d_self, [links[a].name.clone(), links[b].name.clone()]));
         }
         (d_scene, d_self)
+    }
+}
+
+/// What the gripper holds at a state the [`DistanceMonitor`] samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Holding {
+    /// Nothing yet: the robot against the whole scene.
+    Nothing,
+    /// The object, lifting it: the carrying geometry against [`Task::scene_lifting`]
+    /// (its support may touch it).
+    Lifting,
+    /// The object: the carrying geometry against [`Task::scene_after_grasp`].
+    Carrying,
+}
+
+impl Holding {
+    /// The scene checked while holding this.
+    #[must_use]
+    pub fn scene(self, task: &Task) -> &Scene {
+        match self {
+            Holding::Nothing => &task.scene,
+            Holding::Lifting => &task.scene_lifting,
+            Holding::Carrying => &task.scene_after_grasp,
+        }
+    }
+}
+
+/// The distances of a [`DistanceMonitor`]'s last sample.
+#[derive(Debug, Clone, Copy)]
+struct LastSample {
+    scene_distance: f64,
+    self_distance: f64,
+    holding: Holding,
+    /// `link * n_objects + object` of the closest link–scene pair.
+    scene_pair: Option<usize>,
+    /// The closest enabled link pair (index into the geometry's pairs).
+    self_pair: Option<usize>,
+}
+
+impl Default for LastSample {
+    fn default() -> Self {
+        Self {
+            scene_distance: f64::INFINITY,
+            self_distance: f64::INFINITY,
+            holding: Holding::Nothing,
+            scene_pair: None,
+            self_pair: None,
+        }
     }
 }
 
@@ -698,7 +885,8 @@ pub struct PlacementChoice {
 /// One arm motion of the pick.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ArmPlanRecord {
-    /// `approach` (to the pre-grasp), `grasp`, or `retreat` (to the transport posture).
+    /// `approach` (to the pre-grasp), `grasp`, `lift` (up off the support) or `retreat`
+    /// (to the transport posture).
     pub stage: String,
     /// Mission time it was planned at (s).
     pub t: f64,
@@ -750,4 +938,9 @@ pub struct TaskResult {
     pub min_self_distance: Option<f64>,
     /// Links at it.
     pub closest_self_pair: Option<[String; 2]>,
+    /// The scene objects the held object may touch ([`Task::support`]).
+    pub support: Vec<String>,
+    /// The radius of the drive on's footprint, with the held object (m; `None` without
+    /// a drive on).
+    pub drive_on_footprint_radius: Option<f64>,
 }
