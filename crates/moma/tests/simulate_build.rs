@@ -153,6 +153,18 @@ fn mpc_errors_name_the_file_and_the_field() {
         ),
         "{m}"
     );
+    // No map in moma simulate: the map-clearance key of moma mission's table is refused.
+    let m = message(
+        file,
+        "clearance = 0.03",
+        "clearance = 0.03\nmap_clearance = 0.1",
+    );
+    assert!(
+        m.contains(
+            "mpc_reach_on_the_move.toml: controller.mpc.map_clearance: moma simulate has no map"
+        ),
+        "{m}"
+    );
     let m = message(file, "ee_orientation = 0.0", "ee_orientation = -1.0");
     assert!(
         m.contains("controller.mpc.weights.ee_orientation must not be negative, got -1"),

@@ -151,7 +151,7 @@ impl Runner<'_> {
             st.phase = Phase::Done;
             return false;
         };
-        law.track(reference, self.plans.len());
+        law.track(reference, self.plans.len(), &self.planner, &self.m.map.grid);
         st.cur_ref = base_reference(reference.at(t), c.d);
         let t_end = reference.t_end();
         let (q, v_r) = (ws.q_now.as_slice(), ws.v_now.as_slice());

@@ -20,6 +20,8 @@ pub(crate) struct Planner {
     pub occupied: Vec<bool>,
     /// Distance (cells) from each cell centre to the nearest occupied cell centre.
     pub dist: Vec<f32>,
+    /// How many times obstacles that appeared changed `occupied` and `dist`.
+    pub map_changes: usize,
     /// Dilation radius of the configuration space (cells): footprint radius + |d| + ½ cell.
     pub r_cells: f64,
     pub dstar: DStarLite,
@@ -156,6 +158,7 @@ impl Planner {
                 height: h,
                 occupied,
                 dist,
+                map_changes: 0,
                 r_cells,
                 dstar,
                 goal_cell,
@@ -199,6 +202,7 @@ impl Planner {
         }
         if changed {
             self.dist = distance_transform(&self.occupied, self.width, self.height);
+            self.map_changes += 1;
         }
         let clock = Instant::now();
         self.move_start(robot_cell)?;

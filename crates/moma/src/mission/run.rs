@@ -166,6 +166,7 @@ impl<'m> Runner<'m> {
                 goal.end_effector,
                 f.control.reach_radius.unwrap_or(1.0),
                 goal.end_effector_tolerance,
+                m.footprint.radius,
             )
         });
         Ok(Self {

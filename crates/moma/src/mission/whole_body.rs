@@ -11,12 +11,19 @@
 //! and the arm moves out before the base gets there. A re-plan gives a new reference,
 //! which the MPC tracks from its next solve on ([`WholeBodyLaw::track`]), warm-started as
 //! every solve is.
+//!
+//! With `control.mpc.map_clearance`, the MPC keeps the disk of the footprint radius about
+//! the base frame origin that far from the map's obstacles: its map is the planner's
+//! distance transform ([`distance_field`]), handed over at the first solve and again
+//! whenever an obstacle that appeared changed it (with or without a re-plan).
 
 use nalgebra::{Matrix3, Vector3};
 
+use super::plan::Planner;
 use super::reference::{Reference, base_reference};
-use crate::control::mpc::{KnotReference, WholeBodyMpc};
+use crate::control::mpc::{DistanceField, KnotReference, MapClearance, WholeBodyMpc};
 use crate::error::Result;
+use crate::planning::{MapKind, OccupancyGrid};
 use crate::sim::closed_loop::FeedbackLaw;
 use crate::sim::mpc_law::MpcLaw;
 use crate::sim::mpc_run::MpcRunSummary;
@@ -45,6 +52,9 @@ pub(super) struct WholeBodyLaw {
     tolerance: f64,
     /// The number of plans when the tracked reference was set (`None`: none yet).
     plans: Option<usize>,
+    /// With the map-clearance constraint: the footprint radius (m), and the planner's
+    /// `map_changes` when the MPC's map was last set (`None`: not yet).
+    map: Option<(f64, Option<usize>)>,
     /// Mission time the end effector first came within the tolerance (s).
     pub touched_at: Option<f64>,
 }
@@ -52,7 +62,8 @@ pub(super) struct WholeBodyLaw {
 impl WholeBodyLaw {
     /// The law of `mpc`, solving every `every` control steps, for a robot whose base frame
     /// lies `d` ahead of the axle, reaching for `target` (if any) within `tolerance` (m)
-    /// from the knots within `reach_radius` (m) of it.
+    /// from the knots within `reach_radius` (m) of it; its footprint the disk of
+    /// `footprint_radius` (m) about the base frame origin.
     pub(super) fn new(
         mpc: WholeBodyMpc,
         every: usize,
@@ -60,9 +71,17 @@ impl WholeBodyLaw {
         target: Option<[f64; 3]>,
         reach_radius: f64,
         tolerance: f64,
+        footprint_radius: f64,
     ) -> Self {
         let idle: KnotSource = Box::new(|_| KnotReference::default());
+        let map = mpc
+            .problem
+            .settings
+            .constraints
+            .map_clearance
+            .map(|_| (footprint_radius, None));
         Self {
+            map,
             law: MpcLaw::new(mpc, idle),
             every,
             d,
@@ -74,8 +93,25 @@ impl WholeBodyLaw {
         }
     }
 
-    /// Tracks `reference`, the mission's plan number `plans`, unless it already does.
-    pub(super) fn track(&mut self, reference: &Reference, plans: usize) {
+    /// Tracks `reference`, the mission's plan number `plans`, unless it already does;
+    /// with the map-clearance constraint, keeps the MPC's map that of `planner` (on
+    /// `grid`), refreshed when an obstacle has changed it.
+    pub(super) fn track(
+        &mut self,
+        reference: &Reference,
+        plans: usize,
+        planner: &Planner,
+        grid: &OccupancyGrid,
+    ) {
+        if let Some((radius, seen)) = &mut self.map
+            && *seen != Some(planner.map_changes)
+        {
+            *seen = Some(planner.map_changes);
+            self.law.set_map(MapClearance {
+                field: distance_field(planner, grid),
+                footprint_radius: *radius,
+            });
+        }
         if self.plans == Some(plans) {
             return;
         }
@@ -148,5 +184,29 @@ impl WholeBodyLaw {
     /// The run's MPC summary (the `mpc` object of `moma simulate`'s summary).
     pub(super) fn summary(&self) -> Option<MpcRunSummary> {
         self.law.mpc_run().map(|r| r.summary)
+    }
+}
+
+/// The planner's map as the MPC's distance field: at each cell centre the distance (m)
+/// to the nearest occupied cell's edge, the distance transform's centre-to-centre
+/// distance less half a cell (exact along the grid's axes, up to 0.21 cells over it
+/// diagonally), on the grid's frame (a ROS map's origin and yaw; a MovingAI map's unit
+/// cells centred on the integers).
+pub(super) fn distance_field(planner: &Planner, grid: &OccupancyGrid) -> DistanceField {
+    let res = grid.resolution;
+    let origin = match grid.kind {
+        MapKind::Ros => grid.origin,
+        MapKind::MovingAi => [-0.5, -0.5, 0.0],
+    };
+    DistanceField {
+        width: planner.width,
+        height: planner.height,
+        resolution: res,
+        origin,
+        distance: planner
+            .dist
+            .iter()
+            .map(|&d| (f64::from(d) - 0.5).max(0.0) * res)
+            .collect(),
     }
 }

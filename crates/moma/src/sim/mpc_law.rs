@@ -29,7 +29,7 @@ use crate::collision::{
     GeometryData, PairSelection, SceneData, compute_distances, compute_scene_distances,
     update_geometry_placements,
 };
-use crate::control::mpc::{KnotReference, MpcRobot, WholeBodyMpc};
+use crate::control::mpc::{KnotReference, MapClearance, MpcRobot, WholeBodyMpc};
 use crate::error::Result;
 use crate::kinematics::{forward_kinematics, update_frame_placement, wrap_angle};
 use crate::mobile::wheeled::{WheeledData, reduced_forward_dynamics_crba};
@@ -82,6 +82,13 @@ impl<R: FnMut(f64) -> KnotReference> MpcLaw<R> {
     /// dropped), warm-started from the last solution as every tick is.
     pub fn set_reference(&mut self, reference: R) {
         self.reference = reference;
+    }
+
+    /// Keeps the base footprint clear of `map` (the MPC's map-clearance constraint, set
+    /// value `constraints.map_clearance`) from the next solve on: the caller's map as it
+    /// is now, replaced when its obstacles change.
+    pub fn set_map(&mut self, map: MapClearance) {
+        self.mpc.problem.map = Some(map);
     }
 
     /// Between solves: the torques that realise the last solve's first planned input

@@ -99,6 +99,12 @@ pub struct MpcSpec {
     /// `false`: no clearance constraint (and no collision model).
     #[serde(default)]
     pub clearance: Option<toml::Value>,
+    /// Smallest clearance (m, finite, ≥ 0) of the base footprint (`moma mission`: the
+    /// disk of `robot.footprint_radius` about the base frame origin) to the map's
+    /// obstacles, on the mission planner's distance transform; absent: no map-clearance
+    /// constraint. Only `moma mission` has a map: `moma simulate` refuses it.
+    #[serde(default)]
+    pub map_clearance: Option<f64>,
     /// Self pairs farther apart than this at the start of a solve are skipped in it (m,
     /// default 0.25; `inf`: every enabled pair).
     #[serde(default)]
@@ -255,6 +261,13 @@ fn settings(spec: &MpcSpec, table: &str) -> Result<MpcSettings> {
         spec.clearance.as_ref(),
         s.constraints.clearance,
     )?;
+    if let Some(m) = spec.map_clearance {
+        finite(&format!("{table}.map_clearance"), &[m])?;
+        if m < 0.0 {
+            bail!("{table}.map_clearance must not be negative, got {m}");
+        }
+        s.constraints.map_clearance = Some(m);
+    }
     let w = &spec.weights;
     let cw = &mut s.weights;
     for (name, x, field) in [

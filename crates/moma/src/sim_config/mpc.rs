@@ -56,6 +56,13 @@ pub fn mpc_law(
     reference: LineReach,
     base_dir: &Path,
 ) -> Result<Box<dyn FeedbackLaw>> {
+    if spec.map_clearance.is_some() {
+        return Err(crate::Error::Scenario(
+            "controller.mpc.map_clearance: moma simulate has no map to keep the base clear \
+             of (the key is read by moma mission's [control.mpc])"
+                .to_string(),
+        ));
+    }
     let mpc = build_mpc(
         spec,
         "controller.mpc",

@@ -1,7 +1,7 @@
 //! The MPC's constraints and their augmented-Lagrangian terms.
 //!
 //! Every constraint is an inequality `c(x, u) ≤ 0`, scaled to be dimensionless (a torque
-//! by its limit, a speed by its limit, the ZMP margin and the clearance by
+//! by its limit, a speed by its limit, the ZMP margin and the clearances by
 //! [`ConstraintSettings::length_scale`]). Each enters the stage cost as the
 //! Powell–Hestenes–Rockafellar term
 //!
@@ -27,6 +27,7 @@
 //! | joint position | `lower + δ ≤ q_i ≤ upper − δ` | exact |
 //! | ZMP | margin ≥ `zmp_margin` | in u exact (momentum rate affine in q̈); in x the point-mass linearisation, on the critical edge |
 //! | clearance | min distance (self pairs, scene) ≥ `clearance` | closest pair's distance derivative |
+//! | map clearance | base footprint's clearance on the map's distance field ≥ `map_clearance` | the bilinear field's gradient in `(x, y, θ)` |
 
 use nalgebra::DVector;
 
@@ -34,13 +35,14 @@ use super::problem::StageModel;
 use super::robot::{KnotValues, MpcRobot};
 
 /// The constraint kinds, in report order.
-pub const KINDS: [&str; 6] = [
+pub const KINDS: [&str; 7] = [
     "torque",
     "wheel_speed",
     "joint_speed",
     "joint_position",
     "zmp",
     "clearance",
+    "map_clearance",
 ];
 
 /// Set values and the augmented-Lagrangian penalty.
@@ -50,6 +52,9 @@ pub struct ConstraintSettings {
     pub zmp_margin: Option<f64>,
     /// Smallest distance to the scene and between enabled link pairs (m); `None`: none.
     pub clearance: Option<f64>,
+    /// Smallest clearance of the base footprint to the map's obstacles (m), on the
+    /// problem's [`super::MapClearance`]; `None`: none.
+    pub map_clearance: Option<f64>,
     /// Distance kept from the joint position limits (rad or m).
     pub position_margin: f64,
     /// Fraction of the torque limits the MPC may plan with (≤ 1).
@@ -70,6 +75,7 @@ impl Default for ConstraintSettings {
         Self {
             zmp_margin: Some(0.05),
             clearance: Some(0.03),
+            map_clearance: None,
             position_margin: 0.02,
             torque_fraction: 1.0,
             penalty: 1000.0,
@@ -83,7 +89,7 @@ impl Default for ConstraintSettings {
 /// Rows per knot for `robot`.
 #[must_use]
 pub fn rows(robot: &MpcRobot) -> usize {
-    2 * robot.torque_limit.len() + 4 + 4 * robot.n_moved() + 2
+    2 * robot.torque_limit.len() + 4 + 4 * robot.n_moved() + 3
 }
 
 /// Multipliers and the last evaluated values (scaled) of every row of every knot.
@@ -94,12 +100,12 @@ pub struct ConstraintSet {
     /// `value[k][row]`: the scaled `c` of the last evaluation (`−∞`: not applied).
     pub value: Vec<DVector<f64>>,
     /// Physical violation per kind (`max(0, ·)` in SI units) per knot: `[k][kind]`.
-    pub violation: Vec<[f64; 6]>,
+    pub violation: Vec<[f64; 7]>,
     /// `value` as of the last [`ConstraintSet::keep`]: the rows of the trajectory the
     /// solver returned, which [`ConstraintSet::update`] steps the multipliers from.
     pub kept_value: Vec<DVector<f64>>,
     /// `violation` as of the last [`ConstraintSet::keep`].
-    pub kept_violation: Vec<[f64; 6]>,
+    pub kept_violation: Vec<[f64; 7]>,
     gx: DVector<f64>,
     gu: DVector<f64>,
 }
@@ -112,9 +118,9 @@ impl ConstraintSet {
         Self {
             lambda: vec![DVector::zeros(m); n + 1],
             value: vec![DVector::from_element(m, f64::NEG_INFINITY); n + 1],
-            violation: vec![[0.0; 6]; n + 1],
+            violation: vec![[0.0; 7]; n + 1],
             kept_value: vec![DVector::from_element(m, f64::NEG_INFINITY); n + 1],
-            kept_violation: vec![[0.0; 6]; n + 1],
+            kept_violation: vec![[0.0; 7]; n + 1],
             gx: DVector::zeros(robot.nx()),
             gu: DVector::zeros(robot.nu()),
         }
@@ -162,7 +168,7 @@ impl ConstraintSet {
         let mut cost = 0.0;
         let mut row = 0;
         let viol = &mut self.violation[k];
-        *viol = [0.0; 6];
+        *viol = [0.0; 7];
         let (lambda, value, gx, gu) = (
             &self.lambda[k],
             &mut self.value[k],
@@ -313,6 +319,24 @@ impl ConstraintSet {
             phys,
             5,
             &mut |gx, _| gx.axpy(-1.0 / ls, &vals.distance_dx, 0.0),
+            &mut out,
+        );
+        // Map clearance of the base footprint (the base pose's first three states).
+        let (c, phys) = match s.map_clearance {
+            Some(d) if state_rows && vals.map_clearance.is_finite() => {
+                ((d - vals.map_clearance) / ls, d - vals.map_clearance)
+            }
+            _ => (off, 0.0),
+        };
+        apply(
+            c,
+            phys,
+            6,
+            &mut |gx, _| {
+                for (i, g) in vals.map_clearance_dx.iter().enumerate() {
+                    gx[i] = -g / ls;
+                }
+            },
             &mut out,
         );
         cost

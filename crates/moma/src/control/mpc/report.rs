@@ -20,12 +20,17 @@ pub struct Violations {
     pub zmp: f64,
     /// Clearance below the set value (m).
     pub clearance: f64,
+    /// Map clearance of the base footprint below the set value (m); `None` without the
+    /// map-clearance constraint (left out of the summary's kinds, as it was before the
+    /// constraint existed).
+    pub map_clearance: Option<f64>,
 }
 
 impl Violations {
-    /// From per-kind values in [`KINDS`] order.
+    /// From per-kind values in [`KINDS`] order; the map clearance's only when
+    /// `map_constraint` (the problem has that constraint).
     #[must_use]
-    pub fn from_array(a: [f64; 6]) -> Self {
+    pub fn from_array(a: [f64; 7], map_constraint: bool) -> Self {
         Self {
             torque: a[0],
             wheel_speed: a[1],
@@ -33,20 +38,24 @@ impl Violations {
             joint_position: a[3],
             zmp: a[4],
             clearance: a[5],
+            map_clearance: map_constraint.then_some(a[6]),
         }
     }
 
-    /// `(kind, value)` pairs in [`KINDS`] order.
+    /// `(kind, value)` pairs in [`KINDS`] order (the map clearance's only with its
+    /// constraint).
     #[must_use]
-    pub fn pairs(&self) -> [(&'static str, f64); 6] {
-        [
+    pub fn pairs(&self) -> Vec<(&'static str, f64)> {
+        let mut pairs = vec![
             (KINDS[0], self.torque),
             (KINDS[1], self.wheel_speed),
             (KINDS[2], self.joint_speed),
             (KINDS[3], self.joint_position),
             (KINDS[4], self.zmp),
             (KINDS[5], self.clearance),
-        ]
+        ];
+        pairs.extend(self.map_clearance.map(|v| (KINDS[6], v)));
+        pairs
     }
 
     /// The larger of `self` and `other`, kind by kind.
@@ -59,6 +68,10 @@ impl Violations {
             joint_position: self.joint_position.max(other.joint_position),
             zmp: self.zmp.max(other.zmp),
             clearance: self.clearance.max(other.clearance),
+            map_clearance: match (self.map_clearance, other.map_clearance) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            },
         }
     }
 }

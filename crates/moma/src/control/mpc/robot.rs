@@ -266,6 +266,11 @@ pub struct KnotValues {
     pub distance: f64,
     /// Its gradient in x.
     pub distance_dx: DVector<f64>,
+    /// Clearance of the base footprint on the map (m), `+∞` without a map
+    /// (`super::MapClearance::at`, set by the problem, not by [`evaluate_knot`]).
+    pub map_clearance: f64,
+    /// Its gradient in the base pose `(x, y, θ)`, the first three states.
+    pub map_clearance_dx: [f64; 3],
     /// End-effector placement in the world.
     pub end_effector: SE3,
     /// End-effector Jacobian `[ṗ; ω]` (world axes) in x (6 × nx, velocity columns zero).
@@ -350,6 +355,8 @@ impl KnotWorkspace {
                 zmp_du: DVector::zeros(nu),
                 distance: f64::INFINITY,
                 distance_dx: DVector::zeros(nx),
+                map_clearance: f64::INFINITY,
+                map_clearance_dx: [0.0; 3],
                 end_effector: SE3::identity(),
                 end_effector_dx: DMatrix::zeros(6, nx),
             },

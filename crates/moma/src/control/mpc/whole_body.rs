@@ -17,6 +17,7 @@ use nalgebra::DVector;
 
 use super::constraints::{ConstraintSet, ConstraintSettings};
 use super::costs::{CostWeights, KnotReference, knot_cost};
+use super::distance_field::MapClearance;
 use super::problem::{OptimalControlProblem, StageModel};
 use super::report::{SolveReport, Violations};
 use super::robot::{KnotWorkspace, MpcRobot, evaluate_knot, select_pairs};
@@ -80,6 +81,9 @@ pub struct MpcProblem {
     pub hold: DVector<f64>,
     /// Multipliers and the last values of the constraints.
     pub constraints: ConstraintSet,
+    /// The map the base footprint keeps `settings.constraints.map_clearance` from
+    /// (`None`: no map; the caller's to set and refresh).
+    pub map: Option<MapClearance>,
     ws: KnotWorkspace,
     lo: DVector<f64>,
     hi: DVector<f64>,
@@ -103,7 +107,8 @@ impl MpcProblem {
             Some(_) if k == 0 => f64::NEG_INFINITY,
             None => f64::NEG_INFINITY,
             Some(d) => {
-                let lambda = self.constraints.lambda[k][self.constraints.lambda[k].len() - 1];
+                // (the clearance row is the last but one: the map clearance's follows)
+                let lambda = self.constraints.lambda[k][self.constraints.lambda[k].len() - 2];
                 d + lambda.max(0.0) * s.length_scale / s.penalty
             }
         }
@@ -119,6 +124,12 @@ impl MpcProblem {
     ) -> Result<f64> {
         self.ws.distance_cutoff = self.distance_cutoff(k);
         evaluate_knot(&self.robot, &mut self.ws, &self.hold, x, u, out.is_some());
+        let (clearance, gradient) = match (&self.map, self.settings.constraints.map_clearance) {
+            (Some(map), Some(_)) if k > 0 => map.at([x[0], x[1], x[2]]),
+            _ => (f64::INFINITY, [0.0; 3]),
+        };
+        self.ws.values.map_clearance = clearance;
+        self.ws.values.map_clearance_dx = gradient;
         let vals = &self.ws.values;
         self.min_zmp[k] = if u.is_some() {
             vals.zmp_margin.unwrap_or(f64::NEG_INFINITY)
@@ -324,6 +335,7 @@ impl WholeBodyMpc {
         let problem = MpcProblem {
             ws: KnotWorkspace::new(&robot),
             constraints: ConstraintSet::new(&robot, n),
+            map: None,
             reference: vec![KnotReference::default(); n + 1],
             posture,
             hold: q_start.clone(),
@@ -386,9 +398,10 @@ impl WholeBodyMpc {
         let cs = &self.problem.settings.constraints;
         let (penalty, cap) = (cs.penalty, cs.max_multiplier);
         self.problem.constraints.update(penalty, cap);
+        let map_constraint = cs.map_clearance.is_some();
         let mut v = Violations::default();
         for row in &self.problem.constraints.kept_violation {
-            v = v.max(&Violations::from_array(*row));
+            v = v.max(&Violations::from_array(*row, map_constraint));
         }
         Ok(SolveReport {
             time: start.elapsed(),
