@@ -91,6 +91,12 @@ impl MissionFootprint {
             .iter()
             .map(|p| [p.x, p.y])
             .collect();
+        Self::of_polygon(polygon, padding)
+    }
+
+    /// The footprint of `polygon` (base frame): the disk about the base frame origin that
+    /// holds it, grown by `padding`.
+    fn of_polygon(polygon: Vec<[f64; 2]>, padding: f64) -> Self {
         let circumscribed = polygon.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
         Self {
             radius: circumscribed + padding,
@@ -141,16 +147,7 @@ impl MissionFootprint {
                 .map(|p| Vector2::new(p[0], p[1]))
                 .chain(points.iter().map(|p| p.xy())),
         );
-        let polygon: Vec<[f64; 2]> = hull.iter().map(|p| [p.x, p.y]).collect();
-        let circumscribed = polygon.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
-        Self {
-            radius: circumscribed + padding,
-            source: FootprintSource::Robot {
-                polygon,
-                circumscribed,
-                padding: *padding,
-            },
-        }
+        Self::of_polygon(hull.iter().map(|p| [p.x, p.y]).collect(), *padding)
     }
 
     /// The padding (m) the footprint keeps from the obstacles: the file's for the
