@@ -150,6 +150,17 @@ fn positive(table: &str, name: &str, x: Option<f64>) -> Result<Option<f64>> {
     Ok(x)
 }
 
+/// `Some(x)` for a finite `x ≥ 0`, else the error naming `{table}.{name}`.
+fn non_negative(table: &str, name: &str, x: Option<f64>) -> Result<Option<f64>> {
+    if let Some(x) = x {
+        finite(&format!("{table}.{name}"), &[x])?;
+        if x < 0.0 {
+            bail!("{table}.{name} must not be negative, got {x}");
+        }
+    }
+    Ok(x)
+}
+
 /// A count of at least 1 and at most `max`.
 fn count(table: &str, name: &str, x: Option<i64>, max: i64) -> Result<Option<usize>> {
     match x {
@@ -236,11 +247,7 @@ fn settings(spec: &MpcSpec, table: &str) -> Result<MpcSettings> {
     if let Some(n) = count(table, "max_iterations", spec.max_iterations, 1000)? {
         s.solver.max_iterations = n;
     }
-    if let Some(m) = spec.position_margin {
-        finite(&format!("{table}.position_margin"), &[m])?;
-        if m < 0.0 {
-            bail!("{table}.position_margin must not be negative, got {m}");
-        }
+    if let Some(m) = non_negative(table, "position_margin", spec.position_margin)? {
         s.constraints.position_margin = m;
     }
     if let Some(a) = spec.activation_distance {
@@ -261,11 +268,7 @@ fn settings(spec: &MpcSpec, table: &str) -> Result<MpcSettings> {
         spec.clearance.as_ref(),
         s.constraints.clearance,
     )?;
-    if let Some(m) = spec.map_clearance {
-        finite(&format!("{table}.map_clearance"), &[m])?;
-        if m < 0.0 {
-            bail!("{table}.map_clearance must not be negative, got {m}");
-        }
+    if let Some(m) = non_negative(table, "map_clearance", spec.map_clearance)? {
         s.constraints.map_clearance = Some(m);
     }
     let w = &spec.weights;
@@ -294,11 +297,7 @@ fn settings(spec: &MpcSpec, table: &str) -> Result<MpcSettings> {
         ("posture", w.posture, &mut cw.posture),
         ("terminal", w.terminal, &mut cw.terminal),
     ] {
-        if let Some(x) = x {
-            finite(&format!("{table}.weights.{name}"), &[x])?;
-            if x < 0.0 {
-                bail!("{table}.weights.{name} must not be negative, got {x}");
-            }
+        if let Some(x) = non_negative(table, &format!("weights.{name}"), x)? {
             *field = x;
         }
     }

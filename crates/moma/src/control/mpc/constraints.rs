@@ -92,6 +92,13 @@ pub fn rows(robot: &MpcRobot) -> usize {
     2 * robot.torque_limit.len() + 4 + 4 * robot.n_moved() + 3
 }
 
+/// The clearance's row in a knot's rows (the last but one: the ZMP's before it, the map
+/// clearance's after it).
+#[must_use]
+pub fn clearance_row(robot: &MpcRobot) -> usize {
+    rows(robot) - 2
+}
+
 /// Multipliers and the last evaluated values (scaled) of every row of every knot.
 #[derive(Clone, Debug)]
 pub struct ConstraintSet {

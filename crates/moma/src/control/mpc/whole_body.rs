@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use nalgebra::DVector;
 
-use super::constraints::{ConstraintSet, ConstraintSettings};
+use super::constraints::{ConstraintSet, ConstraintSettings, clearance_row};
 use super::costs::{CostWeights, KnotReference, knot_cost};
 use super::distance_field::MapClearance;
 use super::problem::{OptimalControlProblem, StageModel};
@@ -107,8 +107,7 @@ impl MpcProblem {
             Some(_) if k == 0 => f64::NEG_INFINITY,
             None => f64::NEG_INFINITY,
             Some(d) => {
-                // (the clearance row is the last but one: the map clearance's follows)
-                let lambda = self.constraints.lambda[k][self.constraints.lambda[k].len() - 2];
+                let lambda = self.constraints.lambda[k][clearance_row(&self.robot)];
                 d + lambda.max(0.0) * s.length_scale / s.penalty
             }
         }
