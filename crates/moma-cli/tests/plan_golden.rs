@@ -91,8 +91,10 @@ const CASES: &[(&str, &str, &[&str], i32)] = &[
             "1,1",
             "--goal",
             "30,30",
+            // the start is one cell from the wall: a disk of 0.5 cells there would touch
+            // the wall's cell (the disk C-space blocks within the radius + half a cell)
             "--radius",
-            "0.5",
+            "0.4",
             "--no-smooth",
         ],
         0,

@@ -1,7 +1,9 @@
 //! Maps and grid planning: `moma.load_map`, `moma.Map`, `moma.plan`.
 
 use crate::err;
-use moma::planning::pipeline::{self, PlanRequest, PlanStatus, RobotFootprint, Search};
+use moma::planning::pipeline::{
+    self, Frame, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search,
+};
 use moma::planning::{MapKind, OccupancyGrid, load_map as load};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
@@ -118,8 +120,11 @@ fn plan<'py>(
         start,
         start_yaw: None,
         goal,
+        frame: Frame::Map,
         unknown_is_obstacle,
         footprint: RobotFootprint::Disk(radius),
+        axle_offset: 0.0,
+        fields: PlanFields::default(),
         search: Search::Astar,
         turn_cost: 1.0,
         smooth,

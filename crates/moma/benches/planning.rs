@@ -836,12 +836,14 @@ fn mission_replan_case() -> MissionReplan {
     assert!((rp.t - o.t).abs() < 1e-9);
     let grid = m.map.grid.clone();
     let res = grid.resolution;
-    // the mission's configuration space (mission::plan): disk dilation by the footprint
-    // radius + |d| + half a cell of the distance transform of the occupied cells
+    // the mission's configuration space (planning::pipeline's disk C-space): disk
+    // dilation by the footprint radius + |d| of the distance transform of the occupied
+    // cells (blocked within the radius + half a cell, costmap::disk_reach)
     let mut occupied = grid.obstacle_mask(planning::grid::OCCUPIED, f.map.unknown_is_obstacle);
     let dist = planning::distance_transform(&occupied, grid.width, grid.height);
-    let r_cells = (m.footprint.radius + m.robot.base.drive.d.abs()) / res + 0.5;
-    let blocked: Vec<bool> = dist.iter().map(|&d| f64::from(d) <= r_cells).collect();
+    let radius_cells = (m.footprint.radius + m.robot.base.drive.d.abs()) / res;
+    let r_cells = costmap::disk_reach(radius_cells);
+    let blocked = costmap::dilate_disk(&dist, radius_cells);
     let cs = SearchGrid::from_obstacles(&blocked, grid.width, grid.height).unwrap();
     let sc = grid
         .world_to_cell("start", f.start.pose[0], f.start.pose[1])
@@ -1055,7 +1057,9 @@ fn bench_mission(cr: &mut Criterion, c: &MissionReplan) {
 /// calls composed by hand, as `moma plan` composed them before the pipeline existed (the
 /// map loaded once, outside the timing).
 fn bench_pipeline(c: &mut Criterion) {
-    use planning::pipeline::{PlanRequest, RobotFootprint, Search, Timing, plan};
+    use planning::pipeline::{
+        Frame, PlanFields, PlanRequest, RobotFootprint, Search, Timing, plan,
+    };
     use planning::smooth::smooth;
     use planning::trajectory::time_parameterize;
     let grid = load_map(&data(PIPELINE_MAP), None).unwrap().grid;
@@ -1070,12 +1074,15 @@ fn bench_pipeline(c: &mut Criterion) {
         start: [-2.0, -0.5],
         start_yaw: None,
         goal: [1.5, 0.5],
+        frame: Frame::Map,
         unknown_is_obstacle: true,
         footprint,
+        axle_offset: 0.0,
+        fields: PlanFields::default(),
         search: Search::Astar,
         turn_cost: 1.0,
         smooth: true,
-        timing: Some(Timing { limits, dt: 0.1 }),
+        timing: Some(Timing::StopAndTurn { limits, dt: 0.1 }),
     };
     let disk = request(RobotFootprint::Disk(0.1));
     let poly = request(RobotFootprint::Polygon(polygon.clone()));

@@ -15,33 +15,54 @@ fn random_obstacles(w: usize, h: usize, p: f64, seed: u64) -> Vec<bool> {
     (0..w * h).map(|_| rng.random_bool(p)).collect()
 }
 
+/// The disk C-space against the geometry it stands for: an occupied cell is a square of
+/// side one cell, and a cell is blocked when the disk about its centre reaches into an
+/// obstacle's square. Every blocked cell's disk does; a free cell's disk overlaps none
+/// along the grid's axes and none by more than ½·√2 − ½ cells diagonally.
 #[test]
-fn disk_dilation_equals_brute_force() {
+fn disk_dilation_follows_the_obstacle_squares() {
     let (w, h) = (37, 29);
     let obst = random_obstacles(w, h, 0.03, 1);
-    for r in [0.0, 1.0, 1.5, 2.3, 4.0] {
+    let slack = std::f64::consts::FRAC_1_SQRT_2 - 0.5;
+    for r in [0.0, 1.0, 1.5, 1.6, 2.3, 4.0] {
         let fast = costmap::inflate(&obst, w, h, r).unwrap();
         for y in 0..h as i64 {
             for x in 0..w as i64 {
-                let mut hit = false;
+                // distance from the cell's centre to the nearest obstacle square, over all
+                // obstacles and over those in its own row or column
+                let (mut any, mut axis) = (f64::INFINITY, f64::INFINITY);
                 for oy in 0..h as i64 {
                     for ox in 0..w as i64 {
-                        if obst[(oy * w as i64 + ox) as usize]
-                            && (((ox - x).pow(2) + (oy - y).pow(2)) as f64) <= r * r
-                        {
-                            hit = true;
+                        if !obst[(oy * w as i64 + ox) as usize] {
+                            continue;
+                        }
+                        let gap = |d: i64| (d.abs() as f64 - 0.5).max(0.0);
+                        let e = gap(ox - x).hypot(gap(oy - y));
+                        any = any.min(e);
+                        if ox == x || oy == y {
+                            axis = axis.min(e);
                         }
                     }
                 }
-                assert_eq!(
-                    fast[(y * w as i64 + x) as usize],
-                    hit,
-                    "r {r} at ({x}, {y})"
-                );
+                let blocked = fast[(y * w as i64 + x) as usize];
+                if blocked {
+                    assert!(any <= r, "r {r} at ({x}, {y}): blocked {any} from a square");
+                } else {
+                    assert!(axis > r, "r {r} at ({x}, {y}): free {axis} along an axis");
+                    assert!(
+                        any > r - slack - 1e-12,
+                        "r {r} at ({x}, {y}): free at {any}"
+                    );
+                }
             }
         }
     }
     assert!(costmap::inflate(&obst, w, h, -1.0).is_err());
+    // one obstacle cell: the disk of 1.6 cells two cells away reaches 0.1 cell into it
+    let mut one = vec![false; 25];
+    one[2 * 5 + 2] = true;
+    assert!(costmap::inflate(&one, 5, 5, 1.6).unwrap()[2 * 5 + 4]);
+    assert!(!costmap::inflate(&one, 5, 5, 1.4).unwrap()[2 * 5 + 4]);
 }
 
 #[test]
@@ -133,8 +154,12 @@ fn footprint_cspace_matches_brute_force_and_bounds() {
     let res = 0.1;
     let cs = costmap::footprint_cspace(&obst, w, h, res, &fp, 8).unwrap();
     assert_eq!(cs.slices.len(), 8);
-    let disk_in = costmap::inflate(&obst, w, h, fp.inscribed_radius() / res).unwrap();
-    let disk_out = costmap::inflate(&obst, w, h, fp.circumscribed_radius() / res).unwrap();
+    // the polygon is checked against the obstacle cells' centres: its bounds are the
+    // disks of the inscribed and circumscribed radii about the centres
+    let dist = planning::distance_transform(&obst, w, h);
+    let within = |r: f64| -> Vec<bool> { dist.iter().map(|&d| f64::from(d) <= r).collect() };
+    let disk_in = within(fp.inscribed_radius() / res);
+    let disk_out = within(fp.circumscribed_radius() / res);
     for k in 0..8 {
         let offs = fp.cell_offsets(k as f64 * std::f64::consts::TAU / 8.0, res);
         for y in 0..h as i64 {

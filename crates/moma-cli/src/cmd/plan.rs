@@ -17,7 +17,8 @@ use anyhow::{Context, Result, bail};
 use moma::planning::costmap::{Footprint, InflationParams};
 use moma::planning::load_map;
 use moma::planning::pipeline::{
-    self, MapFrame, Plan, PlanRequest, PlanStatus, RobotFootprint, Search, Timing,
+    self, Frame, MapFrame, Plan, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search,
+    Timing,
 };
 use moma::planning::potential::GoalTerm;
 use moma::planning::trajectory::{DiffDriveLimits, TrajectoryPoint};
@@ -285,18 +286,16 @@ pub fn run(args: Args) -> Result<()> {
         start: [sx, sy],
         start_yaw,
         goal: [gx, gy],
+        frame: Frame::Map,
         unknown_is_obstacle: args.unknown == Unknown::Obstacle,
         footprint,
+        axle_offset: 0.0,
+        fields: PlanFields::default(),
         search,
         turn_cost: args.turn_cost,
         smooth: !args.no_smooth,
-        timing: Some(Timing {
-            limits: DiffDriveLimits {
-                v_max: args.v_max,
-                omega_max: args.omega_max,
-                a_max: args.a_max,
-                alpha_max: args.alpha_max,
-            },
+        timing: Some(Timing::StopAndTurn {
+            limits: platform_limits(&args),
             dt: args.dt,
         }),
     };
@@ -322,6 +321,16 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The platform limits of the stop-and-turn timing.
+fn platform_limits(args: &PlanArgs) -> DiffDriveLimits {
+    DiffDriveLimits {
+        v_max: args.v_max,
+        omega_max: args.omega_max,
+        a_max: args.a_max,
+        alpha_max: args.alpha_max,
+    }
 }
 
 /// The `path.json` document of a plan.
@@ -358,7 +367,7 @@ fn plan_output(
         cells: plan.cells.iter().map(|c| [c.0, c.1]).collect(),
         headings: plan.headings.clone(),
         waypoints,
-        limits: request.timing.expect("moma plan times its path").limits,
+        limits: platform_limits(args),
         duration: plan.trajectory.last().map_or(0.0, |p| p.t),
         trajectory: plan.trajectory.clone(),
     }

@@ -6,8 +6,12 @@ use std::time::Instant;
 use super::footprint::MissionFootprint;
 use super::scenario::Mission;
 use crate::error::{Error, Result};
+use crate::planning::costmap;
 use crate::planning::dstar_lite::DStarLite;
 use crate::planning::footprint_clearance::ConvexFootprint;
+use crate::planning::pipeline::{
+    self, Frame, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search,
+};
 use crate::planning::{OccupancyGrid, SearchGrid, distance_transform};
 
 /// Per-cell state of the world the robot knows: obstacles of the map plus the obstacles
@@ -22,7 +26,9 @@ pub(crate) struct Planner {
     pub dist: Vec<f32>,
     /// How many times obstacles that appeared changed `occupied` and `dist`.
     pub map_changes: usize,
-    /// Dilation radius of the configuration space (cells): footprint radius + |d| + ½ cell.
+    /// The centre-to-centre distance (cells) within which an occupied cell blocks a
+    /// configuration-space cell: footprint radius + |d| + ½ cell
+    /// ([`costmap::disk_reach`]).
     pub r_cells: f64,
     pub dstar: DStarLite,
     pub goal_cell: (usize, usize),
@@ -74,94 +80,58 @@ pub struct SearchTiming {
 
 impl Planner {
     /// Builds the configuration space and plans once from `start` to `goal` (world, the
-    /// driven-axle midpoints). The footprint is a disk of `footprint_radius` about the
+    /// driven-axle midpoints) through [`pipeline::plan`] with D* Lite, keeping its D* Lite
+    /// state for the re-plans. The footprint is a disk of `footprint_radius` about the
     /// base frame origin, which lies `axle_offset` (the drive's `d`) ahead of the axle
     /// midpoint; the planned point being the axle midpoint, the obstacles are dilated by
     /// `footprint_radius + |axle_offset|` (the disk about the axle midpoint that holds
-    /// the footprint at every heading; exact for `d = 0`).
+    /// the footprint at every heading; exact for `d = 0`). `fields` name the start, goal
+    /// and radius in the errors.
     ///
     /// # Errors
-    /// Start or goal outside the map, a footprint that fits nowhere, start or goal where
-    /// the footprint does not fit (all input errors). An unreachable goal is not an
+    /// Start or goal outside the map, in an obstacle, or where the footprint does not fit
+    /// (the start's message says when it fits nowhere). An unreachable goal is not an
     /// error: the returned path is `None`.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         grid: &OccupancyGrid,
         unknown_is_obstacle: bool,
-        field: &str,
+        fields: PlanFields,
         footprint_radius: f64,
         axle_offset: f64,
         start: [f64; 2],
         goal: [f64; 2],
     ) -> Result<(Self, Option<CellPath>, SearchTiming)> {
-        let (w, h) = (grid.width, grid.height);
-        let occupied = grid.obstacle_mask(crate::planning::grid::OCCUPIED, unknown_is_obstacle);
-        let dist = distance_transform(&occupied, w, h);
-        let dilation = footprint_radius + axle_offset.abs();
-        let r_cells = dilation / grid.resolution + 0.5;
-        let blocked: Vec<bool> = dist.iter().map(|&d| f64::from(d) <= r_cells).collect();
-        // for d != 0 the messages say that the planned point is the axle midpoint
-        let offset_note = if axle_offset == 0.0 {
-            String::new()
-        } else {
-            format!(
-                " (the driven-axle midpoint is planned, on obstacles dilated by \
-                 footprint_radius + |d| = {dilation} m)"
-            )
-        };
-        if blocked.iter().all(|&b| b) {
-            return Err(Error::invalid(
-                field,
-                format!(
-                    "a footprint of radius {footprint_radius} m fits nowhere on the map (every \
-                     cell lies within that distance of an obstacle or unknown cell){offset_note}"
-                ),
+        let plan = pipeline::plan(
+            grid,
+            &first_plan_request(
+                unknown_is_obstacle,
+                fields,
+                footprint_radius,
+                axle_offset,
+                start,
+                goal,
+            ),
+        )?;
+        let Some(dstar) = plan.dstar else {
+            return Err(Error::Planning(
+                "the planning pipeline gave no D* Lite state for a D* Lite search".into(),
             ));
-        }
-        let start_cell = grid.world_to_cell("start.pose", start[0], start[1])?;
-        let goal_cell = grid.world_to_cell("goal.pose", goal[0], goal[1])?;
-        for (what, c, p) in [
-            ("start.pose", start_cell, start),
-            ("goal.pose", goal_cell, goal),
-        ] {
-            let i = c.1 * w + c.0;
-            if occupied[i] {
-                return Err(Error::invalid(
-                    what,
-                    format!("({}, {}) lies in an obstacle of the map", p[0], p[1]),
-                ));
-            }
-            if blocked[i] {
-                return Err(Error::invalid(
-                    what,
-                    format!(
-                        "the footprint (radius {footprint_radius} m) does not fit at ({}, {}): \
-                         an obstacle lies {:.3} m from it{offset_note}",
-                        p[0],
-                        p[1],
-                        f64::from(dist[i]) * grid.resolution
-                    ),
-                ));
-            }
-        }
-        let sgrid = SearchGrid::from_obstacles(&blocked, w, h)?;
-        let clock = Instant::now();
-        let mut dstar = DStarLite::new(&sgrid, start_cell, goal_cell)?;
-        let path = dstar.compute().and_then(|_| dstar.path());
+        };
         let timing = SearchTiming {
-            search_s: clock.elapsed().as_secs_f64(),
+            search_s: plan.search_s,
             expanded: dstar.expanded(),
         };
+        let path = (plan.status == PlanStatus::Found).then_some(plan.cells);
         Ok((
             Self {
-                width: w,
-                height: h,
-                occupied,
-                dist,
+                width: grid.width,
+                height: grid.height,
+                occupied: plan.occupied,
+                dist: plan.distance,
                 map_changes: 0,
-                r_cells,
+                r_cells: plan.reach_cells,
                 dstar,
-                goal_cell,
+                goal_cell: plan.goal_cell,
                 polygon: None,
             },
             path,
@@ -318,12 +288,8 @@ impl Planner {
         resolution: f64,
         start: (usize, usize),
     ) -> Result<bool> {
-        self.r_cells = radius / resolution + 0.5;
-        let blocked: Vec<bool> = self
-            .dist
-            .iter()
-            .map(|&d| f64::from(d) <= self.r_cells)
-            .collect();
+        self.r_cells = costmap::disk_reach(radius / resolution);
+        let blocked = costmap::dilate_disk(&self.dist, radius / resolution);
         self.polygon = None;
         if blocked[self.goal_cell.1 * self.width + self.goal_cell.0] {
             return Ok(false);
@@ -436,6 +402,34 @@ impl Planner {
     }
 }
 
+/// The pipeline's request of the mission's first plan: D* Lite on the disk C-space of
+/// `footprint_radius` about a base frame `axle_offset` ahead of the planned axle
+/// midpoint, unsmoothed and untimed (the mission smooths and times the cell path from
+/// the robot's pose and speed when it adopts it, `mission::reference`).
+pub(crate) fn first_plan_request(
+    unknown_is_obstacle: bool,
+    fields: PlanFields,
+    footprint_radius: f64,
+    axle_offset: f64,
+    start: [f64; 2],
+    goal: [f64; 2],
+) -> PlanRequest {
+    PlanRequest {
+        start,
+        start_yaw: None,
+        goal,
+        frame: Frame::World,
+        unknown_is_obstacle,
+        footprint: RobotFootprint::Disk(footprint_radius),
+        axle_offset,
+        fields,
+        search: Search::DStarLite,
+        turn_cost: 1.0,
+        smooth: false,
+        timing: None,
+    }
+}
+
 /// The mission's planner between two axle-midpoint poses for `footprint` (the mission's,
 /// or a `[task]`'s while carrying). With the robot's footprint polygon: searched on the
 /// largest disk about the axle midpoint inside it (padded), and every path it gives
@@ -455,10 +449,15 @@ pub(super) fn mission_planner(
         None if m.file.robot.footprint.is_some() => ("robot.footprint", footprint.radius, d),
         None => ("robot.footprint_radius", footprint.radius, d),
     };
+    let fields = PlanFields {
+        start: "start.pose",
+        goal: "goal.pose",
+        radius: field,
+    };
     let (mut planner, path, search) = Planner::new(
         grid,
         m.file.map.unknown_is_obstacle,
-        field,
+        fields,
         radius,
         offset,
         [from[0], from[1]],
@@ -473,4 +472,122 @@ pub(super) fn mission_planner(
         ));
     }
     Ok((planner, path, search))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mission::reference::axle_pose;
+
+    /// The mission's first plan is `moma plan`'s D* Lite plan for a disk of the
+    /// footprint radius + |d| from the axle midpoint to the goal's: the same C-space, the
+    /// same cells and the same D* Lite state to re-plan from (`mission_offset.toml`: a
+    /// base frame 0.12 m ahead of the axle).
+    #[test]
+    fn first_plan_is_the_pipelines() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/mission_offset.toml");
+        let m = crate::mission::load(&path).unwrap();
+        let d = m.robot.base.drive.d;
+        assert!(
+            d != 0.0 && m.footprint.source == crate::mission::footprint::FootprintSource::Radius
+        );
+        let (s0, g0) = (
+            axle_pose(m.file.start.pose, d),
+            axle_pose(m.goal().unwrap().pose, d),
+        );
+        let (planner, cells, search) = mission_planner(&m, &m.footprint, s0, g0).unwrap();
+        let cells = cells.expect("the goal is reachable");
+        let mut as_moma_plan = first_plan_request(
+            m.file.map.unknown_is_obstacle,
+            PlanFields::default(),
+            m.footprint.radius + d.abs(),
+            0.0,
+            [s0[0], s0[1]],
+            [g0[0], g0[1]],
+        );
+        as_moma_plan.frame = Frame::Map;
+        let plan = pipeline::plan(&m.map.grid, &as_moma_plan).unwrap();
+        assert_eq!(plan.status, PlanStatus::Found);
+        assert_eq!(planner.dstar.grid(), &plan.cspace, "the C-space");
+        assert_eq!(cells, plan.cells);
+        assert_eq!(search.expanded, plan.expanded);
+        assert_eq!(planner.r_cells, plan.reach_cells);
+        assert_eq!(planner.occupied, plan.occupied);
+        // the handed-over state re-plans as the mission's does
+        let mut theirs = plan.dstar.unwrap();
+        let mut ours = planner.dstar;
+        let mid = cells[cells.len() / 2];
+        for p in [&mut theirs, &mut ours] {
+            p.move_start(cells[3]).unwrap();
+            p.set_blocked(mid, true).unwrap();
+        }
+        let replanned = ours.compute().and_then(|_| ours.path());
+        assert!(replanned.as_ref().is_some_and(|p| !p.contains(&mid)));
+        assert_eq!(replanned, theirs.compute().and_then(|_| theirs.path()));
+    }
+
+    /// The pipeline's curvature-limited timing of the mission's first plan is the
+    /// reference the mission tracks first (`mission.toml`: its recorded path and
+    /// duration); the timing needs the start heading.
+    #[test]
+    fn curvature_timing_is_the_missions_first_reference() {
+        use crate::planning::curve_timing::CurvatureTiming;
+        use crate::planning::pipeline::Timing;
+        use crate::planning::trajectory::DiffDriveLimits;
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/mission.toml");
+        let m = crate::mission::load(&path).unwrap();
+        let run = crate::mission::run(&m).unwrap();
+        let first = &run.plans[0];
+        let (f, d) = (&m.file, m.robot.base.drive.d);
+        let (s0, g0) = (
+            axle_pose(f.start.pose, d),
+            axle_pose(m.goal().unwrap().pose, d),
+        );
+        let tip = super::super::tip_over::timing_acceleration(
+            &super::super::tip_over::transport_tip_limits(&m).unwrap(),
+            f.limits.tip_fraction,
+        )
+        .unwrap();
+        let l = &f.limits;
+        let fields = PlanFields {
+            start: "start.pose",
+            goal: "goal.pose",
+            radius: "robot.footprint_radius",
+        };
+        let mut req = first_plan_request(
+            f.map.unknown_is_obstacle,
+            fields,
+            m.footprint.radius,
+            d,
+            [s0[0], s0[1]],
+            [g0[0], g0[1]],
+        );
+        req.start_yaw = Some(s0[2]);
+        req.timing = Some(Timing::Curvature {
+            timing: CurvatureTiming {
+                limits: DiffDriveLimits {
+                    v_max: l.v_max,
+                    omega_max: l.omega_max,
+                    a_max: l.a_max,
+                    alpha_max: l.alpha_max,
+                },
+                tip,
+                kappa_max: l.kappa_max,
+                dt: 0.02,
+            },
+            goal_yaw: g0[2],
+        });
+        let plan = pipeline::plan(&m.map.grid, &req).unwrap();
+        assert_eq!(plan.cells, first.cells);
+        let curve = plan.curve.clone().unwrap();
+        assert_eq!(plan.trajectory.len(), curve.samples.len());
+        let reference = super::super::reference::reference_of_curve(curve, first.t, d);
+        assert_eq!(reference.path, first.path);
+        assert_eq!(reference.t_end() - first.t, first.duration);
+        req.start_yaw = None;
+        let e = pipeline::plan(&m.map.grid, &req).unwrap_err().to_string();
+        assert!(e.contains("timing") && e.contains("start heading"), "{e}");
+    }
 }

@@ -7,11 +7,13 @@
 //! [`crate::mission`], with no tip-over bound — as a [`SampledTrajectory`] the platform
 //! laws of [`crate::sim::feedback`] track (Kanayama) or follow (pure pursuit, its path).
 
-use super::plan::Planner;
-use super::reference::{TimingStart, build_reference};
+use super::plan::first_plan_request;
+use super::reference::reference_of_curve;
 use crate::control::unicycle::Pose;
 use crate::error::{Error, Result};
 use crate::planning::OccupancyGrid;
+use crate::planning::curve_timing::CurvatureTiming;
+use crate::planning::pipeline::{self, PlanFields, Timing};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, TrajectoryPoint};
 use crate::sim::feedback::SampledTrajectory;
 
@@ -51,16 +53,14 @@ pub struct PlannedPath {
     pub turn_at_goal: bool,
 }
 
+/// The fields of the planning's and timing's own errors under `reference`.
 fn rename(e: Error) -> Error {
     match e {
-        Error::InvalidInput { field, message } => {
-            let field = match field.as_str() {
-                "start.pose" => "reference.start".to_string(),
-                "goal.pose" => "reference.goal".to_string(),
-                "robot.footprint_radius" => "reference.footprint_radius".to_string(),
-                _ => format!("reference: {field}"),
-            };
-            Error::InvalidInput { field, message }
+        Error::InvalidInput { field, message } if !field.starts_with("reference") => {
+            Error::InvalidInput {
+                field: format!("reference: {field}"),
+                message,
+            }
         }
         other => other,
     }
@@ -99,18 +99,39 @@ pub fn plan_platform_reference(
     }
     grid.world_to_cell("reference.start", r.start[0], r.start[1])?;
     grid.world_to_cell("reference.goal", r.goal[0], r.goal[1])?;
-    let (planner, cells, _) = Planner::new(
-        grid,
+    let inf = f64::INFINITY;
+    let tip = TipOverAcceleration {
+        forward: inf,
+        backward: inf,
+        left: inf,
+        right: inf,
+    };
+    let fields = PlanFields {
+        start: "reference.start",
+        goal: "reference.goal",
+        radius: "reference.footprint_radius",
+    };
+    // the reference is planned for the point the platform law tracks (its base frame)
+    let mut req = first_plan_request(
         r.unknown_is_obstacle,
-        "robot.footprint_radius",
+        fields,
         r.footprint_radius,
-        // the reference is planned for the point the platform law tracks (its base frame)
         0.0,
         [r.start[0], r.start[1]],
         [r.goal[0], r.goal[1]],
-    )
-    .map_err(rename)?;
-    let Some(cells) = cells else {
+    );
+    req.start_yaw = Some(r.start[2]);
+    req.timing = Some(Timing::Curvature {
+        timing: CurvatureTiming {
+            limits: r.limits,
+            tip,
+            kappa_max: r.kappa_max,
+            dt: r.dt,
+        },
+        goal_yaw: r.goal[2],
+    });
+    let plan = pipeline::plan(grid, &req).map_err(rename)?;
+    let Some(curve) = plan.curve else {
         return Err(Error::invalid(
             "reference.goal",
             format!(
@@ -120,31 +141,8 @@ pub fn plan_platform_reference(
             ),
         ));
     };
-    let inf = f64::INFINITY;
-    let tip = TipOverAcceleration {
-        forward: inf,
-        backward: inf,
-        left: inf,
-        right: inf,
-    };
-    let start = TimingStart {
-        t0: 0.0,
-        pose: r.start,
-        v: 0.0,
-    };
-    let reference = build_reference(
-        grid,
-        planner.dstar.grid(),
-        &cells,
-        &start,
-        r.goal,
-        0.0,
-        &r.limits,
-        &tip,
-        r.kappa_max,
-        r.dt,
-    )
-    .map_err(rename)?;
+    let reference = reference_of_curve(curve, 0.0, 0.0);
+    let cells = plan.cells;
     let points: Vec<TrajectoryPoint> = reference
         .samples
         .iter()

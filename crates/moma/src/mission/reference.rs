@@ -2,7 +2,8 @@
 //! built from a planned cell path.
 
 use crate::error::Result;
-use crate::planning::curvature::{SmoothOptions, SmoothPath, smooth_diff_drive};
+use crate::planning::curvature::SmoothPath;
+use crate::planning::curve_timing::{CurvatureTiming, TimedCurve, time_cells_curved};
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, time_parameterize_curve};
 use crate::planning::{OccupancyGrid, SearchGrid};
 
@@ -135,21 +136,20 @@ pub(crate) struct TimingStart {
     pub v: f64,
 }
 
-/// Builds a reference from a cell path: curvature-bounded smoothing against the
-/// configuration space from the exact start pose to the exact goal pose
-/// (`planning::curvature::smooth_diff_drive`), then the near time-optimal time
-/// parameterisation under the platform limits and the tip-over accelerations
-/// (`planning::trajectory::time_parameterize_curve`), continuing from the current speed.
-/// A path that must begin with a turn in place cannot start moving: it is then timed
-/// from rest (the robot brakes onto it; the caller's reference starts with `v = 0`).
-/// A path that allows less than the current speed at its start is timed from the
-/// current speed and brakes onto it, not held to ω_max while braking
-/// ([`Reference::overspeed_until`] says so; the mission then stops along the old path
-/// instead, [`brake_along`], and times the new path from that stop).
-/// When no smooth path ends at the goal pose with `kappa_max`, tighter bounds (2x, 4x)
-/// are tried, then the heading the cell path arrives with (see [`Reference`]).
-/// `start`, `goal` and `cspace` are those of the axle midpoint; `d` places the base frame
-/// origin on the drawn path.
+/// Builds a reference from a cell path with the curvature-limited timing of
+/// [`time_cells_curved`] (curvature-bounded smoothing against the configuration space
+/// from the exact start pose to the exact goal pose, then the near time-optimal time
+/// parameterisation under the platform limits and the tip-over accelerations),
+/// continuing from the current speed and shifted to mission time `start.t0`. A path that
+/// must begin with a turn in place cannot start moving: it is then timed from rest (the
+/// robot brakes onto it; the caller's reference starts with `v = 0`). A path that allows
+/// less than the current speed at its start is timed from the current speed and brakes
+/// onto it, not held to ω_max while braking ([`Reference::overspeed_until`] says so; the
+/// mission then stops along the old path instead, [`brake_along`], and times the new
+/// path from that stop). When no smooth path ends at the goal pose with `kappa_max`,
+/// tighter bounds (2x, 4x) are tried, then the heading the cell path arrives with (see
+/// [`Reference`]). `start`, `goal` and `cspace` are those of the axle midpoint; `d`
+/// places the base frame origin on the drawn path.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn build_reference(
     map: &OccupancyGrid,
@@ -163,43 +163,24 @@ pub(crate) fn build_reference(
     kappa_max: f64,
     dt: f64,
 ) -> Result<Reference> {
-    // First the goal pose as given, with the curvature bound, then tighter bounds (2x,
-    // 4x); last the heading the path arrives with, the goal heading then being taken by a
-    // turn in place at the goal (the settling phase).
-    let arrival = arrival_heading(map, cells, goal);
-    let mut first_err = None;
-    let mut found = None;
-    for (k, g) in [
-        (kappa_max, goal),
-        (2.0 * kappa_max, goal),
-        (4.0 * kappa_max, goal),
-        (kappa_max, [goal[0], goal[1], arrival]),
-        (4.0 * kappa_max, [goal[0], goal[1], arrival]),
-    ] {
-        match smooth_diff_drive(cspace, map, cells, start.pose, g, &SmoothOptions::new(k)) {
-            Ok(p) => {
-                found = Some((p, k, g[2] != goal[2]));
-                break;
-            }
-            Err(e) => {
-                first_err.get_or_insert(e);
-            }
-        }
-    }
-    let Some((path, kappa_used, turn_at_goal)) = found else {
-        return Err(first_err.expect("at least one attempt"));
+    let timing = CurvatureTiming {
+        limits: *limits,
+        tip: *tip,
+        kappa_max,
+        dt,
     };
-    let v0 = if path.pivot() != 0.0 {
-        0.0
-    } else {
-        start.v.max(0.0)
-    };
-    let timed = time_parameterize_curve(&path, limits, Some(tip), v0, 0.0)?;
-    let timed_samples = timed.samples(dt)?;
-    let samples = timed_samples
+    let curve = time_cells_curved(map, cspace, cells, start.pose, start.v, goal, &timing)?;
+    Ok(reference_of_curve(curve, start.t0, d))
+}
+
+/// The reference of a timed curve of the axle midpoint: its samples at mission time
+/// `t0` on, the drawn path of the base frame origin `d` ahead.
+pub(crate) fn reference_of_curve(curve: TimedCurve, t0: f64, d: f64) -> Reference {
+    let samples = curve
+        .samples
         .iter()
         .map(|p| RefSample {
-            t: start.t0 + p.t,
+            t: t0 + p.t,
             x: p.x,
             y: p.y,
             theta: crate::control::wrap_angle(p.theta),
@@ -209,6 +190,7 @@ pub(crate) fn build_reference(
             alpha: p.alpha,
         })
         .collect();
+    let path = curve.geometry;
     let drawn = if d == 0.0 {
         path.points()
     } else {
@@ -220,15 +202,15 @@ pub(crate) fn build_reference(
             })
             .collect()
     };
-    Ok(Reference {
+    Reference {
         samples,
         path: drawn,
-        kappa_max: kappa_used,
-        turn_at_goal,
-        arc: timed_samples.iter().map(|p| p.s).collect(),
-        overspeed_until: timed.overspeed_until(),
+        kappa_max: curve.kappa_max,
+        turn_at_goal: curve.turn_at_goal,
+        arc: curve.samples.iter().map(|p| p.s).collect(),
+        overspeed_until: curve.overspeed_until,
         geometry: path,
-    })
+    }
 }
 
 /// The arc length along `r`'s geometry at mission time `t` (interpolated between
@@ -303,22 +285,4 @@ pub(crate) fn brake_along(
             alpha: p.alpha,
         })
         .collect())
-}
-
-/// The direction (rad) from a point of the cell path about 0.6 m before the goal to the
-/// goal: the heading a path arrives with when it does not turn to the goal heading.
-fn arrival_heading(map: &OccupancyGrid, cells: &[(usize, usize)], goal: [f64; 3]) -> f64 {
-    let back = ((0.6 / map.resolution).ceil() as usize).max(1);
-    let n = cells.len();
-    if n < 2 {
-        return goal[2];
-    }
-    let (x, y) = cells[n.saturating_sub(1 + back)];
-    let p = map.cell_to_world(x as f64, y as f64);
-    let (dx, dy) = (goal[0] - p[0], goal[1] - p[1]);
-    if dx.hypot(dy) < 1e-9 {
-        goal[2]
-    } else {
-        dy.atan2(dx)
-    }
 }

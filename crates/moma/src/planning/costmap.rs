@@ -9,14 +9,31 @@ use crate::{Error, Result};
 // because the cost layer is where users meet them.
 pub use super::grid::{FREE_SPACE, INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION};
 
+/// The centre-to-centre distance (cells) within which an obstacle cell blocks the centre of
+/// a cell for a disk robot of `radius_cells`: the radius plus half a cell.
+///
+/// An occupied cell is a square of side one cell, not a point at its centre: the disk at a
+/// cell centre touches the square of an obstacle cell `dist` cells away (centre to centre)
+/// when `dist − ½ ≤ radius` along the grid's axes (the square's near edge lies half a cell
+/// short of its centre), and diagonally when `dist − ½·√2 ≤ radius`. The rule
+/// `dist ≤ radius + ½` is therefore exact along the axes and misses at most
+/// ½·√2 − ½ ≈ 0.21 cells of overlap diagonally, where `dist ≤ radius` (the obstacle as its
+/// centre point) would miss up to 0.71 cells everywhere. It is the distance the mission's
+/// clearance and footprint-polygon checks, which measure to the occupied cells' edges,
+/// agree with.
+#[must_use]
+pub fn disk_reach(radius_cells: f64) -> f64 {
+    radius_cells + 0.5
+}
+
 /// Dilates obstacles by a disk: a cell is in the C-space obstacle if its centre lies
-/// within `radius_cells` of an obstacle cell's centre (`dist ≤ radius`), `dist` being the
-/// output of [`distance_transform`].
+/// within [`disk_reach`]`(radius_cells)` (the radius plus half a cell) of an obstacle
+/// cell's centre, `dist` being the output of [`distance_transform`].
 #[doc(alias = "c_space")]
 #[doc(alias = "configuration_space")]
 pub fn dilate_disk(dist: &[f32], radius_cells: f64) -> Vec<bool> {
-    let r = radius_cells as f32;
-    dist.iter().map(|&d| d <= r).collect()
+    let r = disk_reach(radius_cells);
+    dist.iter().map(|&d| f64::from(d) <= r).collect()
 }
 
 /// Convenience: obstacle mask → distance transform → disk dilation.

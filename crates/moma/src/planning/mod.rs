@@ -50,6 +50,7 @@
 pub mod astar;
 pub mod costmap;
 pub mod curvature;
+pub mod curve_timing;
 pub mod dstar_lite;
 pub mod edt;
 pub mod footprint_clearance;

@@ -1,10 +1,17 @@
-//! The planning pipeline of `moma plan` and the Python `plan`: a map, a footprint, start
-//! and goal, a search and limits in; the configuration space, the cell path, the
-//! smoothed path and the timed reference out.
+//! The planning pipeline of `moma plan`, the Python `plan` and the mission (its first
+//! plan, the drive on after a pick and the `reference` of `moma simulate`): a map, a
+//! footprint, start and goal, a search and limits in; the configuration space, the cell
+//! path, the smoothed path and the timed reference out. With [`Search::DStarLite`] the
+//! plan hands over the D* Lite state, which the mission keeps re-planning incrementally
+//! as obstacles appear.
 //!
 //! Coordinates and lengths are in the map's own units ([`MapFrame`]): world metres on a
 //! ROS map, cells on a Moving AI map. The footprint is a point, a disk (the obstacles
-//! dilated by its radius, one distance transform) or a polygon in the robot frame. A
+//! dilated by its radius, one distance transform; a cell is blocked when its centre lies
+//! within the radius plus half a cell of an obstacle cell's centre,
+//! [`costmap::disk_reach`]) or a polygon in the robot frame. A planned point behind the
+//! footprint's origin ([`PlanRequest::axle_offset`], the driven-axle midpoint of a base
+//! whose frame lies `d` ahead of it) dilates the disk by `|d|`. A
 //! polygon is searched over (x, y, heading) on the 8-heading lattice of
 //! [`costmap::footprint_cspace`] (each heading's C-space exact at cell centres: blocked
 //! within the inscribed radius, free beyond the circumscribed radius, the polygon tested
@@ -13,31 +20,57 @@
 //! driven with, which nav2's Smac planners also do on their heading lattices.
 
 use super::costmap::{self, Footprint, InflationParams};
+use super::curve_timing::{CurvatureTiming, TimedCurve, time_cells_curved};
+use std::time::Instant;
+
 use super::dstar_lite::DStarLite;
+use super::edt::distance_transform;
 use super::potential::{DescentEnd, GoalTerm, PotentialParams, descend, potential_field};
 use super::smooth::{polyline_length, smooth};
 use super::trajectory::{DiffDriveLimits, TrajectoryPoint, time_parameterize};
 use super::{MapKind, OccupancyGrid, SearchGrid, astar};
 use crate::{Error, Result};
 
+/// The frame a request's points and lengths are in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Frame {
+    /// The map's own units: world metres on a ROS map; cells on a Moving AI map, points
+    /// being cells (`moma plan`, the Python `plan`).
+    #[default]
+    Map,
+    /// World coordinates on every map (a point anywhere in a cell,
+    /// [`OccupancyGrid::world_to_cell`]; lengths over the map's resolution): the
+    /// mission's, whose robot stands anywhere.
+    World,
+}
+
 /// A map with the frame its user's coordinates are in.
 #[derive(Debug, Clone, Copy)]
 pub struct MapFrame<'a> {
     /// The map.
     pub grid: &'a OccupancyGrid,
+    /// The frame of the coordinates.
+    pub frame: Frame,
 }
 
 impl<'a> MapFrame<'a> {
-    /// The frame of `grid`.
+    /// The map's own frame of `grid` ([`Frame::Map`]).
     #[must_use]
     pub fn new(grid: &'a OccupancyGrid) -> Self {
-        Self { grid }
+        Self::in_frame(grid, Frame::Map)
     }
 
-    /// `true` on a ROS map (world metres), `false` on a Moving AI map (cells).
+    /// `grid` with coordinates in `frame`.
+    #[must_use]
+    pub fn in_frame(grid: &'a OccupancyGrid, frame: Frame) -> Self {
+        Self { grid, frame }
+    }
+
+    /// `true` in world units (a ROS map, or [`Frame::World`]), `false` in cells (a
+    /// Moving AI map in its own frame).
     #[must_use]
     pub fn world(&self) -> bool {
-        self.grid.kind == MapKind::Ros
+        self.frame == Frame::World || self.grid.kind == MapKind::Ros
     }
 
     /// A length in map units in cells.
@@ -154,6 +187,30 @@ pub enum Search {
     },
 }
 
+/// The names the caller's user set the inputs by, for the errors (`moma plan`:
+/// [`PlanFields::default`]; the mission: `start.pose`, `goal.pose`,
+/// `robot.footprint_radius`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlanFields {
+    /// The start's field.
+    pub start: &'static str,
+    /// The goal's field.
+    pub goal: &'static str,
+    /// The disk footprint's radius field.
+    pub radius: &'static str,
+}
+
+impl Default for PlanFields {
+    /// `start`, `goal`, `radius` (`moma plan`'s and the Python `plan`'s names).
+    fn default() -> Self {
+        Self {
+            start: "start",
+            goal: "goal",
+            radius: "radius",
+        }
+    }
+}
+
 /// What to plan.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlanRequest {
@@ -163,10 +220,20 @@ pub struct PlanRequest {
     pub start_yaw: Option<f64>,
     /// Goal `[x, y]` in map units.
     pub goal: [f64; 2],
+    /// The frame of the points and lengths.
+    pub frame: Frame,
     /// Unknown cells are obstacles (else free).
     pub unknown_is_obstacle: bool,
     /// The robot's shape.
     pub footprint: RobotFootprint,
+    /// How far ahead of the planned point (start, goal and path) the footprint's origin
+    /// lies along the heading, in map units: the `d` of a base planned at its driven-axle
+    /// midpoint. A disk footprint is then searched on the obstacles dilated by
+    /// `radius + |axle_offset|`, the disk about the planned point that holds the
+    /// footprint at every heading (exact for 0). Only with a point or disk footprint.
+    pub axle_offset: f64,
+    /// The names of the inputs in the caller's errors.
+    pub fields: PlanFields,
     /// The search.
     pub search: Search,
     /// Turn cost per 45° of the polygon search (cells of travel).
@@ -174,18 +241,31 @@ pub struct PlanRequest {
     /// Shortcut smoothing of the cell path (the polygon's path is never shortcut: its
     /// headings hold only along the cells searched).
     pub smooth: bool,
-    /// The stop-and-turn timing; `None` plans the path alone.
+    /// The timing; `None` plans the path alone.
     pub timing: Option<Timing>,
 }
 
-/// Limits and sampling of the stop-and-turn timing
-/// ([`super::trajectory::time_parameterize`]).
+/// How the path is timed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Timing {
-    /// Platform limits.
-    pub limits: DiffDriveLimits,
-    /// Sampling period (s).
-    pub dt: f64,
+pub enum Timing {
+    /// Stop and turn: straight segments between the smoothed waypoints, turning in place
+    /// at each ([`super::trajectory::time_parameterize`]; `moma plan`'s).
+    StopAndTurn {
+        /// Platform limits.
+        limits: DiffDriveLimits,
+        /// Sampling period (s).
+        dt: f64,
+    },
+    /// Curvature-limited: the cell path smoothed under a curvature bound from the start
+    /// pose (the start heading [`PlanRequest::start_yaw`] is then required) to the goal
+    /// pose and timed from rest under the platform limits and tip-over accelerations
+    /// ([`time_cells_curved`]; the mission's). Point and disk footprints only.
+    Curvature {
+        /// Limits, curvature bound and sampling.
+        timing: CurvatureTiming,
+        /// Goal heading (rad, world frame).
+        goal_yaw: f64,
+    },
 }
 
 /// How the search ended.
@@ -200,15 +280,30 @@ pub enum PlanStatus {
 }
 
 /// The pipeline's products.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Plan {
     /// Start cell.
     pub start_cell: (usize, usize),
     /// Goal cell.
     pub goal_cell: (usize, usize),
+    /// The map's obstacle cells (`true` = occupied; unknown cells as the request says).
+    pub occupied: Vec<bool>,
+    /// Distance (cells, centre to centre) from each cell to the nearest occupied cell
+    /// ([`distance_transform`] of [`Plan::occupied`]).
+    pub distance: Vec<f32>,
+    /// The centre-to-centre distance (cells) within which an occupied cell blocks a cell
+    /// of the disk C-space: [`costmap::disk_reach`] of the radius plus `|axle_offset|`
+    /// (of 0 for a point or polygon).
+    pub reach_cells: f64,
     /// The C-space the path lives on (`true` = free); for a polygon, the cells free at
     /// every heading.
     pub cspace: SearchGrid,
+    /// With [`Search::DStarLite`]: the D* Lite state after the first plan (its C-space
+    /// is [`Plan::cspace`]), to re-plan from incrementally (`move_start`, `set_blocked`,
+    /// `compute`).
+    pub dstar: Option<DStarLite>,
+    /// Wall time of the search (s): building it and finding the path.
+    pub search_s: f64,
     /// How the search ended.
     pub status: PlanStatus,
     /// One line on the search's outcome (the reason when unreachable).
@@ -225,25 +320,31 @@ pub struct Plan {
     pub smoothed: Vec<(usize, usize)>,
     /// The smoothed path in map units (cell centres).
     pub waypoints: Vec<[f64; 2]>,
-    /// The stop-and-turn timed reference (empty without [`PlanRequest::timing`]).
+    /// The timed reference (empty without [`PlanRequest::timing`]; with
+    /// [`Timing::Curvature`] the pose and speeds of [`Plan::curve`]'s samples).
     pub trajectory: Vec<TrajectoryPoint>,
+    /// With [`Timing::Curvature`]: the smoothed geometry and its timed samples.
+    pub curve: Option<TimedCurve>,
 }
 
 /// Runs the pipeline on `grid` (see the module documentation).
 ///
 /// # Errors
 /// Start or goal off the map, in an obstacle or unknown cell, or inside the C-space
-/// obstacle; invalid footprint, search or timing parameters; an oversized map or
-/// footprint C-space. An unreachable goal is not an error ([`PlanStatus::Unreachable`]).
+/// obstacle (each naming the request's field; the start's message says when the
+/// footprint fits nowhere on the map); invalid footprint, offset, search or timing
+/// parameters; an oversized map or footprint C-space. An unreachable goal is not an
+/// error ([`PlanStatus::Unreachable`]).
 pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
-    let mf = MapFrame::new(grid);
+    let mf = MapFrame::in_frame(grid, req.frame);
     let (w, h) = (grid.width, grid.height);
-    let obst = grid.obstacle_mask(100, req.unknown_is_obstacle);
+    let fields = req.fields;
+    let obst = grid.obstacle_mask(super::grid::OCCUPIED, req.unknown_is_obstacle);
     // validates the map size for the searches before anything else is built
     SearchGrid::from_obstacles(&obst, w, h)?;
-    let start = mf.cell_of("start", req.start[0], req.start[1])?;
-    let goal = mf.cell_of("goal", req.goal[0], req.goal[1])?;
-    for (what, c) in [("start", start), ("goal", goal)] {
+    let start = mf.cell_of(fields.start, req.start[0], req.start[1])?;
+    let goal = mf.cell_of(fields.goal, req.goal[0], req.goal[1])?;
+    for (what, c) in [(fields.start, start), (fields.goal, goal)] {
         if obst[c.1 * w + c.0] {
             let kind = if grid.cells[c.1 * w + c.0] < 0 {
                 "an unknown cell (unknown cells are obstacles unless declared free)"
@@ -262,27 +363,71 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
     };
     if !(radius.is_finite() && radius >= 0.0) {
         return Err(Error::invalid(
-            "radius",
+            fields.radius,
             format!("must be a finite non-negative number, got {radius}"),
         ));
     }
-    let cspace = SearchGrid::from_obstacles(
-        &costmap::inflate(&obst, w, h, mf.units_to_cells(radius))?,
-        w,
-        h,
-    )?;
-    for (what, c) in [("start", start), ("goal", goal)] {
+    let offset = req.axle_offset;
+    if !offset.is_finite() || (offset != 0.0 && matches!(req.footprint, RobotFootprint::Polygon(_)))
+    {
+        return Err(Error::invalid(
+            "axle offset",
+            format!("must be finite, and 0 with a polygonal footprint, got {offset}"),
+        ));
+    }
+    if let Some(Timing::Curvature { goal_yaw, .. }) = req.timing {
+        if matches!(req.footprint, RobotFootprint::Polygon(_)) || req.start_yaw.is_none() {
+            return Err(Error::invalid(
+                "timing",
+                "the curvature-limited timing needs the start heading and a point or disk \
+                 footprint (a polygon's path is timed stop-and-turn, at the headings searched)",
+            ));
+        }
+        if !goal_yaw.is_finite() {
+            return Err(Error::NonFinite {
+                field: format!("{} heading", fields.goal),
+            });
+        }
+    }
+    let dilation = radius + offset.abs();
+    let distance = distance_transform(&obst, w, h);
+    let reach_cells = costmap::disk_reach(mf.units_to_cells(dilation));
+    let blocked = costmap::dilate_disk(&distance, mf.units_to_cells(dilation));
+    let cspace = SearchGrid::from_obstacles(&blocked, w, h)?;
+    // for an offset the messages say that the planned point is the axle midpoint
+    let offset_note = if offset == 0.0 {
+        String::new()
+    } else {
+        format!(
+            " (the driven-axle midpoint is planned, {} {u} behind the footprint's origin: \
+             on the obstacles dilated by the radius + {} = {} {u})",
+            short(offset),
+            short(offset.abs()),
+            short(dilation),
+            u = mf.units()
+        )
+    };
+    for (what, c) in [(fields.start, start), (fields.goal, goal)] {
         if !cspace.is_free(c.0 as i64, c.1 as i64) {
+            let nowhere = if blocked.iter().all(|&b| b) {
+                "; the footprint fits nowhere on the map (every cell lies within that \
+                 distance of an obstacle or unknown cell)"
+            } else {
+                ""
+            };
             return Err(Error::Planning(format!(
-                "{what} at {} is closer than the robot radius {} {} to an obstacle (inside \
-                 the configuration-space obstacle)",
+                "{what} at {} is closer than the robot radius {} {u} to an obstacle (inside \
+                 the configuration-space obstacle): the footprint does not fit there, an \
+                 obstacle cell's centre lies {:.3} {u} from it{offset_note}{nowhere}",
                 mf.describe(c),
                 short(radius),
-                mf.units()
+                mf.cells_to_units(f64::from(distance[c.1 * w + c.0])),
+                u = mf.units()
             )));
         }
     }
     let ends = Ends { start, goal };
+    let clock = Instant::now();
     let found = match (&req.footprint, &req.search) {
         (RobotFootprint::Polygon(fp), Search::Astar) => search_polygon(&mf, &obst, &ends, req, fp)?,
         (RobotFootprint::Polygon(_), _) => {
@@ -322,7 +467,22 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
             search_potential(&mf, &ends, *term, &params, cspace)?
         }
     };
-    finish(&mf, req, ends, found)
+    let search_s = clock.elapsed().as_secs_f64();
+    let map = MapProducts {
+        occupied: obst,
+        distance,
+        reach_cells,
+        search_s,
+    };
+    finish(&mf, req, ends, found, map)
+}
+
+/// What the pipeline built from the map besides the search's products.
+struct MapProducts {
+    occupied: Vec<bool>,
+    distance: Vec<f32>,
+    reach_cells: f64,
+    search_s: f64,
 }
 
 /// Start and goal cells.
@@ -341,6 +501,7 @@ struct Found {
     cost_cells: Option<f64>,
     expanded: usize,
     cspace: SearchGrid,
+    dstar: Option<DStarLite>,
 }
 
 fn unreachable(report: String, cspace: SearchGrid) -> Found {
@@ -352,6 +513,7 @@ fn unreachable(report: String, cspace: SearchGrid) -> Found {
         cost_cells: None,
         expanded: 0,
         cspace,
+        dstar: None,
     }
 }
 
@@ -409,6 +571,7 @@ fn search_polygon(
         cost_cells: Some(p.cost),
         expanded: p.expanded,
         cspace,
+        dstar: None,
     })
 }
 
@@ -420,14 +583,15 @@ fn search_graph(
     sg: SearchGrid,
 ) -> Result<Found> {
     let (start, goal) = (ends.start, ends.goal);
-    let (path, expanded) = if matches!(req.search, Search::DStarLite) {
+    let (path, expanded, dstar) = if matches!(req.search, Search::DStarLite) {
         let mut d = DStarLite::new(&sg, start, goal)?;
         let c = d.compute();
-        (c.and_then(|c| d.path().map(|p| (p, c))), d.expanded())
+        let path = c.and_then(|c| d.path().map(|p| (p, c)));
+        (path, d.expanded(), Some(d))
     } else {
         let p = astar(&sg, start, goal)?;
         let e = p.as_ref().map_or(0, |p| p.expanded);
-        (p.map(|p| (p.cells, p.cost)), e)
+        (p.map(|p| (p.cells, p.cost)), e, None)
     };
     let Some((cells, cost)) = path else {
         let why = match req.footprint {
@@ -438,14 +602,17 @@ fn search_graph(
             ),
             _ => "(they lie in disconnected free regions)".into(),
         };
-        return Ok(unreachable(
+        let mut found = unreachable(
             format!(
                 "no path: the goal at {} is not reachable from the start at {} {why}",
                 mf.describe(goal),
                 mf.describe(start)
             ),
             sg,
-        ));
+        );
+        // D* Lite's state still serves re-plans (a cut-off goal may open again)
+        found.dstar = dstar;
+        return Ok(found);
     };
     Ok(Found {
         status: PlanStatus::Found,
@@ -459,6 +626,7 @@ fn search_graph(
         cost_cells: Some(cost),
         expanded,
         cspace: sg,
+        dstar,
     })
 }
 
@@ -501,13 +669,20 @@ fn search_potential(
         cost_cells,
         expanded: 0,
         cspace: sg,
+        dstar: None,
     })
 }
 
 /// Smooths and times the path.
-fn finish(mf: &MapFrame<'_>, req: &PlanRequest, ends: Ends, f: Found) -> Result<Plan> {
-    let (smoothed, waypoints, trajectory) = if f.status == PlanStatus::Unreachable {
-        (Vec::new(), Vec::new(), Vec::new())
+fn finish(
+    mf: &MapFrame<'_>,
+    req: &PlanRequest,
+    ends: Ends,
+    f: Found,
+    map: MapProducts,
+) -> Result<Plan> {
+    let (smoothed, waypoints, trajectory, curve) = if f.status == PlanStatus::Unreachable {
+        (Vec::new(), Vec::new(), Vec::new(), None)
     } else {
         let smoothed = if !req.smooth || f.headings.is_some() {
             compress(&f.cells)
@@ -518,16 +693,45 @@ fn finish(mf: &MapFrame<'_>, req: &PlanRequest, ends: Ends, f: Found) -> Result<
             .iter()
             .map(|c| mf.grid.cell_to_world(c.0 as f64, c.1 as f64))
             .collect();
-        let trajectory = match &req.timing {
-            Some(t) => time_parameterize(&waypoints, req.start_yaw, &t.limits, t.dt)?,
-            None => Vec::new(),
+        let (trajectory, curve) = match &req.timing {
+            Some(Timing::StopAndTurn { limits, dt }) => (
+                time_parameterize(&waypoints, req.start_yaw, limits, *dt)?,
+                None,
+            ),
+            // a descent stuck short of the goal has no path to the goal pose to time
+            Some(Timing::Curvature { .. }) if f.status != PlanStatus::Found => (Vec::new(), None),
+            Some(Timing::Curvature { timing, goal_yaw }) => {
+                let start = [req.start[0], req.start[1], req.start_yaw.unwrap_or(0.0)];
+                let goal = [req.goal[0], req.goal[1], *goal_yaw];
+                let curve =
+                    time_cells_curved(mf.grid, &f.cspace, &f.cells, start, 0.0, goal, timing)?;
+                let points = curve
+                    .samples
+                    .iter()
+                    .map(|p| TrajectoryPoint {
+                        t: p.t,
+                        x: p.x,
+                        y: p.y,
+                        theta: p.theta,
+                        v: p.v,
+                        omega: p.omega,
+                    })
+                    .collect();
+                (points, Some(curve))
+            }
+            None => (Vec::new(), None),
         };
-        (smoothed, waypoints, trajectory)
+        (smoothed, waypoints, trajectory, curve)
     };
     Ok(Plan {
         start_cell: ends.start,
         goal_cell: ends.goal,
+        occupied: map.occupied,
+        distance: map.distance,
+        reach_cells: map.reach_cells,
         cspace: f.cspace,
+        dstar: f.dstar,
+        search_s: map.search_s,
         status: f.status,
         report: f.report,
         cells: f.cells,
@@ -537,6 +741,7 @@ fn finish(mf: &MapFrame<'_>, req: &PlanRequest, ends: Ends, f: Found) -> Result<
         smoothed,
         waypoints,
         trajectory,
+        curve,
     })
 }
 
