@@ -195,29 +195,39 @@ fn solve<const FMA: bool, const W: usize>(
         let (above, from_k) = rows.split_at_mut(k * m);
         let row_k = &mut from_k[..m];
         let s = 1.0 / f[k * n + k];
+        // the last 8 columns first, while row k still holds Z there: they cover the
+        // columns the blocks of 8 leave over, without a single-column tail
+        let last =
+            (m - lo >= 8).then(|| gather::<FMA, 8>(row_k, above, m, m - 8, s, f, n, parent, k));
         let mut c = lo;
         while c + W <= m {
-            gather::<FMA, W>(row_k, above, m, c, s, f, n, parent, k);
+            let y = gather::<FMA, W>(row_k, above, m, c, s, f, n, parent, k);
+            row_k[c..c + W].copy_from_slice(&y);
             c += W;
         }
         while c + 8 <= m {
-            gather::<FMA, 8>(row_k, above, m, c, s, f, n, parent, k);
+            let y = gather::<FMA, 8>(row_k, above, m, c, s, f, n, parent, k);
+            row_k[c..c + 8].copy_from_slice(&y);
             c += 8;
         }
-        while c < m {
-            gather::<FMA, 1>(row_k, above, m, c, s, f, n, parent, k);
-            c += 1;
+        if let Some(y) = last {
+            row_k[m - 8..].copy_from_slice(&y);
+        } else {
+            while c < m {
+                row_k[c] = gather::<FMA, 1>(row_k, above, m, c, s, f, n, parent, k)[0];
+                c += 1;
+            }
         }
     }
 }
 
 /// Columns `c..c + B` of row `k` of the downward solve: `s row_k − Σ L_ki row_i` over
 /// `k`'s ancestors `i` (whose rows are in `above`, `m` entries each), accumulated in `B`
-/// registers and stored once.
+/// registers.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn gather<const FMA: bool, const B: usize>(
-    row_k: &mut [f64],
+    row_k: &[f64],
     above: &[f64],
     m: usize,
     c: usize,
@@ -226,10 +236,10 @@ fn gather<const FMA: bool, const B: usize>(
     n: usize,
     parent: &[usize],
     k: usize,
-) {
-    let out: &mut [f64; B] = (&mut row_k[c..c + B]).try_into().expect("B columns");
+) -> [f64; B] {
+    let z: &[f64; B] = (&row_k[c..c + B]).try_into().expect("B columns");
     let mut acc = [0.0; B];
-    for (a, x) in acc.iter_mut().zip(out.iter()) {
+    for (a, x) in acc.iter_mut().zip(z) {
         *a = *x * s;
     }
     let mut i = parent[k];
@@ -243,7 +253,7 @@ fn gather<const FMA: bool, const B: usize>(
         }
         i = parent[i];
     }
-    *out = acc;
+    acc
 }
 
 /// One past the last velocity coordinate of each coordinate's subtree (coordinates are
@@ -342,8 +352,8 @@ mod tests {
 
     #[test]
     fn wide_right_hand_sides_match_the_dense_solve() {
-        // 45 columns: the downward gather's register blocks of 32 and 8 and its single
-        // columns all take part
+        // 45 columns: the downward gather's register blocks of 32 and 8 and the last 8
+        // columns overlapping them take part (3 columns, above, take single columns)
         let (l, d) = factors();
         let n = d.len();
         let h = l.transpose() * DMatrix::from_diagonal(&d.into()) * &l;
