@@ -42,8 +42,9 @@
 //! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H is factorised as
 //! `Lᵀ D L` with the tree's sparsity (Featherstone's LTDL, `Σ depth²` operations), and
 //! the three right-hand sides `[−∂τ/∂q, −∂τ/∂v, I]` are solved together, row by row: each
-//! step of the two triangular solves is one contiguous multiply–add of a 3 nv row, and
-//! only along the tree's ancestor chains (`2 Σ depth` row updates in all).
+//! step of the two triangular solves works on contiguous 3 nv rows, and only along the
+//! tree's ancestor chains (`2 Σ depth` row updates in all; on the way down a row gathers
+//! all its ancestors' rows in registers before it is stored).
 //!
 //! q̈ itself comes from the same passes, with no separate ABA: of everything they
 //! compute, only the accelerations, `u`, the forces, τ and ∂τ/∂q depend on `a`, and
