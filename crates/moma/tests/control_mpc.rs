@@ -305,3 +305,69 @@ fn zmp_margin_input_gradient_matches_finite_differences() {
         );
     }
 }
+
+/// A self pair's distance does not change when the base drives and turns with the arm
+/// still, so a knot evaluated after such a move queries no more pairs than before it
+/// (the bound from each pair's last query holds in the base frame), and reports the
+/// clearance a query of every pair gives. Fetch in the mission's transport posture
+/// (arm folded over the base), where several pairs are within the cut-off.
+#[test]
+fn a_base_move_queries_no_more_self_pairs() {
+    use moma::collision::Scene;
+    use moma::control::mpc::robot::{KnotWorkspace, evaluate_knot, select_pairs};
+    let robot = mpc_common::fetch_robot(Some(Scene::default()));
+    let model = &robot.wheeled.model;
+    let mut q = DVector::zeros(model.nq);
+    for (name, v) in [
+        ("torso_lift_joint", 0.0),
+        ("shoulder_pan_joint", 1.32),
+        ("shoulder_lift_joint", 1.40),
+        ("upperarm_roll_joint", -0.2),
+        ("elbow_flex_joint", 1.72),
+        ("forearm_roll_joint", 0.0),
+        ("wrist_flex_joint", 1.66),
+        ("wrist_roll_joint", 0.0),
+    ] {
+        let j = model.joint_id(name).unwrap();
+        q[model.idx_q[j.0]] = v;
+    }
+    let vr = vec![0.0; robot.wheeled.nr()];
+    let mut x = DVector::zeros(robot.nx());
+    robot.state_from_plant(q.as_slice(), &vr, &mut x);
+    let cutoff = 0.05;
+    let mut ws = KnotWorkspace::new(&robot);
+    select_pairs(&robot, &mut ws, &q, f64::INFINITY);
+    ws.distance_cutoff = cutoff;
+    evaluate_knot(&robot, &mut ws, &q, &x, None, true);
+    let before = ws.queried_pairs;
+    assert!(before > 0, "some pairs within {cutoff} m when tucked");
+    // Drive 0.6 m and turn 0.8 rad, the arm as it was.
+    let mut moved = q.clone();
+    moved[0] += 0.6;
+    moved[1] -= 0.2;
+    moved[2] += 0.8;
+    let mut x_moved = x.clone();
+    x_moved[0] = moved[0];
+    x_moved[1] = moved[1];
+    x_moved[2] = moved[2];
+    evaluate_knot(&robot, &mut ws, &moved, &x_moved, None, true);
+    assert_eq!(ws.queried_pairs, before, "pairs queried after a base move");
+    // Every pair queried there gives the same clearance.
+    let mut all = KnotWorkspace::new(&robot);
+    select_pairs(&robot, &mut all, &moved, f64::INFINITY);
+    all.distance_cutoff = f64::INFINITY;
+    evaluate_knot(&robot, &mut all, &moved, &x_moved, None, true);
+    assert!(
+        all.queried_pairs > before,
+        "{} pairs in all",
+        all.queried_pairs
+    );
+    let full = all.values.distance;
+    assert!(full < cutoff, "closest pair {full} m");
+    assert!(
+        (ws.values.distance - full).abs() < 1e-9,
+        "{} vs {full}",
+        ws.values.distance
+    );
+    assert!((&ws.values.distance_dx - &all.values.distance_dx).amax() < 1e-9);
+}

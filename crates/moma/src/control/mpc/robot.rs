@@ -289,6 +289,11 @@ pub struct KnotWorkspace {
     selected: Vec<bool>,
     /// Each self pair's last query, which bounds its distance now ([`cull_pairs`]).
     history: PairHistory,
+    /// The geometry objects' placements in the base frame (the frame of the model's
+    /// first joint, which the base pose `(x, y, θ)` moves) at the knot being evaluated.
+    in_base: Vec<SE3>,
+    /// Self pairs the last [`evaluate_knot`] queried (those [`cull_pairs`] left).
+    pub queried_pairs: usize,
     /// Distance at or beyond which a pair is not queried ([`evaluate_knot`]); `+∞`:
     /// every selected pair; `−∞`: none (the clearance is not needed).
     pub distance_cutoff: f64,
@@ -334,6 +339,10 @@ impl KnotWorkspace {
                 .clearance
                 .as_ref()
                 .map_or_else(PairHistory::default, |c| PairHistory::new(&c.geometry)),
+            in_base: robot.clearance.as_ref().map_or_else(Vec::new, |c| {
+                vec![SE3::identity(); c.geometry.objects.len()]
+            }),
+            queried_pairs: 0,
             distance_cutoff: f64::INFINITY,
             q: DVector::zeros(wm.model.nq),
             v_r: DVector::zeros(nr),
@@ -369,28 +378,54 @@ impl KnotWorkspace {
 /// farther apart cannot come within the clearance before the next solve re-selects
 /// them, and each pair skipped saves one distance query per knot evaluation.
 pub fn select_pairs(robot: &MpcRobot, ws: &mut KnotWorkspace, q: &DVector<f64>, activation: f64) {
-    let (Some(c), Some((_, gd, _))) = (&robot.clearance, &mut ws.geometry) else {
+    let (Some(c), Some((active, gd, _))) = (&robot.clearance, &mut ws.geometry) else {
         return;
     };
     let model = &robot.wheeled.model;
     crate::kinematics::forward_kinematics(model, &mut ws.wd.data, q);
     update_geometry_placements(&c.geometry, &ws.wd.data, gd);
-    compute_distances(&c.geometry, gd, PairSelection::Enabled);
-    ws.history.record(&c.geometry, gd);
+    placements_in_base(model, &ws.wd.data, gd, &mut ws.in_base);
+    // Query only the pairs that may be closer than `activation`: those whose last query
+    // less the motion since cannot be are not selected, and need no query.
+    for p in 0..c.geometry.pairs.len() {
+        active.enabled[p] = c.geometry.enabled[p]
+            && ws.history.lower_bound(&c.geometry, &ws.in_base, p) < activation;
+    }
+    compute_distances(active, gd, PairSelection::Enabled);
+    ws.history.record(active, gd, &ws.in_base);
     for (p, on) in ws.selected.iter_mut().enumerate() {
-        *on = c.geometry.enabled[p]
+        *on = active.enabled[p]
             && (gd.results[p].distance < activation || gd.results[p].distance.is_nan());
     }
 }
 
+/// The placements of `gd`'s objects (in the world) in the frame of the model's first
+/// joint, the base's, into `in_base`. A self pair's distance does not change when the
+/// whole robot moves rigidly, so how far its objects moved in this frame bounds how
+/// much its distance changed while the base drives and turns.
+fn placements_in_base(
+    model: &crate::multibody::Model,
+    data: &crate::multibody::Data,
+    gd: &GeometryData,
+    in_base: &mut [SE3],
+) {
+    let base = &data.world_from_joint[model.joint_of_dof[0].0];
+    for (rel, world) in in_base.iter_mut().zip(&gd.placements) {
+        *rel = base.inverse_compose(world);
+    }
+}
+
 /// The last distance query of each self pair: its distance and where its objects were
-/// then. A pair whose objects have since moved by at most `δ_a` and `δ_b` is at least
-/// `d − δ_a − δ_b` apart now (each point of a shape moved by at most its shape's `δ`).
+/// then in the base frame ([`placements_in_base`]). A pair whose objects have since
+/// moved in that frame by at most `δ_a` and `δ_b` is at least `d − δ_a − δ_b` apart now
+/// (each point of a shape moved by at most its shape's `δ`, and the distance is the
+/// same in any frame).
 #[derive(Clone, Debug, Default)]
 struct PairHistory {
     /// Distance of the last query per pair (`NaN`: none yet).
     distance: Vec<f64>,
-    /// Placements of the pair's objects then, link a's then link b's, from `offsets[p]`.
+    /// Placements of the pair's objects then (base frame), link a's then link b's,
+    /// from `offsets[p]`.
     placements: Vec<SE3>,
     offsets: Vec<usize>,
 }
@@ -409,8 +444,9 @@ impl PairHistory {
         }
     }
 
-    /// Records the pairs `gm` enables (those the last `compute_distances` queried).
-    fn record(&mut self, gm: &GeometryModel, gd: &GeometryData) {
+    /// Records the pairs `gm` enables (those the last `compute_distances` queried), with
+    /// the objects' placements in the base frame `in_base`.
+    fn record(&mut self, gm: &GeometryModel, gd: &GeometryData, in_base: &[SE3]) {
         for p in 0..gm.pairs.len() {
             if !gm.enabled[p] {
                 continue;
@@ -420,19 +456,19 @@ impl PairHistory {
             for link in gm.pairs[p] {
                 let l = &gm.links[link];
                 for i in l.first..l.first + l.count {
-                    self.placements[slot] = gd.placements[i];
+                    self.placements[slot] = in_base[i];
                     slot += 1;
                 }
             }
         }
     }
 
-    /// A lower bound of pair `p`'s distance at the placements in `gd` (`−∞` if never
-    /// queried): the last distance less how far each link's objects may have moved, a
-    /// point of an object moving by at most `|P c − P' c| + ‖R − R'‖_F r` for its bounding
-    /// ball `(c, r)` between placements `P'` and `P`. A micrometre is taken off for the
-    /// rounding of the query and of this bound.
-    fn lower_bound(&self, gm: &GeometryModel, gd: &GeometryData, p: usize) -> f64 {
+    /// A lower bound of pair `p`'s distance at the base-frame placements `in_base`
+    /// (`−∞` if never queried): the last distance less how far each link's objects may
+    /// have moved, a point of an object moving by at most `|P c − P' c| + ‖R − R'‖_F r`
+    /// for its bounding ball `(c, r)` between placements `P'` and `P`. A micrometre is
+    /// taken off for the rounding of the query and of this bound.
+    fn lower_bound(&self, gm: &GeometryModel, in_base: &[SE3], p: usize) -> f64 {
         let then = self.distance[p];
         if !then.is_finite() {
             return f64::NEG_INFINITY;
@@ -443,7 +479,7 @@ impl PairHistory {
             let l = &gm.links[link];
             let mut most: f64 = 0.0;
             for i in l.first..l.first + l.count {
-                let (o, was, now) = (&gm.objects[i], &self.placements[slot], &gd.placements[i]);
+                let (o, was, now) = (&gm.objects[i], &self.placements[slot], &in_base[i]);
                 let shift = (now.act_point(&o.bounding_centre) - was.act_point(&o.bounding_centre))
                     .norm()
                     + (now.rotation - was.rotation).norm() * o.bounding_radius;
@@ -463,6 +499,7 @@ impl PairHistory {
 fn cull_pairs(
     active: &mut GeometryModel,
     gd: &GeometryData,
+    in_base: &[SE3],
     selected: &[bool],
     history: &PairHistory,
     cutoff: f64,
@@ -481,7 +518,7 @@ fn cull_pairs(
                     gap = gap.min((ci - cj).norm() - oi.bounding_radius - oj.bounding_radius);
                 }
             }
-            gap < cutoff && history.lower_bound(active, gd, p) < cutoff
+            gap < cutoff && history.lower_bound(active, in_base, p) < cutoff
         };
     }
 }
@@ -584,6 +621,7 @@ pub fn evaluate_knot(
     // pair is, the distance is reported as `cutoff` with a zero gradient.
     vals.distance = f64::INFINITY;
     vals.distance_dx.fill(0.0);
+    ws.queried_pairs = 0;
     let cutoff = ws.distance_cutoff;
     if let (Some(c), Some((active, gd, scd)), false) = (
         &robot.clearance,
@@ -591,9 +629,11 @@ pub fn evaluate_knot(
         cutoff == f64::NEG_INFINITY,
     ) {
         update_geometry_placements(active, data, gd);
-        cull_pairs(active, gd, &ws.selected, &ws.history, cutoff);
+        placements_in_base(model, data, gd, &mut ws.in_base);
+        cull_pairs(active, gd, &ws.in_base, &ws.selected, &ws.history, cutoff);
+        ws.queried_pairs = active.enabled.iter().filter(|&&on| on).count();
         compute_distances(active, gd, PairSelection::Enabled);
-        ws.history.record(active, gd);
+        ws.history.record(active, gd, &ws.in_base);
         compute_scene_distances_below(active, gd, &c.scene, scd, cutoff);
         vals.distance = cutoff;
         if !derivatives {
