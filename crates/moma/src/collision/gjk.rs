@@ -142,7 +142,7 @@ pub fn signed_distance(
     let mut pair = Pair::new(a, pose_a, b, pose_b);
     let margin = a.margin() + b.margin();
     let mut simplex = [SupportPoint::default(); 4];
-    match gjk(&pair, warm, &mut simplex, f64::INFINITY) {
+    match gjk(&pair, warm, &mut simplex, f64::NEG_INFINITY, f64::INFINITY) {
         Gjk::Separated { distance, wa, wb } => {
             let normal = (wb - wa) / distance;
             PairDistance {
@@ -168,18 +168,24 @@ pub fn signed_distance(
                 }
             }
         }
+        Gjk::Within { .. } => unreachable!("no upper bound is below -inf"),
     }
 }
 
-/// The signed distance of [`signed_distance`], or a lower bound on it above `enough`: GJK
-/// stops at the first separating plane that shows the distance exceeds `enough` (a caller
-/// that only needs "more than `enough`" pays for no further iteration). At or below
-/// `enough` the value is the signed distance itself.
-pub fn distance_above(
+/// The signed distance of [`signed_distance`], or, when it lies outside `(within,
+/// enough]`, a bound that shows so: a lower bound above `enough` (GJK stops at the first
+/// separating plane that shows the distance exceeds it), or an upper bound at most
+/// `within` (GJK stops at the first point of the Minkowski difference that close; cores
+/// that overlap give the upper bound without EPA). A caller that only needs "more than
+/// `enough`" or "at most `within`" pays for no further iteration. Between the two the
+/// value is the signed distance itself.
+#[allow(clippy::too_many_arguments)]
+pub fn distance_outside(
     a: &Convex,
     pose_a: &SE3,
     b: &Convex,
     pose_b: &SE3,
+    within: f64,
     enough: f64,
     warm: &mut WarmStart,
     epa: &mut EpaWorkspace,
@@ -187,8 +193,13 @@ pub fn distance_above(
     let pair = Pair::new(a, pose_a, b, pose_b);
     let margin = a.margin() + b.margin();
     let mut simplex = [SupportPoint::default(); 4];
-    match gjk(&pair, warm, &mut simplex, enough + margin) {
+    // A lower bound on the cores' distance bounds the signed distance only when positive.
+    let above = enough.max(0.0) + margin;
+    match gjk(&pair, warm, &mut simplex, within + margin, above) {
         Gjk::Separated { distance, .. } => distance - margin,
+        Gjk::Within { upper } => upper - margin,
+        // Cores this close: the shapes are at most `CONTACT - margin` apart.
+        Gjk::Overlap { .. } if CONTACT - margin <= within => CONTACT - margin,
         Gjk::Overlap { .. } => signed_distance(a, pose_a, b, pose_b, warm, epa).distance,
     }
 }
@@ -199,9 +210,9 @@ pub fn overlaps(a: &Convex, pose_a: &SE3, b: &Convex, pose_b: &SE3, warm: &mut W
     let pair = Pair::new(a, pose_a, b, pose_b);
     let margin = a.margin() + b.margin();
     let mut simplex = [SupportPoint::default(); 4];
-    match gjk(&pair, warm, &mut simplex, margin) {
+    match gjk(&pair, warm, &mut simplex, f64::NEG_INFINITY, margin) {
         Gjk::Separated { distance, .. } => distance < margin,
-        Gjk::Overlap { .. } => true,
+        Gjk::Within { .. } | Gjk::Overlap { .. } => true,
     }
 }
 
@@ -211,6 +222,9 @@ enum Gjk {
         wa: Vector3<f64>,
         wb: Vector3<f64>,
     },
+    /// The cores are at most `upper` apart (at most `stop_within`; never below it by
+    /// more than the true distance).
+    Within { upper: f64 },
     /// The cores overlap or touch; `simplex[..n]` holds the last simplex.
     Overlap { n: usize },
 }
@@ -218,9 +232,16 @@ enum Gjk {
 /// Distances below this (m) between cores count as contact and go to EPA.
 const CONTACT: f64 = 1e-10;
 
-/// GJK on the cores; stops early (returning the lower bound as the distance) once the
-/// lower bound exceeds `stop_above`.
-fn gjk(pair: &Pair, warm: &mut WarmStart, simplex: &mut [SupportPoint; 4], stop_above: f64) -> Gjk {
+/// GJK on the cores; stops early once the lower bound exceeds `stop_above` (returning it
+/// as the distance), or once the upper bound |v| (a point of the Minkowski difference) is
+/// at most `stop_within` and above contact ([`Gjk::Within`]).
+fn gjk(
+    pair: &Pair,
+    warm: &mut WarmStart,
+    simplex: &mut [SupportPoint; 4],
+    stop_within: f64,
+    stop_above: f64,
+) -> Gjk {
     let dir = if warm.direction.norm_squared() > 0.0 {
         warm.direction
     } else {
@@ -232,11 +253,15 @@ fn gjk(pair: &Pair, warm: &mut WarmStart, simplex: &mut [SupportPoint; 4], stop_
     let mut v = simplex[0].w;
     for _ in 0..MAX_ITERATIONS {
         let vv = v.norm_squared();
-        if vv.sqrt() <= CONTACT {
+        let vn = vv.sqrt();
+        if vn <= CONTACT {
             return Gjk::Overlap { n };
         }
+        if vn <= stop_within {
+            warm.direction = v;
+            return Gjk::Within { upper: vn };
+        }
         let w = pair.support(&-v, warm);
-        let vn = vv.sqrt();
         let lower = v.dot(&w.w) / vn;
         if lower > stop_above {
             warm.direction = v;
@@ -592,5 +617,30 @@ mod tests {
         let pb = SE3::from_translation(Vector3::new(0.1, 0.0, 0.0));
         let r = signed_distance(&s, &SE3::identity(), &s, &pb, &mut w, &mut ws);
         assert!((r.distance + 0.9).abs() < 1e-3, "{r:?}");
+    }
+
+    #[test]
+    fn distance_outside_decides_with_bounds_and_is_exact_between() {
+        let mut w = WarmStart::default();
+        let mut ws = EpaWorkspace::default();
+        let pa = SE3::identity();
+        // Apart by 0.5, touching, overlapping by 0.3.
+        for (x, d) in [(2.0, 0.5), (1.5, 0.0), (1.2, -0.3)] {
+            let pb = SE3::from_translation(Vector3::new(x, 0.1, 0.0));
+            let (a, b) = (cube(1.0), cube(0.5));
+            // Between the bounds: the distance itself.
+            let v = distance_outside(&a, &pa, &b, &pb, -1.0, 1.0, &mut w, &mut ws);
+            assert!((v - d).abs() < 1e-12, "{x}: {v} vs {d}");
+            // At most `within`: an upper bound, never below the distance.
+            let v = distance_outside(&a, &pa, &b, &pb, 0.6, 1.0, &mut w, &mut ws);
+            assert!(v <= 0.6 && v >= d - 1e-12, "{x}: {v} vs {d}");
+            // Above `enough`: a lower bound, never above the distance.
+            let v = distance_outside(&a, &pa, &b, &pb, -1.0, d - 0.1, &mut w, &mut ws);
+            assert!(v > d - 0.1 && v <= d + 1e-12, "{x}: {v} vs {d}");
+        }
+        // Overlapping cores decided at most `within` skip EPA: the bound is not the depth.
+        let pb = SE3::from_translation(Vector3::new(1.2, 0.1, 0.0));
+        let v = distance_outside(&cube(1.0), &pa, &cube(0.5), &pb, 0.01, 1.0, &mut w, &mut ws);
+        assert!((0.0..=0.01).contains(&v), "{v}");
     }
 }

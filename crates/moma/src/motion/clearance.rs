@@ -31,11 +31,15 @@
 //! distance found at an earlier state of the same segment less the most it can have closed
 //! since; the blocks go
 //! best first (the one that limited the last state, then by the stretch their balls vouch
-//! for), and GJK stops once a separating plane shows the distance covers it.
+//! for), and GJK stops once a separating plane shows the distance covers it, or once a
+//! point of the Minkowski difference shows the pair within the margin (no penetration
+//! depth is computed for a pair that fails).
 //!
 //! **States** ([`StateValidity::is_valid`]) pass when every pair's distance exceeds the
 //! margin plus `tube · ‖c_p ⊘ w‖₂`, the most the pair can close over any state within the
-//! weighted distance `tube` ([`ClearanceChecker::set_tube`]; 0 by default). The time
+//! weighted distance `tube` ([`ClearanceChecker::set_tube`]; 0 by default): the block
+//! that failed the last state first, then the links in turn, each bounded before its pairs,
+//! up to the first pair within (no ordering, as no stretch is sought). The time
 //! parameterisation checks its blends state by state at the resolution; with the tube set
 //! to half the resolution, every state of a blend is vouched for by a checked one.
 //!
@@ -44,7 +48,7 @@
 
 use super::group::JointGroup;
 use crate::collision::ball_cover::{MAX_SLABS, hull_ball_cover};
-use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_above, signed_distance};
+use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_outside, signed_distance};
 use crate::collision::{Convex, GeometryModel, Scene};
 use crate::kinematics;
 use crate::multibody::{Data, Model};
@@ -642,11 +646,12 @@ impl<'a> ClearanceChecker<'a> {
     }
 
     fn exact(&mut self, k: usize) -> f64 {
-        self.exact_above(k, f64::INFINITY)
+        self.exact_outside(k, f64::NEG_INFINITY, f64::INFINITY)
     }
 
-    /// The signed distance of entry `k`, or a lower bound on it above `enough`.
-    fn exact_above(&mut self, k: usize, enough: f64) -> f64 {
+    /// The signed distance of entry `k`, or a lower bound on it above `enough`, or an
+    /// upper bound on it at most `within` ([`distance_outside`]).
+    fn exact_outside(&mut self, k: usize, within: f64, enough: f64) -> f64 {
         self.distances_computed += 1;
         let (a, b) = self.entries[k];
         let oa = &self.gm.objects[a];
@@ -664,12 +669,13 @@ impl<'a> ClearanceChecker<'a> {
                 (&sh.shape, sh.pose)
             }
         };
-        if enough.is_finite() {
-            return distance_above(
+        if within.is_finite() || enough.is_finite() {
+            return distance_outside(
                 &oa.shape,
                 &pa,
                 shape,
                 &pose,
+                within,
                 enough,
                 &mut self.warm[k],
                 &mut self.epa,
@@ -684,6 +690,55 @@ impl<'a> ClearanceChecker<'a> {
             &mut self.epa,
         )
         .distance
+    }
+
+    /// At the placed state: whether every moving pair is farther apart than the margin
+    /// plus `tube · ‖c_p ⊘ w‖₂` ([`StateValidity::is_valid`]). The block that failed last
+    /// goes first, then the clusters in turn, each bounded before its pairs are; no
+    /// pair is computed past the first one found within, and a pair's GJK stops at the
+    /// first bound that decides it.
+    fn state_clear(&mut self, tube: f64) -> bool {
+        let last = self.last_limiting;
+        if last < self.moving.len() && !self.block_clear(last, tube) {
+            return false;
+        }
+        for ci in 0..self.clusters.len() {
+            let cluster = self.clusters[ci];
+            let extra = self.margin + tube * self.tube_norm[cluster.row];
+            if self.cluster_gap(&cluster) > extra {
+                continue;
+            }
+            for bi in cluster.first..cluster.first + cluster.count {
+                if bi != last && !self.block_clear(bi, tube) {
+                    self.last_limiting = bi;
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Whether every object pair of moving block `bi` is farther apart than the margin
+    /// plus the tube's share, at the placed state.
+    fn block_clear(&mut self, bi: usize, tube: f64) -> bool {
+        let block = self.moving[bi];
+        let extra = self.margin + tube * self.tube_norm[block.row];
+        if self.group_gap(block.a, block.b) > extra {
+            return true;
+        }
+        for k in block.first..block.first + block.count {
+            let (a, b) = self.entries[k];
+            if block.count > 1 && self.object_gap(a, b) > extra {
+                continue;
+            }
+            if self.object_box_gap(a, b) > extra || self.cover_clears(a, b, extra) {
+                continue;
+            }
+            if self.exact_outside(k, extra, extra) <= extra {
+                return false;
+            }
+        }
+        true
     }
 
     /// At the placed state: the largest further fraction of the current segment (rates in
@@ -752,15 +807,16 @@ impl<'a> ClearanceChecker<'a> {
                 if self.object_box_gap(a, b) > bound || self.cover_clears(a, b, bound) {
                     continue;
                 }
-                // Above `bound` a lower bound is enough (GJK stops early).
-                let d = self.exact_above(k, bound);
-                self.cache_d[k] = d;
-                self.cache_t[k] = self.t_now;
-                self.cache_epoch[k] = self.epoch;
+                // Above `bound` a lower bound is enough, at or below `extra` an upper
+                // bound (GJK stops early either way).
+                let d = self.exact_outside(k, extra, bound);
                 if d <= extra {
                     self.last_limiting = bi;
                     return None;
                 }
+                self.cache_d[k] = d;
+                self.cache_t[k] = self.t_now;
+                self.cache_epoch[k] = self.epoch;
                 // A checked state keeps the margin; the states it vouches for keep half
                 // of it, so the steps stay longer than (margin / 2) / rate.
                 let free = d - extra + 0.5 * self.margin;
@@ -841,7 +897,7 @@ impl StateValidity for ClearanceChecker<'_> {
         self.epoch += 1;
         self.t_now = 0.0;
         self.place(x);
-        self.allowed_step(0.0, self.tube).is_some()
+        self.state_clear(self.tube)
     }
 
     fn segment_valid(
