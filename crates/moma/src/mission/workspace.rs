@@ -12,7 +12,7 @@ use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::Data;
 use crate::ode::Rk4;
 use crate::sim::computed_torque::ComputedTorque;
-use crate::sim::model_mismatch::SensorNoise;
+use crate::sim::sensor_noise::SensorNoise;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
 use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::BodySet;
