@@ -1,6 +1,7 @@
 //! The contact plant of a mission with `simulation.plant = "contact"`: built and checked
-//! when the file is loaded ([`MissionContact`]), stepped by the closed loop
-//! ([`ContactLoop`]) in place of the reduced (rolling) model's RK4 step.
+//! when the file is loaded ([`MissionContact`]), stepped by the held-input loop
+//! ([`ContactLoop`]) in place of the reduced (rolling) model's RK4 step; the plant the
+//! mission's loop steps is either ([`MissionPlant`]).
 //!
 //! The law is the mission's own, on its rolling model. What it measures is the contact
 //! plant's free-flyer state mapped to the reduced coordinates
@@ -14,14 +15,17 @@
 //! each wheel's friction over μ N, lift-off and slip the plant's own flags
 //! ([`ContactTally`]).
 
-use nalgebra::{DVector, Vector2};
+use nalgebra::Vector2;
 
 use crate::contact::{ContactPlant, ContactSpec, ContactState};
 use crate::control::wrap_angle;
 use crate::error::{Error, Result};
 use crate::mobile::WheeledModel;
 use crate::multibody::{Data, Model};
-use crate::sim::contact_run::{ContactTally, ReducedMap, contact_plant_of};
+use crate::sim::contact_run::{ContactTally, HeldContactPlant, ReducedMap, contact_plant_of};
+use crate::sim::held_loop::HeldPlant;
+use crate::sim::rolling_plant::RollingPlant;
+use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{
     BodySet, ExternalLoads, StabilityData, StabilityModel, SupportAttachment, SupportPolygon,
     evaluate,
@@ -108,18 +112,14 @@ pub(super) struct ContactNews {
     pub text: String,
 }
 
-/// A mission run's contact plant: its state, the inputs held, what it did.
+/// A mission run's contact plant: the contact plant under the held torques
+/// ([`HeldContactPlant`], with what it did), the measured heading, the support and
+/// stability monitors, and the control ticks taken (its time is the mission's, `k ×
+/// simulation.dt`).
 pub(super) struct ContactLoop {
-    plant: ContactPlant,
-    map: ReducedMap,
-    state: ContactState,
-    /// The plant's inputs (one per joint below the free flyer).
-    u_c: Vec<f64>,
-    steps: usize,
-    /// First lift-off and slip, totals, tilt.
-    pub tally: ContactTally,
-    /// Net work of the actuators ∫ uᵀ q̇ dt (J), per contact step.
-    pub input_work: f64,
+    held: HeldContactPlant,
+    control_dt: f64,
+    ticks: usize,
     /// The measured heading, continued across ±π as the rolling model's is.
     heading: f64,
     /// The support polygon in base axes and placed at the measured pose.
@@ -164,17 +164,19 @@ impl ContactLoop {
         let on_ground = SupportPolygon::from_points_at_height(support.vertices_xy(), 0.0)?;
         let model = &setup.plant.model;
         let stability = StabilityModel::new(model, on_ground, SupportAttachment::Base, bodies)?;
+        let held = HeldContactPlant::new(
+            setup.plant.clone(),
+            setup.map.clone(),
+            setup.start.clone(),
+            setup.steps_per_control(control_dt),
+        );
         Ok(Self {
             stability_data: StabilityData::new(&stability),
             stability,
             data: Data::new(model),
-            tally: ContactTally::new(&setup.plant),
-            plant: setup.plant.clone(),
-            map: setup.map.clone(),
-            state: setup.start.clone(),
-            u_c: vec![0.0; setup.plant.nu()],
-            steps: setup.steps_per_control(control_dt),
-            input_work: 0.0,
+            held,
+            control_dt,
+            ticks: 0,
             heading,
             placed: support.clone(),
             support,
@@ -183,46 +185,27 @@ impl ContactLoop {
         })
     }
 
-    /// The reduced state `(q, v)` the law measures. Does not allocate.
-    pub fn measure(&mut self, q: &mut DVector<f64>, v: &mut DVector<f64>) {
-        self.map
-            .to_reduced(&self.state, q.as_mut_slice(), v.as_mut_slice());
-        self.heading += wrap_angle(q[2] - self.heading);
-        q[2] = self.heading;
+    /// What the contacts did so far.
+    pub fn tally(&self) -> &ContactTally {
+        &self.held.tally
     }
 
-    /// Applies the reduced inputs `u` (held) over one control period.
-    ///
-    /// # Errors
-    /// [`Error::Numerical`] if the plant's accelerations stop being finite.
-    pub fn advance(&mut self, u: &[f64]) -> Result<()> {
-        self.map.to_contact_inputs(u, &mut self.u_c);
-        let dt = self.plant.params.dt;
-        for _ in 0..self.steps {
-            let power: f64 = self
-                .u_c
-                .iter()
-                .zip(self.state.v.iter().skip(6))
-                .map(|(u, v)| u * v)
-                .sum();
-            self.plant.step(&mut self.state, &self.u_c)?;
-            self.input_work += power * dt;
-            self.tally.observe(&self.state, dt);
-        }
-        Ok(())
+    /// Net work of the actuators (J).
+    pub fn input_work(&self) -> f64 {
+        self.held.input_work
     }
 
     /// The normal force of each contact (N; the wheels, then the casters, in the order of
     /// [`ContactPlant::contact_name`]) at the present state.
     pub fn normal_loads(&self) -> Vec<f64> {
-        self.state.contacts.iter().map(|r| r.normal).collect()
+        self.held.state.contacts.iter().map(|r| r.normal).collect()
     }
 
     /// The plant takes the bodies' inertias of `robot` (the mission's robot with other
     /// inertias, the joints the same: a `[task]`'s payload attached at the grasp). The
     /// root body (the planar joint's there, the free flyer's here) is the same link.
     pub fn attach(&mut self, robot: &WheeledModel) {
-        let model = &mut self.plant.model;
+        let model = &mut self.held.plant.model;
         model.inertias.clone_from(&robot.model.inertias);
     }
 
@@ -230,7 +213,7 @@ impl ContactLoop {
     pub fn news(&mut self) -> Vec<ContactNews> {
         let mut out = Vec::new();
         if !self.news_lift
-            && let Some(e) = &self.tally.first_lift_off
+            && let Some(e) = &self.held.tally.first_lift_off
         {
             self.news_lift = true;
             out.push(ContactNews {
@@ -240,7 +223,7 @@ impl ContactLoop {
             });
         }
         if !self.news_slip
-            && let Some(e) = &self.tally.first_slip
+            && let Some(e) = &self.held.tally.first_slip
         {
             self.news_slip = true;
             out.push(ContactNews {
@@ -260,10 +243,10 @@ impl ContactLoop {
     /// (`None` before the first step), and the larger drive-wheel slip ratio |F_t| / (μ
     /// N) (`None` when a wheel carries no load). Does not allocate.
     pub fn monitors(&mut self, pose: [f64; 3]) -> Monitors {
-        let (force_angle, mhs) = if self.state.t > 0.0 {
-            let st = &self.state;
+        let (force_angle, mhs) = if self.held.state.t > 0.0 {
+            let st = &self.held.state;
             let r = evaluate(
-                &self.plant.model,
+                &self.held.plant.model,
                 &mut self.data,
                 &self.stability,
                 &mut self.stability_data,
@@ -276,7 +259,7 @@ impl ContactLoop {
         } else {
             (None, None)
         };
-        let reports = &self.state.contacts;
+        let reports = &self.held.state.contacts;
         let total: f64 = reports.iter().map(|r| r.normal).sum();
         let nearest = (total > 0.0).then(|| {
             let cop = reports
@@ -292,8 +275,8 @@ impl ContactLoop {
                 })
                 .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
         });
-        let mu = self.plant.params.mu;
-        let wheels = self.plant.wheel_dofs().len();
+        let mu = self.held.plant.params.mu;
+        let wheels = self.held.plant.wheel_dofs().len();
         let slip = reports[..wheels]
             .iter()
             .map(|r| (r.normal > 0.0).then(|| r.friction.norm() / (mu * r.normal)))
@@ -304,6 +287,122 @@ impl ContactLoop {
             force_angle,
             mhs,
             slip,
+        }
+    }
+}
+
+impl HeldPlant for ContactLoop {
+    fn nq(&self) -> usize {
+        self.held.nq()
+    }
+
+    fn nv(&self) -> usize {
+        self.held.nv()
+    }
+
+    fn nu(&self) -> usize {
+        self.held.nu()
+    }
+
+    /// The mission's time of the present tick, `k × simulation.dt`.
+    fn time(&self) -> f64 {
+        self.ticks as f64 * self.control_dt
+    }
+
+    /// The reduced state the law measures, the heading continued across ±π. Does not
+    /// allocate.
+    fn state(&mut self, q: &mut [f64], v: &mut [f64]) {
+        self.held.state(q, v);
+        self.heading += wrap_angle(q[2] - self.heading);
+        q[2] = self.heading;
+    }
+
+    /// The torques `u` held over one control period.
+    fn advance(&mut self, u: &[f64], first_stage: Option<&[f64]>) -> Result<()> {
+        self.held.advance(u, first_stage)?;
+        self.ticks += 1;
+        Ok(())
+    }
+}
+
+/// The plant a mission's loop steps: the rolling model (RK4 at the control period) or the
+/// contact plant.
+// one plant per run, built once: its size does not matter
+#[allow(clippy::large_enum_variant)]
+pub(super) enum MissionPlant<'s> {
+    /// The reduced (rolling) model.
+    Rolling(RollingPlant<'s, WheeledSystem>),
+    /// The contact plant.
+    Contact(ContactLoop),
+}
+
+impl MissionPlant<'_> {
+    /// The contact plant, when the mission runs on it.
+    pub(super) fn contact(&mut self) -> Option<&mut ContactLoop> {
+        match self {
+            MissionPlant::Rolling(_) => None,
+            MissionPlant::Contact(cl) => Some(cl),
+        }
+    }
+
+    /// The plant takes the bodies' inertias of `robot` (a `[task]`'s payload attached).
+    pub(super) fn attach(&mut self, robot: &WheeledModel) {
+        match self {
+            MissionPlant::Rolling(p) => *p.system = WheeledSystem::new(robot.clone()),
+            MissionPlant::Contact(cl) => cl.attach(robot),
+        }
+    }
+
+    /// Net work of the actuators (J): the integrated `W` of the rolling state, the contact
+    /// plant's per-step sum.
+    pub(super) fn input_work(&self) -> f64 {
+        match self {
+            MissionPlant::Rolling(p) => p.x[p.x.len() - 1],
+            MissionPlant::Contact(cl) => cl.input_work(),
+        }
+    }
+}
+
+impl HeldPlant for MissionPlant<'_> {
+    fn nq(&self) -> usize {
+        match self {
+            MissionPlant::Rolling(p) => p.nq(),
+            MissionPlant::Contact(cl) => cl.nq(),
+        }
+    }
+
+    fn nv(&self) -> usize {
+        match self {
+            MissionPlant::Rolling(p) => p.nv(),
+            MissionPlant::Contact(cl) => cl.nv(),
+        }
+    }
+
+    fn nu(&self) -> usize {
+        match self {
+            MissionPlant::Rolling(p) => p.nu(),
+            MissionPlant::Contact(cl) => cl.nu(),
+        }
+    }
+
+    fn time(&self) -> f64 {
+        match self {
+            MissionPlant::Rolling(p) => p.time(),
+            MissionPlant::Contact(cl) => cl.time(),
+        }
+    }
+
+    fn state(&mut self, q: &mut [f64], v: &mut [f64]) {
+        match self {
+            MissionPlant::Rolling(p) => p.state(q, v),
+            MissionPlant::Contact(cl) => cl.state(q, v),
+        }
+    }
+
+    fn advance(&mut self, u: &[f64], first_stage: Option<&[f64]>) -> Result<()> {
+        match self {
+            MissionPlant::Rolling(p) => p.advance(u, first_stage),
+            MissionPlant::Contact(cl) => cl.advance(u, first_stage),
         }
     }
 }

@@ -7,7 +7,7 @@ use nalgebra::{DVector, Vector3};
 
 use super::arm_motion::ArmStage;
 use super::laws::RunSettings;
-use super::plant::Monitors;
+use super::plant::{ContactLoop, MissionPlant, Monitors};
 use super::run::{LoopState, Phase, Runner};
 use super::task::Holding;
 use super::workspace::Workspace;
@@ -50,16 +50,18 @@ impl Runner<'_> {
         c: &RunSettings,
         ws: &mut Workspace,
         st: &mut LoopState,
+        plant: &mut MissionPlant<'_>,
         t: f64,
         ee: Vector3<f64>,
         evaluated: bool,
     ) {
         self.check_arm_distances(ws, st, t);
-        let Some((slip, clear)) = self.record(c, ws, st, t, ee, evaluated) else {
+        let on_contact = plant.contact().is_some();
+        let Some((slip, clear)) = self.record(c, ws, st, plant.contact(), t, ee, evaluated) else {
             return;
         };
         // (on the contact plant the plant's own slip flag makes the event, in `step`)
-        if ws.contact.is_none() && st.first_slip && slip.is_some_and(|s| s > 1.0) {
+        if !on_contact && st.first_slip && slip.is_some_and(|s| s > 1.0) {
             st.first_slip = false;
             self.event(t, "slip", "lateral wheel force exceeds μ N");
         }
@@ -133,12 +135,13 @@ impl Runner<'_> {
         c: &RunSettings,
         ws: &mut Workspace,
         st: &LoopState,
+        mut contact: Option<&mut ContactLoop>,
         t: f64,
         ee: Vector3<f64>,
         evaluated: bool,
     ) -> Option<(Option<f64>, f64)> {
         let pose = [ws.q_plant[0], ws.q_plant[1], ws.q_plant[2]];
-        let mon = match &mut ws.contact {
+        let mon = match contact.as_deref_mut() {
             Some(cl) => Some(cl.monitors(pose)),
             None if evaluated => monitors(self.wm, self.m.plant_robot.is_some(), ws, t),
             None => None,
@@ -174,7 +177,7 @@ impl Runner<'_> {
         s.arm_side.push(side);
         s.energy.push(st.energy);
         s.phase.push(st.phase.name());
-        if let Some(cl) = &ws.contact {
+        if let Some(cl) = contact {
             s.contact_normal.push(cl.normal_loads());
         }
         mon.map(|m| (m.slip, clearance))
@@ -188,7 +191,7 @@ impl Runner<'_> {
 /// or the loads cannot be formed.
 fn monitors(wm: &WheeledModel, perturbed: bool, ws: &mut Workspace, t: f64) -> Option<Monitors> {
     let q = ws.q_plant.as_slice();
-    if perturbed || ws.noise.is_some() {
+    if perturbed || ws.noisy {
         ws.monitor.sample(t, q, ws.v_plant.as_slice(), &ws.u).ok()?;
     } else {
         lagrange_multipliers(wm, &mut ws.control_dynamics, &ws.q_now).ok()?;

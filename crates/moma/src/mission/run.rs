@@ -1,7 +1,9 @@
 //! The closed loop of a mission: [`run`] prepares the [`Runner`] (the goal, the planner,
-//! the tip-over limits, law `mpc`), then steps it at the control period: the measured
-//! state, the obstacles due, the phase, the control law, the torques, the record, one
-//! step of the plant; [`Runner::finish`] turns what it gathered into the
+//! the tip-over limits, law `mpc`), then has the held-input loop
+//! ([`crate::sim::held_loop::run_held_loop`]) run it as a law with phases on the mission's
+//! plant ([`MissionPlant`]): at each control tick [`Runner::step`] takes the measured
+//! state, the obstacles due, the phase, the control law, the torques, the record; the
+//! loop then advances the plant. [`Runner::finish`] turns what it gathered into the
 //! [`MissionResult`]. The step's parts live beside it: `replan` (planning in the loop),
 //! `arrival` (the phases' ends), `pick` (a `[task]`'s arm motions), `recording` (samples,
 //! monitors, events), `laws` and `workspace`.
@@ -13,7 +15,7 @@ use super::footprint::MissionFootprint;
 use super::laws::{EeState, RunSettings, end_effector_kinematics};
 use super::placement::choose_placement;
 use super::plan::{Planner, SearchTiming, mission_planner};
-use super::plant::ContactLoop;
+use super::plant::{ContactLoop, MissionPlant};
 use super::reference::{RefSample, Reference, TimingStart, axle_pose};
 use super::result::{Event, MissionResult, PlanRecord, Samples, WallTimes};
 use super::scenario::{GoalSpec, MAX_SAMPLES, MAX_STEPS, Mission};
@@ -27,7 +29,12 @@ use crate::mobile::wheeled::{
     reduced_forward_dynamics_crba, reduced_forward_dynamics_under_inputs,
 };
 use crate::planning::trajectory::{DiffDriveLimits, TipOverAcceleration};
-use crate::sim::held_input::HeldInputOde;
+use crate::sim::held_loop::{Tick, TickEnd, TickLaw, run_held_loop};
+use crate::sim::monitor::MonitorLimits;
+use crate::sim::rolling_plant::RollingPlant;
+use crate::sim::settings::{IntegratorSettings, MAX_STEP_BUDGET};
+use crate::sim::stepping::Grid;
+use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::{AccelerationLimits, BodySet};
 
 /// What the loop does at a step (recorded by [`Phase::name`] in `Samples::phase`).
@@ -209,41 +216,69 @@ impl<'m> Runner<'m> {
     }
 
     pub(super) fn run(mut self) -> Result<MissionResult> {
-        let mut x = initial_state(self.m);
         self.first_plan();
         let (time_limit, rec_every) = self.run_length()?;
-        let contact = self
-            .m
-            .contact
-            .as_ref()
-            .map(|c| {
-                let sim = &self.m.file.simulation;
-                ContactLoop::new(c, self.wm, sim.dt, self.m.file.start.pose[2], &BodySet::All)
-            })
-            .transpose()?;
-        let plant = self.m.plant_robot.as_ref().unwrap_or(self.wm);
-        let noise = self.m.sensor_noise.clone();
-        let mut ws = Workspace::new(
+        let sim = &self.m.file.simulation;
+        let h = sim.dt;
+        let plant_robot = self.m.plant_robot.as_ref().unwrap_or(self.wm);
+        // the rolling plant: one RK4 step per control period (the run's length is bounded
+        // by `run_length`, below the step budget)
+        let mut rolling = WheeledSystem::new(plant_robot.clone());
+        let end = |k: usize| (k + 1) as f64 * h;
+        let one_step = |_: usize| 1;
+        let mut plant = match &self.m.contact {
+            Some(c) => MissionPlant::Contact(ContactLoop::new(
+                c,
+                self.wm,
+                h,
+                self.m.file.start.pose[2],
+                &BodySet::All,
+            )?),
+            None => MissionPlant::Rolling(RollingPlant::new(
+                &mut rolling,
+                initial_state(self.m),
+                IntegratorSettings::Rk4 {
+                    dt: h,
+                    max_steps: Some(MAX_STEP_BUDGET),
+                },
+                &MonitorLimits::default(),
+                Grid {
+                    n: (time_limit / h).ceil() as usize + 1,
+                    end: &end,
+                    rk4: Some((h, &one_step)),
+                    switches: false,
+                    max_step_cap: h,
+                },
+            )?),
+        };
+        let mut noise = self.m.sensor_noise.clone();
+        let ws = Workspace::new(
             self.wm,
-            plant,
+            plant_robot,
             self.m.file.limits.mu,
-            contact,
-            noise,
+            noise.is_some(),
             self.m.task.as_ref(),
         )?;
         let act = Actuators::new(self.wm)?;
-        let mut c = RunSettings::new(
+        let c = RunSettings::new(
             self.m, self.wm, &self.goal, &self.tip, act, time_limit, rec_every,
         )?;
-        let mut st = LoopState::new(&self);
+        let st = LoopState::new(&self);
         let sim_clock = Instant::now();
-        while let Flow::Next | Flow::Retry = self.step(&mut c, &mut ws, &mut st, &mut x) {}
+        let mut tick = MissionTick {
+            runner: &mut self,
+            c,
+            ws,
+            st,
+        };
+        run_held_loop(&mut plant, &mut tick, noise.as_mut())?;
+        let MissionTick { mut ws, st, .. } = tick;
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
         let distances = ws.distances.take();
         let edges = (0..ws.monitor.edges().len())
             .map(|i| ws.monitor.edge_label(i))
             .collect();
-        Ok(self.finish(&st, &x, ws.contact.take(), distances, edges))
+        Ok(self.finish(&st, plant, distances, edges))
     }
 
     /// The plan at t = 0 (or the reason there is none: a posture that tips at rest, an
@@ -345,41 +380,34 @@ impl<'m> Runner<'m> {
         Ok((time_limit, rec_every))
     }
 
-    /// One control step: obstacle arrivals (and re-plans), the phase, the control law,
-    /// the torques, the record with its monitors, one integration step.
+    /// One control step, the loop's tick: obstacle arrivals (and re-plans), the phase, the
+    /// control law, the torques, the record with its monitors; the loop then advances
+    /// `plant` with the torques held.
     pub(super) fn step(
         &mut self,
         c: &mut RunSettings,
         ws: &mut Workspace,
         st: &mut LoopState,
-        x: &mut [f64],
+        plant: &mut MissionPlant<'_>,
+        now: &Tick<'_>,
     ) -> Flow {
         let (nq, nr) = (c.nq, c.nr);
-        let t = st.k as f64 * c.h;
+        let t = now.t;
         st.t = t;
-        match &mut ws.contact {
-            Some(cl) => cl.measure(&mut ws.q_plant, &mut ws.v_plant),
-            None => {
-                ws.q_plant.copy_from_slice(&x[..nq]);
-                ws.v_plant.copy_from_slice(&x[nq..nq + nr]);
+        st.k = now.k;
+        ws.first_stage_known = false;
+        // what the contact plant did over the last period
+        if let Some(cl) = plant.contact() {
+            for n in cl.news() {
+                self.event(n.t, n.kind, n.text);
             }
         }
-        // what the law measures: the plant's state, through the sensor noise if any (the
-        // record, the monitors and the energy keep the plant's own)
-        match &mut ws.noise {
-            Some(noise) => {
-                let (q, v) = (ws.q_plant.as_slice(), ws.v_plant.as_slice());
-                let (qm, vm) = (ws.q_now.as_mut_slice(), ws.v_now.as_mut_slice());
-                if let Err(e) = noise.measure(q, v, qm, vm) {
-                    self.fail(t, format!("the measurement failed: {e}"));
-                    st.phase = Phase::Done;
-                }
-            }
-            None => {
-                ws.q_now.copy_from(&ws.q_plant);
-                ws.v_now.copy_from(&ws.v_plant);
-            }
-        }
+        // the plant's state and what the law measures (through the sensor noise if any;
+        // the record, the monitors and the energy keep the plant's own)
+        ws.q_plant.copy_from_slice(now.q_plant);
+        ws.v_plant.copy_from_slice(now.v_plant);
+        ws.q_now.copy_from_slice(now.q);
+        ws.v_now.copy_from_slice(now.v);
         let pose = [ws.q_now[0], ws.q_now[1], ws.q_now[2]];
         let axle = axle_pose(pose, c.d);
         let (v, w) = (ws.v_now[0], ws.v_now[1]);
@@ -474,8 +502,12 @@ impl<'m> Runner<'m> {
                 &ws.u,
             )
             .is_ok();
+        // a payload attached in this step: the plant takes it before the record
+        if std::mem::take(&mut ws.attach_pending) {
+            plant.attach(self.wm);
+        }
         if st.k.is_multiple_of(c.rec_every) || last {
-            self.record_and_check(c, ws, st, t, ee.p, evaluated);
+            self.record_and_check(c, ws, st, plant, t, ee.p, evaluated);
         }
         if last {
             return Flow::Finished;
@@ -485,45 +517,20 @@ impl<'m> Runner<'m> {
         let v_plant = &ws.v_plant;
         st.energy += c.act.absolute_power(&ws.u, v_plant, v_plant[0], v_plant[1]) * c.h;
 
-        // the contact plant: the torques held over the control period
-        if let Some(cl) = &mut ws.contact {
-            let advanced = cl.advance(&ws.u);
-            for n in cl.news() {
-                self.event(n.t, n.kind, n.text);
-            }
-            if let Err(e) = advanced {
-                self.fail(t, format!("the simulation failed: {e}"));
-                st.phase = Phase::Done;
-                return Flow::Retry;
-            }
-            st.k += 1;
-            return Flow::Next;
-        }
-
-        // integrate one step
-        let mut plant = HeldInputOde {
-            system: &mut ws.sys,
-            u: &ws.u,
-        };
-        let stepped = if evaluated && self.m.plant_robot.is_none() && ws.noise.is_none() {
-            // the first stage is the state's evaluation under the torques just formed (on
-            // the law's model, which is the plant's unless [uncertainty] perturbs it)
+        // the rolling plant's first RK4 stage is the state's evaluation under the torques
+        // just formed (on the law's model, which is the plant's unless [uncertainty]
+        // perturbs it or the law measured a noisy state)
+        if evaluated
+            && self.m.plant_robot.is_none()
+            && !ws.noisy
+            && matches!(plant, MissionPlant::Rolling(_))
+        {
             let cd = &ws.control_dynamics;
             ws.first_stage[..nq].copy_from_slice(cd.qdot.as_slice());
             ws.first_stage[nq..nq + nr].copy_from_slice(cd.reduced.vdot.as_slice());
             ws.first_stage[nq + nr] = cd.force.dot(&cd.qdot);
-            ws.rk
-                .step_from_derivative(&mut plant, t, x, &ws.first_stage, c.h)
-        } else {
-            ws.rk.step(&mut plant, t, x, c.h)
-        };
-        if let Err(e) = stepped {
-            self.fail(t, format!("the simulation failed: {e}"));
-            st.phase = Phase::Done;
-            // record the state reached before the failure on the next pass
-            return Flow::Retry;
+            ws.first_stage_known = true;
         }
-        st.k += 1;
         Flow::Next
     }
 
@@ -531,8 +538,7 @@ impl<'m> Runner<'m> {
     pub(super) fn finish(
         mut self,
         st: &LoopState,
-        x: &[f64],
-        contact: Option<ContactLoop>,
+        plant: MissionPlant<'_>,
         distances: Option<DistanceMonitor>,
         support_edges: Vec<String>,
     ) -> MissionResult {
@@ -581,16 +587,65 @@ impl<'m> Runner<'m> {
             torque_saturated_steps: st.torque_sat,
             speed_saturated_steps: st.speed_sat,
             steps: st.k,
-            input_work: contact
-                .as_ref()
-                .map_or(x[model.nq + wm.nr()], |c| c.input_work),
+            input_work: plant.input_work(),
             wall: self.wall,
-            contact: contact.map(|c| c.tally.finish()),
+            contact: match plant {
+                MissionPlant::Rolling(_) => None,
+                MissionPlant::Contact(cl) => Some(cl.tally().clone().finish()),
+            },
             goal_pose: self.goal.pose,
             task: self.task,
             support_edges,
             mpc: self.whole_body.as_ref().and_then(WholeBodyLaw::summary),
         }
+    }
+}
+
+/// The mission as the held-input loop's law: the runner with the run's settings,
+/// workspaces and loop state; its tick is [`Runner::step`].
+struct MissionTick<'r, 'm> {
+    runner: &'r mut Runner<'m>,
+    c: RunSettings,
+    ws: Workspace,
+    st: LoopState,
+}
+
+impl<'s> TickLaw<MissionPlant<'s>> for MissionTick<'_, '_> {
+    fn tick(&mut self, plant: &mut MissionPlant<'s>, now: &mut Tick<'_>) -> Result<TickEnd> {
+        let flow = self
+            .runner
+            .step(&mut self.c, &mut self.ws, &mut self.st, plant, now);
+        now.u.copy_from_slice(&self.ws.u);
+        Ok(match flow {
+            Flow::Next => TickEnd::Hold,
+            Flow::Retry => TickEnd::Again,
+            Flow::Finished => TickEnd::Stop,
+        })
+    }
+
+    fn first_stage(&self) -> Option<&[f64]> {
+        self.ws
+            .first_stage_known
+            .then_some(self.ws.first_stage.as_slice())
+    }
+
+    /// The run ends, its last sample recorded in this tick.
+    fn measurement_failed(&mut self, t: f64, e: Error) -> Result<()> {
+        self.runner.fail(t, format!("the measurement failed: {e}"));
+        self.st.phase = Phase::Done;
+        Ok(())
+    }
+
+    /// The run ends at the state reached before the failure, recorded in a repeated tick.
+    fn advance_failed(&mut self, plant: &mut MissionPlant<'s>, t: f64, e: Error) -> Result<()> {
+        if let Some(cl) = plant.contact() {
+            for n in cl.news() {
+                self.runner.event(n.t, n.kind, n.text);
+            }
+        }
+        self.runner.fail(t, format!("the simulation failed: {e}"));
+        self.st.phase = Phase::Done;
+        Ok(())
     }
 }
 

@@ -19,8 +19,9 @@ use crate::error::{Error, Result};
 use crate::mobile::{Caster, DiffDrive, WheeledBase, WheeledModel};
 use crate::multibody::{FrameIndex, RootJoint};
 use crate::planning::LoadedMap;
-use crate::sim::model_mismatch::{ModelPerturbation, SensorNoise};
+use crate::sim::model_mismatch::ModelPerturbation;
 use crate::sim::mpc_table::build_mpc;
+use crate::sim::sensor_noise::SensorNoise;
 use crate::sim::uncertainty::{Draw, perturb, sensor_noise};
 
 pub use super::schema::{

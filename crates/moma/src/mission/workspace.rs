@@ -1,20 +1,17 @@
-//! The loop's workspaces, allocated once before it ([`Workspace`]: the plant, the law's
-//! reduced dynamics, the monitors, the measured and the plant's state, the inputs), the
+//! The loop's workspaces, allocated once before it ([`Workspace`]: the law's reduced
+//! dynamics, the monitors, the measured and the plant's state, the inputs), the
 //! actuators with their limits ([`Actuators`]) and the plant's start state.
 
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix6xX, Vector2};
 
-use super::plant::{ContactLoop, start_configuration};
+use super::plant::start_configuration;
 use super::scenario::Mission;
 use super::task::{DistanceMonitor, Task};
 use crate::error::Result;
 use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::Data;
-use crate::ode::Rk4;
 use crate::sim::computed_torque::ComputedTorque;
-use crate::sim::model_mismatch::SensorNoise;
 use crate::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
-use crate::sim::wheeled_system::WheeledSystem;
 use crate::stability::BodySet;
 
 /// The plant state at the start: the start pose, the start arm posture, at rest (the
@@ -27,8 +24,6 @@ pub(super) fn initial_state(m: &Mission) -> Vec<f64> {
 
 /// The workspaces of the loop, allocated once before it.
 pub(super) struct Workspace {
-    /// The plant.
-    pub(super) sys: WheeledSystem,
     /// The control law's reduced dynamics (Mr, cr + Gr, N_C) at the step's state, under
     /// zero input.
     pub(super) control_dynamics: WheeledData,
@@ -36,9 +31,10 @@ pub(super) struct Workspace {
     pub(super) data: Data,
     /// The stability, load and slip monitors of the recorded samples.
     pub(super) monitor: StabilityMonitor,
-    pub(super) rk: Rk4,
-    /// The integrator's first stage `[q̇, v̇, Qᵀq̇]` at the step's state.
+    /// The plant's first integration stage `[q̇, v̇, Qᵀq̇]` at the step's state under the
+    /// step's torques, when the step evaluated it exactly (`first_stage_known`).
     pub(super) first_stage: Vec<f64>,
+    pub(super) first_stage_known: bool,
     /// The configuration q the law measured at the step (the plant's, with sensor noise
     /// if any).
     pub(super) q_now: DVector<f64>,
@@ -49,11 +45,11 @@ pub(super) struct Workspace {
     pub(super) zero_u: Vec<f64>,
     /// The law's desired reduced accelerations.
     pub(super) a_des: DVector<f64>,
-    /// The contact plant, when the mission runs on it (else the plant is `sys`).
-    pub(super) contact: Option<ContactLoop>,
-    /// The `[uncertainty]` sensor noise between the plant's state and what the law
-    /// measures (`q_now`, `v_now`).
-    pub(super) noise: Option<SensorNoise>,
+    /// The law measures the plant's state through the `[uncertainty]` sensor noise.
+    pub(super) noisy: bool,
+    /// A `[task]`'s payload was attached in this step: the plant takes it before the
+    /// record.
+    pub(super) attach_pending: bool,
     /// The plant's configuration (reduced coordinates) at the step.
     pub(super) q_plant: DVector<f64>,
     /// The plant's reduced velocity at the step.
@@ -81,27 +77,25 @@ impl Workspace {
         wm: &WheeledModel,
         plant: &WheeledModel,
         mu: f64,
-        contact: Option<ContactLoop>,
-        noise: Option<SensorNoise>,
+        noisy: bool,
         task: Option<&Task>,
     ) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
         let dim = task.map_or(0, |t| t.group.dim());
         Ok(Self {
-            sys: WheeledSystem::new(plant.clone()),
             control_dynamics: WheeledData::new(wm),
             data: Data::new(model),
             monitor: StabilityMonitor::new(plant, monitor_settings(mu))?,
-            rk: Rk4::new(nq + nr + 1),
             first_stage: vec![0.0; nq + nr + 1],
+            first_stage_known: false,
             q_now: DVector::zeros(nq),
             v_now: DVector::zeros(nr),
             u: vec![0.0; nu],
             zero_u: vec![0.0; nu],
             a_des: DVector::zeros(nr),
-            contact,
-            noise,
+            noisy,
+            attach_pending: false,
             q_plant: DVector::zeros(nq),
             v_plant: DVector::zeros(nr),
             jac: Matrix6xX::zeros(model.nv),
@@ -115,13 +109,10 @@ impl Workspace {
         })
     }
 
-    /// The plant (the contact plant too) and the monitors take `robot` (the same joints,
-    /// other inertias: the payload attached).
+    /// The monitors take `robot` (the same joints, other inertias: the payload
+    /// attached), and the plant (the contact plant too) before the step's record.
     pub(super) fn attach(&mut self, robot: &WheeledModel, mu: f64) -> Result<()> {
-        self.sys = WheeledSystem::new(robot.clone());
-        if let Some(cl) = &mut self.contact {
-            cl.attach(robot);
-        }
+        self.attach_pending = true;
         self.monitor = StabilityMonitor::new(robot, monitor_settings(mu))?;
         Ok(())
     }

@@ -22,10 +22,12 @@ use crate::control::lyapunov::{LyapunovMonitor, LyapunovReport};
 use crate::error::{Error, Result};
 use crate::ode::{OdeSystem, StepStats};
 use crate::sim::held_input::HeldInputOde;
+use crate::sim::held_loop::{Tick, TickEnd, TickLaw, run_held_loop};
 use crate::sim::monitor::{Monitor, MonitorLimits};
 use crate::sim::mpc_run::MpcRun;
 use crate::sim::recorder::Recorder;
 use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::rolling_plant::RollingPlant;
 use crate::sim::settings::IntegratorSettings;
 use crate::sim::stepping::{
     Grid, check_rk4_budget, check_rk4_steps, integrate_on_grid, record_plant_sample,
@@ -200,27 +202,25 @@ impl ClosedLoopResult {
     }
 }
 
-/// The plant ODE `[q, v, W]` under either held inputs or continuous feedback.
-struct LoopOde<'a> {
+/// The plant ODE `[q, v, W]` under continuous feedback: the law evaluated inside the
+/// right-hand side.
+struct ContinuousOde<'a> {
     system: &'a mut dyn ReducedSystem,
     law: &'a mut dyn FeedbackLaw,
-    continuous: bool,
     u: Vec<f64>,
     saturation: SaturationReport,
 }
 
-impl OdeSystem for LoopOde<'_> {
+impl OdeSystem for ContinuousOde<'_> {
     fn dim(&self) -> usize {
         self.system.nq() + self.system.nv() + 1
     }
 
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<()> {
-        if self.continuous {
-            let (nq, nv) = (self.system.nq(), self.system.nv());
-            let (q, rest) = x.split_at(nq);
-            let f = self.law.control(t, q, &rest[..nv], &mut self.u)?;
-            self.saturation.add(t, f);
-        }
+        let (nq, nv) = (self.system.nq(), self.system.nv());
+        let (q, rest) = x.split_at(nq);
+        let f = self.law.control(t, q, &rest[..nv], &mut self.u)?;
+        self.saturation.add(t, f);
         HeldInputOde {
             system: &mut *self.system,
             u: &self.u,
@@ -244,6 +244,7 @@ struct Rec {
 impl Rec {
     /// The recorder and monitors of a run of `n_samples` samples, for a law with `ne`
     /// error components, `ns` signals and (if `has_v`) a Lyapunov function.
+    #[allow(clippy::too_many_arguments)]
     fn new(
         system: &mut dyn ReducedSystem,
         q0: &[f64],
@@ -270,26 +271,31 @@ impl Rec {
         })
     }
 
-    fn record(&mut self, ode: &mut LoopOde<'_>, t: f64, x: &[f64]) -> Result<()> {
-        let (nq, nv) = (ode.system.nq(), ode.system.nv());
+    /// Records the state `x = [q, v, W]` at `t` under the inputs `u` and what `law`
+    /// observes there.
+    fn record(
+        &mut self,
+        system: &mut dyn ReducedSystem,
+        law: &mut dyn FeedbackLaw,
+        u: &[f64],
+        t: f64,
+        x: &[f64],
+    ) -> Result<()> {
+        let (nq, nv) = (system.nq(), system.nv());
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
-        if ode.continuous {
-            // the input applied at this instant
-            ode.law.control(t, q, v, &mut ode.u)?;
-        }
         record_plant_sample(
-            &mut *ode.system,
+            system,
             &mut self.recorder,
             &mut self.monitor,
             &mut self.lambda,
             t,
             x,
-            &ode.u,
+            u,
         )?;
-        let obs = ode.law.observe(t, q, v, &mut self.err)?;
+        let obs = law.observe(t, q, v, &mut self.err)?;
         self.errors.extend_from_slice(&self.err);
         if !self.sig.is_empty() {
-            ode.law.signals(t, q, v, &mut self.sig)?;
+            law.signals(t, q, v, &mut self.sig)?;
             self.signals.extend_from_slice(&self.sig);
         }
         if let (Some(m), Some(val)) = (self.lyap.as_mut(), obs.lyapunov) {
@@ -301,7 +307,9 @@ impl Rec {
 }
 
 /// Runs `law` on `system` from `(q0, v0)`; `progress(t)` is called after every recorded
-/// sample.
+/// sample. Under a control period the run is the held-input loop
+/// ([`crate::sim::held_loop::run_held_loop`]) on the rolling plant; with continuous
+/// feedback the law is evaluated inside the integrated right-hand side.
 ///
 /// # Errors
 /// Invalid options or initial state (named), a run that goes numerically wrong (with its
@@ -336,7 +344,7 @@ pub fn simulate_closed_loop(
             "must be a finite number >= 0",
         ));
     }
-    let (nq, nv, nu) = (system.nq(), system.nv(), system.nu());
+    let (nq, nv) = (system.nq(), system.nv());
     let grid = TickGrid::new(options)?;
     check_rk4_budget(&options.integrator, options.duration)?;
     let error_names = law.error_names();
@@ -354,35 +362,7 @@ pub fn simulate_closed_loop(
     let mut x = vec![0.0; nq + nv + 1];
     x[..nq].copy_from_slice(q0);
     x[nq..nq + nv].copy_from_slice(v0);
-    let continuous = options.control_period.is_none();
-    let mut ode = LoopOde {
-        system,
-        law,
-        continuous,
-        u: vec![0.0; nu],
-        saturation: SaturationReport::default(),
-    };
-    let mut evaluations = 0usize;
-    if !continuous {
-        let f = ode.law.control(0.0, q0, v0, &mut ode.u)?;
-        ode.saturation.add(0.0, f);
-        evaluations += 1;
-    }
-    rec.record(&mut ode, 0.0, &x)?;
-    let stats = integrate_ticks(
-        &mut ode,
-        &mut rec,
-        &mut x,
-        options,
-        &grid,
-        &mut evaluations,
-        progress,
-    )?;
-    let control_ticks = if continuous {
-        ode.saturation.evaluations
-    } else {
-        evaluations
-    };
+    let run = integrate_ticks(system, law, &mut rec, x, options, &grid, progress)?;
     let lyapunov_report = rec.lyap.as_ref().map(LyapunovMonitor::report);
     let lyapunov = rec
         .lyap
@@ -392,7 +372,7 @@ pub fn simulate_closed_loop(
     Ok(ClosedLoopResult {
         recorder: rec.recorder,
         monitor: rec.monitor,
-        stats,
+        stats: run.stats,
         error_names,
         errors: rec.errors,
         signal_names,
@@ -400,8 +380,8 @@ pub fn simulate_closed_loop(
         lyapunov,
         lyapunov_rate: rec.rate,
         lyapunov_report,
-        saturation: ode.saturation,
-        control_ticks,
+        saturation: run.saturation,
+        control_ticks: run.control_ticks,
         control_period: options.control_period.map(|_| grid.period),
     })
 }
@@ -467,17 +447,26 @@ impl TickGrid {
     }
 }
 
-/// Integrates the loop from `x` over the tick grid (RK4: `sub` steps per segment),
-/// recording and (under a hold) sampling the law at every segment end.
+/// What a run's stepping gathered.
+struct TickRun {
+    stats: StepStats,
+    saturation: SaturationReport,
+    control_ticks: usize,
+}
+
+/// Integrates the loop from `x` over the tick grid (RK4: `sub` steps per segment):
+/// under a hold, the held-input loop on the rolling plant, recording and sampling the law
+/// at every tick; with continuous feedback, the law inside the right-hand side, recording
+/// at every segment end.
 fn integrate_ticks(
-    ode: &mut LoopOde<'_>,
+    system: &mut dyn ReducedSystem,
+    law: &mut dyn FeedbackLaw,
     rec: &mut Rec,
-    x: &mut [f64],
+    x: Vec<f64>,
     options: &ClosedLoopOptions,
     tg: &TickGrid,
-    evaluations: &mut usize,
     progress: &mut dyn FnMut(f64),
-) -> Result<StepStats> {
+) -> Result<TickRun> {
     let (ticks, period, every) = (tg.ticks, tg.period, tg.every);
     // RK4: `sub` steps per tick (hold) or per recording interval (continuous)
     let sub = match options.integrator {
@@ -495,51 +484,95 @@ fn integrate_ticks(
         }
     };
     let steps = |_: usize| sub;
+    let continuous = options.control_period.is_none();
     let grid = Grid {
         n: ticks,
         end: &end,
         rk4: Some((h, &steps)),
-        switches: !ode.continuous,
+        switches: !continuous,
         max_step_cap: period,
     };
-    integrate_on_grid(
-        ode,
-        x,
-        options.integrator,
-        &options.limits,
-        &grid,
-        &mut |ode, k, t1, x| {
-            tick_end(ode, rec, evaluations, k, ticks, every, t1, x, progress)?;
-            Ok(false)
-        },
-    )
+    if continuous {
+        let nu = system.nu();
+        let mut ode = ContinuousOde {
+            system,
+            law,
+            u: vec![0.0; nu],
+            saturation: SaturationReport::default(),
+        };
+        let mut x = x;
+        // the input applied at each recorded instant
+        let mut record = |ode: &mut ContinuousOde<'_>, t: f64, x: &[f64]| {
+            let (nq, nv) = (ode.system.nq(), ode.system.nv());
+            ode.law.control(t, &x[..nq], &x[nq..nq + nv], &mut ode.u)?;
+            rec.record(&mut *ode.system, &mut *ode.law, &ode.u, t, x)
+        };
+        record(&mut ode, 0.0, &x)?;
+        let stats = integrate_on_grid(
+            &mut ode,
+            &mut x,
+            options.integrator,
+            &options.limits,
+            grid,
+            &mut |ode, _, t1, x| {
+                record(ode, t1, x)?;
+                progress(t1);
+                Ok(false)
+            },
+        )?;
+        return Ok(TickRun {
+            stats,
+            control_ticks: ode.saturation.evaluations,
+            saturation: ode.saturation,
+        });
+    }
+    let mut plant = RollingPlant::new(system, x, options.integrator, &options.limits, grid)?;
+    let mut tick = HoldTick {
+        law,
+        rec,
+        saturation: SaturationReport::default(),
+        ticks,
+        every,
+        progress,
+    };
+    run_held_loop(&mut plant, &mut tick, None)?;
+    Ok(TickRun {
+        stats: plant.stats(),
+        control_ticks: tick.saturation.evaluations,
+        saturation: tick.saturation,
+    })
 }
 
-/// End of tick `k` at time `t1`: record if due, then (under a hold) sample the law for
-/// the next tick.
-#[allow(clippy::too_many_arguments)]
-fn tick_end(
-    ode: &mut LoopOde<'_>,
-    rec: &mut Rec,
-    evaluations: &mut usize,
-    k: usize,
+/// The tick of a law under a hold: the law sampled at every tick but the last, the
+/// record at every `every`-th tick and the last.
+struct HoldTick<'a> {
+    law: &'a mut dyn FeedbackLaw,
+    rec: &'a mut Rec,
+    saturation: SaturationReport,
     ticks: usize,
     every: usize,
-    t1: f64,
-    x: &[f64],
-    progress: &mut dyn FnMut(f64),
-) -> Result<()> {
-    let last = k + 1 == ticks;
-    let (nq, nv) = (ode.system.nq(), ode.system.nv());
-    if !ode.continuous && !last {
-        let (q, v) = (&x[..nq], &x[nq..nq + nv]);
-        let f = ode.law.control(t1, q, v, &mut ode.u)?;
-        ode.saturation.add(t1, f);
-        *evaluations += 1;
+    progress: &'a mut dyn FnMut(f64),
+}
+
+impl TickLaw<RollingPlant<'_, dyn ReducedSystem + '_>> for HoldTick<'_> {
+    fn tick(
+        &mut self,
+        plant: &mut RollingPlant<'_, dyn ReducedSystem + '_>,
+        now: &mut Tick<'_>,
+    ) -> Result<TickEnd> {
+        let (k, t) = (now.k, now.t);
+        let last = k == self.ticks;
+        if !last {
+            let f = self.law.control(t, now.q, now.v, now.u)?;
+            self.saturation.add(t, f);
+        }
+        if k == 0 || k.is_multiple_of(self.every) || last {
+            self.rec
+                .record(&mut *plant.system, &mut *self.law, now.u, t, &plant.x)?;
+            if k > 0 {
+                (self.progress)(t);
+            }
+        }
+        Ok(if last { TickEnd::Stop } else { TickEnd::Hold })
     }
-    if (k + 1).is_multiple_of(every) || last {
-        rec.record(ode, t1, x)?;
-        progress(t1);
-    }
-    Ok(())
 }

@@ -8,7 +8,9 @@
 //! they are; `v` the base origin's world velocity along the heading, `ω` the world yaw
 //! rate, the arm's joint rates. Its inputs `[τ_L, τ_R, τ_arm…]` go to the same joints of
 //! the contact plant. Under a control period the law's output is held over the period
-//! (zero-order hold); without one it is evaluated at every contact step.
+//! (zero-order hold); without one it is evaluated at every contact step. The run is the
+//! held-input loop ([`run_held_loop`]) on [`HeldContactPlant`] (the contact plant under
+//! held inputs, which the mission's contact plant steps too), one contact step per tick.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -18,6 +20,7 @@ use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::admissible_velocity_basis;
 use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
+use crate::sim::held_loop::{HeldPlant, Tick, TickEnd, TickLaw, run_held_loop};
 use crate::sim::settings::InputProfile;
 
 /// Largest number of contact steps a run accepts (`duration / contact.dt`).
@@ -159,6 +162,83 @@ pub fn contact_plant_of(
     let plant = ContactPlant::new(model, &wheels, casters, params)?;
     let map = ReducedMap::new(robot, &plant)?;
     Ok((plant, map))
+}
+
+/// The contact plant under held inputs.
+#[derive(Clone, Debug)]
+pub struct HeldContactPlant {
+    /// The plant.
+    pub plant: ContactPlant,
+    /// Reduced ↔ contact coordinates (holds the law's rolling model).
+    pub map: ReducedMap,
+    /// The plant's state.
+    pub state: ContactState,
+    /// The plant's inputs (one per joint below the free flyer).
+    u_c: Vec<f64>,
+    /// Contact steps per control period.
+    steps: usize,
+    /// First lift-off and slip, totals, tilt.
+    pub tally: ContactTally,
+    /// Net work of the actuators ∫ uᵀ q̇ dt (J), per contact step (the rates at its start).
+    pub input_work: f64,
+}
+
+impl HeldContactPlant {
+    /// `plant` started at `start`, `steps` contact steps per control period.
+    #[must_use]
+    pub fn new(plant: ContactPlant, map: ReducedMap, start: ContactState, steps: usize) -> Self {
+        Self {
+            tally: ContactTally::new(&plant),
+            u_c: vec![0.0; plant.nu()],
+            plant,
+            map,
+            state: start,
+            steps,
+            input_work: 0.0,
+        }
+    }
+}
+
+impl HeldPlant for HeldContactPlant {
+    fn nq(&self) -> usize {
+        self.map.robot.model.nq
+    }
+
+    fn nv(&self) -> usize {
+        self.map.robot.nr()
+    }
+
+    fn nu(&self) -> usize {
+        self.map.robot.nu()
+    }
+
+    /// The plant's own time (the sum of its steps).
+    fn time(&self) -> f64 {
+        self.state.t
+    }
+
+    fn state(&mut self, q: &mut [f64], v: &mut [f64]) {
+        self.map.to_reduced(&self.state, q, v);
+    }
+
+    /// # Errors
+    /// [`crate::Error::Numerical`] if the plant's accelerations stop being finite.
+    fn advance(&mut self, u: &[f64], _first_stage: Option<&[f64]>) -> Result<()> {
+        self.map.to_contact_inputs(u, &mut self.u_c);
+        let dt = self.plant.params.dt;
+        for _ in 0..self.steps {
+            let power: f64 = self
+                .u_c
+                .iter()
+                .zip(self.state.v.iter().skip(6))
+                .map(|(u, v)| u * v)
+                .sum();
+            self.plant.step(&mut self.state, &self.u_c)?;
+            self.input_work += power * dt;
+            self.tally.observe(&self.state, dt);
+        }
+        Ok(())
+    }
 }
 
 /// What drives the contact plant.
@@ -392,7 +472,6 @@ impl ContactRun {
             _ => 1,
         };
         let robot = &self.map.robot;
-        let (nq, nr, nu) = (robot.model.nq, robot.nr(), robot.nu());
         let error_names = match &self.driver {
             ContactDriver::Law { law, .. } => law.error_names(),
             ContactDriver::Profile(_) => Vec::new(),
@@ -424,65 +503,87 @@ impl ContactRun {
             control_evaluations: 0,
             steps_per_control: hold,
         };
-        let mut tally = ContactTally::new(&self.plant);
-        let mut st = self.start.clone();
-        let (mut q_r, mut v_r) = (vec![0.0; nq], vec![0.0; nr]);
-        let mut u_r = vec![0.0; nu];
-        let mut u_c = vec![0.0; self.plant.nu()];
-        let mut err = vec![0.0; res.error_names.len()];
-        let nwheels = self.plant.wheel_dofs().len();
-        for k in 0..=nsteps {
-            let t = st.t;
-            self.map.to_reduced(&st, &mut q_r, &mut v_r);
-            if k % hold == 0 {
-                match &mut self.driver {
-                    ContactDriver::Profile(p) => p.eval(t, &mut u_r),
-                    ContactDriver::Law { law, .. } => {
-                        law.control(t, &q_r, &v_r, &mut u_r)?;
-                    }
-                }
-                res.control_evaluations += 1;
-                self.map.to_contact_inputs(&u_r, &mut u_c);
-            }
-            if k > 0 {
-                // The reports of the step just taken.
-                tally.observe(&st, dt);
-            }
-            if k % every == 0 {
-                let mut row = Vec::with_capacity(nq + nr + nu + 5 + 4 * nc + err.len());
-                row.extend_from_slice(&q_r);
-                row.extend_from_slice(&v_r);
-                row.extend_from_slice(&u_r);
-                let (roll, pitch, _) = st.base_orientation().euler_angles();
-                row.extend([st.q[2], roll, pitch]);
-                row.extend(self.plant.wheel_speeds(&st).take(nwheels.min(2)));
-                for r in &st.contacts {
-                    row.extend([
-                        r.normal,
-                        r.slip.norm(),
-                        f64::from(u8::from(r.lifted)),
-                        f64::from(u8::from(r.slipping)),
-                    ]);
-                }
-                if let ContactDriver::Law { law, .. } = &mut self.driver {
-                    law.observe(t, &q_r, &v_r, &mut err)?;
-                    row.extend_from_slice(&err);
-                }
-                res.times.push(t);
-                res.rows.push(row);
-                progress(t);
-            }
-            if k < nsteps {
-                self.plant.step(&mut st, &u_c)?;
-                res.steps += 1;
-            }
-        }
-        let tally = tally.finish();
+        let n_errors = res.error_names.len();
+        let mut held =
+            HeldContactPlant::new(self.plant.clone(), self.map.clone(), self.start.clone(), 1);
+        let mut tick = ContactTick {
+            driver: &mut self.driver,
+            res: &mut res,
+            err: vec![0.0; n_errors],
+            nsteps,
+            hold,
+            every,
+            progress,
+        };
+        res.steps = run_held_loop(&mut held, &mut tick, None)?;
+        let tally = held.tally.finish();
         res.first_lift_off = tally.first_lift_off;
         res.first_slip = tally.first_slip;
         res.totals = tally.totals;
         res.max_tilt = tally.max_tilt;
         Ok(res)
+    }
+}
+
+/// The tick of a contact run, one per contact step: the driver evaluated every `hold`
+/// steps (its inputs held in between), a row recorded every `every` steps, the run
+/// stopped after `nsteps` steps.
+struct ContactTick<'a> {
+    driver: &'a mut ContactDriver,
+    res: &'a mut ContactResult,
+    err: Vec<f64>,
+    nsteps: usize,
+    hold: usize,
+    every: usize,
+    progress: &'a mut dyn FnMut(f64),
+}
+
+impl TickLaw<HeldContactPlant> for ContactTick<'_> {
+    fn tick(&mut self, held: &mut HeldContactPlant, now: &mut Tick<'_>) -> Result<TickEnd> {
+        let (k, t) = (now.k, now.t);
+        if k.is_multiple_of(self.hold) {
+            match &mut *self.driver {
+                ContactDriver::Profile(p) => p.eval(t, now.u),
+                ContactDriver::Law { law, .. } => {
+                    law.control(t, now.q, now.v, now.u)?;
+                }
+            }
+            self.res.control_evaluations += 1;
+        }
+        if k.is_multiple_of(self.every) {
+            let (st, plant) = (&held.state, &held.plant);
+            let nc = st.contacts.len();
+            let mut row = Vec::with_capacity(
+                now.q.len() + now.v.len() + now.u.len() + 5 + 4 * nc + self.err.len(),
+            );
+            row.extend_from_slice(now.q);
+            row.extend_from_slice(now.v);
+            row.extend_from_slice(now.u);
+            let (roll, pitch, _) = st.base_orientation().euler_angles();
+            row.extend([st.q[2], roll, pitch]);
+            let nwheels = plant.wheel_dofs().len();
+            row.extend(plant.wheel_speeds(st).take(nwheels.min(2)));
+            for r in &st.contacts {
+                row.extend([
+                    r.normal,
+                    r.slip.norm(),
+                    f64::from(u8::from(r.lifted)),
+                    f64::from(u8::from(r.slipping)),
+                ]);
+            }
+            if let ContactDriver::Law { law, .. } = &mut *self.driver {
+                law.observe(t, now.q, now.v, &mut self.err)?;
+                row.extend_from_slice(&self.err);
+            }
+            self.res.times.push(t);
+            self.res.rows.push(row);
+            (self.progress)(t);
+        }
+        Ok(if k < self.nsteps {
+            TickEnd::Hold
+        } else {
+            TickEnd::Stop
+        })
     }
 }
 

@@ -35,9 +35,12 @@
 //!   files share (`[controller.mpc]`, `[control.mpc]`) and builds the MPC from it. A planned platform reference comes from `mission::planned`, one layer
 //!   up.
 //! * The plant ODE `[q, v, W]` under held inputs is [`held_input::HeldInputOde`], the one
-//!   right-hand side of the open loop, the closed loop and `moma mission`. The stepping
-//!   loop and per-sample recording shared by the open- and closed-loop runs are in
-//!   `stepping`; [`recorder::Recorder`] holds what the CLI's writers read.
+//!   right-hand side of the open loop, the closed loop and `moma mission`. The one loop of
+//!   a plant under held inputs is [`held_loop::run_held_loop`] (measure, the law's tick,
+//!   advance): `simulate_closed_loop` under a control period, the contact run and the
+//!   mission run on it, the plant [`rolling_plant::RollingPlant`] or
+//!   [`contact_run::HeldContactPlant`]. The grid stepping and per-sample recording shared
+//!   by the open- and closed-loop runs are in `stepping`; [`recorder::Recorder`] holds what the CLI's writers read.
 //! * [`computed_torque::ComputedTorque`] is the one map from a desired reduced
 //!   acceleration (or force) to the wheel and joint torques of a wheeled robot, used by
 //!   the inner loop, OSC, the coordinated law and the mission.
@@ -54,6 +57,7 @@ pub mod feedback;
 pub mod fixed_base;
 pub mod free_floating;
 pub mod held_input;
+pub mod held_loop;
 pub mod lift_off;
 pub mod model_mismatch;
 pub mod monitor;
@@ -63,9 +67,11 @@ pub mod mpc_run;
 pub mod mpc_table;
 pub mod recorder;
 pub mod reduced_system;
+pub mod rolling_plant;
+pub mod sensor_noise;
 pub mod settings;
 pub mod stability_monitor;
-mod stepping;
+pub(crate) mod stepping;
 pub mod uncertainty;
 pub mod wheeled;
 pub mod wheeled_system;

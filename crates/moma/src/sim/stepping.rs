@@ -41,68 +41,160 @@ pub(crate) fn integrate_on_grid<O: OdeSystem>(
     x: &mut [f64],
     integrator: IntegratorSettings,
     limits: &MonitorLimits,
-    grid: &Grid<'_>,
+    grid: Grid<'_>,
     at_end: &mut SegmentEnd<'_, O>,
 ) -> Result<StepStats> {
-    let mut budget = StepBudget::new(integrator.step_budget());
-    let duration = if grid.n == 0 {
-        0.0
-    } else {
-        (grid.end)(grid.n - 1)
-    };
-    let exhausted = |budget: &StepBudget, t: f64| {
-        budget_exhausted(integrator.method_name(), &integrator, budget, t, duration)
-    };
-    match integrator {
-        IntegratorSettings::Rk4 { .. } => {
-            let (h, steps) = grid.rk4.expect("RK4 grid without a step");
-            let mut rk = Rk4::new(x.len());
-            rk.blowup = limits.blowup;
-            let mut t0 = 0.0;
-            for k in 0..grid.n {
-                if !budget.take(steps(k)) {
-                    return Err(exhausted(&budget, t0));
-                }
-                for s in 0..steps(k) {
-                    rk.step(ode, t0 + s as f64 * h, x, h)?;
-                }
-                let t1 = (grid.end)(k);
-                if at_end(ode, k, t1, x)? {
-                    break;
-                }
-                t0 = t1;
-            }
-            Ok(rk.stats)
+    let mut stepper = GridStepper::new(x.len(), integrator, limits, grid)?;
+    while stepper.k < stepper.grid.n {
+        let k = stepper.k;
+        let t1 = stepper.advance(ode, x, None)?;
+        if at_end(ode, k, t1, x)? {
+            break;
         }
-        IntegratorSettings::Adaptive {
-            rtol,
-            atol,
-            max_step,
-            ..
-        } => {
-            let opts = AdaptiveOptions {
+    }
+    Ok(stepper.stats())
+}
+
+/// The integrator of a run over a [`Grid`], one segment at a time: fixed-step RK4 (the
+/// segment's steps of `h`) or adaptive Dormand–Prince 5(4) (stopping exactly at the
+/// segment's end, its cached derivative dropped there when the grid switches), with the
+/// run's one step budget.
+pub(crate) struct GridStepper<'g> {
+    grid: Grid<'g>,
+    integrator: IntegratorSettings,
+    method: GridMethod,
+    budget: StepBudget,
+    /// The next segment.
+    k: usize,
+    /// The time reached (s): the end of the last segment.
+    t: f64,
+}
+
+enum GridMethod {
+    Rk4(Rk4),
+    Adaptive(DormandPrince45),
+}
+
+impl<'g> GridStepper<'g> {
+    /// The stepper of a state of `dim` components over `grid` (blow-up bound from
+    /// `limits`).
+    ///
+    /// # Errors
+    /// The adaptive integrator's options.
+    ///
+    /// # Panics
+    /// An RK4 integrator on a grid without RK4 steps.
+    pub(crate) fn new(
+        dim: usize,
+        integrator: IntegratorSettings,
+        limits: &MonitorLimits,
+        grid: Grid<'g>,
+    ) -> Result<Self> {
+        let method = match integrator {
+            IntegratorSettings::Rk4 { .. } => {
+                assert!(grid.rk4.is_some(), "RK4 grid without a step");
+                let mut rk = Rk4::new(dim);
+                rk.blowup = limits.blowup;
+                GridMethod::Rk4(rk)
+            }
+            IntegratorSettings::Adaptive {
                 rtol,
                 atol,
-                blowup: limits.blowup,
-                max_step: max_step.unwrap_or(f64::INFINITY).min(grid.max_step_cap),
-                ..AdaptiveOptions::default()
-            };
-            let mut dp = DormandPrince45::new(x.len(), opts)?;
-            let mut t = 0.0;
-            for k in 0..grid.n {
-                let t1 = (grid.end)(k);
-                if !dp.integrate_to_within(ode, &mut t, x, t1, &mut budget)? {
-                    return Err(exhausted(&budget, t));
+                max_step,
+                ..
+            } => {
+                let opts = AdaptiveOptions {
+                    rtol,
+                    atol,
+                    blowup: limits.blowup,
+                    max_step: max_step.unwrap_or(f64::INFINITY).min(grid.max_step_cap),
+                    ..AdaptiveOptions::default()
+                };
+                GridMethod::Adaptive(DormandPrince45::new(dim, opts)?)
+            }
+        };
+        Ok(Self {
+            budget: StepBudget::new(integrator.step_budget()),
+            grid,
+            integrator,
+            method,
+            k: 0,
+            t: 0.0,
+        })
+    }
+
+    /// The time reached (s).
+    pub(crate) fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// The integrator's statistics so far.
+    pub(crate) fn stats(&self) -> StepStats {
+        match &self.method {
+            GridMethod::Rk4(rk) => rk.stats,
+            GridMethod::Adaptive(dp) => dp.stats,
+        }
+    }
+
+    /// Integrates `x` over the next segment and returns its end time. `first_stage`, when
+    /// given, is `ode`'s derivative at the segment's start `(t, x)` (computed by the
+    /// caller): RK4 takes it as its first step's first stage ([`Rk4::step_from_derivative`],
+    /// the same step with one evaluation fewer); the adaptive integrator ignores it.
+    ///
+    /// # Errors
+    /// The integrator's errors (blow-up, step-size underflow) and the step budget running
+    /// out ([`budget_exhausted`]).
+    pub(crate) fn advance<O: OdeSystem>(
+        &mut self,
+        ode: &mut O,
+        x: &mut [f64],
+        first_stage: Option<&[f64]>,
+    ) -> Result<f64> {
+        let (k, t0) = (self.k, self.t);
+        let t1 = (self.grid.end)(k);
+        match &mut self.method {
+            GridMethod::Rk4(rk) => {
+                let (h, steps) = self.grid.rk4.expect("RK4 grid without a step");
+                let n = steps(k);
+                if !self.budget.take(n) {
+                    return Err(self.exhausted(t0));
                 }
-                if at_end(ode, k, t1, x)? {
-                    break;
+                for s in 0..n {
+                    let t = t0 + s as f64 * h;
+                    match first_stage {
+                        Some(dx) if s == 0 => rk.step_from_derivative(ode, t, x, dx, h)?,
+                        _ => rk.step(ode, t, x, h)?,
+                    }
                 }
-                if grid.switches {
+            }
+            GridMethod::Adaptive(dp) => {
+                let mut t = t0;
+                if !dp.integrate_to_within(ode, &mut t, x, t1, &mut self.budget)? {
+                    return Err(self.exhausted(t));
+                }
+                if self.grid.switches {
                     dp.invalidate_derivative();
                 }
             }
-            Ok(dp.stats)
         }
+        self.k += 1;
+        self.t = t1;
+        Ok(t1)
+    }
+
+    fn exhausted(&self, t: f64) -> Error {
+        let duration = if self.grid.n == 0 {
+            0.0
+        } else {
+            (self.grid.end)(self.grid.n - 1)
+        };
+        budget_exhausted(
+            self.integrator.method_name(),
+            &self.integrator,
+            &self.budget,
+            t,
+            duration,
+        )
     }
 }
 

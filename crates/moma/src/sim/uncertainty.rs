@@ -18,9 +18,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result, at, chain};
 use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
-use crate::sim::model_mismatch::{
-    ModelPerturbation, NoisyMeasurement, Payload, SensorNoise, standard_normal,
-};
+use crate::sim::model_mismatch::{ModelPerturbation, NoisyMeasurement, Payload};
+use crate::sim::sensor_noise::{SensorNoise, standard_normal};
 
 /// An [`Error::Scenario`] with a formatted message.
 macro_rules! bail {

@@ -190,7 +190,7 @@ pub fn simulate_observed<'a>(
         &mut x,
         options.integrator,
         &options.limits,
-        &grid,
+        grid,
         &mut |ode, _, t1, x| {
             let stop = rec.record(&mut *ode.system, t1, x)?;
             progress(t1);
