@@ -20,8 +20,9 @@
 //!   then, on a copy of the mission's first D* Lite planner, the same `move_start`,
 //!   `set_blocked` of the crate's C-space cells, `compute` and `path` (checked to give the
 //!   mission's re-planned cells and expansion count), the refresh of the distance
-//!   transform, the smoothing and the timing of the new path (checked to give the
-//!   mission's path) are timed separately ([`MissionReplan`]).
+//!   transform, and the smoothing and timing of the new path by the function the mission
+//!   calls ([`planning::curve_timing::time_cells_curved`], checked to give the mission's
+//!   path) are timed separately ([`MissionReplan`]).
 //!
 //! * `moma plan`'s pipeline ([`planning::pipeline::plan`]) against the primitives it
 //!   calls composed by hand (`MOMA_BENCH_PIPELINE_ONLY=1` runs this group alone).
@@ -31,6 +32,7 @@
 
 use criterion::{Criterion, criterion_group};
 use moma::planning::curvature::{SmoothOptions, smooth_diff_drive};
+use moma::planning::curve_timing::{CurvatureTiming, TimedCurve, time_cells_curved};
 use moma::planning::trajectory::{DiffDriveLimits, TipOverAcceleration, time_parameterize_curve};
 use moma::planning::{
     self, AstarWorkspace, MovingAiScenario, OccupancyGrid, SearchGrid, astar_with, costmap,
@@ -812,10 +814,9 @@ struct MissionReplan {
     start: [f64; 3],
     v0: f64,
     goal: [f64; 3],
-    /// `kappa_max`, 2x, 4x: the bounds the mission tries in turn (`mission::reference`).
-    kappas: [f64; 3],
-    limits: DiffDriveLimits,
-    tip: TipOverAcceleration,
+    /// The mission's curvature-limited timing (its limits, tip-over accelerations,
+    /// `kappa_max` and reference sampling period).
+    timing: CurvatureTiming,
     /// What the mission got: re-planned cells, expansions, smoothed path.
     cells: Vec<(usize, usize)>,
     expanded: usize,
@@ -888,21 +889,32 @@ fn mission_replan_case() -> MissionReplan {
         robot: rp.cells[0],
         disk,
         occupied,
-        start: [q[0], q[1], q[2]],
-        v0: rp.v_start,
-        goal: m.goal().unwrap().pose,
-        kappas: [l.kappa_max, 2.0 * l.kappa_max, 4.0 * l.kappa_max],
-        limits: DiffDriveLimits {
-            v_max: l.v_max,
-            omega_max: l.omega_max,
-            a_max: l.a_max,
-            alpha_max: l.alpha_max,
+        // the pose the new path was smoothed from: where the base stood when the crate
+        // appeared, or the stop along the old path when it braked to rest first (then
+        // the new path is timed from rest); d = 0 here, so the axle midpoint is the base
+        start: rp.smoothed_from,
+        v0: if rp.smoothed_from == [q[0], q[1], q[2]] {
+            rp.v_start
+        } else {
+            0.0
         },
-        tip: TipOverAcceleration {
-            forward: l.tip_fraction * tl.forward.unwrap(),
-            backward: l.tip_fraction * tl.backward.unwrap(),
-            left: side(tl.left),
-            right: side(tl.right),
+        goal: m.goal().unwrap().pose,
+        timing: CurvatureTiming {
+            limits: DiffDriveLimits {
+                v_max: l.v_max,
+                omega_max: l.omega_max,
+                a_max: l.a_max,
+                alpha_max: l.alpha_max,
+            },
+            tip: TipOverAcceleration {
+                forward: l.tip_fraction * tl.forward.unwrap(),
+                backward: l.tip_fraction * tl.backward.unwrap(),
+                left: side(tl.left),
+                right: side(tl.right),
+            },
+            kappa_max: l.kappa_max,
+            // the mission's reference sampling period
+            dt: 0.02,
         },
         cells: rp.cells.clone(),
         expanded: rp.search.expanded,
@@ -914,8 +926,15 @@ fn mission_replan_case() -> MissionReplan {
     let cells = mission_replan(&mut p, &case).expect("a path remains");
     assert_eq!(cells, case.cells, "the mission's re-planned cells");
     assert_eq!(p.expanded(), case.expanded, "the mission's expansion count");
-    let sp = mission_smooth(&p, &case, &cells).expect("the mission's smoothing succeeds");
-    assert_eq!(sp.points(), case.path, "the mission's smoothed path");
+    let curve = mission_timing(&p, &case, &cells).expect("the mission's smoothing succeeds");
+    // the recorded path: the stretch braked along the old path (if any), then the new one
+    let new_path = curve.geometry.points();
+    assert!(
+        case.path.ends_with(&new_path),
+        "the mission's smoothed path: {} recorded points, {} re-smoothed",
+        case.path.len(),
+        new_path.len()
+    );
     case
 }
 
@@ -930,38 +949,19 @@ fn mission_replan(p: &mut DStarLite, c: &MissionReplan) -> Option<Vec<(usize, us
     p.path()
 }
 
-/// The mission's smoothing: the goal pose with `kappa_max`, then 2x, then 4x, the first
-/// that succeeds (failed attempts included in its time, as in the mission).
-fn mission_smooth(
+/// The mission's smoothing and timing of the re-planned cells: the pipeline's
+/// curvature-limited timing, the function the mission itself calls (failed smoothing
+/// attempts included in its time, as in the mission).
+fn mission_timing(
     p: &DStarLite,
     c: &MissionReplan,
     cells: &[(usize, usize)],
-) -> Option<planning::curvature::SmoothPath> {
-    c.kappas.iter().find_map(|&k| {
-        smooth_diff_drive(
-            p.grid(),
-            &c.map,
-            cells,
-            c.start,
-            c.goal,
-            &SmoothOptions::new(k),
-        )
-        .ok()
-    })
-}
-
-/// The speed the timing starts from (`mission::reference`: from rest if the new path
-/// begins with a turn in place).
-fn mission_v0(sp: &planning::curvature::SmoothPath, c: &MissionReplan) -> f64 {
-    if sp.pivot() != 0.0 {
-        0.0
-    } else {
-        c.v0.max(0.0)
-    }
+) -> moma::Result<TimedCurve> {
+    time_cells_curved(&c.map, p.grid(), cells, c.start, c.v0, c.goal, &c.timing)
 }
 
 fn mission_table(c: &MissionReplan) {
-    let (mut tr, mut te, mut ts, mut tt) = (vec![], vec![], vec![], vec![]);
+    let (mut tr, mut te, mut ts) = (vec![], vec![], vec![]);
     let mut p = c.planner.clone();
     for _ in 0..21 {
         p.clone_from(&c.planner);
@@ -976,13 +976,8 @@ fn mission_table(c: &MissionReplan) {
         ));
         te.push(t0.elapsed().as_secs_f64());
         let t0 = Instant::now();
-        let sp = mission_smooth(&p, c, &cells).unwrap();
+        black_box(mission_timing(&p, c, &cells).unwrap());
         ts.push(t0.elapsed().as_secs_f64());
-        let t0 = Instant::now();
-        black_box(
-            time_parameterize_curve(&sp, &c.limits, Some(&c.tip), mission_v0(&sp, c), 0.0).unwrap(),
-        );
-        tt.push(t0.elapsed().as_secs_f64());
     }
     println!(
         "\nThe default mission's re-plan (depot, {} x {} cells, crate at t = 5 s: {} C-space cells; medians of 21 runs)",
@@ -991,16 +986,15 @@ fn mission_table(c: &MissionReplan) {
         c.disk.len()
     );
     println!(
-        "| D* Lite (move_start + set_blocked + compute + path) | expansions | distance transform refresh | smoothing | timing |"
+        "| D* Lite (move_start + set_blocked + compute + path) | expansions | distance transform refresh | smoothing and timing |"
     );
-    println!("| --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- |");
     println!(
-        "| {:.3} ms | {} | {:.3} ms | {:.3} ms | {:.3} ms |\n",
+        "| {:.3} ms | {} | {:.3} ms | {:.3} ms |\n",
         median(&mut tr) * 1e3,
         p.expanded(),
         median(&mut te) * 1e3,
-        median(&mut ts) * 1e3,
-        median(&mut tt) * 1e3
+        median(&mut ts) * 1e3
     );
 }
 
@@ -1032,21 +1026,8 @@ fn bench_mission(cr: &mut Criterion, c: &MissionReplan) {
     });
     p.clone_from(&c.planner);
     let cells = mission_replan(&mut p, c).unwrap();
-    grp.bench_function("depot_mission/smooth", |b| {
-        b.iter(|| black_box(mission_smooth(&p, c, &cells)))
-    });
-    let sp = mission_smooth(&p, c, &cells).unwrap();
-    let v0 = mission_v0(&sp, c);
-    grp.bench_function("depot_mission/time", |b| {
-        b.iter(|| {
-            black_box(time_parameterize_curve(
-                &sp,
-                &c.limits,
-                Some(&c.tip),
-                v0,
-                0.0,
-            ))
-        })
+    grp.bench_function("depot_mission/smooth_and_time", |b| {
+        b.iter(|| black_box(mission_timing(&p, c, &cells)))
     });
     grp.finish();
 }

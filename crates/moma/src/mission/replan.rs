@@ -35,8 +35,8 @@ struct StopAndGo {
     reference: Reference,
     /// Smoothing and timing wall time of the new path (s).
     smoothing_s: f64,
-    /// Mission time of the stop (s).
-    t_stop: f64,
+    /// The stop: its mission time and the axle-midpoint pose the new path starts from.
+    stop: TimingStart,
 }
 
 /// Length of a polyline (m).
@@ -62,6 +62,7 @@ impl Runner<'_> {
                     p.reference,
                     start.t0,
                     start.v,
+                    start.pose,
                     trigger,
                     search,
                     p.smoothing_s,
@@ -221,8 +222,9 @@ impl Runner<'_> {
         Some(r.map(|r| (r, st)))
     }
 
-    /// Makes `r` (timed from `t0` at speed `v_start`, from `cells`) the reference to
-    /// track and records it as a plan.
+    /// Makes `r` (timed from `t0` at speed `v_start`, from `cells`, its path smoothed from
+    /// the axle-midpoint pose `smoothed_from`) the reference to track and records it as a
+    /// plan.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn adopt(
         &mut self,
@@ -230,6 +232,7 @@ impl Runner<'_> {
         r: Reference,
         t0: f64,
         v_start: f64,
+        smoothed_from: [f64; 3],
         trigger: &str,
         search: SearchTiming,
         smoothing_timing_s: f64,
@@ -256,6 +259,7 @@ impl Runner<'_> {
             search,
             smoothing_timing_s,
             v_start,
+            smoothed_from,
         });
         self.reference = Some(r);
     }
@@ -398,7 +402,7 @@ impl Runner<'_> {
                     _ => None,
                 };
                 match brake {
-                    Some(b) => (b.cells, b.reference, st_s + b.smoothing_s, Some(b.t_stop)),
+                    Some(b) => (b.cells, b.reference, st_s + b.smoothing_s, Some(b.stop)),
                     None => (cells, r, st_s, None),
                 }
             }
@@ -412,13 +416,14 @@ impl Runner<'_> {
                 return;
             }
         };
-        self.adopt(cells, r, t, v, &trigger, timing, st_s);
+        let smoothed_from = stop.map_or(start.pose, |s| s.pose);
+        self.adopt(cells, r, t, v, smoothed_from, &trigger, timing, st_s);
         let p = self.plans.last().expect("just pushed");
         let stop_text = stop.map_or(String::new(), |ts| {
             format!(
                 "; the new path does not admit {v:.2} m/s at its start, so the base brakes \
                  to rest along the old path first ({:.2} s)",
-                ts - t
+                ts.t0 - t
             )
         });
         let text = format!(
@@ -503,7 +508,7 @@ impl Runner<'_> {
             cells,
             reference: r,
             smoothing_s: st,
-            t_stop: stop.t,
+            stop: from_stop,
         })
     }
 }

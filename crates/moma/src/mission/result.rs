@@ -27,6 +27,9 @@ pub struct PlanRecord {
     pub smoothing_timing_s: f64,
     /// Forward speed the timing started from (m/s).
     pub v_start: f64,
+    /// The driven-axle midpoint's pose `[x, y, θ]` the path was smoothed from: where the
+    /// base stood, or the stop along the old path when a re-plan brakes to rest first.
+    pub smoothed_from: [f64; 3],
 }
 
 /// Something that happened during the run.
