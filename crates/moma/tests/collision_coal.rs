@@ -4,29 +4,19 @@
 //! pairs and the in-collision verdicts exactly.
 
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, compute_collision,
-    compute_distances, update_geometry_placements,
+    GeometryData, GeometryModel, PairSelection, compute_collision, compute_distances,
+    update_geometry_placements,
 };
 use moma::kinematics::forward_kinematics;
 use moma::multibody::{Data, Model, RootJoint};
 use nalgebra::DVector;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
 
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
+mod fetch_common;
+use fetch_common::{data_dir, fetch_geometry};
 
-pub fn fetch() -> (Model, GeometryModel) {
-    let dir = data_dir().join("robots/fetch");
-    let urdf = dir.join("fetch_description/robots/fetch.urdf");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
-    let opts = GeometryOptions {
-        package_dirs: vec![dir.clone()],
-        srdf: Some(dir.join("fetch.srdf")),
-    };
-    let gm = GeometryModel::from_urdf(&model, &urdf, &opts).unwrap();
-    (model, gm)
+fn fetch() -> (Model, GeometryModel) {
+    fetch_geometry(RootJoint::Fixed)
 }
 
 fn q_of(model: &Model, state: &Value) -> DVector<f64> {

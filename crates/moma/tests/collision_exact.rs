@@ -9,30 +9,21 @@
 //! milliseconds.)
 
 use moma::collision::{
-    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairSelection,
-    SceneData, SceneOptions, compute_exact_distances, compute_exact_scene_distances,
-    compute_scene_distances, read_scene, update_geometry_placements,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, PairSelection, SceneData, SceneOptions,
+    compute_exact_distances, compute_exact_scene_distances, compute_scene_distances, read_scene,
+    update_geometry_placements,
 };
 use moma::kinematics::forward_kinematics;
 use moma::multibody::{Data, Model, RootJoint};
 use nalgebra::{DVector, Rotation3, UnitQuaternion};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
 
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
+mod fetch_common;
+use fetch_common::{data_dir, fetch_geometry};
 
 /// Fetch on a fixed base, its geometry with the SRDF, and its exact shapes.
 fn fetch() -> (Model, GeometryModel, ExactGeometry) {
-    let dir = data_dir().join("robots/fetch");
-    let urdf = dir.join("fetch_description/robots/fetch.urdf");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
-    let opts = GeometryOptions {
-        package_dirs: vec![dir.clone()],
-        srdf: Some(dir.join("fetch.srdf")),
-    };
-    let gm = GeometryModel::from_urdf(&model, &urdf, &opts).unwrap();
+    let (model, gm) = fetch_geometry(RootJoint::Fixed);
     let ex = ExactGeometry::new(&gm).unwrap();
     (model, gm, ex)
 }

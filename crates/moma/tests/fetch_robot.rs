@@ -3,30 +3,17 @@
 //! casters from the shipped casters file, the torso lift and the seven arm joints with
 //! their URDF limits, and the wheeled model they make.
 
-use moma::collision::{GeometryModel, GeometryOptions};
+use moma::collision::GeometryModel;
 use moma::mobile::{WheeledModel, read_casters, wheeled_base_from_urdf};
 use moma::multibody::{Model, RootJoint};
 use moma::stability::SupportPolygon;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn fetch_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/robots/fetch")
-}
+mod fetch_common;
+use fetch_common::{fetch_dir, fetch_geometry};
 
 fn fetch() -> (Model, GeometryModel) {
-    let dir = fetch_dir();
-    let urdf = dir.join("fetch_description/robots/fetch.urdf");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Planar).unwrap();
-    let gm = GeometryModel::from_urdf(
-        &model,
-        &urdf,
-        &GeometryOptions {
-            package_dirs: vec![dir.clone()],
-            srdf: Some(dir.join("fetch.srdf")),
-        },
-    )
-    .unwrap();
-    (model, gm)
+    fetch_geometry(RootJoint::Planar)
 }
 
 /// The largest distance of the wheel collision mesh's vertices from the wheel axle (the

@@ -5,33 +5,19 @@
 //! its goal (which end between the cage's bars and the shelf boards), a state passes
 //! exactly when its closest pair is farther apart than the margin.
 
-use moma::collision::{GeometryModel, GeometryOptions, Scene, SceneOptions, read_scene};
+use moma::collision::{GeometryModel, Scene, SceneOptions, read_scene};
 use moma::motion::{ClearanceChecker, JointGroup};
 use moma::multibody::{Model, RootJoint};
 use moma::planning::StateValidity;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
 
-fn data() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
+mod fetch_common;
+use fetch_common::{data_dir as data, fetch_geometry};
 
 fn fetch() -> (Model, GeometryModel) {
-    let dir = data().join("robots/fetch");
-    let urdf = dir.join("fetch_description/robots/fetch.urdf");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
-    let gm = GeometryModel::from_urdf(
-        &model,
-        &urdf,
-        &GeometryOptions {
-            package_dirs: vec![dir.clone()],
-            srdf: Some(dir.join("fetch.srdf")),
-        },
-    )
-    .unwrap();
-    (model, gm)
+    fetch_geometry(RootJoint::Fixed)
 }
 
 fn numbers(v: &Value) -> Vec<f64> {

@@ -5,8 +5,8 @@
 //! and does not depend on the thread count, and an unreachable grasp says why.
 
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneOptions,
-    compute_distances, compute_scene_distances, read_scene, update_geometry_placements,
+    GeometryData, GeometryModel, PairSelection, Scene, SceneData, SceneOptions, compute_distances,
+    compute_scene_distances, read_scene, update_geometry_placements,
 };
 use moma::kinematics::{forward_kinematics, update_frame_placements};
 use moma::mobile::{read_casters, wheeled_base_from_urdf};
@@ -21,7 +21,7 @@ use moma::stability::{
     SupportPolygon, evaluate,
 };
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const GROUP: [&str; 8] = [
     "torso_lift_joint",
@@ -34,9 +34,8 @@ const GROUP: [&str; 8] = [
     "wrist_roll_joint",
 ];
 
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
+mod fetch_common;
+use fetch_common::{data_dir, fetch_dir, fetch_geometry};
 
 struct Fetch {
     model: Model,
@@ -46,19 +45,8 @@ struct Fetch {
 }
 
 fn fetch() -> Fetch {
-    let dir = data_dir().join("robots/fetch");
-    let urdf = dir.join("fetch_description/robots/fetch.urdf");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Planar).unwrap();
-    let gm = GeometryModel::from_urdf(
-        &model,
-        &urdf,
-        &GeometryOptions {
-            package_dirs: vec![dir.clone()],
-            srdf: Some(dir.join("fetch.srdf")),
-        },
-    )
-    .unwrap();
-    let casters = read_casters(&dir.join("casters.toml")).unwrap();
+    let (model, gm) = fetch_geometry(RootJoint::Planar);
+    let casters = read_casters(&fetch_dir().join("casters.toml")).unwrap();
     let base =
         wheeled_base_from_urdf(&model, &gm, ["l_wheel_joint", "r_wheel_joint"], casters).unwrap();
     let support = SupportPolygon::from_wheeled_base(&base).unwrap();

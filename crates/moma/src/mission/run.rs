@@ -727,3 +727,74 @@ impl LoopState {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::mission::plan::first_plan_request;
+    use crate::mission::reference::axle_pose;
+    use crate::planning::pipeline::{self, PlanFields};
+
+    /// The pipeline's curvature-limited timing of the mission's first plan is the
+    /// reference the mission tracks first (`mission.toml`: its recorded path and
+    /// duration); the timing needs the start heading.
+    #[test]
+    fn curvature_timing_is_the_missions_first_reference() {
+        use crate::planning::curve_timing::CurvatureTiming;
+        use crate::planning::pipeline::Timing;
+        use crate::planning::trajectory::DiffDriveLimits;
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/mission.toml");
+        let m = crate::mission::load(&path).unwrap();
+        let run = crate::mission::run(&m).unwrap();
+        let first = &run.plans[0];
+        let (f, d) = (&m.file, m.robot.base.drive.d);
+        let (s0, g0) = (
+            axle_pose(f.start.pose, d),
+            axle_pose(m.goal().unwrap().pose, d),
+        );
+        let tip = super::super::tip_over::timing_acceleration(
+            &super::super::tip_over::transport_tip_limits(&m).unwrap(),
+            f.limits.tip_fraction,
+        )
+        .unwrap();
+        let l = &f.limits;
+        let fields = PlanFields {
+            start: "start.pose",
+            goal: "goal.pose",
+            radius: "robot.footprint_radius",
+        };
+        let mut req = first_plan_request(
+            f.map.unknown_is_obstacle,
+            fields,
+            m.footprint.radius,
+            d,
+            [s0[0], s0[1]],
+            [g0[0], g0[1]],
+        );
+        req.start_yaw = Some(s0[2]);
+        req.timing = Some(Timing::Curvature {
+            timing: CurvatureTiming {
+                limits: DiffDriveLimits {
+                    v_max: l.v_max,
+                    omega_max: l.omega_max,
+                    a_max: l.a_max,
+                    alpha_max: l.alpha_max,
+                },
+                tip,
+                kappa_max: l.kappa_max,
+                dt: 0.02,
+            },
+            goal_yaw: g0[2],
+        });
+        let plan = pipeline::plan(&m.map.grid, &req).unwrap();
+        assert_eq!(plan.cells, first.cells);
+        let curve = plan.curve.clone().unwrap();
+        assert_eq!(plan.trajectory.len(), curve.samples.len());
+        let reference = super::super::reference::reference_of_curve(curve, first.t, d);
+        assert_eq!(reference.path, first.path);
+        assert_eq!(reference.t_end() - first.t, first.duration);
+        req.start_yaw = None;
+        let e = pipeline::plan(&m.map.grid, &req).unwrap_err().to_string();
+        assert!(e.contains("timing") && e.contains("start heading"), "{e}");
+    }
+}
