@@ -328,37 +328,13 @@ mod tests {
         }
     }
 
-    #[test]
-    fn solve_by_rows_matches_the_dense_solve() {
+    /// Solves `H Y = B` for `B` of `m` columns by rows (the tree factorisation) and
+    /// checks `Y` against a dense LU solve.
+    fn check_rows_solve(m: usize, b_entry: impl Fn(usize, usize) -> f64) {
         let (l, d) = factors();
         let n = d.len();
         let h = l.transpose() * DMatrix::from_diagonal(&d.into()) * &l;
-        let m = 3;
-        let b = DMatrix::from_fn(n, m, |r, c| ((r * m + c) as f64).cos());
-        let want = h.clone().lu().solve(&b).unwrap();
-        let mut f = h;
-        ltdl_in_place(&mut f, &PARENT).unwrap();
-        let mut rows: Vec<f64> = (0..n)
-            .flat_map(|r| (0..m).map(move |c| (r, c)))
-            .map(|(r, c)| b[(r, c)])
-            .collect();
-        ltdl_solve_rows(&f, &PARENT, &mut rows, m, Rhs::Dense);
-        for r in 0..n {
-            for c in 0..m {
-                assert!((rows[r * m + c] - want[(r, c)]).abs() < 1e-12);
-            }
-        }
-    }
-
-    #[test]
-    fn wide_right_hand_sides_match_the_dense_solve() {
-        // 45 columns: the downward gather's register blocks of 32 and 8 and the last 8
-        // columns overlapping them take part (3 columns, above, take single columns)
-        let (l, d) = factors();
-        let n = d.len();
-        let h = l.transpose() * DMatrix::from_diagonal(&d.into()) * &l;
-        let m = 45;
-        let b = DMatrix::from_fn(n, m, |r, c| ((r * m + c) as f64 * 0.7).sin() + 0.2);
+        let b = DMatrix::from_fn(n, m, b_entry);
         let want = h.clone().lu().solve(&b).unwrap();
         let mut f = h;
         ltdl_in_place(&mut f, &PARENT).unwrap();
@@ -372,6 +348,18 @@ mod tests {
                 assert!((rows[r * m + c] - want[(r, c)]).abs() < 1e-12, "Y {r} {c}");
             }
         }
+    }
+
+    #[test]
+    fn solve_by_rows_matches_the_dense_solve() {
+        check_rows_solve(3, |r, c| ((r * 3 + c) as f64).cos());
+    }
+
+    #[test]
+    fn wide_right_hand_sides_match_the_dense_solve() {
+        // 45 columns: the downward gather's register blocks of 32 and 8 and the last 8
+        // columns overlapping them take part (3 columns, above, take single columns)
+        check_rows_solve(45, |r, c| ((r * 45 + c) as f64 * 0.7).sin() + 0.2);
     }
 
     #[test]
