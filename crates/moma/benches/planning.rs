@@ -900,12 +900,7 @@ fn mission_replan_case() -> MissionReplan {
         },
         goal: m.goal().unwrap().pose,
         timing: CurvatureTiming {
-            limits: DiffDriveLimits {
-                v_max: l.v_max,
-                omega_max: l.omega_max,
-                a_max: l.a_max,
-                alpha_max: l.alpha_max,
-            },
+            limits: l.platform(),
             tip: TipOverAcceleration {
                 forward: l.tip_fraction * tl.forward.unwrap(),
                 backward: l.tip_fraction * tl.backward.unwrap(),

@@ -158,12 +158,7 @@ impl<'m> Runner<'m> {
         let planning_s = clock.elapsed().as_secs_f64();
         let tip = transport_tip_limits(m)?;
         let l = &f.limits;
-        let limits = DiffDriveLimits {
-            v_max: l.v_max,
-            omega_max: l.omega_max,
-            a_max: l.a_max,
-            alpha_max: l.alpha_max,
-        };
+        let limits = l.platform();
         let timing_accel = timing_acceleration(&tip, l.tip_fraction);
         let whole_body = m.mpc.as_ref().map(|(mpc, every)| {
             WholeBodyLaw::new(
@@ -741,7 +736,6 @@ mod tests {
     fn curvature_timing_is_the_missions_first_reference() {
         use crate::planning::curve_timing::CurvatureTiming;
         use crate::planning::pipeline::Timing;
-        use crate::planning::trajectory::DiffDriveLimits;
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/mission.toml");
         let m = crate::mission::load(&path).unwrap();
@@ -774,12 +768,7 @@ mod tests {
         req.start_yaw = Some(s0[2]);
         req.timing = Some(Timing::Curvature {
             timing: CurvatureTiming {
-                limits: DiffDriveLimits {
-                    v_max: l.v_max,
-                    omega_max: l.omega_max,
-                    a_max: l.a_max,
-                    alpha_max: l.alpha_max,
-                },
+                limits: l.platform(),
                 tip,
                 kappa_max: l.kappa_max,
                 dt: 0.02,

@@ -13,6 +13,7 @@ use super::task::TaskSpec;
 use crate::contact::{ContactSpec, PlantKind};
 use crate::error::{Error, Result};
 use crate::mobile::Caster;
+use crate::planning::trajectory::DiffDriveLimits;
 use crate::sim::mpc_table::MpcSpec;
 use crate::sim::uncertainty::UncertaintySpec;
 
@@ -287,6 +288,19 @@ pub struct LimitsSpec {
     /// Fraction of the tip-over acceleration limits the timing may use (default 0.8).
     #[serde(default = "default_tip_fraction")]
     pub tip_fraction: f64,
+}
+
+impl LimitsSpec {
+    /// The platform limits the timing and the law hold the base to.
+    #[must_use]
+    pub fn platform(&self) -> DiffDriveLimits {
+        DiffDriveLimits {
+            v_max: self.v_max,
+            omega_max: self.omega_max,
+            a_max: self.a_max,
+            alpha_max: self.alpha_max,
+        }
+    }
 }
 
 /// `[[obstacles]]`: a disk that appears at time `t`.
