@@ -60,10 +60,11 @@ def model_xml():
         return f.read()
 
 
-def replay(sc, xml=None):
+def replay(sc, xml=None, probe=None):
     """Replays scenario `sc` on the model `xml` (default bench/mujoco_contact.xml). Each
     record carries per contact (left wheel, right wheel, caster) the normal force and the
-    magnitude of the tangential force, from mj_contactForce."""
+    magnitude of the tangential force, from mj_contactForce. `probe(m, d)`, if given, is
+    called after every step."""
     m = mujoco.MjModel.from_xml_string(xml if xml is not None else model_xml())
     d = mujoco.MjData(m)
     mu = sc["mu"]
@@ -130,6 +131,8 @@ def replay(sc, xml=None):
             d.ctrl[0:2] = w
             d.ctrl[2:5] = kp * (arm_ref - d.qpos[9:12]) - kd * d.qvel[8:11]
             mujoco.mj_step(m, d)
+            if probe:
+                probe(m, d)
     return {"records": records, "first_lift": first_lift, "first_slip": first_slip,
             "first_unloaded": first_unloaded}
 

@@ -10,6 +10,12 @@ time, and prints one row per setting:
   spin   the first time a contact's normal force is zero (a wheel, bouncing), and the first
          slip.
 
+Then, to show where MuJoCo's wheel normal force departs from a spring's, the left wheel's
+contact at a few instants: penetration delta (from the normal row's efc_pos), N and T
+(mj_contactForce), the slip speed (the friction rows' efc_vel), and k delta + c delta_dot
+(delta_dot from the normal row's efc_vel) with moma's default k and c: in `brake` on the
+shipped model and on the penalty setting, and in `spin` on the shipped model. --probes-only prints only these.
+
 Settings: the shipped model; the pyramidal cone; impratio 10 and 100; 10 noslip iterations;
 condim 4 (torsional friction 0.01) and 6 (and rolling friction 0.001) on the wheels;
 cylinder wheels; solref time constants 0.02 s and 0.05 s; constraint impedance 0.5 and 0.1
@@ -22,10 +28,12 @@ Usage: python bench/mujoco_contact_settings.py DIR
 
 import argparse
 import json
+import math
 import os
 import re
 
 import mujoco
+import numpy as np
 
 from mujoco_contact_compare import model_xml, replay
 
@@ -88,6 +96,29 @@ SETTINGS = [
 ]
 
 
+def wheel_rows(times, stiffness=1e5, damping=2e3):
+    """A probe for replay() printing the left wheel's contact at the given times."""
+    force = np.zeros(6)
+
+    def probe(m, d):
+        if not any(abs(d.time - t) < 5e-5 for t in times):
+            return
+        g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "left_wheel")
+        for i in range(d.ncon):
+            c = d.contact[i]
+            if g in (c.geom1, c.geom2):
+                a = c.efc_address
+                mujoco.mj_contactForce(m, d, i, force)
+                depth, rate = -d.efc_pos[a], -d.efc_vel[a]
+                slip = math.hypot(d.efc_vel[a + 1], d.efc_vel[a + 2])
+                print(f"  t = {d.time:.4f} s: penetration {depth * 1e3:.3f} mm, N {force[0]:.1f} N, "
+                      f"T {math.hypot(force[1], force[2]):.1f} N, slip {slip:.3f} m/s, "
+                      f"k delta + c delta_dot {stiffness * depth + damping * rate:.1f} N")
+                return
+        print(f"  t = {d.time:.4f} s: no contact")
+    return probe
+
+
 def at(records, t, key, j):
     return next(r[key][j] for r in records if abs(r["t"] - t) < 1e-6)
 
@@ -99,11 +130,19 @@ def event(e):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("dir")
+    ap.add_argument("--probes-only", action="store_true")
     a = ap.parse_args()
     scen = {}
     for name in ("brake", "spin"):
         with open(os.path.join(a.dir, f"contact_{name}.json")) as f:
             scen[name] = json.load(f)
+    if not a.probes_only:
+        table(scen)
+    probes(scen)
+
+
+def table(scen):
+    """The table of settings (one row each, as the module says)."""
     b = scen["brake"]
     mo = b["records"]
     print(f"MuJoCo {mujoco.__version__}; moma (stiffness {b['params']['stiffness']:g} N/m, "
@@ -125,6 +164,15 @@ def main():
         print(f'| {label} | {event(br["first_slip"])} | {event(br["first_lift"])} '
               f'| {event(br["first_unloaded"])} | {nt[0]} N | {nt[1]} N '
               f'| {event(sp["first_unloaded"])} | {event(sp["first_slip"])} |', flush=True)
+
+
+def probes(scen):
+    print("brake, shipped model, left wheel:")
+    replay(scen["brake"], model_xml(), wheel_rows([1.2999, 1.3001, 1.3002, 1.3005, 1.301]))
+    print("brake, penalty setting, left wheel:")
+    replay(scen["brake"], penalty()(model_xml()), wheel_rows([1.2999, 1.3005, 1.301, 1.31]))
+    print("spin, shipped model, left wheel:")
+    replay(scen["spin"], model_xml(), wheel_rows([0.955, 1.0, 1.05, 1.055, 1.06, 1.11, 1.4953]))
 
 
 if __name__ == "__main__":

@@ -21,9 +21,9 @@
 //! torques are linear between the schedule's knots.
 //!
 //! The contact is stiff ([`STIFFNESS`], [`DAMPING`]; the other parameters moma's
-//! defaults): MuJoCo's soft-constraint contact moves the load between the contacts within a
-//! step when the torques change, as a rigid contact does, and a penalty contact does so
-//! within a few steps only when it is this stiff (at the default 1e5 N/m the caster needs
+//! defaults): MuJoCo's soft-constraint contact moves the load between the contacts in one
+//! step when the torques jump, as a rigid contact does, and a penalty contact does so
+//! within about 1 ms only when it is this stiff (at the default 1e5 N/m the caster needs
 //! 13 ms to unload under the brake, and the wheels slide meanwhile; BENCHMARKS.md,
 //! "Contact plant").
 //!

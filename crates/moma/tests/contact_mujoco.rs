@@ -14,8 +14,8 @@ const KP: f64 = 200.0;
 const KD: f64 = 20.0;
 const SETTLE: f64 = 0.2;
 /// The comparison's contact stiffness (N/m) and damping (N·s/m), the `contact_rollout`
-/// example's: MuJoCo's constraint moves the load between the contacts within a step, a
-/// penalty contact within a few steps only this stiff.
+/// example's: MuJoCo's constraint moves the load between the contacts in one step when the
+/// torques jump, a penalty contact within about 1 ms only this stiff.
 const STIFFNESS: f64 = 1e7;
 const DAMPING: f64 = 2e4;
 
@@ -187,11 +187,11 @@ fn the_caster_lifts_and_the_wheels_slide_under_a_hard_brake_when_mujoco_says() {
 #[test]
 fn at_the_default_stiffness_the_wheels_slide_as_the_brake_starts() {
     // The penalty contact of moma's default stiffness moves the load onto the wheels only
-    // as the base pitches (the caster unloads in 13 ms), so until then each wheel carries
-    // 43 N against a brake that needs 150 N of friction: Coulomb lets it slide at once. The
-    // comparison's stiff contact (and MuJoCo) move the load within a step or two, and
-    // the wheels hold until the robot, tipping back, has unloaded them (1.71 s, pitched
-    // 0.52 rad).
+    // as the base pitches (the caster unloads in 13 ms): when the brake starts each wheel
+    // carries 43 N against a brake that needs 150 N of friction, and Coulomb lets it slide
+    // at once. The comparison's stiff contact moves the load within about 1 ms (MuJoCo's
+    // in one step), and the wheels hold until the robot, tipping back, has unloaded them
+    // (1.71 s, pitched 0.52 rad).
     let defaults = ContactParams::default();
     let (_, slip) = brake_events(plant(1.0, defaults.stiffness, defaults.damping));
     let s = slip.expect("the wheels should slide");
