@@ -9,7 +9,8 @@ qdot from MuJoCo's own state, every step), and prints the differences:
   roll   largest base position (m), yaw (rad) and wheel-speed (rad/s) difference over the
          run, sampled every 10 ms;
   brake  the time the first contact lifts off (its lowest point 1 mm above the ground) after
-         the settling time, and the time its normal force first reaches zero;
+         the settling time, the time its normal force first reaches zero, and the time a
+         loaded wheel's contact point first slides at 0.2 m/s;
   spin   the time a loaded wheel's contact point first slides at 0.2 m/s (the same
          threshold on both; four times the regularisation velocity of moma's friction).
 
@@ -53,8 +54,18 @@ def yaw_pitch(quat_wxyz):
     return yaw, pitch
 
 
-def replay(sc):
-    m = mujoco.MjModel.from_xml_path(os.path.join(HERE, "mujoco_contact.xml"))
+def model_xml():
+    """The text of bench/mujoco_contact.xml (bench/mujoco_contact_settings.py varies it)."""
+    with open(os.path.join(HERE, "mujoco_contact.xml")) as f:
+        return f.read()
+
+
+def replay(sc, xml=None, probe=None):
+    """Replays scenario `sc` on the model `xml` (default bench/mujoco_contact.xml). Each
+    record carries per contact (left wheel, right wheel, caster) the normal force and the
+    magnitude of the tangential force, from mj_contactForce. `probe(m, d)`, if given, is
+    called after every step."""
+    m = mujoco.MjModel.from_xml_string(xml if xml is not None else model_xml())
     d = mujoco.MjData(m)
     mu = sc["mu"]
     for g in ("floor", "left_wheel", "right_wheel"):
@@ -82,12 +93,14 @@ def replay(sc):
         t = d.time
         if k > 0:
             normal = [0.0, 0.0, 0.0]
+            tangential = [0.0, 0.0, 0.0]
             for i in range(d.ncon):
                 c = d.contact[i]
                 for j, g in enumerate(geoms):
                     if c.geom1 == g or c.geom2 == g:
                         mujoco.mj_contactForce(m, d, i, force)
                         normal[j] += force[0]
+                        tangential[j] += math.hypot(force[1], force[2])
             slip = []
             for b in wheel_bodies:
                 mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
@@ -111,13 +124,15 @@ def replay(sc):
                     "yaw": yaw, "pitch": pitch,
                     "wheel_speeds": [float(d.qvel[6]), float(d.qvel[7])],
                     "arm_q": [float(x) for x in d.qpos[9:12]],
-                    "normal": normal, "slip_speed": slip,
+                    "normal": normal, "tangential": tangential, "slip_speed": slip,
                 })
         if k < nsteps:
             w = wheel_torques(sc["wheel_knots"], t)
             d.ctrl[0:2] = w
             d.ctrl[2:5] = kp * (arm_ref - d.qpos[9:12]) - kd * d.qvel[8:11]
             mujoco.mj_step(m, d)
+            if probe:
+                probe(m, d)
     return {"records": records, "first_lift": first_lift, "first_slip": first_slip,
             "first_unloaded": first_unloaded}
 
@@ -187,6 +202,7 @@ def main():
             ]
         if name == "brake":
             ref["brake_first_lift"] = mj["first_lift"]
+            ref["brake_first_slip"] = mj["first_slip"]
         if name == "spin":
             ref["spin_first_slip"] = mj["first_slip"]
         out[name] = res

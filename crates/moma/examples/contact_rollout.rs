@@ -20,8 +20,16 @@
 //! Every arm joint follows `u = k_p (q_ref − q) − k_d q̇` with the scenario's gains; wheel
 //! torques are linear between the schedule's knots.
 //!
-//! Usage: `cargo run --release --example contact_rollout -- OUT_DIR` (writes
-//! `OUT_DIR/contact_<scenario>.json`).
+//! The contact is stiff ([`STIFFNESS`], [`DAMPING`]; the other parameters moma's
+//! defaults): MuJoCo's soft-constraint contact moves the load between the contacts in one
+//! step when the torques jump, as a rigid contact does, and a penalty contact does so
+//! within about 1 ms only when it is this stiff (at the default 1e5 N/m the caster needs
+//! 13 ms to unload under the brake, and the wheels slide meanwhile; BENCHMARKS.md,
+//! "Contact plant").
+//!
+//! Usage: `cargo run --release --example contact_rollout -- OUT_DIR [STIFFNESS DAMPING]`
+//! (writes `OUT_DIR/contact_<scenario>.json`; `STIFFNESS` (N/m) and `DAMPING` (N·s/m)
+//! replace the comparison's contact stiffness and damping).
 
 use std::path::PathBuf;
 
@@ -48,6 +56,11 @@ const LIFT_HEIGHT: f64 = 1e-3;
 /// Slip onset: a wheel's contact point sliding this fast (m/s).
 const SLIP_SPEED: f64 = 0.2;
 const RECORD_EVERY: f64 = 0.01;
+/// Normal stiffness (N/m) of the comparison with MuJoCo.
+const STIFFNESS: f64 = 1e7;
+/// Normal damping (N·s/m) of the comparison with MuJoCo: the default 2e3 scaled with
+/// `√k`, keeping the contact's damping ratio.
+const DAMPING: f64 = 2e4;
 
 const SCENARIOS: &[Scenario] = &[
     Scenario {
@@ -103,7 +116,13 @@ fn wheel_torques(knots: &[[f64; 3]], t: f64) -> [f64; 2] {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out_dir = PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| "out".into()));
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let out_dir = PathBuf::from(args.first().map_or("out", String::as_str));
+    let (stiffness, damping) = match &args[1.min(args.len())..] {
+        [] => (STIFFNESS, DAMPING),
+        [k, c] => (k.parse::<f64>()?, c.parse::<f64>()?),
+        _ => return Err("usage: contact_rollout OUT_DIR [STIFFNESS DAMPING]".into()),
+    };
     std::fs::create_dir_all(&out_dir)?;
     let urdf =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/robots/diffdrive_arm.urdf");
@@ -111,6 +130,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let model = model_from_urdf_file(&urdf, RootJoint::FreeFlyer)?;
         let params = ContactParams {
             mu: sc.mu,
+            stiffness,
+            damping,
             ..ContactParams::default()
         };
         let wheels = [
