@@ -25,6 +25,14 @@ fn the_pass_by_mission_reaches_on_the_move_and_reports_the_solves() {
     let (p50, p99) = (t["median"].as_f64().unwrap(), t["p99"].as_f64().unwrap());
     assert!(0.0 < p50 && p50 <= p99, "{t}");
     assert!(m["iterations"]["max"].as_u64().unwrap() <= 4, "{m}");
+    // Rollouts per solve: at most six line-search steps in each of the four iterations.
+    let r = &m["rollouts"];
+    let (r50, r99, rmax) = (
+        r["median"].as_u64().unwrap(),
+        r["p99"].as_u64().unwrap(),
+        r["max"].as_u64().unwrap(),
+    );
+    assert!(r50 <= r99 && r99 <= rmax && rmax <= 24, "{r}");
     assert!(m["max_planned_violation"]["torque"].as_f64().unwrap() >= 0.0);
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     assert!(csv.contains("whole_body"));

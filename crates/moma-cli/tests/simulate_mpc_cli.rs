@@ -32,6 +32,18 @@ fn the_reach_on_the_move_scenario_reports_its_solves() {
     let it = &m["iterations"];
     assert!(f(&it["mean"]) >= 1.0 && f(&it["mean"]) <= 4.0, "{it}");
     assert!(it["max"].as_u64().unwrap() <= 4, "{it}");
+    assert!(
+        it["median"].as_u64().unwrap() <= it["p99"].as_u64().unwrap(),
+        "{it}"
+    );
+    // Rollouts per solve: at most six line-search steps in each of the four iterations.
+    let r = &m["rollouts"];
+    let (r50, r99, rmax) = (
+        r["median"].as_u64().unwrap(),
+        r["p99"].as_u64().unwrap(),
+        r["max"].as_u64().unwrap(),
+    );
+    assert!(1 <= r50 && r50 <= r99 && r99 <= rmax && rmax <= 24, "{r}");
     let v = &m["max_planned_violation"];
     for kind in [
         "torque",

@@ -1,9 +1,9 @@
 //! What the whole-body MPC did in closed loop: one [`MpcSample`] per control period (the
 //! solve report, the torques applied and what they did on the MPC's model of the robot:
 //! ZMP margin, clearance, torque beyond the limits before clipping, end-effector error)
-//! and the run's [`MpcRunSummary`] (solve-time percentiles, iterations, the largest
-//! planned violations and the closed loop's extremes), which serialises as the `mpc`
-//! object of a run's report.
+//! and the run's [`MpcRunSummary`] (solve-time percentiles, iterations and line-search
+//! rollouts per solve, the largest planned violations and the closed loop's extremes),
+//! which serialises as the `mpc` object of a run's report.
 
 use nalgebra::DVector;
 
@@ -43,7 +43,10 @@ pub struct MpcRunSummary {
     /// Solve time percentiles (s).
     pub solve_time_s: SolveTimes,
     /// Iterations per solve.
-    pub iterations: IterationCounts,
+    pub iterations: CountsPerSolve,
+    /// Line-search rollouts per solve (the work of a solve that does not depend on the
+    /// machine's load, with the iterations).
+    pub rollouts: CountsPerSolve,
     /// Largest violation per kind over every planned horizon.
     #[serde(
         rename = "max_planned_violation",
@@ -83,13 +86,32 @@ pub struct SolveTimes {
     pub max: f64,
 }
 
-/// Iterations per solve, in [`MpcRunSummary`].
+/// The distribution of a count per solve (iterations, rollouts), in [`MpcRunSummary`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct IterationCounts {
+pub struct CountsPerSolve {
     /// Mean.
     pub mean: f64,
+    /// 50th percentile (nearest rank).
+    pub median: usize,
+    /// 99th percentile (nearest rank).
+    pub p99: usize,
     /// Largest.
     pub max: usize,
+}
+
+impl CountsPerSolve {
+    /// Of one count per solve (all zero for no solves).
+    #[must_use]
+    pub fn of(counts: impl Iterator<Item = usize>) -> Self {
+        let mut sorted: Vec<usize> = counts.collect();
+        sorted.sort_unstable();
+        Self {
+            mean: sorted.iter().sum::<usize>() as f64 / sorted.len().max(1) as f64,
+            median: nearest_rank(&sorted, 50.0).unwrap_or(0),
+            p99: nearest_rank(&sorted, 99.0).unwrap_or(0),
+            max: sorted.last().copied().unwrap_or(0),
+        }
+    }
 }
 
 /// [`Violations`] as a map from kind to its largest value, sorted by kind.
@@ -107,13 +129,13 @@ pub struct MpcRun {
     pub summary: MpcRunSummary,
 }
 
-/// The `p`-th percentile (nearest rank) of sorted values.
-fn percentile(sorted: &[f64], p: f64) -> f64 {
+/// The `p`-th percentile (nearest rank) of sorted values; `None` when there are none.
+fn nearest_rank<T: Copy>(sorted: &[T], p: f64) -> Option<T> {
     if sorted.is_empty() {
-        return f64::NAN;
+        return None;
     }
     let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
-    sorted[rank.clamp(1, sorted.len()) - 1]
+    Some(sorted[rank.clamp(1, sorted.len()) - 1])
 }
 
 /// The summary of a run's samples (`robot`: the MPC's robot, for its limits).
@@ -121,7 +143,6 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 pub fn summarize(robot: &MpcRobot, samples: &[MpcSample]) -> MpcRunSummary {
     let mut times: Vec<f64> = samples.iter().map(|s| s.solve.time.as_secs_f64()).collect();
     times.sort_by(f64::total_cmp);
-    let n = samples.len().max(1) as f64;
     let mut planned = Violations::default();
     let (mut wheel, mut speed, mut pos): (f64, f64, f64) = (0.0, 0.0, 0.0);
     for s in samples {
@@ -144,23 +165,13 @@ pub fn summarize(robot: &MpcRobot, samples: &[MpcSample]) -> MpcRunSummary {
     MpcRunSummary {
         solves: samples.len(),
         solve_time_s: SolveTimes {
-            median: percentile(&times, 50.0),
-            p90: percentile(&times, 90.0),
-            p99: percentile(&times, 99.0),
+            median: nearest_rank(&times, 50.0).unwrap_or(f64::NAN),
+            p90: nearest_rank(&times, 90.0).unwrap_or(f64::NAN),
+            p99: nearest_rank(&times, 99.0).unwrap_or(f64::NAN),
             max: times.last().copied().unwrap_or(f64::NAN),
         },
-        iterations: IterationCounts {
-            mean: samples
-                .iter()
-                .map(|s| s.solve.iterations as f64)
-                .sum::<f64>()
-                / n,
-            max: samples
-                .iter()
-                .map(|s| s.solve.iterations)
-                .max()
-                .unwrap_or(0),
-        },
+        iterations: CountsPerSolve::of(samples.iter().map(|s| s.solve.iterations)),
+        rollouts: CountsPerSolve::of(samples.iter().map(|s| s.solve.rollouts)),
         planned_violations: planned,
         min_zmp_margin: samples
             .iter()
@@ -177,5 +188,25 @@ pub fn summarize(robot: &MpcRobot, samples: &[MpcSample]) -> MpcRunSummary {
         min_ee_error: samples.iter().filter_map(|s| s.ee_error).reduce(f64::min),
         ee_reached_at: reached.map(|s| s.t),
         base_speed_at_reach: reached.map(|s| s.v[0].abs()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_per_solve_give_the_nearest_rank_percentiles() {
+        // 1 … 100 in a shuffled order: the 50th value is 50, the 99th 99.
+        let counts = (1..=100).map(|i| (i * 37) % 101);
+        let c = CountsPerSolve::of(counts);
+        assert_eq!(c.median, 50);
+        assert_eq!(c.p99, 99);
+        assert_eq!(c.max, 100);
+        assert!((c.mean - 50.5).abs() < 1e-12);
+        // Seven solves: the 99th percentile is the largest, the median the fourth.
+        let c = CountsPerSolve::of([6, 1, 22, 6, 1, 12, 1].into_iter());
+        assert_eq!((c.median, c.p99, c.max), (6, 22, 22));
+        assert_eq!(CountsPerSolve::of(std::iter::empty()).max, 0);
     }
 }
