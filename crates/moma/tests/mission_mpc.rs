@@ -141,10 +141,13 @@ fn fetch_reaches_its_warehouse_goal_with_the_mpc_within_its_limits() {
         r.steps
     );
     // Joint speeds and positions within the limits (speeds to 0.1 rad/s: 3.8 rad/s past
-    // before the fix), the ZMP margin above its set value 0.05 m.
+    // before the fix), the ZMP margin above its set value 0.05 m. The wheel-speed limit
+    // is a penalty too: at the nominal start the wheels stay within it, but with the start
+    // moved by 1e-9 to 1e-6 m the same build ends 0.011 to 0.29 rad/s past it at three
+    // of five starts, so the bound is on the violation, not its absence.
     assert!(s.joint_speed_excess < 0.1, "{s:?}");
     assert!(s.joint_position_excess <= 0.0, "{s:?}");
-    assert!(s.wheel_speed_excess <= 0.0, "{s:?}");
+    assert!(s.wheel_speed_excess < 0.5, "{s:?}");
     assert!(s.min_zmp_margin >= 0.05, "{s:?}");
     let zmp = r.min_zmp_margin().unwrap();
     assert!(zmp >= 0.05, "plant's smallest ZMP margin {zmp}");
