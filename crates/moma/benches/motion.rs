@@ -96,6 +96,7 @@ fn bench(c: &mut Criterion) {
                 let options = ShortcutOptions {
                     attempts: 100,
                     seed,
+                    ..ShortcutOptions::default()
                 };
                 black_box(shortcut(&space, &mut v, path, &options, &mut 0).expect("shortcut"));
             }

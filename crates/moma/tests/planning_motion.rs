@@ -99,6 +99,7 @@ fn two_d_wall_path_goes_through_the_gap_and_is_no_shorter_than_the_shortest() {
             &ShortcutOptions {
                 attempts: 200,
                 seed,
+                ..ShortcutOptions::default()
             },
             &mut checks,
         )
@@ -286,6 +287,76 @@ fn lazy_search_cuts_the_edges_its_paths_fail_on_and_returns_a_checked_path() {
 }
 
 #[test]
+fn a_probe_reports_how_far_a_segment_stays_valid() {
+    let space = JointSpace::new(vec![0.0], vec![1.0], 0.1).unwrap();
+    let mut below = |q: &[f64]| q[0] < 0.55;
+    let mut checks = 0;
+    let mut scratch = Vec::new();
+    // States 0.1, …, 0.5 pass, 0.6 fails: 5 of the 10 steps, 6 states checked.
+    assert_eq!(
+        space.discrete_valid_prefix(&mut below, &[0.0], &[1.0], &mut scratch, &mut checks),
+        (5, 10)
+    );
+    assert_eq!(checks, 6);
+    assert_eq!(
+        space.discrete_valid_prefix(&mut below, &[0.0], &[0.5], &mut scratch, &mut checks),
+        (5, 5)
+    );
+    assert_eq!(checks, 11);
+}
+
+/// A bug trap in `[-1, 1]^3`: the shell `0.3 ≤ max |x_i| ≤ 0.35` around the origin, open
+/// only through a hole at `x0 > 0` where `|x1|, |x2| < 0.08`.
+fn bug_trap(q: &[f64]) -> bool {
+    let m = q.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let in_shell = (0.3..=0.35).contains(&m);
+    let in_hole = q[0] > 0.0 && q[1].abs() < 0.08 && q[2].abs() < 0.08;
+    !in_shell || in_hole
+}
+
+#[test]
+fn a_dynamic_domain_leaves_a_bug_trap_with_fewer_checked_states() {
+    // Lazy probes every 0.02 (steps of at most 0.3), from the trap's centre out; the
+    // same 16 seeds with and without the domain: nodes by the shell stop drawing steps
+    // into it.
+    let space = JointSpace::new(vec![-1.0; 3], vec![1.0; 3], 0.02).unwrap();
+    let mut ws = RrtConnectWorkspace::new();
+    let mut run = |domain_radius: Option<f64>| {
+        let mut checks = Vec::new();
+        for seed in 0..16 {
+            let options = RrtConnectOptions {
+                seed,
+                max_step: Some(0.3),
+                lazy: true,
+                domain_radius,
+                time_limit: Duration::from_secs(600),
+                ..RrtConnectOptions::default()
+            };
+            let mut v = bug_trap;
+            let out = rrt_connect(
+                &space,
+                &mut v,
+                &[0.0; 3],
+                &[-0.8, 0.7, -0.6],
+                &options,
+                &mut ws,
+            )
+            .unwrap();
+            let path = out.path().expect("solved");
+            assert!(valid(&space, bug_trap, path));
+            checks.push(out.stats().checks);
+        }
+        checks.iter().sum::<u64>()
+    };
+    // 196,983 checked states without, 66,000 with a radius of 0.1 (when written).
+    let (without, with) = (run(None), run(Some(0.1)));
+    assert!(
+        2 * with < without,
+        "{with} checked states with the domain, {without} without"
+    );
+}
+
+#[test]
 fn shortcutting_never_lengthens_and_stays_valid() {
     let space = cube7();
     let mut ws = RrtConnectWorkspace::new();
@@ -299,6 +370,7 @@ fn shortcutting_never_lengthens_and_stays_valid() {
             &ShortcutOptions {
                 attempts: 100,
                 seed,
+                ..ShortcutOptions::default()
             },
             &mut 0,
         )
@@ -313,6 +385,65 @@ fn shortcutting_never_lengthens_and_stays_valid() {
 
 /// The closed-form time of a straight segment `Δq` from rest to rest: path parameter
 /// `σ ∈ [0, 1]`, `σ̇ ≤ V = min v_i/|Δq_i|`, `σ̈ ≤ A = min a_i/|Δq_i|`.
+#[test]
+fn shortcuts_below_the_least_gain_are_not_checked() {
+    let space = cube7();
+    let mut ws = RrtConnectWorkspace::new();
+    let (mut all, mut gainful) = (0, 0);
+    for seed in 0..10 {
+        let path = solve(&space, narrow_passage, &START7, &GOAL7, seed, &mut ws);
+        let run = |min_gain: f64, checks: &mut u64| {
+            let mut v = narrow_passage;
+            let options = ShortcutOptions {
+                attempts: 100,
+                seed,
+                min_gain,
+                drop_redundant: false,
+            };
+            shortcut(&space, &mut v, &path, &options, checks).unwrap()
+        };
+        // No shortcut gains the whole length: nothing is checked, nothing changes.
+        let mut none = 0;
+        assert_eq!(run(1.0, &mut none), path);
+        assert_eq!(none, 0);
+        let mut c = 0;
+        run(0.0, &mut c);
+        all += c;
+        let mut c = 0;
+        let short = run(0.05, &mut c);
+        gainful += c;
+        assert!(valid(&space, narrow_passage, &short));
+        assert!(short.length(&space) <= path.length(&space) + 1e-12);
+    }
+    assert!(
+        gainful < all,
+        "{gainful} checked states with a least gain, {all} without"
+    );
+}
+
+#[test]
+fn the_redundant_waypoint_pass_runs_only_when_asked() {
+    let space = cube7();
+    // Three waypoints on one free line: the middle one is redundant.
+    let path = JointPath::from_flat(7, [[-0.8; 7], [-0.5; 7], [-0.2; 7]].concat());
+    let mut v = narrow_passage;
+    let mut options = ShortcutOptions {
+        attempts: 0,
+        drop_redundant: false,
+        ..ShortcutOptions::default()
+    };
+    let mut checks = 0;
+    assert_eq!(
+        shortcut(&space, &mut v, &path, &options, &mut checks).unwrap(),
+        path
+    );
+    assert_eq!(checks, 0);
+    options.drop_redundant = true;
+    let short = shortcut(&space, &mut v, &path, &options, &mut checks).unwrap();
+    assert_eq!(short.to_vecs(), vec![vec![-0.8; 7], vec![-0.2; 7]]);
+    assert!(checks > 0);
+}
+
 fn trapezoid_time(dq: &[f64], v: &[f64], a: &[f64]) -> f64 {
     let vmax = dq
         .iter()
@@ -429,6 +560,7 @@ fn planned_path_is_timed_within_limits_and_blends_stay_valid() {
             &ShortcutOptions {
                 attempts: 100,
                 seed,
+                ..ShortcutOptions::default()
             },
             &mut 0,
         )
@@ -552,7 +684,37 @@ fn bad_input_names_the_field() {
         rrt_connect(&space, &mut v, &[0.1, 0.1], &[0.9, 0.1], &bad_step, &mut ws).unwrap_err(),
         "max_step",
     );
+    let bad_domain = RrtConnectOptions {
+        domain_radius: Some(-1.0),
+        ..RrtConnectOptions::default()
+    };
+    named(
+        rrt_connect(
+            &space,
+            &mut v,
+            &[0.1, 0.1],
+            &[0.9, 0.1],
+            &bad_domain,
+            &mut ws,
+        )
+        .unwrap_err(),
+        "domain_radius",
+    );
     let path = JointPath::from_flat(2, vec![0.1, 0.1, 0.2, 0.2]);
+    named(
+        shortcut(
+            &space,
+            &mut v,
+            &path,
+            &ShortcutOptions {
+                min_gain: 1.5,
+                ..ShortcutOptions::default()
+            },
+            &mut 0,
+        )
+        .unwrap_err(),
+        "min_gain",
+    );
     let limits = JointLimits {
         velocity: vec![1.0, 0.0],
         acceleration: vec![1.0, 1.0],

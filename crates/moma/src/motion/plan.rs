@@ -18,6 +18,9 @@ use std::time::{Duration, Instant};
 /// Shortcut attempts between two looks at the time limit.
 const SHORTCUT_ROUND: usize = 25;
 
+/// The least gain a shortcut must offer to be checked, as a fraction of the path's length.
+const SHORTCUT_MIN_GAIN: f64 = 0.01;
+
 /// Where the motion must end.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MotionGoal {
@@ -49,6 +52,10 @@ pub struct MotionOptions {
     /// cut from its tree and the search goes on); `None`: every step is checked
     /// continuously. Either way every returned segment passed the continuous check.
     pub search_resolution: Option<f64>,
+    /// The search's dynamic domain: a tree node whose step was blocked takes later random
+    /// samples only this close to it (joint-space norm; `planning::rrt_connect`'s
+    /// `domain_radius`); `None`: every sample is taken.
+    pub search_domain: Option<f64>,
     /// IK seeds tried for a goal pose.
     pub ik_attempts: usize,
     /// Distinct collision-free IK solutions sought before planning.
@@ -67,7 +74,7 @@ impl MotionOptions {
     /// The defaults for a group of `dim` joints: 1 s, seed 0, a 2 mm margin, blends
     /// checked every 0.01 rad (or m), search steps of at most 1 rad (or m; Fetch's arm box
     /// diagonal is about 13) probed every 0.25 rad (or m) and checked continuously on the
-    /// paths found, 200 IK seeds for up to 4 solutions, 100 shortcut
+    /// paths found, a dynamic domain of 2 rad (or m) around blocked nodes, 200 IK seeds for up to 4 solutions, 100 shortcut
     /// attempts, 1 rad/s² (m/s²) on every joint, blends within 0.1, samples every 10 ms.
     #[must_use]
     pub fn new(dim: usize) -> Self {
@@ -78,6 +85,7 @@ impl MotionOptions {
             resolution: 0.01,
             max_step: Some(1.0),
             search_resolution: Some(0.25),
+            search_domain: Some(2.0),
             ik_attempts: 200,
             ik_solutions: 4,
             shortcut_attempts: 100,
@@ -257,13 +265,18 @@ fn check_options(o: &MotionOptions, dim: usize) -> Result<()> {
             return Err(Error::invalid(field, format!("{v} is not positive")));
         }
     }
-    if let Some(r) = o.search_resolution
-        && !(r.is_finite() && r > 0.0)
-    {
-        return Err(Error::invalid(
-            "search_resolution",
-            format!("{r} is not a positive finite length"),
-        ));
+    for (field, v) in [
+        ("search_resolution", o.search_resolution),
+        ("search_domain", o.search_domain),
+    ] {
+        if let Some(r) = v
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(Error::invalid(
+                field,
+                format!("{r} is not a positive finite length"),
+            ));
+        }
     }
     if !(o.max_deviation.is_finite() && o.max_deviation >= 0.0) {
         return Err(Error::invalid("max_deviation", "is negative or not finite"));
@@ -416,6 +429,7 @@ pub fn plan_motion(
             time_limit: share,
             seed: options.seed.wrapping_add(k as u64),
             lazy: options.search_resolution.is_some(),
+            domain_radius: options.search_domain,
             ..RrtConnectOptions::default()
         };
         match rrt_connect(&search_space, &mut checker, &x_start, x_goal, &rrt, &mut ws)? {
@@ -442,26 +456,28 @@ pub fn plan_motion(
         return Ok(result);
     };
     // Shortcutting in rounds of `SHORTCUT_ROUND` attempts, each seeded from the seed and
-    // its number, until the attempts are spent or the time limit passes.
+    // its number, until the attempts are spent or the time limit passes; then one pass
+    // drops the redundant waypoints.
     let mut extra = 0u64;
     let mut path = path;
     let mut round = 0u64;
     let mut left = options.shortcut_attempts;
+    let mut shortcuts = ShortcutOptions {
+        attempts: 0,
+        seed: options.seed,
+        min_gain: SHORTCUT_MIN_GAIN,
+        drop_redundant: false,
+    };
     while left > 0 && Instant::now() < deadline {
-        let attempts = left.min(SHORTCUT_ROUND);
-        path = shortcut(
-            &space,
-            &mut checker,
-            &path,
-            &ShortcutOptions {
-                attempts,
-                seed: options.seed.wrapping_add(round),
-            },
-            &mut extra,
-        )?;
-        left -= attempts;
+        shortcuts.attempts = left.min(SHORTCUT_ROUND);
+        shortcuts.seed = options.seed.wrapping_add(round);
+        path = shortcut(&space, &mut checker, &path, &shortcuts, &mut extra)?;
+        left -= shortcuts.attempts;
         round += 1;
     }
+    shortcuts.attempts = 0;
+    shortcuts.drop_redundant = true;
+    path = shortcut(&space, &mut checker, &path, &shortcuts, &mut extra)?;
     result.phases.shortcut = lap();
     // The blends are checked state by state; each state vouches for half the spacing.
     checker.set_tube(0.5 * options.resolution);

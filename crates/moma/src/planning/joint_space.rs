@@ -226,6 +226,22 @@ impl JointSpace {
         scratch: &mut Vec<f64>,
         checks: &mut u64,
     ) -> bool {
+        let (valid, n) = self.discrete_valid_prefix(validity, a, b, scratch, checks);
+        valid == n
+    }
+
+    /// Checks the segment `a → b` state by state at the resolution like
+    /// [`Self::discrete_segment_valid`], from `a` on, and stops at the first invalid
+    /// state: `(k, n)`, the segment's `n` steps of which the first `k` checked valid, so
+    /// `a + k/n (b − a)` is the farthest state reached (`a` itself when `k` is 0).
+    pub fn discrete_valid_prefix<V: StateValidity + ?Sized>(
+        &self,
+        validity: &mut V,
+        a: &[f64],
+        b: &[f64],
+        scratch: &mut Vec<f64>,
+        checks: &mut u64,
+    ) -> (usize, usize) {
         let n = self.segment_steps(a, b);
         scratch.resize(self.dim(), 0.0);
         for k in 1..=n {
@@ -235,10 +251,10 @@ impl JointSpace {
             }
             *checks += 1;
             if !validity.is_valid(scratch) {
-                return false;
+                return (k - 1, n);
             }
         }
-        true
+        (n, n)
     }
 }
 

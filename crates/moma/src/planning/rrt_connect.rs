@@ -21,7 +21,16 @@
 //!   skipped from then on), and the search goes on; a returned path passed the segment
 //!   check throughout, as without the option. A check that costs much more per segment
 //!   than its states do at that resolution (a continuous one) then pays for the segments
-//!   of the paths only.
+//!   of the paths only. A probed step blocked part of the way keeps its last valid probe
+//!   as a node (its edge checked later like any other), so the trees grow up to the
+//!   obstacles instead of giving the step up, and the connecting tree stops there.
+//! * **Dynamic domain** ([`RrtConnectOptions::domain_radius`]; Yershova, Jaillet, Siméon
+//!   and LaValle, ICRA 2005): a node whose step towards a sample was blocked takes later
+//!   samples only within that radius; a sample farther from its nearest node is drawn
+//!   again without a check ([`MAX_DOMAIN_REDRAWS`] in a row at most, then taken). Nodes
+//!   by the obstacles then stop drawing steps into them, and the samples they do take
+//!   explore around them: in narrow passages (an arm between shelf boards) the trees need
+//!   far fewer checked states.
 //! * **Allocation**: the trees live in a [`RrtConnectWorkspace`] that keeps its capacity
 //!   between queries; a query allocates only its returned path.
 
@@ -30,6 +39,9 @@ use crate::{Error, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
+
+/// The most samples in a row a dynamic domain redraws before one is taken anyway.
+pub const MAX_DOMAIN_REDRAWS: usize = 200;
 
 /// The options of a query.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,6 +57,9 @@ pub struct RrtConnectOptions {
     /// Probe steps state by state at the space's resolution, and give only the paths
     /// found the segment check (module docs).
     pub lazy: bool,
+    /// The dynamic domain's radius (weighted norm) around a node that was blocked
+    /// (module docs); `None`: none.
+    pub domain_radius: Option<f64>,
 }
 
 impl Default for RrtConnectOptions {
@@ -55,6 +70,7 @@ impl Default for RrtConnectOptions {
             time_limit: Duration::from_secs(1),
             seed: 0,
             lazy: false,
+            domain_radius: None,
         }
     }
 }
@@ -118,14 +134,16 @@ impl Planned {
 }
 
 /// One tree: node states stored flat, each node's parent index (the root's is itself),
-/// whether the edge to its parent is known valid, and whether a failed edge above it cut
-/// it off (lazy mode).
+/// whether the edge to its parent is known valid, whether a failed edge above it cut
+/// it off (lazy mode), and the radius of its dynamic domain (infinite until a step from
+/// it is blocked).
 #[derive(Debug, Clone, Default)]
 struct Tree {
     states: Vec<f64>,
     parents: Vec<u32>,
     edge_checked: Vec<bool>,
     cut: Vec<bool>,
+    radius: Vec<f64>,
 }
 
 impl Tree {
@@ -134,10 +152,12 @@ impl Tree {
         self.parents.clear();
         self.edge_checked.clear();
         self.cut.clear();
+        self.radius.clear();
         self.states.extend_from_slice(root);
         self.parents.push(0);
         self.edge_checked.push(true);
         self.cut.push(false);
+        self.radius.push(f64::INFINITY);
     }
 
     /// Cuts node `i` and every node below it (children come after their parents).
@@ -163,6 +183,7 @@ impl Tree {
         self.parents.push(parent as u32);
         self.edge_checked.push(edge_checked);
         self.cut.push(false);
+        self.radius.push(f64::INFINITY);
         self.parents.len() - 1
     }
 
@@ -206,8 +227,12 @@ enum Extend {
     Reached(usize),
     /// A node one step towards the target was added.
     Advanced(usize),
+    /// The step was blocked after some progress: its last valid probe was added.
+    Partial(usize),
     /// The step was invalid; nothing added.
     Trapped,
+    /// The sample lay outside the nearest node's domain; nothing checked.
+    Rejected,
 }
 
 /// Plans from `start` to `goal` (both checked: length, finite, in the box, valid).
@@ -233,6 +258,15 @@ pub fn rrt_connect(
             format!("{max_step} is not a positive finite length"),
         ));
     }
+    if let Some(r) = options.domain_radius
+        && !(r.is_finite() && r > 0.0)
+    {
+        return Err(Error::invalid(
+            "domain_radius",
+            format!("{r} is not a positive finite length"),
+        ));
+    }
+    let domain = options.domain_radius.unwrap_or(f64::INFINITY);
     let mut checks = 0u64;
     checks += 1;
     if !validity.is_valid(start) {
@@ -271,28 +305,50 @@ pub fn rrt_connect(
                 stats: stats(iteration, &ws.trees, checks),
             });
         }
-        for (s, (lo, hi)) in ws
-            .sample
-            .iter_mut()
-            .zip(space.lower().iter().zip(space.upper()))
-        {
-            *s = lo + (hi - lo) * rng.random::<f64>();
-        }
-        let new = match extend(space, validity, ws, a, max_step, options.lazy, &mut checks) {
-            Extend::Trapped => {
+        // Draw until a sample lies in its nearest node's domain (or the redraws run out).
+        let mut redraws = 0;
+        let outcome = loop {
+            for (s, (lo, hi)) in ws
+                .sample
+                .iter_mut()
+                .zip(space.lower().iter().zip(space.upper()))
+            {
+                *s = lo + (hi - lo) * rng.random::<f64>();
+            }
+            let step = Step {
+                max: max_step,
+                lazy: options.lazy,
+                domain: if redraws < MAX_DOMAIN_REDRAWS {
+                    domain
+                } else {
+                    f64::INFINITY
+                },
+            };
+            match extend(space, validity, ws, a, &step, &mut checks) {
+                Extend::Rejected => redraws += 1,
+                e => break e,
+            }
+        };
+        let new = match outcome {
+            Extend::Trapped | Extend::Rejected => {
                 a = 1 - a;
                 continue;
             }
-            Extend::Reached(i) | Extend::Advanced(i) => i,
+            Extend::Reached(i) | Extend::Advanced(i) | Extend::Partial(i) => i,
         };
         // Connect the other tree to the new node.
         let b = 1 - a;
         ws.sample.clear();
         ws.sample.extend_from_slice(ws.trees[a].state(new, dim));
         loop {
-            match extend(space, validity, ws, b, max_step, options.lazy, &mut checks) {
+            let step = Step {
+                max: max_step,
+                lazy: options.lazy,
+                domain: f64::INFINITY,
+            };
+            match extend(space, validity, ws, b, &step, &mut checks) {
                 Extend::Advanced(_) => continue,
-                Extend::Trapped => break,
+                Extend::Trapped | Extend::Partial(_) | Extend::Rejected => break,
                 Extend::Reached(joined) => {
                     let (from_start, from_goal) =
                         if a == 0 { (new, joined) } else { (joined, new) };
@@ -315,40 +371,67 @@ pub fn rrt_connect(
     })
 }
 
-/// Extends tree `t` one step of at most `max_step` towards `ws.sample`; `lazy` probes the
-/// step state by state at the space's resolution.
+/// How [`extend`] steps.
+struct Step {
+    /// The longest step.
+    max: f64,
+    /// Probe the step at the space's resolution (lazy edges).
+    lazy: bool,
+    /// The radius given to a node whose step is blocked, and the test of the target: a
+    /// finite radius marks the target a sample, rejected outside its nearest node's
+    /// domain; an infinite one takes it whatever the domain.
+    domain: f64,
+}
+
+/// Extends tree `t` one step towards `ws.sample` (see [`Step`]).
 fn extend(
     space: &JointSpace,
     validity: &mut impl StateValidity,
     ws: &mut RrtConnectWorkspace,
     t: usize,
-    max_step: f64,
-    lazy: bool,
+    step: &Step,
     checks: &mut u64,
 ) -> Extend {
     let dim = space.dim();
     let tree = &mut ws.trees[t];
     let near = tree.nearest(space, &ws.sample);
-    let from = tree.state(near, dim);
+    let from = &tree.states[near * dim..(near + 1) * dim];
     let d = space.distance(from, &ws.sample);
-    let reached = d <= max_step;
+    if step.domain.is_finite() && d > tree.radius[near] {
+        return Extend::Rejected;
+    }
+    let reached = d <= step.max;
     ws.step.clear();
     if reached {
         ws.step.extend_from_slice(&ws.sample);
     } else {
-        let f = max_step / d;
+        let f = step.max / d;
         ws.step
             .extend(from.iter().zip(&ws.sample).map(|(x, y)| x + f * (y - x)));
     }
-    let valid = if lazy {
-        space.discrete_segment_valid(validity, from, &ws.step, &mut ws.scratch, checks)
-    } else {
-        space.segment_valid(validity, from, &ws.step, &mut ws.scratch, checks)
-    };
-    if !valid {
+    if step.lazy {
+        let (k, n) = space.discrete_valid_prefix(validity, from, &ws.step, &mut ws.scratch, checks);
+        if k < n {
+            if step.domain.is_finite() {
+                tree.radius[near] = step.domain;
+            }
+            if k == 0 {
+                return Extend::Trapped;
+            }
+            // The last valid probe, computed as the probe was.
+            let f = k as f64 / n as f64;
+            for (s, x) in ws.step.iter_mut().zip(from) {
+                *s = x + f * (*s - x);
+            }
+            return Extend::Partial(tree.push(&ws.step, near, false));
+        }
+    } else if !space.segment_valid(validity, from, &ws.step, &mut ws.scratch, checks) {
+        if step.domain.is_finite() {
+            tree.radius[near] = step.domain;
+        }
         return Extend::Trapped;
     }
-    let i = tree.push(&ws.step, near, !lazy);
+    let i = tree.push(&ws.step, near, !step.lazy);
     if reached {
         Extend::Reached(i)
     } else {

@@ -6,9 +6,14 @@
 //!    candidate replaces everything between waypoint `i` and waypoint `j + 1` by
 //!    `waypoint i → a → b → waypoint j + 1`; it is taken when it is strictly shorter in the
 //!    weighted norm and the one new segment `a → b` is valid at the space's resolution (the
-//!    other two are parts of the path's segments `i` and `j`, valid already).
-//! 2. **Redundant waypoints**: in one pass, a waypoint whose neighbours are joined by a
-//!    valid segment is dropped (the triangle inequality makes that never longer).
+//!    other two are parts of the path's segments `i` and `j`, valid already). A candidate
+//!    that would shorten the path by less than [`ShortcutOptions::min_gain`] × its length
+//!    is dropped unchecked: late attempts mostly offer such crumbs, each for a segment
+//!    check.
+//! 2. **Redundant waypoints** ([`ShortcutOptions::drop_redundant`]): in one pass, a
+//!    waypoint whose neighbours are joined by a valid segment is dropped (the triangle
+//!    inequality makes that never longer). A caller that shortcuts in rounds runs it once,
+//!    after the last: the waypoints a pass keeps fail their check again in the next.
 //!
 //! Every segment of the result was checked at the resolution, so a valid input path gives
 //! a valid output path no longer than the input.
@@ -19,12 +24,17 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// The options of [`shortcut`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShortcutOptions {
     /// Random shortcut attempts.
     pub attempts: usize,
     /// The seed of the attempts.
     pub seed: u64,
+    /// The least a shortcut must gain, as a fraction of the path's length, to be checked
+    /// (0: any gain).
+    pub min_gain: f64,
+    /// Run the redundant-waypoint pass after the attempts.
+    pub drop_redundant: bool,
 }
 
 impl Default for ShortcutOptions {
@@ -32,6 +42,8 @@ impl Default for ShortcutOptions {
         ShortcutOptions {
             attempts: 100,
             seed: 0,
+            min_gain: 0.0,
+            drop_redundant: true,
         }
     }
 }
@@ -44,7 +56,8 @@ pub const MAX_SHORTCUT_ATTEMPTS: usize = 10_000_000;
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for `path` when its dimension is not the space's or a waypoint
-/// lies outside the box, or for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`].
+/// lies outside the box, for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`], or for a
+/// `min_gain` outside [0, 1].
 pub fn shortcut(
     space: &JointSpace,
     validity: &mut impl StateValidity,
@@ -65,6 +78,12 @@ pub fn shortcut(
         return Err(Error::invalid(
             "attempts",
             format!("{} is above {MAX_SHORTCUT_ATTEMPTS}", options.attempts),
+        ));
+    }
+    if !(0.0..=1.0).contains(&options.min_gain) {
+        return Err(Error::invalid(
+            "min_gain",
+            format!("{} is not a fraction in [0, 1]", options.min_gain),
         ));
     }
     let dim = space.dim();
@@ -98,7 +117,7 @@ pub fn shortcut(
         point_on(&points, dim, &cumulative, j, s2, &mut b);
         let (wi, wj) = (&points[wp(i)], &points[wp(j + 1)]);
         let new_len = space.distance(wi, &a) + space.distance(&a, &b) + space.distance(&b, wj);
-        if new_len >= cumulative[j + 1] - cumulative[i] {
+        if new_len >= cumulative[j + 1] - cumulative[i] - options.min_gain * total {
             continue;
         }
         // `waypoint i → a` and `b → waypoint j + 1` lie on segments of the path (valid):
@@ -108,7 +127,22 @@ pub fn shortcut(
             points.splice((i + 1) * dim..(j + 1) * dim, a.iter().chain(&b).copied());
         }
     }
-    // Drop redundant waypoints in one pass.
+    if options.drop_redundant {
+        points = drop_redundant(space, validity, &points, dim, &mut scratch, checks);
+    }
+    Ok(JointPath::from_flat(dim, points))
+}
+
+/// The redundant-waypoint pass (module docs) over the flat waypoints `points`.
+fn drop_redundant(
+    space: &JointSpace,
+    validity: &mut impl StateValidity,
+    points: &[f64],
+    dim: usize,
+    scratch: &mut Vec<f64>,
+    checks: &mut u64,
+) -> Vec<f64> {
+    let wp = |i: usize| i * dim..(i + 1) * dim;
     let mut kept: Vec<f64> = Vec::with_capacity(points.len());
     let n = points.len() / dim;
     for k in 0..n {
@@ -116,13 +150,13 @@ pub fn shortcut(
         if k > 0 && k + 1 < n {
             let last = &kept[kept.len() - dim..];
             let next = &points[wp(k + 1)];
-            if space.segment_valid(validity, last, next, &mut scratch, checks) {
+            if space.segment_valid(validity, last, next, scratch, checks) {
                 continue;
             }
         }
         kept.extend_from_slice(here);
     }
-    Ok(JointPath::from_flat(dim, kept))
+    kept
 }
 
 /// The segment `i` (from waypoint `i` to `i + 1`) holding arc length `s`.
