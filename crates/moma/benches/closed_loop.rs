@@ -83,6 +83,7 @@ fn bench_closed_loop(c: &mut Criterion) {
                 black_box(&q0),
                 &v0,
                 &options,
+                None,
                 &mut |_| {},
             )
             .unwrap();

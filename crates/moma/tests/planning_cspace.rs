@@ -4,6 +4,7 @@
 use moma::planning::costmap::{
     self, Footprint, INSCRIBED, InflationParams, LETHAL, NO_INFORMATION,
 };
+use moma::planning::footprint_clearance::ConvexFootprint;
 use moma::planning::smooth::{line_of_sight, polyline_length, smooth};
 use moma::planning::trajectory::{DiffDriveLimits, time_parameterize};
 use moma::planning::{self, SearchGrid, load_map};
@@ -145,6 +146,11 @@ fn cost_aware_search_prefers_clearance() {
     assert!((wf[20 * w + 5] - a.cost).abs() < 1e-6 * a.cost);
 }
 
+/// The polygon C-space against the geometry it stands for, as the disk's above: an
+/// occupied cell is a square of side one cell, and a pose (a cell centre at heading θ_k)
+/// is blocked exactly when the footprint there meets an obstacle's square. The oracle is
+/// the separating-axis distance of `footprint_clearance` (a pose blocked when it is ≤ 0),
+/// which shares no code with the C-space.
 #[test]
 fn footprint_cspace_matches_brute_force_and_bounds() {
     let (w, h) = (40, 30);
@@ -154,32 +160,49 @@ fn footprint_cspace_matches_brute_force_and_bounds() {
     let res = 0.1;
     let cs = costmap::footprint_cspace(&obst, w, h, res, &fp, 8).unwrap();
     assert_eq!(cs.slices.len(), 8);
-    // the polygon is checked against the obstacle cells' centres: its bounds are the
-    // disks of the inscribed and circumscribed radii about the centres
+    let convex = ConvexFootprint::new(&fp, res).unwrap();
+    let mut placed = Vec::new();
+    // bounds: the inscribed disk reaches every square within r_in + ½ (centre to
+    // centre); no square beyond r_out + ½√2 comes near the footprint
     let dist = planning::distance_transform(&obst, w, h);
     let within = |r: f64| -> Vec<bool> { dist.iter().map(|&d| f64::from(d) <= r).collect() };
-    let disk_in = within(fp.inscribed_radius() / res);
-    let disk_out = within(fp.circumscribed_radius() / res);
+    let disk_in = within(fp.inscribed_radius() / res + 0.5);
+    let disk_out = within(fp.circumscribed_radius() / res + std::f64::consts::FRAC_1_SQRT_2);
+    let mut corner_only = 0;
     for k in 0..8 {
-        let offs = fp.cell_offsets(k as f64 * std::f64::consts::TAU / 8.0, res);
-        for y in 0..h as i64 {
-            for x in 0..w as i64 {
-                let i = (y * w as i64 + x) as usize;
-                let brute = offs.iter().any(|&(dx, dy)| {
-                    let (ox, oy) = (x + dx, y + dy);
+        let theta = k as f64 * std::f64::consts::TAU / 8.0;
+        let offs = fp.cell_offsets(theta, res);
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let pose = [x as f64 + 0.5, y as f64 + 0.5, theta];
+                let d = convex.clearance(&obst, w, h, pose, 1.0, &mut placed);
+                if let Some(d) = d.filter(|d| d.abs() < 1e-7) {
+                    panic!("pose ({x}, {y}, {k}) touches an obstacle ({d}): pick another map");
+                }
+                let meets = d.is_some_and(|d| d < 0.0);
+                assert_eq!(cs.slices[k][i], meets, "heading {k} at ({x}, {y}): {d:?}");
+                assert!(!disk_in[i] || cs.slices[k][i]);
+                assert!(disk_out[i] || !cs.slices[k][i]);
+                assert!(!cs.slices[k][i] || cs.sweeps[k][i]);
+                // blocked although no obstacle centre lies inside the footprint
+                let centre_inside = offs.iter().any(|&(dx, dy)| {
+                    let (ox, oy) = (x as i64 + dx, y as i64 + dy);
+                    let (bx, by) = (dx as f64 * res, dy as f64 * res);
+                    let (s, c) = theta.sin_cos();
                     ox >= 0
                         && oy >= 0
                         && ox < w as i64
                         && oy < h as i64
-                        && obst[(oy * w as i64 + ox) as usize]
+                        && obst[oy as usize * w + ox as usize]
+                        && fp.contains(c * bx + s * by, -s * bx + c * by)
                 });
-                assert_eq!(cs.slices[k][i], brute, "heading {k} at ({x}, {y})");
-                assert!(!disk_in[i] || cs.slices[k][i]);
-                assert!(disk_out[i] || !cs.slices[k][i]);
-                assert!(!cs.slices[k][i] || cs.sweeps[k][i]);
+                corner_only += usize::from(meets && !centre_inside);
             }
         }
     }
+    // the poses an obstacle's centre rule would have missed
+    assert!(corner_only > 0);
     // Headings differ for an elongated robot.
     assert_ne!(cs.slices[0], cs.slices[2]);
     assert!(

@@ -24,7 +24,8 @@ fn footprint_wider_than_the_map_is_an_error() {
     let err = Footprint::new(vec![[0.0, 0.0], [1e300, 0.0], [0.0, 1e300]]).unwrap_err();
     assert!(err.to_string().contains("footprint"), "{err}");
     // A normal footprint: every heading's mask equals a brute-force check of which
-    // poses put the obstacle cell's centre inside the rotated square.
+    // poses put the rotated square footprint onto the obstacle cell's square (side
+    // 0.05 m): the two squares meet when no axis of either separates them.
     let h = 0.11;
     let f = Footprint::new(vec![[-h, -h], [h, -h], [h, h], [-h, h]]).unwrap();
     let empty = footprint_cspace(&obstacles, 20, 10, 0.05, &f, 8).unwrap();
@@ -40,17 +41,21 @@ fn footprint_wider_than_the_map_is_an_error() {
     let (ox, oy) = (10usize, 5usize);
     one[oy * 20 + ox] = true;
     let cs = footprint_cspace(&one, 20, 10, 0.05, &f, 8).unwrap();
+    let e = 0.025;
+    let mut counts = Vec::new();
     for k in 0..8 {
         let th = k as f64 * std::f64::consts::FRAC_PI_4;
+        let (c, s) = (th.cos(), th.sin());
+        let spread = c.abs() + s.abs();
         let mut blocked = 0;
         for y in 0..10 {
             for x in 0..20 {
                 let (wx, wy) = ((ox as f64 - x as f64) * 0.05, (oy as f64 - y as f64) * 0.05);
-                let (bx, by) = (
-                    th.cos() * wx + th.sin() * wy,
-                    -th.sin() * wx + th.cos() * wy,
-                );
-                let want = bx.abs() <= h && by.abs() <= h;
+                // the grid's axes, then the footprint's
+                let want = wx.abs() <= e + h * spread
+                    && wy.abs() <= e + h * spread
+                    && (c * wx + s * wy).abs() <= h + e * spread
+                    && (-s * wx + c * wy).abs() <= h + e * spread;
                 assert_eq!(
                     cs.slices[k][y * 20 + x],
                     want,
@@ -63,9 +68,12 @@ fn footprint_wider_than_the_map_is_an_error() {
                 }
             }
         }
-        // 5 x 5 cell centres axis-aligned; the 45° square (side 0.22 m) covers 25 too
-        assert_eq!(blocked, 25, "heading {k}");
+        counts.push(blocked);
     }
+    // axis-aligned: the square reaches 0.11 + 0.025 m = 2.7 cells, 5 x 5 poses as with
+    // the centres; at 45° the footprint's corners reach into the obstacle's square from
+    // 12 poses beyond the 25 whose footprint holds the obstacle's centre
+    assert_eq!(counts, [25, 37, 25, 37, 25, 37, 25, 37]);
 }
 
 #[test]

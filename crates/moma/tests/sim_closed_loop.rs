@@ -98,6 +98,7 @@ fn run_m5(law: TaskLaw, duration: f64, period: Option<f64>) -> (ClosedLoopResult
         &floats(&c["q0"]),
         &floats(&c["v0"]),
         &options(duration, period, adaptive(1e-11)),
+        None,
         &mut |_| {},
     )
     .unwrap();
@@ -262,6 +263,7 @@ fn osc_panda_run(posture_kp: f64) -> ClosedLoopResult {
         &q0,
         &v0,
         &options(1.0, None, adaptive(1e-11)),
+        None,
         &mut |_| {},
     )
     .unwrap();
@@ -356,6 +358,7 @@ fn run_platform(
             record_interval: 0.1,
             ..options(duration, Some(0.01), IntegratorSettings::rk4(0.002))
         },
+        None,
         &mut |_| {},
     )
     .unwrap()
@@ -516,6 +519,7 @@ fn osc_fixed_run(posture_kp: f64) -> ClosedLoopResult {
         &q0,
         &v0,
         &options(1.0, None, adaptive(1e-11)),
+        None,
         &mut |_| {},
     )
     .unwrap()

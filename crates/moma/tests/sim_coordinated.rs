@@ -69,6 +69,7 @@ fn run(ctl: &mut CoordinatedController, duration: f64) -> ClosedLoopResult {
             limits: MonitorLimits::default(),
             lyapunov_tolerance: 1e-9,
         },
+        None,
         &mut |_| {},
     )
     .unwrap()

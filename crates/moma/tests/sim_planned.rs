@@ -105,6 +105,7 @@ fn kanayama_tracks_a_path_planned_across_the_depot_to_the_goal() {
             limits: MonitorLimits::default(),
             lyapunov_tolerance: 1e-9,
         },
+        None,
         &mut |_| {},
     )
     .unwrap();

@@ -1,6 +1,7 @@
 //! Configuration space from an occupancy grid: dilation by a disk (one distance
 //! transform, whatever the radius), a nav2-style inflation cost layer, and a polygonal
-//! footprint by per-heading dilation.
+//! footprint by per-heading dilation. Both take an occupied cell as the square it covers,
+//! not as its centre point.
 
 use super::edt::distance_transform;
 use crate::{Error, Result};
@@ -254,24 +255,75 @@ impl Footprint {
             .fold(0.0, f64::max)
     }
 
-    /// Integer cell offsets `(dx, dy)` whose centres lie inside the footprint rotated by
-    /// `theta`, for cells of size `resolution`.
+    /// Integer cell offsets `(dx, dy)` whose cells meet the footprint rotated by `theta`,
+    /// for cells of size `resolution`: the cell at `(dx, dy)` is the square of side one
+    /// cell centred `(dx, dy)` cells from the footprint's origin, and it counts when the
+    /// rotated polygon and the square share a point (touching counts, so a footprint that
+    /// clips only a corner of an occupied cell collides with it).
     pub fn cell_offsets(&self, theta: f64, resolution: f64) -> Vec<(i64, i64)> {
         let (s, c) = theta.sin_cos();
-        let r = (self.circumscribed_radius() / resolution).ceil() as i64 + 1;
+        // the polygon rotated into the grid's axes, in cells
+        let poly: Vec<[f64; 2]> = self
+            .vertices
+            .iter()
+            .map(|p| {
+                [
+                    (c * p[0] - s * p[1]) / resolution,
+                    (s * p[0] + c * p[1]) / resolution,
+                ]
+            })
+            .collect();
+        let rotated = Footprint { vertices: poly };
+        let r = (self.circumscribed_radius() / resolution + std::f64::consts::FRAC_1_SQRT_2).ceil()
+            as i64;
         let mut out = Vec::new();
         for dy in -r..=r {
             for dx in -r..=r {
-                let (wx, wy) = (dx as f64 * resolution, dy as f64 * resolution);
-                // Rotate the offset back into the robot frame.
-                let (bx, by) = (c * wx + s * wy, -s * wx + c * wy);
-                if self.contains(bx, by) {
+                if rotated.meets_cell(dx as f64, dy as f64) {
                     out.push((dx, dy));
                 }
             }
         }
         out
     }
+
+    /// Whether the polygon (in cells) meets the closed square of side one cell centred at
+    /// `(x, y)`: an edge crosses or touches the square (which also finds a polygon inside
+    /// the square), or the square lies inside the polygon (its centre does). The square
+    /// is widened by [`CELL_CONTACT_SLACK`] so that rounding never misses a touch.
+    fn meets_cell(&self, x: f64, y: f64) -> bool {
+        let h = 0.5 + CELL_CONTACT_SLACK;
+        let (lo, hi) = ([x - h, y - h], [x + h, y + h]);
+        let v = &self.vertices;
+        (0..v.len()).any(|i| segment_meets_box(v[i], v[(i + 1) % v.len()], lo, hi))
+            || self.contains(x, y)
+    }
+}
+
+/// How far (cells) a cell's square is widened for the footprint test: far below any
+/// map's resolution, far above the rounding of a rotation.
+const CELL_CONTACT_SLACK: f64 = 1e-9;
+
+/// Whether the segment `a`–`b` meets the closed axis-aligned box `lo`–`hi` (the
+/// segment clipped to the box's slabs, Liang–Barsky).
+fn segment_meets_box(a: [f64; 2], b: [f64; 2], lo: [f64; 2], hi: [f64; 2]) -> bool {
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..2 {
+        let d = b[k] - a[k];
+        if d == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return false;
+            }
+        } else {
+            let (ta, tb) = ((lo[k] - a[k]) / d, (hi[k] - a[k]) / d);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+            if t0 > t1 {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -309,11 +361,14 @@ pub const MAX_FOOTPRINT_CSPACE_CELLS: usize = 1 << 30;
 /// Most (x, y, heading) states [`astar_footprint`] allocates (13 bytes each: 1.7 GB).
 pub const MAX_FOOTPRINT_STATES: usize = 1 << 27;
 
-/// Builds the per-heading C-space of `footprint` (`resolution` m/cell). A robot pose
-/// collides when an obstacle cell centre lies inside the footprint (cells outside the
-/// map are not obstacles, as for the disk dilation). Cells closer to an obstacle than the
-/// inscribed radius are blocked and cells farther than the circumscribed radius are free
-/// at every heading, so the exact footprint test only runs in the band between.
+/// Builds the per-heading C-space of `footprint` (`resolution` m/cell). A robot pose (at
+/// a cell centre) collides when the footprint meets an obstacle cell, taken as the
+/// square it covers ([`Footprint::cell_offsets`]; cells outside the map are not
+/// obstacles, as for the disk dilation): conservative, a corner clipped counts. Cells
+/// whose nearest obstacle centre lies within the inscribed radius plus half a cell
+/// ([`disk_reach`]: the inscribed disk then reaches the square) are blocked and cells
+/// farther than the circumscribed radius plus half a cell's diagonal are free at every
+/// heading, so the exact footprint test only runs in the band between.
 pub fn footprint_cspace(
     obstacles: &[bool],
     width: usize,
@@ -357,25 +412,44 @@ pub fn footprint_cspace(
             ),
         ));
     }
+    // the inscribed disk about a cell centre reaches an obstacle's square when the
+    // centres lie within r_in + ½; no point of a square lies nearer than its centre's
+    // distance less half a diagonal, so beyond r_out + ½√2 the footprint cannot reach it
+    let blocked_within = disk_reach(r_in);
+    let free_beyond = r_out + std::f64::consts::FRAC_1_SQRT_2 + 1e-6;
     let step = std::f64::consts::TAU / headings as f64;
+    // obstacles along each row before each cell, so that a run of a stencil's row is
+    // tested at once: row_count[y * (width + 1) + x] counts row y's cells 0..x
+    let mut row_count = vec![0u32; (width + 1) * height];
+    for y in 0..height {
+        let r = y * (width + 1);
+        for x in 0..width {
+            row_count[r + x + 1] = row_count[r + x] + u32::from(obstacles[y * width + x]);
+        }
+    }
     let dilate = |offsets: &[(i64, i64)]| -> Vec<bool> {
+        let runs = row_runs(offsets);
         let mut out = vec![false; width * height];
         for y in 0..height {
             for x in 0..width {
                 let i = y * width + x;
                 let d = dist[i] as f64;
-                out[i] = if d <= r_in {
+                out[i] = if d <= blocked_within {
                     true
-                } else if d > r_out + 1e-9 {
+                } else if d > free_beyond {
                     false
                 } else {
-                    offsets.iter().any(|&(dx, dy)| {
-                        let (ox, oy) = (x as i64 + dx, y as i64 + dy);
-                        ox >= 0
-                            && oy >= 0
-                            && (ox as usize) < width
-                            && (oy as usize) < height
-                            && obstacles[oy as usize * width + ox as usize]
+                    runs.iter().any(|&(dy, lo, hi)| {
+                        let oy = y as i64 + dy;
+                        let (a, b) = (
+                            (x as i64 + lo).max(0),
+                            (x as i64 + hi).min(width as i64 - 1),
+                        );
+                        if oy < 0 || oy >= height as i64 || a > b {
+                            return false;
+                        }
+                        let r = oy as usize * (width + 1);
+                        row_count[r + b as usize + 1] > row_count[r + a as usize]
                     })
                 };
             }
@@ -402,6 +476,21 @@ pub fn footprint_cspace(
         slices,
         sweeps,
     })
+}
+
+/// Cell offsets `(dx, dy)` as runs `(dy, dx_first, dx_last)` of consecutive cells along
+/// each row (a non-convex footprint's row may hold several).
+fn row_runs(offsets: &[(i64, i64)]) -> Vec<(i64, i64, i64)> {
+    let mut sorted = offsets.to_vec();
+    sorted.sort_unstable_by_key(|&(dx, dy)| (dy, dx));
+    let mut runs: Vec<(i64, i64, i64)> = Vec::new();
+    for (dx, dy) in sorted {
+        match runs.last_mut() {
+            Some(run) if run.0 == dy && run.2 + 1 >= dx => run.2 = run.2.max(dx),
+            _ => runs.push((dy, dx, dx)),
+        }
+    }
+    runs
 }
 
 /// A path of a polygonal robot through its (x, y, θ) C-space.
@@ -599,4 +688,19 @@ fn footprint_states(parent: &[u32], u: usize, w: usize) -> Vec<(usize, usize, us
     }
     states.reverse();
     states
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row with a gap (a non-convex footprint's) keeps two runs; rows come in order.
+    #[test]
+    fn row_runs_merge_neighbours_and_keep_gaps() {
+        let offsets = [(3, 0), (0, 1), (1, 0), (0, 0), (-1, 0), (5, 0)];
+        assert_eq!(
+            row_runs(&offsets),
+            [(0, -1, 1), (0, 3, 3), (0, 5, 5), (1, 0, 0)]
+        );
+    }
 }

@@ -13,11 +13,13 @@
 //! footprint's origin ([`PlanRequest::axle_offset`], the driven-axle midpoint of a base
 //! whose frame lies `d` ahead of it) dilates the disk by `|d|`. A
 //! polygon is searched over (x, y, heading) on the 8-heading lattice of
-//! [`costmap::footprint_cspace`] (each heading's C-space exact at cell centres: blocked
-//! within the inscribed radius, free beyond the circumscribed radius, the polygon tested
-//! against the obstacle cells in the band between; turns in place checked on the swept
-//! footprint), so the path's every pose and turn is collision-free at the heading it is
-//! driven with, which nav2's Smac planners also do on their heading lattices.
+//! [`costmap::footprint_cspace`] (each heading's C-space exact for obstacle cells taken
+//! as the squares they cover: a pose is blocked when the polygon there meets one; blocked
+//! within the inscribed radius plus half a cell, free beyond the circumscribed radius
+//! plus half a cell's diagonal, the polygon tested against the squares in the band
+//! between; turns in place checked on the swept footprint), so the path's every pose and
+//! turn is collision-free at the heading it is driven with, which nav2's Smac planners
+//! also do on their heading lattices.
 
 use super::costmap::{self, Footprint, InflationParams};
 use super::curve_timing::{CurvatureTiming, TimedCurve, time_cells_curved};

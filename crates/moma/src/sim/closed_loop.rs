@@ -28,6 +28,7 @@ use crate::sim::mpc_run::MpcRun;
 use crate::sim::recorder::Recorder;
 use crate::sim::reduced_system::ReducedSystem;
 use crate::sim::rolling_plant::RollingPlant;
+use crate::sim::sensor_noise::SensorNoise;
 use crate::sim::settings::IntegratorSettings;
 use crate::sim::stepping::{
     Grid, check_rk4_budget, check_rk4_steps, integrate_on_grid, record_plant_sample,
@@ -308,12 +309,14 @@ impl Rec {
 
 /// Runs `law` on `system` from `(q0, v0)`; `progress(t)` is called after every recorded
 /// sample. Under a control period the run is the held-input loop
-/// ([`crate::sim::held_loop::run_held_loop`]) on the rolling plant; with continuous
-/// feedback the law is evaluated inside the integrated right-hand side.
+/// ([`crate::sim::held_loop::run_held_loop`]) on the rolling plant, the law measuring the
+/// state through `noise` when given (one draw per control tick; the record, the
+/// monitors, the tracking errors and the Lyapunov values keep the plant's own state);
+/// with continuous feedback the law is evaluated inside the integrated right-hand side.
 ///
 /// # Errors
-/// Invalid options or initial state (named), a run that goes numerically wrong (with its
-/// time), or a law that fails at some state.
+/// Invalid options or initial state (named), `noise` without a control period, a run
+/// that goes numerically wrong (with its time), or a law that fails at some state.
 ///
 /// # Panics
 /// If `law.nu()` differs from `system.nu()`.
@@ -323,6 +326,7 @@ pub fn simulate_closed_loop(
     q0: &[f64],
     v0: &[f64],
     options: &ClosedLoopOptions,
+    noise: Option<&mut SensorNoise>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<ClosedLoopResult> {
     assert_eq!(
@@ -344,6 +348,12 @@ pub fn simulate_closed_loop(
             "must be a finite number >= 0",
         ));
     }
+    if noise.is_some() && options.control_period.is_none() {
+        return Err(Error::invalid(
+            "sensor noise",
+            "is drawn once per control tick: it needs a control period",
+        ));
+    }
     let (nq, nv) = (system.nq(), system.nv());
     let grid = TickGrid::new(options)?;
     check_rk4_budget(&options.integrator, options.duration)?;
@@ -362,7 +372,7 @@ pub fn simulate_closed_loop(
     let mut x = vec![0.0; nq + nv + 1];
     x[..nq].copy_from_slice(q0);
     x[nq..nq + nv].copy_from_slice(v0);
-    let run = integrate_ticks(system, law, &mut rec, x, options, &grid, progress)?;
+    let run = integrate_ticks(system, law, &mut rec, x, options, &grid, noise, progress)?;
     let lyapunov_report = rec.lyap.as_ref().map(LyapunovMonitor::report);
     let lyapunov = rec
         .lyap
@@ -455,9 +465,10 @@ struct TickRun {
 }
 
 /// Integrates the loop from `x` over the tick grid (RK4: `sub` steps per segment):
-/// under a hold, the held-input loop on the rolling plant, recording and sampling the law
-/// at every tick; with continuous feedback, the law inside the right-hand side, recording
-/// at every segment end.
+/// under a hold, the held-input loop on the rolling plant (measuring through `noise`),
+/// recording and sampling the law at every tick; with continuous feedback (no noise),
+/// the law inside the right-hand side, recording at every segment end.
+#[allow(clippy::too_many_arguments)]
 fn integrate_ticks(
     system: &mut dyn ReducedSystem,
     law: &mut dyn FeedbackLaw,
@@ -465,6 +476,7 @@ fn integrate_ticks(
     x: Vec<f64>,
     options: &ClosedLoopOptions,
     tg: &TickGrid,
+    noise: Option<&mut SensorNoise>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<TickRun> {
     let (ticks, period, every) = (tg.ticks, tg.period, tg.every);
@@ -535,7 +547,7 @@ fn integrate_ticks(
         every,
         progress,
     };
-    run_held_loop(&mut plant, &mut tick, None)?;
+    run_held_loop(&mut plant, &mut tick, noise)?;
     Ok(TickRun {
         stats: plant.stats(),
         control_ticks: tick.saturation.evaluations,
@@ -543,8 +555,9 @@ fn integrate_ticks(
     })
 }
 
-/// The tick of a law under a hold: the law sampled at every tick but the last, the
-/// record at every `every`-th tick and the last.
+/// The tick of a law under a hold: the law sampled at every tick but the last on the
+/// measured state, the record (the plant's own state) at every `every`-th tick and the
+/// last.
 struct HoldTick<'a> {
     law: &'a mut dyn FeedbackLaw,
     rec: &'a mut Rec,
@@ -574,5 +587,10 @@ impl TickLaw<RollingPlant<'_, dyn ReducedSystem + '_>> for HoldTick<'_> {
             }
         }
         Ok(if last { TickEnd::Stop } else { TickEnd::Hold })
+    }
+
+    /// The last tick only records.
+    fn measures(&self, k: usize) -> bool {
+        k != self.ticks
     }
 }

@@ -10,7 +10,9 @@
 //! the contact plant. Under a control period the law's output is held over the period
 //! (zero-order hold); without one it is evaluated at every contact step. The run is the
 //! held-input loop ([`run_held_loop`]) on [`HeldContactPlant`] (the contact plant under
-//! held inputs, which the mission's contact plant steps too), one contact step per tick.
+//! held inputs, which the mission's contact plant steps too), one contact step per tick;
+//! with sensor noise the loop measures through it at every tick the law is evaluated
+//! (the recorded rows and tracking errors keep the plant's own state).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -21,6 +23,7 @@ use crate::mobile::wheeled::admissible_velocity_basis;
 use crate::multibody::Model;
 use crate::sim::closed_loop::FeedbackLaw;
 use crate::sim::held_loop::{HeldPlant, Tick, TickEnd, TickLaw, run_held_loop};
+use crate::sim::sensor_noise::SensorNoise;
 use crate::sim::settings::InputProfile;
 
 /// Largest number of contact steps a run accepts (`duration / contact.dt`).
@@ -272,6 +275,9 @@ pub struct ContactRun {
     pub record_interval: f64,
     /// The start state (checked: nothing below the ground, a stable step).
     pub start: ContactState,
+    /// The noise on the state a law measures (`None`: the plant's own; an input
+    /// profile measures nothing).
+    pub noise: Option<SensorNoise>,
 }
 
 /// The first time something happened to a contact.
@@ -515,7 +521,7 @@ impl ContactRun {
             every,
             progress,
         };
-        res.steps = run_held_loop(&mut held, &mut tick, None)?;
+        res.steps = run_held_loop(&mut held, &mut tick, self.noise.as_mut())?;
         let tally = held.tally.finish();
         res.first_lift_off = tally.first_lift_off;
         res.first_slip = tally.first_slip;
@@ -526,8 +532,8 @@ impl ContactRun {
 }
 
 /// The tick of a contact run, one per contact step: the driver evaluated every `hold`
-/// steps (its inputs held in between), a row recorded every `every` steps, the run
-/// stopped after `nsteps` steps.
+/// steps on the measured state (its inputs held in between), a row of the plant's own
+/// state recorded every `every` steps, the run stopped after `nsteps` steps.
 struct ContactTick<'a> {
     driver: &'a mut ContactDriver,
     res: &'a mut ContactResult,
@@ -556,8 +562,8 @@ impl TickLaw<HeldContactPlant> for ContactTick<'_> {
             let mut row = Vec::with_capacity(
                 now.q.len() + now.v.len() + now.u.len() + 5 + 4 * nc + self.err.len(),
             );
-            row.extend_from_slice(now.q);
-            row.extend_from_slice(now.v);
+            row.extend_from_slice(now.q_plant);
+            row.extend_from_slice(now.v_plant);
             row.extend_from_slice(now.u);
             let (roll, pitch, _) = st.base_orientation().euler_angles();
             row.extend([st.q[2], roll, pitch]);
@@ -572,7 +578,7 @@ impl TickLaw<HeldContactPlant> for ContactTick<'_> {
                 ]);
             }
             if let ContactDriver::Law { law, .. } = &mut *self.driver {
-                law.observe(t, now.q, now.v, &mut self.err)?;
+                law.observe(t, now.q_plant, now.v_plant, &mut self.err)?;
                 row.extend_from_slice(&self.err);
             }
             self.res.times.push(t);
@@ -584,6 +590,11 @@ impl TickLaw<HeldContactPlant> for ContactTick<'_> {
         } else {
             TickEnd::Stop
         })
+    }
+
+    /// The law reads the measurement at the steps it is evaluated at.
+    fn measures(&self, k: usize) -> bool {
+        k.is_multiple_of(self.hold)
     }
 }
 

@@ -3,6 +3,12 @@
 //! writes the inputs, records, and may end the run), then advances the plant over one
 //! control period with those inputs held (zero-order hold).
 //!
+//! The sensor noise is the loop's argument and nothing else's: every run with noisy
+//! measurements (`moma simulate`'s closed loop on the rolling or the contact plant,
+//! `moma mission`) hands its noise here, the law reads the noisy state
+//! ([`Tick::q`], [`Tick::v`]) and the record keeps the plant's own ([`Tick::q_plant`],
+//! [`Tick::v_plant`]).
+//!
 //! The plant is a [`HeldPlant`]: the rolling model integrated on its grid
 //! (`sim::rolling_plant`) or the contact plant stepped at its own `dt`. The law is a
 //! [`TickLaw`]: `moma simulate`'s closed loop (a feedback law with its recorder,
@@ -43,7 +49,8 @@ pub struct Tick<'a> {
     pub q_plant: &'a [f64],
     /// The plant's own reduced velocity.
     pub v_plant: &'a [f64],
-    /// The configuration the law measures (the plant's, through the sensor noise if any).
+    /// The configuration the law measures (the plant's, through the sensor noise if any
+    /// and [`TickLaw::measures`] this tick).
     pub q: &'a [f64],
     /// The reduced velocity the law measures.
     pub v: &'a [f64],
@@ -80,6 +87,14 @@ pub trait TickLaw<P: ?Sized> {
         None
     }
 
+    /// Whether the law reads the measured state at tick `k` (every tick by default). On a
+    /// tick it does not, the loop draws no noise and [`Tick::q`], [`Tick::v`] are the
+    /// plant's own: a law sampled every few ticks (the contact run's, whose tick is one
+    /// contact step) draws the noise once per evaluation.
+    fn measures(&self, _k: usize) -> bool {
+        true
+    }
+
     /// The sensor noise failed at time `t`: by default the run ends with `e`; a law that
     /// returns `Ok` goes on with the tick (the measured state as the noise left it).
     ///
@@ -100,7 +115,7 @@ pub trait TickLaw<P: ?Sized> {
 }
 
 /// Runs `law` on `plant` until the law stops it; the measured state goes through `noise`
-/// when given. Returns the number of control periods the plant advanced.
+/// when given (a fresh draw at every tick the law [`TickLaw::measures`]). Returns the number of control periods the plant advanced.
 ///
 /// # Errors
 /// Those of the law, and those of the plant and the noise the law does not take over.
@@ -117,7 +132,7 @@ pub fn run_held_loop<P: HeldPlant + ?Sized, L: TickLaw<P> + ?Sized>(
     loop {
         let t = plant.time();
         plant.state(&mut q_plant, &mut v_plant);
-        match noise.as_deref_mut() {
+        match noise.as_deref_mut().filter(|_| law.measures(k)) {
             Some(noise) => {
                 if let Err(e) = noise.measure(&q_plant, &v_plant, &mut q, &mut v) {
                     law.measurement_failed(t, e)?;
@@ -193,12 +208,14 @@ mod tests {
     }
 
     /// `u = 1 − x` until tick 4, which it takes again once before stopping; logs every
-    /// tick as `(k, t, q_plant, q)`; takes a failed advance over when `retry` is set.
+    /// tick as `(k, t, q_plant, q)`; takes a failed advance over when `retry` is set;
+    /// measures at every `measure_every`-th tick.
     struct Law {
         log: Vec<(usize, f64, f64, f64)>,
         again: bool,
         retry: bool,
         first: [f64; 1],
+        measure_every: usize,
     }
 
     impl TickLaw<Integrator> for Law {
@@ -222,12 +239,24 @@ mod tests {
         fn advance_failed(&mut self, _plant: &mut Integrator, _t: f64, e: Error) -> Result<()> {
             if self.retry { Ok(()) } else { Err(e) }
         }
+        fn measures(&self, k: usize) -> bool {
+            k.is_multiple_of(self.measure_every)
+        }
     }
 
     fn run(
         fail_at: Option<usize>,
         retry: bool,
         noise: Option<&mut SensorNoise>,
+    ) -> (Result<usize>, Law, Integrator) {
+        run_measuring(fail_at, retry, noise, 1)
+    }
+
+    fn run_measuring(
+        fail_at: Option<usize>,
+        retry: bool,
+        noise: Option<&mut SensorNoise>,
+        measure_every: usize,
     ) -> (Result<usize>, Law, Integrator) {
         let mut plant = Integrator {
             x: 0.0,
@@ -240,6 +269,7 @@ mod tests {
             again: false,
             retry,
             first: [0.0],
+            measure_every,
         };
         let r = run_held_loop(&mut plant, &mut law, noise);
         (r, law, plant)
@@ -286,5 +316,24 @@ mod tests {
         let (a, b) = (law.log[4], law.log[5]);
         assert_eq!(a.2, b.2);
         assert_ne!(a.3, b.3);
+    }
+
+    #[test]
+    fn the_noise_is_drawn_only_at_the_ticks_the_law_measures() {
+        let mut noise = SensorNoise::new(vec![0.1], vec![0.0], 7).unwrap();
+        let mut draws = noise.clone();
+        let (r, law, _) = run_measuring(None, false, Some(&mut noise), 2);
+        assert_eq!(r.unwrap(), 4);
+        let (mut q, mut v) = ([0.0], [0.0]);
+        for &(k, _, xp, xm) in &law.log {
+            if k % 2 == 0 {
+                // the next draw of the seed's sequence: none was spent on the odd ticks
+                draws.measure(&[xp], &[0.0], &mut q, &mut v).unwrap();
+                assert_eq!(xm, q[0]);
+                assert_ne!(xm, xp);
+            } else {
+                assert_eq!(xm, xp);
+            }
+        }
     }
 }

@@ -1,18 +1,14 @@
 //! Model mismatch between the plant and the controller: a perturbation of the plant's
 //! rigid-body model (a scale on every link's mass and rotational inertia, a point-mass
-//! payload on a named link) and noise on the state the feedback law measures. The law
-//! keeps its nominal model; only the plant's [`Model`] is perturbed
-//! ([`ModelPerturbation::apply`]), and the law sees the plant's state through
-//! [`NoisyMeasurement`] (its [`SensorNoise`] in `sim::sensor_noise`).
+//! payload on a named link). The law keeps its nominal model; only the plant's [`Model`]
+//! is perturbed ([`ModelPerturbation::apply`]). The other half of a mismatch, noise on
+//! the state the law measures, is `sim::sensor_noise`'s, drawn by the held-input loop.
 //!
 //! What is drawn (the values of a perturbation, the seed of the noise) is the caller's
 //! (`sim::uncertainty` reads and draws them from a file's `[uncertainty]`).
 
 use crate::error::{Error, Result};
 use crate::multibody::Model;
-use crate::sim::closed_loop::{FeedbackLaw, Observation, SaturationFlags};
-use crate::sim::mpc_run::MpcRun;
-use crate::sim::sensor_noise::SensorNoise;
 use crate::spatial::Inertia;
 use nalgebra::Vector3;
 
@@ -94,59 +90,6 @@ impl ModelPerturbation {
             model.inertias[j] += extra;
         }
         Ok(())
-    }
-}
-
-/// A feedback law that measures the state through [`SensorNoise`]: at every
-/// [`FeedbackLaw::control`] call the noisy state goes to the inner law. The tracking
-/// error and signals it reports ([`FeedbackLaw::observe`], [`FeedbackLaw::signals`]) are
-/// those of the true state. Does not allocate after construction.
-pub struct NoisyMeasurement {
-    inner: Box<dyn FeedbackLaw>,
-    noise: SensorNoise,
-    q: Vec<f64>,
-    v: Vec<f64>,
-}
-
-impl NoisyMeasurement {
-    /// Wraps `inner` with `noise`.
-    #[must_use]
-    pub fn new(inner: Box<dyn FeedbackLaw>, noise: SensorNoise) -> Self {
-        let (nq, nv) = noise.sizes();
-        Self {
-            inner,
-            noise,
-            q: vec![0.0; nq],
-            v: vec![0.0; nv],
-        }
-    }
-}
-
-impl FeedbackLaw for NoisyMeasurement {
-    fn nu(&self) -> usize {
-        self.inner.nu()
-    }
-    fn error_names(&self) -> Vec<String> {
-        self.inner.error_names()
-    }
-    fn has_lyapunov(&self) -> bool {
-        self.inner.has_lyapunov()
-    }
-    fn control(&mut self, t: f64, q: &[f64], v: &[f64], u: &mut [f64]) -> Result<SaturationFlags> {
-        self.noise.measure(q, v, &mut self.q, &mut self.v)?;
-        self.inner.control(t, &self.q, &self.v, u)
-    }
-    fn observe(&mut self, t: f64, q: &[f64], v: &[f64], error: &mut [f64]) -> Result<Observation> {
-        self.inner.observe(t, q, v, error)
-    }
-    fn signal_names(&self) -> Vec<String> {
-        self.inner.signal_names()
-    }
-    fn signals(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) -> Result<()> {
-        self.inner.signals(t, q, v, out)
-    }
-    fn mpc_run(&self) -> Option<MpcRun> {
-        self.inner.mpc_run()
     }
 }
 

@@ -58,7 +58,7 @@ pub fn run_mpc_loop(
         limits: MonitorLimits::default(),
         lyapunov_tolerance: 0.0,
     };
-    simulate_closed_loop(plant, &mut law, q0, v0, &options, &mut |_| {})?;
+    simulate_closed_loop(plant, &mut law, q0, v0, &options, None, &mut |_| {})?;
     let (solved, run) = law.finish();
     *mpc = solved;
     Ok(run)

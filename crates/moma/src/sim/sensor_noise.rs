@@ -1,6 +1,6 @@
 //! Noise on the state a feedback law measures ([`SensorNoise`]): the `[uncertainty]`
-//! sensor noise of `moma simulate` (through `sim::model_mismatch::NoisyMeasurement`) and
-//! of `moma mission` (through the held-input loop).
+//! sensor noise of `moma simulate` and `moma mission`, drawn by the held-input loop
+//! (`sim::held_loop::run_held_loop`, its one way in).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -4,9 +4,9 @@
 //! state the controller measures, each drawn from a stated distribution with a seed. The
 //! schema, its checks and the draw ([`UncertaintySpec::draw`]) live here, below both
 //! files' readers; a draw perturbs the plant's model
-//! ([`crate::sim::model_mismatch::ModelPerturbation`]) and wraps the law
-//! ([`crate::sim::model_mismatch::NoisyMeasurement`]); the law's own (nominal) model is
-//! never touched. Schema in `docs/simulate.md`.
+//! ([`crate::sim::model_mismatch::ModelPerturbation`]) and gives the sensor noise
+//! ([`sensor_noise`]) the run hands to its held-input loop; the law's own (nominal)
+//! model is never touched. Schema in `docs/simulate.md`.
 
 use std::path::Path;
 
@@ -17,8 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result, at, chain};
 use crate::multibody::Model;
-use crate::sim::closed_loop::FeedbackLaw;
-use crate::sim::model_mismatch::{ModelPerturbation, NoisyMeasurement, Payload};
+use crate::sim::model_mismatch::{ModelPerturbation, Payload};
 use crate::sim::sensor_noise::{SensorNoise, standard_normal};
 
 /// An [`Error::Scenario`] with a formatted message.
@@ -269,22 +268,6 @@ pub fn perturb(draw: &Draw, model: &mut Model, path: &Path) -> Result<()> {
             ),
         )),
         e => Error::Scenario(at(path, &format!("uncertainty: {}", chain(&e)))),
-    })
-}
-
-/// Wraps `law` in the table's sensor noise ([`sensor_noise`]; unchanged without noise).
-///
-/// # Errors
-/// As [`sensor_noise`].
-pub fn with_noise(
-    spec: &UncertaintySpec,
-    law: Box<dyn FeedbackLaw>,
-    names: (&[String], &[String]),
-    path: &Path,
-) -> Result<Box<dyn FeedbackLaw>> {
-    Ok(match sensor_noise(spec, names, path)? {
-        Some(noise) => Box::new(NoisyMeasurement::new(law, noise)),
-        None => law,
     })
 }
 

@@ -76,23 +76,24 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
     )
     .map_err(|e| Error::Scenario(format!("{}: robot: {}", path.display(), chain(&e))))?;
     model.gravity = robot.model.gravity;
-    // [uncertainty]: the plant's model and μ perturbed, the law's noise; the law keeps
-    // the nominal (rolling) model.
+    // [uncertainty]: the plant's model and μ perturbed, the noise on what the law
+    // measures (the run's loop draws it); the law keeps the nominal (rolling) model.
     let mut params = spec.params();
     if let Some(draw) = crate::sim_config::uncertainty::contact_draw(sc, path)? {
         crate::sim::uncertainty::perturb(&draw, &mut model, path)?;
         params.mu = draw.mu.unwrap_or(params.mu);
     }
-    let (q_names, v_names) = (robot.q_names(), robot.v_names());
+    let noise = match &sc.uncertainty {
+        Some(u) => {
+            crate::sim::uncertainty::sensor_noise(u, (&robot.q_names(), &robot.v_names()), path)?
+        }
+        None => None,
+    };
     let (plant, mut map) = contact_plant_of(robot, model, &spec.casters, params).map_err(named)?;
     let (q0, v0, driver, record_interval) = if sc.controller.is_some() || sc.reference.is_some() {
         let cl = closed_loop(sc, path, base_dir)?;
-        let law = match &sc.uncertainty {
-            Some(u) => crate::sim::uncertainty::with_noise(u, cl.law, (&q_names, &v_names), path)?,
-            None => cl.law,
-        };
         let driver = ContactDriver::Law {
-            law,
+            law: cl.law,
             period: cl.options.control_period,
         };
         (cl.q0, cl.v0, driver, cl.options.record_interval)
@@ -116,6 +117,7 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
         duration: sc.duration,
         record_interval,
         start,
+        noise,
     })
 }
 

@@ -34,6 +34,7 @@ use crate::sim::feedback::{
 };
 use crate::sim::fixed_base::FixedBaseSystem;
 use crate::sim::reduced_system::ReducedSystem;
+use crate::sim::sensor_noise::SensorNoise;
 use crate::sim_config::mpc::{LineReach, MpcSpec, mpc_law};
 use crate::sim_config::schema::RobotSpec;
 
@@ -566,6 +567,9 @@ pub struct ClosedLoop {
     pub v0: Vec<f64>,
     /// Duration, integrator, control period, recording, limits, Lyapunov tolerance.
     pub options: ClosedLoopOptions,
+    /// The noise on the state the law measures (`[uncertainty]`'s sensor noise), drawn
+    /// by the loop at every control tick; `None`: the law measures the plant's state.
+    pub noise: Option<SensorNoise>,
 }
 
 impl ClosedLoop {
@@ -581,6 +585,7 @@ impl ClosedLoop {
             &self.q0,
             &self.v0,
             &self.options,
+            self.noise.as_mut(),
             progress,
         )
     }
@@ -647,6 +652,7 @@ pub fn closed_loop(sc: &Scenario, path: &Path, base_dir: &Path) -> Result<Closed
         q0,
         v0,
         options,
+        noise: None,
     })
 }
 

@@ -1,6 +1,6 @@
 //! The rolling plant of a closed-loop scenario with `[uncertainty]`: the wheeled URDF
 //! robot rebuilt with the draw applied, and the closed loop given that plant and the
-//! noisy measurement (the law keeps the nominal model). Separate from `uncertainty`
+//! noise on its measurement (the law keeps the nominal model). Separate from `uncertainty`
 //! (the table and its draws) so that the file schema, which holds the table, and this
 //! builder, which reads the schema, do not import each other.
 
@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::{at, bail, chain};
 use crate::error::{Error, Result};
-use crate::sim::uncertainty::{UncertaintySpec, perturb, with_noise};
+use crate::sim::uncertainty::{UncertaintySpec, perturb, sensor_noise};
 
 /// A wheeled URDF robot's table: the URDF, its drive, wheel joints and casters.
 type WheeledUrdf<'a> = (
@@ -65,8 +65,8 @@ pub fn rolling_plant_model(
 }
 
 /// Applies the scenario's `[uncertainty]` to (and returns) a closed loop on the rolling plant: the
-/// plant rebuilt from [`rolling_plant_model`], the law (built on the nominal model) wrapped
-/// in the sensor noise. Refuses `uncertainty.mu` (the rolling plant has no friction) and
+/// plant rebuilt from [`rolling_plant_model`], the sensor noise on what the law (built on
+/// the nominal model) measures, drawn by the loop ([`super::ClosedLoop::noise`]). Refuses `uncertainty.mu` (the rolling plant has no friction) and
 /// sensor noise without `controller.period` (the noise is drawn once per control tick).
 ///
 /// # Errors
@@ -105,7 +105,7 @@ pub fn apply_to_rolling(
         crate::sim::reduced_system::ReducedSystem::q_names(&system),
         crate::sim::reduced_system::ReducedSystem::v_names(&system),
     );
-    cl.law = with_noise(spec, cl.law, (&names.0, &names.1), path)?;
+    cl.noise = sensor_noise(spec, (&names.0, &names.1), path)?;
     cl.system = Box::new(system);
     Ok(cl)
 }
