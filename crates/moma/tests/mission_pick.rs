@@ -551,3 +551,126 @@ fn the_retreat_is_planned_with_the_held_can() {
         ("Can2", "shelf_top")
     );
 }
+
+/// The recorded state at the payload attach of the shipped pick (the grasp), and the
+/// mission.
+fn grasp_state() -> (moma::mission::Mission, Vec<f64>) {
+    let m = load(&mission_path()).unwrap();
+    let r = run(&m).unwrap();
+    assert!(r.reached, "{:?}", r.reason);
+    let pay = r.task.as_ref().unwrap().payload.as_ref().unwrap().t;
+    let k = r.samples.t.iter().position(|&t| t >= pay - 1e-9).unwrap();
+    let q = r.samples.q[k].clone();
+    (m, q)
+}
+
+/// `q` with the torso lift joint moved by `dz` (m): the held can moves straight up by it.
+fn torso_by(m: &moma::mission::Mission, q: &[f64], dz: f64) -> Vec<f64> {
+    let model = &m.robot.model;
+    let j = model
+        .names
+        .iter()
+        .position(|n| n == "torso_lift_joint")
+        .unwrap();
+    let mut q = q.to_vec();
+    q[model.idx_q[j]] += dz;
+    q
+}
+
+#[test]
+fn a_lift_that_pushes_the_can_into_its_support_or_drags_it_along_it_is_a_touch() {
+    use moma::collision::{Convex, SceneObject};
+    use moma::mission::task::{DistanceMonitor, Holding};
+    let (m, q) = grasp_state();
+    let task = m.task.as_ref().unwrap();
+    // the lift's first sample is the grasp: no touch; the can rises 3 cm: still none
+    let mut dm = DistanceMonitor::new(task, &m.robot);
+    dm.sample(task, &m.robot, &q, Holding::Lifting);
+    assert!(dm.touch(task).is_none(), "{:?}", dm.touch(task));
+    dm.sample(task, &m.robot, &torso_by(&m, &q, 0.03), Holding::Lifting);
+    assert!(dm.touch(task).is_none(), "{:?}", dm.touch(task));
+    // pressed 1.5 cm down from the grasp instead: into the board it stands on
+    let mut dm = DistanceMonitor::new(task, &m.robot);
+    dm.sample(task, &m.robot, &q, Holding::Lifting);
+    dm.sample(task, &m.robot, &torso_by(&m, &q, -0.015), Holding::Lifting);
+    let why = dm.touch(task).expect("pressed into its support");
+    assert!(
+        why.starts_with("held object 'Can2' enters its support 'shelf_bottom'"),
+        "{why}"
+    );
+    // a wall 1 mm beyond the can (world +x, the side away from the gripper), part of
+    // its support: lifting 3 cm straight up drags the can along it
+    let can = can_pose(&m, &q);
+    let wall = SceneObject::new(
+        "wall",
+        vec![(
+            moma::spatial::SE3::from_translation(
+                can.translation + nalgebra::Vector3::new(0.031 + 0.005, 0.0, 0.0),
+            ),
+            Convex::Box {
+                half: nalgebra::Vector3::new(0.005, 0.05, 0.06),
+            },
+        )],
+    )
+    .unwrap();
+    let mut task = task.clone();
+    task.scene.objects.push(wall.clone());
+    task.support.push("wall".into());
+    task.scene_after_grasp.objects.push(wall.clone());
+    let mut lifting = wall;
+    lifting.touch_links.push("Can2".into());
+    task.scene_lifting.objects.push(lifting);
+    let mut dm = DistanceMonitor::new(&task, &m.robot);
+    dm.sample(&task, &m.robot, &q, Holding::Lifting);
+    assert!(dm.touch(&task).is_none(), "{:?}", dm.touch(&task));
+    dm.sample(&task, &m.robot, &torso_by(&m, &q, 0.01), Holding::Lifting);
+    assert!(dm.touch(&task).is_none(), "{:?}", dm.touch(&task));
+    dm.sample(&task, &m.robot, &torso_by(&m, &q, 0.03), Holding::Lifting);
+    let why = dm.touch(&task).expect("dragged along the wall");
+    assert!(
+        why.starts_with("held object 'Can2' is still on its support 'wall'"),
+        "{why}"
+    );
+}
+
+#[test]
+fn the_distance_monitor_sees_every_control_step_of_the_arm_motions() {
+    use moma::mission::task::{DistanceMonitor, Holding};
+    // recorded every 0.5 s (250 control steps): the monitor's smallest distances are
+    // those of every step, below those of the recorded samples
+    let m = with(
+        "[limits]",
+        "[simulation]\nrecord_interval = 0.5\n\n[limits]",
+    )
+    .unwrap();
+    let r = run(&m).unwrap();
+    assert!(r.reached, "{:?}", r.reason);
+    let task = m.task.as_ref().unwrap();
+    let tr = r.task.as_ref().unwrap();
+    let mut dm = DistanceMonitor::new(task, &m.robot);
+    let mut arm_samples = 0;
+    for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
+        let holding = match *phase {
+            "approach" | "grasp" => Holding::Nothing,
+            "lift" => Holding::Lifting,
+            "retreat" => Holding::Carrying,
+            _ => continue,
+        };
+        arm_samples += 1;
+        dm.sample(task, &m.robot, q, holding);
+    }
+    let (at_samples, every_step) = (
+        dm.min_scene.as_ref().unwrap().0,
+        tr.min_scene_distance.unwrap(),
+    );
+    let (self_samples, self_steps) = (
+        dm.min_self.as_ref().unwrap().0,
+        tr.min_self_distance.unwrap(),
+    );
+    eprintln!(
+        "{arm_samples} arm samples: scene {at_samples} m at them, {every_step} m at every \
+         step; self {self_samples} m, {self_steps} m"
+    );
+    assert!(every_step < at_samples - 1e-4, "{every_step} {at_samples}");
+    assert!(self_steps <= self_samples, "{self_steps} {self_samples}");
+}

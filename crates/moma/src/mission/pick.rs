@@ -27,9 +27,11 @@ const ARM_SETTLED: f64 = 0.01;
 const ARM_SETTLED_RATE: f64 = 0.02;
 
 impl<'m> Runner<'m> {
-    /// A `[task]`'s arm motion: planned on entry from the measured state, tracked in
-    /// joint space by computed torque while the platform holds; once it settles, the next
-    /// motion (the payload attached after the grasp). `false` when the run ends here.
+    /// A `[task]`'s arm motion: the state's distances checked (every control step), the
+    /// motion planned on entry from the measured state, tracked in joint space by computed
+    /// torque while the platform holds; once it settles, the next motion (the payload
+    /// attached after the grasp). `false` when the run ends here (a touch, a motion not
+    /// planned or not settled).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn arm_step(
         &mut self,
@@ -42,6 +44,9 @@ impl<'m> Runner<'m> {
         v: f64,
         w: f64,
     ) -> bool {
+        if !self.check_arm_distances(ws, st, t) {
+            return false;
+        }
         let m = self.m;
         let task = m.task.as_ref().expect("arm phases have a task");
         st.cur_ref = c.goal_sample(t);

@@ -1,7 +1,7 @@
 //! The record of the loop: one sample of every column with its monitors (stability,
 //! slip, clearance, tracking error, energy, the arm's side view), the events they raise
-//! (first slip, contact, a pick's touching links, saturation) and the smallest ZMP
-//! margin.
+//! (first slip, contact, saturation) and the smallest ZMP margin; and a pick's distance
+//! check, at every control step of its arm motions.
 
 use nalgebra::{DVector, Vector3};
 
@@ -55,7 +55,6 @@ impl Runner<'_> {
         ee: Vector3<f64>,
         evaluated: bool,
     ) {
-        self.check_arm_distances(ws, st, t);
         let on_contact = plant.contact().is_some();
         let Some((slip, clear)) = self.record(c, ws, st, plant.contact(), t, ee, evaluated) else {
             return;
@@ -85,27 +84,35 @@ impl Runner<'_> {
         }
     }
 
-    /// During a `[task]`'s arm motions: the distances of the state to the scene and
-    /// between the robot's links (once grasped, carrying the object, the scene without
-    /// it, its support allowed during the lift); a distance ≤ 0 is a touch and ends the
-    /// run.
-    pub(super) fn check_arm_distances(&mut self, ws: &mut Workspace, st: &mut LoopState, t: f64) {
+    /// During a `[task]`'s arm motions, at every control step (not only the recorded
+    /// ones): the distances of the plant's state to the scene and between the robot's
+    /// links (once grasped, carrying the object, the scene without it; during the lift
+    /// its support under the lift rule, [`super::task::LiftStart`]); a distance ≤ 0 or a
+    /// broken lift rule is a touch and ends the run (`false`).
+    pub(super) fn check_arm_distances(
+        &mut self,
+        ws: &mut Workspace,
+        st: &mut LoopState,
+        t: f64,
+    ) -> bool {
         let (Phase::Arm(_), Some(task), Some(dm)) =
             (st.phase, self.m.task.as_ref(), ws.distances.as_mut())
         else {
-            return;
+            return true;
         };
         let holding = match st.phase {
             _ if !st.grasped => Holding::Nothing,
             Phase::Arm(ArmStage::Lift) => Holding::Lifting,
             _ => Holding::Carrying,
         };
-        dm.sample(task, &self.m.robot, ws.q_now.as_slice(), holding);
+        dm.sample(task, &self.m.robot, ws.q_plant.as_slice(), holding);
         if let Some(what) = dm.touch(task) {
             self.event(t, "contact", what.clone());
             self.fail(t, format!("collision: {what}"));
             st.phase = Phase::Done;
+            return false;
         }
+        true
     }
 
     /// The smallest ZMP margin of the recorded samples as an event.

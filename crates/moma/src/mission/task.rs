@@ -19,7 +19,8 @@
 //! In the run (`run.rs`): [`Task::placements`] ranks the base poses
 //! ([`crate::motion::placement::place_base`]), the run drives to the best one its planner
 //! reaches, plans and tracks the arm motions, attaches the payload, and monitors the
-//! distances of the executed motion ([`DistanceMonitor`]).
+//! distances of the executed motion at every control step ([`DistanceMonitor`]; during
+//! the lift the held object against its support by the lift rule, [`LiftStart`]).
 
 use std::path::{Path, PathBuf};
 
@@ -131,8 +132,9 @@ pub struct Task {
     pub scene_lifting: Scene,
     /// The scene objects the picked object rests on or in at its scene pose: those within
     /// the grasp's position tolerance of it (the held object may sit that far off its
-    /// scene pose once grasped). Their pairs with the held object are not checked during
-    /// the lift (MoveIt's support surface of a pick).
+    /// scene pose once grasped). During the lift their pairs with the held object are left
+    /// out of the scene check (MoveIt's support surface of a pick) and checked by the lift
+    /// rule instead ([`LiftStart`]).
     pub support: Vec<String>,
     /// The scene as read, in its own frame (for the report).
     pub scene_pose: [f64; 3],
@@ -680,6 +682,10 @@ impl Task {
 /// hulls and the swapped links' mesh surfaces), with the pair of each: before the grasp
 /// with the robot's geometry against the whole scene, after it with the geometry carrying
 /// the object ([`Task::carried`]) against the scene without it ([`Holding`]).
+///
+/// During the lift the held object's pairs with its support ([`Task::support`]) are left
+/// out of the scene distance and checked by the lift rule instead ([`LiftStart`]): the
+/// object may touch its support only while it rises off it.
 #[derive(Debug, Clone)]
 pub struct DistanceMonitor {
     data: Data,
@@ -691,6 +697,8 @@ pub struct DistanceMonitor {
     /// The last sample: its scene and self distances, what it held, and the closest
     /// (link, object) and link pair indices.
     last: LastSample,
+    /// Where the held object stood against its support at the lift's first sample.
+    lift_start: Option<LiftStart>,
     /// Smallest robot–scene distance so far (m) and its link (or the held object) and
     /// scene object.
     pub min_scene: Option<(f64, [String; 2])>,
@@ -711,6 +719,7 @@ impl DistanceMonitor {
             sd_after: SceneData::new(&task.carried, &task.scene_after_grasp),
             q: DVector::zeros(robot.model.nq),
             last: LastSample::default(),
+            lift_start: None,
             min_scene: None,
             min_self: None,
         }
@@ -720,9 +729,16 @@ impl DistanceMonitor {
     /// reason states it: the scene before the links, the held object named as such
     /// (`held object 'Can2' touches scene object '<id>' (<distance> m)`); `None` when it
     /// touched nothing.
+    /// A lift that breaks the rule of [`LiftStart`] is named as the held object entering
+    /// its support (`held object 'Can2' enters its support '<id>' ...`) or staying on it
+    /// after rising (`held object 'Can2' is 0.0021 m from its support '<id>' after
+    /// rising ...`).
     #[must_use]
     pub fn touch(&self, task: &Task) -> Option<String> {
         let l = &self.last;
+        if let Some(v) = &l.lift_violation {
+            return Some(v.clone());
+        }
         let grasped = l.holding != Holding::Nothing;
         let scene = l.holding.scene(task);
         let gm = if grasped {
@@ -783,12 +799,29 @@ impl DistanceMonitor {
         update_geometry_placements(gm, &self.data, gd);
         let d_self = compute_distances(gm, gd, PairSelection::Enabled);
         let d_scene = compute_scene_distances(gm, gd, scene, sd);
+        let lift_violation = if holding == Holding::Lifting {
+            let held = gm.links.len() - 1;
+            let (d, support) = support_distance(task, gm, gd, held);
+            let z = gd.placements[gm.links[held].first].translation.z;
+            let start = *self.lift_start.get_or_insert(LiftStart {
+                z,
+                depth: (-d).max(0.0),
+            });
+            support.and_then(|o| {
+                start
+                    .violation(z, d, &task.scene.objects[o].id)
+                    .map(|why| format!("held object '{}' {why}", gm.links[held].name))
+            })
+        } else {
+            None
+        };
         self.last = LastSample {
             scene_distance: d_scene,
             self_distance: d_self,
             holding,
             scene_pair: sd.closest,
             self_pair: gd.closest,
+            lift_violation,
         };
         let links = &gm.links;
         if self.min_scene.as_ref().is_none_or(|m| d_scene < m.0)
@@ -807,6 +840,89 @@ impl DistanceMonitor {
             self.min_self = Some((d_self, [links[a].name.clone(), links[b].name.clone()]));
         }
         (d_scene, d_self)
+    }
+}
+
+/// The held object's smallest signed distance (m) to its support at the placements in
+/// `gd` (`held` its link in `gm`, the carrying geometry), with the support object's index
+/// in [`Task::scene`]; `+∞` and `None` without a support.
+fn support_distance(
+    task: &Task,
+    gm: &GeometryModel,
+    gd: &GeometryData,
+    held: usize,
+) -> (f64, Option<usize>) {
+    let mut epa = EpaWorkspace::default();
+    let link = &gm.links[held];
+    let mut best = (f64::INFINITY, None);
+    for (o, obj) in task.scene.objects.iter().enumerate() {
+        if !task.support.contains(&obj.id) {
+            continue;
+        }
+        for s in &obj.shapes {
+            for k in link.first..link.first + link.count {
+                let d = signed_distance(
+                    &gm.objects[k].shape,
+                    &gd.placements[k],
+                    &s.shape,
+                    &s.pose,
+                    &mut WarmStart::default(),
+                    &mut epa,
+                )
+                .distance;
+                if d < best.0 {
+                    best = (d, Some(o));
+                }
+            }
+        }
+    }
+    best
+}
+
+/// The lift rule: the held object's state against its support ([`Task::support`]) at the
+/// lift's first sample (the grasp, where the payload was attached), and what every later
+/// sample of the lift must keep. With `depth` how far the object then stood in its support
+/// (0 if clear) and [`ARM_MARGIN`] the arm planner's clearance:
+/// 1. it never enters its support deeper than it stood at the grasp by more than the
+///    margin: signed distance ≥ −(`depth` + margin);
+/// 2. once its centre has risen above its height at the grasp by more than `depth` + 2 ×
+///    margin (lifted straight off a level support it would then be a margin clear of it,
+///    plus a margin for the tracking), it is clear of its support by more than the margin.
+///
+/// The first catches an object pushed into its support, the second one dragged along it
+/// (or not lifted off it at all) while the lift rises.
+#[derive(Debug, Clone, Copy)]
+pub struct LiftStart {
+    /// Height of the held object's centre (world z, m).
+    pub z: f64,
+    /// Its depth in its support (m, ≥ 0).
+    pub depth: f64,
+}
+
+impl LiftStart {
+    /// How a lift sample at height `z` (m) with support distance `d` (m) to the support
+    /// `support` breaks the rule, as the reason's words after the held object's name;
+    /// `None` when it keeps it.
+    #[must_use]
+    pub fn violation(&self, z: f64, d: f64, support: &str) -> Option<String> {
+        let risen = z - self.z;
+        let clear_above = self.depth + 2.0 * ARM_MARGIN;
+        if d < -(self.depth + ARM_MARGIN) {
+            Some(format!(
+                "enters its support '{support}' ({d:.4} m; it stood {:.4} m in it at the \
+                 grasp, the lift allows {ARM_MARGIN} m deeper)",
+                self.depth
+            ))
+        } else if risen > clear_above && d <= ARM_MARGIN {
+            Some(format!(
+                "is still on its support '{support}' ({d:.4} m) after rising {risen:.4} m (it \
+                 stood {:.4} m in it at the grasp; once risen {clear_above:.4} m the lift asks \
+                 for more than {ARM_MARGIN} m clear)",
+                self.depth
+            ))
+        } else {
+            None
+        }
     }
 }
 
@@ -835,7 +951,7 @@ impl Holding {
 }
 
 /// The distances of a [`DistanceMonitor`]'s last sample.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct LastSample {
     scene_distance: f64,
     self_distance: f64,
@@ -844,6 +960,8 @@ struct LastSample {
     scene_pair: Option<usize>,
     /// The closest enabled link pair (index into the geometry's pairs).
     self_pair: Option<usize>,
+    /// During the lift, how the held object broke the lift rule ([`LiftStart`]).
+    lift_violation: Option<String>,
 }
 
 impl Default for LastSample {
@@ -854,6 +972,7 @@ impl Default for LastSample {
             holding: Holding::Nothing,
             scene_pair: None,
             self_pair: None,
+            lift_violation: None,
         }
     }
 }
@@ -930,11 +1049,14 @@ pub struct TaskResult {
     pub arm_plans: Vec<ArmPlanRecord>,
     /// The payload attach.
     pub payload: Option<PayloadRecord>,
-    /// Smallest robot–scene distance along the executed arm motions (m), and the pair.
+    /// Smallest robot–scene distance over every control step of the executed arm motions
+    /// (m; during the lift without the held object's pairs with its support, which
+    /// [`LiftStart`]'s rule checks).
     pub min_scene_distance: Option<f64>,
     /// Link and scene object at it.
     pub closest_scene_pair: Option<[String; 2]>,
-    /// Smallest distance between enabled link pairs along the executed arm motions (m).
+    /// Smallest distance between enabled link pairs over every control step of the
+    /// executed arm motions (m).
     pub min_self_distance: Option<f64>,
     /// Links at it.
     pub closest_self_pair: Option<[String; 2]>,
