@@ -674,3 +674,48 @@ fn the_distance_monitor_sees_every_control_step_of_the_arm_motions() {
     assert!(every_step < at_samples - 1e-4, "{every_step} {at_samples}");
     assert!(self_steps <= self_samples, "{self_steps} {self_samples}");
 }
+
+/// The monitor's step measures a state only when the motion since its last sample could
+/// have brought a distance down to the minima so far. Over the recorded states of the
+/// shipped pick's arm motions it skips some, and after every state its minima are those
+/// of a monitor that samples every state.
+#[test]
+fn the_distance_monitor_step_skips_only_states_that_cannot_lower_the_minima() {
+    use moma::mission::task::{DistanceMonitor, Holding};
+    let m = load(&mission_path()).unwrap();
+    let r = run(&m).unwrap();
+    assert!(r.reached, "{:?}", r.reason);
+    let task = m.task.as_ref().unwrap();
+    let mut stepped = DistanceMonitor::new(task, &m.robot);
+    let mut sampled = DistanceMonitor::new(task, &m.robot);
+    let mut states = 0;
+    for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
+        let holding = match *phase {
+            "approach" | "grasp" => Holding::Nothing,
+            "lift" => Holding::Lifting,
+            "retreat" => Holding::Carrying,
+            _ => continue,
+        };
+        states += 1;
+        stepped.step(task, &m.robot, q, holding);
+        sampled.sample(task, &m.robot, q, holding);
+        // equal up to GJK's tolerance: the skipped states leave the two monitors'
+        // warm starts at different states
+        for (a, b) in [
+            (&stepped.min_scene, &sampled.min_scene),
+            (&stepped.min_self, &sampled.min_self),
+        ] {
+            let (a, b) = (a.as_ref().unwrap(), b.as_ref().unwrap());
+            assert!(
+                (a.0 - b.0).abs() < 1e-9 && a.1 == b.1,
+                "state {states}: {a:?} {b:?}"
+            );
+        }
+    }
+    assert!(
+        stepped.skipped > states / 10 && stepped.skipped < states,
+        "{} of {states} states skipped",
+        stepped.skipped
+    );
+    assert_eq!(sampled.skipped, 0);
+}

@@ -105,7 +105,7 @@ impl Runner<'_> {
             Phase::Arm(ArmStage::Lift) => Holding::Lifting,
             _ => Holding::Carrying,
         };
-        dm.sample(task, &self.m.robot, ws.q_plant.as_slice(), holding);
+        dm.step(task, &self.m.robot, ws.q_plant.as_slice(), holding);
         if let Some(what) = dm.touch(task) {
             self.event(t, "contact", what.clone());
             self.fail(t, format!("collision: {what}"));

@@ -699,6 +699,12 @@ pub struct DistanceMonitor {
     last: LastSample,
     /// Where the held object stood against its support at the lift's first sample.
     lift_start: Option<LiftStart>,
+    /// The world placements of the geometry's objects at the last sample (what
+    /// [`DistanceMonitor::step`] measures the motion since against).
+    anchor: Vec<SE3>,
+    /// Control steps that [`DistanceMonitor::step`] showed could not come closer than
+    /// the minima so far, so it measured no distance there.
+    pub skipped: usize,
     /// Smallest robot–scene distance so far (m) and its link (or the held object) and
     /// scene object.
     pub min_scene: Option<(f64, [String; 2])>,
@@ -720,9 +726,59 @@ impl DistanceMonitor {
             q: DVector::zeros(robot.model.nq),
             last: LastSample::default(),
             lift_start: None,
+            anchor: Vec::new(),
+            skipped: 0,
             min_scene: None,
             min_self: None,
         }
+    }
+
+    /// The monitor at one control step: [`DistanceMonitor::sample`] unless the motion
+    /// since the last sample shows that no distance can have fallen to the minima so far.
+    /// Every point of an object moves by at most `|Δc| + ‖ΔR‖_F ρ` (c and ρ its bounding
+    /// ball's world centre and radius, R its world rotation; the Frobenius norm bounds the
+    /// rotation's), so with `m` the largest such motion a scene distance is at least the
+    /// last one minus `m` and a distance between two links at least the last one minus
+    /// `2 m`. When both stay above the minima, the step changes neither minimum and
+    /// touches nothing (the minima are above zero while the run goes on): the minima are
+    /// those of a sample at every step (up to GJK's tolerance, as its warm starts then come
+    /// from other states). The lift is sampled at every step (its rule reads
+    /// the support distance and height each time), and so is the first step after a
+    /// change of what the robot holds.
+    pub fn step(&mut self, task: &Task, robot: &WheeledModel, q: &[f64], holding: Holding) {
+        let held_then = self.last.holding;
+        if let (Some(min_scene), Some(min_self)) = (&self.min_scene, &self.min_self)
+            && holding != Holding::Lifting
+            && holding == held_then
+            && !self.anchor.is_empty()
+        {
+            let (gm, gd) = if holding == Holding::Nothing {
+                (&task.geometry, &mut self.gd)
+            } else {
+                (&task.carried, &mut self.gd_carried)
+            };
+            self.q.copy_from_slice(q);
+            crate::kinematics::forward_kinematics(&robot.model, &mut self.data, &self.q);
+            update_geometry_placements(gm, &self.data, gd);
+            let moved = gm
+                .objects
+                .iter()
+                .zip(&gd.placements)
+                .zip(&self.anchor)
+                .map(|((o, now), then)| {
+                    let centre =
+                        now.act_point(&o.bounding_centre) - then.act_point(&o.bounding_centre);
+                    centre.norm() + (now.rotation - then.rotation).norm() * o.bounding_radius
+                })
+                .fold(0.0, f64::max);
+            if self.last.scene_distance - moved > min_scene.0
+                && self.last.self_distance - 2.0 * moved > min_self.0
+            {
+                self.skipped += 1;
+                return;
+            }
+        }
+        self.sample(task, robot, q, holding);
     }
 
     /// What the last [`DistanceMonitor::sample`] touched (a distance ≤ 0), as the run's
@@ -823,6 +879,7 @@ impl DistanceMonitor {
             self_pair: gd.closest,
             lift_violation,
         };
+        self.anchor.clone_from(&gd.placements);
         let links = &gm.links;
         if self.min_scene.as_ref().is_none_or(|m| d_scene < m.0)
             && let Some(k) = sd.closest
