@@ -635,7 +635,7 @@ fn a_lift_that_pushes_the_can_into_its_support_or_drags_it_along_it_is_a_touch()
 
 #[test]
 fn the_distance_monitor_sees_every_control_step_of_the_arm_motions() {
-    use moma::mission::task::{DistanceMonitor, Holding};
+    use moma::mission::task::DistanceMonitor;
     // recorded every 0.5 s (250 control steps): the monitor's smallest distances are
     // those of every step, below those of the recorded samples
     let m = with(
@@ -649,13 +649,7 @@ fn the_distance_monitor_sees_every_control_step_of_the_arm_motions() {
     let tr = r.task.as_ref().unwrap();
     let mut dm = DistanceMonitor::new(task, &m.robot);
     let mut arm_samples = 0;
-    for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
-        let holding = match *phase {
-            "approach" | "grasp" => Holding::Nothing,
-            "lift" => Holding::Lifting,
-            "retreat" => Holding::Carrying,
-            _ => continue,
-        };
+    for (q, holding) in arm_states(&r) {
         arm_samples += 1;
         dm.sample(task, &m.robot, q, holding);
     }
@@ -681,7 +675,7 @@ fn the_distance_monitor_sees_every_control_step_of_the_arm_motions() {
 /// of a monitor that samples every state.
 #[test]
 fn the_distance_monitor_step_skips_only_states_that_cannot_lower_the_minima() {
-    use moma::mission::task::{DistanceMonitor, Holding};
+    use moma::mission::task::DistanceMonitor;
     let m = load(&mission_path()).unwrap();
     let r = run(&m).unwrap();
     assert!(r.reached, "{:?}", r.reason);
@@ -689,13 +683,7 @@ fn the_distance_monitor_step_skips_only_states_that_cannot_lower_the_minima() {
     let mut stepped = DistanceMonitor::new(task, &m.robot);
     let mut sampled = DistanceMonitor::new(task, &m.robot);
     let mut states = 0;
-    for (q, phase) in r.samples.q.iter().zip(&r.samples.phase) {
-        let holding = match *phase {
-            "approach" | "grasp" => Holding::Nothing,
-            "lift" => Holding::Lifting,
-            "retreat" => Holding::Carrying,
-            _ => continue,
-        };
+    for (q, holding) in arm_states(&r) {
         states += 1;
         stepped.step(task, &m.robot, q, holding);
         sampled.sample(task, &m.robot, q, holding);
@@ -718,4 +706,24 @@ fn the_distance_monitor_step_skips_only_states_that_cannot_lower_the_minima() {
         stepped.skipped
     );
     assert_eq!(sampled.skipped, 0);
+}
+
+/// The recorded states of a run's arm motions with what the robot holds in each.
+fn arm_states(
+    r: &moma::mission::MissionResult,
+) -> impl Iterator<Item = (&Vec<f64>, moma::mission::task::Holding)> {
+    use moma::mission::task::Holding;
+    r.samples
+        .q
+        .iter()
+        .zip(&r.samples.phase)
+        .filter_map(|(q, phase)| {
+            let holding = match *phase {
+                "approach" | "grasp" => Holding::Nothing,
+                "lift" => Holding::Lifting,
+                "retreat" => Holding::Carrying,
+                _ => return None,
+            };
+            Some((q, holding))
+        })
 }
