@@ -746,39 +746,55 @@ impl DistanceMonitor {
     /// the support distance and height each time), and so is the first step after a
     /// change of what the robot holds.
     pub fn step(&mut self, task: &Task, robot: &WheeledModel, q: &[f64], holding: Holding) {
-        let held_then = self.last.holding;
-        if let (Some(min_scene), Some(min_self)) = (&self.min_scene, &self.min_self)
-            && holding != Holding::Lifting
-            && holding == held_then
-            && !self.anchor.is_empty()
-        {
-            let (gm, gd) = if holding == Holding::Nothing {
-                (&task.geometry, &mut self.gd)
-            } else {
-                (&task.carried, &mut self.gd_carried)
-            };
-            self.q.copy_from_slice(q);
-            crate::kinematics::forward_kinematics(&robot.model, &mut self.data, &self.q);
-            update_geometry_placements(gm, &self.data, gd);
-            let moved = gm
-                .objects
-                .iter()
-                .zip(&gd.placements)
-                .zip(&self.anchor)
-                .map(|((o, now), then)| {
-                    let centre =
-                        now.act_point(&o.bounding_centre) - then.act_point(&o.bounding_centre);
-                    centre.norm() + (now.rotation - then.rotation).norm() * o.bounding_radius
-                })
-                .fold(0.0, f64::max);
-            if self.last.scene_distance - moved > min_scene.0
-                && self.last.self_distance - 2.0 * moved > min_self.0
-            {
-                self.skipped += 1;
-                return;
-            }
+        self.place(task, robot, q, holding);
+        if self.cannot_reach_the_minima(task, holding) {
+            self.skipped += 1;
+        } else {
+            self.measure(task, holding);
         }
-        self.sample(task, robot, q, holding);
+    }
+
+    /// Whether the placements just computed ([`DistanceMonitor::place`]) lie too close
+    /// to the last sample's for any distance to reach the minima (the bound of
+    /// [`DistanceMonitor::step`]); `false` while lifting, after a change of what the robot
+    /// holds, or before the first sample.
+    fn cannot_reach_the_minima(&self, task: &Task, holding: Holding) -> bool {
+        let (Some(min_scene), Some(min_self)) = (&self.min_scene, &self.min_self) else {
+            return false;
+        };
+        if holding == Holding::Lifting || holding != self.last.holding || self.anchor.is_empty() {
+            return false;
+        }
+        let (gm, gd) = if holding == Holding::Nothing {
+            (&task.geometry, &self.gd)
+        } else {
+            (&task.carried, &self.gd_carried)
+        };
+        let moved = gm
+            .objects
+            .iter()
+            .zip(&gd.placements)
+            .zip(&self.anchor)
+            .map(|((o, now), then)| {
+                let centre = now.act_point(&o.bounding_centre) - then.act_point(&o.bounding_centre);
+                centre.norm() + (now.rotation - then.rotation).norm() * o.bounding_radius
+            })
+            .fold(0.0, f64::max);
+        self.last.scene_distance - moved > min_scene.0
+            && self.last.self_distance - 2.0 * moved > min_self.0
+    }
+
+    /// Forward kinematics at `q` (full configuration) and the placements of the geometry
+    /// the robot has holding `holding`.
+    fn place(&mut self, task: &Task, robot: &WheeledModel, q: &[f64], holding: Holding) {
+        let (gm, gd) = if holding == Holding::Nothing {
+            (&task.geometry, &mut self.gd)
+        } else {
+            (&task.carried, &mut self.gd_carried)
+        };
+        self.q.copy_from_slice(q);
+        crate::kinematics::forward_kinematics(&robot.model, &mut self.data, &self.q);
+        update_geometry_placements(gm, &self.data, gd);
     }
 
     /// What the last [`DistanceMonitor::sample`] touched (a distance ≤ 0), as the run's
@@ -844,15 +860,19 @@ impl DistanceMonitor {
         q: &[f64],
         holding: Holding,
     ) -> (f64, f64) {
+        self.place(task, robot, q, holding);
+        self.measure(task, holding)
+    }
+
+    /// The distances of the placements [`DistanceMonitor::place`] computed: as
+    /// [`DistanceMonitor::sample`].
+    fn measure(&mut self, task: &Task, holding: Holding) -> (f64, f64) {
         let scene = holding.scene(task);
         let (gm, gd, sd) = if holding == Holding::Nothing {
             (&task.geometry, &mut self.gd, &mut self.sd)
         } else {
             (&task.carried, &mut self.gd_carried, &mut self.sd_after)
         };
-        self.q.copy_from_slice(q);
-        crate::kinematics::forward_kinematics(&robot.model, &mut self.data, &self.q);
-        update_geometry_placements(gm, &self.data, gd);
         let d_self = compute_distances(gm, gd, PairSelection::Enabled);
         let d_scene = compute_scene_distances(gm, gd, scene, sd);
         let lift_violation = if holding == Holding::Lifting {
