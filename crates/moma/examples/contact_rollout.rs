@@ -49,6 +49,7 @@
 //! `OUT_DIR/contact_<scenario>.json`; `STIFFNESS` (N/m) and `DAMPING` (N·s/m) replace the
 //! comparison's contact stiffness and damping).
 
+use std::f64::consts::FRAC_PI_2;
 use std::path::PathBuf;
 
 use moma::contact::{CasterSpec, ContactParams, ContactPlant, ContactState, WheelSpec};
@@ -170,7 +171,7 @@ const MOBILE_MANIPULATOR: Robot = Robot {
             name: "brake",
             duration: 1.6,
             mu: 1.0,
-            arm_ref: &[0.0, 1.5708, 0.0, 0.0, 0.0, 0.0],
+            arm_ref: &[0.0, FRAC_PI_2, 0.0, 0.0, 0.0, 0.0],
             wheel_knots: &[
                 [0.0, 0.0, 0.0],
                 [0.3, 0.0, 0.0],

@@ -6,6 +6,8 @@
 //! example on `bench/mujoco_contact.xml` and `bench/mujoco_contact_mobile_manipulator.xml`).
 //! The scenarios and the comparison's stiff contact are restated here.
 
+use std::f64::consts::FRAC_PI_2;
+
 use moma::contact::{ContactParams, ContactPlant, ContactState};
 use serde_json::Value;
 
@@ -325,7 +327,7 @@ fn the_mobile_manipulator_tips_forward_under_a_hard_brake_10_ms_after_mujoco() {
     let (lift, slip) = events(
         &MOBILE_MANIPULATOR,
         p,
-        &[0.0, 1.5708, 0.0, 0.0, 0.0, 0.0],
+        &[0.0, FRAC_PI_2, 0.0, 0.0, 0.0, 0.0],
         &knots,
         1.4,
     );
