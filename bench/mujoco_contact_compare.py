@@ -1,10 +1,15 @@
-"""moma's contact plant against MuJoCo on the diff-drive arm, under the same torques.
+"""moma's contact plant against MuJoCo on a robot of the comparison, under the same torques.
 
-Reads the trajectories written by `cargo run --release --example contact_rollout -- DIR`
-(DIR/contact_{roll,brake,spin}.json: each carries its torque schedule, arm PD gains and
-friction coefficient), replays every scenario in MuJoCo on bench/mujoco_contact.xml with
+Robots (ROBOTS below): `diffdrive_arm` (scenarios/robots/diffdrive_arm.urdf, MuJoCo model
+bench/mujoco_contact.xml) and `mobile_manipulator` (the UR5-class mobile manipulator of
+scenarios/robots/mobile_manipulator.urdf, bench/mujoco_contact_mobile_manipulator.xml).
+
+Reads the trajectories written by `cargo run --release --example contact_rollout -- ROBOT DIR`
+(DIR/contact_{roll,brake,spin}.json: each carries its robot, torque schedule, arm joints, PD
+gains and friction coefficient), replays every scenario in MuJoCo on the robot's model with
 the same torque law (wheel torques linear between the knots, arm u = kp (q_ref - q) - kd
-qdot from MuJoCo's own state, every step), and prints the differences:
+qdot from MuJoCo's own state, every step; joints matched by name), and prints the
+differences:
 
   roll   largest base position (m), yaw (rad) and wheel-speed (rad/s) difference over the
          run, sampled every 10 ms;
@@ -17,11 +22,11 @@ qdot from MuJoCo's own state, every step), and prints the differences:
 With --reference FILE it also writes the MuJoCo figures the Rust test
 crates/moma/tests/contact_mujoco.rs checks against.
 
-With --time it also times mj_step on bench/mujoco_contact.xml (the model of the
-comparison: semi-implicit Euler, 0.1 ms) in a C loop (mujoco.rollout), the robot rolling
-under wheel torques (0.25, 0.45) N·m: median of 7 repeats of 5000 steps.
+With --time it also times mj_step on the robot's model (semi-implicit Euler, 0.1 ms) in a C
+loop (mujoco.rollout): 5000 steps from the `roll` replay's state at 0.5 s with the
+controls that replay applied next (the wheels rolling, the arm held), median of 7 repeats.
 
-Usage: python bench/mujoco_contact_compare.py DIR [--reference FILE] [--time]
+Usage: python bench/mujoco_contact_compare.py ROBOT DIR [--reference FILE] [--time]
 """
 
 import argparse
@@ -33,7 +38,15 @@ import mujoco
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-WHEEL_R = 0.08
+# Per robot: the MuJoCo model, and the geoms of moma's contacts in moma's order (the two
+# wheels, then the casters).
+ROBOTS = {
+    "diffdrive_arm": ("mujoco_contact.xml", ["left_wheel", "right_wheel", "caster"]),
+    "mobile_manipulator": ("mujoco_contact_mobile_manipulator.xml", [
+        "left_wheel", "right_wheel", "caster_front_left", "caster_front_right",
+        "caster_rear_left", "caster_rear_right"]),
+}
+WHEEL_JOINTS = ("left_wheel_joint", "right_wheel_joint")
 
 
 def wheel_torques(knots, t):
@@ -54,33 +67,49 @@ def yaw_pitch(quat_wxyz):
     return yaw, pitch
 
 
-def model_xml():
-    """The text of bench/mujoco_contact.xml (bench/mujoco_contact_settings.py varies it)."""
-    with open(os.path.join(HERE, "mujoco_contact.xml")) as f:
+def model_xml(robot="diffdrive_arm"):
+    """The text of the robot's MuJoCo model (bench/mujoco_contact_settings.py varies it)."""
+    with open(os.path.join(HERE, ROBOTS[robot][0])) as f:
         return f.read()
 
 
 def replay(sc, xml=None, probe=None):
-    """Replays scenario `sc` on the model `xml` (default bench/mujoco_contact.xml). Each
-    record carries per contact (left wheel, right wheel, caster) the normal force and the
+    """Replays scenario `sc` on the model `xml` (default: the model of the scenario's
+    robot). Each record carries per contact (in moma's order) the normal force and the
     magnitude of the tangential force, from mj_contactForce. `probe(m, d)`, if given, is
     called after every step."""
-    m = mujoco.MjModel.from_xml_string(xml if xml is not None else model_xml())
+    robot = sc["robot"]
+    m = mujoco.MjModel.from_xml_string(xml if xml is not None else model_xml(robot))
     d = mujoco.MjData(m)
     mu = sc["mu"]
     for g in ("floor", "left_wheel", "right_wheel"):
         m.geom_friction[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g)][0] = mu
     dt = sc["params"]["dt"]
     assert abs(m.opt.timestep - dt) < 1e-15, "the MJCF step must be moma's"
-    geoms = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in ("left_wheel", "right_wheel", "caster")]
+    geom_names = ROBOTS[robot][1]
+    assert len(geom_names) == len(sc["contacts"]), (geom_names, sc["contacts"])
+    geoms = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in geom_names]
+    ncontacts = len(geoms)
     wheel_bodies = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, b) for b in ("left_wheel", "right_wheel")]
+    wheel_r = sc["wheel_radius"]
+
+    def joint(name):
+        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+        assert j >= 0, name
+        act = [a for a in range(m.nu) if m.actuator_trnid[a][0] == j]
+        assert len(act) == 1, name
+        return m.jnt_qposadr[j], m.jnt_dofadr[j], act[0]
+
+    wheel_q, wheel_v, wheel_u = (np.array(x) for x in zip(*(joint(n) for n in WHEEL_JOINTS)))
+    arm_q, arm_v, arm_u = (np.array(x) for x in zip(*(joint(n) for n in sc["arm_joints"])))
     arm_ref = np.array(sc["arm_ref"])
+    base = sc["base_q0"]  # x, y, z, qx, qy, qz, qw
     d.qpos[:] = 0
-    d.qpos[2] = 0.08
-    d.qpos[3] = 1.0
-    d.qpos[9:12] = arm_ref
+    d.qpos[0:3] = base[0:3]
+    d.qpos[3:7] = [base[6], base[3], base[4], base[5]]
+    d.qpos[arm_q] = arm_ref
     mujoco.mj_forward(m, d)
-    kp, kd = sc["kp"], sc["kd"]
+    kp, kd = np.array(sc["kp"]), np.array(sc["kd"])
     nsteps = int(round(sc["duration"] / dt))
     every = int(round(0.01 / dt))
     records = []
@@ -92,8 +121,8 @@ def replay(sc, xml=None, probe=None):
     for k in range(nsteps + 1):
         t = d.time
         if k > 0:
-            normal = [0.0, 0.0, 0.0]
-            tangential = [0.0, 0.0, 0.0]
+            normal = [0.0] * ncontacts
+            tangential = [0.0] * ncontacts
             for i in range(d.ncon):
                 c = d.contact[i]
                 for j, g in enumerate(geoms):
@@ -105,11 +134,11 @@ def replay(sc, xml=None, probe=None):
             for b in wheel_bodies:
                 mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
                 w, v = vel[:3], vel[3:]
-                vp = v + np.cross(w, np.array([0.0, 0.0, -WHEEL_R]))
+                vp = v + np.cross(w, np.array([0.0, 0.0, -wheel_r]))
                 slip.append(float(np.hypot(vp[0], vp[1])))
             lowest = [float(d.geom_xpos[g][2] - m.geom_size[g][0]) for g in geoms]
             if t > sc["settle"]:
-                for j in range(3):
+                for j in range(ncontacts):
                     if first_unloaded is None and normal[j] <= 0.0:
                         first_unloaded = {"t": t, "contact": sc["contacts"][j]}
                     if first_lift is None and lowest[j] >= sc["lift_height"]:
@@ -122,14 +151,13 @@ def replay(sc, xml=None, probe=None):
                 records.append({
                     "t": t, "x": float(d.qpos[0]), "y": float(d.qpos[1]), "z": float(d.qpos[2]),
                     "yaw": yaw, "pitch": pitch,
-                    "wheel_speeds": [float(d.qvel[6]), float(d.qvel[7])],
-                    "arm_q": [float(x) for x in d.qpos[9:12]],
+                    "wheel_speeds": [float(x) for x in d.qvel[wheel_v]],
+                    "arm_q": [float(x) for x in d.qpos[arm_q]],
                     "normal": normal, "tangential": tangential, "slip_speed": slip,
                 })
         if k < nsteps:
-            w = wheel_torques(sc["wheel_knots"], t)
-            d.ctrl[0:2] = w
-            d.ctrl[2:5] = kp * (arm_ref - d.qpos[9:12]) - kd * d.qvel[8:11]
+            d.ctrl[wheel_u] = wheel_torques(sc["wheel_knots"], t)
+            d.ctrl[arm_u] = kp * (arm_ref - d.qpos[arm_q]) - kd * d.qvel[arm_v]
             mujoco.mj_step(m, d)
             if probe:
                 probe(m, d)
@@ -158,40 +186,58 @@ def compare_roll(moma, mj):
     }
 
 
-def time_step(steps=5000, repeats=7):
+def time_step(roll, start=5000, steps=5000, repeats=7):
+    """mj_step's cost on the robot of the `roll` scenario: `steps` steps from the replay's
+    state after `start` steps, with the controls the replay applied next."""
     import statistics
     import time
 
     from mujoco import rollout
 
-    m = mujoco.MjModel.from_xml_path(os.path.join(HERE, "mujoco_contact.xml"))
+    robot = roll["robot"]
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    saved = {"ctrl": []}
+
+    def probe(m, d):
+        n = int(round(d.time / m.opt.timestep))
+        if n == start:
+            saved["state"] = np.empty(mujoco.mj_stateSize(m, spec))
+            mujoco.mj_getState(m, d, saved["state"], spec)
+        elif start < n <= start + steps:
+            saved["ctrl"].append(d.ctrl.copy())
+
+    replay(roll, probe=probe)
+    m = mujoco.MjModel.from_xml_string(model_xml(robot))
     d = mujoco.MjData(m)
-    ctrl = np.tile(np.array([0.25, 0.45, 0.0, 0.0, 0.0]), (steps, 1))
+    ctrl = np.array(saved["ctrl"])
+    assert ctrl.shape == (steps, m.nu), ctrl.shape
     times = []
     for _ in range(repeats):
-        mujoco.mj_resetData(m, d)
-        d.qpos[2] = 0.08
-        d.qpos[3] = 1.0
-        state = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
-        mujoco.mj_getState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
         t0 = time.perf_counter()
-        rollout.rollout(m, d, state, ctrl)
+        rollout.rollout(m, d, saved["state"], ctrl)
         times.append((time.perf_counter() - t0) / steps)
-    return {"model": "mujoco_contact.xml", "integrator": "Euler", "timestep": m.opt.timestep,
+    return {"model": ROBOTS[robot][0], "integrator": "Euler", "timestep": m.opt.timestep,
             "median_us_per_step": statistics.median(times) * 1e6}
 
 
 def main():
     ap = argparse.ArgumentParser()
+    ap.add_argument("robot", choices=sorted(ROBOTS))
     ap.add_argument("dir")
     ap.add_argument("--reference")
     ap.add_argument("--time", action="store_true")
     a = ap.parse_args()
-    out = {"mujoco_version": mujoco.__version__}
-    ref = {"source": f"MuJoCo {mujoco.__version__} (PyPI), bench/mujoco_contact.xml, bench/mujoco_contact_compare.py"}
+    xml = ROBOTS[a.robot][0]
+    out = {"mujoco_version": mujoco.__version__, "robot": a.robot}
+    ref = {"source": f"MuJoCo {mujoco.__version__} (PyPI), bench/{xml}, "
+                     f"bench/mujoco_contact_compare.py {a.robot}"}
+    scen = {}
     for name in ("roll", "brake", "spin"):
         with open(os.path.join(a.dir, f"contact_{name}.json")) as f:
             sc = json.load(f)
+        if sc.get("robot") != a.robot:
+            raise SystemExit(f"{a.dir}/contact_{name}.json is of robot {sc.get('robot')!r}, not {a.robot!r}")
+        scen[name] = sc
         mj = replay(sc)
         res = {k: {"moma": sc[k], "mujoco": mj[k]} for k in ("first_lift", "first_unloaded", "first_slip")}
         if name == "roll":
@@ -207,7 +253,7 @@ def main():
             ref["spin_first_slip"] = mj["first_slip"]
         out[name] = res
     if a.time:
-        out["mj_step"] = time_step()
+        out["mj_step"] = time_step(scen["roll"])
     print(json.dumps(out, indent=2))
     if a.reference:
         with open(a.reference, "w") as f:

@@ -1,7 +1,7 @@
 """Which part of MuJoCo's contact decides the `brake` and `spin` events of the contact
-comparison: replays the scenarios of `cargo run --release --example contact_rollout -- DIR`
-(DIR/contact_{brake,spin}.json) on bench/mujoco_contact.xml with one setting changed at a
-time, and prints one row per setting:
+comparison on the diff-drive arm: replays the scenarios of `cargo run --release --example
+contact_rollout -- diffdrive_arm DIR` (DIR/contact_{brake,spin}.json) on
+bench/mujoco_contact.xml with one setting changed at a time, and prints one row per setting:
 
   brake  the first slip (a loaded wheel's contact point at 0.2 m/s), the caster's lift-off
          (lowest point 1 mm up) and the time its normal force first reaches zero; the left

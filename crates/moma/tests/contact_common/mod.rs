@@ -1,7 +1,9 @@
 //! Shared test fixture: the contact plant of `scenarios/robots/diffdrive_arm.urdf` (the
 //! three-joint arm on a differential drive): the robot on a free-flyer root, its two drive
 //! wheels as disks of radius [`WHEEL_RADIUS`] and its ball caster (frame `caster`) as a
-//! sphere of radius [`CASTER_RADIUS`]. Used by the contact tests and `benches/contact.rs`.
+//! sphere of radius [`CASTER_RADIUS`]; and that of the UR5-class mobile manipulator
+//! (`scenarios/robots/mobile_manipulator.urdf`, [`mobile_manipulator_plant`]). Used by the
+//! contact tests and `benches/contact.rs`.
 #![allow(dead_code)]
 
 use moma::contact::{CasterSpec, ContactParams, ContactPlant, WheelSpec};
@@ -46,4 +48,31 @@ pub fn standing(arm: [f64; 3]) -> Vec<f64> {
     let mut q = vec![0.0, 0.0, WHEEL_RADIUS, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
     q.extend_from_slice(&arm);
     q
+}
+
+/// Radius of the drive wheels (m) of `scenarios/robots/mobile_manipulator.urdf`.
+pub const MOBILE_MANIPULATOR_WHEEL_RADIUS: f64 = 0.10;
+/// Its four ball casters: the frame at each sphere's centre and the radius (m), as
+/// `scenarios/mission_contact.toml` gives them.
+pub const MOBILE_MANIPULATOR_CASTERS: [(&str, f64); 4] = [
+    ("caster_front_left", 0.04),
+    ("caster_front_right", 0.04),
+    ("caster_rear_left", 0.04),
+    ("caster_rear_right", 0.04),
+];
+
+/// The contact plant of the UR5-class mobile manipulator
+/// (`scenarios/robots/mobile_manipulator.urdf`, base frame on the ground under the axle) on
+/// a free-flyer root, with the contact parameters `params`. Its inputs are the six arm
+/// joints, then the two wheels (model order).
+pub fn mobile_manipulator_plant(params: ContactParams) -> ContactPlant {
+    let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/robots/mobile_manipulator.urdf");
+    let model = model_from_urdf_file(urdf, RootJoint::FreeFlyer).expect("mobile_manipulator.urdf");
+    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
+        joint: j.into(),
+        radius: MOBILE_MANIPULATOR_WHEEL_RADIUS,
+    });
+    let casters = MOBILE_MANIPULATOR_CASTERS.map(|(f, r)| CasterSpec::on_frame(f, r));
+    ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
 }
