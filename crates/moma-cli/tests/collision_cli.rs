@@ -164,6 +164,112 @@ fn bad_input_exits_1_and_writes_nothing() {
     );
 }
 
+#[test]
+fn bad_geometry_srdf_and_scene_exit_1_name_file_and_element_and_write_nothing() {
+    // A three-link robot (b and c each turn on a joint of a; the pair b–c is checked) whose
+    // link b's mesh is `mesh`.
+    let urdf_with = |mesh: &str| {
+        format!(
+            r#"<robot name="r"><link name="a"><collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
+<link name="b"><collision><origin xyz="0 0 0.5"/><geometry><mesh filename="{mesh}"/></geometry></collision></link>
+<link name="c"><collision><origin xyz="0 0 0.5"/><geometry><sphere radius="0.05"/></geometry></collision></link>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+<joint name="k" type="revolute"><parent link="a"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#
+        )
+    };
+    let file = |name: &str, text: &[u8]| {
+        let p = tmp(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let states = file(
+        "three_link_states.json",
+        br#"{"states": [{"q": [0.3, 0.2]}]}"#,
+    );
+    file("empty.stl", b"");
+    file("empty.obj", b"");
+    file(
+        "nan.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
+    );
+    file("m.dae", b"<COLLADA/>");
+    file(
+        "tetra.obj",
+        b"v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    );
+    let good = file("good.urdf", urdf_with("tetra.obj").as_bytes());
+    let srdf = file(
+        "ghost.srdf",
+        br#"<robot name="r"><disable_collisions link1="a" link2="ghost" reason="Never"/></robot>"#,
+    );
+    let scene = file(
+        "odom.yaml",
+        b"world:\n  collision_objects:\n    - header: {frame_id: odom}\n      id: Crate\n      primitives: [{type: box, dimensions: [0.1, 0.2, 0.3]}]\n      primitive_poses: [{position: [1, 0, 0], orientation: [0, 0, 0, 1]}]\n",
+    );
+    let out = tmp("three_link_out.json");
+    let run = |urdf: &str, extra: &[&str]| {
+        let mut args = vec![
+            "collision",
+            urdf,
+            "--root",
+            "fixed",
+            "--states",
+            &states,
+            "--output",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        moma(&args)
+    };
+    // The good robot runs, so each failure below is its one change.
+    let o = run(&good, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_file(&out).unwrap();
+    let mesh_cases = [
+        ("missing", "missing.stl", "cannot resolve"),
+        (
+            "empty_stl",
+            "empty.stl",
+            "empty.stl: the mesh file is empty",
+        ),
+        (
+            "empty_obj",
+            "empty.obj",
+            "empty.obj: the mesh file is empty",
+        ),
+        ("nan", "nan.obj", "nan.obj: vertex 2 is not finite"),
+        ("dae", "m.dae", "m.dae: unsupported mesh format 'dae'"),
+    ];
+    for (tag, mesh, reason) in mesh_cases {
+        let name = format!("{tag}.urdf");
+        let urdf = file(&name, urdf_with(mesh).as_bytes());
+        let o = run(&urdf, &[]);
+        assert_eq!(o.status.code(), Some(1), "{mesh}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!("{name}: link 'b' mesh '{mesh}'")) && err.contains(reason),
+            "{mesh}: {err}"
+        );
+        assert!(!out.exists(), "{mesh}: output written");
+    }
+    for (extra, expect) in [
+        (
+            ["--srdf", srdf.as_str()],
+            ["ghost.srdf", "disable_collisions element 1", "link 'ghost'"],
+        ),
+        (
+            ["--scene", scene.as_str()],
+            ["odom.yaml", "(id 'Crate')", "unknown frame 'odom'"],
+        ),
+    ] {
+        let o = run(&good, &extra);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(expect.iter().all(|e| err.contains(e)), "{extra:?}: {err}");
+        assert!(!out.exists(), "{extra:?}: output written");
+    }
+}
+
 /// Runs `moma collision` on Fetch with the table scene over `states` (moma layout) with
 /// `extra` flags; returns the parsed JSON and the standard output.
 fn run_fetch(root: &str, states: &[Vec<f64>], extra: &[&str], name: &str) -> (Value, String) {

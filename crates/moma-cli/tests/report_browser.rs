@@ -492,7 +492,7 @@ fn malformed_reports_are_refused_with_the_field_named() {
     for (extra, expect) in [
         (
             vec!["--robot".to_string(), bad_urdf.display().to_string()],
-            "link 'a' mesh: cannot resolve 'package://nowhere/m.stl'",
+            "bad.urdf: link 'a' mesh 'package://nowhere/m.stl': cannot resolve",
         ),
         (
             vec![

@@ -235,8 +235,14 @@ fn bad_input_names_the_file_and_the_element() {
         .unwrap_err()
         .to_string()
     };
+    // A mesh file that does not exist: the URDF, the link, the URI.
     let e = load(&urdf_with("missing.stl"), None);
-    assert!(e.contains("link 'b'") && e.contains("missing.stl"), "{e}");
+    assert!(
+        e.contains("r.urdf")
+            && e.contains("link 'b' mesh 'missing.stl'")
+            && e.contains("cannot resolve"),
+        "{e}"
+    );
     let e = load(&urdf_with("package://nopkg/m.stl"), None);
     assert!(
         e.contains("link 'b'")
@@ -244,9 +250,18 @@ fn bad_input_names_the_file_and_the_element() {
             && e.contains("--package-dir"),
         "{e}"
     );
+    // Empty mesh files: the URDF, the link, the mesh file, and that it is empty.
     write(&dir, "empty.stl", b"");
-    let e = load(&urdf_with("empty.stl"), None);
-    assert!(e.contains("empty.stl") && e.contains("link 'b'"), "{e}");
+    write(&dir, "empty.obj", b"\n");
+    for name in ["empty.stl", "empty.obj"] {
+        let e = load(&urdf_with(name), None);
+        assert!(
+            e.contains("r.urdf")
+                && e.contains(&format!("link 'b' mesh '{name}'"))
+                && e.contains(&format!("{name}: the mesh file is empty")),
+            "{e}"
+        );
+    }
     write(
         &dir,
         "nan.obj",
@@ -322,4 +337,231 @@ fn panda_without_its_meshes_names_the_first_link_and_uri() {
             && e.contains("--package-dir"),
         "{e}"
     );
+}
+
+/// A link of the test robots: its name and the content of its `<collision>` element
+/// (`None`: no collision element).
+fn link_xml(name: &str, geometry: Option<&str>) -> String {
+    match geometry {
+        Some(g) => format!(
+            r#"<link name="{name}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><collision>{g}</collision></link>"#
+        ),
+        None => format!(r#"<link name="{name}"/>"#),
+    }
+}
+
+/// A joint of the test robots: name, type, parent and child links, origin and axis.
+fn joint_xml(name: &str, kind: &str, parent: &str, child: &str, xyz: &str, axis: &str) -> String {
+    format!(
+        r#"<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/><origin xyz="{xyz}"/><axis xyz="{axis}"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>"#
+    )
+}
+
+/// The names of the enabled pairs, each sorted, in a sorted list.
+fn enabled_pairs(gm: &GeometryModel) -> Vec<[String; 2]> {
+    let mut out: Vec<[String; 2]> = gm
+        .pairs
+        .iter()
+        .zip(&gm.enabled)
+        .filter(|(_, e)| **e)
+        .map(|(&[a, b], _)| {
+            let mut p = [gm.links[a].name.clone(), gm.links[b].name.clone()];
+            p.sort();
+            p
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn pair_rules_without_an_srdf_drop_adjacent_and_fixed_together_links() {
+    // base ─fixed─ torso ─revolute─ arm1 ─revolute─ arm2 ─fixed─ mount ─fixed─ hand
+    //  │              └─revolute─ head (a branch)
+    //  └─fixed─ caster
+    // `mount` has no geometry: arm2 and hand are fixed to each other without one joint
+    // between them; base, torso and caster ride on the fixed root together.
+    let sphere = r#"<geometry><sphere radius="0.05"/></geometry>"#;
+    let mut urdf = String::from(r#"<robot name="tree">"#);
+    for (name, g) in [
+        ("base", Some(sphere)),
+        ("torso", Some(sphere)),
+        ("caster", Some(sphere)),
+        ("arm1", Some(sphere)),
+        ("arm2", Some(sphere)),
+        ("mount", None),
+        ("hand", Some(sphere)),
+        ("head", Some(sphere)),
+    ] {
+        urdf.push_str(&link_xml(name, g));
+    }
+    for (name, kind, parent, child) in [
+        ("j_torso", "fixed", "base", "torso"),
+        ("j_caster", "fixed", "base", "caster"),
+        ("j_arm1", "revolute", "torso", "arm1"),
+        ("j_arm2", "revolute", "arm1", "arm2"),
+        ("j_mount", "fixed", "arm2", "mount"),
+        ("j_hand", "fixed", "mount", "hand"),
+        ("j_head", "revolute", "torso", "head"),
+    ] {
+        urdf.push_str(&joint_xml(name, kind, parent, child, "0 0 0.3", "0 0 1"));
+    }
+    urdf.push_str("</robot>");
+    let dir = std::env::temp_dir().join(format!("moma_collision_pairs_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = write(&dir, "tree.urdf", urdf.as_bytes());
+    let model = moma::io::urdf::model_from_urdf_file(&path, RootJoint::Fixed).unwrap();
+    let load = |srdf: Option<PathBuf>| {
+        GeometryModel::from_urdf(
+            &model,
+            &path,
+            &GeometryOptions {
+                package_dirs: vec![],
+                srdf,
+            },
+        )
+        .unwrap()
+    };
+    let gm = load(None);
+    assert_eq!(gm.links.len(), 7);
+    assert_eq!(gm.pairs.len(), 21);
+    // Dropped: base–torso, base–caster, torso–caster (the fixed root), arm2–hand (fixed
+    // through mount), torso–arm1, arm1–arm2, torso–head (one joint each).
+    let want: Vec<[String; 2]> = [
+        ["arm1", "base"],
+        ["arm1", "caster"],
+        ["arm1", "hand"],
+        ["arm1", "head"],
+        ["arm2", "base"],
+        ["arm2", "caster"],
+        ["arm2", "head"],
+        ["arm2", "torso"],
+        ["base", "hand"],
+        ["base", "head"],
+        ["caster", "hand"],
+        ["caster", "head"],
+        ["hand", "head"],
+        ["hand", "torso"],
+    ]
+    .iter()
+    .map(|p| p.map(String::from))
+    .collect();
+    assert_eq!(enabled_pairs(&gm), want);
+    assert_eq!(gm.n_enabled(), 14);
+    // An SRDF drops one more pair; a pair naming a link without geometry (mount) is
+    // accepted and changes nothing.
+    let srdf = write(
+        &dir,
+        "tree.srdf",
+        br#"<robot name="tree"><disable_collisions link1="hand" link2="arm1" reason="Never"/><disable_collisions link1="mount" link2="base" reason="Never"/></robot>"#,
+    );
+    let gm = load(Some(srdf));
+    let fewer: Vec<[String; 2]> = want
+        .iter()
+        .filter(|p| *p != &["arm1".to_string(), "hand".to_string()])
+        .cloned()
+        .collect();
+    assert_eq!(fewer.len(), 13);
+    assert_eq!(enabled_pairs(&gm), fewer);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_urdf_capsule_and_an_obj_mesh_measure_their_closed_forms() {
+    // `cap`: a capsule of radius 0.1 whose segment runs from z = 0.3 to 0.7 (length 0.4,
+    // centred at z = 0.5). `ball`: a sphere of radius 0.05 at (0.3, 0, q0). `cube`: an OBJ
+    // cube of half-side 1 scaled by 0.1, centred at (−0.4, 0, q1); a vertex in the middle
+    // of one edge makes its two faces pentagons and the other four are quads, so tobj
+    // triangulates 4 × 2 + 2 × 3 = 14 triangles.
+    let dir = std::env::temp_dir().join(format!("moma_collision_shapes_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write(
+        &dir,
+        "cube.obj",
+        b"# a cube with a pentagon on top\n\
+v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\n\
+v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\nv 1 0 1\n\
+f 1 4 3 2\nf 1 2 6 5\nf 2 3 7 9 6\nf 3 4 8 7\nf 4 1 5 8\nf 5 6 9 7 8\n",
+    );
+    let mut urdf = String::from(r#"<robot name="shapes">"#);
+    urdf.push_str(&link_xml(
+        "cap",
+        Some(r#"<origin xyz="0 0 0.5"/><geometry><capsule radius="0.1" length="0.4"/></geometry>"#),
+    ));
+    urdf.push_str(&link_xml(
+        "ball",
+        Some(r#"<geometry><sphere radius="0.05"/></geometry>"#),
+    ));
+    urdf.push_str(&link_xml(
+        "cube",
+        Some(r#"<geometry><mesh filename="cube.obj" scale="0.1 0.1 0.1"/></geometry>"#),
+    ));
+    urdf.push_str(&joint_xml(
+        "z_ball",
+        "prismatic",
+        "cap",
+        "ball",
+        "0.3 0 0",
+        "0 0 1",
+    ));
+    urdf.push_str(&joint_xml(
+        "z_cube",
+        "prismatic",
+        "cap",
+        "cube",
+        "-0.4 0 0",
+        "0 0 1",
+    ));
+    urdf.push_str("</robot>");
+    let path = write(&dir, "shapes.urdf", urdf.as_bytes());
+    let model = moma::io::urdf::model_from_urdf_file(&path, RootJoint::Fixed).unwrap();
+    let gm = GeometryModel::from_urdf(&model, &path, &GeometryOptions::default()).unwrap();
+    let cube = &gm.objects[gm.links[gm.link_index("cube").unwrap()].first];
+    let mesh = cube.mesh.as_ref().expect("the cube keeps its triangles");
+    assert_eq!((mesh.vertices.len(), mesh.triangles.len()), (9, 14));
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        assert!((b - a).cross(&(c - a)).norm() > 1e-3, "degenerate {t:?}");
+    }
+    let pair = |a: &str, b: &str| {
+        let (ia, ib) = (gm.link_index(a).unwrap(), gm.link_index(b).unwrap());
+        gm.pairs
+            .iter()
+            .position(|p| *p == [ia.min(ib), ia.max(ib)])
+            .unwrap()
+    };
+    let (cap_ball, cap_cube) = (pair("cap", "ball"), pair("cap", "cube"));
+    let (qb, qc) = (
+        model.idx_q[model.joint_id("z_ball").unwrap().0],
+        model.idx_q[model.joint_id("z_cube").unwrap().0],
+    );
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    // (ball height, cube height, ball–capsule, cube–capsule): beside the segment, above
+    // its top end (the cube's nearest edge 0.3 m out and 0.2 m up from it), level with
+    // its top end, below its bottom end (0.3 m out and 0.3 m down).
+    let cases = [
+        (0.5, 0.5, 0.15, 0.2),
+        (1.0, 1.0, 0.18f64.sqrt() - 0.15, 0.13f64.sqrt() - 0.1),
+        (0.7, 0.7, 0.15, 0.2),
+        (-0.1, -0.1, 0.5 - 0.15, 0.18f64.sqrt() - 0.1),
+    ];
+    for (zb, zc, want_ball, want_cube) in cases {
+        let mut q = DVector::zeros(model.nq);
+        q[qb] = zb;
+        q[qc] = zc;
+        forward_kinematics(&model, &mut data, &q);
+        update_geometry_placements(&gm, &data, &mut gd);
+        compute_distances(&gm, &mut gd, PairSelection::All);
+        let (db, dc) = (gd.results[cap_ball].distance, gd.results[cap_cube].distance);
+        assert!(
+            (db - want_ball).abs() < 1e-9,
+            "ball at z {zb}: {db} vs {want_ball}"
+        );
+        assert!(
+            (dc - want_cube).abs() < 1e-9,
+            "cube at z {zc}: {dc} vs {want_cube}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

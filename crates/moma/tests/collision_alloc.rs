@@ -1,16 +1,19 @@
 //! The geometry queries allocate nothing once their workspaces have seen a round of
-//! states: forward kinematics, placements, all self-distances, the in-collision check and
-//! the scene distances on 40 random Fetch states against MotionBenchMaker's cage.
+//! states: forward kinematics, placements, all self-distances, the in-collision check,
+//! the scene distances, the scene's in-collision check and the distance derivatives (of
+//! every enabled pair and of the minimum) on 40 random Fetch states against
+//! MotionBenchMaker's cage.
 
 mod counting_alloc;
 use counting_alloc::allocations;
 use moma::collision::{
     GeometryData, GeometryModel, GeometryOptions, PairSelection, SceneData, SceneOptions,
-    compute_collision, compute_distances, compute_scene_distances, read_scene,
-    update_geometry_placements,
+    compute_collision, compute_distances, compute_scene_distances, distance_derivative,
+    min_distance_gradient, read_scene, scene_collision, update_geometry_placements,
 };
-use moma::kinematics::{forward_kinematics, random_configuration};
+use moma::kinematics::{compute_joint_jacobians, forward_kinematics, random_configuration};
 use moma::multibody::{Data, RootJoint};
+use nalgebra::DVector;
 use rand::SeedableRng;
 use std::path::Path;
 
@@ -40,13 +43,26 @@ fn queries_do_not_allocate_after_warm_up() {
     let states: Vec<_> = (0..40)
         .map(|_| random_configuration(&model, &mut rng))
         .collect();
-    let run = |data: &mut Data, gd: &mut GeometryData, sd: &mut SceneData| {
+    let mut derivative = DVector::zeros(model.nv);
+    // What the queries found, so that the test sees they ran: pairs in collision with the
+    // scene, minima whose derivative was taken, non-zero derivatives.
+    let mut found = [0usize; 3];
+    let mut run = |data: &mut Data, gd: &mut GeometryData, sd: &mut SceneData| {
         for q in &states {
             forward_kinematics(&model, data, q);
             update_geometry_placements(&gm, data, gd);
             compute_distances(&gm, gd, PairSelection::All);
             compute_collision(&gm, gd);
             compute_scene_distances(&gm, gd, &scene, sd);
+            found[0] += usize::from(scene_collision(&gm, gd, &scene, sd).is_some());
+            compute_joint_jacobians(&model, data, q);
+            for p in (0..gm.pairs.len()).filter(|&p| gm.enabled[p]) {
+                distance_derivative(&model, data, &gm, gd, p, &mut derivative);
+                found[2] += usize::from(derivative.amax() > 0.0);
+            }
+            found[1] += usize::from(
+                min_distance_gradient(&model, data, &gm, gd, &scene, sd, &mut derivative).is_some(),
+            );
         }
     };
     run(&mut data, &mut gd, &mut sd);
@@ -54,4 +70,8 @@ fn queries_do_not_allocate_after_warm_up() {
         run(&mut data, &mut gd, &mut sd);
     });
     assert_eq!(count, 0, "the geometry queries allocated");
+    assert!(
+        found[0] > 0 && found[1] == 2 * states.len() && found[2] > 0,
+        "{found:?}"
+    );
 }

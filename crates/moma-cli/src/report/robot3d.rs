@@ -9,8 +9,10 @@
 //! Meshes above a triangle budget are simplified by vertex clustering.
 
 use super::view3d::{MAX_TRIANGLES, ReportGeometry, ReportShape, ReportView3d};
-use moma::collision::mesh::{TriangleMesh, convex_hull_vertices, read_mesh};
-use moma::collision::urdf_geometry::{GeometrySpec, UrdfGeometry, read_urdf_geometry, resolve_uri};
+use moma::collision::mesh::{TriangleMesh, convex_hull_vertices};
+use moma::collision::urdf_geometry::{
+    GeometrySpec, UrdfGeometry, read_link_mesh, read_urdf_geometry,
+};
 use moma::collision::{Convex, Scene};
 use moma::multibody::{Data, FrameKind, JointIndex, Model};
 use moma::spatial::SE3;
@@ -151,8 +153,7 @@ impl RobotShapes {
         for g in &chosen {
             meshes.push(match &g.spec {
                 GeometrySpec::Mesh { uri, scale } => {
-                    let path = resolve_uri(uri, &g.link, dir, &dirs)?;
-                    Some(read_mesh(&path, *scale)?)
+                    Some(read_link_mesh(urdf, &g.link, uri, *scale, &dirs)?)
                 }
                 _ => None,
             });

@@ -2,9 +2,9 @@
 //! rigid-body `Model`, and the link pairs to check.
 
 use super::convex::Convex;
-use super::mesh::{ConvexHullData, TriangleMesh, convex_hull_vertices, read_mesh};
+use super::mesh::{ConvexHullData, TriangleMesh, convex_hull_vertices};
 use super::srdf::disabled_pairs;
-use super::urdf_geometry::{GeometrySpec, UrdfGeometry, read_urdf_geometry, resolve_uri};
+use super::urdf_geometry::{GeometrySpec, UrdfGeometry, read_link_mesh, read_urdf_geometry};
 use crate::multibody::{FrameKind, JointIndex, Model};
 use crate::spatial::SE3;
 use crate::{Error, Result};
@@ -75,19 +75,18 @@ impl GeometryModel {
     /// Reads the `<collision>` geometry of a URDF for `model` (loaded from the same file).
     ///
     /// # Errors
-    /// [`Error::Io`] / [`Error::Parse`] naming the URDF, SRDF or mesh file and the element;
-    /// [`Error::InvalidInput`] naming the link and URI of a mesh that does not resolve,
-    /// or an SRDF pair naming a link the URDF lacks.
+    /// [`Error::Io`] / [`Error::Parse`] naming the URDF or SRDF file and the element; for a
+    /// mesh, the URDF file, the link and the URI, and why the URI does not resolve or the
+    /// mesh file and what is wrong with it ([`read_link_mesh`]); an SRDF pair naming a
+    /// link the URDF lacks.
     pub fn from_urdf(model: &Model, urdf: &Path, options: &GeometryOptions) -> Result<Self> {
         let text = std::fs::read_to_string(urdf).map_err(|source| Error::Io {
             path: urdf.to_path_buf(),
             source,
         })?;
         let elements = read_urdf_geometry(&text, &urdf.display().to_string())?;
-        let dir = urdf.parent().unwrap_or(Path::new("."));
         let mut gm = Self::from_elements(model, &elements.collisions, |g, uri, scale| {
-            let path = resolve_uri(uri, &g.link, dir, &options.package_dirs)?;
-            let mesh = read_mesh(&path, scale).map_err(|e| in_link(e, &g.link, uri))?;
+            let mesh = read_link_mesh(urdf, &g.link, uri, scale, &options.package_dirs)?;
             Ok((convex_hull_vertices(&mesh.vertices), Arc::new(mesh)))
         })?;
         let adjacent: Vec<(usize, usize)> = elements
@@ -258,15 +257,5 @@ pub(super) fn bounding_radius_about(shape: &Convex, centre: &Vector3<f64>) -> f6
             .map(|v| (v - centre).norm())
             .fold(0.0, f64::max),
         other => other.bounding_radius(),
-    }
-}
-
-fn in_link(e: Error, link: &str, uri: &str) -> Error {
-    match e {
-        Error::Parse { path, message } => Error::Parse {
-            path,
-            message: format!("link '{link}' mesh '{uri}': {message}"),
-        },
-        other => other,
     }
 }

@@ -21,27 +21,38 @@ pub const MAX_MESH_VERTICES: usize = 5_000_000;
 /// (case-insensitive), and scales it.
 ///
 /// # Errors
-/// [`Error::Io`] if the file cannot be read; [`Error::Parse`] naming the file for a
-/// malformed or empty mesh, a non-finite vertex, an index out of range, or an extension
-/// other than `.stl` / `.obj`.
+/// [`Error::Parse`] naming the file for an extension other than `.stl` / `.obj`, an empty
+/// file (nothing but whitespace), a malformed mesh or one without triangles, a
+/// non-finite vertex or an index out of range; [`Error::Io`] if the file cannot be read.
 pub fn read_mesh(path: &Path, scale: [f64; 3]) -> Result<TriangleMesh> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    let parse: fn(&[u8]) -> std::result::Result<TriangleMesh, String> = match ext.as_deref() {
+        Some("stl") => stl_from_bytes,
+        Some("obj") => obj_from_bytes,
+        _ => {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "unsupported mesh format '{}' (expected .stl or .obj)",
+                    ext.unwrap_or_default()
+                ),
+            ));
+        }
+    };
     let bytes = std::fs::read(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    let mesh = match ext.as_deref() {
-        Some("stl") => stl_from_bytes(&bytes),
-        Some("obj") => obj_from_bytes(&bytes),
-        _ => Err(format!(
-            "unsupported mesh format '{}' (expected .stl or .obj)",
-            ext.unwrap_or_default()
-        )),
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(Error::parse(
+            path,
+            format!("the mesh file is empty ({} bytes)", bytes.len()),
+        ));
     }
-    .map_err(|m| Error::parse(path, m))?;
+    let mesh = parse(&bytes).map_err(|m| Error::parse(path, m))?;
     scaled(mesh, scale).map_err(|m| Error::parse(path, m))
 }
 

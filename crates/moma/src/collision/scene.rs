@@ -617,7 +617,7 @@ pub fn scene_from_str(text: &str, path: &Path, opts: &SceneOptions) -> Result<Sc
         }
         for (i, (m, pose)) in o.meshes.iter().zip(&o.mesh_poses).enumerate() {
             let pose = parse_pose(pose).map_err(|e| at(format!("mesh_poses[{i}]: {e}")))?;
-            let file = resolve_uri(&m.resource, &o.id, dir, &opts.package_dirs)
+            let file = resolve_uri(&m.resource, dir, &opts.package_dirs)
                 .map_err(|e| at(format!("meshes[{i}]: {e}")))?;
             let mesh = read_mesh(&file, [1.0; 3]).map_err(|e| at(format!("meshes[{i}]: {e}")))?;
             let hull = convex_hull_vertices(&mesh.vertices);

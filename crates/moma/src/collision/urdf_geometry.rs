@@ -1,7 +1,8 @@
 //! The URDF's `<collision>` and `<visual>` elements and its link tree, read in their own
-//! pass with `quick-xml` (the rigid-body loader strips them), and mesh URIs resolved
-//! against package folders.
+//! pass with `quick-xml` (the rigid-body loader strips them), and their meshes read (URIs
+//! resolved against package folders).
 
+use super::mesh::{TriangleMesh, read_mesh};
 use crate::spatial::SE3;
 use crate::{Error, Result};
 use quick_xml::events::{BytesStart, Event};
@@ -234,22 +235,17 @@ fn finish(
 
 /// Resolves a mesh URI: `package://PKG/REST` as `DIR/PKG/REST` (or `DIR/REST` when `DIR`
 /// is the package folder itself) for each of `package_dirs` in turn, then each folder of
-/// `ROS_PACKAGE_PATH`; `file://PATH` as `PATH`; any other URI relative to `urdf_dir`.
+/// `ROS_PACKAGE_PATH`; `file://PATH` as `PATH`; any other URI relative to `dir` (the
+/// folder of the file that names it).
 ///
 /// # Errors
-/// [`Error::InvalidInput`] naming the link and the URI when no candidate file exists.
+/// A message naming the URI and where it was looked for when no candidate file exists;
+/// the caller names its file and element ([`read_link_mesh`] for a URDF's meshes).
 pub fn resolve_uri(
     uri: &str,
-    link: &str,
-    urdf_dir: &Path,
+    dir: &Path,
     package_dirs: &[PathBuf],
-) -> Result<PathBuf> {
-    let not_found = |tried: &str| {
-        Error::invalid(
-            format!("link '{link}' mesh"),
-            format!("cannot resolve '{uri}' ({tried})"),
-        )
-    };
+) -> std::result::Result<PathBuf, String> {
     if let Some(rest) = uri.strip_prefix("package://") {
         let (pkg, path) = rest.split_once('/').unwrap_or((rest, ""));
         let mut dirs: Vec<PathBuf> = package_dirs.to_vec();
@@ -265,24 +261,51 @@ pub fn resolve_uri(
                 }
             }
         }
-        return Err(not_found(if dirs.is_empty() {
-            "no package folder given: use --package-dir"
-        } else {
-            "not found in any package folder"
-        }));
+        return Err(format!(
+            "cannot resolve '{uri}' ({})",
+            if dirs.is_empty() {
+                "no package folder given: use --package-dir"
+            } else {
+                "not found in any package folder"
+            }
+        ));
     }
     let path = uri.strip_prefix("file://").unwrap_or(uri);
     let p = Path::new(path);
     let p = if p.is_absolute() {
         p.to_path_buf()
     } else {
-        urdf_dir.join(p)
+        dir.join(p)
     };
     if p.is_file() {
         Ok(p)
     } else {
-        Err(not_found("no such file"))
+        Err(format!(
+            "cannot resolve '{uri}' (no such file {})",
+            p.display()
+        ))
     }
+}
+
+/// Reads the mesh of a `<mesh filename="uri" scale>` element of link `link` in the URDF
+/// file `urdf`: the URI resolved against the URDF's folder and `package_dirs`
+/// ([`resolve_uri`]), the file read and scaled ([`read_mesh`]).
+///
+/// # Errors
+/// [`Error::Parse`] naming the URDF file, the link and the URI, and then either why the
+/// URI does not resolve or the mesh file and what is wrong with it (unreadable, empty,
+/// malformed, non-finite, not STL or OBJ).
+pub fn read_link_mesh(
+    urdf: &Path,
+    link: &str,
+    uri: &str,
+    scale: [f64; 3],
+    package_dirs: &[PathBuf],
+) -> Result<TriangleMesh> {
+    let at = |m: String| Error::parse(urdf, format!("link '{link}' mesh '{uri}': {m}"));
+    let dir = urdf.parent().unwrap_or(Path::new("."));
+    let path = resolve_uri(uri, dir, package_dirs).map_err(at)?;
+    read_mesh(&path, scale).map_err(|e| at(e.to_string()))
 }
 
 #[cfg(test)]

@@ -11,14 +11,14 @@
 
 use super::clearance::ClearanceChecker;
 use super::group::JointGroup;
-use crate::collision::mesh::{TriangleMesh, read_mesh};
-use crate::collision::urdf_geometry::{GeometrySpec, read_urdf_geometry, resolve_uri};
+use crate::collision::mesh::TriangleMesh;
+use crate::collision::urdf_geometry::{GeometrySpec, read_link_mesh, read_urdf_geometry};
 use crate::collision::{Convex, GeometryModel, GeometryObject, LinkGeometry, Scene};
 use crate::multibody::{FrameKind, Model};
 use crate::spatial::SE3;
 use crate::{Error, Result};
 use nalgebra::Vector3;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Where the URDF's meshes are: the file and the package folders.
 #[derive(Clone, Debug)]
@@ -56,7 +56,6 @@ pub fn with_mesh_surface(
         .iter()
         .find(|f| f.kind == FrameKind::Body && f.name == link)
         .ok_or_else(|| Error::invalid(format!("link '{link}'"), "is not a body of the model"))?;
-    let dir = source.urdf.parent().unwrap_or(Path::new("."));
     let mine: Vec<_> = elements
         .collisions
         .iter()
@@ -80,8 +79,7 @@ pub fn with_mesh_surface(
             replaced.push(original.clone());
             continue;
         };
-        let path = resolve_uri(uri, link, dir, &source.package_dirs)?;
-        let mesh = read_mesh(&path, *scale)?;
+        let mesh = read_link_mesh(&source.urdf, link, uri, *scale, &source.package_dirs)?;
         let placement: SE3 = frame.placement * g.origin;
         let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
         let mut leaves = Vec::new();
@@ -166,12 +164,16 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
         source: e,
     })?;
     let elements = read_urdf_geometry(&text, &source.urdf.display().to_string())?;
-    let dir = source.urdf.parent().unwrap_or(Path::new("."));
     let mut out = Vec::new();
     for g in elements.collisions.iter().filter(|g| g.link == link) {
         if let GeometrySpec::Mesh { uri, scale } = &g.spec {
-            let path = resolve_uri(uri, link, dir, &source.package_dirs)?;
-            out.push(read_mesh(&path, *scale)?);
+            out.push(read_link_mesh(
+                &source.urdf,
+                link,
+                uri,
+                *scale,
+                &source.package_dirs,
+            )?);
         }
     }
     Ok(out)
