@@ -253,11 +253,13 @@ pub fn aba_derivatives(
     let (qs, vs, ts) = (q.as_slice(), v.as_slice(), tau.as_slice());
     // the passes at a = 0 give H, ∂τ/∂v and h = RNEA(q, v, 0) (pass convention)
     dd.layout.v_to_pinocchio(qs, vs, dd.v_local.as_mut_slice());
-    dd.a_local.fill(0.0);
+    dd.a_local.as_mut_slice().fill(0.0);
     forward_pass(model, dd, qs);
     composite_pass(model, dd);
     // q̈ = H⁻¹ (τ − h) in the pass's convention, into a_local
-    dd.fact.copy_from(&dd.drnea_da);
+    dd.fact
+        .as_mut_slice()
+        .copy_from_slice(dd.drnea_da.as_slice());
     if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
         return Err(singular(dd, k));
     }
@@ -288,7 +290,9 @@ pub fn aba_derivatives(
     );
     if dd.layout.has_planar_root() {
         // moma's H differs from the pass's by the planar root's rotation
-        dd.fact.copy_from(&dd.drnea_da);
+        dd.fact
+            .as_mut_slice()
+            .copy_from_slice(dd.drnea_da.as_slice());
         if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
             return Err(singular(dd, k));
         }
@@ -297,16 +301,13 @@ pub fn aba_derivatives(
     let nv = model.nv;
     let m = 3 * nv;
     let rows = dd.rows.as_mut_slice();
-    let (dq, dv) = (dd.drnea_dq.as_slice(), dd.drnea_dv.as_slice());
     for r in 0..nv {
-        let row = &mut rows[r * m..(r + 1) * m];
-        row[..nv].fill(0.0);
+        let row = &mut rows[r * m..r * m + nv];
+        row.fill(0.0);
         row[r] = 1.0;
-        for c in 0..nv {
-            row[nv + c] = -dq[c * nv + r];
-            row[2 * nv + c] = -dv[c * nv + r];
-        }
     }
+    transpose::<true>(dd.drnea_dq.as_slice(), nv, &mut rows[nv..], m, nv);
+    transpose::<true>(dd.drnea_dv.as_slice(), nv, &mut rows[2 * nv..], m, nv);
     ltdl_solve_rows(
         &dd.fact,
         &dd.dof_parent,
@@ -321,19 +322,55 @@ pub fn aba_derivatives(
         dd.daba_dv.as_mut_slice(),
         dd.daba_dtau.as_mut_slice(),
     );
+    transpose::<false>(&rows[nv..], m, oq, nv, nv);
+    transpose::<false>(&rows[2 * nv..], m, ov, nv, nv);
+    // H⁻¹ from its upper triangle (row r, columns r..), exactly symmetric: the whole
+    // block transposed gives the upper triangle, then each row r's columns r.. are the
+    // lower triangle's column r
+    transpose::<false>(rows, m, ot, nv, nv);
     for r in 0..nv {
-        let row = &rows[r * m..(r + 1) * m];
-        for c in 0..nv {
-            oq[c * nv + r] = row[nv + c];
-            ov[c * nv + r] = row[2 * nv + c];
-        }
-        // H⁻¹ from its upper triangle (row r, columns r..), exactly symmetric
-        ot[r * nv + r..(r + 1) * nv].copy_from_slice(&row[r..nv]);
-        for c in r + 1..nv {
-            ot[c * nv + r] = row[c];
-        }
+        ot[r * nv + r..(r + 1) * nv].copy_from_slice(&rows[r * m + r..r * m + nv]);
     }
     Ok(())
+}
+
+/// `dst[r dst_stride + c] = ±src[c src_stride + r]` for `r, c < n` (negated when `NEG`):
+/// the transpose of an `n × n` block between a column-major matrix and rows, or back.
+/// Done by tiles of 8 × 8, each read as 8 contiguous runs and written as 8, instead of
+/// one strided access per entry.
+fn transpose<const NEG: bool>(
+    src: &[f64],
+    src_stride: usize,
+    dst: &mut [f64],
+    dst_stride: usize,
+    n: usize,
+) {
+    const T: usize = 8;
+    let sign = |x: f64| if NEG { -x } else { x };
+    let tiled = n / T * T;
+    for c0 in (0..tiled).step_by(T) {
+        for r0 in (0..tiled).step_by(T) {
+            let mut tile = [[0.0; T]; T];
+            for (j, t) in tile.iter_mut().enumerate() {
+                let at = (c0 + j) * src_stride + r0;
+                t.copy_from_slice(&src[at..at + T]);
+            }
+            for i in 0..T {
+                let at = (r0 + i) * dst_stride + c0;
+                for (d, t) in dst[at..at + T].iter_mut().zip(&tile) {
+                    *d = sign(t[i]);
+                }
+            }
+        }
+    }
+    // the edges the tiles leave: rows tiled.. of every column, and columns tiled.. of the
+    // tiled rows
+    for c in 0..n {
+        let r_from = if c < tiled { tiled } else { 0 };
+        for r in r_from..n {
+            dst[r * dst_stride + c] = sign(src[c * src_stride + r]);
+        }
+    }
 }
 
 /// Fills the forward-dynamics outputs with NaN and names the failed pivot.
@@ -387,8 +424,9 @@ fn forward_pass(model: &Model, dd: &mut DerivativeData, qs: &[f64]) {
 /// [`dq_pass`]. Everything here but τ is independent of the acceleration.
 fn composite_pass(model: &Model, dd: &mut DerivativeData) {
     let nv = model.nv;
-    dd.drnea_dv.fill(0.0);
-    dd.drnea_da.fill(0.0);
+    // a slice's fill is a memset; the matrix's own is an element iterator
+    dd.drnea_dv.as_mut_slice().fill(0.0);
+    dd.drnea_da.as_mut_slice().fill(0.0);
     // column-major storage: entry (r, c) at c nv + r
     let (dv, da) = (dd.drnea_dv.as_mut_slice(), dd.drnea_da.as_mut_slice());
     for i in (1..model.njoints).rev() {
@@ -436,8 +474,8 @@ fn composite_pass(model: &Model, dd: &mut DerivativeData) {
 /// subtree forces of the current acceleration.
 fn dq_pass(model: &Model, dd: &mut DerivativeData) {
     let nv = model.nv;
-    dd.drnea_dq.fill(0.0);
     let dq = dd.drnea_dq.as_mut_slice();
+    dq.fill(0.0);
     for i in (1..model.njoints).rev() {
         let (ic, bc, f) = (&dd.ic[i], &dd.bc[i], &dd.force[i]);
         let iv = model.idx_v[i];
