@@ -129,6 +129,7 @@ fn plan<'py>(
         turn_cost: 1.0,
         smooth,
         timing: None,
+        polygon_check: None,
     };
     let grid = &grid.grid;
     let found = py.detach(|| pipeline::plan(grid, &request)).map_err(err)?;

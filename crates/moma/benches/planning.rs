@@ -1059,6 +1059,7 @@ fn bench_pipeline(c: &mut Criterion) {
         turn_cost: 1.0,
         smooth: true,
         timing: Some(Timing::StopAndTurn { limits, dt: 0.1 }),
+        polygon_check: None,
     };
     let disk = request(RobotFootprint::Disk(0.1));
     let poly = request(RobotFootprint::Polygon(polygon.clone()));

@@ -298,6 +298,9 @@ pub fn run(args: Args) -> Result<()> {
             limits: platform_limits(&args),
             dt: args.dt,
         }),
+        // `--footprint` searches the polygon's heading lattice, exact at the headings the
+        // path is driven with: no check of the timed path needed (docs/planning.md)
+        polygon_check: None,
     };
     let plan = pipeline::plan(&loaded.grid, &request)?;
     if plan.status == PlanStatus::Unreachable {

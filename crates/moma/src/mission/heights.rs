@@ -26,7 +26,7 @@ use crate::collision::{
 use crate::error::{Error, Result};
 use crate::mobile::WheeledModel;
 use crate::planning::OccupancyGrid;
-use crate::planning::footprint_clearance::convex_polygon_cells;
+use crate::planning::costmap::{CellContact, polygon_cells};
 use crate::planning::grid::OCCUPIED;
 use crate::spatial::SE3;
 
@@ -141,7 +141,7 @@ pub fn block_scene_footprint(grid: &mut OccupancyGrid, objects: &[SceneObject]) 
             .iter()
             .map(|p| grid.world_to_cell_f(p.x, p.y))
             .collect();
-        for (x, y) in convex_polygon_cells(&hull, grid.width, grid.height) {
+        for (x, y) in polygon_cells(&hull, grid.width, grid.height, CellContact::Overlapping) {
             let c = &mut grid.cells[y * grid.width + x];
             if *c != OCCUPIED {
                 *c = OCCUPIED;

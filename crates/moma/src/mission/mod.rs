@@ -8,7 +8,7 @@
 //! | step | what runs |
 //! | --- | --- |
 //! | map → C-space | [`crate::planning::load_map`] plus the `[[map.boxes]]` and `[task]` scene objects the robot cannot pass under ([`heights`]), the distance transform, disk dilation by `footprint_radius` + ½ cell (with the robot's footprint polygon: by the largest disk about the axle inside it) |
-//! | footprint polygon | every sample of a timed path checked with the polygon at its heading ([`crate::planning::footprint_clearance`]); colliding cells blocked and re-planned, the circumscribed disk as the fallback |
+//! | footprint polygon | every sample of a timed path checked with the polygon at its heading (the planning pipeline's check, [`crate::planning::footprint_clearance::PathCheck`]); colliding cells blocked and re-planned, the circumscribed disk as the fallback |
 //! | search | [`crate::planning::dstar_lite::DStarLite`] from the start pose's cell to the goal's cell |
 //! | path → motion | curvature-bounded smoothing from the exact start pose to the exact goal pose ([`crate::planning::curvature::smooth_diff_drive`]), then near time-optimal timing under v, ω, a, α and the tip-over accelerations ([`crate::stability::acceleration_limits`] of the transport posture, times `tip_fraction`; [`crate::planning::trajectory::time_parameterize_curve`]), re-plans continuing from the current speed |
 //! | off-axle base (`d ≠ 0`) | search, smoothing, timing and Kanayama work on the driven-axle midpoint (base pose − d·heading), the unicycle point whose speed and yaw rate are the reduced platform inputs; its C-space is dilated by `footprint_radius + |d|` (the footprint disk about the base frame at every heading); reference, tracking error, paths and tolerances are reported for the base frame |

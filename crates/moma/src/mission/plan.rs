@@ -8,9 +8,9 @@ use super::scenario::Mission;
 use crate::error::{Error, Result};
 use crate::planning::costmap;
 use crate::planning::dstar_lite::DStarLite;
-use crate::planning::footprint_clearance::ConvexFootprint;
+use crate::planning::footprint_clearance::PathCheck;
 use crate::planning::pipeline::{
-    self, Frame, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search,
+    self, Frame, PlanFields, PlanRequest, PlanStatus, PolygonCheck, RobotFootprint, Search,
 };
 use crate::planning::{OccupancyGrid, SearchGrid, distance_transform};
 
@@ -32,37 +32,10 @@ pub(crate) struct Planner {
     pub r_cells: f64,
     pub dstar: DStarLite,
     pub goal_cell: (usize, usize),
-    /// The footprint polygon the paths are checked with (`robot.footprint = "robot"`),
-    /// `None` for a disk.
-    pub polygon: Option<PolygonCheck>,
-}
-
-/// The heading-aware check of the robot's footprint polygon against the occupied cells
-/// (nav2's approach: the C-space is a cheap lower bound, here the largest disk about the
-/// driven-axle midpoint inside the polygon; each pose of the smoothed, timed path is then
-/// checked with the polygon at its heading).
-pub(crate) struct PolygonCheck {
-    /// The polygon about the base frame origin, in cells.
-    pub footprint: ConvexFootprint,
-    /// The padding the polygon must keep from the obstacles (cells).
-    pub padding: f64,
-    /// The base frame origin's offset ahead of the axle midpoint (cells).
-    pub d: f64,
-    /// Scratch of the placed vertices.
-    placed: Vec<[f64; 2]>,
-}
-
-impl PolygonCheck {
-    /// The check of `footprint` (cells, about the base frame origin) with `padding` and
-    /// the base frame `d` cells ahead of the axle midpoint.
-    pub fn new(footprint: ConvexFootprint, padding: f64, d: f64) -> Self {
-        Self {
-            footprint,
-            padding,
-            d,
-            placed: Vec::new(),
-        }
-    }
+    /// The pipeline's check of the paths with the footprint polygon
+    /// (`robot.footprint = "robot"`, the base frame `d` ahead of the planned axle
+    /// midpoint), `None` for a disk.
+    pub polygon: Option<PathCheck>,
 }
 
 /// A path of cells `(x, y)`, start to goal.
@@ -81,7 +54,8 @@ pub struct SearchTiming {
 impl Planner {
     /// Builds the configuration space and plans once from `start` to `goal` (world, the
     /// driven-axle midpoints) through [`pipeline::plan`] with D* Lite, keeping its D* Lite
-    /// state for the re-plans. The footprint is a disk of `footprint_radius` about the
+    /// state for the re-plans and, with `polygon`, its check of the paths with the
+    /// footprint polygon. The footprint is a disk of `footprint_radius` about the
     /// base frame origin, which lies `axle_offset` (the drive's `d`) ahead of the axle
     /// midpoint; the planned point being the axle midpoint, the obstacles are dilated by
     /// `footprint_radius + |axle_offset|` (the disk about the axle midpoint that holds
@@ -90,28 +64,29 @@ impl Planner {
     ///
     /// # Errors
     /// Start or goal outside the map, in an obstacle, or where the footprint does not fit
-    /// (the start's message says when it fits nowhere). An unreachable goal is not an
-    /// error: the returned path is `None`.
+    /// (the start's message says when it fits nowhere); a polygon that is not convex. An
+    /// unreachable goal is not an error: the returned path is `None`.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         grid: &OccupancyGrid,
         unknown_is_obstacle: bool,
         fields: PlanFields,
         footprint_radius: f64,
         axle_offset: f64,
+        polygon: Option<PolygonCheck>,
         start: [f64; 2],
         goal: [f64; 2],
     ) -> Result<(Self, Option<CellPath>, SearchTiming)> {
-        let plan = pipeline::plan(
-            grid,
-            &first_plan_request(
-                unknown_is_obstacle,
-                fields,
-                footprint_radius,
-                axle_offset,
-                start,
-                goal,
-            ),
-        )?;
+        let mut request = first_plan_request(
+            unknown_is_obstacle,
+            fields,
+            footprint_radius,
+            axle_offset,
+            start,
+            goal,
+        );
+        request.polygon_check = polygon;
+        let plan = pipeline::plan(grid, &request)?;
         let Some(dstar) = plan.dstar else {
             return Err(Error::Planning(
                 "the planning pipeline gave no D* Lite state for a D* Lite search".into(),
@@ -132,7 +107,7 @@ impl Planner {
                 r_cells: plan.reach_cells,
                 dstar,
                 goal_cell: plan.goal_cell,
-                polygon: None,
+                polygon: plan.path_check,
             },
             path,
             timing,
@@ -185,37 +160,29 @@ impl Planner {
         Ok((newly, clock.elapsed().as_secs_f64()))
     }
 
-    /// The world pose `[x, y, θ]` in the grid's continuous cell coordinates and frame.
-    fn to_cells(grid: &OccupancyGrid, pose: [f64; 3]) -> [f64; 3] {
-        let [fx, fy] = grid.world_to_cell_f(pose[0], pose[1]);
-        let yaw0 = if grid.kind == crate::planning::MapKind::Ros {
-            grid.origin[2]
-        } else {
-            0.0
-        };
-        [fx, fy, pose[2] - yaw0]
-    }
-
     /// `true` when the footprint with the axle midpoint at the world pose `axle`
     /// collides: the polygon at the pose's heading comes closer than its padding to an
     /// occupied cell; without a polygon, the axle midpoint's C-space cell is blocked.
     pub fn axle_collides(&mut self, grid: &OccupancyGrid, axle: [f64; 3]) -> bool {
-        let [fx, fy, th] = Self::to_cells(grid, axle);
         let Some(pc) = self.polygon.as_mut() else {
+            let [fx, fy, _] = PathCheck::pose_in_cells(grid, axle);
             return self.blocked_at(fx, fy);
         };
-        let (s, c) = th.sin_cos();
-        let base = [fx + pc.d * c, fy + pc.d * s, th];
-        pc.footprint
-            .clearance(
-                &self.occupied,
-                self.width,
-                self.height,
-                base,
-                pc.padding,
-                &mut pc.placed,
-            )
-            .is_some_and(|d| d < pc.padding)
+        pc.collides(grid, &self.occupied, axle)
+    }
+
+    /// The cells of the axle midpoints among `poses` (world, in order) where the
+    /// footprint polygon collides ([`PathCheck::colliding_cells`]), each once; none
+    /// without the polygon.
+    pub fn colliding_cells(
+        &mut self,
+        grid: &OccupancyGrid,
+        poses: impl IntoIterator<Item = [f64; 3]>,
+    ) -> Vec<(usize, usize)> {
+        match self.polygon.as_mut() {
+            Some(pc) => pc.colliding_cells(grid, &self.occupied, poses),
+            None => Vec::new(),
+        }
     }
 
     /// The clearance (m) of the footprint with the base frame at the world pose `base`:
@@ -232,21 +199,20 @@ impl Planner {
         exact: f64,
     ) -> f64 {
         let res = grid.resolution;
-        let [fx, fy, th] = Self::to_cells(grid, base);
+        let [fx, fy, th] = PathCheck::pose_in_cells(grid, base);
         let Some(pc) = self.polygon.as_mut() else {
             return self
                 .obstacle_distance(fx, fy, (r_foot + exact) / res)
                 .map_or(f64::INFINITY, |d| d * res - r_foot);
         };
-        let near = pc.footprint.clearance(
+        let near = pc.clearance(
             &self.occupied,
             self.width,
             self.height,
             [fx, fy, th],
             exact / res,
-            &mut pc.placed,
         );
-        let (circ, pad) = (pc.footprint.circumscribed(), pc.padding);
+        let (circ, pad) = (pc.footprint().circumscribed(), pc.padding());
         let cells = match near {
             Some(d) => Some(d),
             // the disk about the base that holds the polygon bounds it from below
@@ -427,6 +393,7 @@ pub(crate) fn first_plan_request(
         turn_cost: 1.0,
         smooth: false,
         timing: None,
+        polygon_check: None,
     }
 }
 
@@ -449,29 +416,26 @@ pub(super) fn mission_planner(
         None if m.file.robot.footprint.is_some() => ("robot.footprint", footprint.radius, d),
         None => ("robot.footprint_radius", footprint.radius, d),
     };
+    let check = polygon.map(|(polygon, _)| PolygonCheck {
+        polygon,
+        padding: footprint.padding(),
+        ahead: d,
+    });
     let fields = PlanFields {
         start: "start.pose",
         goal: "goal.pose",
         radius: field,
     };
-    let (mut planner, path, search) = Planner::new(
+    Planner::new(
         grid,
         m.file.map.unknown_is_obstacle,
         fields,
         radius,
         offset,
+        check,
         [from[0], from[1]],
         [to[0], to[1]],
-    )?;
-    if let Some((fp, _)) = polygon {
-        let res = grid.resolution;
-        planner.polygon = Some(PolygonCheck::new(
-            ConvexFootprint::new(&fp, res)?,
-            footprint.padding() / res,
-            d / res,
-        ));
-    }
-    Ok((planner, path, search))
+    )
 }
 
 #[cfg(test)]

@@ -180,20 +180,11 @@ impl Runner<'_> {
         )
     }
 
-    /// The axle cells of the samples of `r` where the footprint collides
-    /// ([`Planner::axle_collides`]), each once.
+    /// The axle cells of the samples of `r` where the footprint polygon collides
+    /// ([`super::plan::Planner::colliding_cells`]), each once.
     pub(super) fn colliding_cells(&mut self, r: &Reference) -> Vec<(usize, usize)> {
-        let mut out = Vec::new();
-        for s in &r.samples {
-            let p = [s.x, s.y, s.theta];
-            if self.planner.axle_collides(&self.m.map.grid, p) {
-                let c = self.cell_of(p);
-                if !out.contains(&c) {
-                    out.push(c);
-                }
-            }
-        }
-        out
+        let poses = r.samples.iter().map(|s| [s.x, s.y, s.theta]);
+        self.planner.colliding_cells(&self.m.map.grid, poses)
     }
 
     /// Smooths and times `cells` from `start` (`None` without timing accelerations),

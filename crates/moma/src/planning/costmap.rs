@@ -217,25 +217,7 @@ impl Footprint {
 
     /// Point-in-polygon test (boundary counts as inside).
     pub fn contains(&self, x: f64, y: f64) -> bool {
-        let v = &self.vertices;
-        let n = v.len();
-        let mut inside = false;
-        for i in 0..n {
-            let (a, b) = (v[i], v[(i + 1) % n]);
-            // On the edge?
-            let cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
-            let within = (x - a[0]) * (x - b[0]) <= 1e-12 && (y - a[1]) * (y - b[1]) <= 1e-12;
-            if cross.abs() <= 1e-12 * (1.0 + (b[0] - a[0]).abs() + (b[1] - a[1]).abs()) && within {
-                return true;
-            }
-            if (a[1] > y) != (b[1] > y) {
-                let xi = a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
-                if x < xi {
-                    inside = !inside;
-                }
-            }
-        }
-        inside
+        polygon_contains(&self.vertices, x, y)
     }
 
     /// Radius of the largest origin-centred circle inside the polygon (nav2's inscribed
@@ -273,36 +255,131 @@ impl Footprint {
                 ]
             })
             .collect();
-        let rotated = Footprint { vertices: poly };
         let r = (self.circumscribed_radius() / resolution + std::f64::consts::FRAC_1_SQRT_2).ceil()
             as i64;
-        let mut out = Vec::new();
-        for dy in -r..=r {
-            for dx in -r..=r {
-                if rotated.meets_cell(dx as f64, dy as f64) {
-                    out.push((dx, dy));
-                }
-            }
-        }
-        out
-    }
-
-    /// Whether the polygon (in cells) meets the closed square of side one cell centred at
-    /// `(x, y)`: an edge crosses or touches the square (which also finds a polygon inside
-    /// the square), or the square lies inside the polygon (its centre does). The square
-    /// is widened by [`CELL_CONTACT_SLACK`] so that rounding never misses a touch.
-    fn meets_cell(&self, x: f64, y: f64) -> bool {
-        let h = 0.5 + CELL_CONTACT_SLACK;
-        let (lo, hi) = ([x - h, y - h], [x + h, y + h]);
-        let v = &self.vertices;
-        (0..v.len()).any(|i| segment_meets_box(v[i], v[(i + 1) % v.len()], lo, hi))
-            || self.contains(x, y)
+        cells_meeting(&poly, [-r, r], [-r, r], 0.0, CellContact::Touching)
     }
 }
 
-/// How far (cells) a cell's square is widened for the footprint test: far below any
-/// map's resolution, far above the rounding of a rotation.
+/// When a polygon counts as covering a cell's square.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CellContact {
+    /// A cell the polygon touches counts (the square widened by [`CELL_CONTACT_SLACK`],
+    /// so that rounding never misses a touch): the footprint C-space's conservative rule,
+    /// a footprint that clips only a corner of an occupied cell collides with it.
+    Touching,
+    /// Only a cell the polygon enters counts (the square narrowed by [`TOUCH`]): the
+    /// rasterisation of an obstacle's outline, whose edge on a cell boundary, off by
+    /// rounding, only touches the cell beyond.
+    Overlapping,
+}
+
+impl CellContact {
+    /// Half the side (cells) of the square tested for a cell.
+    fn half_side(self) -> f64 {
+        match self {
+            Self::Touching => 0.5 + CELL_CONTACT_SLACK,
+            Self::Overlapping => 0.5 - TOUCH,
+        }
+    }
+}
+
+/// How far (cells) a cell's square is widened for [`CellContact::Touching`]: far below
+/// any map's resolution, far above the rounding of a rotation.
 const CELL_CONTACT_SLACK: f64 = 1e-9;
+
+/// How deep (cells) a polygon must enter a cell for [`CellContact::Overlapping`] to
+/// count it.
+pub const TOUCH: f64 = 1e-9;
+
+/// The cells of a `width` × `height` grid (cell `(x, y)` covers `[x, x + 1] × [y, y + 1]`)
+/// that the simple polygon `vertices` (continuous cell coordinates, either orientation)
+/// covers under `contact`, as `(x, y)` row by row: with [`CellContact::Overlapping`] the
+/// rasterisation of an obstacle's outline. None for fewer than three vertices.
+#[must_use]
+pub fn polygon_cells(
+    vertices: &[[f64; 2]],
+    width: usize,
+    height: usize,
+    contact: CellContact,
+) -> Vec<(usize, usize)> {
+    if vertices.len() < 3 {
+        return Vec::new();
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for v in vertices {
+        for k in 0..2 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    // the cells whose squares, widened for a touch, meet the bounding box
+    let span = |a: f64, b: f64, n: usize| {
+        let first = (a - CELL_CONTACT_SLACK).floor().max(0.0);
+        let last = (b + CELL_CONTACT_SLACK).floor().min(n as f64 - 1.0);
+        (first <= last).then_some([first as i64, last as i64])
+    };
+    let (Some(xs), Some(ys)) = (span(lo[0], hi[0], width), span(lo[1], hi[1], height)) else {
+        return Vec::new();
+    };
+    cells_meeting(vertices, xs, ys, 0.5, contact)
+        .into_iter()
+        .map(|(x, y)| (x as usize, y as usize))
+        .collect()
+}
+
+/// The cells `(x, y)`, `x` in `xs[0]..=xs[1]` and `y` in `ys[0]..=ys[1]`, row by row,
+/// whose square, centred at `(x + centre, y + centre)`, the polygon `poly` meets under
+/// `contact`: an edge crosses or touches the square (which also finds a polygon inside
+/// the square), or the square lies inside the polygon (its centre does). The one
+/// cover of cells by a polygon: the footprint's stencil ([`Footprint::cell_offsets`],
+/// centred on the offsets) and the outline's cells ([`polygon_cells`]).
+fn cells_meeting(
+    poly: &[[f64; 2]],
+    xs: [i64; 2],
+    ys: [i64; 2],
+    centre: f64,
+    contact: CellContact,
+) -> Vec<(i64, i64)> {
+    let h = contact.half_side();
+    let n = poly.len();
+    let mut out = Vec::new();
+    for y in ys[0]..=ys[1] {
+        for x in xs[0]..=xs[1] {
+            let (cx, cy) = (x as f64 + centre, y as f64 + centre);
+            let (lo, hi) = ([cx - h, cy - h], [cx + h, cy + h]);
+            if (0..n).any(|i| segment_meets_box(poly[i], poly[(i + 1) % n], lo, hi))
+                || polygon_contains(poly, cx, cy)
+            {
+                out.push((x, y));
+            }
+        }
+    }
+    out
+}
+
+/// Point-in-polygon test of a simple polygon (either orientation; the boundary counts as
+/// inside).
+fn polygon_contains(v: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let n = v.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        // On the edge?
+        let cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+        let within = (x - a[0]) * (x - b[0]) <= 1e-12 && (y - a[1]) * (y - b[1]) <= 1e-12;
+        if cross.abs() <= 1e-12 * (1.0 + (b[0] - a[0]).abs() + (b[1] - a[1]).abs()) && within {
+            return true;
+        }
+        if (a[1] > y) != (b[1] > y) {
+            let xi = a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+            if x < xi {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
 
 /// Whether the segment `a`–`b` meets the closed axis-aligned box `lo`–`hi` (the
 /// segment clipped to the box's slabs, Liang–Barsky).
@@ -377,6 +454,16 @@ pub fn footprint_cspace(
     footprint: &Footprint,
     headings: usize,
 ) -> Result<FootprintCSpace> {
+    check_cspace_size(width, height, headings)?;
+    crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
+    let dist = distance_transform(obstacles, width, height);
+    footprint_cspace_with_distance(
+        obstacles, &dist, width, height, resolution, footprint, headings,
+    )
+}
+
+/// The heading count and the C-space's size checked before anything is allocated.
+fn check_cspace_size(width: usize, height: usize, headings: usize) -> Result<()> {
     if !(4..=360).contains(&headings) {
         return Err(Error::invalid(
             "headings",
@@ -397,8 +484,26 @@ pub fn footprint_cspace(
             ),
         ));
     }
+    Ok(())
+}
+
+/// [`footprint_cspace`] on the caller's [`distance_transform`] `dist` of `obstacles`
+/// (the planning pipeline has it already).
+///
+/// # Errors
+/// As [`footprint_cspace`]; a `dist` of another size than the mask.
+pub fn footprint_cspace_with_distance(
+    obstacles: &[bool],
+    dist: &[f32],
+    width: usize,
+    height: usize,
+    resolution: f64,
+    footprint: &Footprint,
+    headings: usize,
+) -> Result<FootprintCSpace> {
+    check_cspace_size(width, height, headings)?;
     crate::error::ensure_len("obstacle mask", width * height, obstacles.len())?;
-    let dist = distance_transform(obstacles, width, height);
+    crate::error::ensure_len("distance transform", width * height, dist.len())?;
     let r_in = footprint.inscribed_radius() / resolution;
     let r_out = footprint.circumscribed_radius() / resolution;
     // A footprint wider than the whole map collides everywhere, and its cell stencil
@@ -427,47 +532,74 @@ pub fn footprint_cspace(
             row_count[r + x + 1] = row_count[r + x] + u32::from(obstacles[y * width + x]);
         }
     }
-    let dilate = |offsets: &[(i64, i64)]| -> Vec<bool> {
-        let runs = row_runs(offsets);
-        let mut out = vec![false; width * height];
-        for y in 0..height {
-            for x in 0..width {
-                let i = y * width + x;
-                let d = dist[i] as f64;
-                out[i] = if d <= blocked_within {
-                    true
-                } else if d > free_beyond {
-                    false
-                } else {
-                    runs.iter().any(|&(dy, lo, hi)| {
-                        let oy = y as i64 + dy;
-                        let (a, b) = (
-                            (x as i64 + lo).max(0),
-                            (x as i64 + hi).min(width as i64 - 1),
-                        );
-                        if oy < 0 || oy >= height as i64 || a > b {
-                            return false;
-                        }
-                        let r = oy as usize * (width + 1);
-                        row_count[r + b as usize + 1] > row_count[r + a as usize]
-                    })
-                };
-            }
+    // What the distance alone decides, the same at every heading: blocked within the
+    // inscribed reach, free beyond the circumscribed one; the cells between (the band)
+    // are listed once and only they are tested against each stencil.
+    let mut decided = vec![false; width * height];
+    let mut band: Vec<usize> = Vec::new();
+    for (i, &d) in dist.iter().enumerate() {
+        let d = f64::from(d);
+        if d <= blocked_within {
+            decided[i] = true;
+        } else if d <= free_beyond {
+            band.push(i);
         }
-        out
+    }
+    // `true` when an obstacle lies in the stencil `runs` placed at cell i
+    let hits = |runs: &[(i64, i64, i64)], i: usize| {
+        let (x, y) = ((i % width) as i64, (i / width) as i64);
+        runs.iter().any(|&(dy, lo, hi)| {
+            let oy = y + dy;
+            let (a, b) = ((x + lo).max(0), (x + hi).min(width as i64 - 1));
+            if oy < 0 || oy >= height as i64 || a > b {
+                return false;
+            }
+            let r = oy as usize * (width + 1);
+            row_count[r + b as usize + 1] > row_count[r + a as usize]
+        })
     };
-    let mut slices = Vec::with_capacity(headings);
-    let mut sweeps = Vec::with_capacity(headings);
+    // The turns first: a turn's stencil (the footprint at every sampled heading from θ_k
+    // to θ_{k+1}) holds the footprint's at θ_k and at θ_{k+1}, so where a turn is free
+    // both headings are, and only the band cells where neither adjacent turn is free are
+    // tested for a heading (the inclusion is checked, not assumed).
     let sub = ((step.to_degrees() / 3.0).ceil() as usize).max(1);
+    let offsets: Vec<Vec<(i64, i64)>> = (0..headings)
+        .map(|k| footprint.cell_offsets(k as f64 * step, resolution))
+        .collect();
+    let mut sweeps = Vec::with_capacity(headings);
+    let mut swept_stencils = Vec::with_capacity(headings);
     for k in 0..headings {
         let theta = k as f64 * step;
-        slices.push(dilate(&footprint.cell_offsets(theta, resolution)));
-        let mut swept: Vec<(i64, i64)> = (0..=sub)
-            .flat_map(|j| footprint.cell_offsets(theta + step * j as f64 / sub as f64, resolution))
-            .collect();
-        swept.sort_unstable();
-        swept.dedup();
-        sweeps.push(dilate(&swept));
+        let swept = Stencil::of(
+            (0..=sub)
+                .flat_map(|j| {
+                    footprint.cell_offsets(theta + step * j as f64 / sub as f64, resolution)
+                })
+                .collect(),
+        );
+        let runs = swept.row_runs();
+        let mut out = decided.clone();
+        for &i in &band {
+            out[i] = hits(&runs, i);
+        }
+        sweeps.push(out);
+        swept_stencils.push(swept);
+    }
+    let mut slices = Vec::with_capacity(headings);
+    for (k, own) in offsets.iter().enumerate() {
+        let before = (k + headings - 1) % headings;
+        let runs = row_runs(own);
+        let inside = |s: &Stencil| own.iter().all(|&o| s.holds(o));
+        let (after_free, before_free) = (
+            inside(&swept_stencils[k]).then_some(&sweeps[k]),
+            inside(&swept_stencils[before]).then_some(&sweeps[before]),
+        );
+        let mut out = decided.clone();
+        for &i in &band {
+            let free_turn = after_free.is_some_and(|t| !t[i]) || before_free.is_some_and(|t| !t[i]);
+            out[i] = !free_turn && hits(&runs, i);
+        }
+        slices.push(out);
     }
     Ok(FootprintCSpace {
         headings,
@@ -476,6 +608,66 @@ pub fn footprint_cspace(
         slices,
         sweeps,
     })
+}
+
+/// A set of cell offsets `(dx, dy)` as a bitmap over their bounding box: the union of
+/// the footprint's stencils over a turn without sorting them.
+struct Stencil {
+    /// Least `dx` and `dy`.
+    lo: (i64, i64),
+    /// Width and height of the box (cells).
+    size: (usize, usize),
+    /// `cells[(dy - lo.1) · size.0 + dx - lo.0]`: the offset is in the set.
+    cells: Vec<bool>,
+}
+
+impl Stencil {
+    fn of(offsets: Vec<(i64, i64)>) -> Self {
+        let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
+        for &(dx, dy) in &offsets {
+            lo = (lo.0.min(dx), lo.1.min(dy));
+            hi = (hi.0.max(dx), hi.1.max(dy));
+        }
+        if offsets.is_empty() {
+            return Self {
+                lo: (0, 0),
+                size: (0, 0),
+                cells: Vec::new(),
+            };
+        }
+        let size = ((hi.0 - lo.0 + 1) as usize, (hi.1 - lo.1 + 1) as usize);
+        let mut cells = vec![false; size.0 * size.1];
+        for (dx, dy) in offsets {
+            cells[(dy - lo.1) as usize * size.0 + (dx - lo.0) as usize] = true;
+        }
+        Self { lo, size, cells }
+    }
+
+    fn holds(&self, (dx, dy): (i64, i64)) -> bool {
+        let (x, y) = (dx - self.lo.0, dy - self.lo.1);
+        x >= 0
+            && y >= 0
+            && (x as usize) < self.size.0
+            && (y as usize) < self.size.1
+            && self.cells[y as usize * self.size.0 + x as usize]
+    }
+
+    /// The set as [`row_runs`] gives it, read off the bitmap row by row.
+    fn row_runs(&self) -> Vec<(i64, i64, i64)> {
+        let mut runs: Vec<(i64, i64, i64)> = Vec::new();
+        for y in 0..self.size.1 {
+            let row = &self.cells[y * self.size.0..(y + 1) * self.size.0];
+            let dy = y as i64 + self.lo.1;
+            for (x, _) in row.iter().enumerate().filter(|c| *c.1) {
+                let dx = x as i64 + self.lo.0;
+                match runs.last_mut() {
+                    Some(run) if run.0 == dy && run.2 + 1 == dx => run.2 = dx,
+                    _ => runs.push((dy, dx, dx)),
+                }
+            }
+        }
+        runs
+    }
 }
 
 /// Cell offsets `(dx, dy)` as runs `(dy, dx_first, dx_last)` of consecutive cells along
@@ -693,6 +885,70 @@ fn footprint_states(parent: &[u32], u: usize, w: usize) -> Vec<(usize, usize, us
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An outline counts the cells it enters, not those it only touches; the footprint's
+    /// rule counts the touched ones too (the same cover, the contact rule apart).
+    #[test]
+    fn a_polygon_covers_the_cells_it_overlaps_or_touches() {
+        // a 2 x 1 rectangle on cell edges: exactly two cells entered, and the ten around
+        // them touched; shifted by a quarter cell up, the row above is entered too
+        let r = [[2.0, 3.0], [4.0, 3.0], [4.0, 4.0], [2.0, 4.0]];
+        assert_eq!(
+            polygon_cells(&r, 12, 12, CellContact::Overlapping),
+            [(2, 3), (3, 3)]
+        );
+        let touched = polygon_cells(&r, 12, 12, CellContact::Touching);
+        let expected: Vec<(usize, usize)> =
+            (2..=4).flat_map(|y| (1..=4).map(move |x| (x, y))).collect();
+        assert_eq!(touched, expected);
+        let up: Vec<[f64; 2]> = r.iter().rev().map(|p| [p[0], p[1] + 0.25]).collect();
+        assert_eq!(
+            polygon_cells(&up, 12, 12, CellContact::Overlapping),
+            [(2, 3), (3, 3), (2, 4), (3, 4)]
+        );
+        // a concave outline: the notch's cell is left out
+        let u = [
+            [0.0, 0.0],
+            [3.0, 0.0],
+            [3.0, 2.0],
+            [2.0, 2.0],
+            [2.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 2.0],
+            [0.0, 2.0],
+        ];
+        let cells = polygon_cells(&u, 12, 12, CellContact::Overlapping);
+        assert_eq!(cells, [(0, 0), (1, 0), (2, 0), (0, 1), (2, 1)]);
+        // off the grid: none
+        assert!(
+            polygon_cells(
+                &[[-3.0, -3.0], [-2.0, -3.0], [-2.0, -2.0]],
+                12,
+                12,
+                CellContact::Touching
+            )
+            .is_empty()
+        );
+    }
+
+    /// The bitmap of a turn's stencil gives the runs the sorted offsets give, whatever
+    /// their order and repeats.
+    #[test]
+    fn a_stencil_bitmap_reads_off_the_sorted_runs() {
+        let offsets = vec![
+            (3, 0),
+            (0, 1),
+            (1, 0),
+            (0, 0),
+            (-1, 0),
+            (5, 0),
+            (1, 0),
+            (0, -2),
+        ];
+        let stencil = Stencil::of(offsets.clone());
+        assert_eq!(stencil.row_runs(), row_runs(&offsets));
+        assert!(stencil.holds((5, 0)) && !stencil.holds((4, 0)) && !stencil.holds((9, 9)));
+    }
 
     /// A row with a gap (a non-convex footprint's) keeps two runs; rows come in order.
     #[test]

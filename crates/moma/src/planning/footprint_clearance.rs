@@ -9,8 +9,13 @@
 //! then their distance is the smallest vertex-to-edge distance of either; when no axis
 //! separates them, the smallest overlap over those axes is the depth of penetration (the
 //! shortest translation that parts them), reported as a negative distance.
+//!
+//! [`PathCheck`] checks a planned path so, pose by pose: the planning pipeline's check of
+//! a disk C-space's timed path with the robot's polygon ([`super::pipeline::PlanRequest::polygon_check`]),
+//! which the mission keeps for the paths it re-times and re-plans.
 
 use super::costmap::Footprint;
+use super::{MapKind, OccupancyGrid};
 use crate::{Error, Result};
 
 /// A convex footprint in cells, ready to be placed: its vertices counter-clockwise and
@@ -154,56 +159,131 @@ impl ConvexFootprint {
     }
 }
 
-/// How deep (cells) a polygon must enter a cell for [`convex_polygon_cells`] to count
-/// it: an outline on a cell boundary, off by rounding, only touches the cell beyond.
-pub const TOUCH: f64 = 1e-9;
+/// The heading-aware check of a path of planned points with a convex footprint polygon
+/// whose origin lies a fixed distance ahead of the planned point along the heading (the
+/// base frame ahead of the driven-axle midpoint): a pose collides when the polygon at the
+/// pose's heading comes closer than the padding to an occupied cell (nav2's check of a
+/// path against a polygon footprint). Poses are world poses on an [`OccupancyGrid`];
+/// the occupied cells are the caller's (the map's, or the map's and the obstacles that
+/// appeared since).
+#[derive(Debug, Clone)]
+pub struct PathCheck {
+    /// The polygon about its origin, in cells.
+    footprint: ConvexFootprint,
+    /// The padding the polygon keeps from the occupied cells (cells).
+    padding: f64,
+    /// The polygon's origin ahead of the planned point (cells).
+    ahead: f64,
+    /// Scratch of the placed vertices.
+    placed: Vec<[f64; 2]>,
+}
 
-/// The cells of a `width` × `height` grid whose squares overlap the convex polygon
-/// `vertices` (continuous cell coordinates, either orientation; cells it only touches,
-/// within [`TOUCH`], are not counted), as `(x, y)`: the rasterisation of an obstacle's
-/// outline.
-#[must_use]
-pub fn convex_polygon_cells(
-    vertices: &[[f64; 2]],
-    width: usize,
-    height: usize,
-) -> Vec<(usize, usize)> {
-    let mut p = vertices.to_vec();
-    let n = p.len();
-    if n < 3 {
-        return Vec::new();
-    }
-    let twice_area: f64 = (0..n)
-        .map(|i| p[i][0] * p[(i + 1) % n][1] - p[(i + 1) % n][0] * p[i][1])
-        .sum();
-    if twice_area < 0.0 {
-        p.reverse();
-    }
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for v in &p {
-        for k in 0..2 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
+impl PathCheck {
+    /// The check of the convex `polygon` with `padding`, its origin `ahead` of the
+    /// planned point, all lengths in units of which a cell is `cell` (the map's
+    /// resolution for metres, 1 for cells).
+    ///
+    /// # Errors
+    /// A polygon that is not convex; a padding that is negative or not finite, an offset
+    /// or cell size that is not finite (or a cell size that is not positive).
+    pub fn new(polygon: &Footprint, padding: f64, ahead: f64, cell: f64) -> Result<Self> {
+        if !(padding.is_finite() && padding >= 0.0) {
+            return Err(Error::invalid(
+                "footprint padding",
+                format!("must be a finite non-negative length, got {padding}"),
+            ));
         }
+        if !ahead.is_finite() {
+            return Err(Error::NonFinite {
+                field: "footprint offset".into(),
+            });
+        }
+        Ok(Self {
+            footprint: ConvexFootprint::new(polygon, cell)?,
+            padding: padding / cell,
+            ahead: ahead / cell,
+            placed: Vec::new(),
+        })
     }
-    let span = |a: f64, b: f64, n: usize| {
-        let first = a.floor().max(0.0);
-        let last = b.floor().min(n as f64 - 1.0);
-        (first <= last).then_some((first as usize, last as usize))
-    };
-    let (Some((x0, x1)), Some((y0, y1))) = (span(lo[0], hi[0], width), span(lo[1], hi[1], height))
-    else {
-        return Vec::new();
-    };
-    let mut out = Vec::new();
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            if polygon_square_distance(&p, [x as f64, y as f64]) < -TOUCH {
-                out.push((x, y));
+
+    /// The polygon about its origin (cells).
+    #[must_use]
+    pub fn footprint(&self) -> &ConvexFootprint {
+        &self.footprint
+    }
+
+    /// The padding (cells).
+    #[must_use]
+    pub fn padding(&self) -> f64 {
+        self.padding
+    }
+
+    /// The world pose `[x, y, θ]` in `grid`'s continuous cell coordinates and frame.
+    #[must_use]
+    pub fn pose_in_cells(grid: &OccupancyGrid, pose: [f64; 3]) -> [f64; 3] {
+        let [fx, fy] = grid.world_to_cell_f(pose[0], pose[1]);
+        let yaw0 = if grid.kind == MapKind::Ros {
+            grid.origin[2]
+        } else {
+            0.0
+        };
+        [fx, fy, pose[2] - yaw0]
+    }
+
+    /// `true` when the polygon with the planned point at the world pose `planned` comes
+    /// closer than the padding to an `occupied` cell of `grid` (its cells' mask).
+    ///
+    /// # Panics
+    /// If `occupied` does not hold one flag per cell of `grid`.
+    pub fn collides(&mut self, grid: &OccupancyGrid, occupied: &[bool], planned: [f64; 3]) -> bool {
+        let [fx, fy, th] = Self::pose_in_cells(grid, planned);
+        let (s, c) = th.sin_cos();
+        let origin = [fx + self.ahead * c, fy + self.ahead * s, th];
+        self.clearance(occupied, grid.width, grid.height, origin, self.padding)
+            .is_some_and(|d| d < self.padding)
+    }
+
+    /// The cells of the planned points among `poses` (world poses, in order) where the
+    /// polygon collides ([`PathCheck::collides`]), each once, in the order met (a point
+    /// off the map in its nearest cell).
+    pub fn colliding_cells(
+        &mut self,
+        grid: &OccupancyGrid,
+        occupied: &[bool],
+        poses: impl IntoIterator<Item = [f64; 3]>,
+    ) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for p in poses {
+            if self.collides(grid, occupied, p) {
+                let [fx, fy] = grid.world_to_cell_f(p[0], p[1]);
+                let c = (
+                    (fx.floor().max(0.0) as usize).min(grid.width - 1),
+                    (fy.floor().max(0.0) as usize).min(grid.height - 1),
+                );
+                if !out.contains(&c) {
+                    out.push(c);
+                }
             }
         }
+        out
     }
-    out
+
+    /// [`ConvexFootprint::clearance`] of the polygon with its origin at `origin`
+    /// (continuous cell coordinates and grid-frame heading), the padding not subtracted.
+    ///
+    /// # Panics
+    /// If `occupied` does not hold `width · height` cells.
+    pub fn clearance(
+        &mut self,
+        occupied: &[bool],
+        width: usize,
+        height: usize,
+        origin: [f64; 3],
+        reach: f64,
+    ) -> Option<f64> {
+        self.footprint
+            .clearance(occupied, width, height, origin, reach, &mut self.placed)
+    }
 }
 
 /// Signed distance between the convex counter-clockwise polygon `p` and the unit square
@@ -347,23 +427,6 @@ mod tests {
         assert!(across.unwrap() < 0.0, "{across:?}");
         let along = fp.clearance(&m, 12, 12, [5.5, 3.5, 0.0], 5.0, &mut buf);
         assert!((along.unwrap() - 1.0).abs() < 1e-12, "{along:?}");
-    }
-
-    #[test]
-    fn a_polygon_covers_the_cells_it_overlaps_not_those_it_touches() {
-        // a 2 x 1 rectangle on cell edges: exactly two cells; shifted by a quarter cell
-        // up, the row above too
-        let r = [[2.0, 3.0], [4.0, 3.0], [4.0, 4.0], [2.0, 4.0]];
-        assert_eq!(convex_polygon_cells(&r, 12, 12), [(2, 3), (3, 3)]);
-        let up: Vec<[f64; 2]> = r.iter().rev().map(|p| [p[0], p[1] + 0.25]).collect();
-        assert_eq!(
-            convex_polygon_cells(&up, 12, 12),
-            [(2, 3), (3, 3), (2, 4), (3, 4)]
-        );
-        // off the grid: none
-        assert!(
-            convex_polygon_cells(&[[-3.0, -3.0], [-2.0, -3.0], [-2.0, -2.0]], 12, 12).is_empty()
-        );
     }
 
     #[test]

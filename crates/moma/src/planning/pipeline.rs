@@ -20,6 +20,14 @@
 //! between; turns in place checked on the swept footprint), so the path's every pose and
 //! turn is collision-free at the heading it is driven with, which nav2's Smac planners
 //! also do on their heading lattices.
+//!
+//! A point or disk plan may also be checked with a convex polygon
+//! ([`PlanRequest::polygon_check`], nav2's way with a polygon footprint on a cheap
+//! C-space): every pose of the timed reference with the polygon at the pose's heading
+//! ([`PathCheck`]); the plan lists the cells of the poses that collide
+//! ([`Plan::colliding`]) and hands the check over ([`Plan::path_check`]). The mission
+//! plans so: D* Lite on the disk inside its footprint polygon, which re-plans
+//! incrementally on (x, y) cells, each path it re-times checked with the polygon.
 
 use super::costmap::{self, Footprint, InflationParams};
 use super::curve_timing::{CurvatureTiming, TimedCurve, time_cells_curved};
@@ -27,6 +35,7 @@ use std::time::Instant;
 
 use super::dstar_lite::DStarLite;
 use super::edt::distance_transform;
+use super::footprint_clearance::PathCheck;
 use super::potential::{DescentEnd, GoalTerm, PotentialParams, descend, potential_field};
 use super::smooth::{polyline_length, smooth};
 use super::trajectory::{DiffDriveLimits, TrajectoryPoint, time_parameterize};
@@ -245,6 +254,25 @@ pub struct PlanRequest {
     pub smooth: bool,
     /// The timing; `None` plans the path alone.
     pub timing: Option<Timing>,
+    /// With a point or disk footprint: the polygon the timed reference is checked with,
+    /// pose by pose ([`Plan::colliding`]); the check is handed over in
+    /// [`Plan::path_check`] (with no timing, for the caller's own timed paths).
+    pub polygon_check: Option<PolygonCheck>,
+}
+
+/// The convex footprint polygon a point or disk plan's timed path is checked with
+/// ([`PathCheck`]): the disk being the largest about the planned point inside the
+/// polygon, the C-space never blocks a pose the polygon could take, and the check finds
+/// the poses it cannot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PolygonCheck {
+    /// The polygon about its origin (map units), convex.
+    pub polygon: Footprint,
+    /// The clearance it must keep from the obstacle cells (map units, ≥ 0).
+    pub padding: f64,
+    /// How far ahead of the planned point the polygon's origin lies along the heading
+    /// (map units; the drive's `d` when the driven-axle midpoint is planned).
+    pub ahead: f64,
 }
 
 /// How the path is timed.
@@ -327,6 +355,13 @@ pub struct Plan {
     pub trajectory: Vec<TrajectoryPoint>,
     /// With [`Timing::Curvature`]: the smoothed geometry and its timed samples.
     pub curve: Option<TimedCurve>,
+    /// With [`PlanRequest::polygon_check`]: the check, to check the caller's own paths
+    /// (on its own occupied cells) with.
+    pub path_check: Option<PathCheck>,
+    /// With [`PlanRequest::polygon_check`]: the cells of the [`Plan::trajectory`]'s poses
+    /// where the polygon collides (each once, in path order; empty when it passes or
+    /// without a trajectory), checked against [`Plan::occupied`].
+    pub colliding: Vec<(usize, usize)>,
 }
 
 /// Runs the pipeline on `grid` (see the module documentation).
@@ -428,10 +463,28 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
             )));
         }
     }
+    let path_check = match &req.polygon_check {
+        None => None,
+        Some(_) if matches!(req.footprint, RobotFootprint::Polygon(_)) => {
+            return Err(Error::invalid(
+                "polygon check",
+                "a polygonal footprint is searched at its headings already; the polygon \
+                 check is for a point or disk footprint's path",
+            ));
+        }
+        Some(pc) => Some(PathCheck::new(
+            &pc.polygon,
+            pc.padding,
+            pc.ahead,
+            mf.cells_to_units(1.0),
+        )?),
+    };
     let ends = Ends { start, goal };
     let clock = Instant::now();
     let found = match (&req.footprint, &req.search) {
-        (RobotFootprint::Polygon(fp), Search::Astar) => search_polygon(&mf, &obst, &ends, req, fp)?,
+        (RobotFootprint::Polygon(fp), Search::Astar) => {
+            search_polygon(&mf, &obst, &distance, &ends, req, fp)?
+        }
         (RobotFootprint::Polygon(_), _) => {
             return Err(Error::invalid(
                 "footprint",
@@ -475,6 +528,7 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
         distance,
         reach_cells,
         search_s,
+        path_check,
     };
     finish(&mf, req, ends, found, map)
 }
@@ -485,6 +539,7 @@ struct MapProducts {
     distance: Vec<f32>,
     reach_cells: f64,
     search_s: f64,
+    path_check: Option<PathCheck>,
 }
 
 /// Start and goal cells.
@@ -523,6 +578,7 @@ fn unreachable(report: String, cspace: SearchGrid) -> Found {
 fn search_polygon(
     mf: &MapFrame<'_>,
     obst: &[bool],
+    distance: &[f32],
     ends: &Ends,
     req: &PlanRequest,
     fp: &Footprint,
@@ -534,7 +590,7 @@ fn search_polygon(
             .map(|v| [mf.units_to_cells(v[0]), mf.units_to_cells(v[1])])
             .collect(),
     )?;
-    let cs = costmap::footprint_cspace(obst, w, h, 1.0, &fp_cells, 8)?;
+    let cs = costmap::footprint_cspace_with_distance(obst, distance, w, h, 1.0, &fp_cells, 8)?;
     // A cell is free for smoothing and drawing when it is free at every heading.
     let all_free = cs.slices.iter().fold(vec![true; w * h], |acc, s| {
         acc.iter().zip(s).map(|(a, b)| *a && *b).collect()
@@ -725,6 +781,15 @@ fn finish(
         };
         (smoothed, waypoints, trajectory, curve)
     };
+    let mut path_check = map.path_check;
+    let colliding = match path_check.as_mut() {
+        Some(check) => check.colliding_cells(
+            mf.grid,
+            &map.occupied,
+            trajectory.iter().map(|p| [p.x, p.y, p.theta]),
+        ),
+        None => Vec::new(),
+    };
     Ok(Plan {
         start_cell: ends.start,
         goal_cell: ends.goal,
@@ -744,6 +809,8 @@ fn finish(
         waypoints,
         trajectory,
         curve,
+        path_check,
+        colliding,
     })
 }
 
@@ -763,4 +830,117 @@ fn compress(cells: &[(usize, usize)]) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planning::grid::OCCUPIED;
+
+    /// A 30 x 12 Moving AI map with one obstacle cell at (15, 7), two rows above the
+    /// straight path along row 5 from (3, 5) to (27, 5).
+    fn one_obstacle() -> OccupancyGrid {
+        let mut g = OccupancyGrid::new_free(30, 12, MapKind::MovingAi).unwrap();
+        g.cells[7 * 30 + 15] = OCCUPIED;
+        g
+    }
+
+    fn request(check: Option<PolygonCheck>) -> PlanRequest {
+        PlanRequest {
+            start: [3.0, 5.0],
+            start_yaw: None,
+            goal: [27.0, 5.0],
+            frame: Frame::Map,
+            unknown_is_obstacle: true,
+            footprint: RobotFootprint::Disk(0.5),
+            axle_offset: 0.0,
+            fields: PlanFields::default(),
+            search: Search::Astar,
+            turn_cost: 1.0,
+            smooth: true,
+            timing: Some(Timing::StopAndTurn {
+                limits: DiffDriveLimits {
+                    v_max: 1.0,
+                    omega_max: 1.0,
+                    a_max: 1.0,
+                    alpha_max: 1.0,
+                },
+                dt: 0.1,
+            }),
+            polygon_check: check,
+        }
+    }
+
+    /// A rectangle `long` along the heading and `wide` across it (cells).
+    fn rectangle(long: f64, wide: f64, padding: f64) -> PolygonCheck {
+        let (a, b) = (long / 2.0, wide / 2.0);
+        PolygonCheck {
+            polygon: Footprint::new(vec![[-a, -b], [a, -b], [a, b], [-a, b]]).unwrap(),
+            padding,
+            ahead: 0.0,
+        }
+    }
+
+    /// The disk C-space passes the straight path; the polygon check finds where a chassis
+    /// wide across the path meets the obstacle (its centre within a cell of it), and
+    /// passes the same chassis driven lengthwise, unless the padding asks for more room.
+    #[test]
+    fn the_timed_path_is_checked_with_the_polygon_at_its_heading() {
+        let g = one_obstacle();
+        let plain = plan(&g, &request(None)).unwrap();
+        assert_eq!(plain.status, PlanStatus::Found);
+        assert!(plain.cells.iter().all(|c| c.1 == 5));
+        assert!(plain.path_check.is_none() && plain.colliding.is_empty());
+        // 2 cells along the heading, 5 across: reaches from y = 3 to 8 over row 5
+        let across = plan(&g, &request(Some(rectangle(2.0, 5.0, 0.0)))).unwrap();
+        assert_eq!(across.cells, plain.cells, "the same search");
+        assert_eq!(across.colliding, [(14, 5), (15, 5), (16, 5)]);
+        assert!(across.path_check.is_some());
+        // turned lengthwise (5 along, 2 across): its side passes 0.5 cells below the
+        // obstacle's square
+        let along = plan(&g, &request(Some(rectangle(5.0, 2.0, 0.0)))).unwrap();
+        assert!(along.colliding.is_empty());
+        let padded = plan(&g, &request(Some(rectangle(5.0, 2.0, 0.6)))).unwrap();
+        assert!(!padded.colliding.is_empty());
+        // without a timing the check is handed over, nothing is checked
+        let mut untimed = request(Some(rectangle(2.0, 5.0, 0.0)));
+        untimed.timing = None;
+        let untimed = plan(&g, &untimed).unwrap();
+        assert!(untimed.colliding.is_empty());
+        let mut check = untimed.path_check.unwrap();
+        assert!(check.collides(&g, &untimed.occupied, [15.0, 5.0, 0.0]));
+        assert!(!check.collides(
+            &g,
+            &untimed.occupied,
+            [15.0, 5.0, std::f64::consts::FRAC_PI_2]
+        ));
+    }
+
+    #[test]
+    fn the_polygon_check_needs_a_point_or_disk_footprint_and_a_convex_polygon() {
+        let g = one_obstacle();
+        let mut req = request(Some(rectangle(2.0, 2.0, 0.0)));
+        req.footprint = RobotFootprint::Polygon(rectangle(2.0, 2.0, 0.0).polygon);
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(e.contains("polygon check"), "{e}");
+        let concave = Footprint::new(vec![
+            [-1.0, -1.0],
+            [1.0, -1.0],
+            [0.2, 0.0],
+            [1.0, 1.0],
+            [-1.0, 1.0],
+        ])
+        .unwrap();
+        let req = request(Some(PolygonCheck {
+            polygon: concave,
+            padding: 0.0,
+            ahead: 0.0,
+        }));
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(e.contains("convex"), "{e}");
+        let mut negative = rectangle(2.0, 2.0, 0.0);
+        negative.padding = -0.1;
+        let e = plan(&g, &request(Some(negative))).unwrap_err().to_string();
+        assert!(e.contains("padding"), "{e}");
+    }
 }
