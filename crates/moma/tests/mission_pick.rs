@@ -239,6 +239,15 @@ fn with_scene_objects(tag: &str, extra: &str) -> moma::Result<moma::mission::Mis
 /// The pick mission with the shipped scene's text passed through `edit`, written to a
 /// fresh folder.
 fn with_scene(tag: &str, edit: impl Fn(&str) -> String) -> moma::Result<moma::mission::Mission> {
+    with_scene_and_task(tag, edit, "")
+}
+
+/// [`with_scene`] with `task_lines` added at the end of the mission's `[task]`.
+fn with_scene_and_task(
+    tag: &str,
+    edit: impl Fn(&str) -> String,
+    task_lines: &str,
+) -> moma::Result<moma::mission::Mission> {
     let dir = std::env::temp_dir().join(format!("moma-pick-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let shipped =
@@ -250,6 +259,7 @@ fn with_scene(tag: &str, edit: impl Fn(&str) -> String) -> moma::Result<moma::mi
         "scene = \"scenes/bookshelf_small_can1.yaml\"",
         &format!("scene = {:?}", scene.display().to_string()),
     );
+    let text = text.replace("headings = 8\n", &format!("headings = 8\n{task_lines}\n"));
     let f = scenario::parse_file(&text, &path)?;
     scenario::from_file(f, &path, path.parent().unwrap())
 }
@@ -301,6 +311,135 @@ fn a_table_top_the_robot_clears_is_left_off_the_map_its_legs_are_not() {
         err.contains("task.pose") && err.contains("'table_top'"),
         "{err}"
     );
+}
+
+/// An open square ring of walls (no floor, no top): 1.2 m square, 0.3 m high, its
+/// centre at the origin of its frame, eight triangles, as an OBJ file in `dir`; and the
+/// scene object (MoveIt YAML) of it with its centre at `at` (scene frame).
+fn ring_yaml(dir: &Path, at: [f64; 3]) -> String {
+    let file = dir.join("ring.obj");
+    let mut obj = String::new();
+    for z in [0.0, 0.3] {
+        for (x, y) in [(-0.6, -0.6), (0.6, -0.6), (0.6, 0.6), (-0.6, 0.6)] {
+            obj.push_str(&format!("v {x} {y} {z}\n"));
+        }
+    }
+    for k in 0..4 {
+        let (a, b) = (k + 1, (k + 1) % 4 + 1);
+        obj.push_str(&format!("f {a} {b} {}\nf {a} {} {}\n", b + 4, b + 4, a + 4));
+    }
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(&file, obj).unwrap();
+    format!(
+        "    - header: {{frame_id: base_link}}\n      id: ring\n      meshes:\n        - resource: {:?}\n      mesh_poses:\n        - position: {at:?}\n          orientation: [0.0, 0.0, 0.0, 1.0]\n",
+        file.display().to_string()
+    )
+}
+
+#[test]
+fn a_task_scene_keeps_its_meshes_and_measures_them_exactly_on_request() {
+    use moma::collision::{
+        Convex, GeometryData, Scene, SceneData, SceneObject, SceneOptions, compute_scene_distances,
+        read_scene, update_geometry_placements,
+    };
+    use moma::spatial::SE3;
+    let dir = std::env::temp_dir().join(format!("moma-pick-ring-mesh-{}", std::process::id()));
+    // the ring 2 m behind and 2 m right of the shelf's frame: at (3, 6) on the map
+    let ring = ring_yaml(&dir, [-2.0, -2.0, 0.0]);
+    let add = |shipped: &str| format!("{}\n{ring}", shipped.trim_end());
+    let convex = with_scene_and_task("ring-convex", add, "").unwrap();
+    let exact = with_scene_and_task("ring-exact", add, "mesh = \"exact\"").unwrap();
+    // the base in the ring's middle, the arm at its transport posture
+    let mut q = at_posture(&exact, &exact.transport);
+    q[..3].copy_from_slice(&[3.0, 6.0, 0.0]);
+    let distances = |m: &moma::mission::Mission, scene: &Scene, q: &[f64]| {
+        let task = m.task.as_ref().unwrap();
+        let model = &m.robot.model;
+        let mut data = Data::new(model);
+        forward_kinematics(model, &mut data, &DVector::from_column_slice(q));
+        let mut gd = GeometryData::new(&task.geometry);
+        update_geometry_placements(&task.geometry, &data, &mut gd);
+        let mut sd = SceneData::new(&task.geometry, scene);
+        compute_scene_distances(&task.geometry, &mut gd, scene, &mut sd);
+        let o = scene.objects.iter().position(|o| o.id == "ring").unwrap();
+        let no = scene.objects.len();
+        (0..task.geometry.links.len())
+            .map(|l| sd.results[l * no + o].distance)
+            .collect::<Vec<f64>>()
+    };
+    let task = exact.task.as_ref().unwrap();
+    let base = task.geometry.link_index("base_link").unwrap();
+    let hull = distances(&convex, &convex.task.as_ref().unwrap().scene, &q);
+    let surface = distances(&exact, &task.scene, &q);
+    // the hull is a solid block round the base; the walls stand clear of it
+    assert!(hull[base] < -0.1, "{}", hull[base]);
+    assert!(surface[base] > 0.2, "{}", surface[base]);
+    // the walls as four boxes 0.2 µm thick at the same places: the same distances
+    let wall = |c: [f64; 2], half: [f64; 2]| {
+        (
+            SE3::from_translation(nalgebra::Vector3::new(3.0 + c[0], 6.0 + c[1], 0.15)),
+            Convex::Box {
+                half: nalgebra::Vector3::new(half[0], half[1], 0.15),
+            },
+        )
+    };
+    let t = 1e-7;
+    let walls = Scene {
+        objects: vec![
+            SceneObject::new(
+                "ring",
+                vec![
+                    wall([-0.6, 0.0], [t, 0.6]),
+                    wall([0.6, 0.0], [t, 0.6]),
+                    wall([0.0, -0.6], [0.6, t]),
+                    wall([0.0, 0.6], [0.6, t]),
+                ],
+            )
+            .unwrap(),
+        ],
+    };
+    let boxes = distances(&exact, &walls, &q);
+    for (l, (a, b)) in surface.iter().zip(&boxes).enumerate() {
+        assert!(
+            (a - b).abs() < 1e-6,
+            "{}: {a} vs {b}",
+            task.geometry.links[l].name
+        );
+    }
+    // placing keeps the triangles: the scene as read, in its own frame, with the robot
+    // moved by the inverse of the scene's placement measures the same
+    let local = read_scene(
+        &std::env::temp_dir()
+            .join(format!("moma-pick-ring-exact-{}", std::process::id()))
+            .join("scene.yaml"),
+        &SceneOptions {
+            world_frames: vec!["world".into(), "base_link".into()],
+            package_dirs: vec![],
+        },
+    )
+    .unwrap()
+    .with_mesh_triangles()
+    .unwrap();
+    let mut q_local = q.clone();
+    q_local[..3].copy_from_slice(&[-2.0, -2.0, 0.0]);
+    let unplaced = distances(&exact, &local, &q_local);
+    for (l, (a, b)) in surface.iter().zip(&unplaced).enumerate() {
+        assert!(
+            (a - b).abs() < 1e-9,
+            "{}: {a} vs {b}",
+            task.geometry.links[l].name
+        );
+    }
+    // the convex mission keeps the meshes too (the hulls measure, the triangles ride along)
+    let kept = &convex.task.as_ref().unwrap().scene;
+    let ring_obj = kept.objects.iter().find(|o| o.id == "ring").unwrap();
+    assert!(ring_obj.shapes.iter().all(|s| s.mesh.is_some()));
+    // a mode that is not one is refused, naming the field
+    let err = with_scene_and_task("ring-bad", add, "mesh = \"hull\"")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("task.mesh") && err.contains("'hull'"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The configuration with the platform at the origin (the base frame on the world frame),

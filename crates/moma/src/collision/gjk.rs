@@ -8,7 +8,11 @@
 //! (or no step shrinks |v| any more), and every closest point it reports is an explicit
 //! convex combination of support points, so the distance it returns is never below the
 //! true one by more than round-off. EPA stops when the support point in the closest
-//! face's normal lies within [`GAP_TOLERANCE`] of that face.
+//! face's normal lies within [`GAP_TOLERANCE`] of that face, or when adding it would
+//! not leave a closed convex polytope (round-off, for a point almost on the faces): then
+//! it keeps the last sound polytope's closest face, so its work is bounded by
+//! [`MAX_ITERATIONS`] iterations over at most 2V − 4 faces
+//! ([`EpaWorkspace::faces_visited`]).
 
 use super::convex::Convex;
 use crate::spatial::SE3;
@@ -76,6 +80,18 @@ pub struct EpaWorkspace {
     vertices: Vec<SupportPoint>,
     faces: Vec<Face>,
     horizon: Vec<(usize, usize)>,
+    /// Faces the last EPA visited (closest-face scans and visibility tests).
+    faces_visited: usize,
+}
+
+impl EpaWorkspace {
+    /// The faces the last EPA visited: its closest-face scans and visibility tests, the
+    /// work of one query, bounded by [`MAX_ITERATIONS`] iterations over at most 2V - 4
+    /// faces (V ≤ [`MAX_ITERATIONS`] + 4 vertices).
+    #[must_use]
+    pub fn faces_visited(&self) -> usize {
+        self.faces_visited
+    }
 }
 
 struct Placed<'a> {
@@ -480,10 +496,11 @@ fn epa_depth(
         let face = make_face(&ws.vertices, f, Some(&centroid))?;
         ws.faces.push(face);
     }
-    let mut best = 0;
+    ws.faces_visited = 0;
+    let mut face = ws.faces[0];
     for _ in 0..MAX_ITERATIONS {
-        best = closest_face(&ws.faces)?;
-        let face = ws.faces[best];
+        ws.faces_visited += ws.faces.len();
+        face = ws.faces[closest_face(&ws.faces)?];
         let p = pair.support(&face.n, warm);
         if face.n.dot(&p.w) - face.d <= GAP_TOLERANCE || ws.vertices.iter().any(|q| q.w == p.w) {
             break;
@@ -491,8 +508,9 @@ fn epa_depth(
         let new = ws.vertices.len();
         ws.vertices.push(p);
         ws.horizon.clear();
+        ws.faces_visited += ws.faces.len();
         for f in &mut ws.faces {
-            if f.live && f.n.dot(&(p.w - ws.vertices[f.v[0]].w)) > 0.0 {
+            if f.n.dot(&(p.w - ws.vertices[f.v[0]].w)) > 0.0 {
                 f.live = false;
                 for k in 0..3 {
                     let e = (f.v[k], f.v[(k + 1) % 3]);
@@ -504,14 +522,26 @@ fn epa_depth(
                 }
             }
         }
+        ws.faces.retain(|f| f.live);
+        // The faces the new point sees must be bounded by one loop of edges, each giving a
+        // well-formed face: then the polytope stays a closed triangulated surface, with at
+        // most 2V - 4 faces. A point almost on the polytope can break this by round-off
+        // (a face seen and its neighbour not): stop with the last sound polytope's
+        // closest face instead of growing a broken one.
+        if !is_one_loop(&ws.horizon) {
+            break;
+        }
+        let kept = ws.faces.len();
         for h in 0..ws.horizon.len() {
             let (i, j) = ws.horizon[h];
-            if let Some(face) = make_face(&ws.vertices, [i, j, new], None) {
-                ws.faces.push(face);
+            if let Some(f) = make_face(&ws.vertices, [i, j, new], None) {
+                ws.faces.push(f);
             }
         }
+        if ws.faces.len() - kept != ws.horizon.len() || ws.faces.len() + 4 > 2 * ws.vertices.len() {
+            break;
+        }
     }
-    let face = ws.faces[best];
     let [a, b, c] = face.v.map(|i| ws.vertices[i]);
     let proj = face.n * face.d;
     let l = barycentric(&proj, &a.w, &b.w, &c.w);
@@ -524,6 +554,26 @@ fn epa_depth(
         witness_b: wb,
         normal: face.n,
     })
+}
+
+/// Whether the directed edges `h` form one closed loop (each vertex left by one edge).
+fn is_one_loop(h: &[(usize, usize)]) -> bool {
+    let Some(&(start, mut at)) = h.first() else {
+        return false;
+    };
+    let mut steps = 1;
+    while at != start {
+        let mut leaving = h.iter().filter(|e| e.0 == at);
+        let (Some(e), None) = (leaving.next(), leaving.next()) else {
+            return false;
+        };
+        at = e.1;
+        steps += 1;
+        if steps > h.len() {
+            return false;
+        }
+    }
+    steps == h.len()
 }
 
 fn closest_face(faces: &[Face]) -> Option<usize> {
@@ -642,5 +692,144 @@ mod tests {
         let pb = SE3::from_translation(Vector3::new(1.2, 0.1, 0.0));
         let v = distance_outside(&cube(1.0), &pa, &cube(0.5), &pb, 0.01, 1.0, &mut w, &mut ws);
         assert!((0.0..=0.01).contains(&v), "{v}");
+    }
+
+    /// A patch of Fetch's torso mesh surface (13 vertices, the torso's frame) and the
+    /// pick's can (a cylinder) held at a random arm posture, overlapping by 15.5 mm: EPA's
+    /// point on the can's rim that converged to within 1.3e-11 m of the polytope saw a face
+    /// and not its neighbour by round-off, and the broken polytope grew to 1.4 million
+    /// faces (26 s, then a positive "depth" of 32 mm).
+    fn torso_patch_and_can() -> (Convex, SE3, Convex, SE3) {
+        let v = [
+            [
+                -0.018678657710552216,
+                -0.07823757082223892,
+                0.48767927289009094,
+            ],
+            [
+                -0.018678657710552216,
+                -0.07124803215265274,
+                0.47767695784568787,
+            ],
+            [
+                -0.018678657710552216,
+                -0.06102566048502922,
+                0.4710288345813751,
+            ],
+            [
+                -0.018678657710552216,
+                -0.053860366344451904,
+                0.2861594259738922,
+            ],
+            [
+                -0.018678657710552216,
+                -0.05000000074505806,
+                0.28831377625465393,
+            ],
+            [
+                -0.018678657710552216,
+                -0.04905466362833977,
+                0.4687000811100006,
+            ],
+            [
+                -0.018678657710552216,
+                -0.0002500000118743628,
+                0.28831377625465393,
+            ],
+            [
+                -0.018678657710552216,
+                -0.0002500000118743628,
+                0.4687000811100006,
+            ],
+            [
+                0.034171100705862045,
+                -0.09398100525140762,
+                0.42087385058403015,
+            ],
+            [
+                0.036079831421375275,
+                -0.059844303876161575,
+                0.47451213002204895,
+            ],
+            [0.03651868551969528, -0.0471743568778038, 0.4208739101886749],
+            [
+                0.037139393389225006,
+                -0.0002500000118743628,
+                0.37741538882255554,
+            ],
+            [
+                0.037465132772922516,
+                -0.00025035993894562125,
+                0.47262606024742126,
+            ],
+        ];
+        let patch = Convex::Hull {
+            vertices: v.iter().map(|p| Vector3::from(*p)).collect(),
+            neighbours: Vec::new(),
+        };
+        let pose_patch = SE3::new(
+            Matrix3::from_column_slice(&[1.0, 0.0, 0.0, 0.0, 1.0, -6.123e-17, 0.0, 6.123e-17, 1.0]),
+            Vector3::new(-0.086875, 1.9355935210512733e-18, 0.4090418491107508),
+        );
+        let can = Convex::Cylinder {
+            radius: 0.03,
+            half_height: 0.07,
+        };
+        let pose_can = SE3::new(
+            Matrix3::from_column_slice(&[
+                -0.7261298381733813,
+                -0.377342966185498,
+                0.5747588572476541,
+                0.6683973136809866,
+                -0.5833773451805426,
+                0.46142811378820736,
+                0.16118464312191716,
+                0.7192239977923652,
+                0.6758227221847664,
+            ]),
+            Vector3::new(
+                -0.10400289933693851,
+                -0.059528324588966994,
+                0.6446143782264571,
+            ),
+        );
+        (patch, pose_patch, can, pose_can)
+    }
+
+    #[test]
+    fn epa_stops_at_a_polytope_that_round_off_breaks() {
+        let (patch, pose_patch, can, pose_can) = torso_patch_and_can();
+        let mut ws = EpaWorkspace::default();
+        let r = signed_distance(
+            &patch,
+            &pose_patch,
+            &can,
+            &pose_can,
+            &mut WarmStart::default(),
+            &mut ws,
+        );
+        // Bounded work: a few thousand face visits (the broken polytope took 1.4e8).
+        assert!(ws.faces_visited() < 10_000, "{}", ws.faces_visited());
+        assert!((r.distance + 0.015463).abs() < 1e-6, "{r:?}");
+        // The depth is the translation that separates them: the can moved along the
+        // normal by the depth less 1 µm still overlaps, by the depth and 1 µm more is
+        // 1 µm clear.
+        for (extra, clear) in [(-1e-6, false), (1e-6, true)] {
+            let moved = SE3::new(
+                pose_can.rotation,
+                pose_can.translation + r.normal * (-r.distance + extra),
+            );
+            let d = signed_distance(
+                &patch,
+                &pose_patch,
+                &can,
+                &moved,
+                &mut WarmStart::default(),
+                &mut ws,
+            )
+            .distance;
+            assert_eq!(d > 0.0, clear, "{extra}: {d}");
+            assert!((d - extra).abs() < 1e-9, "{extra}: {d}");
+        }
     }
 }

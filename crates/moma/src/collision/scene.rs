@@ -188,6 +188,70 @@ pub struct Scene {
     pub objects: Vec<SceneObject>,
 }
 
+impl Scene {
+    /// The scene moved by `by`: every shape at `by ∘ pose`, each object keeping its
+    /// shapes, their meshes and its touch links (trees rebuilt).
+    ///
+    /// # Errors
+    /// As [`SceneObject::with_meshes`] (not for the objects of a scene built by them).
+    pub fn placed(&self, by: &SE3) -> Result<Scene> {
+        self.map_objects(|o| {
+            o.shapes
+                .iter()
+                .map(|s| (by.compose(&s.pose), s.shape.clone(), s.mesh.clone()))
+                .collect()
+        })
+    }
+
+    /// The scene with every mesh as its triangles, each a flat convex shape at the
+    /// mesh's pose (primitives and voxels kept): the convex queries then measure the
+    /// meshes' surfaces, as [`super::exact`] does (`moma collision --mesh exact`),
+    /// instead of their hulls. A triangle's distance is GJK's on its three vertices; the
+    /// surface distance is the smallest over the triangles, and the object's tree prunes
+    /// the far ones. A surface has no inside: a shape wholly inside a closed mesh is apart
+    /// from it.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming an object whose triangles exceed
+    /// [`MAX_SCENE_SHAPES`].
+    pub fn with_mesh_triangles(&self) -> Result<Scene> {
+        self.map_objects(|o| {
+            let mut shapes = Vec::new();
+            for s in &o.shapes {
+                match &s.mesh {
+                    Some(mesh) => shapes.extend(mesh.triangles.iter().map(|t| {
+                        let triangle = Convex::Hull {
+                            vertices: t.iter().map(|&i| mesh.vertices[i as usize]).collect(),
+                            neighbours: Vec::new(),
+                        };
+                        (s.pose, triangle, None)
+                    })),
+                    None => shapes.push((s.pose, s.shape.clone(), None)),
+                }
+            }
+            shapes
+        })
+    }
+
+    /// The scene with each object's shapes replaced by `shapes(object)`, its id and touch
+    /// links kept.
+    fn map_objects(
+        &self,
+        shapes: impl Fn(&SceneObject) -> Vec<(SE3, Convex, Option<Arc<TriangleMesh>>)>,
+    ) -> Result<Scene> {
+        let objects = self
+            .objects
+            .iter()
+            .map(|o| {
+                let mut placed = SceneObject::with_meshes(o.id.clone(), shapes(o))?;
+                placed.touch_links.clone_from(&o.touch_links);
+                Ok(placed)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Scene { objects })
+    }
+}
+
 /// Workspace of the scene queries: results per (link, object) pair and warm starts.
 #[derive(Clone, Debug)]
 pub struct SceneData {

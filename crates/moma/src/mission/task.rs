@@ -2,7 +2,10 @@
 //! pick with its grasp and mass, and what the run needs of them.
 //!
 //! At load ([`load_task`]): the scene is read (poses in its own frame, `world` or the
-//! robot's root link) and placed on the map at `task.pose`; the grasp comes from a
+//! robot's root link) and placed on the map at `task.pose` ([`Scene::placed`], meshes
+//! kept), its meshes as their triangles with `task.mesh = "exact"`
+//! ([`Scene::with_mesh_triangles`]: the one scene of the placement, the planner and the
+//! monitor); the grasp comes from a
 //! MotionBenchMaker goal query or an offset from the object; the robot's collision
 //! geometry is read with the SRDF's disabled pairs; the joint group is the end effector's
 //! arm chain; the robot with the object as a point mass on the grasp frame's body is
@@ -96,6 +99,12 @@ pub struct TaskSpec {
     /// Seed of the placement's IK seeds and of the arm planner.
     #[serde(default)]
     pub seed: u64,
+    /// How the scene's meshes enter the pick's distances (the placement's, the arm
+    /// planner's and the distance monitor's), as `moma collision --mesh`: `"convex"`
+    /// (default), each mesh as its convex hull; `"exact"`, each mesh as its triangles
+    /// ([`Scene::with_mesh_triangles`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
 }
 
 fn default_step() -> f64 {
@@ -197,7 +206,8 @@ fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
 /// unknown object (listing the scene's), both or neither of `query` and `grasp`, a query
 /// for another object, a non-finite pose or grasp, a mass that is not ≥ 0, a step,
 /// heading count, approach, lift or planning time out of range, an area of the wrong shape, a
-/// scene object where the footprint stands at the start.
+/// scene object where the footprint stands at the start, a `mesh` other than `"convex"`
+/// and `"exact"`.
 #[allow(clippy::too_many_arguments)]
 pub fn load_task(
     spec: &TaskSpec,
@@ -212,6 +222,7 @@ pub fn load_task(
     footprint: &super::footprint::MissionFootprint,
 ) -> Result<Task> {
     check_numbers(spec, path)?;
+    let exact = exact_meshes(spec, path)?;
     let model = &robot.model;
     let mut world_frames = vec!["world".to_string()];
     if let Some(f) = model.frames.iter().find(|f| f.kind == FrameKind::Body) {
@@ -226,7 +237,16 @@ pub fn load_task(
     )
     .map_err(|e| field_err(path, "task.scene", e))?;
     let on_map = SE3::from_xyz_rpy([spec.pose[0], spec.pose[1], 0.0], [0.0, 0.0, spec.pose[2]]);
-    let scene = placed(&local, &on_map).map_err(|e| field_err(path, "task.scene", e))?;
+    let scene = local
+        .placed(&on_map)
+        .map_err(|e| field_err(path, "task.scene", e))?;
+    let scene = if exact {
+        scene
+            .with_mesh_triangles()
+            .map_err(|e| field_err(path, "task.mesh", e))?
+    } else {
+        scene
+    };
     let Some(obj) = scene.objects.iter().find(|o| o.id == spec.object) else {
         let ids: Vec<&str> = scene.objects.iter().map(|o| o.id.as_str()).collect();
         return Err(field_err(
@@ -452,21 +472,18 @@ fn check_numbers(spec: &TaskSpec, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// `local` with every shape moved by `on_map`.
-fn placed(local: &Scene, on_map: &SE3) -> Result<Scene> {
-    let objects = local
-        .objects
-        .iter()
-        .map(|o| {
-            let shapes = o
-                .shapes
-                .iter()
-                .map(|s| (on_map.compose(&s.pose), s.shape.clone()))
-                .collect();
-            SceneObject::new(o.id.clone(), shapes)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(Scene { objects })
+/// Whether `task.mesh` asks for the meshes' triangles (`"exact"`) rather than their hulls
+/// (`"convex"`, the default).
+fn exact_meshes(spec: &TaskSpec, path: &Path) -> Result<bool> {
+    match spec.mesh.as_deref() {
+        None | Some("convex") => Ok(false),
+        Some("exact") => Ok(true),
+        Some(other) => Err(field_err(
+            path,
+            "task.mesh",
+            format!("'{other}' is not a mesh mode (\"convex\" or \"exact\")"),
+        )),
+    }
 }
 
 /// The joints of the chain from the base to the end effector that the mission's arm
