@@ -276,7 +276,7 @@ fn zmp_margin_input_gradient_matches_finite_differences() {
     use moma::control::mpc::robot::{KnotWorkspace, evaluate_knot};
     let robot = mpc_common::fetch_robot(None);
     let q0 = mpc_common::fetch_start(&robot);
-    let mut ws = KnotWorkspace::new(&robot);
+    let mut ws = KnotWorkspace::new(&robot, 1);
     let (nx, nu) = (robot.nx(), robot.nu());
     let mut x = DVector::zeros(nx);
     let mut vr = vec![0.0; robot.wheeled.nr()];
@@ -335,7 +335,7 @@ fn a_base_move_queries_no_more_self_pairs() {
     let mut x = DVector::zeros(robot.nx());
     robot.state_from_plant(q.as_slice(), &vr, &mut x);
     let cutoff = 0.05;
-    let mut ws = KnotWorkspace::new(&robot);
+    let mut ws = KnotWorkspace::new(&robot, 1);
     select_pairs(&robot, &mut ws, &q, f64::INFINITY);
     ws.distance_cutoff = cutoff;
     evaluate_knot(&robot, &mut ws, &q, &x, None, true);
@@ -353,7 +353,7 @@ fn a_base_move_queries_no_more_self_pairs() {
     evaluate_knot(&robot, &mut ws, &moved, &x_moved, None, true);
     assert_eq!(ws.queried_pairs, before, "pairs queried after a base move");
     // Every pair queried there gives the same clearance.
-    let mut all = KnotWorkspace::new(&robot);
+    let mut all = KnotWorkspace::new(&robot, 1);
     select_pairs(&robot, &mut all, &moved, f64::INFINITY);
     all.distance_cutoff = f64::INFINITY;
     evaluate_knot(&robot, &mut all, &moved, &x_moved, None, true);
@@ -362,12 +362,139 @@ fn a_base_move_queries_no_more_self_pairs() {
         "{} pairs in all",
         all.queried_pairs
     );
-    let full = all.values.distance;
+    let full = all.values.distances[0];
     assert!(full < cutoff, "closest pair {full} m");
     assert!(
-        (ws.values.distance - full).abs() < 1e-9,
+        (ws.values.distances[0] - full).abs() < 1e-9,
         "{} vs {full}",
-        ws.values.distance
+        ws.values.distances[0]
     );
-    assert!((&ws.values.distance_dx - &all.values.distance_dx).amax() < 1e-9);
+    assert!((&ws.values.distances_dx[0] - &all.values.distances_dx[0]).amax() < 1e-9);
+}
+
+/// Fetch in the mission's transport posture (arm folded over the base), where several
+/// self pairs are within a few centimetres: the MPC state and configuration.
+fn fetch_tucked(robot: &moma::control::mpc::MpcRobot) -> (DVector<f64>, DVector<f64>) {
+    let model = &robot.wheeled.model;
+    let mut q = DVector::zeros(model.nq);
+    for (name, v) in [
+        ("torso_lift_joint", 0.0),
+        ("shoulder_pan_joint", 1.32),
+        ("shoulder_lift_joint", 1.40),
+        ("upperarm_roll_joint", -0.2),
+        ("elbow_flex_joint", 1.72),
+        ("forearm_roll_joint", 0.0),
+        ("wrist_flex_joint", 1.66),
+        ("wrist_roll_joint", 0.0),
+    ] {
+        let j = model.joint_id(name).unwrap();
+        q[model.idx_q[j.0]] = v;
+    }
+    let vr = vec![0.0; robot.wheeled.nr()];
+    let mut x = DVector::zeros(robot.nx());
+    robot.state_from_plant(q.as_slice(), &vr, &mut x);
+    (q, x)
+}
+
+/// Each clearance slot holds one pair's distance, nearest first, with that pair's own
+/// gradient: the first slot is the closest pair of a one-slot evaluation, and every
+/// filled slot's gradient matches central differences of that slot's distance along
+/// each moved joint (the pairs' order does not change over such small steps), so the
+/// second slot's gradient is not the nearest pair's.
+#[test]
+fn each_clearance_slot_is_one_pair_with_its_own_gradient() {
+    use moma::collision::Scene;
+    use moma::control::mpc::robot::{KnotWorkspace, evaluate_knot, select_pairs};
+    let robot = mpc_common::fetch_robot(Some(Scene::default()));
+    let (q, x) = fetch_tucked(&robot);
+    let slots = 4;
+    let cutoff = 0.1;
+    let evaluate = |slots: usize, x: &DVector<f64>| {
+        let mut ws = KnotWorkspace::new(&robot, slots);
+        select_pairs(&robot, &mut ws, &q, f64::INFINITY);
+        ws.distance_cutoff = cutoff;
+        evaluate_knot(&robot, &mut ws, &q, x, None, true);
+        ws.values
+    };
+    let one = evaluate(1, &x);
+    let vals = evaluate(slots, &x);
+    assert_eq!(vals.distances.len(), slots);
+    assert_eq!(vals.distances[0], one.distances[0]);
+    assert!((&vals.distances_dx[0] - &one.distances_dx[0]).amax() < 1e-12);
+    let filled = vals.distances.iter().filter(|&&d| d < cutoff).count();
+    assert!(filled >= 2, "pairs within {cutoff} m: {:?}", vals.distances);
+    for w in vals.distances.windows(2) {
+        assert!(w[0] <= w[1], "not ascending: {:?}", vals.distances);
+    }
+    assert!(
+        (&vals.distances_dx[1] - &vals.distances_dx[0]).amax() > 1e-3,
+        "the second slot has the first's gradient"
+    );
+    let n = robot.n_moved();
+    let eps = 1e-6;
+    for col in 3..3 + n {
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[col] += eps;
+        xm[col] -= eps;
+        let (p, m) = (evaluate(slots, &xp), evaluate(slots, &xm));
+        for s in 0..filled {
+            let fd = (p.distances[s] - m.distances[s]) / (2.0 * eps);
+            let g = vals.distances_dx[s][col];
+            assert!(
+                (fd - g).abs() < 1e-4 * (1.0 + fd.abs()),
+                "slot {s}, column {col}: gradient {g}, central difference {fd}"
+            );
+        }
+    }
+}
+
+/// An inactive clearance row within `clearance_band` of the set value gives the step's
+/// model its Gauss–Newton curvature `ρ ∇c ∇cᵀ` and nothing else (no gradient, no cost);
+/// beyond the band it gives nothing.
+#[test]
+fn an_inactive_clearance_row_in_the_band_gives_only_curvature() {
+    use moma::collision::Scene;
+    use moma::control::mpc::ConstraintSettings;
+    use moma::control::mpc::constraints::ConstraintSet;
+    use moma::control::mpc::robot::{KnotWorkspace, evaluate_knot, select_pairs};
+    let robot = mpc_common::fetch_robot(Some(Scene::default()));
+    let (q, x) = fetch_tucked(&robot);
+    let mut ws = KnotWorkspace::new(&robot, 1);
+    select_pairs(&robot, &mut ws, &q, f64::INFINITY);
+    ws.distance_cutoff = f64::INFINITY;
+    let u = DVector::zeros(robot.nu());
+    evaluate_knot(&robot, &mut ws, &q, &x, Some(&u), true);
+    let mut vals = ws.values.clone();
+    let grad = vals.distances_dx[0].clone();
+    assert!(grad.amax() > 1e-3);
+    let terms = |band: f64, distance: f64, vals: &mut moma::control::mpc::robot::KnotValues| {
+        let s = ConstraintSettings {
+            clearance: Some(0.03),
+            clearance_pairs: 1,
+            clearance_band: band,
+            ..ConstraintSettings::default()
+        };
+        vals.distances[0] = distance;
+        let mut set = ConstraintSet::new(&robot, &s, 2);
+        let mut out = StageModel::new(robot.nx(), robot.nu());
+        let cost = set.knot_terms(&robot, &s, 1, &x, Some(&u), &*vals, Some(&mut out));
+        (cost, out)
+    };
+    let s = ConstraintSettings::default();
+    let scale = s.penalty / (s.length_scale * s.length_scale);
+    // 2 mm above the set value: inactive (λ = 0), inside a 3 mm band.
+    let (c0, m0) = terms(0.0, 0.032, &mut vals);
+    let (c1, m1) = terms(0.003, 0.032, &mut vals);
+    assert_eq!(c0, c1);
+    assert!((&m1.lx - &m0.lx).amax() == 0.0);
+    let want = scale * &grad * grad.transpose();
+    let got = &m1.lxx - &m0.lxx;
+    assert!(
+        (&got - &want).amax() < 1e-9 * want.amax(),
+        "curvature {got} != ρ ∇c ∇cᵀ {want}"
+    );
+    // 4 mm above: beyond the band, nothing.
+    let (_, m2) = terms(0.0, 0.034, &mut vals);
+    let (_, m3) = terms(0.003, 0.034, &mut vals);
+    assert!((&m3.lxx - &m2.lxx).amax() == 0.0);
 }

@@ -260,6 +260,22 @@ fn what_law_mpc_does_not_run_is_refused_naming_the_field() {
             "control.mpc.map_clearance",
         ),
         (
+            "mission_mpc.toml",
+            vec![(
+                "clearance = false",
+                "clearance = false\nclearance_pairs = 0".into(),
+            )],
+            "control.mpc.clearance_pairs",
+        ),
+        (
+            "mission_mpc.toml",
+            vec![(
+                "clearance = false",
+                "clearance = false\nclearance_band = -0.01".into(),
+            )],
+            "control.mpc.clearance_band",
+        ),
+        (
             "mission_contact.toml",
             vec![("[simulation]", format!("{mpc}\n[simulation]"))],
             "simulation.plant",

@@ -109,6 +109,14 @@ pub struct MpcSpec {
     /// default 0.25; `inf`: every enabled pair).
     #[serde(default)]
     pub activation_distance: Option<f64>,
+    /// Clearance rows per knot: one for each of the nearest this many pairs (1 to 64,
+    /// default 4).
+    #[serde(default)]
+    pub clearance_pairs: Option<i64>,
+    /// Band above the clearance's set value within which an inactive clearance row still
+    /// gives the step's model its curvature (m, finite, ≥ 0, default 0.003; 0: none).
+    #[serde(default)]
+    pub clearance_band: Option<f64>,
     /// Distance kept from the joint position limits (default 0.02).
     #[serde(default)]
     pub position_margin: Option<f64>,
@@ -246,6 +254,12 @@ fn settings(spec: &MpcSpec, table: &str) -> Result<MpcSettings> {
     }
     if let Some(n) = count(table, "max_iterations", spec.max_iterations, 1000)? {
         s.solver.max_iterations = n;
+    }
+    if let Some(n) = count(table, "clearance_pairs", spec.clearance_pairs, 64)? {
+        s.constraints.clearance_pairs = n;
+    }
+    if let Some(b) = non_negative(table, "clearance_band", spec.clearance_band)? {
+        s.constraints.clearance_band = b;
     }
     if let Some(m) = non_negative(table, "position_margin", spec.position_margin)? {
         s.constraints.position_margin = m;

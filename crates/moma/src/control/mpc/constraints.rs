@@ -16,6 +16,12 @@
 //! the measured state, would otherwise raise its multiplier by `ρ c` at every solve
 //! without bound, and the cost it dominates would leave the line search no step).
 //!
+//! A clearance row inactive at the linearisation but within
+//! [`ConstraintSettings::clearance_band`] of its set value still adds its Gauss–Newton
+//! curvature `ρ ∇c ∇cᵀ` to the stage model (not its gradient, and not to the cost): the
+//! step's model then resists closing a pair that is about to become active, which the
+//! model of the active rows alone cannot see.
+//!
 //! Kinds, per knot (state constraints from knot 1 on, since `x_0` is measured; the
 //! input–state ones at knots 0 … N − 1):
 //!
@@ -26,7 +32,7 @@
 //! | joint speed | `|q̇_i| ≤ q̇_max,i` | exact |
 //! | joint position | `lower + δ ≤ q_i ≤ upper − δ` | exact |
 //! | ZMP | margin ≥ `zmp_margin` | in u exact (momentum rate affine in q̈); in x the point-mass linearisation, on the critical edge |
-//! | clearance | min distance (self pairs, scene) ≥ `clearance` | closest pair's distance derivative |
+//! | clearance | one row per nearest pair (self pairs, scene; the [`ConstraintSettings::clearance_pairs`] nearest, ascending): distance ≥ `clearance` | that pair's distance derivative |
 //! | map clearance | base footprint's clearance on the map's distance field ≥ `map_clearance` | the bilinear field's gradient in `(x, y, θ)` |
 
 use nalgebra::DVector;
@@ -68,6 +74,16 @@ pub struct ConstraintSettings {
     /// Self pairs farther apart than this at the start of a solve are not checked in
     /// that solve (m; `∞`: every enabled pair).
     pub activation_distance: f64,
+    /// Clearance rows per knot (≥ 1): one for each of the nearest this many pairs (self
+    /// pairs and scene link–object pairs), each with its own distance, gradient and
+    /// multiplier, so the step's model sees a second pair that closes while the
+    /// nearest one opens.
+    pub clearance_pairs: usize,
+    /// Width of the band above the clearance's set value (m) within which an inactive
+    /// clearance row still gives the step's model its Gauss–Newton curvature
+    /// `ρ ∇c ∇cᵀ` (no gradient, no cost): the model then resists a step that closes a
+    /// pair about to become active. 0: none.
+    pub clearance_band: f64,
 }
 
 impl Default for ConstraintSettings {
@@ -82,21 +98,24 @@ impl Default for ConstraintSettings {
             max_multiplier: 1000.0,
             length_scale: 0.02,
             activation_distance: 0.25,
+            clearance_pairs: 4,
+            clearance_band: 0.003,
         }
     }
 }
 
-/// Rows per knot for `robot`.
+/// Rows per knot for `robot` with `s`.
 #[must_use]
-pub fn rows(robot: &MpcRobot) -> usize {
-    2 * robot.torque_limit.len() + 4 + 4 * robot.n_moved() + 3
+pub fn rows(robot: &MpcRobot, s: &ConstraintSettings) -> usize {
+    2 * robot.torque_limit.len() + 4 + 4 * robot.n_moved() + 2 + s.clearance_pairs
 }
 
-/// The clearance's row in a knot's rows (the last but one: the ZMP's before it, the map
-/// clearance's after it).
+/// The clearance rows in a knot's rows (the last but one group: the ZMP's row before
+/// them, the map clearance's after them), nearest pair first.
 #[must_use]
-pub fn clearance_row(robot: &MpcRobot) -> usize {
-    rows(robot) - 2
+pub fn clearance_rows(robot: &MpcRobot, s: &ConstraintSettings) -> std::ops::Range<usize> {
+    let end = rows(robot, s) - 1;
+    end - s.clearance_pairs..end
 }
 
 /// Multipliers and the last evaluated values (scaled) of every row of every knot.
@@ -120,8 +139,8 @@ pub struct ConstraintSet {
 impl ConstraintSet {
     /// Zero multipliers for `n + 1` knots.
     #[must_use]
-    pub fn new(robot: &MpcRobot, n: usize) -> Self {
-        let m = rows(robot);
+    pub fn new(robot: &MpcRobot, s: &ConstraintSettings, n: usize) -> Self {
+        let m = rows(robot, s);
         Self {
             lambda: vec![DVector::zeros(m); n + 1],
             value: vec![DVector::from_element(m, f64::NEG_INFINITY); n + 1],
@@ -182,10 +201,13 @@ impl ConstraintSet {
             &mut self.gx,
             &mut self.gu,
         );
-        // One row: scaled value c, physical violation, kind, and a closure writing ∇c.
+        // One row: scaled value c, physical violation, kind, the scaled value above which
+        // the row gives its curvature while inactive (`+∞`: never), and a closure
+        // writing ∇c.
         let mut apply = |c: f64,
                          phys: f64,
                          kind: usize,
+                         band_floor: f64,
                          grad: &mut dyn FnMut(&mut DVector<f64>, &mut DVector<f64>),
                          out: &mut Option<&mut StageModel>| {
             let l = lambda[row];
@@ -196,22 +218,28 @@ impl ConstraintSet {
             }
             viol[kind] = viol[kind].max(phys.max(0.0));
             let a = l + rho * c;
-            if a > 0.0 {
+            let active = a > 0.0;
+            if active {
                 cost += (a * a - l * l) / (2.0 * rho);
-                if let Some(o) = out.as_deref_mut() {
-                    gx.fill(0.0);
-                    gu.fill(0.0);
-                    grad(gx, gu);
-                    o.lx.axpy(a, gx, 1.0);
-                    o.lu.axpy(a, gu, 1.0);
-                    o.lxx.ger(rho, gx, gx, 1.0);
-                    o.luu.ger(rho, gu, gu, 1.0);
-                    o.lux.ger(rho, gu, gx, 1.0);
-                }
             } else {
                 cost -= l * l / (2.0 * rho);
             }
+            if let Some(o) = out.as_deref_mut()
+                && (active || c > band_floor)
+            {
+                gx.fill(0.0);
+                gu.fill(0.0);
+                grad(gx, gu);
+                if active {
+                    o.lx.axpy(a, gx, 1.0);
+                    o.lu.axpy(a, gu, 1.0);
+                }
+                o.lxx.ger(rho, gx, gx, 1.0);
+                o.luu.ger(rho, gu, gu, 1.0);
+                o.lux.ger(rho, gu, gx, 1.0);
+            }
         };
+        let never = f64::INFINITY;
         let off = f64::NEG_INFINITY;
         // Torques.
         for i in 0..robot.torque_limit.len() {
@@ -227,6 +255,7 @@ impl ConstraintSet {
                     c,
                     phys,
                     0,
+                    never,
                     &mut |_, gu| {
                         for j in 0..gu.len() {
                             gu[j] = sign * vals.torque_du[(i, j)] / lim;
@@ -251,6 +280,7 @@ impl ConstraintSet {
                     c,
                     phys,
                     1,
+                    never,
                     &mut |gx, _| {
                         gx[3 + n] = sign * a / wl;
                         gx[4 + n] = sign * b / wl;
@@ -273,6 +303,7 @@ impl ConstraintSet {
                     c,
                     phys,
                     2,
+                    never,
                     &mut |gx, _| gx[5 + n + i] = sign / vmax,
                     &mut out,
                 );
@@ -287,13 +318,20 @@ impl ConstraintSet {
             } else {
                 (off, 0.0)
             };
-            apply(c_hi, p_hi, 3, &mut |gx, _| gx[3 + i] = 1.0, &mut out);
+            apply(c_hi, p_hi, 3, never, &mut |gx, _| gx[3 + i] = 1.0, &mut out);
             let (c_lo, p_lo) = if state_rows && lo.is_finite() {
                 (lo - q, robot.lower[i] - q)
             } else {
                 (off, 0.0)
             };
-            apply(c_lo, p_lo, 3, &mut |gx, _| gx[3 + i] = -1.0, &mut out);
+            apply(
+                c_lo,
+                p_lo,
+                3,
+                never,
+                &mut |gx, _| gx[3 + i] = -1.0,
+                &mut out,
+            );
         }
         // ZMP margin (lift-off counts as a margin of −1 m).
         let ls = s.length_scale;
@@ -308,26 +346,30 @@ impl ConstraintSet {
             c,
             phys,
             4,
+            never,
             &mut |gx, gu| {
                 gx.axpy(-1.0 / ls, &vals.zmp_dx, 0.0);
                 gu.axpy(-1.0 / ls, &vals.zmp_du, 0.0);
             },
             &mut out,
         );
-        // Clearance.
-        let (c, phys) = match s.clearance {
-            Some(d) if state_rows && vals.distance.is_finite() => {
-                ((d - vals.distance) / ls, d - vals.distance)
-            }
-            _ => (off, 0.0),
-        };
-        apply(
-            c,
-            phys,
-            5,
-            &mut |gx, _| gx.axpy(-1.0 / ls, &vals.distance_dx, 0.0),
-            &mut out,
-        );
+        // Clearance: one row per nearest pair, in the order of their distances.
+        let band_floor = -s.clearance_band / ls;
+        for (slot, &dist) in vals.distances.iter().enumerate() {
+            let (c, phys) = match s.clearance {
+                Some(d) if state_rows && dist.is_finite() => ((d - dist) / ls, d - dist),
+                _ => (off, 0.0),
+            };
+            let grad = &vals.distances_dx[slot];
+            apply(
+                c,
+                phys,
+                5,
+                band_floor,
+                &mut |gx, _| gx.axpy(-1.0 / ls, grad, 0.0),
+                &mut out,
+            );
+        }
         // Map clearance of the base footprint (the base pose's first three states).
         let (c, phys) = match s.map_clearance {
             Some(d) if state_rows && vals.map_clearance.is_finite() => {
@@ -339,6 +381,7 @@ impl ConstraintSet {
             c,
             phys,
             6,
+            never,
             &mut |gx, _| {
                 for (i, g) in vals.map_clearance_dx.iter().enumerate() {
                     gx[i] = -g / ls;

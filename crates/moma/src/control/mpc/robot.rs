@@ -18,8 +18,9 @@
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3};
 
 use crate::collision::{
-    GeometryData, GeometryModel, PairSelection, Scene, SceneData, closest_pair, compute_distances,
-    compute_scene_distances_below, min_distance_gradient, update_geometry_placements,
+    ClosestPair, GeometryData, GeometryModel, PairSelection, Scene, SceneData, compute_distances,
+    compute_scene_distances_below, distance_derivative, scene_distance_derivative,
+    update_geometry_placements,
 };
 use crate::error::{Error, Result};
 use crate::kinematics::{
@@ -262,10 +263,14 @@ pub struct KnotValues {
     /// Its gradient in u (exact: the momentum rate is affine in q̈, see
     /// [`evaluate_knot`]).
     pub zmp_du: DVector<f64>,
-    /// Smallest signed distance (self pairs and scene), `+∞` without geometry.
-    pub distance: f64,
-    /// Its gradient in x.
-    pub distance_dx: DVector<f64>,
+    /// The signed distances of the nearest pairs (self pairs and scene link–object
+    /// pairs), ascending, one per clearance row (the workspace's `pair_rows` of them):
+    /// `distances[0]` is the smallest distance. A slot no queried pair fills holds the
+    /// knot's cut-off ([`KnotWorkspace::distance_cutoff`]), `+∞` without geometry or
+    /// cut-off.
+    pub distances: Vec<f64>,
+    /// Each slot's pair's distance derivative in x (zero for an empty slot).
+    pub distances_dx: Vec<DVector<f64>>,
     /// Clearance of the base footprint on the map (m), `+∞` without a map
     /// (`super::MapClearance::at`, set by the problem, not by [`evaluate_knot`]).
     pub map_clearance: f64,
@@ -297,6 +302,9 @@ pub struct KnotWorkspace {
     /// Distance at or beyond which a pair is not queried ([`evaluate_knot`]); `+∞`:
     /// every selected pair; `−∞`: none (the clearance is not needed).
     pub distance_cutoff: f64,
+    /// The nearest pairs of the knot being evaluated, ascending (at most
+    /// `values.distances.len()`, its capacity).
+    nearest: Vec<(f64, ClosestPair)>,
     q: DVector<f64>,
     v_r: DVector<f64>,
     a_r: DVector<f64>,
@@ -314,9 +322,11 @@ pub struct KnotWorkspace {
 }
 
 impl KnotWorkspace {
-    /// Buffers for `robot`.
+    /// Buffers for `robot`, keeping the distances of the `pair_rows` nearest pairs
+    /// (at least one).
     #[must_use]
-    pub fn new(robot: &MpcRobot) -> Self {
+    pub fn new(robot: &MpcRobot, pair_rows: usize) -> Self {
+        let pair_rows = pair_rows.max(1);
         let wm = &robot.wheeled;
         let (nv, nr, nu_full) = (wm.nv(), wm.nr(), wm.nu());
         let (nx, nu) = (robot.nx(), robot.nu());
@@ -344,6 +354,7 @@ impl KnotWorkspace {
             }),
             queried_pairs: 0,
             distance_cutoff: f64::INFINITY,
+            nearest: Vec::with_capacity(pair_rows),
             q: DVector::zeros(wm.model.nq),
             v_r: DVector::zeros(nr),
             a_r: DVector::zeros(nr),
@@ -362,8 +373,8 @@ impl KnotWorkspace {
                 zmp_margin: None,
                 zmp_dx: DVector::zeros(nx),
                 zmp_du: DVector::zeros(nu),
-                distance: f64::INFINITY,
-                distance_dx: DVector::zeros(nx),
+                distances: vec![f64::INFINITY; pair_rows],
+                distances_dx: vec![DVector::zeros(nx); pair_rows],
                 map_clearance: f64::INFINITY,
                 map_clearance_dx: [0.0; 3],
                 end_effector: SE3::identity(),
@@ -523,6 +534,27 @@ fn cull_pairs(
     }
 }
 
+/// Inserts `(distance, pair)` into `nearest`, kept ascending and at most `slots` long
+/// (no allocation with a capacity of `slots`); a pair ties after those already in, so
+/// the first slot holds the pair `closest_pair` would name.
+fn keep_nearest(
+    nearest: &mut Vec<(f64, ClosestPair)>,
+    slots: usize,
+    distance: f64,
+    pair: ClosestPair,
+) {
+    let at = nearest
+        .iter()
+        .position(|&(d, _)| distance < d)
+        .unwrap_or(nearest.len());
+    if at < slots {
+        if nearest.len() == slots {
+            nearest.pop();
+        }
+        nearest.insert(at, (distance, pair));
+    }
+}
+
 /// Column of x that a `v`-coordinate of the full model maps to (`None`: held).
 fn x_column(robot: &MpcRobot, dof: usize) -> Option<usize> {
     if dof < 3 {
@@ -616,11 +648,13 @@ pub fn evaluate_knot(
             }
         }
     }
-    // Clearance.
-    // Pairs at least `cutoff` apart (by their bounding balls) are not queried; when every
-    // pair is, the distance is reported as `cutoff` with a zero gradient.
-    vals.distance = f64::INFINITY;
-    vals.distance_dx.fill(0.0);
+    // Clearance: the nearest pairs, each with its own distance and gradient.
+    // Pairs at least `cutoff` apart (by their bounding balls) are not queried; a slot no
+    // queried pair fills holds `cutoff` with a zero gradient.
+    vals.distances.fill(f64::INFINITY);
+    for g in &mut vals.distances_dx {
+        g.fill(0.0);
+    }
     ws.queried_pairs = 0;
     let cutoff = ws.distance_cutoff;
     if let (Some(c), Some((active, gd, scd)), false) = (
@@ -635,20 +669,53 @@ pub fn evaluate_knot(
         compute_distances(active, gd, PairSelection::Enabled);
         ws.history.record(active, gd, &ws.in_base);
         compute_scene_distances_below(active, gd, &c.scene, scd, cutoff);
-        vals.distance = cutoff;
-        if !derivatives {
-            if let Some((_, d)) = closest_pair(gd, &c.scene, scd) {
-                vals.distance = d;
+        let slots = vals.distances.len();
+        ws.nearest.clear();
+        for p in 0..active.pairs.len() {
+            if active.enabled[p] {
+                keep_nearest(
+                    &mut ws.nearest,
+                    slots,
+                    gd.results[p].distance,
+                    ClosestPair::SelfPair(p),
+                );
             }
-        } else if let Some((_, d)) =
-            min_distance_gradient(model, data, active, gd, &c.scene, scd, &mut ws.grad_nv)
-        {
-            vals.distance = d;
-            {
-                for k in 0..model.nv {
-                    if let Some(col) = x_column(robot, k) {
-                        vals.distance_dx[col] = ws.grad_nv[k];
-                    }
+        }
+        let objects = c.scene.objects.len();
+        for (k, r) in scd.results.iter().enumerate() {
+            if r.distance < cutoff {
+                let pair = ClosestPair::Scene {
+                    link: k / objects,
+                    object: k % objects,
+                };
+                keep_nearest(&mut ws.nearest, slots, r.distance, pair);
+            }
+        }
+        vals.distances.fill(cutoff);
+        for (slot, &(d, pair)) in ws.nearest.iter().enumerate() {
+            vals.distances[slot] = d;
+            if !derivatives {
+                continue;
+            }
+            match pair {
+                ClosestPair::SelfPair(p) => {
+                    distance_derivative(model, data, active, gd, p, &mut ws.grad_nv);
+                }
+                ClosestPair::Scene { link, object } => scene_distance_derivative(
+                    model,
+                    data,
+                    active,
+                    &c.scene,
+                    scd,
+                    link,
+                    object,
+                    &mut ws.grad_nv,
+                ),
+            }
+            let dx = &mut vals.distances_dx[slot];
+            for k in 0..model.nv {
+                if let Some(col) = x_column(robot, k) {
+                    dx[col] = ws.grad_nv[k];
                 }
             }
         }

@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use nalgebra::DVector;
 
-use super::constraints::{ConstraintSet, ConstraintSettings, clearance_row};
+use super::constraints::{ConstraintSet, ConstraintSettings, clearance_rows};
 use super::costs::{CostWeights, KnotReference, knot_cost};
 use super::distance_field::MapClearance;
 use super::problem::{OptimalControlProblem, StageModel};
@@ -96,19 +96,28 @@ pub struct MpcProblem {
 }
 
 impl MpcProblem {
-    /// The distance at or beyond which knot `k`'s clearance row is inactive, so that
-    /// pairs that far apart need no query: the row `c = (d_min − d) / ℓ` enters only
-    /// where `λ + ρ c > 0`, that is `d < d_min + λ ℓ / ρ`; beyond it the term, its
-    /// derivatives and the multiplier step are the same whatever `d` is. `−∞` (no query)
-    /// at knot 0, whose state is measured, and without a clearance constraint.
-    fn distance_cutoff(&self, k: usize) -> f64 {
+    /// The distance at or beyond which knot `k`'s clearance rows are inactive, so that
+    /// pairs that far apart need no query: a row `c = (d_min − d) / ℓ` enters only where
+    /// `λ + ρ c > 0`, that is `d < d_min + λ ℓ / ρ`; beyond it the term, its
+    /// derivatives and the multiplier step are the same whatever `d` is. With
+    /// `derivatives`, at least `d_min` plus the clearance band, within which an inactive
+    /// row gives the model its curvature. `−∞` (no query) at knot 0, whose state is
+    /// measured, and without a clearance constraint.
+    fn distance_cutoff(&self, k: usize, derivatives: bool) -> f64 {
         let s = &self.settings.constraints;
         match s.clearance {
             Some(_) if k == 0 => f64::NEG_INFINITY,
             None => f64::NEG_INFINITY,
             Some(d) => {
-                let lambda = self.constraints.lambda[k][clearance_row(&self.robot)];
-                d + lambda.max(0.0) * s.length_scale / s.penalty
+                let lambda = self.constraints.lambda[k].as_slice()[clearance_rows(&self.robot, s)]
+                    .iter()
+                    .fold(0.0, |m: f64, &l| m.max(l));
+                let reach = lambda * s.length_scale / s.penalty;
+                d + if derivatives {
+                    reach.max(s.clearance_band)
+                } else {
+                    reach
+                }
             }
         }
     }
@@ -121,7 +130,7 @@ impl MpcProblem {
         u: Option<&DVector<f64>>,
         mut out: Option<&mut StageModel>,
     ) -> Result<f64> {
-        self.ws.distance_cutoff = self.distance_cutoff(k);
+        self.ws.distance_cutoff = self.distance_cutoff(k, out.is_some());
         evaluate_knot(&self.robot, &mut self.ws, &self.hold, x, u, out.is_some());
         let (clearance, gradient) = match (&self.map, self.settings.constraints.map_clearance) {
             (Some(map), Some(_)) if k > 0 => map.at([x[0], x[1], x[2]]),
@@ -135,7 +144,11 @@ impl MpcProblem {
         } else {
             f64::INFINITY
         };
-        self.min_clearance[k] = if k > 0 { vals.distance } else { f64::INFINITY };
+        self.min_clearance[k] = if k > 0 {
+            vals.distances[0]
+        } else {
+            f64::INFINITY
+        };
         if let Some(o) = out.as_deref_mut() {
             o.clear_cost();
         }
@@ -295,6 +308,16 @@ impl WholeBodyMpc {
         if settings.stages == 0 {
             return Err(Error::invalid("mpc.stages", "must be at least 1"));
         }
+        if settings.constraints.clearance_pairs == 0 {
+            return Err(Error::invalid("mpc.clearance_pairs", "must be at least 1"));
+        }
+        let band = settings.constraints.clearance_band;
+        if !(band >= 0.0 && band.is_finite()) {
+            return Err(Error::invalid(
+                "mpc.clearance_band",
+                format!("must be zero or positive, got {band}"),
+            ));
+        }
         for (field, v) in [
             ("mpc.dt", settings.dt),
             (
@@ -332,8 +355,8 @@ impl WholeBodyMpc {
         let posture =
             DVector::from_iterator(robot.n_moved(), robot.dofs.iter().map(|&d| q_start[d]));
         let problem = MpcProblem {
-            ws: KnotWorkspace::new(&robot),
-            constraints: ConstraintSet::new(&robot, n),
+            ws: KnotWorkspace::new(&robot, settings.constraints.clearance_pairs),
+            constraints: ConstraintSet::new(&robot, &settings.constraints, n),
             map: None,
             reference: vec![KnotReference::default(); n + 1],
             posture,
