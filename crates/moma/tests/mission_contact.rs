@@ -8,6 +8,7 @@ mod mission_common;
 
 use mission_common::{load, run};
 use moma::mission::{self, Mission, MissionResult};
+use moma::mobile::wheeled::wheel_longitudinal_forces;
 
 /// `mission_contact.toml` with `from` replaced by `to`, validated as if it were the file.
 fn variant(from: &str, to: &str) -> moma::Result<Mission> {
@@ -178,4 +179,173 @@ fn bad_contact_input_names_the_field_before_running() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("simulation.plant"), "{e}");
+}
+
+/// The contact plant's normal forces over the shipped mission against the rolling
+/// model's normal loads at the same state: `StabilityMonitor::sample` on the mission's
+/// robot at each recorded driving sample of the contact run (its configuration, forward
+/// speed, yaw rate and torques; the arm's rates by central differences of the recorded
+/// joints, which the transport posture holds nearly still). With more than three
+/// contacts the monitor's rule is the minimum-norm one, loads affine in the contact
+/// position — what equal springs under a rigid base give, and the plant's springs are
+/// equal (the casters are fixed balls at the description's positions, no trail). The
+/// wheels' friction (`samples.contact_friction`) against the multipliers λ of the same
+/// sample: each wheel's traction against the rolling rows' −λ₁, −λ₂, the summed lateral
+/// force against the no-side-slip row's −λ₀.
+#[test]
+fn over_the_mission_the_contact_forces_match_the_rolling_loads_and_multipliers() {
+    use moma::sim::stability_monitor::{StabilityMonitor, StabilitySettings};
+    use moma::stability::{BodySet, LoadRule};
+    // the plant's first samples: it sinks onto its springs from touching without load
+    const SETTLE: f64 = 0.2;
+    // a torque step (N·m) between two samples: the recorded torques are those of the
+    // next control period, the plant's forces still those of the last
+    const STEP: f64 = 0.1;
+    let m = load("mission_contact.toml");
+    let r = run(&m);
+    assert!(r.reached, "{:?}", r.reason);
+    let s = &r.samples;
+    let settings = StabilitySettings {
+        mu: None,
+        bodies: BodySet::All,
+        ground_z: None,
+        stop_at_tip: false,
+    };
+    let mut monitor = StabilityMonitor::new(&m.robot, settings).unwrap();
+    let names = monitor.contact_names().to_vec();
+    assert_eq!(names.len(), 6);
+    let arm = m.robot.arm_dofs().to_vec();
+    let mut v = vec![0.0; m.robot.nr()];
+    // (|difference|, time, contact) of the samples after no torque step, and of those
+    let (mut smooth, mut stepped) = (Vec::new(), Vec::new());
+    let mut swing = 0.0f64;
+    // the wheels' forces: (|difference|, time) of each wheel's traction and of the
+    // summed lateral force, after no torque step; the largest of each, rolling
+    let (mut traction, mut lateral) = (Vec::new(), Vec::new());
+    let (mut traction_max, mut lateral_max) = (0.0f64, 0.0f64);
+    for k in 1..s.t.len() - 1 {
+        if s.phase[k] != "drive" || s.t[k] < SETTLE {
+            continue;
+        }
+        v[0] = s.v[k];
+        v[1] = s.omega[k];
+        for (j, &i) in arm.iter().enumerate() {
+            v[2 + j] = (s.q[k + 1][i] - s.q[k - 1][i]) / (s.t[k + 1] - s.t[k - 1]);
+        }
+        monitor.sample(s.t[k], &s.q[k], &v, &s.u[k]).unwrap();
+        assert_eq!(monitor.load_rule(), Some(LoadRule::MinimumNorm));
+        let step = s.u[k]
+            .iter()
+            .zip(&s.u[k - 1])
+            .any(|(a, b)| (a - b).abs() > STEP);
+        // each wheel's traction against the rolling rows' −λ₁, −λ₂, their summed lateral
+        // force against the no-side-slip row's −λ₀
+        let lambda = monitor.multipliers().as_slice();
+        let rolling = wheel_longitudinal_forces(&m.robot, lambda, &s.u[k]);
+        let (sn, cs) = s.q[k][2].sin_cos();
+        let f = &s.contact_friction[k];
+        let lat: f64 = f[..2].iter().map(|w| -w[0] * sn + w[1] * cs).sum();
+        if !step {
+            for w in 0..2 {
+                let along = f[w][0] * cs + f[w][1] * sn;
+                traction.push(((along - rolling[w]).abs(), s.t[k]));
+                traction_max = traction_max.max(rolling[w].abs());
+            }
+            lateral.push(((lat + lambda[0]).abs(), s.t[k]));
+            lateral_max = lateral_max.max(lambda[0].abs());
+        }
+        let rows = if step { &mut stepped } else { &mut smooth };
+        let at_rest = &s.contact_normal[1];
+        for (c, (plant, rolling)) in s.contact_normal[k]
+            .iter()
+            .zip(monitor.normal_loads())
+            .enumerate()
+        {
+            rows.push(((plant - rolling).abs(), s.t[k], c));
+            swing = swing.max((rolling - at_rest[c]).abs());
+        }
+    }
+    let weight: f64 = s.contact_normal[1].iter().sum();
+    let (n_smooth, n_stepped) = (smooth.len() / 6, stepped.len() / 6);
+    eprintln!(
+        "{n_smooth} driving samples after no torque step, {n_stepped} after one; weight \
+         {weight:.1} N, the rolling loads swing by up to {swing:.1} N from rest"
+    );
+    let mut largest = [0.0f64; 2];
+    for (i, (label, rows)) in [("no step", &mut smooth), ("step", &mut stepped)]
+        .into_iter()
+        .enumerate()
+    {
+        rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let rms = (rows.iter().map(|x| x.0 * x.0).sum::<f64>() / rows.len() as f64).sqrt();
+        largest[i] = rows[0].0;
+        eprintln!(
+            "{label}: largest {:.3} N, 99 % {:.3} N, RMS {rms:.3} N; largest at",
+            rows[0].0,
+            rows[rows.len() / 100].0
+        );
+        for (d, t, c) in rows.iter().take(6) {
+            eprintln!("  {d:.3} N at {t:.2} s on {}", names[*c]);
+        }
+    }
+    for (label, rows, of) in [
+        ("traction", &mut traction, traction_max),
+        ("lateral", &mut lateral, lateral_max),
+    ] {
+        rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let rms = (rows.iter().map(|x| x.0 * x.0).sum::<f64>() / rows.len() as f64).sqrt();
+        eprintln!(
+            "{label} (up to {of:.2} N): largest {:.4} N at {:.2} s, 99 % {:.4} N, RMS {rms:.4} N",
+            rows[0].0,
+            rows[0].1,
+            rows[rows.len() / 100].0
+        );
+        for (d, t) in rows.iter().take(5) {
+            eprintln!("  {d:.4} N at {t:.2} s");
+        }
+    }
+    // Measured, after no torque step (a wheel or joint torque changing by more than
+    // 0.1 N·m between samples; 58 of the 1101 driving samples): normal forces largest
+    // 0.83 N (at 20.30 s, turning towards the shelf), 99 % within 0.31 N, RMS 0.12 N,
+    // against loads that swing by 45.5 N on an 802 N robot; traction largest 0.20 N
+    // (0.96 s, accelerating), 99 % within 0.14 N, RMS 0.026 N, of up to 23.4 N; summed
+    // lateral force largest 0.93 N (20.30 s, turning), 99 % within 0.69 N, RMS 0.20 N,
+    // of up to 35.6 N (the wheels creep sideways: friction is viscous below v_ε). At a
+    // step the recorded torques are the next control period's and the plant has not yet
+    // felt them: normal forces off by up to 10.9 N (2.00 s, the end of the acceleration:
+    // the pitch load the step moves between front and rear casters; 9.0 N at 5.10 s,
+    // braking for the crate).
+    assert!(
+        swing > 30.0,
+        "the loads should move while driving: {swing} N"
+    );
+    assert!(
+        traction_max > 15.0 && lateral_max > 20.0,
+        "forces too small"
+    );
+    assert!(n_stepped * 12 < n_smooth, "{n_stepped} torque steps");
+    let quantile = |rows: &[(f64, f64)]| rows[rows.len() / 100].0;
+    let rms = |rows: &[(f64, f64)]| {
+        (rows.iter().map(|x| x.0 * x.0).sum::<f64>() / rows.len() as f64).sqrt()
+    };
+    let normal: Vec<(f64, f64)> = smooth.iter().map(|x| (x.0, x.1)).collect();
+    for (label, rows, [max, q99, rms_max]) in [
+        ("normal force", &normal, [1.5, 0.5, 0.2]),
+        ("traction", &traction, [0.4, 0.25, 0.05]),
+        ("lateral force", &lateral, [1.5, 1.0, 0.3]),
+    ] {
+        assert!(
+            rows[0].0 < max,
+            "{label} differs by {} N at {} s",
+            rows[0].0,
+            rows[0].1
+        );
+        assert!(quantile(rows) < q99, "{label}: 99 % {} N", quantile(rows));
+        assert!(rms(rows) < rms_max, "{label}: RMS {} N", rms(rows));
+    }
+    assert!(
+        largest[1] < 15.0,
+        "normal force at a torque step: {} N",
+        largest[1]
+    );
 }

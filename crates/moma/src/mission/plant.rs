@@ -201,6 +201,16 @@ impl ContactLoop {
         self.held.state.contacts.iter().map(|r| r.normal).collect()
     }
 
+    /// The friction force `[x, y]` of each contact on the robot (world, N; the order of
+    /// [`ContactLoop::normal_loads`]) applied over the last step.
+    pub fn friction_forces(&self) -> Vec<[f64; 2]> {
+        let reports = &self.held.state.contacts;
+        reports
+            .iter()
+            .map(|r| [r.friction.x, r.friction.y])
+            .collect()
+    }
+
     /// The plant takes the bodies' inertias of `robot` (the mission's robot with other
     /// inertias, the joints the same: a `[task]`'s payload attached at the grasp). The
     /// root body (the planar joint's there, the free flyer's here) is the same link.

@@ -186,6 +186,7 @@ impl Runner<'_> {
         s.phase.push(st.phase.name());
         if let Some(cl) = contact {
             s.contact_normal.push(cl.normal_loads());
+            s.contact_friction.push(cl.friction_forces());
         }
         mon.map(|m| (m.slip, clearance))
     }

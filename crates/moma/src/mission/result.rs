@@ -98,6 +98,10 @@ pub struct Samples {
     /// On the contact plant: each contact's normal force (N; the wheels, then the
     /// casters, as [`ContactTally::totals`]); empty on the rolling plant.
     pub contact_normal: Vec<Vec<f64>>,
+    /// On the contact plant: each contact's friction force on the robot `[x, y]` (world,
+    /// N; same order; zero for a caster), applied over the step that ends at the sample;
+    /// empty on the rolling plant.
+    pub contact_friction: Vec<Vec<[f64; 2]>>,
 }
 
 /// Wall times of the run's parts (s).
