@@ -107,10 +107,44 @@ fn the_simulated_lift_off_is_the_predicted_limit_within_five_percent() {
 }
 
 #[test]
-fn the_shipped_lift_off_sweep_loads() {
+fn the_shipped_lift_off_sweeps_load() {
     let s = Sweep::from_file(root().join("scenarios/sweeps/lift_off.toml")).unwrap();
     assert_eq!(s.study(), "lift_off");
     assert!(s.len() >= 15, "{} postures", s.len());
+    let s = Sweep::from_file(root().join("scenarios/sweeps/lift_off_brake.toml")).unwrap();
+    assert_eq!(s.study(), "lift_off");
+    assert_eq!(s.len(), 8, "4 shoulder angles x 2 payloads");
+}
+
+#[test]
+fn braking_the_brake_test_robot_lifts_a_rear_caster_at_the_predicted_limit_within_five_percent() {
+    // The shipped braking sweep (direction "backward") cut to the extended arm of
+    // scenarios/brake_arm_extended.toml, without and with 2 kg more at the tool.
+    let dir = root().join("scenarios/sweeps");
+    let text = std::fs::read_to_string(dir.join("lift_off_brake.toml")).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("\"q.shoulder_joint\""))
+        .unwrap();
+    let text = text.replace(line, "\"q.shoulder_joint\" = [1.5707963267948966]");
+    let s = Sweep::from_toml_str(&text, &dir.join("lift_off_brake.toml"), &dir).unwrap();
+    assert_eq!(s.len(), 2);
+    let cols = s.columns();
+    let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
+    let t = s.run(&[0, 1], 0).unwrap();
+    for row in &t.rows {
+        let ratio = f(&row[col("ratio")]);
+        assert!((ratio - 1.0).abs() < 0.05, "{row:?}");
+        assert_eq!(
+            row[col("lifted_contact")],
+            Value::Text("rear_left_caster".into()),
+            "braking tips the robot over its front wheels"
+        );
+    }
+    // The direction is braking's: speeding up would tip the robot back over its casters,
+    // a limit over 10 m/s² in this posture; braking's is under 6 m/s².
+    let pred = f(&t.rows[0][col("predicted_limit")]);
+    assert!(pred > 3.0 && pred < 6.0, "{pred}");
 }
 
 #[test]
