@@ -27,9 +27,11 @@
 //! `payload` frame. Speeding it up would tip it back over the casters, unloading the
 //! wheels: unreachable by traction, as braking the diff-drive arm.
 //!
-//! The UR5-class mobile manipulator (`scenarios/robots/mobile_manipulator.urdf`, wheels
-//! under the centre, four casters) is statically indeterminate: a far caster lifts well
-//! before the predicted limit, in both directions; the test states by how much and why.
+//! The UR5-class mobile manipulator (`scenarios/robots/mobile_manipulator.urdf`) and
+//! Fetch (`tests/data/robots/fetch`), wheels under the centre and four casters, stand on
+//! a statically indeterminate support: a far caster lifts well before the predicted limit,
+//! in both directions, in the transport posture of their contact missions and a reach
+//! posture, with and without 2 kg at the tool; the tests state by how much and why.
 
 use moma::contact::{ContactParams, ContactPlant};
 use moma::dynamics::center_of_mass;
@@ -42,8 +44,8 @@ use nalgebra::{DVector, Matrix3, Vector2, Vector3};
 
 mod contact_common;
 use contact_common::{
-    MOBILE_MANIPULATOR_ARM, brake_test_robot_plant, diffdrive_arm_model, diffdrive_arm_plant,
-    mobile_manipulator_plant, standing,
+    FETCH_ARM, MOBILE_MANIPULATOR_ARM, brake_test_robot_plant, diffdrive_arm_model,
+    diffdrive_arm_plant, fetch_plant, mobile_manipulator_plant, standing,
 };
 
 const G: f64 = 9.81;
@@ -304,53 +306,153 @@ fn the_brake_test_robots_simulated_braking_lift_off_is_the_predicted_limit_withi
     }
 }
 
-#[test]
-fn on_the_mobile_manipulator_a_far_caster_lifts_well_before_the_predicted_limit() {
-    // The UR5-class robot stands on six contacts: the drive wheels under the base's centre
-    // and four casters at x = ±0.24 m. The support is statically indeterminate: on equal
-    // linear springs under a rigid base the loads vary linearly with x, and the far
-    // casters' load reaches zero when the ZMP is at 2/3 of the way from the centre to the
-    // tipping edge (x = ∓0.16 m), not at the edge (the prediction's tip-over). So the
-    // first lift-off (a far caster: front when speeding up, rear when braking) comes at
-    // about 0.6–0.7 × the predicted limit, and at that limit itself (every contact off
-    // the edge unloaded, the drive wheels included) the wheels' friction, the only
-    // horizontal force, is zero: the robot's own traction cannot reach it. Measured, 2 kg
-    // at the tool: transport posture 0.68 (forward) and 0.60 (braking), reach posture
-    // 0.60 and 0.60.
-    let plant = mobile_manipulator_plant(ContactParams {
-        mu: 2.0,
-        slip_velocity: 0.1,
-        ..ContactParams::default()
-    });
-    let arm = MOBILE_MANIPULATOR_ARM;
-    // The default arm gains (2000 N·m/rad, 100 N·m·s/rad) are unstable at the plant's
-    // step on the UR5's light wrist: softer damping holds it.
-    let settings = LiftOffSettings {
-        tolerance: 0.01,
-        joint_gains: [1000.0, 5.0],
-        ..LiftOffSettings::default()
-    };
-    for (name, posture) in [
-        ("transport", [0.0, -0.5, 2.6, 1.04, 0.0, 0.0]),
-        ("reach", [0.0, -0.3, 0.3, 0.0, 0.0, 0.0]),
-    ] {
-        let joints: Vec<(&str, f64)> = arm.iter().copied().zip(posture).collect();
-        for (dir, far) in [(1.0, "caster_front"), (-1.0, "caster_rear")] {
-            let p = problem_on(&plant, &joints, "tool0", 2.0, Vector2::new(dir, 0.0));
-            let lim = p.predicted_limit().unwrap().unwrap();
-            let found = p.search(0.2 * lim, 0.9 * lim, &settings).unwrap();
-            let ratio = found.acceleration / lim;
-            eprintln!(
-                "mobile manipulator, {name}, direction {dir:+}: predicted {lim:.3} m/s², first lift-off {:.3} m/s² ({ratio:.3} ×) at {}",
-                found.acceleration,
-                plant.contact_name(found.contact)
-            );
-            assert!(
-                plant.contact_name(found.contact).starts_with(far),
-                "{name} {dir}: {}",
-                plant.contact_name(found.contact)
-            );
-            assert!((0.5..0.8).contains(&ratio), "{name} {dir}: {ratio}");
+/// A robot whose drive wheels sit between front and rear casters, in the postures tested.
+struct OnCasters {
+    name: &'static str,
+    plant: ContactPlant,
+    arm: &'static [&'static str],
+    postures: [(&'static str, [f64; 8]); 2],
+    /// The payload's frame.
+    tool: &'static str,
+    /// What the name of the caster that lifts first contains: speeding up (+x, a front
+    /// caster), braking (−x, a rear one).
+    far: [&'static str; 2],
+}
+
+/// The default arm gains (2000 N·m/rad, 100 N·m·s/rad) are unstable at the plant's step
+/// on these arms' light wrists: softer damping holds them.
+const ON_CASTERS_SETTINGS: LiftOffSettings = LiftOffSettings {
+    settle: 0.3,
+    ramp: 1.0,
+    hold: 0.7,
+    wheel_gains: [500.0, 20.0],
+    joint_gains: [1000.0, 1.0],
+    tolerance: 0.01,
+    max_iterations: 20,
+};
+
+/// The UR5-class robot: the drive wheels under the base's centre, four casters at
+/// x = ±0.24 m; `scenarios/mission_contact.toml`'s transport posture and the arm reaching
+/// forwards (the last two entries unused).
+fn mobile_manipulator() -> OnCasters {
+    OnCasters {
+        name: "mobile manipulator",
+        plant: mobile_manipulator_plant(ContactParams {
+            mu: 2.0,
+            slip_velocity: 0.1,
+            ..ContactParams::default()
+        }),
+        arm: &MOBILE_MANIPULATOR_ARM,
+        postures: [
+            ("transport", [0.0, -0.5, 2.6, 1.04, 0.0, 0.0, 0.0, 0.0]),
+            ("reach", [0.0, -0.3, 0.3, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        ],
+        tool: "tool0",
+        far: ["caster_front", "caster_rear"],
+    }
+}
+
+/// Fetch: drive wheels at x = 0, casters at x = 0.15 m and −0.2 m;
+/// `scenarios/mission_fetch_contact.toml`'s transport posture and the torso up with the
+/// arm reaching forwards and down.
+fn fetch() -> OnCasters {
+    OnCasters {
+        name: "Fetch",
+        plant: fetch_plant(ContactParams {
+            mu: 2.0,
+            slip_velocity: 0.1,
+            ..ContactParams::default()
+        }),
+        arm: &FETCH_ARM,
+        postures: [
+            ("transport", [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.66, 0.0]),
+            ("reach", [0.2, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        ],
+        tool: "gripper_link",
+        far: ["[0.15", "[-0.2"],
+    }
+}
+
+impl OnCasters {
+    /// Calls `f` with each case's label, the caster expected to lift, the problem and its
+    /// predicted limit: per posture, payload (0 and 2 kg at the tool) and direction.
+    fn each(&self, mut f: impl FnMut(&str, &str, &LiftOffProblem, f64)) {
+        for (posture, q) in &self.postures {
+            let joints: Vec<(&str, f64)> =
+                self.arm.iter().copied().zip(q.iter().copied()).collect();
+            for payload in [0.0, 2.0] {
+                for (dir, far) in [(1.0, self.far[0]), (-1.0, self.far[1])] {
+                    let p = problem_on(
+                        &self.plant,
+                        &joints,
+                        self.tool,
+                        payload,
+                        Vector2::new(dir, 0.0),
+                    );
+                    let lim = p.predicted_limit().unwrap().unwrap();
+                    let label =
+                        format!("{}, {posture}, {payload} kg, direction {dir:+}", self.name);
+                    f(&label, far, &p, lim);
+                }
+            }
         }
     }
+
+    /// At 0.9 × the predicted limit a far caster has already lifted, in every case.
+    fn far_caster_lifts_at_0_9_times_the_limit(&self) {
+        self.each(|label, far, p, lim| {
+            let lifted = p.lifted_contact(0.9 * lim, &ON_CASTERS_SETTINGS).unwrap();
+            let name = lifted.map(|k| self.plant.contact_name(k));
+            eprintln!("{label}: predicted {lim:.3} m/s², at 0.9 × lifted {name:?}");
+            assert!(
+                name.is_some_and(|n| n.contains(far)),
+                "{label}: {name:?}, expected {far}"
+            );
+        });
+    }
+
+    /// The bisected first lift-off (to 1 %) lies in `band` times the prediction.
+    fn first_lift_off_within(&self, band: std::ops::Range<f64>) {
+        self.each(|label, far, p, lim| {
+            let found = p.search(0.1 * lim, 0.9 * lim, &ON_CASTERS_SETTINGS).unwrap();
+            let ratio = found.acceleration / lim;
+            let contact = self.plant.contact_name(found.contact);
+            eprintln!(
+                "{label}: predicted {lim:.3} m/s², first lift-off {:.3} m/s² ({ratio:.3} ×) at {contact}",
+                found.acceleration
+            );
+            assert!(contact.contains(far), "{label}: {contact}");
+            assert!(band.contains(&ratio), "{label}: {ratio}");
+        });
+    }
+}
+
+// The mobile manipulator's support is statically indeterminate: on equal linear springs
+// under a rigid base the loads vary linearly with x, and the far casters' load reaches
+// zero when the ZMP is 2/3 of the way from the centre to the tipping edge (x = ∓0.16 m),
+// not at the edge (the prediction's tip-over): about 0.67 × the limit for a centre of
+// mass over the axle. And at the limit itself (every contact off the edge unloaded, the
+// drive wheels included) the wheels' friction, the only horizontal force, is zero: the
+// robot's own traction cannot reach it. Fetch likewise: its far casters unload with the
+// ZMP at x = −0.14 m (speeding up) or 0.0955 m (braking), 0.70 × and 0.64 × of the way to
+// the edges; its casters also start 0.225 mm above the wheels' lowest points, so the
+// wheels carry more than their share and the casters unload earlier still.
+
+#[test]
+fn on_the_mobile_manipulator_a_far_caster_has_lifted_at_0_9_times_the_predicted_limit() {
+    mobile_manipulator().far_caster_lifts_at_0_9_times_the_limit();
+}
+
+#[test]
+fn on_fetch_a_far_caster_has_lifted_at_0_9_times_the_predicted_limit() {
+    fetch().far_caster_lifts_at_0_9_times_the_limit();
+}
+
+#[test]
+#[ignore = "16 bisections, about 40 s in release on two cores (CI tier 2)"]
+fn on_the_robots_on_casters_the_first_lift_off_is_well_below_the_predicted_limit() {
+    // Measured (docs/contact.md lists every case): 0.58 to 0.68 × on the mobile
+    // manipulator, 0.40 to 0.69 × on Fetch.
+    mobile_manipulator().first_lift_off_within(0.55..0.75);
+    fetch().first_lift_off_within(0.35..0.75);
 }

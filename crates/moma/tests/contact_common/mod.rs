@@ -106,3 +106,36 @@ pub const MOBILE_MANIPULATOR_ARM: [&str; 6] = [
     "wrist_2_joint",
     "wrist_3_joint",
 ];
+
+/// Radius of Fetch's drive wheels (m): the rim of their collision meshes, as
+/// `mobile::wheeled_base_from_urdf` reads it.
+pub const FETCH_WHEEL_RADIUS: f64 = 0.060325002979023566;
+
+/// Fetch's torso and seven arm joints, base to tool.
+pub const FETCH_ARM: [&str; 8] = [
+    "torso_lift_joint",
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "upperarm_roll_joint",
+    "elbow_flex_joint",
+    "forearm_roll_joint",
+    "wrist_flex_joint",
+    "wrist_roll_joint",
+];
+
+/// The contact plant of Fetch (`tests/data/robots/fetch`, its description's drive wheels
+/// and the four ball casters of `scenarios/mission_fetch_contact.toml`: spheres of radius
+/// 0.0601 m at x = 0.15 and −0.2 m, y = ±0.12 m, z = 0.055325 m in `base_link`) on a
+/// free-flyer root, with the contact parameters `params`.
+pub fn fetch_plant(params: ContactParams) -> ContactPlant {
+    let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/robots/fetch/fetch_description/robots/fetch.urdf");
+    let model = model_from_urdf_file(urdf, RootJoint::FreeFlyer).expect("fetch.urdf");
+    let wheels = ["l_wheel_joint", "r_wheel_joint"].map(|j| WheelSpec {
+        joint: j.into(),
+        radius: FETCH_WHEEL_RADIUS,
+    });
+    let casters = [[0.15, 0.12], [0.15, -0.12], [-0.2, -0.12], [-0.2, 0.12]]
+        .map(|[x, y]| CasterSpec::at_position("base_link", [x, y, 0.055325], 0.0601));
+    ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
+}
