@@ -5,7 +5,8 @@
 //! Each point is one posture (the `[lift_off].posture` joints, then the point's `q.JOINT`
 //! values) with a point-mass payload of `payload` kg at the origin of `payload_frame`:
 //! the predicted limit along `direction`, then the bisection between `bracket[0]` and
-//! `bracket[1]` times the prediction to the relative `tolerance`.
+//! `bracket[1]` times the prediction to the relative `tolerance`, the arm joints held by
+//! the PD gains `joint_gains` (`LiftOffSettings::joint_gains` by default).
 
 use std::path::Path;
 
@@ -49,6 +50,7 @@ struct Spec {
     bracket: Option<[f64; 2]>,
     tolerance: Option<f64>,
     max_iterations: Option<usize>,
+    joint_gains: Option<[f64; 2]>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -126,6 +128,7 @@ fn settings(path: &Path, spec: &Spec) -> Result<([f64; 2], LiftOffSettings)> {
     let settings = LiftOffSettings {
         tolerance: spec.tolerance.unwrap_or(d.tolerance),
         max_iterations: spec.max_iterations.unwrap_or(d.max_iterations),
+        joint_gains: spec.joint_gains.unwrap_or(d.joint_gains),
         ..d
     };
     settings.validate().map_err(|e| match e {

@@ -76,3 +76,66 @@ pub fn mobile_manipulator_plant(params: ContactParams) -> ContactPlant {
     let casters = MOBILE_MANIPULATOR_CASTERS.map(|(f, r)| CasterSpec::on_frame(f, r));
     ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
 }
+
+/// Radius of the drive wheels (m) of `scenarios/robots/brake_test_robot.urdf`.
+pub const BRAKE_TEST_ROBOT_WHEEL_RADIUS: f64 = 0.1;
+
+/// The contact plant of the braking test robot (`scenarios/robots/brake_test_robot.urdf`:
+/// the driven axle at the front, x = 0.2 m, two point casters at the rear, x = −0.4 m,
+/// as `scenarios/contact_brake_arm_extended.toml` gives them) on a free-flyer root, with
+/// the contact parameters `params`. Its joints below the root: the two wheels, then the
+/// turret, shoulder and elbow (model order).
+pub fn brake_test_robot_plant(params: ContactParams) -> ContactPlant {
+    let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/robots/brake_test_robot.urdf");
+    let model = model_from_urdf_file(urdf, RootJoint::FreeFlyer).expect("brake_test_robot.urdf");
+    let wheels = ["left_wheel_joint", "right_wheel_joint"].map(|j| WheelSpec {
+        joint: j.into(),
+        radius: BRAKE_TEST_ROBOT_WHEEL_RADIUS,
+    });
+    let casters = ["rear_left_caster", "rear_right_caster"].map(|f| CasterSpec::on_frame(f, 0.0));
+    ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
+}
+
+/// The mobile manipulator's six arm joints, base to tool.
+pub const MOBILE_MANIPULATOR_ARM: [&str; 6] = [
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+];
+
+/// Radius of Fetch's drive wheels (m): the rim of their collision meshes, as
+/// `mobile::wheeled_base_from_urdf` reads it.
+pub const FETCH_WHEEL_RADIUS: f64 = 0.060325002979023566;
+
+/// Fetch's torso and seven arm joints, base to tool.
+pub const FETCH_ARM: [&str; 8] = [
+    "torso_lift_joint",
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "upperarm_roll_joint",
+    "elbow_flex_joint",
+    "forearm_roll_joint",
+    "wrist_flex_joint",
+    "wrist_roll_joint",
+];
+
+/// The contact plant of Fetch (`tests/data/robots/fetch`, its description's drive wheels
+/// and the four ball casters of `scenarios/mission_fetch_contact.toml`: spheres of radius
+/// 0.0601 m at x = 0.15 and −0.2 m, y = ±0.12 m, z = 0.055325 m in `base_link`) on a
+/// free-flyer root, with the contact parameters `params`.
+pub fn fetch_plant(params: ContactParams) -> ContactPlant {
+    let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/robots/fetch/fetch_description/robots/fetch.urdf");
+    let model = model_from_urdf_file(urdf, RootJoint::FreeFlyer).expect("fetch.urdf");
+    let wheels = ["l_wheel_joint", "r_wheel_joint"].map(|j| WheelSpec {
+        joint: j.into(),
+        radius: FETCH_WHEEL_RADIUS,
+    });
+    let casters = [[0.15, 0.12], [0.15, -0.12], [-0.2, -0.12], [-0.2, 0.12]]
+        .map(|[x, y]| CasterSpec::at_position("base_link", [x, y, 0.055325], 0.0601));
+    ContactPlant::new(model, &wheels, &casters, params).expect("the contact plant")
+}
