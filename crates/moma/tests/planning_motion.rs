@@ -700,6 +700,30 @@ fn bad_input_names_the_field() {
         .unwrap_err(),
         "domain_radius",
     );
+    for (share, radius, field) in [
+        (1.5, 0.3, "local_share"),
+        (f64::NAN, 0.3, "local_share"),
+        (0.3, 0.0, "local_radius"),
+        (0.3, f64::INFINITY, "local_radius"),
+    ] {
+        let bad_local = RrtConnectOptions {
+            local_share: share,
+            local_radius: radius,
+            ..RrtConnectOptions::default()
+        };
+        named(
+            rrt_connect(
+                &space,
+                &mut v,
+                &[0.1, 0.1],
+                &[0.9, 0.1],
+                &bad_local,
+                &mut ws,
+            )
+            .unwrap_err(),
+            field,
+        );
+    }
     let path = JointPath::from_flat(2, vec![0.1, 0.1, 0.2, 0.2]);
     named(
         shortcut(

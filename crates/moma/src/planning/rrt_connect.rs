@@ -31,6 +31,14 @@
 //!   by the obstacles then stop drawing steps into them, and the samples they do take
 //!   explore around them: in narrow passages (an arm between shelf boards) the trees need
 //!   far fewer checked states.
+//! * **Local samples** ([`RrtConnectOptions::local_share`]): that share of the samples
+//!   is drawn near the extending tree's own nodes instead of over the whole box: a node
+//!   picked uniformly (cut nodes excepted) and an offset uniform in
+//!   ±[`RrtConnectOptions::local_radius`] per joint (over its weight), clamped to the box.
+//!   A tree rooted in a pocket (an arm reaching between shelf boards) takes nearly all
+//!   its uniform samples from far away: its steps towards them are blocked at the first
+//!   probe, while a local sample gives a short step that fits the pocket. The rest of
+//!   the samples keep RRT's pull towards the unexplored space.
 //! * **Allocation**: the trees live in a [`RrtConnectWorkspace`] that keeps its capacity
 //!   between queries; a query allocates only its returned path.
 
@@ -60,6 +68,11 @@ pub struct RrtConnectOptions {
     /// The dynamic domain's radius (weighted norm) around a node that was blocked
     /// (module docs); `None`: none.
     pub domain_radius: Option<f64>,
+    /// The share of samples drawn near the extending tree's own nodes, in `[0, 1]`
+    /// (module docs); 0: every sample is uniform over the box.
+    pub local_share: f64,
+    /// The largest offset of a local sample from its node, per joint (weighted).
+    pub local_radius: f64,
 }
 
 impl Default for RrtConnectOptions {
@@ -71,6 +84,8 @@ impl Default for RrtConnectOptions {
             seed: 0,
             lazy: false,
             domain_radius: None,
+            local_share: 0.0,
+            local_radius: 0.3,
         }
     }
 }
@@ -266,6 +281,20 @@ pub fn rrt_connect(
             format!("{r} is not a positive finite length"),
         ));
     }
+    if !(0.0..=1.0).contains(&options.local_share) {
+        return Err(Error::invalid(
+            "local_share",
+            format!("{} is not a share in [0, 1]", options.local_share),
+        ));
+    }
+    if options.local_share > 0.0
+        && !(options.local_radius.is_finite() && options.local_radius > 0.0)
+    {
+        return Err(Error::invalid(
+            "local_radius",
+            format!("{} is not a positive finite length", options.local_radius),
+        ));
+    }
     let domain = options.domain_radius.unwrap_or(f64::INFINITY);
     let mut checks = 0u64;
     checks += 1;
@@ -308,13 +337,14 @@ pub fn rrt_connect(
         // Draw until a sample lies in its nearest node's domain (or the redraws run out).
         let mut redraws = 0;
         let outcome = loop {
-            for (s, (lo, hi)) in ws
-                .sample
-                .iter_mut()
-                .zip(space.lower().iter().zip(space.upper()))
-            {
-                *s = lo + (hi - lo) * rng.random::<f64>();
-            }
+            let local = options.local_share > 0.0 && rng.random::<f64>() < options.local_share;
+            draw_sample(
+                space,
+                ws,
+                a,
+                local.then_some(options.local_radius),
+                &mut rng,
+            );
             let step = Step {
                 max: max_step,
                 lazy: options.lazy,
@@ -369,6 +399,42 @@ pub fn rrt_connect(
         limit: PlanLimit::Iterations,
         stats: stats(options.max_iterations, &ws.trees, checks),
     })
+}
+
+/// Draws `ws.sample`: uniform over the box, or with `local = Some(radius)` near a node of
+/// tree `t` picked uniformly among those not cut (module docs).
+fn draw_sample(
+    space: &JointSpace,
+    ws: &mut RrtConnectWorkspace,
+    t: usize,
+    local: Option<f64>,
+    rng: &mut ChaCha8Rng,
+) {
+    let bounds = space.lower().iter().zip(space.upper());
+    let Some(radius) = local else {
+        for (s, (lo, hi)) in ws.sample.iter_mut().zip(bounds) {
+            *s = lo + (hi - lo) * rng.random::<f64>();
+        }
+        return;
+    };
+    let tree = &ws.trees[t];
+    // The root is never cut, so this ends.
+    let node = loop {
+        let i = rng.random_range(0..tree.len());
+        if !tree.cut[i] {
+            break i;
+        }
+    };
+    let centre = tree.state(node, space.dim());
+    for (((s, (lo, hi)), c), w) in ws
+        .sample
+        .iter_mut()
+        .zip(bounds)
+        .zip(centre)
+        .zip(space.weights())
+    {
+        *s = (c + radius / w * (2.0 * rng.random::<f64>() - 1.0)).clamp(*lo, *hi);
+    }
 }
 
 /// How [`extend`] steps.
