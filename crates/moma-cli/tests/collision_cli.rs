@@ -1,5 +1,6 @@
 //! End-to-end tests of `moma collision`: Fetch in Pinocchio-layout states against the
-//! coal reference (self pairs and a MotionBenchMaker scene), the SVG figure, and the
+//! coal reference (self pairs and a MotionBenchMaker scene), Panda with its SRDF and a
+//! table scene against its coal reference, the SVG figure, and the
 //! errors (message naming file and element, exit status 1, no output file).
 
 use serde_json::Value;
@@ -112,6 +113,174 @@ fn fetch_against_coal_with_a_scene_and_a_figure() {
     }
     let fig = std::fs::read_to_string(&svg).unwrap();
     assert!(fig.starts_with("<svg") && fig.matches("<polygon").count() >= 2 * (21 + 12));
+}
+
+/// Panda's URDF, SRDF and package folder in the test data.
+fn panda_files() -> (String, String, String) {
+    let pkg = format!("{DATA}/robots/panda");
+    (
+        format!("{DATA}/pinocchio/urdf/panda.urdf"),
+        format!("{pkg}/example-robot-data/robots/panda_description/srdf/panda.srdf"),
+        pkg,
+    )
+}
+
+/// A reference's states of kind `near_contact`, the first `n` on each side of contact by
+/// the reference's verdict `verdict_key`.
+fn near_contact_states(reference: &Value, verdict_key: &str, n: usize) -> Vec<Value> {
+    let near: Vec<&Value> = reference["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "near_contact")
+        .collect();
+    let side = |hit: bool| {
+        near.iter()
+            .filter(move |s| s[verdict_key].as_bool() == Some(hit))
+            .take(n)
+            .map(|s| (*s).clone())
+    };
+    let states: Vec<Value> = side(true).chain(side(false)).collect();
+    assert_eq!(states.len(), 2 * n, "near-contact states on both sides");
+    states
+}
+
+/// Checks `moma collision`'s pairs of one state against a reference state: every reference
+/// pair (either order) to 1e-6 m, its witness points to 1e-5 m where unique.
+fn assert_pairs_match(got: &Value, want: &Value, ref_pairs: &[Value]) {
+    let pairs = got["pairs"].as_array().unwrap();
+    for (k, p) in ref_pairs.iter().enumerate() {
+        let Some(mine) = pairs
+            .iter()
+            .find(|x| (x["a"] == p[0] && x["b"] == p[1]) || (x["a"] == p[1] && x["b"] == p[0]))
+        else {
+            continue;
+        };
+        let d = mine["distance"].as_f64().unwrap();
+        let w = want["distance_convex"][k].as_f64().unwrap();
+        assert!(
+            (d - w).abs() <= 1e-6,
+            "{} {p}: {d} vs coal {w}",
+            want["label"]
+        );
+        if want["witness_unique"][k].as_bool() == Some(true) {
+            let (wa, wb) = if mine["a"] == p[0] {
+                ("witness_a", "witness_b")
+            } else {
+                ("witness_b", "witness_a")
+            };
+            for (m, t) in [
+                (&mine[wa], &want["witness_a"][k]),
+                (&mine[wb], &want["witness_b"][k]),
+            ] {
+                for i in 0..3 {
+                    let e = (m[i].as_f64().unwrap() - t[i].as_f64().unwrap()).abs();
+                    assert!(e <= 1e-5, "{} {p}: witness {m} vs coal {t}", want["label"]);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn panda_with_srdf_and_scene_reproduces_coal() {
+    let (urdf, srdf, pkg) = panda_files();
+    let read = |f: &str| -> Value {
+        serde_json::from_str(&std::fs::read_to_string(format!("{DATA}/collision/{f}")).unwrap())
+            .unwrap()
+    };
+    let run = |states: &[Value], scene: Option<&str>, name: &str| -> Value {
+        let refs: Vec<&Value> = states.iter().collect();
+        let states_file = write_reference_states(&format!("{name}_states.json"), &refs);
+        let out = tmp(&format!("{name}_out.json"));
+        let mut args = vec!["collision", &urdf, "--root", "fixed", "--srdf", &srdf];
+        args.extend([
+            "--package-dir",
+            &pkg,
+            "--states",
+            states_file.to_str().unwrap(),
+        ]);
+        args.extend(["--output", out.to_str().unwrap()]);
+        if let Some(scene) = scene {
+            args.extend(["--scene", scene]);
+        }
+        let o = moma(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap()
+    };
+    // Self: the SRDF's enabled pairs, their distances, the minimum and the verdict, on
+    // states within 3 mm of contact on both sides.
+    let reference = read("panda_self.json");
+    let states = near_contact_states(&reference, "in_collision_enabled", 2);
+    let got = run(&states, None, "panda_self");
+    let enabled: Vec<&Value> = reference["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(reference["pair_enabled"].as_array().unwrap())
+        .filter(|(_, e)| e.as_bool().unwrap())
+        .map(|(p, _)| p)
+        .collect();
+    let listed = got["pairs_enabled"].as_array().unwrap();
+    assert_eq!(listed.len(), enabled.len());
+    for p in &enabled {
+        assert!(
+            listed
+                .iter()
+                .any(|x| (x[0] == p[0] && x[1] == p[1]) || (x[0] == p[1] && x[1] == p[0])),
+            "enabled pair {p} not listed"
+        );
+    }
+    let ref_pairs = reference["pairs"].as_array().unwrap();
+    for (s, want) in got["states"].as_array().unwrap().iter().zip(&states) {
+        assert_eq!(s["pairs"].as_array().unwrap().len(), enabled.len());
+        assert_pairs_match(s, want, ref_pairs);
+        let min = s["min_distance"].as_f64().unwrap();
+        let want_min = want["min_enabled_convex"].as_f64().unwrap();
+        assert!(
+            (min - want_min).abs() <= 1e-6,
+            "{}: {min} vs {want_min}",
+            want["label"]
+        );
+        assert_eq!(
+            s["in_collision"], want["in_collision_enabled"],
+            "{}",
+            want["label"]
+        );
+    }
+    // Scene: with the SRDF and the scene, every (link, object) pair of the reference; a
+    // state the reference puts in collision with the scene is in collision.
+    let reference = read("panda_scene.json");
+    let states = near_contact_states(&reference, "in_collision", 2);
+    let scene = format!("{DATA}/collision/panda_scene_table.yaml");
+    let got = run(&states, Some(&scene), "panda_scene");
+    let ref_pairs = reference["scenes"]["table"]["pairs"].as_array().unwrap();
+    assert_eq!(got["scene_objects"].as_array().unwrap().len(), 3);
+    for (s, want) in got["states"].as_array().unwrap().iter().zip(&states) {
+        let pairs = s["pairs"].as_array().unwrap();
+        assert_eq!(pairs.len(), enabled.len() + ref_pairs.len());
+        for p in ref_pairs {
+            assert!(
+                pairs.iter().any(|x| x["a"] == p[0] && x["b"] == p[1]),
+                "{p} missing"
+            );
+        }
+        assert_pairs_match(s, want, ref_pairs);
+        let scene_min = pairs
+            .iter()
+            .filter(|x| ref_pairs.iter().any(|p| x["a"] == p[0] && x["b"] == p[1]))
+            .map(|x| x["distance"].as_f64().unwrap())
+            .fold(f64::INFINITY, f64::min);
+        let want_min = want["min_distance"].as_f64().unwrap();
+        assert!(
+            (scene_min - want_min).abs() <= 1e-6,
+            "{}: {scene_min} vs {want_min}",
+            want["label"]
+        );
+        if want["in_collision"] == true {
+            assert_eq!(s["in_collision"], true, "{}", want["label"]);
+        }
+    }
 }
 
 #[test]
