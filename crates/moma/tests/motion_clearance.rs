@@ -5,61 +5,32 @@
 //! its goal (which end between the cage's bars and the shelf boards), a state passes
 //! exactly when its closest pair is farther apart than the margin.
 
-use moma::collision::{GeometryModel, Scene, SceneOptions, read_scene};
-use moma::motion::{ClearanceChecker, JointGroup};
+use moma::collision::GeometryModel;
+use moma::motion::ClearanceChecker;
 use moma::multibody::{Model, RootJoint};
 use moma::planning::StateValidity;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde_json::Value;
 
 mod fetch_common;
-use fetch_common::{data_dir as data, fetch_geometry};
+use fetch_common::{FetchQueries, fetch_geometry, numbers};
 
 fn fetch() -> (Model, GeometryModel) {
     fetch_geometry(RootJoint::Fixed)
 }
 
-fn numbers(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
 #[test]
 fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
     let (model, gm) = fetch();
-    let dir = data().join("scenes/motion_bench_maker/fetch_queries");
-    let queries: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("queries.json")).unwrap()).unwrap();
-    let names: Vec<&str> = queries["group"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_str().unwrap())
-        .collect();
-    let group = JointGroup::new(&model, &names).unwrap();
+    let queries = FetchQueries::load();
+    let group = queries.group(&model);
     let dim = group.dim();
     let margin = 2e-3;
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let (mut passed, mut failed) = (0, 0);
     for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
-        let query = queries["queries"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|q| q["name"] == name)
-            .unwrap();
-        let scene: Scene = read_scene(
-            &dir.join(query["scene"].as_str().unwrap()),
-            &SceneOptions {
-                world_frames: vec!["world".into(), "base_link".into()],
-                package_dirs: Vec::new(),
-            },
-        )
-        .unwrap();
+        let query = queries.query(name);
+        let scene = queries.scene(query);
         let start = numbers(&query["start"]);
         let goal = numbers(&query["goal_state"]);
         let mut checker =

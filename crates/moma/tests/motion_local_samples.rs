@@ -4,39 +4,20 @@
 //! near the tree's own nodes (`MotionOptions::search_local_share`) lets it leave the
 //! pocket: the same queries solve with far fewer checked states than with uniform samples.
 
-use moma::collision::{Scene, SceneOptions, read_scene};
 use moma::motion::{
-    JointGroup, MeshSource, MotionGoal, MotionOptions, MotionProblem, plan_motion,
-    surface_links_for_start,
+    MeshSource, MotionGoal, MotionOptions, MotionProblem, plan_motion, surface_links_for_start,
 };
 use moma::multibody::RootJoint;
-use serde_json::Value;
 use std::time::Duration;
 
 mod fetch_common;
-use fetch_common::{data_dir, fetch_dir, fetch_geometry, fetch_urdf};
-
-fn numbers(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
+use fetch_common::{FetchQueries, fetch_dir, fetch_geometry, fetch_urdf, numbers};
 
 #[test]
 fn local_samples_let_the_goal_tree_leave_the_shelf() {
     let (model, gm) = fetch_geometry(RootJoint::Fixed);
-    let dir = data_dir().join("scenes/motion_bench_maker/fetch_queries");
-    let queries: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("queries.json")).unwrap()).unwrap();
-    let names: Vec<&str> = queries["group"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_str().unwrap())
-        .collect();
-    let group = JointGroup::new(&model, &names).unwrap();
+    let queries = FetchQueries::load();
+    let group = queries.group(&model);
     // (query, seed): checked states with uniform samples and with the default share of
     // local samples, measured when the default was chosen: 48,349 and 3,366; 76,483 and
     // 1,992 (without shortcutting).
@@ -44,20 +25,8 @@ fn local_samples_let_the_goal_tree_leave_the_shelf() {
         ("bookshelf_small-Front-Can1-1", 0),
         ("bookshelf_tall-Front-Can4-0", 0),
     ] {
-        let query = queries["queries"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|q| q["name"] == name)
-            .unwrap();
-        let scene: Scene = read_scene(
-            &dir.join(query["scene"].as_str().unwrap()),
-            &SceneOptions {
-                world_frames: vec!["world".into(), "base_link".into()],
-                package_dirs: Vec::new(),
-            },
-        )
-        .unwrap();
+        let query = queries.query(name);
+        let scene = queries.scene(query);
         let start = numbers(&query["start"]);
         let source = MeshSource {
             urdf: fetch_urdf(),

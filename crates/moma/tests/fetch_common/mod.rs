@@ -38,3 +38,64 @@ pub fn fetch_geometry(root: RootJoint) -> (Model, GeometryModel) {
     .unwrap();
     (model, gm)
 }
+
+/// MotionBenchMaker's Fetch queries (`scenes/motion_bench_maker/fetch_queries`): the
+/// planning group, each query's start, goal state and scene.
+pub struct FetchQueries {
+    /// The queries' folder.
+    pub dir: PathBuf,
+    /// `queries.json`.
+    pub json: serde_json::Value,
+}
+
+impl FetchQueries {
+    pub fn load() -> Self {
+        let dir = data_dir().join("scenes/motion_bench_maker/fetch_queries");
+        let json =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("queries.json")).unwrap())
+                .unwrap();
+        FetchQueries { dir, json }
+    }
+
+    /// The planning group of every query.
+    pub fn group(&self, model: &Model) -> moma::motion::JointGroup {
+        let names: Vec<&str> = self.json["group"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        moma::motion::JointGroup::new(model, &names).unwrap()
+    }
+
+    /// The query named `name`.
+    pub fn query(&self, name: &str) -> &serde_json::Value {
+        self.json["queries"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|q| q["name"] == name)
+            .unwrap()
+    }
+
+    /// A query's scene, poses in `world` or `base_link` (the robot at the origin).
+    pub fn scene(&self, query: &serde_json::Value) -> moma::collision::Scene {
+        moma::collision::read_scene(
+            &self.dir.join(query["scene"].as_str().unwrap()),
+            &moma::collision::SceneOptions {
+                world_frames: vec!["world".into(), "base_link".into()],
+                package_dirs: Vec::new(),
+            },
+        )
+        .unwrap()
+    }
+}
+
+/// A JSON list of numbers.
+pub fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
