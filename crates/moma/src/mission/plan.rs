@@ -52,41 +52,21 @@ pub struct SearchTiming {
 }
 
 impl Planner {
-    /// Builds the configuration space and plans once from `start` to `goal` (world, the
-    /// driven-axle midpoints) through [`pipeline::plan`] with D* Lite, keeping its D* Lite
-    /// state for the re-plans and, with `polygon`, its check of the paths with the
-    /// footprint polygon. The footprint is a disk of `footprint_radius` about the
-    /// base frame origin, which lies `axle_offset` (the drive's `d`) ahead of the axle
-    /// midpoint; the planned point being the axle midpoint, the obstacles are dilated by
-    /// `footprint_radius + |axle_offset|` (the disk about the axle midpoint that holds
-    /// the footprint at every heading; exact for `d = 0`). `fields` name the start, goal
-    /// and radius in the errors.
+    /// Builds the configuration space and plans once through [`pipeline::plan`] on
+    /// `request` (the mission's: [`first_plan_request`], D* Lite between the driven-axle
+    /// midpoints, with or without a polygon check), keeping its D* Lite state for the
+    /// re-plans and its check of the paths with the footprint polygon.
     ///
     /// # Errors
-    /// Start or goal outside the map, in an obstacle, or where the footprint does not fit
-    /// (the start's message says when it fits nowhere); a polygon that is not convex. An
-    /// unreachable goal is not an error: the returned path is `None`.
-    #[allow(clippy::too_many_arguments)]
+    /// [`pipeline::plan`]'s: start or goal outside the map, in an obstacle, or where the
+    /// footprint does not fit (the start's message says when it fits nowhere); a polygon
+    /// that is not convex. An unreachable goal is not an error: the returned path is
+    /// `None`.
     pub fn new(
         grid: &OccupancyGrid,
-        unknown_is_obstacle: bool,
-        fields: PlanFields,
-        footprint_radius: f64,
-        axle_offset: f64,
-        polygon: Option<PolygonCheck>,
-        start: [f64; 2],
-        goal: [f64; 2],
+        request: &PlanRequest,
     ) -> Result<(Self, Option<CellPath>, SearchTiming)> {
-        let mut request = first_plan_request(
-            unknown_is_obstacle,
-            fields,
-            footprint_radius,
-            axle_offset,
-            start,
-            goal,
-        );
-        request.polygon_check = polygon;
-        let plan = pipeline::plan(grid, &request)?;
+        let plan = pipeline::plan(grid, request)?;
         let Some(dstar) = plan.dstar else {
             return Err(Error::Planning(
                 "the planning pipeline gave no D* Lite state for a D* Lite search".into(),
@@ -426,16 +406,16 @@ pub(super) fn mission_planner(
         goal: "goal.pose",
         radius: field,
     };
-    Planner::new(
-        grid,
+    let mut request = first_plan_request(
         m.file.map.unknown_is_obstacle,
         fields,
         radius,
         offset,
-        check,
         [from[0], from[1]],
         [to[0], to[1]],
-    )
+    );
+    request.polygon_check = check;
+    Planner::new(grid, &request)
 }
 
 #[cfg(test)]
