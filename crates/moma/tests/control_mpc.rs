@@ -316,24 +316,7 @@ fn a_base_move_queries_no_more_self_pairs() {
     use moma::collision::Scene;
     use moma::control::mpc::robot::{KnotWorkspace, evaluate_knot, select_pairs};
     let robot = mpc_common::fetch_robot(Some(Scene::default()));
-    let model = &robot.wheeled.model;
-    let mut q = DVector::zeros(model.nq);
-    for (name, v) in [
-        ("torso_lift_joint", 0.0),
-        ("shoulder_pan_joint", 1.32),
-        ("shoulder_lift_joint", 1.40),
-        ("upperarm_roll_joint", -0.2),
-        ("elbow_flex_joint", 1.72),
-        ("forearm_roll_joint", 0.0),
-        ("wrist_flex_joint", 1.66),
-        ("wrist_roll_joint", 0.0),
-    ] {
-        let j = model.joint_id(name).unwrap();
-        q[model.idx_q[j.0]] = v;
-    }
-    let vr = vec![0.0; robot.wheeled.nr()];
-    let mut x = DVector::zeros(robot.nx());
-    robot.state_from_plant(q.as_slice(), &vr, &mut x);
+    let (q, x) = fetch_tucked(&robot);
     let cutoff = 0.05;
     let mut ws = KnotWorkspace::new(&robot, 1);
     select_pairs(&robot, &mut ws, &q, f64::INFINITY);
