@@ -22,6 +22,18 @@ pub enum ClosestPair {
     },
 }
 
+impl ClosestPair {
+    /// The (link, object) pair of entry `k` of `SceneData::results` in a scene of
+    /// `objects` objects (the results are link-major).
+    #[must_use]
+    pub fn scene_result(k: usize, objects: usize) -> Self {
+        ClosestPair::Scene {
+            link: k / objects,
+            object: k % objects,
+        }
+    }
+}
+
 /// The closest pair of the last `compute_distances` and `compute_scene_distances` (a
 /// self pair wins a tie) and its signed distance; `None` if neither visited a pair.
 #[must_use]
@@ -34,15 +46,10 @@ pub fn closest_pair(
         .closest
         .map(|p| (ClosestPair::SelfPair(p), gd.results[p].distance));
     let no = scene.objects.len();
-    let other = sd.closest.filter(|_| no > 0).map(|k| {
-        (
-            ClosestPair::Scene {
-                link: k / no,
-                object: k % no,
-            },
-            sd.results[k].distance,
-        )
-    });
+    let other = sd
+        .closest
+        .filter(|_| no > 0)
+        .map(|k| (ClosestPair::scene_result(k, no), sd.results[k].distance));
     match (own, other) {
         (Some(a), Some(b)) => Some(if b.1 < a.1 { b } else { a }),
         (a, b) => a.or(b),
@@ -94,7 +101,30 @@ pub fn min_distance_gradient(
     out: &mut DVector<f64>,
 ) -> Option<(ClosestPair, f64)> {
     let best = closest_pair(gd, scene, sd)?;
-    match best.0 {
+    pair_distance_derivative(model, data, gm, gd, scene, sd, best.0, out);
+    Some(best)
+}
+
+/// Derivative of the distance of `pair` (as last computed by `compute_distances` or
+/// `compute_scene_distances`) with respect to the velocity coordinates, into `out`:
+/// [`distance_derivative`](super::geometry_data::distance_derivative) for a self pair,
+/// [`scene_distance_derivative`] for a link and a scene object (run
+/// `kinematics::compute_joint_jacobians` first).
+///
+/// # Panics
+/// If `out` does not have length `model.nv` or the pair's indices are out of range.
+#[allow(clippy::too_many_arguments)]
+pub fn pair_distance_derivative(
+    model: &Model,
+    data: &Data,
+    gm: &GeometryModel,
+    gd: &GeometryData,
+    scene: &Scene,
+    sd: &SceneData,
+    pair: ClosestPair,
+    out: &mut DVector<f64>,
+) {
+    match pair {
         ClosestPair::SelfPair(p) => {
             super::geometry_data::distance_derivative(model, data, gm, gd, p, out);
         }
@@ -102,5 +132,4 @@ pub fn min_distance_gradient(
             scene_distance_derivative(model, data, gm, scene, sd, link, object, out);
         }
     }
-    Some(best)
 }

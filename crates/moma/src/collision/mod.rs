@@ -79,7 +79,10 @@ pub use geometry_data::{
 };
 pub use geometry_model::{GeometryModel, GeometryObject, GeometryOptions, LinkGeometry};
 pub use gjk::PairDistance;
-pub use gradient::{ClosestPair, closest_pair, min_distance_gradient, scene_distance_derivative};
+pub use gradient::{
+    ClosestPair, closest_pair, min_distance_gradient, pair_distance_derivative,
+    scene_distance_derivative,
+};
 pub use point_cloud::read_points;
 pub use scene::{
     Scene, SceneData, SceneObject, SceneOptions, compute_scene_distances,

@@ -19,8 +19,7 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3};
 
 use crate::collision::{
     ClosestPair, GeometryData, GeometryModel, PairSelection, Scene, SceneData, compute_distances,
-    compute_scene_distances_below, distance_derivative, scene_distance_derivative,
-    update_geometry_placements,
+    compute_scene_distances_below, pair_distance_derivative, update_geometry_placements,
 };
 use crate::error::{Error, Result};
 use crate::kinematics::{
@@ -684,10 +683,7 @@ pub fn evaluate_knot(
         let objects = c.scene.objects.len();
         for (k, r) in scd.results.iter().enumerate() {
             if r.distance < cutoff {
-                let pair = ClosestPair::Scene {
-                    link: k / objects,
-                    object: k % objects,
-                };
+                let pair = ClosestPair::scene_result(k, objects);
                 keep_nearest(&mut ws.nearest, slots, r.distance, pair);
             }
         }
@@ -697,21 +693,16 @@ pub fn evaluate_knot(
             if !derivatives {
                 continue;
             }
-            match pair {
-                ClosestPair::SelfPair(p) => {
-                    distance_derivative(model, data, active, gd, p, &mut ws.grad_nv);
-                }
-                ClosestPair::Scene { link, object } => scene_distance_derivative(
-                    model,
-                    data,
-                    active,
-                    &c.scene,
-                    scd,
-                    link,
-                    object,
-                    &mut ws.grad_nv,
-                ),
-            }
+            pair_distance_derivative(
+                model,
+                data,
+                active,
+                gd,
+                &c.scene,
+                scd,
+                pair,
+                &mut ws.grad_nv,
+            );
             let dx = &mut vals.distances_dx[slot];
             for k in 0..model.nv {
                 if let Some(col) = x_column(robot, k) {
