@@ -32,14 +32,27 @@
 //! a statically indeterminate support: a far caster lifts well before the predicted limit,
 //! in both directions, in the transport posture of their contact missions and a reach
 //! posture, with and without 2 kg at the tool; the tests state by how much and why.
+//!
+//! Their tip-over itself (every contact off a caster edge unloaded, the drive wheels
+//! included) needs horizontal force at the casters: with friction given to the casters
+//! (`ContactPlant::with_caster_friction`) and the joints held with their static torque
+//! (`LiftOffProblem::with_static_torque`), in the same postures, payloads and directions,
+//! 0.9 × the predicted limit does not tip the robot over and 1.1 × does, within 3 % of the
+//! prediction; at every step the ZMP that `stability::evaluate` computes from the model's
+//! dynamics is the point about which the plant's contact forces have no horizontal
+//! moment, and its margin stays positive until every contact off the edge has lost its
+//! load and is within 1 mm of zero at that step.
 
 use moma::contact::{ContactParams, ContactPlant};
 use moma::dynamics::center_of_mass;
 use moma::multibody::{Data, Model};
-use moma::sim::lift_off::{LiftOffProblem, LiftOffSettings};
+use moma::sim::lift_off::{LiftOffEvent, LiftOffProblem, LiftOffSettings};
 use moma::sim::model_mismatch::Payload;
 use moma::spatial::Inertia;
-use moma::stability::{SupportPolygon, acceleration_limits};
+use moma::stability::{
+    BodySet, ExternalLoads, StabilityData, StabilityModel, SupportAttachment, SupportPolygon,
+    acceleration_limits, evaluate,
+};
 use nalgebra::{DVector, Matrix3, Vector2, Vector3};
 
 mod contact_common;
@@ -331,17 +344,23 @@ const ON_CASTERS_SETTINGS: LiftOffSettings = LiftOffSettings {
     max_iterations: 20,
 };
 
+/// The contact parameters of the runs on casters: wheel friction μ = 2 (it carries the
+/// horizontal load), the default stiffness.
+fn on_casters_params() -> ContactParams {
+    ContactParams {
+        mu: 2.0,
+        slip_velocity: 0.1,
+        ..ContactParams::default()
+    }
+}
+
 /// The UR5-class robot: the drive wheels under the base's centre, four casters at
 /// x = ±0.24 m; `scenarios/mission_contact.toml`'s transport posture and the arm reaching
 /// forwards (the last two entries unused).
-fn mobile_manipulator() -> OnCasters {
+fn mobile_manipulator(params: ContactParams) -> OnCasters {
     OnCasters {
         name: "mobile manipulator",
-        plant: mobile_manipulator_plant(ContactParams {
-            mu: 2.0,
-            slip_velocity: 0.1,
-            ..ContactParams::default()
-        }),
+        plant: mobile_manipulator_plant(params),
         arm: &MOBILE_MANIPULATOR_ARM,
         postures: [
             ("transport", [0.0, -0.5, 2.6, 1.04, 0.0, 0.0, 0.0, 0.0]),
@@ -355,14 +374,10 @@ fn mobile_manipulator() -> OnCasters {
 /// Fetch: drive wheels at x = 0, casters at x = 0.15 m and −0.2 m;
 /// `scenarios/mission_fetch_contact.toml`'s transport posture and the torso up with the
 /// arm reaching forwards and down.
-fn fetch() -> OnCasters {
+fn fetch(params: ContactParams) -> OnCasters {
     OnCasters {
         name: "Fetch",
-        plant: fetch_plant(ContactParams {
-            mu: 2.0,
-            slip_velocity: 0.1,
-            ..ContactParams::default()
-        }),
+        plant: fetch_plant(params),
         arm: &FETCH_ARM,
         postures: [
             ("transport", [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.66, 0.0]),
@@ -440,12 +455,12 @@ impl OnCasters {
 
 #[test]
 fn on_the_mobile_manipulator_a_far_caster_has_lifted_at_0_9_times_the_predicted_limit() {
-    mobile_manipulator().far_caster_lifts_at_0_9_times_the_limit();
+    mobile_manipulator(on_casters_params()).far_caster_lifts_at_0_9_times_the_limit();
 }
 
 #[test]
 fn on_fetch_a_far_caster_has_lifted_at_0_9_times_the_predicted_limit() {
-    fetch().far_caster_lifts_at_0_9_times_the_limit();
+    fetch(on_casters_params()).far_caster_lifts_at_0_9_times_the_limit();
 }
 
 #[test]
@@ -453,6 +468,198 @@ fn on_fetch_a_far_caster_has_lifted_at_0_9_times_the_predicted_limit() {
 fn on_the_robots_on_casters_the_first_lift_off_is_well_below_the_predicted_limit() {
     // Measured (docs/contact.md lists every case): 0.58 to 0.68 × on the mobile
     // manipulator, 0.40 to 0.69 × on Fetch.
-    mobile_manipulator().first_lift_off_within(0.55..0.75);
-    fetch().first_lift_off_within(0.35..0.75);
+    mobile_manipulator(on_casters_params()).first_lift_off_within(0.55..0.75);
+    fetch(on_casters_params()).first_lift_off_within(0.35..0.75);
+}
+
+// The tip-over itself, on these robots. With frictionless casters their own traction
+// cannot reach it: the drive wheels are the only frictional contacts, inside the support,
+// and a tip-over over a caster edge unloads them, so at that limit no horizontal force is
+// left to accelerate the robot (or to carry the tilted gravity of the d'Alembert run).
+// The edge is reachable when the contacts on it carry friction: the runs below give the
+// casters the wheels' μ = 2 (`ContactPlant::with_caster_friction`, as braked or locked
+// casters would have), which changes neither the prediction (mass, centre of mass,
+// support) nor the stability module's inputs. Speeding up (+x) tips the robot back over
+// the rear casters, braking (−x) forward over the front ones.
+//
+// The check: at every step after the settling, `stability::evaluate` computes the ZMP from
+// the model's dynamics (the step's q, v, v̇ and the plant's gravity of that step), on the
+// support polygon of the contacts at the start, and it must be the point on the ground
+// plane about which the plant's contact forces have no horizontal moment; and the ZMP
+// margin must reach zero at the step at which every contact off the tipping edge carries
+// no normal force, not before.
+
+/// Contact stiffness (N/m) of the tip-over runs, ten times the default: the contacts sink
+/// less (about 0.3 to 0.6 mm at the edge as the robot tips), so the ZMP on the ground
+/// plane z = 0 and the centre of pressure of the normal forces at the contacts' depth δ,
+/// which differ by δ |F_t| / N, are within about 0.3 mm (the default's 3 to 6 mm would
+/// swamp a shifted support polygon).
+const EDGE_STIFFNESS: f64 = 1e6;
+
+/// Largest |ZMP margin| (m) of the stability module at the step the last contact off the
+/// tipping edge loses its load (measured −0.04 to +0.29 mm: the contacts' depth times
+/// |F_t| / N, see `EDGE_STIFFNESS`, and the casters' rolling contact points).
+const MARGIN_AT_TIP: f64 = 1e-3;
+
+/// Lowest ZMP margin (m) allowed before the tip-over: the support is the contacts' at the
+/// start, carried with the base, while a caster's contact point rolls round its sphere as
+/// the base pitches (r θ: about 0.1 mm for Fetch's 6 cm casters at a few mrad); measured
+/// −0.04 mm at worst (Fetch, reach, braking, 2 kg).
+const MARGIN_BEFORE_TIP: f64 = -0.5e-3;
+
+/// Largest distance (m) between the stability module's ZMP and the contact forces'.
+const ZMP_AGREEMENT: f64 = 1e-6;
+
+/// What one tip-over run showed after the settling.
+#[derive(Debug)]
+struct EdgeRun {
+    /// Largest distance (m) between the stability module's ZMP and the point on z = 0
+    /// about which the plant's contact forces have no horizontal moment.
+    zmp_gap: f64,
+    /// Largest distance (m) between the stability module's ZMP and the centre of pressure
+    /// of the plant's normal forces alone.
+    cop_gap: f64,
+    /// The smallest ZMP margin (m) of the stability module before the tip-over.
+    margin_before: f64,
+    /// The ramp's acceleration (m/s²) at the first step every contact off the tipping
+    /// edge carried no normal force, and the stability module's ZMP margin there (m).
+    tip: Option<(f64, f64)>,
+}
+
+/// Runs `p` at the acceleration `a` (until the tip-over), the stability module evaluating
+/// every step on the support polygon of the contacts at the start moved by `shift`.
+fn edge_run(p: &LiftOffProblem, a: f64, shift: Vector2<f64>) -> EdgeRun {
+    let plant = p.plant();
+    let model = &plant.model;
+    let start = plant.contact_points(p.start()).unwrap();
+    let touching: Vec<Vector2<f64>> = start
+        .iter()
+        .filter(|c| c.z <= plant.params.start_penetration_tol)
+        .map(|c| c.xy() + shift)
+        .collect();
+    let support = SupportPolygon::from_points(&touching).unwrap();
+    let mut sm =
+        StabilityModel::new(model, support, SupportAttachment::Base, &BodySet::All).unwrap();
+    let mut sd = StabilityData::new(&sm);
+    let mut data = Data::new(model);
+    // The tipping edge: the contacts farthest back along the acceleration.
+    let u = p.direction();
+    let along = |c: &Vector3<f64>| c.xy().dot(&u.xy());
+    let back = start.iter().map(along).fold(f64::INFINITY, f64::min);
+    let off_edge: Vec<usize> = (0..start.len())
+        .filter(|&k| along(&start[k]) > back + 1e-3)
+        .collect();
+    let g = model.gravity;
+    let mut run = EdgeRun {
+        zmp_gap: 0.0,
+        cop_gap: 0.0,
+        margin_before: f64::INFINITY,
+        tip: None,
+    };
+    p.run(a, &ON_CASTERS_SETTINGS, |s| {
+        if s.time <= ON_CASTERS_SETTINGS.settle {
+            return false;
+        }
+        sm.gravity = s.gravity;
+        let report = evaluate(
+            model,
+            &mut data,
+            &sm,
+            &mut sd,
+            s.q,
+            s.v,
+            s.acceleration,
+            &ExternalLoads::NONE,
+        );
+        let zmp = report.zmp.expect("the robot presses on the ground").xy();
+        let margin = report.zmp_margin.unwrap();
+        let (mut force, mut moment, mut pressure) =
+            (Vector3::zeros(), Vector3::zeros(), Vector2::zeros());
+        for r in s.contacts {
+            let f = Vector3::new(r.friction.x, r.friction.y, r.normal);
+            force += f;
+            moment += r.point.cross(&f);
+            pressure += r.normal * r.point.xy();
+        }
+        let contact_zmp = Vector2::new(-moment.y / force.z, moment.x / force.z);
+        run.zmp_gap = run.zmp_gap.max((zmp - contact_zmp).norm());
+        run.cop_gap = run.cop_gap.max((zmp - pressure / force.z).norm());
+        let accel = (g - s.gravity).dot(&u);
+        if off_edge.iter().all(|&k| s.contacts[k].normal == 0.0) {
+            run.tip = Some((accel, margin));
+            return true;
+        }
+        run.margin_before = run.margin_before.min(margin);
+        false
+    })
+    .unwrap();
+    run
+}
+
+impl OnCasters {
+    /// The same robot with friction at its casters and stiffer contacts.
+    fn with_caster_friction(params: fn(ContactParams) -> Self) -> Self {
+        let mut r = params(ContactParams {
+            stiffness: EDGE_STIFFNESS,
+            ..on_casters_params()
+        });
+        r.plant = r.plant.with_caster_friction();
+        r
+    }
+
+    /// At 0.9 × the predicted limit the robot does not tip over; at 1.1 × it does, within
+    /// `band` times the prediction, with the stability module's ZMP margin positive until
+    /// that step and within `MARGIN_AT_TIP` of zero there, and its ZMP that of the contact
+    /// forces at every step.
+    fn tips_over_the_edge_where_the_zmp_margin_reaches_zero(&self, band: std::ops::Range<f64>) {
+        self.each(|label, _, p, lim| {
+            let p = p
+                .clone()
+                .with_event(LiftOffEvent::TipOver)
+                .with_static_torque();
+            assert!(
+                lim * 1.1 < 2.0 * G * 0.9,
+                "{label}: friction carries 1.1 × {lim}"
+            );
+            let lifted = p.lifted_contact(0.9 * lim, &ON_CASTERS_SETTINGS).unwrap();
+            assert_eq!(lifted, None, "{label}: tipped at 0.9 × {lim}");
+            let run = edge_run(&p, 1.1 * lim, Vector2::zeros());
+            eprintln!("{label}: predicted {lim:.3} m/s², {run:?}");
+            let (at, margin) = run
+                .tip
+                .unwrap_or_else(|| panic!("{label}: no tip-over at 1.1 × {lim}"));
+            assert!(
+                band.contains(&(at / lim)),
+                "{label}: tipped at {at} = {} ×",
+                at / lim
+            );
+            assert!(
+                run.zmp_gap < ZMP_AGREEMENT,
+                "{label}: ZMP gap {}",
+                run.zmp_gap
+            );
+            assert!(
+                margin.abs() < MARGIN_AT_TIP,
+                "{label}: ZMP margin {margin} at the tip-over"
+            );
+            assert!(
+                run.margin_before > MARGIN_BEFORE_TIP,
+                "{label}: the ZMP margin fell to {} m before the tip-over",
+                run.margin_before
+            );
+        });
+    }
+}
+
+#[test]
+fn with_caster_friction_the_mobile_manipulator_tips_over_where_the_stability_modules_zmp_margin_reaches_zero()
+ {
+    OnCasters::with_caster_friction(mobile_manipulator)
+        .tips_over_the_edge_where_the_zmp_margin_reaches_zero(0.97..1.03);
+}
+
+#[test]
+fn with_caster_friction_fetch_tips_over_where_the_stability_modules_zmp_margin_reaches_zero() {
+    OnCasters::with_caster_friction(fetch)
+        .tips_over_the_edge_where_the_zmp_margin_reaches_zero(0.97..1.03);
 }

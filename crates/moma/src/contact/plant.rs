@@ -29,7 +29,7 @@ pub(crate) struct Contact {
     pub body: usize,
     pub shape: Shape,
     pub radius: f64,
-    /// Frictional (wheels) or not (casters).
+    /// Frictional (wheels; casters only by [`ContactPlant::with_caster_friction`]).
     pub frictional: bool,
 }
 
@@ -144,6 +144,20 @@ impl ContactPlant {
             contacts,
             wheel_dofs,
         })
+    }
+
+    /// The same plant with Coulomb friction (μ, `v_ε` of its parameters, as a wheel's) at
+    /// every caster: a caster that carries horizontal force, as a braked or locked caster
+    /// does. The shipped casters are frictionless ([`CasterSpec`]); this is for studies
+    /// that need horizontal force at the casters, such as tipping a robot over an edge
+    /// between two casters (`sim::lift_off`), where frictionless casters leave the
+    /// unloaded drive wheels as the only frictional contacts.
+    #[must_use]
+    pub fn with_caster_friction(mut self) -> Self {
+        for c in &mut self.contacts {
+            c.frictional = true;
+        }
+        self
     }
 
     /// Number of ground contacts: the wheels, then the casters, in the order given.

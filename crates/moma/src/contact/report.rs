@@ -15,7 +15,7 @@ pub struct ContactReport {
     /// Slip velocity: the ground-plane velocity `[x, y]` (world, m/s) of the body's
     /// material point at the contact.
     pub slip: Vector2<f64>,
-    /// Friction force `[x, y]` on the robot (world, N); zero for a caster.
+    /// Friction force `[x, y]` on the robot (world, N); zero for a frictionless caster.
     pub friction: Vector2<f64>,
     /// The contact carries no normal force (lifted off, or separating).
     pub lifted: bool,

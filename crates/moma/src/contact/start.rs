@@ -12,9 +12,10 @@ use crate::multibody::Data;
 
 impl ContactPlant {
     /// The stable-step checks of `docs/contact.md` at the state's configuration: for every
-    /// contact the normal spring-damper on its normal effective mass, and for every wheel
-    /// the viscous friction branch on its longitudinal and lateral effective masses with
-    /// the normal force taken as the robot's whole weight.
+    /// contact the normal spring-damper on its normal effective mass, and for every
+    /// frictional contact the viscous friction branch on its longitudinal and lateral
+    /// effective masses (a wheel's rolling and axle directions; a frictional caster's world
+    /// x and y) with the normal force taken as the robot's whole weight.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] naming `contact.stiffness` or `contact.slip_velocity`,
@@ -40,7 +41,10 @@ impl ContactPlant {
             if !c.frictional {
                 continue;
             }
-            let (fwd, lat) = self.wheel_directions(state, k);
+            let (fwd, lat) = match c.shape {
+                Shape::Disk { axis } => self.wheel_directions(state, k, &axis),
+                Shape::Sphere { .. } => (Vector3::x(), Vector3::y()),
+            };
             for (what, dir) in [("longitudinal", fwd), ("lateral", lat)] {
                 let m_t = self.effective_mass(state, k, &dir)?;
                 let bound = friction_step_bound(p.mu, weight, p.slip_velocity, m_t);
@@ -62,11 +66,13 @@ impl ContactPlant {
 
     /// World rolling direction and lateral (axle) direction of wheel `k` in the ground
     /// plane.
-    fn wheel_directions(&self, state: &ContactState, k: usize) -> (Vector3<f64>, Vector3<f64>) {
+    fn wheel_directions(
+        &self,
+        state: &ContactState,
+        k: usize,
+        axis: &Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
         let c = &self.contacts[k];
-        let Shape::Disk { axis } = c.shape else {
-            unreachable!("only wheels are frictional")
-        };
         let mut data = Data::new(&self.model);
         crate::kinematics::forward_kinematics(&self.model, &mut data, &state.q);
         let a = data.world_from_joint[c.body].rotation * axis;

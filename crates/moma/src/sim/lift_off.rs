@@ -9,8 +9,11 @@
 //! lowest contact on the ground, lets it settle for [`LiftOffSettings::settle`], ramps the
 //! plant's gravity linearly from `g` to `g − a u` over [`LiftOffSettings::ramp`] and holds
 //! it for [`LiftOffSettings::hold`], with every joint (wheels included) held at its start
-//! position by a PD law; the wheels' friction carries the horizontal load. The first
-//! contact that carries no normal force after the settling time has lifted.
+//! position by a PD law; the wheels' friction carries the horizontal load. The run ends
+//! at the problem's [`LiftOffEvent`] after the settling time: by default the first
+//! contact that carries no normal force; or the tip-over, when the contacts still loaded
+//! lie on one line (every contact off that edge has lost its load).
+//! [`LiftOffProblem::run`] shows each step to an observer.
 //!
 //! [`LiftOffProblem::search`] bisects on `a` between an acceleration at which nothing
 //! lifts and one at which a contact lifts, until the bracket is narrower than
@@ -23,7 +26,7 @@
 
 use nalgebra::{DVector, Vector2, Vector3};
 
-use crate::contact::{ContactPlant, ContactState};
+use crate::contact::{ContactPlant, ContactReport, ContactState};
 use crate::dynamics::center_of_mass;
 use crate::error::{Error, Result};
 use crate::multibody::Data;
@@ -104,6 +107,68 @@ impl LiftOffSettings {
     }
 }
 
+/// What a run looks for after the settling time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LiftOffEvent {
+    /// The first contact that carries no normal force (the default).
+    #[default]
+    FirstLift,
+    /// The tip-over: a contact has lifted and the contacts still carrying normal force lie
+    /// on one line (within [`EDGE_TOLERANCE`], or one contact or none), so every contact
+    /// off that edge has lost its load.
+    TipOver,
+}
+
+/// Largest distance (m) of a loaded contact from the line through the two loaded
+/// contacts farthest apart for the loaded contacts to count as one edge
+/// ([`LiftOffEvent::TipOver`]).
+pub const EDGE_TOLERANCE: f64 = 1e-3;
+
+/// Do the contacts that carry normal force lie on one line (within [`EDGE_TOLERANCE`], in
+/// the ground plane)? True for one loaded contact or none.
+fn loaded_on_one_line(contacts: &[ContactReport]) -> bool {
+    let loaded = || contacts.iter().filter(|r| !r.lifted).map(|r| r.point.xy());
+    let mut ends = None;
+    let mut widest = 0.0;
+    for (i, a) in loaded().enumerate() {
+        for b in loaded().skip(i + 1) {
+            let d = (b - a).norm();
+            if d > widest {
+                widest = d;
+                ends = Some((a, b));
+            }
+        }
+    }
+    let Some((a, b)) = ends.filter(|_| widest > EDGE_TOLERANCE) else {
+        return true;
+    };
+    let along = (b - a) / widest;
+    loaded().all(|p| {
+        let r = p - a;
+        (r.x * along.y - r.y * along.x).abs() <= EDGE_TOLERANCE
+    })
+}
+
+/// One step of a run as [`LiftOffProblem::run`] shows it: the state the step started
+/// from, the gravity it ran under, and the contact forces and accelerations computed
+/// there (so `q`, `v`, `acceleration` and `contacts` satisfy the plant's equations of
+/// motion together).
+#[derive(Clone, Copy, Debug)]
+pub struct RunStep<'a> {
+    /// Time at the end of the step (s).
+    pub time: f64,
+    /// The plant's gravity over the step (world, m/s²): `g − a s u`, s the ramp's fraction.
+    pub gravity: Vector3<f64>,
+    /// Configuration at the start of the step.
+    pub q: &'a DVector<f64>,
+    /// Velocity at the start of the step.
+    pub v: &'a DVector<f64>,
+    /// The step's accelerations `v̇`.
+    pub acceleration: &'a DVector<f64>,
+    /// The step's contact reports (forces at the start of the step).
+    pub contacts: &'a [ContactReport],
+}
+
 /// The result of a search: the smallest acceleration that lifted a contact, to the
 /// tolerance.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,7 +180,8 @@ pub struct LiftOff {
     /// The smallest acceleration tried at which a contact lifted (m/s²).
     pub hi: f64,
     /// The contact that lifted at `hi` (index in the plant's contact order: wheels, then
-    /// casters).
+    /// casters); for [`LiftOffEvent::TipOver`] the one whose loss of load completed the
+    /// tip-over.
     pub contact: usize,
     /// Bisection runs made (besides the two that check the bracket).
     pub iterations: usize,
@@ -127,6 +193,8 @@ pub struct LiftOffProblem {
     plant: ContactPlant,
     q0: Vec<f64>,
     direction: Vector3<f64>,
+    event: LiftOffEvent,
+    static_torque: bool,
 }
 
 impl LiftOffProblem {
@@ -175,13 +243,43 @@ impl LiftOffProblem {
             plant,
             q0,
             direction: Vector3::new(direction.x / norm, direction.y / norm, 0.0),
+            event: LiftOffEvent::FirstLift,
+            static_torque: false,
         })
+    }
+
+    /// The same problem, its runs looking for `event` ([`LiftOffEvent::FirstLift`] unless
+    /// set).
+    #[must_use]
+    pub fn with_event(mut self, event: LiftOffEvent) -> Self {
+        self.event = event;
+        self
+    }
+
+    /// The same problem, its runs adding to the PD law of every joint but the wheels the
+    /// static torque that holds the start posture under the gravity of the moment: the
+    /// joint rows of the generalised gravity `g(q0)` for the tilted gravity `g − a s u`
+    /// (linear in it). Without it a joint sags until its PD law carries the load (by
+    /// `load / kp`: with soft gains, as a light wrist needs, a heavy prismatic torso
+    /// sinks by centimetres and bounces, lightly damped), and the centre of mass moves
+    /// from where the prediction puts it. The wheels keep the PD law alone: their static
+    /// torque is the ground friction's, not gravity's.
+    #[must_use]
+    pub fn with_static_torque(mut self) -> Self {
+        self.static_torque = true;
+        self
     }
 
     /// The plant the runs step (the payload included).
     #[must_use]
     pub fn plant(&self) -> &ContactPlant {
         &self.plant
+    }
+
+    /// The unit horizontal direction of the acceleration (world).
+    #[must_use]
+    pub fn direction(&self) -> Vector3<f64> {
+        self.direction
     }
 
     /// The start configuration (free-flyer `q`).
@@ -220,14 +318,53 @@ impl LiftOffProblem {
         ))
     }
 
-    /// One run at the steady acceleration `a` (m/s², ≥ 0): the first contact (plant
-    /// order) that lifted after the settling time, or `None`.
+    /// One run at the steady acceleration `a` (m/s², ≥ 0) until the problem's event
+    /// after the settling time: for [`LiftOffEvent::FirstLift`] the first contact (plant
+    /// order) that lifted, for [`LiftOffEvent::TipOver`] the first (plant order) of the
+    /// contacts whose loss of load completed the tip-over; `None` if the event did not
+    /// happen.
+    ///
+    /// # Errors
+    /// As [`LiftOffProblem::run`].
+    pub fn lifted_contact(&self, a: f64, settings: &LiftOffSettings) -> Result<Option<usize>> {
+        let mut was_lifted = vec![false; self.plant.ncontacts()];
+        let mut found = None;
+        self.run(a, settings, |s| {
+            if s.time > settings.settle {
+                let lifted = |r: &ContactReport| r.lifted;
+                found = match self.event {
+                    LiftOffEvent::FirstLift => s.contacts.iter().position(lifted),
+                    LiftOffEvent::TipOver if loaded_on_one_line(s.contacts) => s
+                        .contacts
+                        .iter()
+                        .zip(&was_lifted)
+                        .position(|(r, was)| r.lifted && !was)
+                        .or_else(|| s.contacts.iter().position(lifted)),
+                    LiftOffEvent::TipOver => None,
+                };
+            }
+            for (was, r) in was_lifted.iter_mut().zip(s.contacts) {
+                *was = r.lifted;
+            }
+            found.is_some()
+        })?;
+        Ok(found)
+    }
+
+    /// One run at the steady acceleration `a` (m/s², ≥ 0), showing every step to
+    /// `observe` (the first step's `time` is one contact step), until `observe` returns
+    /// true or the run ends.
     ///
     /// # Errors
     /// `settings` invalid ([`LiftOffSettings::validate`]), `a` negative or not finite
     /// (`acceleration`), a run longer than [`MAX_CONTACT_STEPS`] steps, the start's checks
     /// ([`ContactState::new`]) and a step's numerical failure.
-    pub fn lifted_contact(&self, a: f64, settings: &LiftOffSettings) -> Result<Option<usize>> {
+    pub fn run(
+        &self,
+        a: f64,
+        settings: &LiftOffSettings,
+        mut observe: impl FnMut(&RunStep<'_>) -> bool,
+    ) -> Result<()> {
         settings.validate()?;
         if !(a.is_finite() && a >= 0.0) {
             return Err(Error::invalid(
@@ -258,31 +395,60 @@ impl LiftOffProblem {
                 }
             })
             .collect();
+        // The joint rows of g(q0) per unit of gravity along world x, y, z (zero without
+        // the static torque, and for the wheels).
+        let mut hold = [vec![0.0; nv - 6], vec![0.0; nv - 6], vec![0.0; nv - 6]];
+        if self.static_torque {
+            let mut m = p.model.clone();
+            let mut data = Data::new(&m);
+            let q0 = DVector::from_column_slice(&self.q0);
+            for (axis, column) in hold.iter_mut().enumerate() {
+                m.gravity = Vector3::ith(axis, 1.0);
+                let tau = crate::dynamics::gravity_torque(&m, &mut data, &q0);
+                for (k, c) in column.iter_mut().enumerate() {
+                    if !p.wheel_dofs().contains(&(6 + k)) {
+                        *c = tau[6 + k];
+                    }
+                }
+            }
+        }
         let mut u = vec![0.0; nv - 6];
+        let (mut q, mut v) = (st.q.clone(), st.v.clone());
         for _ in 0..steps as usize {
             let s = ((st.t - settings.settle) / settings.ramp).clamp(0.0, 1.0);
             p.model.gravity = g - self.direction * (a * s);
+            let gravity = p.model.gravity;
             for (k, (uk, [kp, kd])) in u.iter_mut().zip(&gains).enumerate() {
                 // Joint k below the root: q index 7 + k, v index 6 + k (one-dof joints).
                 *uk = kp * (self.q0[7 + k] - st.q[7 + k]) - kd * st.v[6 + k];
+                *uk += hold[0][k] * gravity.x + hold[1][k] * gravity.y + hold[2][k] * gravity.z;
             }
+            q.copy_from(&st.q);
+            v.copy_from(&st.v);
             p.step(&mut st, &u)?;
-            if st.t > settings.settle
-                && let Some(k) = st.contacts.iter().position(|r| r.lifted)
-            {
-                return Ok(Some(k));
+            let step = RunStep {
+                time: st.t,
+                gravity: p.model.gravity,
+                q: &q,
+                v: &v,
+                acceleration: st.acceleration(),
+                contacts: &st.contacts,
+            };
+            if observe(&step) {
+                break;
             }
         }
-        Ok(None)
+        Ok(())
     }
 
-    /// The smallest acceleration in `[lo, hi]` (m/s², `0 ≤ lo < hi`) that lifts a
-    /// contact, by bisection: checks that nothing lifts at `lo` and a contact lifts at
-    /// `hi`, then halves the bracket until `hi − lo ≤ tolerance · hi`.
+    /// The smallest acceleration in `[lo, hi]` (m/s², `0 ≤ lo < hi`) at which the
+    /// problem's event happens (a contact lifts, or the robot tips over), by bisection:
+    /// checks that it does not happen at `lo` and does at `hi`, then halves the bracket
+    /// until `hi − lo ≤ tolerance · hi`.
     ///
     /// # Errors
-    /// [`Error::InvalidInput`] naming `bracket` when it is not `0 ≤ lo < hi` (finite), a
-    /// contact already lifts at `lo` or none lifts at `hi`; naming `max_iterations` when
+    /// [`Error::InvalidInput`] naming `bracket` when it is not `0 ≤ lo < hi` (finite), the
+    /// event already happens at `lo` or does not at `hi`; naming `max_iterations` when
     /// the tolerance is not reached within it; the errors of
     /// [`LiftOffProblem::lifted_contact`].
     pub fn search(&self, lo: f64, hi: f64, settings: &LiftOffSettings) -> Result<LiftOff> {
@@ -293,11 +459,18 @@ impl LiftOffProblem {
                 format!("needs 0 <= lo < hi, got [{lo}, {hi}]"),
             ));
         }
+        let (happens, none) = match self.event {
+            LiftOffEvent::FirstLift => ("lifts", "no contact lifts"),
+            LiftOffEvent::TipOver => (
+                "lifts, tipping the robot over,",
+                "the robot does not tip over",
+            ),
+        };
         if let Some(k) = self.lifted_contact(lo, settings)? {
             return Err(Error::invalid(
                 "bracket",
                 format!(
-                    "contact '{}' already lifts at the lower end {lo} m/s²",
+                    "contact '{}' already {happens} at the lower end {lo} m/s²",
                     self.plant.contact_name(k)
                 ),
             ));
@@ -305,7 +478,7 @@ impl LiftOffProblem {
         let Some(mut contact) = self.lifted_contact(hi, settings)? else {
             return Err(Error::invalid(
                 "bracket",
-                format!("no contact lifts at the upper end {hi} m/s²"),
+                format!("{none} at the upper end {hi} m/s²"),
             ));
         };
         let (mut lo, mut hi) = (lo, hi);
@@ -360,6 +533,41 @@ pub fn lift_off_acceleration(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_loaded_contacts_form_one_edge_only_when_on_one_line_within_the_tolerance() {
+        let at = |x: f64, y: f64, lifted: bool| ContactReport {
+            point: Vector3::new(x, y, -0.001),
+            normal: if lifted { 0.0 } else { 100.0 },
+            lifted,
+            ..ContactReport::default()
+        };
+        // Wheels at x = 0, casters at x = ±0.24: the rear casters alone carry the load.
+        let mut c = [
+            at(0.0, 0.25, true),
+            at(0.0, -0.25, true),
+            at(0.24, 0.16, true),
+            at(0.24, -0.16, true),
+            at(-0.24, 0.16, false),
+            at(-0.24, -0.16, false),
+        ];
+        assert!(loaded_on_one_line(&c));
+        // A wheel still loaded: three loaded contacts span a triangle.
+        c[0] = at(0.0, 0.25, false);
+        assert!(!loaded_on_one_line(&c));
+        // A loaded contact 0.9 mm off the edge's line counts as on it, 1.1 mm does not.
+        c[0] = at(-0.2391, 0.0, false);
+        assert!(loaded_on_one_line(&c));
+        c[0] = at(-0.2389, 0.0, false);
+        assert!(!loaded_on_one_line(&c));
+        // One loaded contact, or none: on a point.
+        let one = [at(0.0, 0.0, false), at(1.0, 0.0, true), at(0.0, 1.0, true)];
+        assert!(loaded_on_one_line(&one));
+        assert!(loaded_on_one_line(&[
+            at(0.0, 0.0, true),
+            at(1.0, 0.0, true)
+        ]));
+    }
 
     #[test]
     fn bad_settings_name_their_field() {

@@ -6,7 +6,12 @@
 //! values) with a point-mass payload of `payload` kg at the origin of `payload_frame`:
 //! the predicted limit along `direction`, then the bisection between `bracket[0]` and
 //! `bracket[1]` times the prediction to the relative `tolerance`, the arm joints held by
-//! the PD gains `joint_gains` (`LiftOffSettings::joint_gains` by default).
+//! the PD gains `joint_gains` (`LiftOffSettings::joint_gains` by default). The search
+//! looks for `event`: the first contact to lift (`first_lift`, the default) or the
+//! tip-over (`tip_over`: every contact off one edge unloaded); `caster_friction = true`
+//! gives the casters the wheels' friction (`ContactPlant::with_caster_friction`);
+//! `static_torque = true` adds the static torque of the posture to the joints' PD law
+//! (`LiftOffProblem::with_static_torque`).
 
 use std::path::Path;
 
@@ -22,7 +27,7 @@ use crate::contact::{ContactPlant, ContactSpec, WheelSpec};
 use crate::error::{Error, Result};
 use crate::mission::scenario::Loader;
 use crate::multibody::{RootJoint, neutral};
-use crate::sim::lift_off::{LiftOffProblem, LiftOffSettings};
+use crate::sim::lift_off::{LiftOffEvent, LiftOffProblem, LiftOffSettings};
 use crate::sim::model_mismatch::{ModelPerturbation, Payload};
 
 /// Result columns of the lift-off study.
@@ -51,6 +56,9 @@ struct Spec {
     tolerance: Option<f64>,
     max_iterations: Option<usize>,
     joint_gains: Option<[f64; 2]>,
+    event: Option<String>,
+    caster_friction: Option<bool>,
+    static_torque: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -68,6 +76,8 @@ pub(super) struct LiftOffStudy {
     direction: Vector2<f64>,
     bracket: [f64; 2],
     settings: LiftOffSettings,
+    event: LiftOffEvent,
+    static_torque: bool,
     slots: Vec<Slot>,
 }
 
@@ -201,15 +211,29 @@ impl LiftOffStudy {
                 ));
             }
         };
+        let event = match spec.event.as_deref().unwrap_or("first_lift") {
+            "first_lift" => LiftOffEvent::FirstLift,
+            "tip_over" => LiftOffEvent::TipOver,
+            other => {
+                return Err(file_error(
+                    path,
+                    "lift_off.event",
+                    format!("unknown event '{other}' (expected first_lift or tip_over)"),
+                ));
+            }
+        };
         let (bracket, settings) = settings(path, &spec)?;
         let slots = parameter_slots(path, &model, params)?;
-        let plant = ContactPlant::new(
+        let mut plant = ContactPlant::new(
             model,
             &spec.wheels,
             &spec.contact.casters,
             spec.contact.params(),
         )
         .map_err(|e| plant_error(path, e))?;
+        if spec.caster_friction == Some(true) {
+            plant = plant.with_caster_friction();
+        }
         Ok(Self {
             plant,
             posture,
@@ -217,6 +241,8 @@ impl LiftOffStudy {
             direction,
             bracket,
             settings,
+            event,
+            static_torque: spec.static_torque == Some(true),
             slots,
         })
     }
@@ -246,12 +272,16 @@ impl LiftOffStudy {
             mass: payload,
             position: Vector3::zeros(),
         };
-        let problem = LiftOffProblem::new(
+        let mut problem = LiftOffProblem::new(
             &self.plant,
             &ws.q.as_slice()[7..],
             (payload > 0.0).then_some(&tool),
             self.direction,
-        )?;
+        )?
+        .with_event(self.event);
+        if self.static_torque {
+            problem = problem.with_static_torque();
+        }
         let predicted = problem.predicted_limit()?.ok_or_else(|| {
             Error::invalid(
                 "predicted_limit",
