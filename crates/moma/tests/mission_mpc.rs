@@ -115,6 +115,32 @@ fn the_default_mission_with_the_mpc_replans_round_the_crate_and_reaches_the_shel
     assert_eq!(summary["mpc"]["solves"], s.solves);
 }
 
+/// The limits of Fetch's warehouse mission with the MPC that hold at every start checked
+/// (the shipped one and the three moved ones of
+/// `fetch_keeps_the_limits_that_hold_at_every_start_from_moved_starts`): the goal within
+/// 30 s, the gripper within 2 cm of its target, the ZMP margin (planned and in the
+/// plant) above its set value 0.05 m, no joint past a position limit, clearance to the
+/// racks, and the torques clipped on fewer than 5 % of the steps (the wheels ride their
+/// limit while braking into the reach).
+fn fetch_warehouse_limits_hold(r: &MissionResult, start: &str) {
+    assert!(r.reached, "{start}: {:?} {:?}", r.reason, r.events);
+    let t_goal = r.time_to_goal.expect("a time to goal");
+    assert!(t_goal < 30.0, "{start}: time to goal {t_goal}");
+    let s = r.mpc.as_ref().expect("the MPC's summary");
+    assert!(s.min_ee_error.unwrap() <= 0.02, "{start}: {s:?}");
+    assert!(
+        r.torque_saturated_steps * 20 < r.steps,
+        "{start}: {} of {} steps clipped",
+        r.torque_saturated_steps,
+        r.steps
+    );
+    assert!(s.joint_position_excess <= 0.0, "{start}: {s:?}");
+    assert!(s.min_zmp_margin >= 0.05, "{start}: {s:?}");
+    let zmp = r.min_zmp_margin().unwrap();
+    assert!(zmp >= 0.05, "{start}: plant's smallest ZMP margin {zmp}");
+    assert!(r.min_clearance().unwrap() > 0.0, "{start}");
+}
+
 /// Fetch's warehouse mission with the MPC: one solve per 50 ms, 25 simulation steps of
 /// 2 ms; in between, the law recomputes the torques of the planned acceleration at the
 /// measured state. Holding the solve's torques over those 25 steps instead let Fetch's
@@ -124,34 +150,40 @@ fn the_default_mission_with_the_mpc_replans_round_the_crate_and_reaches_the_shel
 fn fetch_reaches_its_warehouse_goal_with_the_mpc_within_its_limits() {
     let m = mission::load(&scenarios().join("mission_fetch_mpc.toml")).unwrap();
     let r = run(&m);
-    assert!(r.reached, "{:?} {:?}", r.reason, r.events);
-    let t_goal = r.time_to_goal.expect("a time to goal");
-    assert!(t_goal < 30.0, "time to goal {t_goal}");
+    fetch_warehouse_limits_hold(&r, "shipped start");
+    // Torque asked past a limit, joint speed past a limit and wheel speed past a limit
+    // are penalties, not bounds, and they are checked at the shipped start only: the
+    // closed loop amplifies round-off (`docs/mpc.md`, "In closed loop"), and with the
+    // start moved by -1e-7 m the same build asks 1.37 N·m past a torque limit and
+    // runs a joint 0.13 rad/s past its speed limit, with it moved by 1e-6 m the wheels
+    // 0.72 rad/s past theirs (BENCHMARKS.md, "Fetch's mission from moved starts"). At
+    // the shipped start: 0.06 N·m, 0.014 rad/s and 0.061 rad/s.
     let s = r.mpc.as_ref().expect("the MPC's summary");
-    assert!(s.min_ee_error.unwrap() <= 0.02, "{s:?}");
-    // Torques: the solves ask little past a limit (the wheels ride theirs while braking
-    // into the reach; the torque constraint is a penalty, not a bound), and the torques
-    // are clipped on few steps. How far past depends on the round-off of the run: with
-    // the start moved by 1e-9 to 1e-6 m the same solver asks 0.04 to 0.56 N·m.
     assert!(s.max_torque_excess < 1.0, "{s:?}");
-    assert!(
-        r.torque_saturated_steps * 20 < r.steps,
-        "{} of {} steps clipped",
-        r.torque_saturated_steps,
-        r.steps
-    );
-    // Joint speeds and positions within the limits (speeds to 0.1 rad/s: 3.8 rad/s past
-    // before the fix), the ZMP margin above its set value 0.05 m. The wheel-speed limit
-    // is a penalty too: at the nominal start the wheels stay within it, but with the start
-    // moved by 1e-9 to 1e-6 m the same build ends 0.011 to 0.29 rad/s past it at three
-    // of five starts, so the bound is on the violation, not its absence.
     assert!(s.joint_speed_excess < 0.1, "{s:?}");
-    assert!(s.joint_position_excess <= 0.0, "{s:?}");
     assert!(s.wheel_speed_excess < 0.5, "{s:?}");
-    assert!(s.min_zmp_margin >= 0.05, "{s:?}");
-    let zmp = r.min_zmp_margin().unwrap();
-    assert!(zmp >= 0.05, "plant's smallest ZMP margin {zmp}");
-    assert!(r.min_clearance().unwrap() > 0.0);
+}
+
+/// The mission's limits that do not depend on the luck of the round-off: with the start
+/// moved by 1e-9, -1e-7 and 1e-6 m along x (each run's round-off, and so its closed
+/// loop, differs from the shipped start's from the first solve on) the goal, the
+/// gripper error, the ZMP margin, the joint positions, the clearance and the clipped
+/// steps keep the bounds of the shipped start.
+#[test]
+fn fetch_keeps_the_limits_that_hold_at_every_start_from_moved_starts() {
+    for (x, moved) in [
+        ("-5.399999999", "+1e-9 m"),
+        ("-5.400000100000001", "-1e-7 m"),
+        ("-5.399999", "+1e-6 m"),
+    ] {
+        let m = variant(
+            "mission_fetch_mpc.toml",
+            &[("pose = [-5.4, -12.0", &format!("pose = [{x}, -12.0"))],
+        )
+        .unwrap();
+        let r = run(&m);
+        fetch_warehouse_limits_hold(&r, &format!("start moved by {moved}"));
+    }
 }
 
 /// The pass-by mission with a post (radius 0.3 m) that appears at t = 1 s just above
