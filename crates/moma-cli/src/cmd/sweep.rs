@@ -182,7 +182,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(_) => Some(super::sweep_lift_off::figure(
             &table,
             &format!(
-                "Tip-over: simulated lift-off vs predicted limit\n{}",
+                "Tip-over: simulated vs predicted limit\n{}",
                 path.file_name()
                     .map_or(String::new(), |f| f.to_string_lossy().into_owned())
             ),

@@ -88,7 +88,7 @@ pub fn figure(table: &Table, title: &str) -> Result<String> {
     Ok(identity_scatter_chart(
         title,
         "predicted tip-over limit [m/s²]",
-        "simulated lift-off acceleration [m/s²]",
+        "simulated limit: first lift or tip-over [m/s²]",
         &series,
     ))
 }
