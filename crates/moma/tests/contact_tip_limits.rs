@@ -35,8 +35,9 @@
 
 use moma::contact::{ContactParams, ContactPlant};
 use moma::dynamics::center_of_mass;
+use moma::error::Error;
 use moma::multibody::{Data, Model};
-use moma::sim::lift_off::{LiftOffProblem, LiftOffSettings};
+use moma::sim::lift_off::{JointGains, LiftOffProblem, LiftOffSettings};
 use moma::sim::model_mismatch::Payload;
 use moma::spatial::Inertia;
 use moma::stability::{SupportPolygon, acceleration_limits};
@@ -319,16 +320,10 @@ struct OnCasters {
     far: [&'static str; 2],
 }
 
-/// The default arm gains (2000 N·m/rad, 100 N·m·s/rad) are unstable at the plant's step
-/// on these arms' light wrists: softer damping holds them.
+/// The default gains (the arm's from each joint's own inertia), the bisection to 1 %.
 const ON_CASTERS_SETTINGS: LiftOffSettings = LiftOffSettings {
-    settle: 0.3,
-    ramp: 1.0,
-    hold: 0.7,
-    wheel_gains: [500.0, 20.0],
-    joint_gains: [1000.0, 1.0],
     tolerance: 0.01,
-    max_iterations: 20,
+    ..DEFAULT_SETTINGS
 };
 
 /// The UR5-class robot: the drive wheels under the base's centre, four casters at
@@ -455,4 +450,69 @@ fn on_the_robots_on_casters_the_first_lift_off_is_well_below_the_predicted_limit
     // manipulator, 0.40 to 0.69 × on Fetch.
     mobile_manipulator().first_lift_off_within(0.55..0.75);
     fetch().first_lift_off_within(0.35..0.75);
+}
+
+/// What `LiftOffSettings::default()` holds, as a constant.
+const DEFAULT_SETTINGS: LiftOffSettings = LiftOffSettings {
+    settle: 0.3,
+    ramp: 1.0,
+    hold: 0.7,
+    wheel_gains: [500.0, 20.0],
+    joint_gains: moma::sim::lift_off::DEFAULT_JOINT_GAINS,
+    tolerance: 0.005,
+    max_iterations: 20,
+};
+
+#[test]
+fn the_default_settings_are_the_constant_these_tests_use() {
+    assert_eq!(LiftOffSettings::default(), DEFAULT_SETTINGS);
+}
+
+#[test]
+fn arm_gains_unstable_at_the_step_are_refused_before_the_run_naming_the_joint() {
+    // 2000 N·m/rad and 100 N·m·s/rad on every arm joint (the study's former default): on
+    // the light wrist and head joints (effective inertia 1.4e-3 and 1.6e-3 kg·m²) explicit
+    // damping is unstable at 0.1 ms (kd dt / I ≈ 7 > 2); the run used to end in
+    // non-finite accelerations. Now no step is taken: the error is the gains', not a
+    // numerical failure.
+    let stiff = LiftOffSettings {
+        joint_gains: JointGains::Fixed([2000.0, 100.0]),
+        ..DEFAULT_SETTINGS
+    };
+    // The first joint in model order whose gains break the bound (measured).
+    for (robot, first) in [
+        (mobile_manipulator(), "wrist_2_joint"),
+        (fetch(), "head_tilt_joint"),
+    ] {
+        let joints: Vec<(&str, f64)> = robot
+            .arm
+            .iter()
+            .copied()
+            .zip(robot.postures[0].1.iter().copied())
+            .collect();
+        let p = problem_on(
+            &robot.plant,
+            &joints,
+            robot.tool,
+            0.0,
+            Vector2::new(1.0, 0.0),
+        );
+        for e in [
+            p.joint_gains(&stiff).unwrap_err(),
+            p.lifted_contact(1.0, &stiff).unwrap_err(),
+            p.search(0.5, 1.0, &stiff).unwrap_err(),
+        ] {
+            let Error::InvalidInput { field, message } = &e else {
+                panic!("{}: {e}", robot.name)
+            };
+            assert_eq!(field, "joint_gains", "{e}");
+            assert!(
+                message.contains("need dt <") && message.contains("contact.dt"),
+                "{e}"
+            );
+            let joint = message.split('\'').nth(1).unwrap();
+            eprintln!("{}: {message}", robot.name);
+            assert_eq!(joint, first, "{}: {e}", robot.name);
+        }
+    }
 }

@@ -6,9 +6,11 @@
 //! values) with a point-mass payload of `payload` kg at the origin of `payload_frame`:
 //! the predicted limit along `direction`, then the bisection between `bracket[0]` and
 //! `bracket[1]` times the prediction to the relative `tolerance`, the arm joints held by
-//! the PD gains `joint_gains` (`LiftOffSettings::joint_gains` by default).
+//! the PD gains `joint_gains` (`[kp, kd]` on every joint; by default each joint's from its
+//! own inertia, `sim::lift_off::DEFAULT_JOINT_GAINS`). Gains unstable at the plant's step
+//! fail the point before it runs, naming `lift_off.joint_gains` and the joint.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
@@ -22,7 +24,7 @@ use crate::contact::{ContactPlant, ContactSpec, WheelSpec};
 use crate::error::{Error, Result};
 use crate::mission::scenario::Loader;
 use crate::multibody::{RootJoint, neutral};
-use crate::sim::lift_off::{LiftOffProblem, LiftOffSettings};
+use crate::sim::lift_off::{JointGains, LiftOffProblem, LiftOffSettings};
 use crate::sim::model_mismatch::{ModelPerturbation, Payload};
 
 /// Result columns of the lift-off study.
@@ -62,6 +64,8 @@ enum Slot {
 
 /// The prepared study.
 pub(super) struct LiftOffStudy {
+    /// The sweep file, for the errors of a point's checks.
+    path: PathBuf,
     plant: ContactPlant,
     posture: DVector<f64>,
     payload_link: String,
@@ -128,7 +132,7 @@ fn settings(path: &Path, spec: &Spec) -> Result<([f64; 2], LiftOffSettings)> {
     let settings = LiftOffSettings {
         tolerance: spec.tolerance.unwrap_or(d.tolerance),
         max_iterations: spec.max_iterations.unwrap_or(d.max_iterations),
-        joint_gains: spec.joint_gains.unwrap_or(d.joint_gains),
+        joint_gains: spec.joint_gains.map_or(d.joint_gains, JointGains::Fixed),
         ..d
     };
     settings.validate().map_err(|e| match e {
@@ -211,6 +215,7 @@ impl LiftOffStudy {
         )
         .map_err(|e| plant_error(path, e))?;
         Ok(Self {
+            path: path.to_path_buf(),
             plant,
             posture,
             payload_link,
@@ -258,6 +263,19 @@ impl LiftOffStudy {
                 "no tip-over limit in this direction (the robot tips at rest, or no support \
                  edge limits the direction)",
             )
+        })?;
+        // The gains' stable step depends on the point's posture and payload: checked here,
+        // before the point runs, and named in the file.
+        problem.joint_gains(&self.settings).map_err(|e| match e {
+            Error::InvalidInput { field, message } => {
+                let field = if field == "wheel_gains" {
+                    "lift_off.wheels".to_string()
+                } else {
+                    format!("lift_off.{field}")
+                };
+                file_error(&self.path, &field, message)
+            }
+            other => other,
         })?;
         let found = problem.search(
             self.bracket[0] * predicted,
