@@ -23,7 +23,14 @@ cylinder wheels; solref time constants 0.02 s and 0.05 s; constraint impedance 0
 and damping scaled by each contact's approximate inverse mass (MuJoCo's body_invweight0),
 so that the normal force is k delta + c delta_dot with moma's default k and c.
 
-Usage: python bench/mujoco_contact_settings.py DIR
+With --robot mobile_manipulator (DIR from `contact_rollout -- mobile_manipulator DIR`) it
+prints instead one row per setting of the mobile manipulator's disagreements
+(bench/mujoco_contact_mobile_manipulator.xml): the brake's rear-caster lift-off, the
+turn's (`spin`) slip onset, and the roll's largest differences from moma's trajectory
+(base position, heading, wheel speeds), for the shipped model, the pyramidal cone,
+impratio 10 and 0.1, 10 noslip iterations, a 25 us step, and solimp 0.99-0.999 and 0.5.
+
+Usage: python bench/mujoco_contact_settings.py DIR [--robot diffdrive_arm|mobile_manipulator]
 """
 
 import argparse
@@ -35,7 +42,7 @@ import re
 import mujoco
 import numpy as np
 
-from mujoco_contact_compare import model_xml, replay
+from mujoco_contact_compare import compare_roll, model_xml, replay
 
 WHEEL_GEOM = re.compile(r'(<geom name="(?:left|right)_wheel") type="sphere" size="0\.08" condim="3" friction="1 0 0"')
 DEFAULT = '<geom solref="0.01 1" solimp="0.95 0.99 0.001"/>'
@@ -127,11 +134,53 @@ def event(e):
     return f'{e["t"]:.4f}' if e else "none"
 
 
+MOBILE_MANIPULATOR_SETTINGS = [
+    ("shipped (elliptic, impratio 1, 0.1 ms)", None, None),
+    ("cone pyramidal", sub('cone="elliptic"', 'cone="pyramidal"', 1), None),
+    ("impratio 10", option('impratio="10"'), None),
+    ("impratio 0.1", option('impratio="0.1"'), None),
+    ("noslip_iterations 10", option('noslip_iterations="10"'), None),
+    ("timestep 25 us", sub('timestep="0.0001"', 'timestep="0.000025"', 1), 2.5e-5),
+    ("solimp 0.99 0.999", sub(re.escape('solimp="0.95 0.99 0.001"'), 'solimp="0.99 0.999 0.001"', 1), None),
+    ("solimp 0.5 0.5", sub(re.escape('solimp="0.95 0.99 0.001"'), 'solimp="0.5 0.5 0.001"', 1), None),
+]
+
+
+def mobile_manipulator_table(d):
+    """The mobile manipulator's rows (one per setting, as the module says)."""
+    scen = {}
+    for name in ("roll", "brake", "spin"):
+        with open(os.path.join(d, f"contact_{name}.json")) as f:
+            scen[name] = json.load(f)
+    print(f"MuJoCo {mujoco.__version__}; moma: brake lift {event(scen['brake']['first_lift'])}, "
+          f"spin slip {event(scen['spin']['first_slip'])}")
+    print("| MuJoCo setting | brake: rear caster lift-off (s) | turn: slip onset (s) "
+          "| roll: position / heading / wheel speed |")
+    print("| --- | --- | --- | --- |")
+    for label, edit, dt in MOBILE_MANIPULATOR_SETTINGS:
+        xml = model_xml("mobile_manipulator")
+        if edit:
+            xml = edit(xml)
+        res = {}
+        for name, sc in scen.items():
+            if dt:
+                sc = dict(sc, params=dict(sc["params"], dt=dt))
+            res[name] = replay(sc, xml)
+        r = compare_roll(scen["roll"], res["roll"])
+        print(f'| {label} | {event(res["brake"]["first_lift"])} | {event(res["spin"]["first_slip"])} '
+              f'| {r["max_position_diff_m"] * 1e3:.2f} mm / {r["max_yaw_diff_rad"] * 1e3:.2f} mrad '
+              f'/ {r["max_wheel_speed_diff_rad_s"]:.3f} rad/s |', flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("dir")
     ap.add_argument("--probes-only", action="store_true")
+    ap.add_argument("--robot", choices=["diffdrive_arm", "mobile_manipulator"], default="diffdrive_arm")
     a = ap.parse_args()
+    if a.robot == "mobile_manipulator":
+        mobile_manipulator_table(a.dir)
+        return
     scen = {}
     for name in ("brake", "spin"):
         with open(os.path.join(a.dir, f"contact_{name}.json")) as f:

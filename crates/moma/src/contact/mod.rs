@@ -32,7 +32,7 @@ mod table;
 
 pub use geometry::{disk_lowest_point, sphere_lowest_point};
 pub use law::{friction_force, normal_force};
-pub use params::{ContactParams, friction_step_bound, normal_step_bound};
+pub use params::{ContactParams, friction_step_bound, spring_damper_step_bound};
 pub use plant::{ContactPlant, ContactState};
 pub use report::ContactReport;
 pub use spec::{CasterSpec, WheelSpec};

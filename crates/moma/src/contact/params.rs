@@ -39,7 +39,7 @@ impl Default for ContactParams {
 impl ContactParams {
     /// Checks every field on its own: all finite, `stiffness`, `mu`, `slip_velocity`,
     /// `dt` positive, `damping` and `start_penetration_tol` not negative. The checks
-    /// that depend on the robot (the stable step) are [`normal_step_bound`] and
+    /// that depend on the robot (the stable step) are [`spring_damper_step_bound`] and
     /// [`friction_step_bound`], made when a run starts.
     ///
     /// # Errors
@@ -72,21 +72,17 @@ impl ContactParams {
     }
 }
 
-/// The largest stable step of semi-implicit Euler on the spring-damper `m ẍ = −k x − c ẋ`:
-/// `dt < 2 (√(1 + ζ²) − ζ) / ω_n` with `ω_n = √(k/m)`, `ζ = c / (2 √(k m))`
-/// (the step's amplification matrix has trace `2 − 2ζω_n dt − ω_n² dt²` and determinant
-/// `1 − 2ζω_n dt`; Jury's conditions give this bound, and `2/ω_n` without damping).
+/// The largest stable step of semi-implicit Euler on the spring-damper `m ẍ = −k x − c ẋ`
+/// (`k, c ≥ 0`): `dt < 4 m / (c + √(c² + 4 k m))`, which is `2 (√(1 + ζ²) − ζ) / ω_n` with
+/// `ω_n = √(k/m)`, `ζ = c / (2 √(k m))` (`2/ω_n` without damping, `2 m / c` without
+/// stiffness, unbounded without either). The step's amplification matrix has trace
+/// `2 − 2ζω_n dt − ω_n² dt²` and determinant `1 − 2ζω_n dt`; of Jury's conditions,
+/// `1 − trace + det > 0` holds for any `k > 0`, `1 + trace + det > 0` gives this bound, and
+/// `|det| < 1` (`dt < 1/(ζ ω_n)`) follows from it. Serves the contact's normal law and the
+/// PD laws that hold joints on the contact plant ([`crate::sim::lift_off`]).
 #[must_use]
-pub fn normal_step_bound(stiffness: f64, damping: f64, mass: f64) -> f64 {
-    let wn = (stiffness / mass).sqrt();
-    let zeta = damping / (2.0 * (stiffness * mass).sqrt());
-    let jury = 2.0 * ((1.0 + zeta * zeta).sqrt() - zeta) / wn;
-    // The determinant condition |1 − 2ζω_n dt| < 1 adds dt < 1/(ζ ω_n).
-    if zeta > 0.0 {
-        jury.min(1.0 / (zeta * wn))
-    } else {
-        jury
-    }
+pub fn spring_damper_step_bound(stiffness: f64, damping: f64, mass: f64) -> f64 {
+    4.0 * mass / (damping + (damping * damping + 4.0 * stiffness * mass).sqrt())
 }
 
 /// The largest stable step of explicit Euler on the viscous branch of regularised friction,
@@ -100,10 +96,10 @@ pub fn friction_step_bound(mu: f64, normal: f64, slip_velocity: f64, mass: f64) 
 mod tests {
     use super::*;
 
-    /// Runs semi-implicit Euler on `m ẍ = −k x − c ẋ` from x = 1 for 20 000 steps and
-    /// returns |x| at the end (NaN once it has overflowed).
+    /// Runs semi-implicit Euler on `m ẍ = −k x − c ẋ` from x = 1, ẋ = 1 for 20 000 steps
+    /// and returns |x| at the end (NaN once it has overflowed).
     fn spring_damper(k: f64, c: f64, m: f64, dt: f64) -> f64 {
-        let (mut x, mut v) = (1.0f64, 0.0f64);
+        let (mut x, mut v) = (1.0f64, 1.0f64);
         for _ in 0..20_000 {
             v += dt * (-k * x - c * v) / m;
             x += dt * v;
@@ -112,14 +108,17 @@ mod tests {
     }
 
     #[test]
-    fn the_normal_bound_separates_decay_from_growth() {
+    fn the_spring_damper_bound_separates_decay_from_growth() {
+        // The last two: a PD-held light joint (kp, kd on 2e-4 kg·m²) and a damper alone.
         for (k, c, m) in [
             (1e5, 0.0, 1.0),
+            (2.0, 0.04, 2e-4),
+            (0.0, 50.0, 0.01),
             (1e5, 2e3, 1.0),
             (1e5, 2e3, 10.0),
             (1e6, 50.0, 3.0),
         ] {
-            let b = normal_step_bound(k, c, m);
+            let b = spring_damper_step_bound(k, c, m);
             // Bounded below the bound (undamped it is neutrally stable, the amplitude of x
             // up to 1/√(1 − (ω_n dt/2)²) ≈ 5 at 0.98 × the bound), unbounded above it (NaN
             // once it has overflowed).

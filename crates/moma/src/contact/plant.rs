@@ -226,15 +226,6 @@ impl ContactPlant {
         dir: &Vector3<f64>,
     ) -> Result<f64> {
         let mut data = Data::new(&self.model);
-        crate::dynamics::crba(&self.model, &mut data, &state.q);
-        let chol = data
-            .mass_matrix
-            .clone()
-            .cholesky()
-            .ok_or_else(|| Error::Singular {
-                what: "contact plant mass matrix".into(),
-                detail: None,
-            })?;
         crate::kinematics::forward_kinematics(&self.model, &mut data, &state.q);
         let mut g = DVector::zeros(self.model.nv);
         add_point_force(
@@ -246,8 +237,37 @@ impl ContactPlant {
             state.q.as_slice(),
             g.as_mut_slice(),
         );
-        let hinv_g = chol.solve(&g);
-        Ok(1.0 / g.dot(&hinv_g))
+        Ok(self.effective_inertias(&state.q, &[g])?[0])
+    }
+
+    /// Effective inertia (kg·m² for a revolute joint) of each joint below the free flyer at
+    /// the configuration `q`, in input order: `1 / (H⁻¹)ᵢᵢ`, the inertia the joint's own
+    /// torque moves with the base and every other joint free (what a PD law on that joint
+    /// acts on over one step). Allocates (set-up and checks only).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] if the mass matrix is not positive definite.
+    pub fn joint_inertias(&self, q: &DVector<f64>) -> Result<Vec<f64>> {
+        let nv = self.model.nv;
+        let units: Vec<DVector<f64>> = (6..nv)
+            .map(|i| DVector::from_fn(nv, |r, _| if r == i { 1.0 } else { 0.0 }))
+            .collect();
+        self.effective_inertias(q, &units)
+    }
+
+    /// `1 / (gᵀ H⁻¹ g)` at `q` for each generalised force `g`.
+    fn effective_inertias(&self, q: &DVector<f64>, forces: &[DVector<f64>]) -> Result<Vec<f64>> {
+        let mut data = Data::new(&self.model);
+        crate::dynamics::crba(&self.model, &mut data, q);
+        let chol = data
+            .mass_matrix
+            .clone()
+            .cholesky()
+            .ok_or_else(|| Error::Singular {
+                what: "contact plant mass matrix".into(),
+                detail: None,
+            })?;
+        Ok(forces.iter().map(|g| 1.0 / g.dot(&chol.solve(g))).collect())
     }
 
     /// Wheel speeds (rad/s, joint velocities) of `state`, in the order the wheels were given.

@@ -3,7 +3,7 @@
 
 use nalgebra::{DVector, Vector3};
 
-use super::params::{friction_step_bound, normal_step_bound};
+use super::params::{friction_step_bound, spring_damper_step_bound};
 use super::plant::{ContactPlant, ContactState, Shape};
 use super::report::ContactReport;
 use super::step::evaluate_contacts;
@@ -26,7 +26,7 @@ impl ContactPlant {
         for k in 0..self.contacts.len() {
             let c = &self.contacts[k];
             let m_n = self.effective_mass(state, k, &Vector3::z())?;
-            let bound = normal_step_bound(p.stiffness, p.damping, m_n);
+            let bound = spring_damper_step_bound(p.stiffness, p.damping, m_n);
             if p.dt >= bound {
                 return Err(Error::invalid(
                     "contact.stiffness",

@@ -9,7 +9,8 @@
 //! lowest contact on the ground, lets it settle for [`LiftOffSettings::settle`], ramps the
 //! plant's gravity linearly from `g` to `g − a u` over [`LiftOffSettings::ramp`] and holds
 //! it for [`LiftOffSettings::hold`], with every joint (wheels included) held at its start
-//! position by a PD law; the wheels' friction carries the horizontal load. The run ends
+//! position by a PD law (the arm's gains by default from each joint's own inertia,
+//! [`JointGains`]); the wheels' friction carries the horizontal load. The run ends
 //! at the problem's [`LiftOffEvent`] after the settling time: by default the first
 //! contact that carries no normal force; or the tip-over, when the contacts still loaded
 //! lie on one line (every contact off that edge has lost its load).
@@ -26,13 +27,39 @@
 
 use nalgebra::{DVector, Vector2, Vector3};
 
-use crate::contact::{ContactPlant, ContactReport, ContactState};
+use crate::contact::{ContactPlant, ContactReport, ContactState, spring_damper_step_bound};
 use crate::dynamics::center_of_mass;
 use crate::error::{Error, Result};
 use crate::multibody::Data;
 use crate::sim::contact_run::MAX_CONTACT_STEPS;
 use crate::sim::model_mismatch::{ModelPerturbation, Payload};
 use crate::stability::{SupportPolygon, acceleration_limit};
+
+/// How the PD law `u = kp (q₀ − q) − kd q̇` holding the joints other than the wheels is
+/// tuned.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JointGains {
+    /// Per joint from its effective inertia `I` at the start posture
+    /// ([`ContactPlant::joint_inertias`], the payload included): `kp = I ω²`,
+    /// `kd = 2 ζ ω I`, so that each joint on its own is a spring-damper of natural
+    /// frequency `frequency` ω (rad/s, > 0) and damping ratio `damping_ratio` ζ (≥ 0),
+    /// whatever its inertia (a light wrist as a heavy shoulder).
+    Inertial {
+        /// ω (rad/s).
+        frequency: f64,
+        /// ζ.
+        damping_ratio: f64,
+    },
+    /// The same `[kp (N·m/rad), kd (N·m·s/rad)]` on every joint.
+    Fixed([f64; 2]),
+}
+
+/// The default [`JointGains`]: ω = 100 rad/s, ζ = 1 (critically damped). Each joint's
+/// stable step is then `0.828 / ω` = 8.3 ms, 83 times the plant's default step.
+pub const DEFAULT_JOINT_GAINS: JointGains = JointGains::Inertial {
+    frequency: 100.0,
+    damping_ratio: 1.0,
+};
 
 /// How a lift-off run imposes the acceleration and how the search ends.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,8 +72,8 @@ pub struct LiftOffSettings {
     pub hold: f64,
     /// PD gains `[kp (N·m/rad), kd (N·m·s/rad)]` holding the wheel joints.
     pub wheel_gains: [f64; 2],
-    /// PD gains `[kp, kd]` holding every other joint.
-    pub joint_gains: [f64; 2],
+    /// The PD gains holding every other joint.
+    pub joint_gains: JointGains,
     /// The search ends when the bracket `[lo, hi]` has `hi − lo ≤ tolerance · hi` (> 0).
     pub tolerance: f64,
     /// Largest number of bisection runs (≥ 1).
@@ -60,7 +87,7 @@ impl Default for LiftOffSettings {
             ramp: 1.0,
             hold: 0.7,
             wheel_gains: [500.0, 20.0],
-            joint_gains: [2000.0, 100.0],
+            joint_gains: DEFAULT_JOINT_GAINS,
             tolerance: 0.005,
             max_iterations: 20,
         }
@@ -68,7 +95,8 @@ impl Default for LiftOffSettings {
 }
 
 impl LiftOffSettings {
-    /// Checks every field.
+    /// Checks every field on its own (the gains' stable step, which depends on the robot,
+    /// is [`LiftOffProblem::joint_gains`]).
     ///
     /// # Errors
     /// [`Error::InvalidInput`] naming the field (`settle`, `ramp`, `hold`, `wheel_gains`,
@@ -87,12 +115,20 @@ impl LiftOffSettings {
         nonneg("settle", self.settle)?;
         nonneg("hold", self.hold)?;
         crate::error::ensure_positive("ramp", self.ramp)?;
-        for (name, g) in [
-            ("wheel_gains", self.wheel_gains),
-            ("joint_gains", self.joint_gains),
-        ] {
-            nonneg(name, g[0])?;
-            nonneg(name, g[1])?;
+        nonneg("wheel_gains", self.wheel_gains[0])?;
+        nonneg("wheel_gains", self.wheel_gains[1])?;
+        match self.joint_gains {
+            JointGains::Fixed([kp, kd]) => {
+                nonneg("joint_gains", kp)?;
+                nonneg("joint_gains", kd)?;
+            }
+            JointGains::Inertial {
+                frequency,
+                damping_ratio,
+            } => {
+                crate::error::ensure_positive("joint_gains", frequency)?;
+                nonneg("joint_gains", damping_ratio)?;
+            }
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
             return Err(Error::invalid(
@@ -351,6 +387,59 @@ impl LiftOffProblem {
         Ok(found)
     }
 
+    /// The PD gains `[kp, kd]` of every joint below the root (model order, wheels
+    /// included) under `settings`, each checked against the plant's step: semi-implicit
+    /// Euler on the joint alone, a spring-damper on its effective inertia `I`
+    /// ([`ContactPlant::joint_inertias`] at the start posture), is stable for
+    /// `dt < 4 I / (kd + √(kd² + 4 kp I))` ([`spring_damper_step_bound`]; `2 I / kd`
+    /// without stiffness).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming `joint_gains` (or `wheel_gains`), the first joint
+    /// whose gains break the bound, its inertia and the bound; `settings` invalid.
+    pub fn joint_gains(&self, settings: &LiftOffSettings) -> Result<Vec<[f64; 2]>> {
+        settings.validate()?;
+        let p = &self.plant;
+        let inertias = p.joint_inertias(&DVector::from_column_slice(&self.q0))?;
+        let dt = p.params.dt;
+        let names = p.input_names();
+        let mut gains = Vec::with_capacity(inertias.len());
+        for (k, &inertia) in inertias.iter().enumerate() {
+            let wheel = p.wheel_dofs().contains(&(6 + k));
+            let [kp, kd] = match (wheel, settings.joint_gains) {
+                (true, _) => settings.wheel_gains,
+                (false, JointGains::Fixed(g)) => g,
+                (
+                    false,
+                    JointGains::Inertial {
+                        frequency: w,
+                        damping_ratio: z,
+                    },
+                ) => [inertia * w * w, 2.0 * z * w * inertia],
+            };
+            let bound = spring_damper_step_bound(kp, kd, inertia);
+            if dt >= bound {
+                return Err(Error::invalid(
+                    if wheel { "wheel_gains" } else { "joint_gains" },
+                    format!(
+                        "kp = {kp} N·m/rad, kd = {kd} N·m·s/rad on '{}' (effective inertia \
+                         {inertia:.4e} kg·m² at the start posture) need dt < \
+                         4 I/(kd + √(kd² + 4 kp I)) = {bound:.3e} s, but contact.dt = {dt} s: \
+                         lower the gains{}",
+                        names[k],
+                        if wheel {
+                            ""
+                        } else {
+                            " (or leave them unset: gains from each joint's own inertia)"
+                        }
+                    ),
+                ));
+            }
+            gains.push([kp, kd]);
+        }
+        Ok(gains)
+    }
+
     /// One run at the steady acceleration `a` (m/s², ≥ 0), showing every step to
     /// `observe` (the first step's `time` is one contact step), until `observe` returns
     /// true or the run ends.
@@ -358,7 +447,8 @@ impl LiftOffProblem {
     /// # Errors
     /// `settings` invalid ([`LiftOffSettings::validate`]), `a` negative or not finite
     /// (`acceleration`), a run longer than [`MAX_CONTACT_STEPS`] steps, the start's checks
-    /// ([`ContactState::new`]) and a step's numerical failure.
+    /// ([`ContactState::new`]), gains unstable at the step
+    /// ([`LiftOffProblem::joint_gains`]) and a step's numerical failure.
     pub fn run(
         &self,
         a: f64,
@@ -384,17 +474,9 @@ impl LiftOffProblem {
                 ),
             ));
         }
+        let gains = self.joint_gains(settings)?;
         let nv = p.model.nv;
         let mut st = ContactState::new(&p, &self.q0, &vec![0.0; nv])?;
-        let gains: Vec<[f64; 2]> = (6..nv)
-            .map(|i| {
-                if p.wheel_dofs().contains(&i) {
-                    settings.wheel_gains
-                } else {
-                    settings.joint_gains
-                }
-            })
-            .collect();
         // The joint rows of g(q0) per unit of gravity along world x, y, z (zero without
         // the static torque, and for the wheels).
         let mut hold = [vec![0.0; nv - 6], vec![0.0; nv - 6], vec![0.0; nv - 6]];
@@ -592,7 +674,7 @@ mod tests {
             (LiftOffSettings { hold: -1.0, ..ok }, "hold"),
             (
                 LiftOffSettings {
-                    joint_gains: [-1.0, 0.0],
+                    joint_gains: JointGains::Fixed([-1.0, 0.0]),
                     ..ok
                 },
                 "joint_gains",

@@ -6,14 +6,16 @@
 //! values) with a point-mass payload of `payload` kg at the origin of `payload_frame`:
 //! the predicted limit along `direction`, then the bisection between `bracket[0]` and
 //! `bracket[1]` times the prediction to the relative `tolerance`, the arm joints held by
-//! the PD gains `joint_gains` (`LiftOffSettings::joint_gains` by default). The search
+//! the PD gains `joint_gains` (`[kp, kd]` on every joint; by default each joint's from its
+//! own inertia, `sim::lift_off::DEFAULT_JOINT_GAINS`). Gains unstable at the plant's step
+//! fail the point before it runs, naming `lift_off.joint_gains` and the joint. The search
 //! looks for `event`: the first contact to lift (`first_lift`, the default) or the
 //! tip-over (`tip_over`: every contact off one edge unloaded); `caster_friction = true`
 //! gives the casters the wheels' friction (`ContactPlant::with_caster_friction`);
 //! `static_torque = true` adds the static torque of the posture to the joints' PD law
 //! (`LiftOffProblem::with_static_torque`).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use nalgebra::{DVector, Vector2, Vector3};
 use serde::Deserialize;
@@ -27,7 +29,7 @@ use crate::contact::{ContactPlant, ContactSpec, WheelSpec};
 use crate::error::{Error, Result};
 use crate::mission::scenario::Loader;
 use crate::multibody::{RootJoint, neutral};
-use crate::sim::lift_off::{LiftOffEvent, LiftOffProblem, LiftOffSettings};
+use crate::sim::lift_off::{JointGains, LiftOffEvent, LiftOffProblem, LiftOffSettings};
 use crate::sim::model_mismatch::{ModelPerturbation, Payload};
 
 /// Result columns of the lift-off study.
@@ -70,6 +72,8 @@ enum Slot {
 
 /// The prepared study.
 pub(super) struct LiftOffStudy {
+    /// The sweep file, for the errors of a point's checks.
+    path: PathBuf,
     plant: ContactPlant,
     posture: DVector<f64>,
     payload_link: String,
@@ -138,7 +142,7 @@ fn settings(path: &Path, spec: &Spec) -> Result<([f64; 2], LiftOffSettings)> {
     let settings = LiftOffSettings {
         tolerance: spec.tolerance.unwrap_or(d.tolerance),
         max_iterations: spec.max_iterations.unwrap_or(d.max_iterations),
-        joint_gains: spec.joint_gains.unwrap_or(d.joint_gains),
+        joint_gains: spec.joint_gains.map_or(d.joint_gains, JointGains::Fixed),
         ..d
     };
     settings.validate().map_err(|e| match e {
@@ -235,6 +239,7 @@ impl LiftOffStudy {
             plant = plant.with_caster_friction();
         }
         Ok(Self {
+            path: path.to_path_buf(),
             plant,
             posture,
             payload_link,
@@ -288,6 +293,19 @@ impl LiftOffStudy {
                 "no tip-over limit in this direction (the robot tips at rest, or no support \
                  edge limits the direction)",
             )
+        })?;
+        // The gains' stable step depends on the point's posture and payload: checked here,
+        // before the point runs, and named in the file.
+        problem.joint_gains(&self.settings).map_err(|e| match e {
+            Error::InvalidInput { field, message } => {
+                let field = if field == "wheel_gains" {
+                    "lift_off.wheels".to_string()
+                } else {
+                    format!("lift_off.{field}")
+                };
+                file_error(&self.path, &field, message)
+            }
+            other => other,
         })?;
         let found = problem.search(
             self.bracket[0] * predicted,
