@@ -319,3 +319,135 @@ fn scen_csv_and_summary() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("line 2"));
 }
+
+/// A 30 x 12 Moving AI map with one obstacle cell at (15, 7), two rows above the
+/// straight path along row 5 from (3, 5) to (27, 5).
+fn one_obstacle_map() -> PathBuf {
+    let p = tmp("one_obstacle.map");
+    let mut text = String::from("type octile\nheight 12\nwidth 30\nmap\n");
+    for row in 0..12 {
+        let line: String = (0..30)
+            .map(|x| if (x, row) == (15, 7) { '@' } else { '.' })
+            .collect();
+        text.push_str(&line);
+        text.push('\n');
+    }
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn plan_checks_a_disk_plans_path_with_a_polygon() {
+    let map = one_obstacle_map();
+    let out = tmp("checked.json");
+    let plan = |extra: &[&str]| {
+        std::fs::remove_file(&out).ok();
+        let mut a = vec![
+            "plan",
+            map.to_str().unwrap(),
+            "--start",
+            "3,5",
+            "--goal",
+            "27,5",
+            "--radius",
+            "0.5",
+            "--output",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        moma(&a)
+    };
+    let written = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap()
+    };
+    // the disk passes along row 5; a chassis 5 cells along the path and 2 across passes
+    // half a cell below the obstacle's square
+    let along = "-2.5,-1;2.5,-1;2.5,1;-2.5,1";
+    let o = plan(&["--check-footprint", along]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("the polygon clears the obstacles"));
+    let v = written();
+    assert_eq!(v["status"], "found");
+    assert!(v["cells"].as_array().unwrap().iter().all(|c| c[1] == 5));
+    assert_eq!(v["robot"]["kind"], "disk");
+    assert_eq!(v["robot"]["radius"], 0.5);
+    let check = &v["robot"]["check"];
+    assert_eq!(check["kind"], "polygon");
+    assert_eq!(check["vertices"].as_array().unwrap().len(), 4);
+    assert_eq!(check["padding"], 0.0);
+    assert_eq!(check["colliding"], serde_json::json!([]));
+    // the same search; turned across the path (2 along, 5 across) it reaches the
+    // obstacle's square from the cells next to it: written, status colliding, exit 3
+    let o = plan(&["--check-footprint", "-1,-2.5;1,-2.5;1,2.5;-1,2.5"]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("--check-footprint") && e.contains("cell (14, 5)"),
+        "{e}"
+    );
+    let v = written();
+    assert_eq!(v["status"], "colliding");
+    assert_eq!(
+        v["robot"]["check"]["colliding"],
+        serde_json::json!([[14, 5], [15, 5], [16, 5]])
+    );
+    // lengthwise again, asked to keep 0.6 cells from the obstacles
+    let o = plan(&["--check-footprint", along, "--check-padding", "0.6"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert_eq!(written()["robot"]["check"]["padding"], 0.6);
+    // without the check the robot entry is the disk alone
+    let o = plan(&[]);
+    assert!(o.status.success());
+    assert!(written()["robot"].get("check").is_none());
+}
+
+#[test]
+fn plan_check_footprint_errors_name_the_option() {
+    let map = one_obstacle_map();
+    let out = tmp("never-checked.json");
+    let run = |extra: &[&str]| {
+        let mut a = vec![
+            "plan",
+            map.to_str().unwrap(),
+            "--start",
+            "3,5",
+            "--goal",
+            "27,5",
+            "--output",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        let o = moma(&a);
+        assert_eq!(o.status.code(), Some(1), "{extra:?} should fail");
+        assert!(!out.exists(), "no output");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let square = "-1,-1;1,-1;1,1;-1,1";
+    let e = run(&["--footprint", square, "--check-footprint", square]);
+    assert!(
+        e.contains("--check-footprint") && e.contains("--footprint"),
+        "{e}"
+    );
+    let e = run(&["--radius", "0.5", "--check-padding", "0.1"]);
+    assert!(
+        e.contains("--check-padding") && e.contains("--check-footprint"),
+        "{e}"
+    );
+    let e = run(&["--check-footprint", square, "--check-padding=-0.1"]);
+    assert!(e.contains("--check-padding"), "{e}");
+    let e = run(&["--check-footprint", square, "--check-padding", "nan"]);
+    assert!(e.contains("--check-padding"), "{e}");
+    let concave = "-1,-1;1,-1;0.2,0;1,1;-1,1";
+    let e = run(&["--radius", "0.5", "--check-footprint", concave]);
+    assert!(
+        e.contains("--check-footprint") && e.contains("convex"),
+        "{e}"
+    );
+    let e = run(&["--check-footprint", "0,0;1,0"]);
+    assert!(e.contains("--check-footprint"), "{e}");
+}

@@ -869,3 +869,120 @@ fn arm_states(
             Some((q, holding))
         })
 }
+
+/// The pick mission with the arm's transport posture raised to hold the can above
+/// Fetch's head, and `boxes` (`[[map.boxes]]` tables) on the map.
+fn raised_with_boxes(boxes: &str) -> moma::Result<moma::mission::Mission> {
+    let path = mission_path();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let shipped = "transport_posture = [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.30, 0.0]";
+    let map = "file = \"maps/depot.yaml\"\n";
+    assert!(text.contains(shipped) && text.contains(map));
+    let text = text
+        .replace(shipped, &format!("transport_posture = {RAISED}"))
+        .replace(map, &format!("{map}\n{boxes}\n"));
+    let f = scenario::parse_file(&text, &path)?;
+    scenario::from_file(f, &path, path.parent().unwrap())
+}
+
+/// Torso down, the arm turned to the right (away from the shelf at the placement) and
+/// raised, the gripper pointing up: the held can stands above every link of the robot.
+const RAISED: &str = "[0.0, -1.57, -1.2, 0.0, -1.0, 0.0, -0.9, 0.0]";
+
+/// A beam across the drive on's way from the shelf (5, 8) to the goal (9, 8): x 7.4–7.8,
+/// y 6.5–9.5 (or `y` wide), over the raised arm's top and under the held can's.
+fn beam(y: f64) -> String {
+    format!("[[map.boxes]]\npose = [7.6, 8.0, 0.0]\nsize = [0.4, {y}]\nz = {BEAM_Z}\n")
+}
+
+const BEAM_Z: &str = "[1.47, 1.6]";
+
+#[test]
+fn the_drive_on_map_blocks_a_beam_that_only_the_held_can_would_hit() {
+    let m = raised_with_boxes(&beam(3.0)).unwrap();
+    // the robot alone passes under the beam: it is not on the mission's map
+    let bare = m.boxes[0];
+    assert!(!bare.blocked && bare.clearance > 0.0, "{bare:?}");
+    let g = &m.map.grid;
+    let cell = |g: &moma::planning::OccupancyGrid, x: f64, y: f64| {
+        let (cx, cy) = g.world_to_cell("beam", x, y).unwrap();
+        g.cells[g.index(cx, cy)]
+    };
+    assert!(cell(g, 7.6, 8.0) < 100);
+    // holding the can it does not: the drive on's map blocks the beam
+    let drive_on = m.drive_on_map.as_ref().unwrap();
+    assert_eq!(drive_on.blocks.len(), 1, "{:?}", drive_on.blocks);
+    let b = &drive_on.blocks[0];
+    assert_eq!(b.name, "map.boxes[0]");
+    assert_eq!(b.bare, bare);
+    assert!(b.holding.blocked && b.holding.clearance < 0.0, "{b:?}");
+    assert!(cell(&drive_on.grid, 7.6, 8.0) >= 100);
+    assert!(cell(&drive_on.grid, 7.6, 6.6) >= 100 && cell(&drive_on.grid, 7.6, 6.4) < 100);
+    // the map gains the beam's cells and nothing else
+    let added = (drive_on.grid.cells.iter().zip(&g.cells))
+        .filter(|(a, b)| a != b)
+        .count();
+    let res = g.resolution;
+    assert!(
+        added as f64 <= (0.4 / res + 2.0) * (3.0 / res + 2.0),
+        "{added} cells"
+    );
+    // planned for the footprint that holds the can (its circumscribed disk) from in front
+    // of the shelf to the goal: on the mission's map under the beam, on the drive on's
+    // round its ends
+    use moma::planning::pipeline::{
+        Frame, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search, plan,
+    };
+    let task = m.task.as_ref().unwrap();
+    let request = PlanRequest {
+        start: [4.0, 8.0],
+        start_yaw: None,
+        goal: m.goal().unwrap().pose[..2].try_into().unwrap(),
+        frame: Frame::World,
+        unknown_is_obstacle: true,
+        footprint: RobotFootprint::Disk(task.carrying_footprint.radius),
+        axle_offset: 0.0,
+        fields: PlanFields::default(),
+        search: Search::Astar,
+        turn_cost: 1.0,
+        smooth: false,
+        timing: None,
+        polygon_check: None,
+    };
+    let under_the_beam = |grid: &moma::planning::OccupancyGrid| {
+        let p = plan(grid, &request).unwrap();
+        assert_eq!(p.status, PlanStatus::Found);
+        p.cells.iter().any(|&(x, y)| {
+            let [wx, wy] = grid.cell_to_world(x as f64, y as f64);
+            (7.4..=7.8).contains(&wx) && (6.5..=9.5).contains(&wy)
+        })
+    };
+    assert!(under_the_beam(&m.map.grid));
+    assert!(!under_the_beam(&drive_on.grid));
+}
+
+#[test]
+fn a_drive_on_with_no_way_round_the_beam_fails_naming_it() {
+    // the beam across the whole map: the robot passes under it to the shelf, but holding
+    // the can no way leads to the goal
+    let m = raised_with_boxes(&beam(40.0)).unwrap();
+    assert!(!m.boxes[0].blocked);
+    let r = run(&m).unwrap();
+    assert!(!r.reached);
+    let why = r.reason.unwrap();
+    assert!(
+        why.contains("'map.boxes[0]'") && why.contains("holding 'Can2'"),
+        "{why}"
+    );
+    assert!(r.task.unwrap().payload.is_some(), "failed after the pick");
+    let ev = r.events.iter().find(|e| e.kind == "heights").unwrap();
+    eprintln!("{}", ev.text);
+    assert!(
+        ev.text.starts_with(
+            "holding 'Can2' at the transport posture the robot no longer passes under \
+             'map.boxes[0]' (clearance 0.0381 m bare, -0.0462 m holding it)"
+        ),
+        "{}",
+        ev.text
+    );
+}

@@ -15,10 +15,11 @@ use crate::output::write_all_atomic;
 use crate::svg_map::{Scene, render};
 use anyhow::{Context, Result, bail};
 use moma::planning::costmap::{Footprint, InflationParams};
+use moma::planning::footprint_clearance::ConvexFootprint;
 use moma::planning::load_map;
 use moma::planning::pipeline::{
-    self, Frame, MapFrame, Plan, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search,
-    Timing,
+    self, Frame, MapFrame, Plan, PlanFields, PlanRequest, PlanStatus, PolygonCheck, RobotFootprint,
+    Search, Timing,
 };
 use moma::planning::potential::GoalTerm;
 use moma::planning::trajectory::{DiffDriveLimits, TrajectoryPoint};
@@ -76,6 +77,16 @@ pub struct PlanArgs {
     /// 8 headings, each pose checked at its heading (A* only).
     #[arg(long, allow_hyphen_values = true)]
     pub footprint: Option<String>,
+    /// With a point or `--radius` disk: a convex polygon (the `--footprint` syntax) that
+    /// every pose of the timed path is checked with at its heading, the way nav2 and the
+    /// mission check a polygon robot planned on a disk; a pose where it meets an obstacle
+    /// cell writes the outputs with status `colliding` and exits with status 3.
+    #[arg(long, allow_hyphen_values = true)]
+    pub check_footprint: Option<String>,
+    /// The clearance (m, or cells) the `--check-footprint` polygon keeps from the
+    /// obstacle cells (default 0).
+    #[arg(long)]
+    pub check_padding: Option<f64>,
     /// Algorithm.
     #[arg(long, value_enum, default_value_t = Algo::Astar)]
     pub algo: Algo,
@@ -181,6 +192,7 @@ fn check_finite_options(args: &PlanArgs) -> Result<()> {
     for (name, v) in [
         ("--resolution", opt(args.resolution)),
         ("--radius", opt(args.radius)),
+        ("--check-padding", opt(args.check_padding)),
         ("--inflation-radius", opt(args.inflation_radius)),
         ("--cost-scaling", opt(args.cost_scaling)),
         ("--cost-multiplier", args.cost_multiplier),
@@ -272,8 +284,38 @@ fn footprint_and_search(
     Ok((footprint, search, robot))
 }
 
-/// Runs the subcommand. A potential field stuck in a local minimum still writes its
-/// outputs (status `local_minimum`), then ends in `GoalNotReached` (exit status 3).
+/// `--check-footprint` and `--check-padding`: the polygon the timed path of a point or
+/// disk plan is checked with (the pipeline's [`PlanRequest::polygon_check`]), its origin
+/// on the planned point; `None` without `--check-footprint`.
+fn polygon_check(args: &PlanArgs) -> Result<Option<PolygonCheck>> {
+    let Some(text) = &args.check_footprint else {
+        if args.check_padding.is_some() {
+            bail!("--check-padding: read only with --check-footprint");
+        }
+        return Ok(None);
+    };
+    if args.footprint.is_some() {
+        bail!(
+            "--check-footprint checks the path of a point or --radius plan; a --footprint \
+             plan is searched at its headings already: give one of the two"
+        );
+    }
+    let polygon = Footprint::parse(text).context("--check-footprint")?;
+    ConvexFootprint::new(&polygon, 1.0).context("--check-footprint")?;
+    let padding = args.check_padding.unwrap_or(0.0);
+    if !(padding.is_finite() && padding >= 0.0) {
+        bail!("--check-padding: must be a finite length >= 0, got {padding}");
+    }
+    Ok(Some(PolygonCheck {
+        polygon,
+        padding,
+        ahead: 0.0,
+    }))
+}
+
+/// Runs the subcommand. A potential field stuck in a local minimum, and a path that the
+/// `--check-footprint` polygon collides along, still write their outputs (status
+/// `local_minimum`, `colliding`), then end in `GoalNotReached` (exit status 3).
 pub fn run(args: Args) -> Result<()> {
     let args = *args.inner;
     check_finite_options(&args)?;
@@ -281,7 +323,16 @@ pub fn run(args: Args) -> Result<()> {
     let mf = MapFrame::new(&loaded.grid);
     let (sx, sy, start_yaw) = parse_xy("start", &args.start)?;
     let (gx, gy, _) = parse_xy("goal", &args.goal)?;
-    let (footprint, search, robot) = footprint_and_search(&args, &mf)?;
+    let (footprint, search, mut robot) = footprint_and_search(&args, &mf)?;
+    let check = polygon_check(&args)?;
+    let checked = check.is_some();
+    if let Some(pc) = &check {
+        robot["check"] = serde_json::json!({
+            "kind": "polygon",
+            "vertices": pc.polygon.vertices,
+            "padding": pc.padding,
+        });
+    }
     let request = PlanRequest {
         start: [sx, sy],
         start_yaw,
@@ -298,13 +349,17 @@ pub fn run(args: Args) -> Result<()> {
             limits: platform_limits(&args),
             dt: args.dt,
         }),
-        // `--footprint` searches the polygon's heading lattice, exact at the headings the
-        // path is driven with: no check of the timed path needed (docs/planning.md)
-        polygon_check: None,
+        // (`--footprint` searches the polygon's heading lattice, exact at the headings the
+        // path is driven with: it needs no check of the timed path, docs/planning.md)
+        polygon_check: check,
     };
     let plan = pipeline::plan(&loaded.grid, &request)?;
     if plan.status == PlanStatus::Unreachable {
         bail!("{}", plan.report);
+    }
+    if let Some(c) = robot.get_mut("check") {
+        let cells: Vec<[usize; 2]> = plan.colliding.iter().map(|c| [c.0, c.1]).collect();
+        c["colliding"] = serde_json::json!(cells);
     }
     let out = plan_output(&args, &mf, &request, robot, &plan);
     write_outputs(&args, &mf, &plan, &out)?;
@@ -317,13 +372,36 @@ pub fn run(args: Args) -> Result<()> {
         mf.units(),
         out.duration
     );
+    if checked {
+        outln!("{}", check_report(&mf, &plan));
+    }
     if plan.status == PlanStatus::LocalMinimum {
         return goal_not_reached(format!(
             "the potential-field descent is stuck: {}",
             plan.report
         ));
     }
+    if !plan.colliding.is_empty() {
+        return goal_not_reached(check_report(&mf, &plan));
+    }
     Ok(())
+}
+
+/// One line on the `--check-footprint` check of `plan`'s timed path.
+fn check_report(mf: &MapFrame<'_>, plan: &Plan) -> String {
+    match plan.colliding.first() {
+        None => format!(
+            "--check-footprint: the polygon clears the obstacles at all {} poses of the \
+             timed path",
+            plan.trajectory.len()
+        ),
+        Some(&first) => format!(
+            "--check-footprint: the polygon meets an obstacle cell along the timed path, \
+             with its origin in {} cell(s), the first {}",
+            plan.colliding.len(),
+            mf.describe(first)
+        ),
+    }
 }
 
 /// The platform limits of the stop-and-turn timing.
@@ -355,6 +433,7 @@ fn plan_output(
         algorithm: args.algo,
         status: match plan.status {
             PlanStatus::LocalMinimum => "local_minimum",
+            _ if !plan.colliding.is_empty() => "colliding",
             _ => "found",
         },
         report: plan.report.clone(),

@@ -13,6 +13,11 @@
 //! clears by more than the footprint's padding is not an obstacle (a table top the base
 //! passes under with the arm tucked); any other box blocks the cells its outline covers
 //! (a table the raised arm would hit). One distance query per box, at load.
+//!
+//! A pick's drive on carries the object: the same check with the object attached to the
+//! robot's geometry ([`HeldObjectBlocks`], `Task::drive_on_map`) blocks, on the drive
+//! on's map, the objects the robot passes under bare but not holding it (a can held above
+//! the robot's top under a table top the robot alone clears).
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -154,7 +159,8 @@ pub fn block_scene_footprint(grid: &mut OccupancyGrid, objects: &[SceneObject]) 
 
 /// Checks each box of `boxes` against `robot`'s geometry `gm` at the arm posture
 /// `transport` and blocks on `grid` those whose slab the robot does not clear by more
-/// than `padding` (m); the verdicts in file order ([`block_by_height`]).
+/// than `padding` (m); the boxes as scene objects (named `map.boxes[k]`) and their
+/// verdicts, in file order ([`block_by_height`]).
 ///
 /// # Errors
 /// A box with invalid numbers (named `map.boxes[k]`).
@@ -165,7 +171,7 @@ pub fn place_boxes(
     gm: &GeometryModel,
     transport: &[f64],
     padding: f64,
-) -> Result<Vec<BoxVerdict>> {
+) -> Result<(Vec<SceneObject>, Vec<BoxVerdict>)> {
     let objects = boxes
         .iter()
         .enumerate()
@@ -175,9 +181,8 @@ pub fn place_boxes(
             b.object(&field)
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok(block_by_height(
-        grid, &objects, robot, gm, transport, padding,
-    ))
+    let verdicts = block_by_height(grid, &objects, robot, gm, transport, padding);
+    Ok((objects, verdicts))
 }
 
 /// The one rasteriser of objects with heights on a mission's map (`[[map.boxes]]` and a
@@ -218,4 +223,56 @@ pub fn block_by_height(
         .collect();
     block_scene_footprint(grid, &blocked);
     verdicts
+}
+
+/// An obstacle with a height that holding an object changes: the robot at the transport
+/// posture passes under it bare, and holding the object it does not.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HeldObjectBlocks {
+    /// Its name: `map.boxes[k]`, or the `[task]` scene object's id.
+    pub name: String,
+    /// The verdict on the robot's geometry.
+    pub bare: BoxVerdict,
+    /// The verdict on the robot's geometry with the object attached.
+    pub holding: BoxVerdict,
+}
+
+/// The map of a drive on that holds an object: blocks on `grid` (the mission's map,
+/// where each of `objects` is blocked by its verdict in `bare`) the objects whose slab
+/// `carried`, the robot's geometry with the object attached
+/// ([`GeometryModel::with_attached`]), does not clear by more than `padding` (m) at the
+/// arm posture `transport` ([`block_by_height`] on that geometry); returns those that the
+/// bare robot passed under, in the order of `objects` (each named by its id).
+pub fn block_by_height_holding(
+    grid: &mut OccupancyGrid,
+    objects: &[(SceneObject, BoxVerdict)],
+    robot: &WheeledModel,
+    carried: &GeometryModel,
+    transport: &[f64],
+    padding: f64,
+) -> Vec<HeldObjectBlocks> {
+    let shapes: Vec<SceneObject> = objects.iter().map(|(o, _)| o.clone()).collect();
+    let holding = block_by_height(grid, &shapes, robot, carried, transport, padding);
+    objects
+        .iter()
+        .zip(holding)
+        .filter(|((_, bare), holding)| holding.blocked && !bare.blocked)
+        .map(|((o, bare), holding)| HeldObjectBlocks {
+            name: o.id.clone(),
+            bare: *bare,
+            holding,
+        })
+        .collect()
+}
+
+/// The map a pick's drive on plans on: the mission's, with the obstacles with heights
+/// that the robot holding the object does not pass under blocked
+/// ([`block_by_height_holding`]).
+#[derive(Debug, Clone)]
+pub struct DriveOnMap {
+    /// The map.
+    pub grid: OccupancyGrid,
+    /// The obstacles it blocks that the mission's map leaves off (the robot passes under
+    /// them bare), in the order of `[[map.boxes]]` then the scene's objects.
+    pub blocks: Vec<HeldObjectBlocks>,
 }

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use super::arm_motion::{ArmMotion, ArmStage};
 use super::footprint::MissionFootprint;
+use super::heights::HeldObjectBlocks;
 use super::laws::RunSettings;
 use super::plan::mission_planner;
 use super::reference::{TimingStart, axle_pose};
@@ -149,22 +150,35 @@ impl<'m> Runner<'m> {
         let to = axle_pose(goal.pose, d);
         let task = m.task.as_ref().expect("the drive on follows a pick");
         let footprint = &task.carrying_footprint;
-        let (from, planned) = match mission_planner(m, footprint, axle, to) {
+        let map = m
+            .drive_on_map
+            .as_ref()
+            .expect("a pick has its drive on's map");
+        let held = holding_text(task, &map.blocks);
+        if let Some(text) = &held {
+            self.event(t, "heights", text.clone());
+        }
+        // the failures' reasons name what the object held blocks
+        let why = held.map_or(String::new(), |text| format!(" ({text})"));
+        let grid = &map.grid;
+        let (from, planned) = match mission_planner(m, grid, footprint, axle, to) {
             Ok(p) => (axle, Ok(p)),
             Err(_) => {
                 let placement = axle_pose(self.goal.pose, d);
-                (placement, mission_planner(m, footprint, placement, to))
+                (
+                    placement,
+                    mission_planner(m, grid, footprint, placement, to),
+                )
             }
         };
         let (mut planner, mut path, search) = match planned {
             Ok(p) => p,
             Err(e) => {
-                self.fail(t, format!("driving on to the goal: {e}"));
+                self.fail(t, format!("driving on to the goal: {e}{why}"));
                 return false;
             }
         };
         // the obstacles that have appeared so far
-        let grid = &m.map.grid;
         let [fx, fy] = grid.world_to_cell_f(from[0], from[1]);
         let cell = (
             (fx.floor().max(0.0) as usize).min(grid.width - 1),
@@ -187,9 +201,10 @@ impl<'m> Runner<'m> {
         let Some(cells) = path else {
             self.fail(
                 t,
-                "the goal is unreachable from the placement: no collision-free path on the \
-                 configuration space"
-                    .to_string(),
+                format!(
+                    "the goal is unreachable from the placement: no collision-free path on \
+                     the configuration space{why}"
+                ),
             );
             return false;
         };
@@ -392,6 +407,31 @@ impl<'m> Runner<'m> {
             });
         }
     }
+}
+
+/// The drive on's `heights` event: the obstacles with heights that the robot passes
+/// under bare and not holding the object, which its map blocks; `None` when there are
+/// none.
+fn holding_text(task: &Task, blocks: &[HeldObjectBlocks]) -> Option<String> {
+    if blocks.is_empty() {
+        return None;
+    }
+    let each: Vec<String> = blocks
+        .iter()
+        .map(|b| {
+            format!(
+                "'{}' (clearance {:.4} m bare, {:.4} m holding it)",
+                b.name, b.bare.clearance, b.holding.clearance
+            )
+        })
+        .collect();
+    Some(format!(
+        "holding '{}' at the transport posture the robot no longer passes under {}: the \
+         drive on's map blocks {}",
+        task.object,
+        each.join(", "),
+        if blocks.len() == 1 { "it" } else { "them" }
+    ))
 }
 
 /// The drive on's `footprint` event: the footprint with the held object against the

@@ -52,7 +52,7 @@ pub(super) fn choose_placement(
     let s0 = axle_pose(f.start.pose, d);
     for (rank, c) in placement.candidates.iter().enumerate() {
         let g0 = axle_pose(c.base, d);
-        let reached = mission_planner(m, &m.footprint, s0, g0);
+        let reached = mission_planner(m, &m.map.grid, &m.footprint, s0, g0);
         if let Ok((_, Some(_), _)) = reached {
             result.placement = Some(PlacementChoice {
                 base: c.base,

@@ -377,19 +377,19 @@ pub(crate) fn first_plan_request(
     }
 }
 
-/// The mission's planner between two axle-midpoint poses for `footprint` (the mission's,
-/// or a `[task]`'s while carrying). With the robot's footprint polygon: searched on the
-/// largest disk about the axle midpoint inside it (padded), and every path it gives
-/// checked with the polygon at each heading; with a disk: the map dilated by it (and
-/// `|d|`).
+/// The mission's planner on `grid` (the mission's map, or a `[task]`'s drive on's) between
+/// two axle-midpoint poses for `footprint` (the mission's, or a `[task]`'s while
+/// carrying). With the robot's footprint polygon: searched on the largest disk about the
+/// axle midpoint inside it (padded), and every path it gives checked with the polygon at
+/// each heading; with a disk: the map dilated by it (and `|d|`).
 pub(super) fn mission_planner(
     m: &Mission,
+    grid: &OccupancyGrid,
     footprint: &MissionFootprint,
     from: [f64; 3],
     to: [f64; 3],
 ) -> Result<(Planner, Option<CellPath>, SearchTiming)> {
     let d = m.robot.base.drive.d;
-    let grid = &m.map.grid;
     let polygon = footprint.planning_polygon(d);
     let (field, radius, offset) = match &polygon {
         Some((_, inscribed)) => ("robot.footprint", inscribed + footprint.padding(), 0.0),
@@ -440,7 +440,8 @@ mod tests {
             axle_pose(m.file.start.pose, d),
             axle_pose(m.goal().unwrap().pose, d),
         );
-        let (planner, cells, search) = mission_planner(&m, &m.footprint, s0, g0).unwrap();
+        let (planner, cells, search) =
+            mission_planner(&m, &m.map.grid, &m.footprint, s0, g0).unwrap();
         let cells = cells.expect("the goal is reachable");
         let mut as_moma_plan = first_plan_request(
             m.file.map.unknown_is_obstacle,

@@ -39,7 +39,8 @@ pub struct Event {
     pub t: f64,
     /// Kind: `plan`, `obstacle`, `replan`, `torque_limit`, `speed_limit`, `slip`,
     /// `lift_off` (contact plant), `contact`, `min_zmp_margin`, `arrived`, `reached`,
-    /// `failed`.
+    /// `failed`; with a `[task]` also `arm_plan`, `arm`, `payload`, `picked`, `footprint`
+    /// and `heights` (the drive on's).
     pub kind: String,
     /// Human-readable detail.
     pub text: String,

@@ -134,7 +134,8 @@ impl<'m> Runner<'m> {
         };
         let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(goal.pose, d));
         let grid = &m.map.grid;
-        let (mut planner, first_path, first_search) = mission_planner(m, &m.footprint, s0, g0)?;
+        let (mut planner, first_path, first_search) =
+            mission_planner(m, &m.map.grid, &m.footprint, s0, g0)?;
         if planner.polygon.is_some() {
             for (what, pose, axle) in [
                 ("start.pose", f.start.pose, s0),

@@ -9,7 +9,9 @@
 use std::path::{Path, PathBuf};
 
 use super::footprint::MissionFootprint;
-use super::heights::{BoxVerdict, block_by_height, place_boxes};
+use super::heights::{
+    BoxVerdict, DriveOnMap, block_by_height, block_by_height_holding, place_boxes,
+};
 use super::plant::{MissionContact, start_configuration};
 use super::task::{Task, load_task, object_under_footprint, scene_outlines, task_geometry_options};
 use crate::collision::{GeometryModel, GeometryOptions, Scene};
@@ -73,6 +75,8 @@ pub struct Mission {
     pub sensor_noise: Option<SensorNoise>,
     /// The pick of `[task]`, loaded (its scene's outline already blocks [`Mission::map`]).
     pub task: Option<Task>,
+    /// With a `[task]`: the map its drive on plans on, holding the object.
+    pub drive_on_map: Option<DriveOnMap>,
     /// Law `mpc`: the whole-body MPC built from `[control.mpc]`, its posture the start
     /// configuration, and its solve period in control steps.
     pub mpc: Option<(WholeBodyMpc, usize)>,
@@ -182,7 +186,7 @@ pub fn from_file_with(
     let (robot, ee_frame, geometry) = load_robot(&file, path, base, &package_dirs, files)?;
     let (transport, q_arm0) = arm_postures(&file, &robot, path)?;
     let footprint = mission_footprint(&file, path, &map, &robot, geometry.as_ref(), &transport)?;
-    let boxes = match &geometry {
+    let (box_objects, boxes) = match &geometry {
         Some(gm) => place_boxes(
             &mut map.grid,
             &file.map.boxes,
@@ -195,7 +199,7 @@ pub fn from_file_with(
             Error::InvalidInput { field, message } => field_err(path, &field, message),
             other => other,
         })?,
-        None => Vec::new(),
+        None => (Vec::new(), Vec::new()),
     };
     let draw = uncertainty_draw(&file, path)?;
     let contact = contact_plant(&file, path, base, &robot, &q_arm0, draw.as_ref(), files)?;
@@ -209,8 +213,8 @@ pub fn from_file_with(
         Some(spec) => sensor_noise(spec, (&robot.q_names(), &robot.v_names()), path)?,
         None => None,
     };
-    let task = match &file.task {
-        None => None,
+    let (task, drive_on_map) = match &file.task {
+        None => (None, None),
         Some(spec) => {
             let options = task_geometry_options(spec, base, &package_dirs);
             let gm = files
@@ -237,7 +241,10 @@ pub fn from_file_with(
                 (&robot, transport.as_slice()),
                 &footprint,
             )?;
-            Some(task)
+            let held = (&robot, transport.as_slice());
+            let boxes = box_objects.into_iter().zip(boxes.iter().copied());
+            let drive_on = drive_on_map(&task, boxes, &map, held, &footprint);
+            (Some(task), Some(drive_on))
         }
     };
     let mpc = whole_body_mpc(&file, path, base, &robot, ee_frame, &q_arm0)?;
@@ -264,6 +271,7 @@ pub fn from_file_with(
         plant_robot,
         sensor_noise,
         task,
+        drive_on_map,
         mpc,
     })
 }
@@ -399,6 +407,38 @@ fn place_scene_on_map(
     }
     map.grid = grid;
     Ok(())
+}
+
+/// The map of `task`'s drive on: `map` (the mission's, the scene placed on it) with the
+/// obstacles with heights, the `boxes` (with their verdicts) and the scene's objects but
+/// the picked one, checked again with the object held ([`block_by_height_holding`] on
+/// [`Task::carried`]); those the robot passed under bare and does not holding it are
+/// blocked.
+fn drive_on_map(
+    task: &Task,
+    boxes: impl Iterator<Item = (crate::collision::SceneObject, BoxVerdict)>,
+    map: &LoadedMap,
+    (robot, transport): (&WheeledModel, &[f64]),
+    footprint: &MissionFootprint,
+) -> DriveOnMap {
+    let scene = task
+        .scene
+        .objects
+        .iter()
+        .zip(&task.heights)
+        .filter(|(o, _)| o.id != task.object)
+        .map(|(o, v)| (o.clone(), *v));
+    let objects: Vec<_> = boxes.chain(scene).collect();
+    let mut grid = map.grid.clone();
+    let blocks = block_by_height_holding(
+        &mut grid,
+        &objects,
+        robot,
+        &task.carried,
+        transport,
+        footprint.padding(),
+    );
+    DriveOnMap { grid, blocks }
 }
 
 /// The file's `[uncertainty]` draw, checked (`None` without the table); `mu` is refused
