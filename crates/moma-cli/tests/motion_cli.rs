@@ -545,6 +545,34 @@ fn unreachable_goal_pose_exits_3_with_the_reason() {
 }
 
 #[test]
+fn a_goal_pose_out_of_reach_says_so_even_with_a_short_time_limit() {
+    // 5 m from Fetch's shoulder, beyond its arm and torso: the reason is the reach, not
+    // the time limit (here shorter than the set-up) that used to be the only word.
+    let (scene, _, _, _, _) = query_files(QUERY);
+    let out = tmp("out_of_reach.json");
+    let o = run_with(
+        &[
+            "--goal-pose",
+            "gripper_link:5.0,0,1.0",
+            "--time-limit",
+            "1e-6",
+            "--output",
+            &out.display().to_string(),
+        ],
+        &scene,
+    );
+    assert_eq!(o.status.code(), Some(3));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("goal pose unreachable:") && e.contains("m beyond every position"),
+        "{e}"
+    );
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(v["solved"], false);
+    assert_eq!(v["ik_attempts"], 0);
+}
+
+#[test]
 fn motion_bench_runs_a_problem_and_prints_the_rates() {
     let dir = format!("{DATA}/scenes/motion_bench_maker/fetch_queries");
     let (u, srdf, pkg) = (
