@@ -80,7 +80,9 @@ impl ContactParams {
 pub fn normal_step_bound(stiffness: f64, damping: f64, mass: f64) -> f64 {
     let wn = (stiffness / mass).sqrt();
     let zeta = damping / (2.0 * (stiffness * mass).sqrt());
-    let jury = 2.0 * ((1.0 + zeta * zeta).sqrt() - zeta) / wn;
+    // 2 (√(1 + ζ²) − ζ) / ω_n written without the difference, which cancels to 0 for a
+    // large ζ (a soft, damped contact), and without squaring ζ.
+    let jury = 2.0 / (wn * (zeta.hypot(1.0) + zeta));
     // The determinant condition |1 − 2ζω_n dt| < 1 adds dt < 1/(ζ ω_n).
     if zeta > 0.0 {
         jury.min(1.0 / (zeta * wn))
