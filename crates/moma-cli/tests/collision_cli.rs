@@ -334,6 +334,62 @@ fn bad_input_exits_1_and_writes_nothing() {
 }
 
 #[test]
+fn scene_sizes_and_positions_beyond_the_bound_are_named() {
+    // A box of 1e15 m around Fetch read as clear of some links (the distance query's
+    // tolerances are fixed lengths); sizes and positions past 1e6 m are refused by name.
+    let (urdf, srdf, pkg) = fetch_files();
+    let states = tmp("huge_scene_states.json");
+    std::fs::write(
+        &states,
+        format!("{{\"states\": [{{\"q\": {:?}}}]}}", vec![0.0; 15]),
+    )
+    .unwrap();
+    let out = tmp("huge_scene_out.json");
+    for (name, dims, position, expect) in [
+        (
+            "huge_box.yaml",
+            "[1e15, 1e15, 1e15]",
+            "[0, 0, 0]",
+            "primitives[0]: box dimension 1e15 m is larger than 1e6 m",
+        ),
+        (
+            "far_box.yaml",
+            "[0.1, 0.1, 0.1]",
+            "[1e300, 0, 0]",
+            "primitive_poses[0]: position coordinate 1e300 m is beyond ±1e6 m",
+        ),
+    ] {
+        let scene = tmp(name);
+        std::fs::write(
+            &scene,
+            format!(
+                "world:\n  collision_objects:\n    - id: Crate\n      primitives: [{{type: box, dimensions: {dims}}}]\n      primitive_poses: [{{position: {position}, orientation: [0, 0, 0, 1]}}]\n"
+            ),
+        )
+        .unwrap();
+        let mut args = fetch_args(&urdf, &srdf, &pkg);
+        args.extend([
+            "--scene",
+            scene.to_str().unwrap(),
+            "--states",
+            states.to_str().unwrap(),
+            "--output",
+            out.to_str().unwrap(),
+        ]);
+        let o = moma(&args);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!(
+                "{name}: world.collision_objects[0] (id 'Crate'): {expect}"
+            )),
+            "{name}: {err}"
+        );
+        assert!(!out.exists(), "{name}: output written");
+    }
+}
+
+#[test]
 fn bad_geometry_srdf_and_scene_exit_1_name_file_and_element_and_write_nothing() {
     // A three-link robot (b and c each turn on a joint of a; the pair b–c is checked) whose
     // link b's mesh is `mesh`.

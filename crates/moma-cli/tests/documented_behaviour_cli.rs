@@ -375,3 +375,61 @@ fn a_closed_standard_output_is_not_a_panic() {
     let o = child.wait_with_output().unwrap();
     assert_status(&o, 0, "");
 }
+
+/// Every subcommand `moma --help` lists has its usage in `docs/cli.md`, and every flag its
+/// own `--help` lists appears on the lines of `docs/cli.md` that show `moma NAME …` (the
+/// long form, or the short one where it has one).
+#[test]
+fn every_subcommand_and_flag_of_help_is_in_the_cli_doc() {
+    let doc =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/cli.md")).unwrap();
+    let top = String::from_utf8(moma(&["--help"]).stdout).unwrap();
+    let commands: Vec<&str> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() >= 20, "{commands:?}");
+    let mut missing = Vec::new();
+    for c in commands {
+        let usage = format!("moma {c} ");
+        let lines: String = doc
+            .lines()
+            .filter(|l| l.contains(&usage))
+            .collect::<Vec<_>>()
+            .join("\n");
+        if lines.is_empty() {
+            missing.push(format!("{c}: no usage line"));
+            continue;
+        }
+        let help = String::from_utf8(moma(&[c, "--help"]).stdout).unwrap();
+        for l in help.lines().map(str::trim_start) {
+            let (short, long) = match l.split_once(", --") {
+                Some((s, rest)) if s.starts_with('-') && s.len() == 2 => (Some(s), rest),
+                _ => match l.strip_prefix("--") {
+                    Some(rest) => (None, rest),
+                    None => continue,
+                },
+            };
+            let name: String = long
+                .chars()
+                .take_while(|ch| ch.is_ascii_alphanumeric() || *ch == '-')
+                .collect();
+            if name == "help" || name == "version" {
+                continue;
+            }
+            let flag = format!("--{name}");
+            let documented = lines.match_indices(&flag).any(|(i, _)| {
+                !lines[i + flag.len()..]
+                    .starts_with(|ch: char| ch.is_ascii_alphanumeric() || ch == '-')
+            }) || short.is_some_and(|s| lines.contains(&format!("{s} ")));
+            if !documented {
+                missing.push(format!("{c}: {flag}"));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "not in docs/cli.md: {missing:?}");
+}

@@ -358,7 +358,9 @@ fn run_with(extra: &[&str], scene: &str) -> Output {
         format!("{DATA}/robots/fetch"),
     );
     let mut args = base_args(&u, &srdf, &pkg, scene);
-    args.extend(["--start", &start]);
+    if !extra.contains(&"--start") {
+        args.extend(["--start", &start]);
+    }
     if !extra.iter().any(|a| a.starts_with("--goal")) {
         args.extend(["--goal-state", &goal]);
     }
@@ -446,6 +448,73 @@ fn unreadable_files_are_named() {
 }
 
 #[test]
+fn a_bad_goal_state_names_the_goal_file_not_the_start_file() {
+    let (scene, start, _, start_q, _) = query_files(QUERY);
+    // The goal file is the start with the torso beyond its upper limit (0.386 m).
+    let mut q = start_q.clone();
+    q[2] = 5.1;
+    let goal = tmp("goal_beyond_limits.json");
+    std::fs::write(&goal, serde_json::json!({"states": [{"q": q}]}).to_string()).unwrap();
+    let out = tmp("goal_beyond_limits_out.json");
+    let o = run_with(
+        &[
+            "--goal-state",
+            &goal.display().to_string(),
+            "--output",
+            &out.display().to_string(),
+        ],
+        &scene,
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(&format!("{}: invalid goal", goal.display()))
+            && e.contains("torso_lift_joint")
+            && !e.contains(&start),
+        "{e}"
+    );
+    assert!(!out.exists());
+    // The start file is still named for the start's own faults.
+    let o = run_with(
+        &[
+            "--start",
+            &goal.display().to_string(),
+            "--goal-state",
+            &start,
+        ],
+        &scene,
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(&format!("{}: invalid start", goal.display())),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_vanishing_acceleration_limit_is_refused_by_name() {
+    let (scene, _, _, _, _) = query_files(QUERY);
+    let out = tmp("tiny_acceleration.json");
+    let o = run_with(
+        &[
+            "--max-acceleration",
+            "1e-300",
+            "--output",
+            &out.display().to_string(),
+        ],
+        &scene,
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.starts_with("error: --max-acceleration: element 0 (1e-300) is below 0.001"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
 fn unreachable_goal_pose_exits_3_with_the_reason() {
     let (scene, _, _, _, _) = query_files(QUERY);
     let out = tmp("unreachable.json");
@@ -473,6 +542,34 @@ fn unreachable_goal_pose_exits_3_with_the_reason() {
     assert_eq!(v["solved"], false);
     assert!(v["reason"].as_str().unwrap().contains("unreachable"));
     assert_eq!(v["path"].as_array().unwrap().len(), 0);
+}
+
+#[test]
+fn a_goal_pose_out_of_reach_says_so_even_with_a_short_time_limit() {
+    // 5 m from Fetch's shoulder, beyond its arm and torso: the reason is the reach, not
+    // the time limit (here shorter than the set-up) that used to be the only word.
+    let (scene, _, _, _, _) = query_files(QUERY);
+    let out = tmp("out_of_reach.json");
+    let o = run_with(
+        &[
+            "--goal-pose",
+            "gripper_link:5.0,0,1.0",
+            "--time-limit",
+            "1e-6",
+            "--output",
+            &out.display().to_string(),
+        ],
+        &scene,
+    );
+    assert_eq!(o.status.code(), Some(3));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("goal pose unreachable:") && e.contains("m beyond every position"),
+        "{e}"
+    );
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(v["solved"], false);
+    assert_eq!(v["ik_attempts"], 0);
 }
 
 #[test]

@@ -107,6 +107,16 @@ fn bad_lift_off_input_is_one_error_and_no_output() {
             lift_off_sweep(&dir, "tol.toml", good, "tolerance = 0.0"),
             "lift_off.tolerance",
         ),
+        // A payload of 1e300 kg failed at a sweep point with "no tip-over limit", a
+        // bracket of 1e300 with non-finite plant accelerations; both now name the field.
+        (
+            lift_off_sweep(&dir, "heavy.toml", "payload = [0.0, 1e300]", ""),
+            "parameters.payload: must be at most 1e4 kg, got 1e300",
+        ),
+        (
+            lift_off_sweep(&dir, "bracket.toml", good, "bracket = [0.8, 1e300]"),
+            "lift_off.bracket: needs 0 <= lo < hi <= 10",
+        ),
     ];
     let csv = dir.join("never.csv");
     let svg = dir.join("never.svg");

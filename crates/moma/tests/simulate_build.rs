@@ -120,6 +120,40 @@ fn errors_name_the_file_and_the_field() {
     );
 }
 
+/// Extreme `[uncertainty]` draws (a payload of 1e300 kg or 1e300 m off its link, a mass
+/// scale of 1e-300, a noise of 1e300) are refused before the run, naming the field and
+/// the bound; they used to end the run in a singular mass matrix or a non-finite energy.
+#[test]
+fn extreme_uncertainty_draws_name_the_field_and_the_bound() {
+    let file = "uncertainty_brake.toml";
+    let payload = "payload = { link = \"payload\", mass = { uniform = [0.0, 1.0] }, position = [{ uniform = [0.0, 0.05] }, 0.0, 0.0] }";
+    for (from, to, want) in [
+        (
+            payload,
+            "payload = { link = \"payload\", mass = 1e300 }",
+            "uncertainty.payload.mass: can draw 1e300, beyond the bound 1e4",
+        ),
+        (
+            payload,
+            "payload = { link = \"payload\", mass = 1.0, position = [1e300, 0.0, 0.0] }",
+            "uncertainty.payload.position[0]: can draw 1e300, beyond the bound 1e2",
+        ),
+        (
+            "link_mass_scale = { normal = [1.0, 0.03] }",
+            "link_mass_scale = 1e-300",
+            "uncertainty.link_mass_scale: can draw 1e-300, the value must be >= 0.001",
+        ),
+        (
+            "q = [0.002,",
+            "q = [1e300,",
+            "uncertainty.sensor_noise.q[0] must be a number in [0, 100], got 1e300",
+        ),
+    ] {
+        let m = message(file, from, to);
+        assert!(m.contains(&format!("{file}: {want}")), "{to}: {m}");
+    }
+}
+
 /// Law `mpc`: a key the `[controller.mpc]` table does not have, a horizon that is not a
 /// positive number of stages or of seconds, and the law on a robot that is not a URDF
 /// robot on a differential drive each get a message naming the file and the field.

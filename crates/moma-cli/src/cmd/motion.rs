@@ -201,6 +201,31 @@ pub fn parse_goal_pose(model: &Model, text: &str, pos_tol: f64, rot_tol: f64) ->
     })
 }
 
+/// The smallest acceleration limit `--max-acceleration` takes (rad/s², m/s²).
+const MIN_ACCELERATION: f64 = 1e-3;
+
+/// The input a planning error is about, as its context: the goal-state file (or
+/// `--goal-pose`) for the goal's faults, the start file for the others (the start's own
+/// faults, and its swap to mesh surfaces).
+fn name_plan_error(e: anyhow::Error, start: &Path, goal: Option<&Path>) -> anyhow::Error {
+    let field = match e.downcast_ref::<moma::Error>() {
+        Some(
+            moma::Error::InvalidInput { field, .. }
+            | moma::Error::WrongLength { field, .. }
+            | moma::Error::NonFinite { field },
+        ) => field.as_str(),
+        _ => "",
+    };
+    if field.starts_with("goal") {
+        match goal {
+            Some(p) => e.context(p.display().to_string()),
+            None => e.context("--goal-pose"),
+        }
+    } else {
+        e.context(start.display().to_string())
+    }
+}
+
 /// The options from the command line's values.
 pub fn options(
     dim: usize,
@@ -223,6 +248,14 @@ pub fn options(
     };
     if let Some(i) = acc.iter().position(|a| *a <= 0.0) {
         bail!("--max-acceleration: element {i} is not positive");
+    }
+    // Below it the timed motion outlasts the 10^7 samples it may have (at 1e-3 rad/s² a
+    // path across a joint's whole range takes minutes, not days).
+    if let Some(i) = acc.iter().position(|a| *a < MIN_ACCELERATION) {
+        bail!(
+            "--max-acceleration: element {i} ({:e}) is below {MIN_ACCELERATION} (rad/s², m/s²)",
+            acc[i]
+        );
     }
     let mut o = MotionOptions::new(dim);
     o.time_limit = Duration::from_secs_f64(time_limit);
@@ -294,7 +327,7 @@ pub fn run(args: Args) -> Result<()> {
     )?;
     let (r, swapped) = robot
         .plan(&scene, &group, &start, &goal, &opts)
-        .with_context(|| format!("{}", args.start.display()))?;
+        .map_err(|e| name_plan_error(e, &args.start, args.goal_state.as_deref()))?;
     let out = Output {
         solved: r.not_solved.is_none(),
         reason: r.not_solved.as_ref().map(ToString::to_string),

@@ -59,6 +59,11 @@ struct BvhNode {
 /// or point cloud can claim.
 pub const MAX_SCENE_SHAPES: usize = 4_000_000;
 
+/// Largest size and largest position coordinate (m) of a scene primitive: the distance
+/// queries' fixed tolerances hold to about 1e12 m and fail beyond (a box of 1e15 m around
+/// the robot reads as clear of some links), so a planning scene is bounded well inside.
+pub const MAX_SCENE_LENGTH: f64 = 1e6;
+
 /// Shapes per BVH leaf.
 const LEAF_SIZE: usize = 4;
 
@@ -714,6 +719,11 @@ fn parse_pose(p: &RawPose) -> std::result::Result<SE3, String> {
     if t.iter().chain(&q).any(|x| !x.is_finite()) {
         return Err("pose is not finite".into());
     }
+    if let Some(x) = t.iter().find(|x| x.abs() > MAX_SCENE_LENGTH) {
+        return Err(format!(
+            "position coordinate {x:e} m is beyond ±{MAX_SCENE_LENGTH:e} m"
+        ));
+    }
     let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
     if (norm - 1.0).abs() > 1e-3 {
         return Err(format!(
@@ -735,6 +745,12 @@ fn primitive(p: &RawPrimitive) -> std::result::Result<Convex, String> {
         }
         if let Some(x) = d.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
             return Err(format!("{} dimension {x} must be finite and > 0", p.kind));
+        }
+        if let Some(x) = d.iter().find(|x| **x > MAX_SCENE_LENGTH) {
+            return Err(format!(
+                "{} dimension {x:e} m is larger than {MAX_SCENE_LENGTH:e} m",
+                p.kind
+            ));
         }
         Ok(())
     };

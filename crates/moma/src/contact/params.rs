@@ -82,7 +82,8 @@ impl ContactParams {
 /// PD laws that hold joints on the contact plant ([`crate::sim::lift_off`]).
 #[must_use]
 pub fn spring_damper_step_bound(stiffness: f64, damping: f64, mass: f64) -> f64 {
-    4.0 * mass / (damping + (damping * damping + 4.0 * stiffness * mass).sqrt())
+    // √(c² + 4km) as a hypotenuse: no overflow for a huge damping (a tiny bound, not 0)
+    4.0 * mass / (damping + damping.hypot(2.0 * (stiffness * mass).sqrt()))
 }
 
 /// The largest stable step of explicit Euler on the viscous branch of regularised friction,

@@ -180,6 +180,18 @@ pub fn ik_goals(
         }
     }
     let dim = group.dim();
+    if let Some(gap) = reach_gap(model, group, goal, base)
+        && gap > goal.position_tolerance
+    {
+        // No attempt can end closer than the gap: unreachable without a search.
+        return Ok(IkGoals {
+            states: Vec::new(),
+            attempts: 0,
+            reached: 0,
+            best_position_error: gap,
+            best_orientation_error: f64::INFINITY,
+        });
+    }
     let kin = GroupFrame::new(model, group, goal.frame, base);
     let mut task = PoseTask::new(kin, goal.target, &TaskRows::Full)?;
     let options = IkOptions {
@@ -227,4 +239,46 @@ pub fn ik_goals(
         }
     }
     Ok(out)
+}
+
+/// How far (m) the goal position lies beyond every position the group's joints can move
+/// the frame to from `base`: its distance from the origin of the topmost group joint on
+/// the frame's chain (which that joint's own motion does not move) less the chain's
+/// length below it (the joint offsets, the frame's offset, each prismatic joint's largest
+/// travel: the box for group joints, `base` for the others). `None` when no group joint
+/// moves the frame or a joint below it is neither revolute nor prismatic.
+fn reach_gap(model: &Model, group: &JointGroup, goal: &GoalPose, base: &[f64]) -> Option<f64> {
+    let frame = &model.frames[goal.frame.0];
+    let mut chain = Vec::new();
+    let mut j = frame.parent_joint.0;
+    while j != 0 {
+        chain.push(j);
+        j = model.parents[j].0;
+    }
+    let top = chain
+        .iter()
+        .rposition(|j| group.joints.iter().any(|g| g.0 == *j))?;
+    let mut radius = frame.placement.translation.norm();
+    for (i, &j) in chain[..=top].iter().enumerate() {
+        let jt = &model.joint_types[j];
+        if jt.is_prismatic() {
+            let iq = model.idx_q[j];
+            radius += match group.joints.iter().position(|g| g.0 == j) {
+                Some(k) => group.lower[k].abs().max(group.upper[k].abs()),
+                None => base[iq].abs(),
+            };
+        } else if !jt.is_revolute() {
+            return None;
+        }
+        if i < top {
+            radius += model.joint_placements[j].translation.norm();
+        }
+    }
+    let mut data = Data::new(model);
+    kinematics::forward_kinematics(model, &mut data, &DVector::from_column_slice(base));
+    let first = chain[top];
+    let origin = data.world_from_joint[model.parents[first].0]
+        .act_point(&model.joint_placements[first].translation);
+    let gap = (goal.target.translation.vector - origin).norm() - radius;
+    gap.is_finite().then_some(gap)
 }

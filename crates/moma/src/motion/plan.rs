@@ -138,6 +138,15 @@ impl std::fmt::Display for NotSolved {
             NotSolved::GoalUnreachable {
                 attempts,
                 best_position_error,
+                ..
+            } if *attempts == 0 => write!(
+                f,
+                "goal pose unreachable: {best_position_error:.4} m beyond every position the \
+                 group's joints can move the frame to (no IK attempted)"
+            ),
+            NotSolved::GoalUnreachable {
+                attempts,
+                best_position_error,
                 best_orientation_error,
             } => write!(
                 f,
@@ -402,7 +411,8 @@ pub fn plan_motion(
             result.ik_attempts = found.attempts;
             result.ik_solutions = found.states.len();
             if found.states.is_empty() {
-                result.not_solved = Some(if Instant::now() >= deadline {
+                // No attempt (the goal is out of reach) is the reason even past the deadline.
+                result.not_solved = Some(if Instant::now() >= deadline && found.attempts > 0 {
                     NotSolved::TimeLimit
                 } else if found.reached == 0 {
                     NotSolved::GoalUnreachable {

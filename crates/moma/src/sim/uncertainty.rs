@@ -63,8 +63,8 @@ impl Dist {
     }
 
     /// Checks the parameters (finite, `lo <= hi`, `std >= 0`) and that every value it can
-    /// draw is at least `min` (or above it, when `strict`).
-    fn check(&self, field: &str, min: f64, strict: bool) -> Result<()> {
+    /// draw is at least `min` (or above it, when `strict`) and at most `max`.
+    fn check(&self, field: &str, min: f64, strict: bool, max: f64) -> Result<()> {
         let params: &[f64] = match self {
             Dist::Fixed(x) => std::slice::from_ref(x),
             Dist::Uniform { uniform } => uniform,
@@ -82,10 +82,17 @@ impl Dist {
             }
             _ => {}
         }
-        let (lo, _) = self.support();
+        let (lo, hi) = self.support();
+        if hi > max || lo < -max {
+            bail!(
+                "{field}: can draw {:e}, beyond the bound {max:e} (for a normal, mean ± \
+                 {NORMAL_TRUNCATION} std)",
+                if hi > max { hi } else { lo }
+            );
+        }
         if lo < min || (strict && lo <= min) {
             bail!(
-                "{field}: can draw {lo}, the value must be {} {min} (for a normal, \
+                "{field}: can draw {lo:e}, the value must be {} {min} (for a normal, \
                  mean - {NORMAL_TRUNCATION} std)",
                 if strict { ">" } else { ">=" }
             );
@@ -173,6 +180,20 @@ pub struct Draw {
     pub noise_seed: u64,
 }
 
+// Bounds of the draws, far beyond any robot's, inside what its dynamics can integrate (a
+// payload of 1e300 kg, a mass scale of 1e-300 or a noise of 1e300 only ended the run in a
+// singular mass matrix or a non-finite energy, naming no field).
+/// Largest payload mass (kg).
+pub const MAX_PAYLOAD_MASS: f64 = 1e4;
+/// Largest payload offset from its link's origin, per axis (m).
+pub const MAX_PAYLOAD_OFFSET: f64 = 100.0;
+/// Smallest link mass scale (the largest is its inverse).
+pub const MIN_MASS_SCALE: f64 = 1e-3;
+/// Largest friction coefficient μ.
+pub const MAX_MU: f64 = 100.0;
+/// Largest sensor-noise standard deviation (m, rad, m/s or rad/s).
+pub const MAX_NOISE_STD: f64 = 100.0;
+
 // The generator stream of each quantity.
 const STREAM_PAYLOAD_MASS: u64 = 1;
 const STREAM_PAYLOAD_POSITION: u64 = 2; // 2, 3, 4
@@ -187,28 +208,38 @@ impl UncertaintySpec {
     /// [`Error::Scenario`] with the field's message.
     pub fn check(&self) -> Result<()> {
         if let Some(p) = &self.payload {
-            p.mass.check("uncertainty.payload.mass", 0.0, false)?;
+            p.mass
+                .check("uncertainty.payload.mass", 0.0, false, MAX_PAYLOAD_MASS)?;
             for (i, d) in p.position.iter().enumerate() {
                 d.check(
                     &format!("uncertainty.payload.position[{i}]"),
                     f64::NEG_INFINITY,
                     false,
+                    MAX_PAYLOAD_OFFSET,
                 )?;
             }
         }
         if let Some(d) = &self.link_mass_scale {
-            d.check("uncertainty.link_mass_scale", 0.0, true)?;
+            d.check(
+                "uncertainty.link_mass_scale",
+                MIN_MASS_SCALE,
+                false,
+                1.0 / MIN_MASS_SCALE,
+            )?;
         }
         if let Some(d) = &self.mu {
-            d.check("uncertainty.mu", 0.0, true)?;
+            d.check("uncertainty.mu", 0.0, true, MAX_MU)?;
         }
         if let Some(n) = &self.sensor_noise {
             for (name, xs) in [("q", &n.q), ("v", &n.v)] {
                 if let Some(xs) = xs
-                    && let Some(i) = xs.iter().position(|s| !(s.is_finite() && *s >= 0.0))
+                    && let Some(i) = xs
+                        .iter()
+                        .position(|s| !(s.is_finite() && (0.0..=MAX_NOISE_STD).contains(s)))
                 {
                     bail!(
-                        "uncertainty.sensor_noise.{name}[{i}] must be a finite number >= 0, got {}",
+                        "uncertainty.sensor_noise.{name}[{i}] must be a number in [0, \
+                         {MAX_NOISE_STD}], got {:e}",
                         xs[i]
                     );
                 }

@@ -31,6 +31,7 @@ use crate::mission::scenario::Loader;
 use crate::multibody::{RootJoint, neutral};
 use crate::sim::lift_off::{JointGains, LiftOffEvent, LiftOffProblem, LiftOffSettings};
 use crate::sim::model_mismatch::{ModelPerturbation, Payload};
+use crate::sim::uncertainty::MAX_PAYLOAD_MASS;
 
 /// Result columns of the lift-off study.
 pub(super) const RESULTS: &[&str] = &[
@@ -40,6 +41,10 @@ pub(super) const RESULTS: &[&str] = &[
     "lifted_contact",
     "bisection_runs",
 ];
+
+/// Largest factor of the predicted limit the search may start from: a bracket of 1e300
+/// drove the plant to non-finite accelerations, naming no field.
+const MAX_BRACKET: f64 = 10.0;
 
 /// The parameters this study reads.
 const NAMES: &str = "payload, q.JOINT";
@@ -130,6 +135,17 @@ fn parameter_slots(
         require_numbers(path, p)?;
         if matches!(slot, Slot::Payload) {
             require_non_negative(path, p, " kg (0: no payload)")?;
+            let hi = match &p.values {
+                super::Values::Linspace { lo, hi, .. } => lo.max(*hi),
+                super::Values::List(v) => v.iter().map(num).fold(f64::NEG_INFINITY, f64::max),
+            };
+            if hi > MAX_PAYLOAD_MASS {
+                return Err(file_error(
+                    path,
+                    &format!("parameters.{}", p.name),
+                    format!("must be at most {MAX_PAYLOAD_MASS:e} kg, got {hi:e}"),
+                ));
+            }
         }
         slots.push(slot);
     }
@@ -154,12 +170,14 @@ fn settings(path: &Path, spec: &Spec) -> Result<([f64; 2], LiftOffSettings)> {
     let bracket = spec.bracket.unwrap_or([0.8, 1.2]);
     if !(bracket[0].is_finite() && bracket[1].is_finite() && 0.0 <= bracket[0])
         || bracket[0] >= bracket[1]
+        || bracket[1] > MAX_BRACKET
     {
         return Err(file_error(
             path,
             "lift_off.bracket",
             format!(
-                "needs 0 <= lo < hi (factors of the predicted limit), got [{}, {}]",
+                "needs 0 <= lo < hi <= {MAX_BRACKET} (factors of the predicted limit), got \
+                 [{:e}, {:e}]",
                 bracket[0], bracket[1]
             ),
         ));
