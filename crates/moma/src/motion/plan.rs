@@ -191,6 +191,8 @@ pub struct MotionResult {
     pub iterations: usize,
     /// Where the planning time went.
     pub phases: PhaseTimes,
+    /// Where the checked states went (phase by phase; they sum to `checks`).
+    pub phase_checks: PhaseChecks,
     /// IK attempts for a goal pose (0 for a goal state).
     pub ik_attempts: usize,
     /// Collision-free IK goal states found.
@@ -213,6 +215,21 @@ pub struct PhaseTimes {
     pub shortcut: Duration,
     /// Time-optimal timing with its blend checks.
     pub timing: Duration,
+}
+
+/// The states checked in each phase of the planning.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PhaseChecks {
+    /// The start and goal states.
+    pub setup: u64,
+    /// Goal states by IK (goal poses only).
+    pub ik: u64,
+    /// RRT-Connect: its probes and the continuous checks of the paths it found.
+    pub search: u64,
+    /// Shortcutting.
+    pub shortcut: u64,
+    /// The timing's blend checks.
+    pub timing: u64,
 }
 
 /// A planning problem: the robot, its geometry, the scene and the group.
@@ -355,6 +372,7 @@ pub fn plan_motion(
         distances: 0,
         iterations: 0,
         phases: PhaseTimes::default(),
+        phase_checks: PhaseChecks::default(),
         ik_attempts: 0,
         ik_solutions: 0,
         margin: 0.0,
@@ -367,6 +385,14 @@ pub fn plan_motion(
         d
     };
     result.phases.setup = lap();
+    // The states checked so far, to split them by phase.
+    let mut counted = 0u64;
+    let mut count = |checker: &ClearanceChecker<'_>| {
+        let n = checker.states_checked - counted;
+        counted = checker.states_checked;
+        n
+    };
+    result.phase_checks.setup = count(&checker);
     let goals: Vec<Vec<f64>> = match goal {
         MotionGoal::State(q) => {
             let (x, d_goal) = check_state(problem, &mut checker, "goal", q)?;
@@ -384,6 +410,7 @@ pub fn plan_motion(
                 ));
             }
             result.phases.setup += lap();
+            result.phase_checks.setup += count(&checker);
             vec![x]
         }
         MotionGoal::Pose(pose) => {
@@ -399,6 +426,7 @@ pub fn plan_motion(
                 deadline,
             )?;
             result.phases.ik = lap();
+            result.phase_checks.ik = count(&checker);
             result.ik_attempts = found.attempts;
             result.ik_solutions = found.states.len();
             if found.states.is_empty() {
@@ -470,6 +498,7 @@ pub fn plan_motion(
         }
     }
     result.phases.search = lap();
+    result.phase_checks.search = count(&checker);
     let Some((path, k)) = found else {
         result.not_solved = Some(limit);
         result.margin = checker.margin();
@@ -502,6 +531,7 @@ pub fn plan_motion(
     shortcuts.drop_redundant = true;
     path = shortcut(&space, &mut checker, &path, &shortcuts, &mut extra)?;
     result.phases.shortcut = lap();
+    result.phase_checks.shortcut = count(&checker);
     // The blends are checked state by state; each state vouches for half the spacing.
     checker.set_tube(0.5 * options.resolution);
     let timed = time_optimal(
@@ -520,6 +550,7 @@ pub fn plan_motion(
     )?;
     checker.set_tube(0.0);
     result.phases.timing = lap();
+    result.phase_checks.timing = count(&checker);
     result.planning_time = began.elapsed();
     result.checks = checker.states_checked;
     result.distances = checker.distances_computed;
