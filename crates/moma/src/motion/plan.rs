@@ -519,6 +519,9 @@ pub fn plan_motion(
         seed: options.seed,
         min_gain: SHORTCUT_MIN_GAIN,
         drop_redundant: false,
+        // A candidate is probed at the search's resolution first: most that fail do so
+        // at a probe, before the continuous check's exact distances.
+        probe: options.search_resolution,
     };
     while left > 0 && Instant::now() < deadline {
         shortcuts.attempts = left.min(SHORTCUT_ROUND);
