@@ -454,6 +454,21 @@ fn probing_shortcuts_first_checks_fewer_states() {
 }
 
 #[test]
+fn a_probe_spacing_that_is_not_positive_is_an_error() {
+    let space = cube7();
+    let path = JointPath::from_flat(7, [[-0.8; 7], [-0.5; 7], [-0.2; 7]].concat());
+    for probe in [0.0, -0.1, f64::NAN, f64::INFINITY, 1e-9] {
+        let mut v = narrow_passage;
+        let options = ShortcutOptions {
+            probe: Some(probe),
+            ..ShortcutOptions::default()
+        };
+        let err = shortcut(&space, &mut v, &path, &options, &mut 0).unwrap_err();
+        assert!(err.to_string().contains("probe"), "{probe}: {err}");
+    }
+}
+
+#[test]
 fn the_redundant_waypoint_pass_runs_only_when_asked() {
     let space = cube7();
     // Three waypoints on one free line: the middle one is redundant.

@@ -25,7 +25,7 @@
 //! Every segment of the result was checked at the resolution, so a valid input path gives
 //! a valid output path no longer than the input.
 
-use super::joint_space::{JointPath, JointSpace, StateValidity};
+use super::joint_space::{JointPath, JointSpace, MAX_STATES_PER_SEGMENT, StateValidity};
 use crate::{Error, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -69,8 +69,9 @@ pub const MAX_SHORTCUT_ATTEMPTS: usize = 10_000_000;
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for `path` when its dimension is not the space's or a waypoint
-/// lies outside the box, for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`], or for a
-/// `min_gain` outside [0, 1].
+/// lies outside the box, for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`], for a
+/// `min_gain` outside [0, 1], or for a `probe` that is not positive or would need more
+/// than [`MAX_STATES_PER_SEGMENT`] probes across the box.
 pub fn shortcut(
     space: &JointSpace,
     validity: &mut impl StateValidity,
@@ -97,6 +98,17 @@ pub fn shortcut(
         return Err(Error::invalid(
             "min_gain",
             format!("{} is not a fraction in [0, 1]", options.min_gain),
+        ));
+    }
+    if let Some(r) = options.probe
+        && !(r.is_finite() && r > 0.0 && space.diagonal() / r <= MAX_STATES_PER_SEGMENT)
+    {
+        return Err(Error::invalid(
+            "probe",
+            format!(
+                "{r} is not a positive spacing of at most {MAX_STATES_PER_SEGMENT:.0e} \
+                 probes across the box"
+            ),
         ));
     }
     let dim = space.dim();
