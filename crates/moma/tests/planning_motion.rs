@@ -399,6 +399,7 @@ fn shortcuts_below_the_least_gain_are_not_checked() {
                 seed,
                 min_gain,
                 drop_redundant: false,
+                probe: None,
             };
             shortcut(&space, &mut v, &path, &options, checks).unwrap()
         };
@@ -419,6 +420,52 @@ fn shortcuts_below_the_least_gain_are_not_checked() {
         gainful < all,
         "{gainful} checked states with a least gain, {all} without"
     );
+}
+
+/// Probes at a coarse spacing first reject the shortcuts through the wall before their
+/// segment check: fewer states are checked, and every segment of the result still passed
+/// the segment check at the resolution.
+#[test]
+fn probing_shortcuts_first_checks_fewer_states() {
+    let space = cube7();
+    let mut ws = RrtConnectWorkspace::new();
+    let (mut probed, mut plain) = (0, 0);
+    for seed in 0..10 {
+        let path = solve(&space, narrow_passage, &START7, &GOAL7, seed, &mut ws);
+        let run = |probe: Option<f64>, checks: &mut u64| {
+            let mut v = narrow_passage;
+            let options = ShortcutOptions {
+                attempts: 100,
+                seed,
+                probe,
+                ..ShortcutOptions::default()
+            };
+            shortcut(&space, &mut v, &path, &options, checks).unwrap()
+        };
+        let short = run(Some(0.25), &mut probed);
+        assert!(valid(&space, narrow_passage, &short), "seed {seed}");
+        assert!(short.length(&space) <= path.length(&space) + 1e-12);
+        run(None, &mut plain);
+    }
+    assert!(
+        probed < plain,
+        "{probed} checked states with probes, {plain} without"
+    );
+}
+
+#[test]
+fn a_probe_spacing_that_is_not_positive_is_an_error() {
+    let space = cube7();
+    let path = JointPath::from_flat(7, [[-0.8; 7], [-0.5; 7], [-0.2; 7]].concat());
+    for probe in [0.0, -0.1, f64::NAN, f64::INFINITY, 1e-9] {
+        let mut v = narrow_passage;
+        let options = ShortcutOptions {
+            probe: Some(probe),
+            ..ShortcutOptions::default()
+        };
+        let err = shortcut(&space, &mut v, &path, &options, &mut 0).unwrap_err();
+        assert!(err.to_string().contains("probe"), "{probe}: {err}");
+    }
 }
 
 #[test]

@@ -93,6 +93,8 @@ struct Run {
     min_distance: Option<f64>,
     /// Seconds in setup, IK, search, shortcutting and timing.
     phases_s: [f64; 5],
+    /// States checked in setup, IK, search, shortcutting and timing.
+    phase_checks: [u64; 5],
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -170,6 +172,13 @@ pub fn run(args: Args) -> Result<()> {
                         res.phases.timing,
                     ]
                     .map(|d| d.as_secs_f64()),
+                    phase_checks: [
+                        res.phase_checks.setup,
+                        res.phase_checks.ik,
+                        res.phase_checks.search,
+                        res.phase_checks.shortcut,
+                        res.phase_checks.timing,
+                    ],
                 },
                 Err(e) => Run {
                     name: q.name.clone(),
@@ -182,6 +191,7 @@ pub fn run(args: Args) -> Result<()> {
                     distances: 0,
                     min_distance: None,
                     phases_s: [f64::NAN; 5],
+                    phase_checks: [0; 5],
                 },
             };
             runs.push(run);
@@ -248,6 +258,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     let all: f64 = totals.iter().sum();
     let checks: u64 = timed.iter().map(|r| r.checks).sum();
+    let mut phase_checks = [0u64; 5];
+    for r in &timed {
+        for (t, c) in phase_checks.iter_mut().zip(r.phase_checks) {
+            *t += c;
+        }
+    }
     let distances: u64 = timed.iter().map(|r| r.distances).sum();
     if all > 0.0 {
         println!(
@@ -261,6 +277,15 @@ pub fn run(args: Args) -> Result<()> {
             100.0 * totals[4] / all,
             1e6 * all / checks.max(1) as f64,
             distances as f64 / checks.max(1) as f64
+        );
+        println!(
+            "# checked states: setup {:.1} %, IK {:.1} %, search {:.1} %, shortcut {:.1} %, \
+             timing {:.1} %",
+            100.0 * phase_checks[0] as f64 / checks.max(1) as f64,
+            100.0 * phase_checks[1] as f64 / checks.max(1) as f64,
+            100.0 * phase_checks[2] as f64 / checks.max(1) as f64,
+            100.0 * phase_checks[3] as f64 / checks.max(1) as f64,
+            100.0 * phase_checks[4] as f64 / checks.max(1) as f64,
         );
     }
     if let Some(path) = &args.json {

@@ -26,6 +26,6 @@ pub use goal::{GoalPose, GroupFrame, IkGoals, ik_goals};
 pub use group::JointGroup;
 pub use plan::{
     MotionGoal, MotionOptions, MotionProblem, MotionResult, MotionTrajectory, NotSolved,
-    PhaseTimes, plan_motion,
+    PhaseChecks, PhaseTimes, plan_motion,
 };
 pub use surface::{MeshSource, surface_links_for_start, with_mesh_surface};

@@ -200,6 +200,8 @@ pub struct MotionResult {
     pub iterations: usize,
     /// Where the planning time went.
     pub phases: PhaseTimes,
+    /// Where the checked states went (phase by phase; they sum to `checks`).
+    pub phase_checks: PhaseChecks,
     /// IK attempts for a goal pose (0 for a goal state).
     pub ik_attempts: usize,
     /// Collision-free IK goal states found.
@@ -222,6 +224,21 @@ pub struct PhaseTimes {
     pub shortcut: Duration,
     /// Time-optimal timing with its blend checks.
     pub timing: Duration,
+}
+
+/// The states checked in each phase of the planning.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PhaseChecks {
+    /// The start and goal states.
+    pub setup: u64,
+    /// Goal states by IK (goal poses only).
+    pub ik: u64,
+    /// RRT-Connect: its probes and the continuous checks of the paths it found.
+    pub search: u64,
+    /// Shortcutting.
+    pub shortcut: u64,
+    /// The timing's blend checks.
+    pub timing: u64,
 }
 
 /// A planning problem: the robot, its geometry, the scene and the group.
@@ -364,6 +381,7 @@ pub fn plan_motion(
         distances: 0,
         iterations: 0,
         phases: PhaseTimes::default(),
+        phase_checks: PhaseChecks::default(),
         ik_attempts: 0,
         ik_solutions: 0,
         margin: 0.0,
@@ -376,6 +394,14 @@ pub fn plan_motion(
         d
     };
     result.phases.setup = lap();
+    // The states checked so far, to split them by phase.
+    let mut counted = 0u64;
+    let mut count = |checker: &ClearanceChecker<'_>| {
+        let n = checker.states_checked - counted;
+        counted = checker.states_checked;
+        n
+    };
+    result.phase_checks.setup = count(&checker);
     let goals: Vec<Vec<f64>> = match goal {
         MotionGoal::State(q) => {
             let (x, d_goal) = check_state(problem, &mut checker, "goal", q)?;
@@ -393,6 +419,7 @@ pub fn plan_motion(
                 ));
             }
             result.phases.setup += lap();
+            result.phase_checks.setup += count(&checker);
             vec![x]
         }
         MotionGoal::Pose(pose) => {
@@ -408,6 +435,7 @@ pub fn plan_motion(
                 deadline,
             )?;
             result.phases.ik = lap();
+            result.phase_checks.ik = count(&checker);
             result.ik_attempts = found.attempts;
             result.ik_solutions = found.states.len();
             if found.states.is_empty() {
@@ -480,6 +508,7 @@ pub fn plan_motion(
         }
     }
     result.phases.search = lap();
+    result.phase_checks.search = count(&checker);
     let Some((path, k)) = found else {
         result.not_solved = Some(limit);
         result.margin = checker.margin();
@@ -500,6 +529,9 @@ pub fn plan_motion(
         seed: options.seed,
         min_gain: SHORTCUT_MIN_GAIN,
         drop_redundant: false,
+        // A candidate is probed at the search's resolution first: most that fail do so
+        // at a probe, before the continuous check's exact distances.
+        probe: options.search_resolution,
     };
     while left > 0 && Instant::now() < deadline {
         shortcuts.attempts = left.min(SHORTCUT_ROUND);
@@ -512,6 +544,7 @@ pub fn plan_motion(
     shortcuts.drop_redundant = true;
     path = shortcut(&space, &mut checker, &path, &shortcuts, &mut extra)?;
     result.phases.shortcut = lap();
+    result.phase_checks.shortcut = count(&checker);
     // The blends are checked state by state; each state vouches for half the spacing.
     checker.set_tube(0.5 * options.resolution);
     let timed = time_optimal(
@@ -530,6 +563,7 @@ pub fn plan_motion(
     )?;
     checker.set_tube(0.0);
     result.phases.timing = lap();
+    result.phase_checks.timing = count(&checker);
     result.planning_time = began.elapsed();
     result.checks = checker.states_checked;
     result.distances = checker.distances_computed;

@@ -206,12 +206,9 @@ impl Tree {
     fn nearest(&self, space: &JointSpace, q: &[f64]) -> usize {
         let dim = space.dim();
         let mut best = (0, f64::INFINITY);
-        for (i, node) in self.states.chunks_exact(dim).enumerate() {
-            if self.cut[i] {
-                continue;
-            }
+        for (i, (node, cut)) in self.states.chunks_exact(dim).zip(&self.cut).enumerate() {
             let d = space.distance_squared(node, q);
-            if d < best.1 {
+            if d < best.1 && !cut {
                 best = (i, d);
             }
         }

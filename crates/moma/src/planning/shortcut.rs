@@ -15,13 +15,21 @@
 //!    inequality makes that never longer). A caller that shortcuts in rounds runs it once,
 //!    after the last: the waypoints a pass keeps fail their check again in the next.
 //!
+//! 3. **Probes first** ([`ShortcutOptions::probe`]): a new segment (a shortcut, or the one
+//!    that would drop a waypoint) can be probed state by state at a coarser spacing,
+//!    coarse to fine, before its segment check: a segment through an obstacle usually
+//!    fails at a probe, and a segment check that computes distances (a continuous one)
+//!    then runs only on segments that passed the probes. The verdict on an accepted
+//!    segment is still the segment check's.
+//!
 //! Every segment of the result was checked at the resolution, so a valid input path gives
 //! a valid output path no longer than the input.
 
-use super::joint_space::{JointPath, JointSpace, StateValidity};
+use super::joint_space::{JointPath, JointSpace, MAX_STATES_PER_SEGMENT, StateValidity};
 use crate::{Error, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::collections::VecDeque;
 
 /// The options of [`shortcut`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,6 +43,10 @@ pub struct ShortcutOptions {
     pub min_gain: f64,
     /// Run the redundant-waypoint pass after the attempts.
     pub drop_redundant: bool,
+    /// Probe a candidate's new segment state by state this far apart (weighted norm),
+    /// coarse to fine, before its segment check, and drop it at the first invalid probe;
+    /// `None`: the segment check alone.
+    pub probe: Option<f64>,
 }
 
 impl Default for ShortcutOptions {
@@ -44,6 +56,7 @@ impl Default for ShortcutOptions {
             seed: 0,
             min_gain: 0.0,
             drop_redundant: true,
+            probe: None,
         }
     }
 }
@@ -56,8 +69,9 @@ pub const MAX_SHORTCUT_ATTEMPTS: usize = 10_000_000;
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for `path` when its dimension is not the space's or a waypoint
-/// lies outside the box, for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`], or for a
-/// `min_gain` outside [0, 1].
+/// lies outside the box, for `attempts` above [`MAX_SHORTCUT_ATTEMPTS`], for a
+/// `min_gain` outside [0, 1], or for a `probe` that is not positive or would need more
+/// than [`MAX_STATES_PER_SEGMENT`] probes across the box.
 pub fn shortcut(
     space: &JointSpace,
     validity: &mut impl StateValidity,
@@ -86,11 +100,23 @@ pub fn shortcut(
             format!("{} is not a fraction in [0, 1]", options.min_gain),
         ));
     }
+    if let Some(r) = options.probe
+        && !(r.is_finite() && r > 0.0 && space.diagonal() / r <= MAX_STATES_PER_SEGMENT)
+    {
+        return Err(Error::invalid(
+            "probe",
+            format!(
+                "{r} is not a positive spacing of at most {MAX_STATES_PER_SEGMENT:.0e} \
+                 probes across the box"
+            ),
+        ));
+    }
     let dim = space.dim();
     let mut points: Vec<f64> = path.as_flat().to_vec();
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let mut cumulative = Vec::new();
-    let (mut a, mut b, mut scratch) = (vec![0.0; dim], vec![0.0; dim], Vec::new());
+    let (mut a, mut b) = (vec![0.0; dim], vec![0.0; dim]);
+    let mut work = Scratch::default();
     let wp = |i: usize| i * dim..(i + 1) * dim;
     for _ in 0..options.attempts {
         let n = points.len() / dim;
@@ -122,15 +148,68 @@ pub fn shortcut(
         }
         // `waypoint i → a` and `b → waypoint j + 1` lie on segments of the path (valid):
         // only the new segment needs a check.
-        let valid = space.segment_valid(validity, &a, &b, &mut scratch, checks);
+        let valid = new_segment_valid(space, validity, &a, &b, options.probe, &mut work, checks);
         if valid {
             points.splice((i + 1) * dim..(j + 1) * dim, a.iter().chain(&b).copied());
         }
     }
     if options.drop_redundant {
-        points = drop_redundant(space, validity, &points, dim, &mut scratch, checks);
+        points = drop_redundant(
+            space,
+            validity,
+            &points,
+            dim,
+            options.probe,
+            &mut work,
+            checks,
+        );
     }
     Ok(JointPath::from_flat(dim, points))
+}
+
+/// The scratch space of the segment checks: the probed state and the stretches left.
+#[derive(Default)]
+struct Scratch {
+    state: Vec<f64>,
+    open: VecDeque<(usize, usize)>,
+}
+
+/// Whether a new segment `a → b` (its ends on the path, valid) is valid: with `probe =
+/// Some(r)` its states at most `r` apart are probed first, coarse to fine (the middle,
+/// then the middles of the halves), and the first invalid one ends the check; then the
+/// segment check.
+fn new_segment_valid(
+    space: &JointSpace,
+    validity: &mut impl StateValidity,
+    a: &[f64],
+    b: &[f64],
+    probe: Option<f64>,
+    work: &mut Scratch,
+    checks: &mut u64,
+) -> bool {
+    if let Some(r) = probe {
+        let n = (space.distance(a, b) / r).ceil().max(1.0) as usize;
+        work.state.resize(a.len(), 0.0);
+        work.open.clear();
+        work.open.push_back((0, n));
+        while let Some((lo, hi)) = work.open.pop_front() {
+            if hi - lo < 2 {
+                continue;
+            }
+            let mid = (lo + hi) / 2;
+            let f = mid as f64 / n as f64;
+            for ((s, x), y) in work.state.iter_mut().zip(a).zip(b) {
+                *s = x + f * (y - x);
+            }
+            *checks += 1;
+            if !validity.is_valid(&work.state) {
+                return false;
+            }
+            work.open.push_back((lo, mid));
+            work.open.push_back((mid, hi));
+        }
+    }
+    space.segment_valid(validity, a, b, &mut work.state, checks)
 }
 
 /// The redundant-waypoint pass (module docs) over the flat waypoints `points`.
@@ -139,7 +218,8 @@ fn drop_redundant(
     validity: &mut impl StateValidity,
     points: &[f64],
     dim: usize,
-    scratch: &mut Vec<f64>,
+    probe: Option<f64>,
+    work: &mut Scratch,
     checks: &mut u64,
 ) -> Vec<f64> {
     let wp = |i: usize| i * dim..(i + 1) * dim;
@@ -150,7 +230,7 @@ fn drop_redundant(
         if k > 0 && k + 1 < n {
             let last = &kept[kept.len() - dim..];
             let next = &points[wp(k + 1)];
-            if space.segment_valid(validity, last, next, scratch, checks) {
+            if new_segment_valid(space, validity, last, next, probe, work, checks) {
                 continue;
             }
         }
