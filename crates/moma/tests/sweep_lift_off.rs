@@ -124,6 +124,23 @@ fn the_shipped_lift_off_sweeps_load() {
     }
 }
 
+/// The shipped mobile-manipulator sweep `file` (in `scenarios/sweeps`) cut to one point:
+/// its transport posture (shoulder lift −0.5 rad) without payload; the text, the file's
+/// path and its folder.
+fn transport_point(file: &str) -> (String, PathBuf, PathBuf) {
+    let dir = root().join("scenarios/sweeps");
+    let path = dir.join(file);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("\"q.shoulder_lift_joint\""))
+        .unwrap();
+    let text = text
+        .replace(line, "\"q.shoulder_lift_joint\" = [-0.5]")
+        .replace("payload = [0.0, 2.0]", "payload = [0.0]");
+    (text, path, dir)
+}
+
 #[test]
 fn the_mobile_manipulators_default_gains_hold_its_wrist_and_too_stiff_ones_are_named() {
     // The shipped sweep cut to its transport posture without payload: with the default
@@ -132,20 +149,11 @@ fn the_mobile_manipulators_default_gains_hold_its_wrist_and_too_stiff_ones_are_n
     // 2000 N·m/rad and 100 N·m·s/rad on every joint, which ended the run in non-finite
     // accelerations on the light wrist, are refused before it runs, naming the file, the
     // field and the joint.
-    let dir = root().join("scenarios/sweeps");
-    let path = dir.join("lift_off_mobile_manipulator.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
+    let (text, path, dir) = transport_point("lift_off_mobile_manipulator.toml");
     assert!(
         !text.contains("joint_gains"),
         "the shipped file uses the default"
     );
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("\"q.shoulder_lift_joint\""))
-        .unwrap();
-    let text = text
-        .replace(line, "\"q.shoulder_lift_joint\" = [-0.5]")
-        .replace("payload = [0.0, 2.0]", "payload = [0.0]");
     let s = Sweep::from_toml_str(&text, &path, &dir).unwrap();
     let cols = s.columns();
     let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
@@ -176,16 +184,7 @@ fn with_caster_friction_the_mobile_manipulator_tips_over_within_ten_percent_of_t
     // (crates/moma/tests/contact_tip_limits.rs states the measured figures); without the
     // casters' friction nothing carries the horizontal load at that limit and the robot
     // does not tip over at the bracket's upper end (the wheels slide instead).
-    let dir = root().join("scenarios/sweeps");
-    let path = dir.join("tip_over_mobile_manipulator.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("\"q.shoulder_lift_joint\""))
-        .unwrap();
-    let text = text
-        .replace(line, "\"q.shoulder_lift_joint\" = [-0.5]")
-        .replace("payload = [0.0, 2.0]", "payload = [0.0]");
+    let (text, path, dir) = transport_point("tip_over_mobile_manipulator.toml");
     let s = Sweep::from_toml_str(&text, &path, &dir).unwrap();
     let cols = s.columns();
     let col = |n: &str| cols.iter().position(|c| c == n).unwrap();

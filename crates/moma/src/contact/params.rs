@@ -118,6 +118,8 @@ mod tests {
             (1e5, 2e3, 1.0),
             (1e5, 2e3, 10.0),
             (1e6, 50.0, 3.0),
+            // a soft, damped contact (ζ ≈ 3.6e8), where 2(√(1 + ζ²) − ζ)/ω_n cancels to 0
+            (1e-12, 2e3, 7.9),
         ] {
             let b = spring_damper_step_bound(k, c, m);
             // Bounded below the bound (undamped it is neutrally stable, the amplitude of x
@@ -134,6 +136,12 @@ mod tests {
                 "k {k} c {c} m {m}: 1.02 × bound gives {above}"
             );
         }
+    }
+
+    #[test]
+    fn a_huge_damping_gives_a_tiny_bound_not_zero() {
+        let b = spring_damper_step_bound(1e5, 1e300, 7.9);
+        assert!(b > 0.0 && b < 1e-290, "{b}");
     }
 
     #[test]
