@@ -15,7 +15,7 @@
 //! (a table the raised arm would hit). One distance query per box, at load.
 //!
 //! A pick's drive on carries the object: the same check with the object attached to the
-//! robot's geometry ([`HeldObjectBlocks`], `Task::drive_on_map`) blocks, on the drive
+//! robot's geometry ([`HeldObjectBlocks`], `Mission::drive_on_map`) blocks, on the drive
 //! on's map, the objects the robot passes under bare but not holding it (a can held above
 //! the robot's top under a table top the robot alone clears).
 
