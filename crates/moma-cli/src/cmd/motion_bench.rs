@@ -250,46 +250,39 @@ pub fn run(args: Args) -> Result<()> {
     }
     // Where the time went, over every run that got past its input checks.
     let timed: Vec<&Run> = runs.iter().filter(|r| r.phases_s[0].is_finite()).collect();
-    let mut totals = [0.0; 5];
+    let (mut totals, mut phase_checks) = ([0.0; 5], [0.0; 5]);
     for r in &timed {
-        for (t, p) in totals.iter_mut().zip(r.phases_s) {
-            *t += p;
+        let sums = totals.iter_mut().zip(&mut phase_checks);
+        for ((time, checked), (s, n)) in sums.zip(r.phases_s.iter().zip(r.phase_checks)) {
+            *time += s;
+            *checked += n as f64;
         }
     }
     let all: f64 = totals.iter().sum();
-    let checks: u64 = timed.iter().map(|r| r.checks).sum();
-    let mut phase_checks = [0u64; 5];
-    for r in &timed {
-        for (t, c) in phase_checks.iter_mut().zip(r.phase_checks) {
-            *t += c;
-        }
-    }
+    let checks = timed.iter().map(|r| r.checks).sum::<u64>().max(1) as f64;
     let distances: u64 = timed.iter().map(|r| r.distances).sum();
     if all > 0.0 {
         println!(
-            "# time: setup {:.1} %, IK {:.1} %, search {:.1} %, shortcut {:.1} %, timing {:.1} %; \
-             {:.1} µs per checked state, {:.1} exact pair distances per state (wall clock, \
-             all phases)",
-            100.0 * totals[0] / all,
-            100.0 * totals[1] / all,
-            100.0 * totals[2] / all,
-            100.0 * totals[3] / all,
-            100.0 * totals[4] / all,
-            1e6 * all / checks.max(1) as f64,
-            distances as f64 / checks.max(1) as f64
+            "# time: {}; {:.1} µs per checked state, {:.1} exact pair distances per state \
+             (wall clock, all phases)",
+            phase_shares(totals, all),
+            1e6 * all / checks,
+            distances as f64 / checks
         );
-        println!(
-            "# checked states: setup {:.1} %, IK {:.1} %, search {:.1} %, shortcut {:.1} %, \
-             timing {:.1} %",
-            100.0 * phase_checks[0] as f64 / checks.max(1) as f64,
-            100.0 * phase_checks[1] as f64 / checks.max(1) as f64,
-            100.0 * phase_checks[2] as f64 / checks.max(1) as f64,
-            100.0 * phase_checks[3] as f64 / checks.max(1) as f64,
-            100.0 * phase_checks[4] as f64 / checks.max(1) as f64,
-        );
+        println!("# checked states: {}", phase_shares(phase_checks, checks));
     }
     if let Some(path) = &args.json {
         crate::output::write_json(path, &runs)?;
     }
     Ok(())
+}
+
+/// `setup p %, IK p %, search p %, shortcut p %, timing p %`: each phase's part of `whole`.
+fn phase_shares(parts: [f64; 5], whole: f64) -> String {
+    ["setup", "IK", "search", "shortcut", "timing"]
+        .iter()
+        .zip(parts)
+        .map(|(name, part)| format!("{name} {:.1} %", 100.0 * part / whole))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
