@@ -238,23 +238,24 @@ pub struct HeldObjectBlocks {
 }
 
 /// The map of a drive on that holds an object: blocks on `grid` (the mission's map,
-/// where each of `objects` is blocked by its verdict in `bare`) the objects whose slab
-/// `carried`, the robot's geometry with the object attached
+/// where each of `objects` is blocked by its verdict in `bare`, aligned with it) the
+/// objects whose slab `carried`, the robot's geometry with the object attached
 /// ([`GeometryModel::with_attached`]), does not clear by more than `padding` (m) at the
 /// arm posture `transport` ([`block_by_height`] on that geometry); returns those that the
 /// bare robot passed under, in the order of `objects` (each named by its id).
 pub fn block_by_height_holding(
     grid: &mut OccupancyGrid,
-    objects: &[(SceneObject, BoxVerdict)],
+    objects: &[SceneObject],
+    bare: &[BoxVerdict],
     robot: &WheeledModel,
     carried: &GeometryModel,
     transport: &[f64],
     padding: f64,
 ) -> Vec<HeldObjectBlocks> {
-    let shapes: Vec<SceneObject> = objects.iter().map(|(o, _)| o.clone()).collect();
-    let holding = block_by_height(grid, &shapes, robot, carried, transport, padding);
+    let holding = block_by_height(grid, objects, robot, carried, transport, padding);
     objects
         .iter()
+        .zip(bare)
         .zip(holding)
         .filter(|((_, bare), holding)| holding.blocked && !bare.blocked)
         .map(|((o, bare), holding)| HeldObjectBlocks {

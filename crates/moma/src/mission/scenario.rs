@@ -242,8 +242,7 @@ pub fn from_file_with(
                 &footprint,
             )?;
             let held = (&robot, transport.as_slice());
-            let boxes = box_objects.into_iter().zip(boxes.iter().copied());
-            let drive_on = drive_on_map(&task, boxes, &map, held, &footprint);
+            let drive_on = drive_on_map(&task, (box_objects, &boxes), &map, held, &footprint);
             (Some(task), Some(drive_on))
         }
     };
@@ -416,23 +415,23 @@ fn place_scene_on_map(
 /// blocked.
 fn drive_on_map(
     task: &Task,
-    boxes: impl Iterator<Item = (crate::collision::SceneObject, BoxVerdict)>,
+    (box_objects, box_verdicts): (Vec<crate::collision::SceneObject>, &[BoxVerdict]),
     map: &LoadedMap,
     (robot, transport): (&WheeledModel, &[f64]),
     footprint: &MissionFootprint,
 ) -> DriveOnMap {
-    let scene = task
-        .scene
-        .objects
-        .iter()
-        .zip(&task.heights)
-        .filter(|(o, _)| o.id != task.object)
-        .map(|(o, v)| (o.clone(), *v));
-    let objects: Vec<_> = boxes.chain(scene).collect();
+    let (mut objects, mut bare) = (box_objects, box_verdicts.to_vec());
+    for (o, v) in task.scene.objects.iter().zip(&task.heights) {
+        if o.id != task.object {
+            objects.push(o.clone());
+            bare.push(*v);
+        }
+    }
     let mut grid = map.grid.clone();
     let blocks = block_by_height_holding(
         &mut grid,
         &objects,
+        &bare,
         robot,
         &task.carried,
         transport,
