@@ -45,7 +45,7 @@ impl<'m> Runner<'m> {
         v: f64,
         w: f64,
     ) -> bool {
-        if !self.check_arm_distances(ws, st, t) {
+        if !self.check_task_distances(ws, st, t) {
             return false;
         }
         let m = self.m;

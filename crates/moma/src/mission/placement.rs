@@ -38,6 +38,7 @@ pub(super) fn choose_placement(
         closest_scene_pair: None,
         min_self_distance: None,
         closest_self_pair: None,
+        driving: None,
         support: task.support.clone(),
         drive_on_footprint_radius: None,
     };

@@ -84,20 +84,25 @@ impl Runner<'_> {
         }
     }
 
-    /// During a `[task]`'s arm motions, at every control step (not only the recorded
-    /// ones): the distances of the plant's state to the scene and between the robot's
-    /// links (once grasped, carrying the object, the scene without it; during the lift
-    /// its support under the lift rule, [`super::task::LiftStart`]); a distance ≤ 0 or a
-    /// broken lift rule is a touch and ends the run (`false`).
-    pub(super) fn check_arm_distances(
+    /// With a `[task]`, at every control step (not only the recorded ones) of its arm
+    /// motions and of the drives before and after them (each its own monitor, so the
+    /// result has the minima of both): the distances of the plant's
+    /// state to the task's scene and between the robot's links (once grasped, carrying
+    /// the object, the scene without it; during the lift its support under the lift rule,
+    /// [`super::task::LiftStart`]); a distance ≤ 0 or a broken lift rule is a touch and
+    /// ends the run (`false`).
+    pub(super) fn check_task_distances(
         &mut self,
         ws: &mut Workspace,
         st: &mut LoopState,
         t: f64,
     ) -> bool {
-        let (Phase::Arm(_), Some(task), Some(dm)) =
-            (st.phase, self.m.task.as_ref(), ws.distances.as_mut())
-        else {
+        let monitor = match st.phase {
+            Phase::Arm(_) => ws.distances.as_mut(),
+            Phase::Drive | Phase::Arrive => ws.drive_distances.as_mut(),
+            _ => None,
+        };
+        let (Some(task), Some(dm)) = (self.m.task.as_ref(), monitor) else {
             return true;
         };
         let holding = match st.phase {

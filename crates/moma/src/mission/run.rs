@@ -270,7 +270,7 @@ impl<'m> Runner<'m> {
         run_held_loop(&mut plant, &mut tick, noise.as_mut())?;
         let MissionTick { mut ws, st, .. } = tick;
         self.wall.simulation_s = (sim_clock.elapsed().as_secs_f64() - st.excluded).max(0.0);
-        let distances = ws.distances.take();
+        let distances = [ws.distances.take(), ws.drive_distances.take()];
         let edges = (0..ws.monitor.edges().len())
             .map(|i| ws.monitor.edge_label(i))
             .collect();
@@ -443,6 +443,9 @@ impl<'m> Runner<'m> {
         // control law: desired reduced accelerations
         let speed_clip = match st.phase {
             Phase::Drive | Phase::Arrive => {
+                if !self.check_task_distances(ws, st, t) {
+                    return Flow::Retry;
+                }
                 let reference = if st.phase == Phase::Drive {
                     Some(
                         self.reference
@@ -535,18 +538,21 @@ impl<'m> Runner<'m> {
         mut self,
         st: &LoopState,
         plant: MissionPlant<'_>,
-        distances: Option<DistanceMonitor>,
+        [arm, drives]: [Option<DistanceMonitor>; 2],
         support_edges: Vec<String>,
     ) -> MissionResult {
-        if let (Some(tr), Some(dm)) = (&mut self.task, distances) {
-            if let Some((d, pair)) = dm.min_scene {
-                tr.min_scene_distance = Some(d);
-                tr.closest_scene_pair = Some(pair);
+        if let Some(tr) = &mut self.task {
+            if let Some(dm) = arm {
+                if let Some((d, pair)) = dm.min_scene {
+                    tr.min_scene_distance = Some(d);
+                    tr.closest_scene_pair = Some(pair);
+                }
+                if let Some((d, pair)) = dm.min_self {
+                    tr.min_self_distance = Some(d);
+                    tr.closest_self_pair = Some(pair);
+                }
             }
-            if let Some((d, pair)) = dm.min_self {
-                tr.min_self_distance = Some(d);
-                tr.closest_self_pair = Some(pair);
-            }
+            tr.driving = drives.and_then(|dm| dm.minima());
         }
         self.min_zmp_event();
         self.events.sort_by(|a, b| a.t.total_cmp(&b.t));

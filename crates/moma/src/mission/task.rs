@@ -814,6 +814,19 @@ impl DistanceMonitor {
         update_geometry_placements(gm, &self.data, gd);
     }
 
+    /// Both minima, once the monitor has measured a state.
+    #[must_use]
+    pub fn minima(&self) -> Option<DistanceMinima> {
+        let ((scene, scene_pair), (self_d, self_pair)) =
+            (self.min_scene.clone()?, self.min_self.clone()?);
+        Some(DistanceMinima {
+            min_scene_distance: scene,
+            closest_scene_pair: scene_pair,
+            min_self_distance: self_d,
+            closest_self_pair: self_pair,
+        })
+    }
+
     /// What the last [`DistanceMonitor::sample`] touched (a distance ≤ 0), as the run's
     /// reason states it: the scene before the links, the held object named as such
     /// (`held object 'Can2' touches scene object '<id>' (<distance> m)`); `None` when it
@@ -1130,6 +1143,19 @@ pub struct PayloadRecord {
     pub zmp_margin_with: Option<f64>,
 }
 
+/// The smallest distances a [`DistanceMonitor`] measured.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct DistanceMinima {
+    /// Smallest robot–scene distance (m).
+    pub min_scene_distance: f64,
+    /// Link (or the held object) and scene object at it.
+    pub closest_scene_pair: [String; 2],
+    /// Smallest distance between enabled link pairs (m).
+    pub min_self_distance: f64,
+    /// Links at it.
+    pub closest_self_pair: [String; 2],
+}
+
 /// What the pick did.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TaskResult {
@@ -1154,6 +1180,10 @@ pub struct TaskResult {
     pub min_self_distance: Option<f64>,
     /// Links at it.
     pub closest_self_pair: Option<[String; 2]>,
+    /// Smallest distances over every control step of the drives, to the placement and
+    /// on from it (the task's scene, the held object with the robot after the grasp;
+    /// `None` without a drive).
+    pub driving: Option<DistanceMinima>,
     /// The scene objects the held object may touch ([`Task::support`]).
     pub support: Vec<String>,
     /// The radius of the drive on's footprint, with the held object (m; `None` without
