@@ -253,8 +253,9 @@ impl Solver {
     }
 
     /// The linearisation the first iteration of [`Solver::solve`] works on: `traj`'s
-    /// inputs rolled out from `x0`, each moved onto the inputs admissible at its knot, and every stage's
-    /// model there (read with [`Solver::stages`]); returns the total cost. With
+    /// inputs rolled out from `x0`, each moved onto the inputs admissible at its knot,
+    /// and every stage's model there (read with [`Solver::stages`]); returns the total
+    /// cost. With
     /// [`Solver::backward_pass`] it is one iteration's quadratic program and its Riccati
     /// solution, for comparing that pass with other QP solvers on the same problem.
     ///
@@ -277,8 +278,8 @@ impl Solver {
     }
 
     /// Checks the dimensions, rolls the guess out from `x0` (each input moved onto the
-    /// inputs admissible at its knot)
-    /// and sums the lower bounds of the stages left (for stopping hopeless rollouts).
+    /// inputs admissible at its knot) and sums the lower bounds of the stages left (for
+    /// stopping hopeless rollouts).
     fn roll_out_guess<P: OptimalControlProblem + ?Sized>(
         &mut self,
         problem: &mut P,
