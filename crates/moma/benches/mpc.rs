@@ -78,13 +78,18 @@ fn bench_mpc(c: &mut Criterion) {
     riccati
         .linearize(&mut mpc_qp.problem, &x0, &mut traj)
         .unwrap();
-    let (lo, hi) = {
-        let (l, h) = mpc_qp.problem.input_bounds(0);
-        (l.clone(), h.clone())
-    };
+    // Each stage's input bounds at its state (the joint speeds' limits make them
+    // depend on it).
+    let bounds: Vec<(DVector<f64>, DVector<f64>)> = (0..n)
+        .map(|k| {
+            let (mut l, mut h) = (DVector::zeros(nu), DVector::zeros(nu));
+            mpc_qp.problem.input_bounds(k, &traj.xs[k], &mut l, &mut h);
+            (l, h)
+        })
+        .collect();
     let stages = riccati.stages().to_vec();
     riccati.backward_pass(&mpc_qp.problem, &traj, 0.0).unwrap();
-    let qp = StepQp::new(&stages, &traj, &lo, &hi);
+    let qp = StepQp::new(&stages, &traj, &bounds);
     let z = qp.solve();
     let du0 = DVector::from_column_slice(&z[..nu]);
     println!(
@@ -97,7 +102,7 @@ fn bench_mpc(c: &mut Criterion) {
         b.iter(|| black_box(riccati.backward_pass(&mpc_qp.problem, &traj, 0.0).unwrap()));
     });
     c.bench_function("mpc/qp_clarabel", |b| {
-        b.iter(|| black_box(StepQp::new(&stages, &traj, &lo, &hi).solve()));
+        b.iter(|| black_box(StepQp::new(&stages, &traj, &bounds).solve()));
     });
     #[cfg(feature = "bench-osqp")]
     {
@@ -109,7 +114,7 @@ fn bench_mpc(c: &mut Criterion) {
             (&riccati.feedforward[0] - &du0).amax()
         );
         c.bench_function("mpc/qp_osqp", |b| {
-            b.iter(|| black_box(StepQp::new(&stages, &traj, &lo, &hi).solve_osqp()));
+            b.iter(|| black_box(StepQp::new(&stages, &traj, &bounds).solve_osqp()));
         });
     }
 
@@ -130,7 +135,11 @@ struct StepQp {
 }
 
 impl StepQp {
-    fn new(stages: &[StageModel], traj: &Trajectory, lo: &DVector<f64>, hi: &DVector<f64>) -> Self {
+    fn new(
+        stages: &[StageModel],
+        traj: &Trajectory,
+        bounds: &[(DVector<f64>, DVector<f64>)],
+    ) -> Self {
         let n = traj.us.len();
         let (nx, nu) = (traj.xs[0].len(), traj.us[0].len());
         let w = nx + nu;
@@ -199,7 +208,7 @@ impl StepQp {
             }
         }
         let equalities = b.len();
-        for k in 0..n {
+        for (k, (lo, hi)) in bounds.iter().enumerate() {
             for i in 0..nu {
                 for (sign, bound) in [(1.0, hi[i] - traj.us[k][i]), (-1.0, traj.us[k][i] - lo[i])] {
                     ai.push(b.len());

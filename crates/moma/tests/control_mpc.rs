@@ -72,8 +72,15 @@ impl OptimalControlProblem for LinearQuadratic {
         }
         self.cost(k, x, u)
     }
-    fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
-        (&self.lo, &self.hi)
+    fn input_bounds(
+        &self,
+        _k: usize,
+        _x: &DVector<f64>,
+        lo: &mut DVector<f64>,
+        hi: &mut DVector<f64>,
+    ) {
+        lo.copy_from(&self.lo);
+        hi.copy_from(&self.hi);
     }
 }
 
@@ -480,4 +487,106 @@ fn an_inactive_clearance_row_in_the_band_gives_only_curvature() {
     let (_, m2) = terms(0.0, 0.034, &mut vals);
     let (_, m3) = terms(0.003, 0.034, &mut vals);
     assert!((&m3.lxx - &m2.lxx).amax() == 0.0);
+}
+
+/// The inputs Fetch's MPC applies in its rollouts (`admissible_input`), from 300 states
+/// with the wheel rates and joint speeds anywhere within their limits and inputs of up
+/// to 5× the acceleration bounds: the next knot's joint speeds and wheel rates, stepped
+/// by the problem's own transition, stay within their limits, the inputs within the
+/// acceleration bounds; the platform input is the nearest admissible one to the one
+/// asked for (no point of a 161 × 161 grid of the wheels' accelerations that is
+/// admissible lies nearer); and an admissible input is left as it is.
+#[test]
+fn fetch_admissible_inputs_keep_the_next_knots_speed_limits_and_are_the_nearest() {
+    let s = MpcSettings::default();
+    let (a_lin, a_ang, a_joint) = (
+        s.max_linear_acceleration,
+        s.max_angular_acceleration,
+        s.max_joint_acceleration,
+    );
+    let (mut mpc, q0) = mpc_common::fetch_mpc(None, s);
+    let p = &mut mpc.problem;
+    let (nx, nu, n) = (p.nx(), p.nu(), p.robot.n_moved());
+    let dt = p.settings.dt;
+    let w = p.robot.wheel_map;
+    let w_inv = w.try_inverse().unwrap();
+    let wl = p.robot.wheel_rate_limit;
+    let speed_limit = p.robot.speed_limit.clone();
+    let mut x = DVector::zeros(nx);
+    let vr = vec![0.0; p.robot.wheeled.nr()];
+    p.robot.state_from_plant(q0.as_slice(), &vr, &mut x);
+    let (mut lo, mut hi) = (DVector::zeros(nu), DVector::zeros(nu));
+    let mut next = DVector::zeros(nx);
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let mut moved = 0;
+    for trial in 0..300 {
+        let rates = nalgebra::Vector2::new(wl * rnd(), wl * rnd());
+        let platform = w_inv * rates;
+        x[3 + n] = platform[0];
+        x[4 + n] = platform[1];
+        for i in 0..n {
+            x[5 + n + i] = speed_limit[i] * rnd();
+        }
+        let mut u = DVector::zeros(nu);
+        u[0] = a_lin * rnd();
+        u[1] = a_ang * rnd();
+        for i in 2..nu {
+            u[i] = 5.0 * a_joint * rnd();
+        }
+        let asked = u.clone();
+        p.admissible_input(1, &x, &mut u, &mut lo, &mut hi);
+        p.dynamics(1, &x, &u, &mut next).unwrap();
+        let rates_next = w * nalgebra::Vector2::new(next[3 + n], next[4 + n]);
+        assert!(
+            rates_next.amax() <= wl * (1.0 + 1e-9),
+            "{trial}: {rates_next}"
+        );
+        for i in 0..n {
+            let qd = next[5 + n + i];
+            assert!(
+                qd.abs() <= speed_limit[i] * (1.0 + 1e-9),
+                "{trial}: joint {i} {qd}"
+            );
+            assert!(u[2 + i].abs() <= a_joint * (1.0 + 1e-12), "{trial}: {u}");
+        }
+        assert!(u[0].abs() <= a_lin * (1.0 + 1e-12) && u[1].abs() <= a_ang * (1.0 + 1e-12));
+        // Nearest: the wheels' accelerations z = W u of every admissible grid point are
+        // no nearer the asked input's.
+        let z_asked = w * nalgebra::Vector2::new(asked[0], asked[1]);
+        let z_got = w * nalgebra::Vector2::new(u[0], u[1]);
+        let d_got = (z_got - z_asked).norm();
+        if d_got > 0.0 {
+            moved += 1;
+        }
+        for a in 0..=160 {
+            for b in 0..=160 {
+                let z = nalgebra::Vector2::new(
+                    (-wl - rates[0] + 2.0 * wl * a as f64 / 160.0) / dt,
+                    (-wl - rates[1] + 2.0 * wl * b as f64 / 160.0) / dt,
+                );
+                let up = w_inv * z;
+                if up[0].abs() <= a_lin && up[1].abs() <= a_ang {
+                    let d = (z - z_asked).norm();
+                    assert!(d_got <= d * (1.0 + 1e-9) + 1e-9, "{trial}: {d_got} > {d}");
+                }
+            }
+        }
+        // Admissible already: unchanged.
+        let kept = u.clone();
+        p.admissible_input(1, &x, &mut u, &mut lo, &mut hi);
+        assert!(
+            (&u - &kept).amax() <= 1e-12 * (1.0 + kept.amax()),
+            "{trial}"
+        );
+    }
+    assert!(
+        moved > 30,
+        "the wheel-rate limit moved {moved} of 300 inputs"
+    );
 }

@@ -115,13 +115,20 @@ fn the_default_mission_with_the_mpc_replans_round_the_crate_and_reaches_the_shel
     assert_eq!(summary["mpc"]["solves"], s.solves);
 }
 
-/// The limits of Fetch's warehouse mission with the MPC that hold at every start checked
-/// (the shipped one and the three moved ones of
-/// `fetch_keeps_the_limits_that_hold_at_every_start_from_moved_starts`): the goal within
+/// The limits of Fetch's warehouse mission with the MPC, checked at the shipped start
+/// and at three moved ones (`fetch_keeps_its_limits_from_moved_starts`): the goal within
 /// 30 s, the gripper within 2 cm of its target, the ZMP margin (planned and in the
 /// plant) above its set value 0.05 m, no joint past a position limit, clearance to the
-/// racks, and the torques clipped on fewer than 5 % of the steps (the wheels ride their
-/// limit while braking into the reach).
+/// racks, the torques clipped on fewer than 5 % of the steps, and the torque, wheel-speed
+/// and joint-speed limits. Those three hold in the plan by construction, not by a
+/// penalty: the joint speeds of the next knot are a bound on the input, the wheel rates
+/// of the next knot and the wheels' torques of the first input are the polygon the
+/// platform input is projected onto (`docs/mpc.md`, "Limits the solver enforces"). What
+/// the plant then does past them (measured: at most 0.011 rad/s of joint speed, none of
+/// the rest) is the plant leaving the plan between solves, bounded here: torque asked
+/// past a limit at most 0.01 N·m (the arm's torques are still a penalty), wheel rates at
+/// most 0.01 rad/s and joint speeds at most 0.02 rad/s past theirs (before: up to
+/// 1.37 N·m, 0.72 rad/s and 0.13 rad/s at these starts).
 fn fetch_warehouse_limits_hold(r: &MissionResult, start: &str) {
     assert!(r.reached, "{start}: {:?} {:?}", r.reason, r.events);
     let t_goal = r.time_to_goal.expect("a time to goal");
@@ -139,6 +146,9 @@ fn fetch_warehouse_limits_hold(r: &MissionResult, start: &str) {
     let zmp = r.min_zmp_margin().unwrap();
     assert!(zmp >= 0.05, "{start}: plant's smallest ZMP margin {zmp}");
     assert!(r.min_clearance().unwrap() > 0.0, "{start}");
+    assert!(s.max_torque_excess <= 0.01, "{start}: {s:?}");
+    assert!(s.wheel_speed_excess <= 0.01, "{start}: {s:?}");
+    assert!(s.joint_speed_excess <= 0.02, "{start}: {s:?}");
 }
 
 /// Fetch's warehouse mission with the MPC: one solve per 50 ms, 25 simulation steps of
@@ -151,26 +161,14 @@ fn fetch_reaches_its_warehouse_goal_with_the_mpc_within_its_limits() {
     let m = mission::load(&scenarios().join("mission_fetch_mpc.toml")).unwrap();
     let r = run(&m);
     fetch_warehouse_limits_hold(&r, "shipped start");
-    // Torque asked past a limit, joint speed past a limit and wheel speed past a limit
-    // are penalties, not bounds, and they are checked at the shipped start only: the
-    // closed loop amplifies round-off (`docs/mpc.md`, "In closed loop"), and with the
-    // start moved by -1e-7 m the same build asks 1.37 N·m past a torque limit and
-    // runs a joint 0.13 rad/s past its speed limit, with it moved by 1e-6 m the wheels
-    // 0.72 rad/s past theirs (BENCHMARKS.md, "Fetch's mission from moved starts"). At
-    // the shipped start: 0.06 N·m, 0.014 rad/s and 0.061 rad/s.
-    let s = r.mpc.as_ref().expect("the MPC's summary");
-    assert!(s.max_torque_excess < 1.0, "{s:?}");
-    assert!(s.joint_speed_excess < 0.1, "{s:?}");
-    assert!(s.wheel_speed_excess < 0.5, "{s:?}");
 }
 
-/// The mission's limits that do not depend on the luck of the round-off: with the start
-/// moved by 1e-9, -1e-7 and 1e-6 m along x (each run's round-off, and so its closed
-/// loop, differs from the shipped start's from the first solve on) the goal, the
-/// gripper error, the ZMP margin, the joint positions, the clearance and the clipped
-/// steps keep the bounds of the shipped start.
+/// The same limits from moved starts: with the start moved by 1e-9, -1e-7 and 1e-6 m
+/// along x, each run's round-off, and so its closed loop, differs from the shipped
+/// start's from the first solve on (the closed loop amplifies round-off, `docs/mpc.md`,
+/// "In closed loop"); limits that held only as penalties broke at two of these three.
 #[test]
-fn fetch_keeps_the_limits_that_hold_at_every_start_from_moved_starts() {
+fn fetch_keeps_its_limits_from_moved_starts() {
     for (x, moved) in [
         ("-5.399999999", "+1e-9 m"),
         ("-5.400000100000001", "-1e-7 m"),

@@ -34,6 +34,12 @@
 //! | ZMP | margin ≥ `zmp_margin` | in u exact (momentum rate affine in q̈); in x the point-mass linearisation, on the critical edge |
 //! | clearance | one row per nearest pair (self pairs, scene; the [`ConstraintSettings::clearance_pairs`] nearest, ascending): distance ≥ `clearance` | that pair's distance derivative |
 //! | map clearance | base footprint's clearance on the map's distance field ≥ `map_clearance` | the bilinear field's gradient in `(x, y, θ)` |
+//!
+//! The joint-speed and wheel-speed limits, and the wheels' torque limits of the first
+//! input, are also enforced exactly by the solver, on every input it applies (the
+//! whole-body problem's `input_bounds` and `admissible_input`, `docs/mpc.md`, "Limits the
+//! solver enforces"); their rows here then stay inactive unless the limit cannot be met
+//! in one stage.
 
 use nalgebra::DVector;
 

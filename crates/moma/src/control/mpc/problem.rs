@@ -1,6 +1,7 @@
 //! The discrete optimal-control problem the solver works on: `N` stages of dynamics
 //! `x_{k+1} = f_k(x_k, u_k)`, stage costs `ℓ_k(x_k, u_k)`, a terminal cost `ℓ_N(x_N)` and
-//! box bounds on each input. State constraints and input–state constraints are the
+//! box bounds on each input that may depend on the knot's state (and an admissible set
+//! within the box that the rollouts project onto). State constraints and input–state constraints are the
 //! problem's own business: the whole-body problem folds them into its costs as
 //! augmented-Lagrangian terms ([`super::constraints`]) and updates the multipliers once
 //! per MPC solve, after the solver returns (so the cost is one function within a solve).
@@ -99,8 +100,34 @@ pub trait OptimalControlProblem {
     fn cost_lower_bound(&self, _k: usize) -> f64 {
         f64::NEG_INFINITY
     }
-    /// Lower and upper bounds of `u_k` (`±∞` for a free component).
-    fn input_bounds(&self, k: usize) -> (&DVector<f64>, &DVector<f64>);
+    /// Lower and upper bounds of `u_k` at the state `x` of knot `k` (`±∞` for a free
+    /// component), written into `lo` and `hi` (`lo ≤ hi`): the box the backward pass's
+    /// stage QPs keep the step in.
+    fn input_bounds(
+        &self,
+        k: usize,
+        x: &DVector<f64>,
+        lo: &mut DVector<f64>,
+        hi: &mut DVector<f64>,
+    );
+    /// Moves `u` onto the inputs admissible at the state `x` of knot `k`, where every
+    /// rollout applies it; `lo` and `hi` are scratch of length `nu`. The default clamps
+    /// `u` to [`OptimalControlProblem::input_bounds`]; a problem whose admissible set is
+    /// that box cut by further constraints the rollout enforces exactly projects onto
+    /// it, the result staying within the box.
+    fn admissible_input(
+        &self,
+        k: usize,
+        x: &DVector<f64>,
+        u: &mut DVector<f64>,
+        lo: &mut DVector<f64>,
+        hi: &mut DVector<f64>,
+    ) {
+        self.input_bounds(k, x, lo, hi);
+        for i in 0..u.len() {
+            u[i] = u[i].clamp(lo[i], hi[i]);
+        }
+    }
     /// Called by the solver after every pass that evaluated all the knots of the
     /// trajectory it keeps (its models, or an accepted line-search rollout): what the
     /// problem recorded in that pass describes the trajectory the solve returns, unless

@@ -1,7 +1,8 @@
 //! Box-constrained iterative LQR (DDP with the dynamics' second derivatives left out):
 //! a Riccati backward pass over the stage models, each stage's input step the solution
 //! of a box QP ([`super::box_qp`]), and a forward pass that rolls the nonlinear dynamics
-//! out under the affine policy `u = ū + α k + K (x − x̄)` with a backtracking line search
+//! out under the affine policy `u = ū + α k + K (x − x̄)` (each input moved onto the
+//! problem's admissible inputs at its knot's state) with a backtracking line search
 //! on the total cost. Levenberg–Marquardt regularisation `μ I` on `Q_uu` grows when a
 //! stage's free block is not positive definite or no step decreases the cost.
 //!
@@ -119,6 +120,9 @@ pub struct Solver {
     gains_t: DMatrix<f64>,
     lo: DVector<f64>,
     hi: DVector<f64>,
+    /// The problem's input bounds at a knot (scratch of `input_bounds`).
+    bound_lo: DVector<f64>,
+    bound_hi: DVector<f64>,
     qp: BoxQp,
     col: DVector<f64>,
     tmp_x: DVector<f64>,
@@ -154,6 +158,8 @@ impl Solver {
             gains_t: DMatrix::zeros(nx, nu),
             lo: DVector::zeros(nu),
             hi: DVector::zeros(nu),
+            bound_lo: DVector::zeros(nu),
+            bound_hi: DVector::zeros(nu),
             qp: BoxQp::new(nu),
             col: DVector::zeros(nu),
             tmp_x: DVector::zeros(nx),
@@ -247,8 +253,9 @@ impl Solver {
     }
 
     /// The linearisation the first iteration of [`Solver::solve`] works on: `traj`'s
-    /// inputs projected onto the bounds and rolled out from `x0`, and every stage's
-    /// model there (read with [`Solver::stages`]); returns the total cost. With
+    /// inputs rolled out from `x0`, each moved onto the inputs admissible at its knot,
+    /// and every stage's model there (read with [`Solver::stages`]); returns the total
+    /// cost. With
     /// [`Solver::backward_pass`] it is one iteration's quadratic program and its Riccati
     /// solution, for comparing that pass with other QP solvers on the same problem.
     ///
@@ -270,8 +277,9 @@ impl Solver {
         &self.stages
     }
 
-    /// Checks the dimensions, projects the guess onto the bounds, rolls it out from `x0`
-    /// and sums the lower bounds of the stages left (for stopping hopeless rollouts).
+    /// Checks the dimensions, rolls the guess out from `x0` (each input moved onto the
+    /// inputs admissible at its knot) and sums the lower bounds of the stages left (for
+    /// stopping hopeless rollouts).
     fn roll_out_guess<P: OptimalControlProblem + ?Sized>(
         &mut self,
         problem: &mut P,
@@ -292,16 +300,17 @@ impl Solver {
                 ),
             ));
         }
-        // Project the guess onto the bounds and roll it out.
-        for k in 0..self.n {
-            let (lo, hi) = problem.input_bounds(k);
-            for i in 0..self.nu {
-                traj.us[k][i] = traj.us[k][i].clamp(lo[i], hi[i]);
-            }
-        }
+        // Roll the guess out, each input moved onto the inputs admissible at its knot.
         traj.xs[0].copy_from(x0);
         for k in 0..self.n {
             let (xs, rest) = traj.xs.split_at_mut(k + 1);
+            problem.admissible_input(
+                k,
+                &xs[k],
+                &mut traj.us[k],
+                &mut self.bound_lo,
+                &mut self.bound_hi,
+            );
             problem.dynamics(k, &xs[k], &traj.us[k], &mut rest[0])?;
         }
         // Suffix sums of the stage costs' lower bounds (for stopping hopeless rollouts).
@@ -363,12 +372,12 @@ impl Solver {
             for i in 0..self.nu {
                 self.quu[(i, i)] += mu;
             }
-            // Step bounds: the input bounds less the current input.
-            let (lo, hi) = problem.input_bounds(k);
+            // Step bounds: the input bounds at the knot's state less the current input.
+            problem.input_bounds(k, &traj.xs[k], &mut self.bound_lo, &mut self.bound_hi);
             let u = &traj.us[k];
             for i in 0..self.nu {
-                self.lo[i] = lo[i] - u[i];
-                self.hi[i] = hi[i] - u[i];
+                self.lo[i] = (self.bound_lo[i] - u[i]).min(0.0);
+                self.hi[i] = (self.bound_hi[i] - u[i]).max(0.0);
             }
             // Warm start the QP from the previous feed-forward step.
             self.tmp_u.copy_from(&self.feedforward[k]);
@@ -438,17 +447,20 @@ impl Solver {
         self.trial.xs[0].copy_from(&traj.xs[0]);
         let mut cost = 0.0;
         for k in 0..self.n {
-            // u = ū + α k + K (x − x̄), clamped to the bounds.
+            // u = ū + α k + K (x − x̄), moved onto the inputs admissible at x.
             self.tmp_x.copy_from(&self.trial.xs[k]);
             self.tmp_x -= &traj.xs[k];
             let u = &mut self.trial.us[k];
             u.copy_from(&traj.us[k]);
             u.axpy(alpha, &self.feedforward[k], 1.0);
             u.gemv(1.0, &self.gains[k], &self.tmp_x, 1.0);
-            let (lo, hi) = problem.input_bounds(k);
-            for i in 0..self.nu {
-                u[i] = u[i].clamp(lo[i], hi[i]);
-            }
+            problem.admissible_input(
+                k,
+                &self.trial.xs[k],
+                u,
+                &mut self.bound_lo,
+                &mut self.bound_hi,
+            );
             cost += problem.cost(k, &self.trial.xs[k], Some(&self.trial.us[k]))?;
             if cost + self.rest_bound[k + 1] > limit {
                 return Ok(f64::INFINITY);

@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2, Vector3};
 
 use super::constraints::{ConstraintSet, ConstraintSettings, clearance_rows};
 use super::costs::{CostWeights, KnotReference, knot_cost};
@@ -87,6 +87,11 @@ pub struct MpcProblem {
     ws: KnotWorkspace,
     lo: DVector<f64>,
     hi: DVector<f64>,
+    /// The wheels' torques at the solve's measured state, affine in the first input:
+    /// `τ_w = first_wheel_torque_du u_0 + first_wheel_torque_offset` (2 × nu; exact,
+    /// the state being fixed), set at the start of each solve.
+    first_wheel_torque_du: DMatrix<f64>,
+    first_wheel_torque_offset: [f64; 2],
     /// Per knot, the ZMP margin and clearance of the last evaluation.
     min_zmp: Vec<f64>,
     min_clearance: Vec<f64>,
@@ -119,6 +124,25 @@ impl MpcProblem {
                     reach
                 }
             }
+        }
+    }
+
+    /// The wheels' torques at the measured state `x0` as an affine function of the first
+    /// input (`first_wheel_torque_du`, `first_wheel_torque_offset`), from one evaluation
+    /// of knot 0 with derivatives at the first input `u0`: the torques are
+    /// `(N_Cᵀ S)⁻¹ (M_r u + c_r + G_r)`, affine in `u` at a fixed state.
+    fn linearize_first_wheel_torques(&mut self, x0: &DVector<f64>, u0: &DVector<f64>) {
+        self.ws.distance_cutoff = f64::NEG_INFINITY;
+        evaluate_knot(&self.robot, &mut self.ws, &self.hold, x0, Some(u0), true);
+        let vals = &self.ws.values;
+        for i in 0..2 {
+            let mut offset = vals.torque[i];
+            for j in 0..u0.len() {
+                let d = vals.torque_du[(i, j)];
+                self.first_wheel_torque_du[(i, j)] = d;
+                offset -= d * u0[j];
+            }
+            self.first_wheel_torque_offset[i] = offset;
         }
     }
 
@@ -268,8 +292,98 @@ impl OptimalControlProblem for MpcProblem {
         }
         -self.constraints.lambda[k].norm_squared() / (2.0 * rho)
     }
-    fn input_bounds(&self, _k: usize) -> (&DVector<f64>, &DVector<f64>) {
-        (&self.lo, &self.hi)
+    /// The acceleration bounds cut, for each moved joint, by its speed limit at the next
+    /// knot: `q̇⁺ = q̇ + dt q̈` is affine in `q̈`, so `|q̇⁺| ≤ q̇_max` is the interval
+    /// `[(−q̇_max − q̇)/dt, (q̇_max − q̇)/dt]` for the knot's `q̇`, intersected with the
+    /// acceleration bound (where the two do not meet, `|q̇|` beyond what one stage at the
+    /// bound brings back, the bound nearest the limits: full braking).
+    fn input_bounds(
+        &self,
+        _k: usize,
+        x: &DVector<f64>,
+        lo: &mut DVector<f64>,
+        hi: &mut DVector<f64>,
+    ) {
+        lo.copy_from(&self.lo);
+        hi.copy_from(&self.hi);
+        let n = self.robot.n_moved();
+        let h = self.settings.dt;
+        for i in 0..n {
+            let (a_lo, a_hi) = (self.lo[2 + i], self.hi[2 + i]);
+            let (vmax, qd) = (self.robot.speed_limit[i], x[5 + n + i]);
+            lo[2 + i] = ((-vmax - qd) / h).clamp(a_lo, a_hi);
+            hi[2 + i] = ((vmax - qd) / h).clamp(a_lo, a_hi);
+        }
+    }
+    /// The box of [`MpcProblem::input_bounds`], the wheel-rate limit at the next knot
+    /// and, at knot 0, the wheels' torque limits. `φ̇⁺ = W ([v, ω] + dt [v̇, ω̇])` is affine
+    /// in the platform's accelerations, so `|φ̇⁺_L|, |φ̇⁺_R| ≤ φ̇_max` is a box on the
+    /// wheels' accelerations `z = W [v̇, ω̇]`; the acceleration bounds on `(v̇, ω̇)` are a
+    /// parallelogram there; and at knot 0, whose state is the measured one, the wheels'
+    /// torques are affine in the input (exactly: `first_wheel_torque_du`), so
+    /// `|τ_w| ≤ torque_fraction · τ_max` are two more pairs of half-planes for the
+    /// other inputs given. The platform input is moved to the nearest point (in `z`) of
+    /// their intersection, a convex polygon; where it is empty, the nearest point of the
+    /// acceleration bounds and the torque limits, then of the acceleration bounds alone
+    /// (a wheel beyond what one stage can bring back: the nearest the limit it gets).
+    fn admissible_input(
+        &self,
+        k: usize,
+        x: &DVector<f64>,
+        u: &mut DVector<f64>,
+        lo: &mut DVector<f64>,
+        hi: &mut DVector<f64>,
+    ) {
+        self.input_bounds(k, x, lo, hi);
+        for i in 0..u.len() {
+            u[i] = u[i].clamp(lo[i], hi[i]);
+        }
+        let n = self.robot.n_moved();
+        let w = &self.robot.wheel_map;
+        let Some(w_inv) = w.try_inverse() else {
+            return;
+        };
+        let dt = self.settings.dt;
+        let limit = self.robot.wheel_rate_limit;
+        let rate = w * Vector2::new(x[3 + n], x[4 + n]);
+        // Half-planes a·z ≤ b as (a, b): the acceleration bounds (rows of W⁻¹), the
+        // wheel torques (knot 0), the wheel rates.
+        let mut planes = [Vector3::zeros(); 12];
+        for i in 0..2 {
+            let r = w_inv.row(i);
+            planes[2 * i] = Vector3::new(r[0], r[1], hi[i]);
+            planes[2 * i + 1] = Vector3::new(-r[0], -r[1], -lo[i]);
+        }
+        let mut torque_planes = 0;
+        if k == 0 {
+            let t = &self.first_wheel_torque_du;
+            for i in 0..2 {
+                let lim = self.settings.constraints.torque_fraction * self.robot.torque_limit[i];
+                let mut rest = self.first_wheel_torque_offset[i];
+                for j in 2..u.len() {
+                    rest += t[(i, j)] * u[j];
+                }
+                let a = Vector2::new(t[(i, 0)], t[(i, 1)]).transpose() * w_inv;
+                planes[4 + 2 * i] = Vector3::new(a[0], a[1], lim - rest);
+                planes[4 + 2 * i + 1] = Vector3::new(-a[0], -a[1], lim + rest);
+            }
+            torque_planes = 4;
+        }
+        let speed = 4 + torque_planes;
+        for i in 0..2 {
+            let mut e = Vector2::zeros();
+            e[i] = 1.0;
+            planes[speed + 2 * i] = Vector3::new(e[0], e[1], (limit - rate[i]) / dt);
+            planes[speed + 2 * i + 1] = Vector3::new(-e[0], -e[1], (limit + rate[i]) / dt);
+        }
+        let z0 = w * Vector2::new(u[0], u[1]);
+        let z = nearest_in_polygon(&planes[..speed + 4], z0)
+            .or_else(|| nearest_in_polygon(&planes[..speed], z0))
+            .or_else(|| nearest_in_polygon(&planes[..4], z0))
+            .unwrap_or(z0);
+        let p = w_inv * z;
+        u[0] = p[0].clamp(lo[0], hi[0]);
+        u[1] = p[1].clamp(lo[1], hi[1]);
     }
     /// Keeps the constraint rows, violations, ZMP margins and clearances of the pass:
     /// the report and the multiplier step of the solve read them, with no pass of
@@ -363,6 +477,8 @@ impl WholeBodyMpc {
             hold: q_start.clone(),
             lo,
             hi,
+            first_wheel_torque_du: DMatrix::zeros(2, nu),
+            first_wheel_torque_offset: [0.0; 2],
             min_zmp: vec![f64::INFINITY; n + 1],
             min_clearance: vec![f64::INFINITY; n + 1],
             kept_min_zmp: vec![f64::INFINITY; n + 1],
@@ -410,6 +526,8 @@ impl WholeBodyMpc {
         if self.solved_once {
             shift_solution(&mut self.solution.us, &mut self.problem.constraints.lambda);
         }
+        self.problem
+            .linearize_first_wheel_torques(&self.x0, &self.solution.us[0]);
         let opts = self.problem.settings.solver.clone();
         let stats: SolveStats =
             self.solver
@@ -511,4 +629,43 @@ fn check_plant_state(robot: &MpcRobot, q: &[f64], v_r: &[f64]) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The point nearest `z0` of the convex polygon `{z : a·z ≤ b}` of the half-planes
+/// `(a, b)` (feasible to a relative 1e-9): `z0` itself if inside, else the nearest of its
+/// projections onto the lines and their pairwise corners that lie inside (the nearest
+/// point of a polygon is on an edge or at a corner); `None` when no candidate is inside
+/// (the polygon is empty).
+fn nearest_in_polygon(planes: &[Vector3<f64>], z0: Vector2<f64>) -> Option<Vector2<f64>> {
+    let inside = |z: &Vector2<f64>| {
+        z.iter().all(|c| c.is_finite())
+            && planes
+                .iter()
+                .all(|p| p.x * z[0] + p.y * z[1] <= p.z + 1e-9 * (1.0 + p.z.abs()))
+    };
+    if inside(&z0) {
+        return Some(z0);
+    }
+    let mut best: Option<(f64, Vector2<f64>)> = None;
+    let mut consider = |z: Vector2<f64>| {
+        if inside(&z) {
+            let d = (z - z0).norm_squared();
+            if best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, z));
+            }
+        }
+    };
+    for (i, p) in planes.iter().enumerate() {
+        let a = Vector2::new(p.x, p.y);
+        let aa = a.norm_squared();
+        if aa > 0.0 {
+            consider(z0 - a * ((a.dot(&z0) - p.z) / aa));
+        }
+        for q in &planes[i + 1..] {
+            if let Some(m_inv) = Matrix2::new(p.x, p.y, q.x, q.y).try_inverse() {
+                consider(m_inv * Vector2::new(p.z, q.z));
+            }
+        }
+    }
+    best.map(|(_, z)| z)
 }
