@@ -7,8 +7,10 @@
 //! the same contact forces as the robot at rest under gravity `g − a u`. A run
 //! ([`LiftOffProblem::lifted_contact`]) starts the robot at rest, level, heading +x, its
 //! lowest contact on the ground, lets it settle for [`LiftOffSettings::settle`], ramps the
-//! plant's gravity linearly from `g` to `g − a u` over [`LiftOffSettings::ramp`] and holds
-//! it for [`LiftOffSettings::hold`], with every joint (wheels included) held at its start
+//! plant's gravity from `g` to `g − a u` over [`LiftOffSettings::ramp`] along a smooth step
+//! (`3τ² − 2τ³` of the elapsed fraction τ: no jump in the rate of the imposed acceleration
+//! at either end, so the hold does not start with a jolt) and holds it for
+//! [`LiftOffSettings::hold`], with every joint (wheels included) held at its start
 //! position by a PD law (the arm's gains by default from each joint's own inertia,
 //! [`JointGains`]); the wheels' friction carries the horizontal load. The run ends
 //! at the problem's [`LiftOffEvent`] after the settling time: by default the first
@@ -66,7 +68,7 @@ pub const DEFAULT_JOINT_GAINS: JointGains = JointGains::Inertial {
 pub struct LiftOffSettings {
     /// Time at rest before the ramp (s, ≥ 0); lift-off is looked for only after it.
     pub settle: f64,
-    /// Duration of the linear ramp of the acceleration from 0 to `a` (s, > 0).
+    /// Duration of the ramp of the acceleration from 0 to `a` (s, > 0), a smooth step.
     pub ramp: f64,
     /// Time `a` is held after the ramp (s, ≥ 0).
     pub hold: f64,
@@ -185,6 +187,17 @@ fn loaded_on_one_line(contacts: &[ContactReport]) -> bool {
     })
 }
 
+/// The fraction of the acceleration imposed at time `t` (s) of a run: 0 until the end of
+/// the settling, then the smooth step `3τ² − 2τ³` of the ramp's elapsed fraction τ, then 1.
+/// Its rate is zero at both ends of the ramp: a linear ramp's jump in rate where the hold
+/// begins set the base rocking on its contacts, and a held run read the overshoot as a
+/// lower threshold (Fetch's tip-over, `docs/contact.md`: 0.964 × the prediction, 0.980 ×
+/// with this step).
+fn ramp_fraction(t: f64, settings: &LiftOffSettings) -> f64 {
+    let tau = ((t - settings.settle) / settings.ramp).clamp(0.0, 1.0);
+    tau * tau * (3.0 - 2.0 * tau)
+}
+
 /// One step of a run as [`LiftOffProblem::run`] shows it: the state the step started
 /// from, the gravity it ran under, and the contact forces and accelerations computed
 /// there (so `q`, `v`, `acceleration` and `contacts` satisfy the plant's equations of
@@ -193,7 +206,8 @@ fn loaded_on_one_line(contacts: &[ContactReport]) -> bool {
 pub struct RunStep<'a> {
     /// Time at the end of the step (s).
     pub time: f64,
-    /// The plant's gravity over the step (world, m/s²): `g − a s u`, s the ramp's fraction.
+    /// The plant's gravity over the step (world, m/s²): `g − a s u`, s the ramp's fraction
+    /// (a smooth step from 0 to 1).
     pub gravity: Vector3<f64>,
     /// Configuration at the start of the step.
     pub q: &'a DVector<f64>,
@@ -497,8 +511,7 @@ impl LiftOffProblem {
         let mut u = vec![0.0; nv - 6];
         let (mut q, mut v) = (st.q.clone(), st.v.clone());
         for _ in 0..steps as usize {
-            let s = ((st.t - settings.settle) / settings.ramp).clamp(0.0, 1.0);
-            p.model.gravity = g - self.direction * (a * s);
+            p.model.gravity = g - self.direction * (a * ramp_fraction(st.t, settings));
             let gravity = p.model.gravity;
             for (k, (uk, [kp, kd])) in u.iter_mut().zip(&gains).enumerate() {
                 // Joint k below the root: q index 7 + k, v index 6 + k (one-dof joints).
@@ -649,6 +662,40 @@ mod tests {
             at(0.0, 0.0, true),
             at(1.0, 0.0, true)
         ]));
+    }
+
+    #[test]
+    fn the_ramp_rises_from_0_to_1_without_a_jump_in_rate_at_either_end() {
+        let s = LiftOffSettings {
+            settle: 0.3,
+            ramp: 2.0,
+            ..LiftOffSettings::default()
+        };
+        let f = |t: f64| ramp_fraction(t, &s);
+        assert_eq!(f(0.0), 0.0);
+        assert_eq!(f(0.3), 0.0);
+        assert_eq!(f(2.3), 1.0);
+        assert_eq!(f(5.0), 1.0);
+        // Half-way in time, half-way in acceleration; rising throughout.
+        assert!((f(1.3) - 0.5).abs() < 1e-15);
+        let mut last = 0.0;
+        for k in 1..=200 {
+            let x = f(0.3 + 2.0 * f64::from(k) / 200.0);
+            assert!(x > last, "{k}");
+            last = x;
+        }
+        // The rate (per second) just inside either end is ~0, as it is outside: a
+        // linear ramp's would be 1/ramp = 0.5 there.
+        let h = 1e-6;
+        for end in [0.3, 2.3] {
+            for t in [end - h, end + h] {
+                let rate = (f(t + h) - f(t - h)) / (2.0 * h);
+                assert!(rate.abs() < 1e-5, "rate {rate} at {t}");
+            }
+        }
+        // Steepest half-way: 1.5 / ramp.
+        let rate = (f(1.3 + h) - f(1.3 - h)) / (2.0 * h);
+        assert!((rate - 0.75).abs() < 1e-6, "{rate}");
     }
 
     #[test]
