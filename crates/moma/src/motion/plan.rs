@@ -62,6 +62,10 @@ pub struct MotionOptions {
     /// How far a local sample lies from its node at most, per joint (rad or m;
     /// `planning::rrt_connect`'s `local_radius`).
     pub search_local_radius: f64,
+    /// The search's tree with fewer live nodes extends next instead of the two
+    /// alternating (`planning::rrt_connect`'s `balanced`): a tree stuck in a pocket gets
+    /// the iterations, where its blocked steps cost one probe each.
+    pub search_balanced: bool,
     /// IK seeds tried for a goal pose.
     pub ik_attempts: usize,
     /// Distinct collision-free IK solutions sought before planning.
@@ -81,7 +85,8 @@ impl MotionOptions {
     /// checked every 0.01 rad (or m), search steps of at most 1 rad (or m; Fetch's arm box
     /// diagonal is about 13) probed every 0.25 rad (or m) and checked continuously on the
     /// paths found, a dynamic domain of 2 rad (or m) around blocked nodes, 30 % of the
-    /// samples within 0.8 rad (or m) per joint of a tree node, 200 IK seeds for up to 4 solutions, 100 shortcut
+    /// samples within 0.8 rad (or m) per joint of a tree node, the smaller tree extending
+    /// next, 200 IK seeds for up to 4 solutions, 100 shortcut
     /// attempts, 1 rad/s² (m/s²) on every joint, blends within 0.1, samples every 10 ms.
     #[must_use]
     pub fn new(dim: usize) -> Self {
@@ -95,6 +100,7 @@ impl MotionOptions {
             search_domain: Some(2.0),
             search_local_share: 0.3,
             search_local_radius: 0.8,
+            search_balanced: true,
             ik_attempts: 200,
             ik_solutions: 4,
             shortcut_attempts: 100,
@@ -491,6 +497,7 @@ pub fn plan_motion(
             domain_radius: options.search_domain,
             local_share: options.search_local_share,
             local_radius: options.search_local_radius,
+            balanced: options.search_balanced,
             ..RrtConnectOptions::default()
         };
         match rrt_connect(&search_space, &mut checker, &x_start, x_goal, &rrt, &mut ws)? {

@@ -39,6 +39,15 @@
 //!   its uniform samples from far away: its steps towards them are blocked at the first
 //!   probe, while a local sample gives a short step that fits the pocket. The rest of
 //!   the samples keep RRT's pull towards the unexplored space.
+//! * **Balanced trees** ([`RrtConnectOptions::balanced`]): the tree with fewer live
+//!   nodes (cut nodes excepted) extends next, the other connects to it; on a tie they
+//!   alternate, as without the option. A tree rooted in a pocket (an arm reaching between
+//!   a cage's bars) has most of its steps blocked at the first probe, so it grows slowly;
+//!   with plain alternation the tree in the open spends half the iterations, and the
+//!   larger share of the checked states (its steps run their full length), growing far
+//!   beyond what the join needs, and each of its new nodes costs the pocketed tree a
+//!   blocked connection too. Balanced, the iterations go where the search is stuck, and a
+//!   blocked step costs one probe.
 //! * **Allocation**: the trees live in a [`RrtConnectWorkspace`] that keeps its capacity
 //!   between queries; a query allocates only its returned path.
 
@@ -73,6 +82,9 @@ pub struct RrtConnectOptions {
     pub local_share: f64,
     /// The largest offset of a local sample from its node, per joint (weighted).
     pub local_radius: f64,
+    /// Let the tree with fewer live nodes extend next instead of alternating every
+    /// iteration (module docs).
+    pub balanced: bool,
 }
 
 impl Default for RrtConnectOptions {
@@ -86,6 +98,7 @@ impl Default for RrtConnectOptions {
             domain_radius: None,
             local_share: 0.0,
             local_radius: 0.3,
+            balanced: false,
         }
     }
 }
@@ -150,8 +163,8 @@ impl Planned {
 
 /// One tree: node states stored flat, each node's parent index (the root's is itself),
 /// whether the edge to its parent is known valid, whether a failed edge above it cut
-/// it off (lazy mode), and the radius of its dynamic domain (infinite until a step from
-/// it is blocked).
+/// it off (lazy mode), the radius of its dynamic domain (infinite until a step from
+/// it is blocked), and how many nodes are not cut.
 #[derive(Debug, Clone, Default)]
 struct Tree {
     states: Vec<f64>,
@@ -159,6 +172,7 @@ struct Tree {
     edge_checked: Vec<bool>,
     cut: Vec<bool>,
     radius: Vec<f64>,
+    live: usize,
 }
 
 impl Tree {
@@ -173,14 +187,19 @@ impl Tree {
         self.edge_checked.push(true);
         self.cut.push(false);
         self.radius.push(f64::INFINITY);
+        self.live = 1;
     }
 
     /// Cuts node `i` and every node below it (children come after their parents).
     fn cut_below(&mut self, i: usize) {
-        self.cut[i] = true;
+        if !self.cut[i] {
+            self.cut[i] = true;
+            self.live -= 1;
+        }
         for j in i + 1..self.len() {
-            if self.cut[self.parents[j] as usize] {
+            if !self.cut[j] && self.cut[self.parents[j] as usize] {
                 self.cut[j] = true;
+                self.live -= 1;
             }
         }
     }
@@ -199,6 +218,7 @@ impl Tree {
         self.edge_checked.push(edge_checked);
         self.cut.push(false);
         self.radius.push(f64::INFINITY);
+        self.live += 1;
         self.parents.len() - 1
     }
 
@@ -358,7 +378,7 @@ pub fn rrt_connect(
         };
         let new = match outcome {
             Extend::Trapped | Extend::Rejected => {
-                a = 1 - a;
+                a = next_tree(&ws.trees, 1 - a, options.balanced);
                 continue;
             }
             Extend::Reached(i) | Extend::Advanced(i) | Extend::Partial(i) => i,
@@ -390,12 +410,25 @@ pub fn rrt_connect(
                 }
             }
         }
-        a = b;
+        a = next_tree(&ws.trees, b, options.balanced);
     }
     Ok(Planned::NotSolved {
         limit: PlanLimit::Iterations,
         stats: stats(options.max_iterations, &ws.trees, checks),
     })
+}
+
+/// The tree that extends next: `other` (the one that did not extend this iteration), or
+/// when `balanced` the one with fewer live nodes (`other` on a tie).
+fn next_tree(trees: &[Tree; 2], other: usize, balanced: bool) -> usize {
+    if !balanced {
+        return other;
+    }
+    match trees[0].live.cmp(&trees[1].live) {
+        std::cmp::Ordering::Less => 0,
+        std::cmp::Ordering::Greater => 1,
+        std::cmp::Ordering::Equal => other,
+    }
 }
 
 /// Draws `ws.sample`: uniform over the box, or with `local = Some(radius)` near a node of
