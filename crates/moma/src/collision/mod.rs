@@ -55,6 +55,7 @@
 
 pub mod attached;
 pub mod ball_cover;
+mod bvh;
 pub mod convex;
 pub mod exact;
 pub mod footprint;
