@@ -681,6 +681,41 @@ mod tests {
         }
     }
 
+    /// Two triangles: parallel 0.3 apart (closest points anywhere on the overlap, at that
+    /// distance), an edge over a face, and crossing (0, a common point); a triangle
+    /// against a sphere subtracts the radius.
+    #[test]
+    fn triangle_gaps_touch_at_zero() {
+        use crate::collision::convex::Triangle;
+        let v = Vector3::new;
+        let flat = Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0)]);
+        let id = SE3::identity();
+        let up = SE3::from_translation(v(0.1, 0.1, 0.3));
+        let mut w = WarmStart::default();
+        let r = gap_distance(&flat, &id, &flat, &up, &mut w);
+        assert!((r.distance - 0.3).abs() < 1e-12, "{r:?}");
+        assert!((r.normal - Vector3::z()).norm() < 1e-9);
+        assert!(((r.witness_b - r.witness_a).norm() - 0.3).abs() < 1e-12);
+        // A vertical triangle whose lowest edge is 0.2 above the face's middle.
+        let wall = Triangle([v(0.1, 0.2, 0.2), v(0.4, 0.2, 0.2), v(0.2, 0.2, 1.0)]);
+        let r = gap_distance(&flat, &id, &wall, &id, &mut WarmStart::default());
+        assert!((r.distance - 0.2).abs() < 1e-12, "{r:?}");
+        // The same wall pushed through the face: crossing, at 0, the point on both.
+        let down = SE3::from_translation(v(0.0, 0.0, -0.5));
+        let r = gap_distance(&flat, &id, &wall, &down, &mut WarmStart::default());
+        assert_eq!(r.distance, 0.0);
+        assert_eq!(r.normal, Vector3::zeros());
+        assert!(r.witness_a.z.abs() < 1e-9, "{r:?}");
+        // A ball of radius 0.1 centred 0.5 above the face.
+        let ball = Convex::Sphere { radius: 0.1 };
+        let above = SE3::from_translation(v(0.2, 0.2, 0.5));
+        let r = gap_distance(&flat, &id, &ball, &above, &mut WarmStart::default());
+        assert!((r.distance - 0.4).abs() < 1e-12 && (r.witness_b.z - 0.4).abs() < 1e-12);
+        let inside = SE3::from_translation(v(0.2, 0.2, 0.05));
+        let r = gap_distance(&flat, &id, &ball, &inside, &mut WarmStart::default());
+        assert_eq!(r.distance, 0.0);
+    }
+
     #[test]
     fn boxes_apart_and_overlapping() {
         let mut w = WarmStart::default();
