@@ -1,20 +1,28 @@
 #!/usr/bin/env python3
 """Reference distances for Panda's collision geometry with Pinocchio + coal (the wheel
 run.sh installs; PyYAML from the same venv), in the schema of the Fetch reference files
-(crates/moma/tests/data/collision/SOURCES.md), for crates/moma/tests/collision_coal.rs:
+(crates/moma/tests/data/collision/SOURCES.md), for crates/moma/tests/collision_coal.rs
+(convex hulls) and crates/moma/tests/collision_exact.rs (triangle meshes):
 
     python panda_collision_reference.py PANDA.urdf PACKAGE_DIR PANDA.srdf SCENE.yaml OUT_DIR [SEED]
 
 writes OUT_DIR/panda_self.json (every link pair, SRDF-enabled pairs, per state the signed
 distance between convex hulls, witness points, their uniqueness, the minimum over the
-enabled pairs and the in-collision verdict) and OUT_DIR/panda_scene.json (every link x
-every object of the MoveIt-style SCENE.yaml, whose poses are in panda_link0 = world).
+enabled pairs and the in-collision verdict, and the same for the triangle meshes:
+distance_mesh, its minimum and verdict) and OUT_DIR/panda_scene.json (every link x every
+object of the MoveIt-style SCENE.yaml, whose poses are in panda_link0 = world).
 
-Meshes are their convex hulls (coal's qhull), primitives are kept; GJK and EPA run to a
-1e-12 m absolute duality gap, 1000 iterations. A link with several elements (the finger
+distance_convex: meshes are their convex hulls (coal's qhull), primitives are kept; GJK
+and EPA run to a 1e-12 m absolute duality gap, 1000 iterations. distance_mesh: meshes are
+coal's BVH models of the triangles (OBBRSS), primitives are kept, the request unsigned
+(coal's signed request gives a mesh against a box the depth of its deepest triangle,
+negative; between two meshes it gives 0 when triangles cross either way), GJK to the same
+gap; a value <= 1e-10 m is written 0 (touching). A link with several elements (the finger
 boxes) is at the minimum over its element pairs, with that pair's witness points.
 States: seeded uniform draws in the joint limits, then states bisected between a free and
-a colliding draw until both ends are within 3 mm of contact (kind 'near_contact').
+a colliding draw until both ends are within 3 mm of contact (kind 'near_contact', on the
+hulls' signed distance; kind 'near_contact_mesh', on the meshes' distance: the colliding
+end touches, the free end is within 3 mm).
 """
 import json
 import sys
@@ -27,11 +35,12 @@ import yaml
 
 TOL_FEATURE = 1e-5  # hull vertices this close to the supporting plane form the feature
 NEAR = 3e-3  # near-contact states: |min distance| below this
+TOUCH = 1e-10  # mesh distances at most this are written 0 (touching)
 
 
-def request():
+def request(signed=True):
     r = coal.DistanceRequest()
-    r.enable_signed_distance = True
+    r.enable_signed_distance = signed
     r.gjk_tolerance = 1e-12
     r.epa_tolerance = 1e-12
     r.gjk_max_iterations = 1000
@@ -97,6 +106,16 @@ def pair_distance(req, elems_a, elems_b):
     return d, wa, wb, unique_witness(a.world, b.world, wa, wb, d)
 
 
+def mesh_distance(req, elems_a, elems_b):
+    """Minimum over element pairs of the triangle meshes' (or primitives') distance, 0 when touching."""
+    best = np.inf
+    for a in elems_a:
+        for b in elems_b:
+            res = coal.DistanceResult()
+            best = min(best, coal.distance(a.shape, a.tf, b.shape, b.tf, req, res))
+    return 0.0 if best <= TOUCH else best
+
+
 def r12(x):
     return float(round(float(x), 12))
 
@@ -107,9 +126,9 @@ class Panda:
         self.geom = pin.buildGeomFromUrdf(self.model, urdf, pin.COLLISION, package_dirs=[package_dir])
         self.data = self.model.createData()
         self.gdata = pin.GeometryData(self.geom)
-        self.links, self.elements = [], {}
+        self.links, self.elements, self.meshes = [], {}, {}
         for g in self.geom.geometryObjects:
-            shape = g.geometry
+            shape = mesh = g.geometry
             if isinstance(shape, coal.BVHModelBase):
                 shape.buildConvexHull(True, "Qt")
                 shape = shape.convex
@@ -117,8 +136,11 @@ class Panda:
             if link not in self.elements:
                 self.links.append(link)
                 self.elements[link] = []
+                self.meshes[link] = []
             self.elements[link].append(Element(shape, local_vertices(shape)))
+            self.meshes[link].append(Element(mesh, local_vertices(shape)))
         self.req = request()
+        self.req_mesh = request(signed=False)
 
     def place(self, q):
         pin.updateGeometryPlacements(self.model, self.data, self.geom, self.gdata, q)
@@ -127,6 +149,7 @@ class Panda:
             link = self.model.frames[g.parentFrame].name
             i = k.get(link, 0)
             self.elements[link][i].place(m)
+            self.meshes[link][i].place(m)
             k[link] = i + 1
 
     def q_by_joint(self, q):
@@ -142,12 +165,18 @@ def self_state(p, pairs, enabled, q):
         out["witness_a"].append([r12(x) for x in wa])
         out["witness_b"].append([r12(x) for x in wb])
         out["witness_unique"].append(u)
+    out["distance_mesh"] = [r12(mesh_distance(p.req_mesh, p.meshes[a], p.meshes[b])) for a, b in pairs]
     de = [(d, k) for k, d in enumerate(out["distance_convex"]) if enabled[k]]
     m, k = min(de)
     out["min_enabled_convex"] = m
     out["min_enabled_pair"] = list(pairs[k])
     out["in_collision_enabled"] = m < 0
     out["colliding_enabled_pairs"] = [list(pairs[k]) for d, k in de if d < 0]
+    dm = [(d, k) for k, d in enumerate(out["distance_mesh"]) if enabled[k]]
+    m, k = min(dm)
+    out["min_enabled_mesh"] = m
+    out["min_enabled_mesh_pair"] = list(pairs[k])
+    out["in_collision_enabled_mesh"] = m == 0
     return out
 
 
@@ -160,11 +189,16 @@ def scene_state(p, pairs, objects, q):
         out["witness_a"].append([r12(x) for x in wa])
         out["witness_b"].append([r12(x) for x in wb])
         out["witness_unique"].append(u)
+    out["distance_mesh"] = [r12(mesh_distance(p.req_mesh, p.meshes[link], [objects[oid]])) for link, oid in pairs]
     m, k = min((d, k) for k, d in enumerate(out["distance_convex"]))
     out["min_distance"] = m
     out["min_pair"] = list(pairs[k])
     out["in_collision"] = m < 0
     out["colliding_pairs"] = [list(pairs[k]) for k, d in enumerate(out["distance_convex"]) if d < 0]
+    m, k = min((d, k) for k, d in enumerate(out["distance_mesh"]))
+    out["min_distance_mesh"] = m
+    out["min_pair_mesh"] = list(pairs[k])
+    out["in_collision_mesh"] = m == 0
     return out
 
 
@@ -176,22 +210,31 @@ def near_contact(min_of, q_free, q_hit):
         if a < NEAR and b > -NEAR:
             break
         mid = 0.5 * (lo + hi)
-        if min_of(q_free + mid * (q_hit - q_free)) < 0:
+        if min_of(q_free + mid * (q_hit - q_free)) <= 0:
             hi = mid
         else:
             lo = mid
     return q_free + lo * (q_hit - q_free), q_free + hi * (q_hit - q_free)
 
 
-def states_with_contacts(p, rng, n_random, n_near, min_of):
-    draws = [rng.uniform(p.model.lowerPositionLimit, p.model.upperPositionLimit) for _ in range(n_random)]
+def near_states(draws, n_near, min_of):
+    """Bisected pairs between the free draws and the colliding ones (min <= 0) in turn."""
     mins = [min_of(q) for q in draws]
     free = [q for q, m in zip(draws, mins) if m > 0]
-    hit = [q for q, m in zip(draws, mins) if m < 0]
+    hit = [q for q, m in zip(draws, mins) if m <= 0]
     near = []
     for i in range(min(n_near, len(free)) if hit else 0):
         near.extend(near_contact(min_of, free[i], hit[i % len(hit)]))
-    return [("random", q) for q in draws] + [("near_contact", q) for q in near]
+    return near
+
+
+def states_with_contacts(p, rng, n_random, n_near, min_of, min_mesh_of):
+    draws = [rng.uniform(p.model.lowerPositionLimit, p.model.upperPositionLimit) for _ in range(n_random)]
+    return (
+        [("random", q) for q in draws]
+        + [("near_contact", q) for q in near_states(draws, n_near, min_of)]
+        + [("near_contact_mesh", q) for q in near_states(draws, n_near, min_mesh_of)]
+    )
 
 
 def source(seed):
@@ -221,8 +264,18 @@ NOTES = [
     "A link may carry several elements (Panda: 4 boxes per finger): the link pair's distance is the minimum over element pairs, witnesses those of the minimising pair.",
     "distance_convex: signed distance between convex hulls (coal qhull), primitives kept; negative = -penetration depth (EPA).",
     "witness_a on the first of the pair, witness_b on the second (world frame). witness_unique (distance_convex > 1e-6 only, else null): true when the supporting feature (hull vertices within 1e-5 m of the supporting plane) of one side is a single vertex, or both are non-parallel edges (|sin| > 1e-3).",
-    "States: seeded uniform draws in the URDF limits (kind 'random'), then pairs of states bisected between a free draw and a colliding one (the colliding draws taken in turn) until both are within 3 mm of contact (kind 'near_contact').",
+    "States: seeded uniform draws in the URDF limits (kind 'random'), then pairs of states bisected between a free draw and a colliding one (the colliding draws taken in turn) until both are within 3 mm of contact (kind 'near_contact', on distance_convex; kind 'near_contact_mesh', on distance_mesh: one end touching, the other within 3 mm).",
+    "distance_mesh: distance between the triangle meshes (coal BVHModelOBBRSS; primitives kept), unsigned request (GJK to the same 1e-12 m gap), 0 when triangles touch or cross or a triangle touches or enters a primitive (values <= 1e-10 m written 0). A surface distance: a mesh wholly inside another is at a positive distance. min_enabled_mesh / min_distance_mesh: its minimum (enabled pairs / every scene pair); in_collision_enabled_mesh / in_collision_mesh: that minimum is 0.",
 ]
+
+
+def dump(doc, path):
+    """The document with one state per line (the files stay small and diff by state)."""
+    states = doc.pop("states")
+    head = json.dumps(doc, indent=1)[:-2]
+    lines = ",\n".join("  " + json.dumps(s, separators=(",", ":")) for s in states)
+    with open(path, "w") as f:
+        f.write(f'{head},\n "states": [\n{lines}\n ]\n}}\n')
 
 
 def main(urdf, package_dir, srdf, scene_yaml, out_dir, seed=3):
@@ -238,8 +291,12 @@ def main(urdf, package_dir, srdf, scene_yaml, out_dir, seed=3):
         p.place(q)
         return min(pair_distance(p.req, p.elements[a], p.elements[b])[0] for (a, b), e in zip(pairs, enabled) if e)
 
+    def min_self_mesh(q):
+        p.place(q)
+        return min(mesh_distance(p.req_mesh, p.meshes[a], p.meshes[b]) for (a, b), e in zip(pairs, enabled) if e)
+
     states = []
-    for i, (kind, q) in enumerate(states_with_contacts(p, rng, 50, 6, min_self)):
+    for i, (kind, q) in enumerate(states_with_contacts(p, rng, 50, 6, min_self, min_self_mesh)):
         s = {"index": i, "kind": kind, "label": f"{kind}_{i:03d}", "q": q.tolist(), "q_by_joint": p.q_by_joint(q)}
         s.update(self_state(p, pairs, enabled, q))
         states.append(s)
@@ -258,8 +315,7 @@ def main(urdf, package_dir, srdf, scene_yaml, out_dir, seed=3):
         "nq": p.model.nq,
         "states": states,
     }
-    with open(f"{out_dir}/panda_self.json", "w") as f:
-        json.dump(doc, f, indent=1)
+    dump(doc, f"{out_dir}/panda_self.json")
 
     objects, described = {}, []
     for o in yaml.safe_load(open(scene_yaml))["world"]["collision_objects"]:
@@ -270,7 +326,7 @@ def main(urdf, package_dir, srdf, scene_yaml, out_dir, seed=3):
         shape = coal.Box(*o["primitives"][0]["dimensions"])
         e = Element(shape, local_vertices(shape))
         e.place(se3)
-        objects[o["id"]] = e
+        objects[o["id"]] = e  # a box: the same shape for both definitions
         described.append({"id": o["id"], "type": "box", "dimensions": o["primitives"][0]["dimensions"],
                           "position": pose["position"], "orientation_xyzw": pose["orientation"]})
     scene_pairs = [(link, o["id"]) for link in p.links for o in described]
@@ -279,8 +335,12 @@ def main(urdf, package_dir, srdf, scene_yaml, out_dir, seed=3):
         p.place(q)
         return min(pair_distance(p.req, p.elements[a], [objects[b]])[0] for a, b in scene_pairs)
 
+    def min_scene_mesh(q):
+        p.place(q)
+        return min(mesh_distance(p.req_mesh, p.meshes[a], [objects[b]]) for a, b in scene_pairs)
+
     states = []
-    for i, (kind, q) in enumerate(states_with_contacts(p, rng, 24, 4, min_scene)):
+    for i, (kind, q) in enumerate(states_with_contacts(p, rng, 24, 4, min_scene, min_scene_mesh)):
         s = {"scene": "table", "index": i, "kind": kind, "label": f"{kind}_{i:03d}", "q": q.tolist(),
              "q_by_joint": p.q_by_joint(q)}
         s.update(scene_state(p, scene_pairs, objects, q))
@@ -297,8 +357,7 @@ def main(urdf, package_dir, srdf, scene_yaml, out_dir, seed=3):
         "nq": p.model.nq,
         "states": states,
     }
-    with open(f"{out_dir}/panda_scene.json", "w") as f:
-        json.dump(doc, f, indent=1)
+    dump(doc, f"{out_dir}/panda_scene.json")
     print(f"self: {len(pairs)} pairs ({sum(enabled)} enabled); scene: {len(scene_pairs)} pairs, {len(states)} states")
 
 

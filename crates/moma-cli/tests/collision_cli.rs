@@ -127,12 +127,12 @@ fn panda_files() -> (String, String, String) {
 
 /// A reference's states of kind `near_contact`, the first `n` on each side of contact by
 /// the reference's verdict `verdict_key`.
-fn near_contact_states(reference: &Value, verdict_key: &str, n: usize) -> Vec<Value> {
+fn near_contact_states(reference: &Value, kind: &str, verdict_key: &str, n: usize) -> Vec<Value> {
     let near: Vec<&Value> = reference["states"]
         .as_array()
         .unwrap()
         .iter()
-        .filter(|s| s["kind"] == "near_contact")
+        .filter(|s| s["kind"] == kind)
         .collect();
     let side = |hit: bool| {
         near.iter()
@@ -211,7 +211,7 @@ fn panda_with_srdf_and_scene_reproduces_coal() {
     // Self: the SRDF's enabled pairs, their distances, the minimum and the verdict, on
     // states within 3 mm of contact on both sides.
     let reference = read("panda_self.json");
-    let states = near_contact_states(&reference, "in_collision_enabled", 2);
+    let states = near_contact_states(&reference, "near_contact", "in_collision_enabled", 2);
     let got = run(&states, None, "panda_self");
     let enabled: Vec<&Value> = reference["pairs"]
         .as_array()
@@ -251,7 +251,7 @@ fn panda_with_srdf_and_scene_reproduces_coal() {
     // Scene: with the SRDF and the scene, every (link, object) pair of the reference; a
     // state the reference puts in collision with the scene is in collision.
     let reference = read("panda_scene.json");
-    let states = near_contact_states(&reference, "in_collision", 2);
+    let states = near_contact_states(&reference, "near_contact", "in_collision", 2);
     let scene = format!("{DATA}/collision/panda_scene_table.yaml");
     let got = run(&states, Some(&scene), "panda_scene");
     let ref_pairs = reference["scenes"]["table"]["pairs"].as_array().unwrap();
@@ -279,6 +279,74 @@ fn panda_with_srdf_and_scene_reproduces_coal() {
         );
         if want["in_collision"] == true {
             assert_eq!(s["in_collision"], true, "{}", want["label"]);
+        }
+    }
+}
+
+#[test]
+fn panda_exact_meshes_reproduce_coal() {
+    // States bisected to within 3 mm of a mesh contact, two on each side: every enabled
+    // pair and every (link, object) pair against coal's distance_mesh, the verdicts.
+    let (urdf, srdf, pkg) = panda_files();
+    let read = |f: &str| -> Value {
+        serde_json::from_str(&std::fs::read_to_string(format!("{DATA}/collision/{f}")).unwrap())
+            .unwrap()
+    };
+    let scene = format!("{DATA}/collision/panda_scene_table.yaml");
+    for (file, verdict, scene) in [
+        ("panda_self.json", "in_collision_enabled_mesh", None),
+        (
+            "panda_scene.json",
+            "in_collision_mesh",
+            Some(scene.as_str()),
+        ),
+    ] {
+        let reference = read(file);
+        let states = near_contact_states(&reference, "near_contact_mesh", verdict, 2);
+        let refs: Vec<&Value> = states.iter().collect();
+        let states_file = write_reference_states(&format!("exact_{file}"), &refs);
+        let out = tmp(&format!("exact_out_{file}"));
+        let mut args = vec!["collision", &urdf, "--root", "fixed", "--srdf", &srdf];
+        args.extend(["--package-dir", &pkg, "--mesh", "exact"]);
+        args.extend(["--states", states_file.to_str().unwrap()]);
+        args.extend(["--output", out.to_str().unwrap()]);
+        if let Some(scene) = scene {
+            args.extend(["--scene", scene]);
+        }
+        let o = moma(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let got: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let ref_pairs = match scene {
+            None => reference["pairs"].as_array().unwrap(),
+            Some(_) => reference["scenes"]["table"]["pairs"].as_array().unwrap(),
+        };
+        for (s, want) in got["states"].as_array().unwrap().iter().zip(&states) {
+            let pairs = s["pairs"].as_array().unwrap();
+            let mut min = f64::INFINITY;
+            for (k, p) in ref_pairs.iter().enumerate() {
+                let Some(mine) = pairs.iter().find(|x| {
+                    (x["a"] == p[0] && x["b"] == p[1]) || (x["a"] == p[1] && x["b"] == p[0])
+                }) else {
+                    continue;
+                };
+                let (d, w) = (
+                    mine["distance"].as_f64().unwrap(),
+                    want["distance_mesh"][k].as_f64().unwrap(),
+                );
+                assert!(
+                    (d - w).abs() <= 1e-6,
+                    "{} {p}: {d} vs coal {w}",
+                    want["label"]
+                );
+                min = min.min(d);
+            }
+            if scene.is_none() {
+                let want_min = want["min_enabled_mesh"].as_f64().unwrap();
+                assert!((min - want_min).abs() <= 1e-6, "{}", want["label"]);
+                assert_eq!(s["in_collision"], want[verdict], "{}", want["label"]);
+            } else if want[verdict] == true {
+                assert_eq!(s["in_collision"], true, "{}", want["label"]);
+            }
         }
     }
 }

@@ -17,9 +17,10 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use moma::collision::Convex;
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData, SceneObject,
-    SceneOptions, compute_collision, compute_distances, compute_scene_distances,
-    point_cloud_object, read_scene, scene_collision, update_geometry_placements, voxel_object,
+    ExactGeometry, GeometryData, GeometryModel, GeometryOptions, PairSelection, Scene, SceneData,
+    SceneObject, SceneOptions, compute_collision, compute_distances, compute_exact_distances,
+    compute_scene_distances, point_cloud_object, read_scene, scene_collision,
+    update_geometry_placements, voxel_object,
 };
 use moma::io::pinocchio_layout::PinocchioLayout;
 use moma::kinematics::forward_kinematics;
@@ -115,6 +116,33 @@ fn bench(c: &mut Criterion) {
             forward_kinematics(&model, &mut data, &states[k]);
             update_geometry_placements(&gm, &data, &mut gd);
             black_box(compute_distances(&gm, &mut gd, PairSelection::Enabled))
+        })
+    });
+    // The exact triangle meshes (`--mesh exact`): the same 76 pairs, mesh against mesh.
+    let exact = ExactGeometry::new(&gm).expect("exact meshes");
+    let exact_sum: f64 = states
+        .iter()
+        .map(|q| {
+            forward_kinematics(&model, &mut data, q);
+            update_geometry_placements(&gm, &data, &mut gd);
+            compute_exact_distances(&gm, &exact, &mut gd, PairSelection::Enabled)
+        })
+        .sum();
+    eprintln!(
+        "# check mean min enabled mesh distance over the states {:.9}",
+        exact_sum / n
+    );
+    c.bench_function("fetch/self_distance_enabled_exact", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            forward_kinematics(&model, &mut data, &states[k]);
+            update_geometry_placements(&gm, &data, &mut gd);
+            black_box(compute_exact_distances(
+                &gm,
+                &exact,
+                &mut gd,
+                PairSelection::Enabled,
+            ))
         })
     });
     c.bench_function("fetch/in_collision_early_exit", |b| {

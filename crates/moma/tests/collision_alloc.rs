@@ -1,14 +1,15 @@
 //! The geometry queries allocate nothing once their workspaces have seen a round of
 //! states: forward kinematics, placements, all self-distances, the in-collision check,
-//! the scene distances, the scene's in-collision check and the distance derivatives (of
-//! every enabled pair and of the minimum) on 40 random Fetch states against
-//! MotionBenchMaker's cage.
+//! the scene distances, the scene's in-collision check, the distance derivatives (of
+//! every enabled pair and of the minimum) and the exact triangle-mesh distances (self and
+//! scene) on 40 random Fetch states against MotionBenchMaker's cage.
 
 mod counting_alloc;
 use counting_alloc::allocations;
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, SceneData, SceneOptions,
-    compute_collision, compute_distances, compute_scene_distances, distance_derivative,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairSelection,
+    SceneData, SceneOptions, compute_collision, compute_distances, compute_exact_distances,
+    compute_exact_scene_distances, compute_scene_distances, distance_derivative,
     min_distance_gradient, read_scene, scene_collision, update_geometry_placements,
 };
 use moma::kinematics::{compute_joint_jacobians, forward_kinematics, random_configuration};
@@ -39,14 +40,19 @@ fn queries_do_not_allocate_after_warm_up() {
     )
     .unwrap();
     let mut sd = SceneData::new(&gm, &scene);
+    let (ex, exs) = (
+        ExactGeometry::new(&gm).unwrap(),
+        ExactScene::new(&scene).unwrap(),
+    );
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let states: Vec<_> = (0..40)
         .map(|_| random_configuration(&model, &mut rng))
         .collect();
     let mut derivative = DVector::zeros(model.nv);
     // What the queries found, so that the test sees they ran: pairs in collision with the
-    // scene, minima whose derivative was taken, non-zero derivatives.
-    let mut found = [0usize; 3];
+    // scene, minima whose derivative was taken, non-zero derivatives, finite exact minima
+    // (self and scene).
+    let mut found = [0usize; 5];
     let mut run = |data: &mut Data, gd: &mut GeometryData, sd: &mut SceneData| {
         for q in &states {
             forward_kinematics(&model, data, q);
@@ -63,6 +69,10 @@ fn queries_do_not_allocate_after_warm_up() {
             found[1] += usize::from(
                 min_distance_gradient(&model, data, &gm, gd, &scene, sd, &mut derivative).is_some(),
             );
+            let self_min = compute_exact_distances(&gm, &ex, gd, PairSelection::Enabled);
+            let scene_min = compute_exact_scene_distances(&gm, &ex, gd, &scene, &exs, sd);
+            found[3] += usize::from(self_min.is_finite());
+            found[4] += usize::from(scene_min.is_finite());
         }
     };
     run(&mut data, &mut gd, &mut sd);
@@ -71,7 +81,11 @@ fn queries_do_not_allocate_after_warm_up() {
     });
     assert_eq!(count, 0, "the geometry queries allocated");
     assert!(
-        found[0] > 0 && found[1] == 2 * states.len() && found[2] > 0,
+        found[0] > 0
+            && found[1] == 2 * states.len()
+            && found[2] > 0
+            && found[3] == 2 * states.len()
+            && found[4] == 2 * states.len(),
         "{found:?}"
     );
 }

@@ -4,14 +4,16 @@
 //! pairs of every state of `fetch_self_public.json`, and every (link, object) pair of
 //! the three MotionBenchMaker scenes of `fetch_scene_public.json` (the link meshes
 //! against solid boxes and cylinders); a link mesh placed in the scene as a mesh object
-//! is measured by its triangles, as the link itself. (Every one of the 210 self pairs of
-//! the 20 states agrees too, worst 3.6e-11 m, but takes a minute: mesh–mesh queries cost
-//! milliseconds.)
+//! is measured by its triangles, as the link itself. Panda the same way, against coal's
+//! `distance_mesh` of `panda_self.json` and `panda_scene.json` (written by
+//! `bench/pinocchio/panda_collision_reference.py`): every pair, the minimum and the
+//! in-collision verdict (minimum 0) of every state, including states bisected to within
+//! 3 mm of a mesh contact.
 
 use moma::collision::{
-    ExactGeometry, ExactScene, GeometryData, GeometryModel, PairSelection, SceneData, SceneOptions,
-    compute_exact_distances, compute_exact_scene_distances, compute_scene_distances, read_scene,
-    update_geometry_placements,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairSelection,
+    SceneData, SceneOptions, compute_exact_distances, compute_exact_scene_distances,
+    compute_scene_distances, read_scene, update_geometry_placements,
 };
 use moma::kinematics::forward_kinematics;
 use moma::multibody::{Data, Model, RootJoint};
@@ -282,4 +284,156 @@ fn a_link_mesh_inside_a_solid_box_is_at_zero() {
         &mut sd,
     );
     assert_eq!(sd.results[g].distance, 0.0);
+}
+
+/// Panda (example-robot-data's URDF: 9 STL meshes, four boxes per finger) with its SRDF,
+/// and its exact shapes.
+fn panda() -> (Model, GeometryModel, ExactGeometry) {
+    let urdf = data_dir().join("pinocchio/urdf/panda.urdf");
+    let pkg = data_dir().join("robots/panda");
+    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
+    let gm = GeometryModel::from_urdf(
+        &model,
+        &urdf,
+        &GeometryOptions {
+            srdf: Some(pkg.join("example-robot-data/robots/panda_description/srdf/panda.srdf")),
+            package_dirs: vec![pkg],
+        },
+    )
+    .unwrap();
+    let ex = ExactGeometry::new(&gm).unwrap();
+    (model, gm, ex)
+}
+
+/// One pair against coal: `0` where coal's meshes touch, else within 1e-6 m, never below
+/// the hulls', the witnesses the distance apart. Returns the error (0 for a touching pair).
+fn check_mesh_pair(
+    got: &moma::collision::PairDistance,
+    want: f64,
+    convex: f64,
+    label: &str,
+) -> f64 {
+    assert!(got.distance >= convex - 1e-9, "{label}: below the hulls");
+    assert!(
+        ((got.witness_b - got.witness_a).norm() - got.distance).abs() < 1e-9,
+        "{label}"
+    );
+    if want == 0.0 {
+        assert_eq!(got.distance, 0.0, "{label}: coal's meshes touch");
+        0.0
+    } else {
+        let err = (got.distance - want).abs();
+        assert!(
+            err <= 1e-6,
+            "{label}: exact {} vs coal {want}",
+            got.distance
+        );
+        err
+    }
+}
+
+/// The verdicts compared: (in collision, free).
+fn verdict(got_min: f64, want_min: f64, counts: &mut [usize; 2], label: &str) {
+    assert!(
+        (got_min - want_min).abs() <= 1e-6,
+        "{label}: min {got_min} vs coal {want_min}"
+    );
+    if want_min == 0.0 || want_min > 1e-6 {
+        assert_eq!(got_min <= 0.0, want_min == 0.0, "{label}: in collision");
+        counts[usize::from(want_min > 0.0)] += 1;
+    }
+}
+
+#[test]
+fn panda_mesh_distances_match_coal() {
+    let (model, gm, ex) = panda();
+    let r = reference("panda_self.json");
+    let pairs: Vec<usize> = r["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let a = gm.link_index(p[0].as_str().unwrap()).unwrap();
+            let b = gm.link_index(p[1].as_str().unwrap()).unwrap();
+            gm.pairs
+                .iter()
+                .position(|x| *x == [a.min(b), a.max(b)])
+                .unwrap()
+        })
+        .collect();
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    let (mut worst, mut checked, mut counts) = (0.0_f64, 0, [0usize; 2]);
+    for s in r["states"].as_array().unwrap() {
+        forward_kinematics(&model, &mut data, &q_of(&model, s));
+        update_geometry_placements(&gm, &data, &mut gd);
+        // Every pair, enabled or not.
+        compute_exact_distances(&gm, &ex, &mut gd, PairSelection::All);
+        for (k, want) in s["distance_mesh"].as_array().unwrap().iter().enumerate() {
+            let label = format!("{} {}", s["label"], r["pairs"][k]);
+            let convex = s["distance_convex"][k].as_f64().unwrap();
+            let err = check_mesh_pair(
+                &gd.results[pairs[k]],
+                want.as_f64().unwrap(),
+                convex,
+                &label,
+            );
+            worst = worst.max(err);
+            checked += 1;
+        }
+        let min = compute_exact_distances(&gm, &ex, &mut gd, PairSelection::Enabled);
+        let want_min = s["min_enabled_mesh"].as_f64().unwrap();
+        assert_eq!(s["in_collision_enabled_mesh"], want_min == 0.0);
+        verdict(min, want_min, &mut counts, &s["label"].to_string());
+    }
+    eprintln!("{checked} pairs, worst error {worst:e} m; verdicts in collision / free: {counts:?}");
+    assert!(
+        checked >= 70 * 55 && counts[0] >= 5 && counts[1] >= 5,
+        "{checked} {counts:?}"
+    );
+}
+
+#[test]
+fn panda_scene_mesh_distances_match_coal() {
+    let (model, gm, ex) = panda();
+    let r = reference("panda_scene.json");
+    let sc = &r["scenes"]["table"];
+    let scene = read_scene(
+        &data_dir().join(sc["scene_yaml"].as_str().unwrap()),
+        &SceneOptions {
+            world_frames: vec!["panda_link0".into()],
+            package_dirs: vec![],
+        },
+    )
+    .unwrap();
+    let exs = ExactScene::new(&scene).unwrap();
+    let mut sd = SceneData::new(&gm, &scene);
+    let mut data = Data::new(&model);
+    let mut gd = GeometryData::new(&gm);
+    let pairs = sc["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), gm.links.len() * scene.objects.len());
+    let (mut worst, mut checked, mut counts) = (0.0_f64, 0, [0usize; 2]);
+    for s in r["states"].as_array().unwrap() {
+        forward_kinematics(&model, &mut data, &q_of(&model, s));
+        update_geometry_placements(&gm, &data, &mut gd);
+        let min = compute_exact_scene_distances(&gm, &ex, &mut gd, &scene, &exs, &mut sd);
+        for (k, p) in pairs.iter().enumerate() {
+            let l = gm.link_index(p[0].as_str().unwrap()).unwrap();
+            let o = scene.objects.iter().position(|o| o.id == p[1]).unwrap();
+            let got = &sd.results[l * scene.objects.len() + o];
+            let want = s["distance_mesh"][k].as_f64().unwrap();
+            let convex = s["distance_convex"][k].as_f64().unwrap();
+            let err = check_mesh_pair(got, want, convex, &format!("{} {p}", s["label"]));
+            worst = worst.max(err);
+            checked += 1;
+        }
+        let want_min = s["min_distance_mesh"].as_f64().unwrap();
+        assert_eq!(s["in_collision_mesh"], want_min == 0.0);
+        verdict(min, want_min, &mut counts, &s["label"].to_string());
+    }
+    eprintln!("{checked} pairs, worst error {worst:e} m; verdicts in collision / free: {counts:?}");
+    assert!(
+        checked >= 38 * 33 && counts[0] >= 5 && counts[1] >= 5,
+        "{checked} {counts:?}"
+    );
 }

@@ -152,6 +152,54 @@ impl Convex {
     }
 }
 
+/// What GJK needs of a convex shape: its core's support point and its margin.
+pub trait Support {
+    /// The radius added around the core.
+    fn margin(&self) -> f64;
+    /// A point of the core that maximises `d · p` (`hint`: see [`Convex::core_support`]).
+    fn core_support(&self, d: &Vector3<f64>, hint: &mut usize) -> Vector3<f64>;
+}
+
+impl Support for Convex {
+    fn margin(&self) -> f64 {
+        Convex::margin(self)
+    }
+    fn core_support(&self, d: &Vector3<f64>, hint: &mut usize) -> Vector3<f64> {
+        Convex::core_support(self, d, hint)
+    }
+}
+
+/// A triangle of a mesh (its three vertices): a flat convex shape without margin, the
+/// element of the exact triangle-mesh distances ([`super::exact`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle(pub [Vector3<f64>; 3]);
+
+impl Triangle {
+    /// Axis-aligned bounding box (min, max) in the mesh's frame.
+    #[must_use]
+    pub fn aabb(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let [a, b, c] = &self.0;
+        (a.inf(b).inf(c), a.sup(b).sup(c))
+    }
+}
+
+impl Support for Triangle {
+    fn margin(&self) -> f64 {
+        0.0
+    }
+    fn core_support(&self, d: &Vector3<f64>, _hint: &mut usize) -> Vector3<f64> {
+        let [a, b, c] = &self.0;
+        let (da, db, dc) = (a.dot(d), b.dot(d), c.dot(d));
+        if da >= db && da >= dc {
+            *a
+        } else if db >= dc {
+            *b
+        } else {
+            *c
+        }
+    }
+}
+
 fn scan_support(vertices: &[Vector3<f64>], d: &Vector3<f64>) -> usize {
     let mut best = 0;
     let mut best_dot = f64::NEG_INFINITY;

@@ -2,35 +2,57 @@
 //! its triangles (not its convex hull), a primitive is itself, for the link pairs
 //! ([`compute_exact_distances`]) and the (link, scene object) pairs
 //! ([`compute_exact_scene_distances`], scene meshes as their triangles, primitives and
-//! voxels as themselves). Mesh against mesh is `parry3d-f64`'s triangle-mesh query (glam
-//! converted at this file's boundary); mesh against primitive is the nearest triangle by
-//! this module's GJK. As coal's distance between BVH models, the result is the surface
-//! distance: `0` when triangles touch or cross, and positive for a mesh entirely inside
-//! another one without a crossing; a primitive is solid, so a mesh inside a box is at
-//! `0`, a box inside a mesh (no triangle reaching it) at its distance to the nearest
-//! triangle.
+//! voxels as themselves). Each mesh keeps a bounding-volume tree over its triangles (in
+//! its own frame, built once); a query descends the two trees (or the one tree against
+//! the primitive's box) nearest first, skipping the node pairs whose boxes are no nearer
+//! than the best distance so far, and measures the triangles left with this module's GJK
+//! ([`gap_distance`]: triangles are flat convex shapes). As coal's distance between BVH
+//! models, the result is the surface distance: `0` when triangles touch or cross, and
+//! positive for a mesh entirely inside another one without a crossing; a primitive is
+//! solid, so a mesh inside a box is at `0`, a box inside a mesh (no triangle reaching
+//! it) at its distance to the nearest triangle. A query allocates nothing: the descent
+//! is recursive, its depth that of the trees (about 2 log2 of the triangles per leaf).
 
-use super::convex::Convex;
+use super::bvh::{BvhNode, box_gap, build_bvh};
+use super::convex::{Convex, Triangle};
 use super::geometry_data::{GeometryData, PairSelection};
 use super::geometry_model::GeometryModel;
-use super::gjk::{EpaWorkspace, PairDistance, WarmStart, signed_distance};
+use super::gjk::{PairDistance, WarmStart, gap_distance};
 use super::mesh::TriangleMesh;
-use super::scene::{Scene, SceneData, nearest_in_scene, world_aabb};
+use super::scene::{Scene, SceneData, nearest_in_scene};
 use crate::spatial::SE3;
 use crate::{Error, Result};
-use nalgebra::{Rotation3, UnitQuaternion, Vector3};
-use parry3d_f64::math::{Pose, Rot3, Vector as GVec};
-use parry3d_f64::query::{ClosestPoints, closest_points};
-use parry3d_f64::shape::{SharedShape, TriMesh};
+use nalgebra::Vector3;
 use std::sync::Arc;
 
+/// Triangles per leaf of a mesh's tree.
+const TRIANGLES_PER_LEAF: usize = 4;
+
+/// A mesh's triangles in its own frame, in the leaf order of their tree.
+#[derive(Debug)]
+struct MeshTree {
+    triangles: Vec<Triangle>,
+    nodes: Vec<BvhNode>,
+}
+
+impl MeshTree {
+    fn new(mesh: &TriangleMesh) -> Self {
+        let mut triangles: Vec<Triangle> = mesh
+            .triangles
+            .iter()
+            .map(|t| Triangle(t.map(|i| mesh.vertices[i as usize])))
+            .collect();
+        let nodes = build_bvh(&mut triangles, TRIANGLES_PER_LEAF, Triangle::aabb);
+        MeshTree { triangles, nodes }
+    }
+}
+
 /// One exact shape: a mesh's triangles, or a convex primitive as itself.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 enum Exact {
-    /// The triangles, as parry's `TriMesh` (for mesh–mesh queries) and as read (for
-    /// triangle–primitive queries with this module's GJK).
-    Mesh(SharedShape, Arc<TriangleMesh>),
-    /// A primitive (box, cylinder, sphere, capsule), measured with this module's GJK.
+    /// The triangles with their tree.
+    Mesh(Arc<MeshTree>),
+    /// A primitive (box, cylinder, sphere, capsule).
     Solid(Convex),
 }
 
@@ -46,18 +68,6 @@ impl std::fmt::Debug for ExactGeometry {
     }
 }
 
-fn g(v: &Vector3<f64>) -> GVec {
-    GVec::new(v.x, v.y, v.z)
-}
-
-fn pose(m: &SE3) -> Pose {
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m.rotation));
-    Pose::from_parts(
-        g(&m.translation),
-        Rot3::from_xyzw(q.i, q.j, q.k, q.w).normalize(),
-    )
-}
-
 /// The exact shape of `shape` (with its mesh's triangles when it is a mesh's hull);
 /// `what` names it in the error.
 fn exact_shape(
@@ -66,14 +76,11 @@ fn exact_shape(
     what: &dyn Fn() -> String,
 ) -> Result<Exact> {
     match (mesh, shape) {
-        (Some(mesh), _) => {
-            let tri = TriMesh::new(
-                mesh.vertices.iter().map(g).collect(),
-                mesh.triangles.clone(),
-            )
-            .map_err(|e| Error::invalid(what(), format!("no exact triangle mesh: {e}")))?;
-            Ok(Exact::Mesh(SharedShape::new(tri), Arc::clone(mesh)))
-        }
+        (Some(mesh), _) if mesh.triangles.is_empty() => Err(Error::invalid(
+            what(),
+            "no exact triangle mesh: no triangle",
+        )),
+        (Some(mesh), _) => Ok(Exact::Mesh(Arc::new(MeshTree::new(mesh)))),
         (None, Convex::Hull { .. }) => Err(Error::invalid(
             what(),
             "a hull without its mesh has no exact shape",
@@ -83,11 +90,11 @@ fn exact_shape(
 }
 
 impl ExactGeometry {
-    /// Builds the exact shapes: each mesh element's triangles as a parry `TriMesh`, each
-    /// primitive as parry's.
+    /// Builds the exact shapes: each mesh element's triangles with their tree, each
+    /// primitive as itself.
     ///
     /// # Errors
-    /// [`Error::InvalidInput`] naming the link of a mesh parry refuses (no triangle).
+    /// [`Error::InvalidInput`] naming the link of a mesh without triangles.
     pub fn new(gm: &GeometryModel) -> Result<Self> {
         let shapes = gm
             .objects
@@ -120,8 +127,8 @@ impl ExactScene {
     /// Builds the exact shapes of `scene`'s objects.
     ///
     /// # Errors
-    /// [`Error::InvalidInput`] naming the scene object of a mesh parry refuses, or of a
-    /// hull given without its mesh.
+    /// [`Error::InvalidInput`] naming the scene object of a mesh without triangles, or
+    /// of a hull given without its mesh.
     pub fn new(scene: &Scene) -> Result<Self> {
         let objects = scene
             .objects
@@ -140,132 +147,205 @@ impl ExactScene {
 
 /// Exact distance between `a` at `pose_a` and `b` at `pose_b` (world placements): the
 /// surface distance with the world closest points, `0` when they touch or cross. Two
-/// meshes: parry's triangle-mesh query. A mesh and a primitive: the nearest triangle to
-/// the solid primitive by this module's GJK (parry's triangle–cuboid closest points come
-/// from separating axes and can miss an edge–vertex distance by millimetres). Two
-/// primitives: their GJK distance, `0` when they overlap.
-fn exact_distance(
-    a: &Exact,
-    pose_a: &SE3,
-    b: &Exact,
-    pose_b: &SE3,
-    epa: &mut EpaWorkspace,
-) -> PairDistance {
+/// meshes: the nearest pair of triangles; a mesh and a primitive: the nearest triangle
+/// to the solid primitive; two primitives: their distance, `0` when they overlap.
+fn exact_distance(a: &Exact, pose_a: &SE3, b: &Exact, pose_b: &SE3) -> PairDistance {
+    let mut search = Nearest::new(pose_a, pose_b);
     match (a, b) {
-        (Exact::Mesh(ta, _), Exact::Mesh(tb, _)) => mesh_mesh(ta, pose_a, tb, pose_b),
-        (Exact::Mesh(_, m), Exact::Solid(c)) => mesh_solid(m, pose_a, c, pose_b, epa),
-        (Exact::Solid(c), Exact::Mesh(_, m)) => {
-            let r = mesh_solid(m, pose_b, c, pose_a, epa);
-            PairDistance {
+        (Exact::Mesh(ta), Exact::Mesh(tb)) => search.mesh_mesh(ta, 0, tb, 0),
+        (Exact::Mesh(t), Exact::Solid(c)) => {
+            let (lo, hi) = box_in(&search.b_in_a, c);
+            search.mesh_solid(t, 0, c, &lo, &hi);
+        }
+        (Exact::Solid(c), Exact::Mesh(t)) => {
+            let mut swapped = Nearest::new(pose_b, pose_a);
+            let (lo, hi) = box_in(&swapped.b_in_a, c);
+            swapped.mesh_solid(t, 0, c, &lo, &hi);
+            let r = swapped.best;
+            return PairDistance {
                 witness_a: r.witness_b,
                 witness_b: r.witness_a,
                 normal: -r.normal,
                 ..r
-            }
+            };
         }
         (Exact::Solid(ca), Exact::Solid(cb)) => {
-            let r = signed_distance(ca, pose_a, cb, pose_b, &mut WarmStart::default(), epa);
-            clamp_touching(r)
+            search.best = gap_distance(ca, pose_a, cb, pose_b, &mut WarmStart::default());
         }
     }
+    search.best
 }
 
-/// A GJK/EPA result as a surface distance: overlapping is touching (distance 0, no
-/// normal).
-fn clamp_touching(r: PairDistance) -> PairDistance {
-    if r.distance > 0.0 {
-        r
-    } else {
-        PairDistance {
-            distance: 0.0,
-            normal: Vector3::zeros(),
-            ..r
+/// The box (min, max) in the mesh's frame of the primitive `c`, `to` mapping the
+/// primitive's frame to the mesh's: its own box turned and enclosed.
+fn box_in(to: &SE3, c: &Convex) -> (Vector3<f64>, Vector3<f64>) {
+    let (centre, half) = c.local_aabb();
+    let m = to.act_point(&centre);
+    let r = to.rotation.abs() * half;
+    (m - r, m + r)
+}
+
+/// The nearest-pair search between a mesh (A, its tree's boxes in its own frame) and a
+/// mesh or primitive (B), with the best pair so far.
+///
+/// Two lower bounds skip a pair of boxes (or of triangles): the gap between A's box and
+/// B's box turned into A's frame and enclosed, and the gap along the best pair's normal
+/// `n` (from A to B), `min over B of n·x − max over A of n·x`, which holds for any unit
+/// `n` and is tight near the closest features, where the boxes overlap.
+struct Nearest<'a> {
+    pose_a: &'a SE3,
+    pose_b: &'a SE3,
+    /// B's frame to A's.
+    b_in_a: SE3,
+    best: PairDistance,
+    /// The best pair's normal in A's frame and in B's (zero before the first pair apart),
+    /// and `n · (B's origin − A's origin)` in the world.
+    axis_a: Vector3<f64>,
+    axis_b: Vector3<f64>,
+    offset: f64,
+}
+
+impl<'a> Nearest<'a> {
+    fn new(pose_a: &'a SE3, pose_b: &'a SE3) -> Self {
+        Nearest {
+            pose_a,
+            pose_b,
+            b_in_a: pose_a.inverse_compose(pose_b),
+            best: PairDistance {
+                distance: f64::INFINITY,
+                witness_a: pose_a.translation,
+                witness_b: pose_b.translation,
+                normal: Vector3::zeros(),
+            },
+            axis_a: Vector3::zeros(),
+            axis_b: Vector3::zeros(),
+            offset: 0.0,
         }
     }
-}
 
-/// The nearest of `mesh`'s triangles (at `pose_m`) to the solid `c` (at `pose_c`):
-/// triangles in the order of the gap between their bounding box and `c`'s, each a
-/// three-vertex hull measured by GJK, until the gap reaches the best distance; `0` at
-/// the first triangle that touches or enters `c`.
-fn mesh_solid(
-    mesh: &TriangleMesh,
-    pose_m: &SE3,
-    c: &Convex,
-    pose_c: &SE3,
-    epa: &mut EpaWorkspace,
-) -> PairDistance {
-    let (lo, hi) = world_aabb(c, pose_c);
-    let mut order: Vec<(f64, usize)> = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
-            let w = t.map(|i| pose_m.act_point(&mesh.vertices[i as usize]));
-            let tlo = w[0].inf(&w[1]).inf(&w[2]);
-            let thi = w[0].sup(&w[1]).sup(&w[2]);
-            let gap = (tlo - hi).sup(&(lo - thi)).sup(&Vector3::zeros()).norm();
-            (gap, k)
-        })
-        .collect();
-    order.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let mut best = PairDistance {
-        distance: f64::INFINITY,
-        witness_a: pose_m.translation,
-        witness_b: pose_c.translation,
-        normal: Vector3::zeros(),
-    };
-    for (gap, k) in order {
-        if gap >= best.distance {
-            break;
-        }
-        let tri = Convex::Hull {
-            vertices: mesh.triangles[k]
-                .iter()
-                .map(|&i| mesh.vertices[i as usize])
-                .collect(),
-            neighbours: Vec::new(),
-        };
-        let r = signed_distance(&tri, pose_m, c, pose_c, &mut WarmStart::default(), epa);
-        if r.distance <= 0.0 {
-            return clamp_touching(r);
-        }
-        if r.distance < best.distance {
-            best = r;
+    /// Measures one pair of shapes and keeps it when nearer (its normal the new axis).
+    fn measure<B: super::convex::Support>(&mut self, t: &Triangle, b: &B) {
+        let r = gap_distance(t, self.pose_a, b, self.pose_b, &mut WarmStart::default());
+        if r.distance < self.best.distance {
+            self.best = r;
+            let n = r.normal;
+            self.axis_a = self.pose_a.rotation.tr_mul(&n);
+            self.axis_b = self.pose_b.rotation.tr_mul(&n);
+            self.offset = n.dot(&(self.pose_b.translation - self.pose_a.translation));
         }
     }
-    best
-}
 
-/// Exact distance between two triangle meshes (parry), `0` when they touch or cross.
-fn mesh_mesh(a: &SharedShape, pose_a: &SE3, b: &SharedShape, pose_b: &SE3) -> PairDistance {
-    let touching = PairDistance {
-        distance: 0.0,
-        witness_a: pose_a.translation,
-        witness_b: pose_a.translation,
-        normal: Vector3::zeros(),
-    };
-    match closest_points(&pose(pose_a), &*a.0, &pose(pose_b), &*b.0, f64::MAX) {
-        Ok(ClosestPoints::WithinMargin(a, b)) => {
-            let (wa, wb) = (Vector3::new(a.x, a.y, a.z), Vector3::new(b.x, b.y, b.z));
-            let d = (wb - wa).norm();
-            if d > 0.0 {
-                PairDistance {
-                    distance: d,
-                    witness_a: wa,
-                    witness_b: wb,
-                    normal: (wb - wa) / d,
+    /// The gap along the axis between A's points whose largest `axis_a` projection is
+    /// `a_max` and B's whose smallest `axis_b` projection is `b_min` (each in its frame).
+    fn axis_gap(&self, a_max: f64, b_min: f64) -> f64 {
+        b_min + self.offset - a_max
+    }
+
+    /// Whether a triangle of A and one of B are no nearer than the best along the axis.
+    fn triangles_apart(&self, ta: &Triangle, tb: &Triangle) -> bool {
+        let a_max =
+            ta.0.iter()
+                .map(|v| v.dot(&self.axis_a))
+                .fold(f64::MIN, f64::max);
+        let b_min =
+            tb.0.iter()
+                .map(|v| v.dot(&self.axis_b))
+                .fold(f64::MAX, f64::min);
+        self.axis_gap(a_max, b_min) >= self.best.distance
+    }
+
+    /// Node `na` of tree `a` against node `nb` of tree `b`: leaves' triangles pairwise,
+    /// otherwise the larger node's children, the nearer (by box gap) first, each only
+    /// while its gap is below the best distance.
+    fn mesh_mesh(&mut self, a: &MeshTree, na: usize, b: &MeshTree, nb: usize) {
+        let (x, y) = (&a.nodes[na], &b.nodes[nb]);
+        match (x.leaf, y.leaf) {
+            (Some((fa, ca)), Some((fb, cb))) => {
+                for ta in &a.triangles[fa..fa + ca] {
+                    for tb in &b.triangles[fb..fb + cb] {
+                        if self.best.distance <= 0.0 {
+                            return;
+                        }
+                        if !self.triangles_apart(ta, tb) {
+                            self.measure(ta, tb);
+                        }
+                    }
                 }
-            } else {
-                PairDistance {
-                    witness_a: wa,
-                    witness_b: wb,
-                    ..touching
+            }
+            _ => {
+                let split_a = y.leaf.is_some()
+                    || (x.leaf.is_none() && (x.hi - x.lo).norm() >= (y.hi - y.lo).norm());
+                let children = |n: &BvhNode| [n.child, n.child + 1];
+                let gaps = if split_a {
+                    children(x).map(|c| (self.gap(&a.nodes[c], y), c, nb))
+                } else {
+                    children(y).map(|c| (self.gap(x, &b.nodes[c]), na, c))
+                };
+                let [first, second] = if gaps[0].0 <= gaps[1].0 {
+                    gaps
+                } else {
+                    [gaps[1], gaps[0]]
+                };
+                for (gap, ia, ib) in [first, second] {
+                    // The axis may have changed since: the bound again.
+                    if gap < self.best.distance
+                        && self.gap(&a.nodes[ia], &b.nodes[ib]) < self.best.distance
+                    {
+                        self.mesh_mesh(a, ia, b, ib);
+                    }
                 }
             }
         }
-        // Intersecting: touching.
-        _ => touching,
+    }
+
+    /// A lower bound on the distance between a node of A's tree and a node of B's.
+    fn gap(&self, x: &BvhNode, y: &BvhNode) -> f64 {
+        let (cy, hy) = ((y.lo + y.hi) / 2.0, (y.hi - y.lo) / 2.0);
+        let centre = self.b_in_a.act_point(&cy);
+        let half = self.b_in_a.rotation.abs() * hy;
+        let boxes = box_gap(&x.lo, &x.hi, &(centre - half), &(centre + half));
+        let (cx, hx) = ((x.lo + x.hi) / 2.0, (x.hi - x.lo) / 2.0);
+        let a_max = cx.dot(&self.axis_a) + hx.dot(&self.axis_a.abs());
+        let b_min = cy.dot(&self.axis_b) - hy.dot(&self.axis_b.abs());
+        boxes.max(self.axis_gap(a_max, b_min))
+    }
+
+    /// Node `n` of the mesh's tree against the primitive `c` (its box `lo`, `hi` in the
+    /// mesh's frame), nearer child first.
+    fn mesh_solid(
+        &mut self,
+        t: &MeshTree,
+        n: usize,
+        c: &Convex,
+        lo: &Vector3<f64>,
+        hi: &Vector3<f64>,
+    ) {
+        let node = &t.nodes[n];
+        match node.leaf {
+            Some((first, count)) => {
+                for tri in &t.triangles[first..first + count] {
+                    if self.best.distance <= 0.0 {
+                        return;
+                    }
+                    self.measure(tri, c);
+                }
+            }
+            None => {
+                let gap = |k: usize| box_gap(&t.nodes[k].lo, &t.nodes[k].hi, lo, hi);
+                let (l, r) = (node.child, node.child + 1);
+                let (gl, gr) = (gap(l), gap(r));
+                let order = if gl <= gr {
+                    [(gl, l), (gr, r)]
+                } else {
+                    [(gr, r), (gl, l)]
+                };
+                for (g, k) in order {
+                    if g < self.best.distance {
+                        self.mesh_solid(t, k, c, lo, hi);
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -273,7 +353,7 @@ fn mesh_mesh(a: &SharedShape, pose_a: &SE3, b: &SharedShape, pose_b: &SE3) -> Pa
 /// `gd.results` as [`compute_distances`](super::geometry_data::compute_distances) does
 /// for the hulls: each link pair's minimum over its objects, the world closest points,
 /// `normal` = (witness_b − witness_a) / distance (zero when touching). Returns the
-/// minimum and sets `gd.closest`. Allocates (parry's traversal), unlike the hull queries.
+/// minimum and sets `gd.closest`. Allocates nothing.
 pub fn compute_exact_distances(
     gm: &GeometryModel,
     ex: &ExactGeometry,
@@ -296,7 +376,6 @@ pub fn compute_exact_distances(
                     &gd.placements[i],
                     &ex.shapes[j],
                     &gd.placements[j],
-                    &mut gd.epa,
                 );
                 if best.is_none_or(|b| r.distance < b.distance) {
                     best = Some(r);
@@ -321,8 +400,7 @@ pub fn compute_exact_distances(
 /// convex hulls, are lower bounds on the meshes' distances): a link mesh against a
 /// primitive or a voxel is the distance from its triangles to the solid primitive (`0`
 /// when a triangle touches or enters it), against a scene mesh the distance between the
-/// two triangle sets. Returns the minimum and sets `sd.closest`. Allocates (parry's
-/// traversal), unlike the convex queries.
+/// two triangle sets. Returns the minimum and sets `sd.closest`. Allocates nothing.
 pub fn compute_exact_scene_distances(
     gm: &GeometryModel,
     ex: &ExactGeometry,
@@ -337,7 +415,6 @@ pub fn compute_exact_scene_distances(
             q.pose,
             &exs.objects[q.scene_object][q.shape],
             &scene.objects[q.scene_object].shapes[q.shape].pose,
-            q.epa,
         )
     })
 }

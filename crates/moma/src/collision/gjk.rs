@@ -14,7 +14,7 @@
 //! [`MAX_ITERATIONS`] iterations over at most 2V − 4 faces
 //! ([`EpaWorkspace::faces_visited`]).
 
-use super::convex::Convex;
+use super::convex::{Convex, Support};
 use crate::spatial::SE3;
 use nalgebra::{Matrix3, Vector3};
 
@@ -94,12 +94,12 @@ impl EpaWorkspace {
     }
 }
 
-struct Placed<'a> {
-    shape: &'a Convex,
+struct Placed<'a, S: ?Sized> {
+    shape: &'a S,
     pose: &'a SE3,
 }
 
-impl Placed<'_> {
+impl<S: Support + ?Sized> Placed<'_, S> {
     /// World support point of the core in world direction `d`.
     fn core(&self, d: &Vector3<f64>, hint: &mut usize) -> Vector3<f64> {
         let local = self.pose.rotation.tr_mul(d);
@@ -107,16 +107,16 @@ impl Placed<'_> {
     }
 }
 
-struct Pair<'a> {
-    a: Placed<'a>,
-    b: Placed<'a>,
+struct Pair<'a, A: ?Sized, B: ?Sized> {
+    a: Placed<'a, A>,
+    b: Placed<'a, B>,
     /// Add the margins to the support function (EPA on overlapping cores).
     inflate: bool,
 }
 
-impl<'a> Pair<'a> {
+impl<'a, A: Support + ?Sized, B: Support + ?Sized> Pair<'a, A, B> {
     /// The two placed shapes, support functions on their cores (no margins).
-    fn new(a: &'a Convex, pose_a: &'a SE3, b: &'a Convex, pose_b: &'a SE3) -> Self {
+    fn new(a: &'a A, pose_a: &'a SE3, b: &'a B, pose_b: &'a SE3) -> Self {
         Pair {
             a: Placed {
                 shape: a,
@@ -188,6 +188,54 @@ pub fn signed_distance(
     }
 }
 
+/// Distance between two placed shapes as surfaces meeting: their gap when apart, `0`
+/// (no EPA) when they touch or overlap, with world witness points (when touching, a
+/// point common to both within 1e-10 m) and the unit normal (zero when touching). The
+/// exact triangle-mesh distances ([`super::exact`]) measure triangles with it.
+pub fn gap_distance<A: Support + ?Sized, B: Support + ?Sized>(
+    a: &A,
+    pose_a: &SE3,
+    b: &B,
+    pose_b: &SE3,
+    warm: &mut WarmStart,
+) -> PairDistance {
+    let pair = Pair::new(a, pose_a, b, pose_b);
+    let (ma, mb) = (a.margin(), b.margin());
+    let mut simplex = [SupportPoint::default(); 4];
+    match gjk(&pair, warm, &mut simplex, f64::NEG_INFINITY, f64::INFINITY) {
+        Gjk::Separated { distance, wa, wb } if distance > ma + mb => {
+            let normal = (wb - wa) / distance;
+            PairDistance {
+                distance: distance - ma - mb,
+                witness_a: wa + normal * ma,
+                witness_b: wb - normal * mb,
+                normal,
+            }
+        }
+        Gjk::Separated { wa, wb, .. } => {
+            // Cores apart by at most the margins (so these are positive): a point between
+            // them on the segment.
+            touching(wa + (wb - wa) * (ma / (ma + mb)))
+        }
+        Gjk::Overlap { n } => {
+            let (_, _, weights) = closest_on_simplex(&simplex[..n]);
+            let p = (0..n).fold(Vector3::zeros(), |p, i| p + simplex[i].a * weights[i]);
+            touching(p)
+        }
+        Gjk::Within { .. } => unreachable!("no upper bound is below -inf"),
+    }
+}
+
+/// Two shapes touching at world point `p`.
+fn touching(p: Vector3<f64>) -> PairDistance {
+    PairDistance {
+        distance: 0.0,
+        witness_a: p,
+        witness_b: p,
+        normal: Vector3::zeros(),
+    }
+}
+
 /// The signed distance of [`signed_distance`], or, when it lies outside `(within,
 /// enough]`, a bound that shows so: a lower bound above `enough` (GJK stops at the first
 /// separating plane that shows the distance exceeds it), or an upper bound at most
@@ -251,8 +299,8 @@ const CONTACT: f64 = 1e-10;
 /// GJK on the cores; stops early once the lower bound exceeds `stop_above` (returning it
 /// as the distance), or once the upper bound |v| (a point of the Minkowski difference) is
 /// at most `stop_within` and above contact ([`Gjk::Within`]).
-fn gjk(
-    pair: &Pair,
+fn gjk<A: Support + ?Sized, B: Support + ?Sized>(
+    pair: &Pair<A, B>,
     warm: &mut WarmStart,
     simplex: &mut [SupportPoint; 4],
     stop_within: f64,
@@ -442,8 +490,8 @@ fn project(s: &[SupportPoint], idx: &arrayvec_like::Idx) -> Option<[f64; 4]> {
 }
 
 /// EPA on the (possibly inflated) Minkowski difference, from GJK's last simplex.
-fn epa_depth(
-    pair: &Pair,
+fn epa_depth<A: Support + ?Sized, B: Support + ?Sized>(
+    pair: &Pair<A, B>,
     warm: &mut WarmStart,
     start: &[SupportPoint],
     ws: &mut EpaWorkspace,
@@ -631,6 +679,41 @@ mod tests {
         Convex::Box {
             half: Vector3::repeat(h),
         }
+    }
+
+    /// Two triangles: parallel 0.3 apart (closest points anywhere on the overlap, at that
+    /// distance), an edge over a face, and crossing (0, a common point); a triangle
+    /// against a sphere subtracts the radius.
+    #[test]
+    fn triangle_gaps_touch_at_zero() {
+        use crate::collision::convex::Triangle;
+        let v = Vector3::new;
+        let flat = Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0)]);
+        let id = SE3::identity();
+        let up = SE3::from_translation(v(0.1, 0.1, 0.3));
+        let mut w = WarmStart::default();
+        let r = gap_distance(&flat, &id, &flat, &up, &mut w);
+        assert!((r.distance - 0.3).abs() < 1e-12, "{r:?}");
+        assert!((r.normal - Vector3::z()).norm() < 1e-9);
+        assert!(((r.witness_b - r.witness_a).norm() - 0.3).abs() < 1e-12);
+        // A vertical triangle whose lowest edge is 0.2 above the face's middle.
+        let wall = Triangle([v(0.1, 0.2, 0.2), v(0.4, 0.2, 0.2), v(0.2, 0.2, 1.0)]);
+        let r = gap_distance(&flat, &id, &wall, &id, &mut WarmStart::default());
+        assert!((r.distance - 0.2).abs() < 1e-12, "{r:?}");
+        // The same wall pushed through the face: crossing, at 0, the point on both.
+        let down = SE3::from_translation(v(0.0, 0.0, -0.5));
+        let r = gap_distance(&flat, &id, &wall, &down, &mut WarmStart::default());
+        assert_eq!(r.distance, 0.0);
+        assert_eq!(r.normal, Vector3::zeros());
+        assert!(r.witness_a.z.abs() < 1e-9, "{r:?}");
+        // A ball of radius 0.1 centred 0.5 above the face.
+        let ball = Convex::Sphere { radius: 0.1 };
+        let above = SE3::from_translation(v(0.2, 0.2, 0.5));
+        let r = gap_distance(&flat, &id, &ball, &above, &mut WarmStart::default());
+        assert!((r.distance - 0.4).abs() < 1e-12 && (r.witness_b.z - 0.4).abs() < 1e-12);
+        let inside = SE3::from_translation(v(0.2, 0.2, 0.05));
+        let r = gap_distance(&flat, &id, &ball, &inside, &mut WarmStart::default());
+        assert_eq!(r.distance, 0.0);
     }
 
     #[test]

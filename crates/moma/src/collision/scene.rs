@@ -2,6 +2,7 @@
 //! occupancy grids and point clouds binned into voxels, as named scene objects with a
 //! bounding-volume tree each; and the link–object distance queries.
 
+use super::bvh::{BvhNode, build_bvh};
 use super::convex::Convex;
 use super::geometry_data::GeometryData;
 use super::geometry_model::GeometryModel;
@@ -43,16 +44,6 @@ pub struct SceneObject {
     pub touch_links: Vec<String>,
     /// The tree: node `k` has box `nodes[k]`; leaves hold a range of `shapes`.
     nodes: Vec<BvhNode>,
-}
-
-#[derive(Clone, Debug)]
-struct BvhNode {
-    lo: Vector3<f64>,
-    hi: Vector3<f64>,
-    /// Leaf: `Some((first, count))` into the shapes; inner: children `left`, `left + 1`
-    /// are stored at `child`.
-    leaf: Option<(usize, usize)>,
-    child: usize,
 }
 
 /// Most shapes one scene object may hold (about 0.8 GB): bounds the memory a voxel grid
@@ -107,14 +98,7 @@ impl SceneObject {
                 mesh,
             })
             .collect();
-        let mut nodes = Vec::with_capacity(2 * shapes.len() / LEAF_SIZE + 2);
-        nodes.push(BvhNode {
-            lo: Vector3::zeros(),
-            hi: Vector3::zeros(),
-            leaf: None,
-            child: 0,
-        });
-        build(&mut shapes, 0, 0, &mut nodes);
+        let nodes = build_bvh(&mut shapes, LEAF_SIZE, |s| s.aabb);
         Ok(SceneObject {
             id,
             shapes,
@@ -142,42 +126,6 @@ pub(super) fn world_aabb(shape: &Convex, pose: &SE3) -> (Vector3<f64>, Vector3<f
     let centre = pose.act_point(&c);
     let r = pose.rotation.abs() * h;
     (centre - r, centre + r)
-}
-
-/// Builds node `k` over `shapes[first..]` (median split on the longest axis).
-fn build(shapes: &mut [SceneShape], first: usize, k: usize, nodes: &mut Vec<BvhNode>) {
-    let mut lo = Vector3::repeat(f64::INFINITY);
-    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
-    for s in shapes.iter() {
-        lo = lo.inf(&s.aabb.0);
-        hi = hi.sup(&s.aabb.1);
-    }
-    nodes[k].lo = lo;
-    nodes[k].hi = hi;
-    if shapes.len() <= LEAF_SIZE {
-        nodes[k].leaf = Some((first, shapes.len()));
-        return;
-    }
-    let axis = (hi - lo).imax();
-    let mid = shapes.len() / 2;
-    shapes.select_nth_unstable_by(mid, |a, b| {
-        let ca = a.aabb.0[axis] + a.aabb.1[axis];
-        let cb = b.aabb.0[axis] + b.aabb.1[axis];
-        ca.total_cmp(&cb)
-    });
-    let child = nodes.len();
-    nodes[k].child = child;
-    for _ in 0..2 {
-        nodes.push(BvhNode {
-            lo,
-            hi,
-            leaf: None,
-            child: 0,
-        });
-    }
-    let (left, right) = shapes.split_at_mut(mid);
-    build(left, first, child, nodes);
-    build(right, first + mid, child + 1, nodes);
 }
 
 /// Distance from a ball to a box (0 inside), a lower bound on any shape in the box.
