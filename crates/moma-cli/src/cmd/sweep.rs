@@ -154,7 +154,11 @@ pub fn run(args: Args) -> Result<()> {
                 pb.inc(d);
             }
         })
-        .with_context(|| path.display().to_string())?;
+        .map_err(|e| match &e {
+            // a point's error in the sweep file names it already (`lift_off.joint_gains`)
+            moma::Error::Parse { path: named, .. } if *named == path => anyhow::Error::new(e),
+            _ => anyhow::Error::new(e).context(path.display().to_string()),
+        })?;
     let secs = start.elapsed().as_secs_f64();
     if let Some(pb) = &pb {
         pb.finish_and_clear();
