@@ -120,7 +120,7 @@ fn bad_lift_off_input_is_one_error_and_no_output() {
         // gains unstable at the plant's step fail the point before it runs; the sweep
         // file was named twice (by the library's error and by the command)
         (
-            lift_off_sweep(&dir, "gains.toml", good, "joint_gains = [2000, 100]"),
+            lift_off_sweep(&dir, "gains.toml", good, "joint_gains = [2000, 1e5]"),
             "lift_off.joint_gains",
         ),
     ];

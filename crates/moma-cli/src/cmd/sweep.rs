@@ -154,10 +154,14 @@ pub fn run(args: Args) -> Result<()> {
                 pb.inc(d);
             }
         })
-        .map_err(|e| match &e {
+        .map_err(|e| {
             // a point's error in the sweep file names it already (`lift_off.joint_gains`)
-            moma::Error::Parse { path: named, .. } if *named == path => anyhow::Error::new(e),
-            _ => anyhow::Error::new(e).context(path.display().to_string()),
+            let file = path.display().to_string();
+            if e.to_string().contains(&file) {
+                anyhow::Error::new(e)
+            } else {
+                anyhow::Error::new(e).context(file)
+            }
         })?;
     let secs = start.elapsed().as_secs_f64();
     if let Some(pb) = &pb {
