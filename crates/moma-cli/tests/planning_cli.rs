@@ -407,6 +407,44 @@ fn plan_checks_a_disk_plans_path_with_a_polygon() {
 }
 
 #[test]
+fn plan_check_footprint_refuses_a_start_or_goal_the_polygon_collides_at() {
+    // (15, 5) lies two cells below the obstacle: the disk fits, a chassis 5 cells wide
+    // across its heading does not at heading 0 (the path's along row 5)
+    let map = one_obstacle_map();
+    let out = tmp("end-checked.json");
+    let across = "-1,-2.5;1,-2.5;1,2.5;-1,2.5";
+    for (start, goal, field) in [
+        ("15,5", "27,5", "start: "),
+        ("15,5,0", "27,5", "start: "),
+        ("3,5", "15,5", "goal: "),
+    ] {
+        let o = moma(&[
+            "plan",
+            map.to_str().unwrap(),
+            "--start",
+            start,
+            "--goal",
+            goal,
+            "--radius",
+            "0.5",
+            "--check-footprint",
+            across,
+            "--output",
+            out.to_str().unwrap(),
+        ]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{start} {goal}: {e}");
+        assert!(
+            e.contains(&format!(
+                "{field}the footprint polygon with its origin at (15.000, 5.000) cells"
+            )),
+            "{e}"
+        );
+        assert!(!out.exists(), "no output");
+    }
+}
+
+#[test]
 fn plan_check_footprint_errors_name_the_option() {
     let map = one_obstacle_map();
     let out = tmp("never-checked.json");

@@ -1,12 +1,14 @@
 //! Maps and grid planning: `moma.load_map`, `moma.Map`, `moma.plan`.
 
-use crate::err;
+use crate::{err, json_to_py};
 use moma::planning::pipeline::{
-    self, Frame, PlanFields, PlanRequest, PlanStatus, RobotFootprint, Search,
+    self, Frame, PLAN_DT, PLAN_LIMITS, PlanFields, PlanRequest, PlanStatus, PolygonCheck,
+    RobotFootprint, Search, Timing,
 };
 use moma::planning::{MapKind, OccupancyGrid, load_map as load};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use std::path::PathBuf;
 
 /// An occupancy grid: a ROS map (coordinates in world metres) or a Moving AI map
@@ -94,10 +96,25 @@ fn load_map(py: Python<'_>, path: PathBuf, resolution: Option<f64>) -> PyResult<
 /// (n, 2) array in the map's frame (cell centres), or None when the goal cannot be
 /// reached. Unknown cells are obstacles unless `unknown="free"`. The GIL is released.
 ///
+/// With `check_footprint` (a convex polygon `[[x, y], ...]` about the planned point, map
+/// units) the path is checked as `moma plan --check-footprint` checks it: timed
+/// stop-and-turn with `moma plan`'s default limits, every pose checked with the polygon at
+/// its heading, keeping `check_padding` (≥ 0) from the obstacle cells; the start and goal
+/// are checked at the heading the path leaves and arrives with. The result is then a dict:
+/// `status` ("found", or "colliding" when a pose collides), `waypoints` and `check` (kind,
+/// vertices, padding, colliding: the cells of the colliding poses), as `moma plan` writes
+/// them in path.json (`status`, `waypoints`, `robot.check`); None when unreachable.
+///
 /// Raises MomaError when start or goal lies outside the map, in an obstacle or closer
-/// than `radius` to one.
+/// than `radius` to one, or where the `check_footprint` polygon collides; for a polygon
+/// that is not convex (naming `check_footprint`) and a negative or non-finite
+/// `check_padding`, or one given without `check_footprint`.
 #[pyfunction]
-#[pyo3(signature = (grid, start, goal, radius = 0.0, unknown = "obstacle", smooth = true))]
+#[pyo3(signature = (
+    grid, start, goal, radius = 0.0, unknown = "obstacle", smooth = true,
+    check_footprint = None, check_padding = None
+))]
+#[allow(clippy::too_many_arguments)]
 fn plan<'py>(
     py: Python<'py>,
     grid: PyRef<'py, PyMap>,
@@ -106,7 +123,9 @@ fn plan<'py>(
     radius: f64,
     unknown: &str,
     smooth: bool,
-) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+    check_footprint: Option<Vec<[f64; 2]>>,
+    check_padding: Option<f64>,
+) -> PyResult<Option<Bound<'py, PyAny>>> {
     let unknown_is_obstacle = match unknown {
         "obstacle" => true,
         "free" => false,
@@ -116,10 +135,33 @@ fn plan<'py>(
             )));
         }
     };
+    let polygon_check = match check_footprint {
+        None if check_padding.is_some() => {
+            return Err(err(
+                "check_padding: read only with check_footprint (the polygon it pads)",
+            ));
+        }
+        None => None,
+        Some(vertices) => Some(
+            PolygonCheck::new(
+                vertices,
+                check_padding.unwrap_or(0.0),
+                0.0,
+                ["check_footprint", "check_padding"],
+            )
+            .map_err(err)?,
+        ),
+    };
+    // the check is of the timed path, timed as `moma plan` times it by default
+    let timing = polygon_check.as_ref().map(|_| Timing::StopAndTurn {
+        limits: PLAN_LIMITS,
+        dt: PLAN_DT,
+    });
     let request = PlanRequest {
         start,
         start_yaw: None,
         goal,
+        goal_yaw: None,
         frame: Frame::Map,
         unknown_is_obstacle,
         footprint: RobotFootprint::Disk(radius),
@@ -128,8 +170,8 @@ fn plan<'py>(
         search: Search::Astar,
         turn_cost: 1.0,
         smooth,
-        timing: None,
-        polygon_check: None,
+        timing,
+        polygon_check,
     };
     let grid = &grid.grid;
     let found = py.detach(|| pipeline::plan(grid, &request)).map_err(err)?;
@@ -146,7 +188,16 @@ fn plan<'py>(
         .iter()
         .flat_map(|c| grid.cell_to_world(c.0 as f64, c.1 as f64))
         .collect();
-    Ok(Some(PyArray1::from_vec(py, flat).reshape([n, 2])?))
+    let waypoints = PyArray1::from_vec(py, flat).reshape([n, 2])?.into_any();
+    let Some(report) = found.check_report(&request) else {
+        return Ok(Some(waypoints));
+    };
+    let report = serde_json::to_value(report).map_err(err)?;
+    let out = PyDict::new(py);
+    out.set_item("status", found.outcome())?;
+    out.set_item("waypoints", waypoints)?;
+    out.set_item("check", json_to_py(py, &report)?)?;
+    Ok(Some(out.into_any()))
 }
 
 /// Registers the class and functions.

@@ -1049,6 +1049,7 @@ fn bench_pipeline(c: &mut Criterion) {
     let request = |footprint| PlanRequest {
         start: [-2.0, -0.5],
         start_yaw: None,
+        goal_yaw: None,
         goal: [1.5, 0.5],
         frame: Frame::Map,
         unknown_is_obstacle: true,

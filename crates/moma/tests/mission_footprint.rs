@@ -88,6 +88,30 @@ fn the_check_catches_a_heading_where_the_polygon_collides() {
     assert!(at(30f64.to_radians(), &mut buf).unwrap() < 0.0);
 }
 
+/// The planning pipeline checks the start and goal poses with the polygon at their
+/// headings: across the passage's middle the 1 m chassis reaches into both walls, though
+/// the inscribed disk the search runs on fits there; each refusal names its field.
+#[test]
+fn a_start_or_goal_the_polygon_collides_at_is_refused_naming_the_field() {
+    for (from, field) in [
+        ("pose = [1.5, 2.0, 0.0]", "start.pose"),
+        ("pose = [6.5, 2.0, 0.0]", "goal.pose"),
+    ] {
+        let across = narrow(from, "pose = [4.0, 2.0, 1.5708]").unwrap();
+        let e = run(&across).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!(
+                "{field}: the footprint polygon with its origin at (4.000, 2.000) m and \
+                 heading 1.571 rad overlaps"
+            )),
+            "{e}"
+        );
+        // along the passage it fits
+        let along = narrow(from, "pose = [4.0, 2.0, 0.0]").unwrap();
+        assert!(run(&along).is_ok(), "{field}");
+    }
+}
+
 #[test]
 fn a_path_the_polygon_collides_on_is_replanned_with_those_cells_blocked() {
     // from the upper left, the path on the inscribed disk's C-space enters the passage

@@ -980,6 +980,7 @@ fn the_drive_on_map_blocks_a_beam_that_only_the_held_can_would_hit() {
     let request = PlanRequest {
         start: [4.0, 8.0],
         start_yaw: None,
+        goal_yaw: None,
         goal: m.goal().unwrap().pose[..2].try_into().unwrap(),
         frame: Frame::World,
         unknown_is_obstacle: true,

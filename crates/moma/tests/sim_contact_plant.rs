@@ -212,6 +212,45 @@ fn a_caster_by_position_in_a_link_is_the_caster_on_the_frame_there() {
     assert!(e.contains("contact.casters[1].position"), "{e}");
 }
 
+/// `caster_friction = true` in the `[contact]` table is the plant built with
+/// `ContactPlant::with_caster_friction`: the same run to the bit, which differs from the
+/// frictionless casters' (the casters carry the brake's horizontal load until they lift).
+/// A value that is not a boolean is refused naming the field and the file.
+#[test]
+fn caster_friction_in_the_file_is_the_plants_caster_friction() {
+    let brake = "contact_brake_arm_extended.toml";
+    let with_friction = |t: String| t.replace("mu = 0.9", "mu = 0.9\ncaster_friction = true");
+    let (sf, path_f) = scenario(brake, with_friction);
+    let from_file = run_contact(&sf, &path_f);
+    let (sc, path) = scenario(brake, |t| t);
+    let mut run = prepare_contact(&sc, &path).unwrap();
+    let frictionless = run.run(&mut |_| {}).unwrap();
+    let mut run = prepare_contact(&sc, &path).unwrap();
+    run.plant = run.plant.with_caster_friction();
+    let by_method = run.run(&mut |_| {}).unwrap();
+    assert_eq!(from_file.rows, by_method.rows);
+    assert_ne!(from_file.rows, frictionless.rows);
+    // `false` is the default
+    let (s0, path_0) = scenario(brake, |t| {
+        t.replace("mu = 0.9", "mu = 0.9\ncaster_friction = false")
+    });
+    assert_eq!(run_contact(&s0, &path_0).rows, frictionless.rows);
+    let text = std::fs::read_to_string(&path).unwrap();
+    for bad in ["caster_friction = 1", "caster_friction = \"yes\""] {
+        let e = parse_scenario::<toml::Table, toml::Table, toml::Table, toml::Table>(
+            &text.replace("mu = 0.9", &format!("mu = 0.9\n{bad}")),
+            &path,
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(
+            e.contains("caster_friction") && e.contains(&path.display().to_string()),
+            "{e}"
+        );
+    }
+}
+
 #[test]
 fn the_state_map_round_trips_through_the_rolling_models_velocity_basis() {
     let (sc, path) = scenario("contact_coordinated.toml", |t| t);

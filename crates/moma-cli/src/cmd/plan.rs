@@ -15,11 +15,10 @@ use crate::output::write_all_atomic;
 use crate::svg_map::{Scene, render};
 use anyhow::{Context, Result, bail};
 use moma::planning::costmap::{Footprint, InflationParams};
-use moma::planning::footprint_clearance::ConvexFootprint;
 use moma::planning::load_map;
 use moma::planning::pipeline::{
-    self, Frame, MapFrame, Plan, PlanFields, PlanRequest, PlanStatus, PolygonCheck, RobotFootprint,
-    Search, Timing,
+    self, Frame, MapFrame, PLAN_DT, PLAN_LIMITS, Plan, PlanFields, PlanRequest, PlanStatus,
+    PolygonCheck, RobotFootprint, Search, Timing,
 };
 use moma::planning::potential::GoalTerm;
 use moma::planning::trajectory::{DiffDriveLimits, TrajectoryPoint};
@@ -118,19 +117,19 @@ pub struct PlanArgs {
     #[arg(long)]
     pub no_smooth: bool,
     /// Maximum forward speed (m/s, or cells/s).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = PLAN_LIMITS.v_max)]
     pub v_max: f64,
     /// Maximum turn rate (rad/s).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = PLAN_LIMITS.omega_max)]
     pub omega_max: f64,
     /// Maximum linear acceleration.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = PLAN_LIMITS.a_max)]
     pub a_max: f64,
     /// Maximum angular acceleration (rad/s²).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = PLAN_LIMITS.alpha_max)]
     pub alpha_max: f64,
     /// Trajectory sampling period (s).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = PLAN_DT)]
     pub dt: f64,
     /// Write the result as JSON here.
     #[arg(long)]
@@ -301,16 +300,12 @@ fn polygon_check(args: &PlanArgs) -> Result<Option<PolygonCheck>> {
         );
     }
     let polygon = Footprint::parse(text).context("--check-footprint")?;
-    ConvexFootprint::new(&polygon, 1.0).context("--check-footprint")?;
-    let padding = args.check_padding.unwrap_or(0.0);
-    if !(padding.is_finite() && padding >= 0.0) {
-        bail!("--check-padding: must be a finite length >= 0, got {padding}");
-    }
-    Ok(Some(PolygonCheck {
-        polygon,
-        padding,
-        ahead: 0.0,
-    }))
+    Ok(Some(PolygonCheck::new(
+        polygon.vertices,
+        args.check_padding.unwrap_or(0.0),
+        0.0,
+        ["--check-footprint", "--check-padding"],
+    )?))
 }
 
 /// Runs the subcommand. A potential field stuck in a local minimum, and a path that the
@@ -326,16 +321,10 @@ pub fn run(args: Args) -> Result<()> {
     let (footprint, search, mut robot) = footprint_and_search(&args, &mf)?;
     let check = polygon_check(&args)?;
     let checked = check.is_some();
-    if let Some(pc) = &check {
-        robot["check"] = serde_json::json!({
-            "kind": "polygon",
-            "vertices": pc.polygon.vertices,
-            "padding": pc.padding,
-        });
-    }
     let request = PlanRequest {
         start: [sx, sy],
         start_yaw,
+        goal_yaw: None,
         goal: [gx, gy],
         frame: Frame::Map,
         unknown_is_obstacle: args.unknown == Unknown::Obstacle,
@@ -357,9 +346,8 @@ pub fn run(args: Args) -> Result<()> {
     if plan.status == PlanStatus::Unreachable {
         bail!("{}", plan.report);
     }
-    if let Some(c) = robot.get_mut("check") {
-        let cells: Vec<[usize; 2]> = plan.colliding.iter().map(|c| [c.0, c.1]).collect();
-        c["colliding"] = serde_json::json!(cells);
+    if let Some(report) = plan.check_report(&request) {
+        robot["check"] = serde_json::to_value(report)?;
     }
     let out = plan_output(&args, &mf, &request, robot, &plan);
     write_outputs(&args, &mf, &plan, &out)?;
@@ -431,11 +419,7 @@ fn plan_output(
         map: args.map.display().to_string(),
         frame: if mf.world() { "world" } else { "cells" },
         algorithm: args.algo,
-        status: match plan.status {
-            PlanStatus::LocalMinimum => "local_minimum",
-            _ if !plan.colliding.is_empty() => "colliding",
-            _ => "found",
-        },
+        status: plan.outcome(),
         report: plan.report.clone(),
         start: request.start,
         goal: request.goal,

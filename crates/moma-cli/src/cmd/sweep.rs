@@ -154,7 +154,15 @@ pub fn run(args: Args) -> Result<()> {
                 pb.inc(d);
             }
         })
-        .with_context(|| path.display().to_string())?;
+        .map_err(|e| {
+            // a point's error in the sweep file names it already (`lift_off.joint_gains`)
+            let file = path.display().to_string();
+            if e.to_string().contains(&file) {
+                anyhow::Error::new(e)
+            } else {
+                anyhow::Error::new(e).context(file)
+            }
+        })?;
     let secs = start.elapsed().as_secs_f64();
     if let Some(pb) = &pb {
         pb.finish_and_clear();

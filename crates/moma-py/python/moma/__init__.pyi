@@ -1,7 +1,7 @@
 """Type stubs of the moma package (the Rust extension moma._moma)."""
 
 from os import PathLike
-from typing import Any, Literal, Mapping, Optional, Sequence, Union
+from typing import Any, Literal, Mapping, Optional, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -242,6 +242,7 @@ def osc(
 def load_map(path: Path, resolution: Optional[float] = None) -> Map:
     """Loads a ROS YAML, Moving AI .map or bare PGM/PNG map."""
 
+@overload
 def plan(
     grid: Map,
     start: Sequence[float],
@@ -249,8 +250,23 @@ def plan(
     radius: float = 0.0,
     unknown: Literal["obstacle", "free"] = "obstacle",
     smooth: bool = True,
+    check_footprint: None = None,
+    check_padding: None = None,
 ) -> Optional[F64]:
     """A* + shortcut smoothing for a disk robot: (n, 2) waypoints, or None."""
+@overload
+def plan(
+    grid: Map,
+    start: Sequence[float],
+    goal: Sequence[float],
+    radius: float = 0.0,
+    unknown: Literal["obstacle", "free"] = "obstacle",
+    smooth: bool = True,
+    *,
+    check_footprint: Sequence[Sequence[float]],
+    check_padding: Optional[float] = None,
+) -> Optional[dict[str, Any]]:
+    """As moma plan --check-footprint: keys status ("found" | "colliding"), waypoints (n, 2), check {kind, vertices, padding, colliding}; None when unreachable."""
 
 Cell = Union[int, float, bool, str, None]
 

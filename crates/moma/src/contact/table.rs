@@ -5,7 +5,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::params::ContactParams;
-use super::spec::CasterSpec;
+use super::plant::ContactPlant;
+use super::spec::{CasterSpec, WheelSpec};
+use crate::Result;
+use crate::multibody::Model;
 
 /// Which plant a wheeled scenario runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -47,9 +50,34 @@ pub struct ContactSpec {
     /// The casters: a sphere of `radius` on a `frame` of the robot description, or at
     /// `position` in the frame of `link` ([`CasterSpec`]).
     pub casters: Vec<CasterSpec>,
+    /// `true` gives every caster the wheels' Coulomb friction (μ, `v_ε`), as a braked or
+    /// locked caster has ([`ContactPlant::with_caster_friction`]); default `false`:
+    /// frictionless casters.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub caster_friction: Option<bool>,
 }
 
 impl ContactSpec {
+    /// The contact plant of `model` (a free-flyer root) with the drive `wheels`, the
+    /// table's casters (with the wheels' friction when `caster_friction = true`) and the
+    /// law `params` (the table's, [`ContactSpec::params`], or a perturbed draw of them).
+    ///
+    /// # Errors
+    /// [`ContactPlant::new`]'s, naming the field at fault.
+    pub fn plant(
+        &self,
+        model: Model,
+        wheels: &[WheelSpec],
+        params: ContactParams,
+    ) -> Result<ContactPlant> {
+        let plant = ContactPlant::new(model, wheels, &self.casters, params)?;
+        Ok(if self.caster_friction == Some(true) {
+            plant.with_caster_friction()
+        } else {
+            plant
+        })
+    }
+
     /// The law's parameters: the table's values over the defaults.
     #[must_use]
     pub fn params(&self) -> ContactParams {

@@ -59,8 +59,9 @@ impl Planner {
     ///
     /// # Errors
     /// [`pipeline::plan`]'s: start or goal outside the map, in an obstacle, or where the
-    /// footprint does not fit (the start's message says when it fits nowhere); a polygon
-    /// that is not convex. An unreachable goal is not an error: the returned path is
+    /// footprint does not fit (the start's message says when it fits nowhere) or where
+    /// the request's footprint polygon collides at the pose's heading; a polygon that is
+    /// not convex. An unreachable goal is not an error: the returned path is
     /// `None`.
     pub fn new(
         grid: &OccupancyGrid,
@@ -363,6 +364,7 @@ pub(crate) fn first_plan_request(
     PlanRequest {
         start,
         start_yaw: None,
+        goal_yaw: None,
         goal,
         frame: Frame::World,
         unknown_is_obstacle,
@@ -414,6 +416,9 @@ pub(super) fn mission_planner(
         [from[0], from[1]],
         [to[0], to[1]],
     );
+    // the poses' headings: the polygon check refuses a start or goal where it collides
+    request.start_yaw = Some(from[2]);
+    request.goal_yaw = Some(to[2]);
     request.polygon_check = check;
     Planner::new(grid, &request)
 }

@@ -121,6 +121,7 @@ pub fn plan_platform_reference(
         [r.goal[0], r.goal[1]],
     );
     req.start_yaw = Some(r.start[2]);
+    req.goal_yaw = Some(r.goal[2]);
     req.timing = Some(Timing::Curvature {
         timing: CurvatureTiming {
             limits: r.limits,
@@ -128,7 +129,6 @@ pub fn plan_platform_reference(
             kappa_max: r.kappa_max,
             dt: r.dt,
         },
-        goal_yaw: r.goal[2],
     });
     let plan = pipeline::plan(grid, &req).map_err(rename)?;
     let Some(curve) = plan.curve else {

@@ -76,7 +76,7 @@ impl MissionContact {
                 ),
             ));
         }
-        let (plant, mut map) = contact_plant_of(robot.clone(), model, &spec.casters, params)?;
+        let (plant, mut map) = contact_plant_of(robot.clone(), model, spec, params)?;
         let (qc, vc) = map.to_contact(q0, &vec![0.0; robot.nr()]);
         let start = ContactState::new(&plant, &qc, &vc)?;
         Ok(Self { plant, map, start })

@@ -133,29 +133,9 @@ impl<'m> Runner<'m> {
             Some(task) => choose_placement(m, task)?,
         };
         let (s0, g0) = (axle_pose(f.start.pose, d), axle_pose(goal.pose, d));
-        let grid = &m.map.grid;
-        let (mut planner, first_path, first_search) =
+        // the pipeline refuses a start or goal pose where the footprint polygon collides
+        let (planner, first_path, first_search) =
             mission_planner(m, &m.map.grid, &m.footprint, s0, g0)?;
-        if planner.polygon.is_some() {
-            for (what, pose, axle) in [
-                ("start.pose", f.start.pose, s0),
-                ("goal.pose", goal.pose, g0),
-            ] {
-                if planner.axle_collides(grid, axle) {
-                    return Err(Error::invalid(
-                        what,
-                        format!(
-                            "the robot's footprint polygon at ({}, {}, {} rad) overlaps an \
-                             obstacle or comes closer to one than the padding ({} m)",
-                            pose[0],
-                            pose[1],
-                            pose[2],
-                            m.footprint.padding()
-                        ),
-                    ));
-                }
-            }
-        }
         let planning_s = clock.elapsed().as_secs_f64();
         let tip = transport_tip_limits(m)?;
         let l = &f.limits;
@@ -773,6 +753,7 @@ mod tests {
             [g0[0], g0[1]],
         );
         req.start_yaw = Some(s0[2]);
+        req.goal_yaw = Some(g0[2]);
         req.timing = Some(Timing::Curvature {
             timing: CurvatureTiming {
                 limits: l.platform(),
@@ -780,7 +761,6 @@ mod tests {
                 kappa_max: l.kappa_max,
                 dt: 0.02,
             },
-            goal_yaw: g0[2],
         });
         let plan = pipeline::plan(&m.map.grid, &req).unwrap();
         assert_eq!(plan.cells, first.cells);

@@ -25,7 +25,10 @@
 //! ([`PlanRequest::polygon_check`], nav2's way with a polygon footprint on a cheap
 //! C-space): every pose of the timed reference with the polygon at the pose's heading
 //! ([`PathCheck`]); the plan lists the cells of the poses that collide
-//! ([`Plan::colliding`]) and hands the check over ([`Plan::path_check`]). The mission
+//! ([`Plan::colliding`]) and hands the check over ([`Plan::path_check`]). The start and
+//! goal poses are checked too, at the request's headings ([`PlanRequest::start_yaw`],
+//! [`PlanRequest::goal_yaw`]) or else at the timed path's there: a collision there is an
+//! error naming the request's field, the robot cannot stand there. The mission
 //! plans so: D* Lite on the disk inside its footprint polygon, which re-plans
 //! incrementally on (x, y) cells, each path it re-times checked with the polygon.
 
@@ -35,7 +38,7 @@ use std::time::Instant;
 
 use super::dstar_lite::DStarLite;
 use super::edt::distance_transform;
-use super::footprint_clearance::PathCheck;
+use super::footprint_clearance::{ConvexFootprint, PathCheck};
 use super::potential::{DescentEnd, GoalTerm, PotentialParams, descend, potential_field};
 use super::smooth::{polyline_length, smooth};
 use super::trajectory::{DiffDriveLimits, TrajectoryPoint, time_parameterize};
@@ -231,6 +234,10 @@ pub struct PlanRequest {
     pub start_yaw: Option<f64>,
     /// Goal `[x, y]` in map units.
     pub goal: [f64; 2],
+    /// Goal heading (rad, world frame): the curvature-limited timing arrives with it (and
+    /// needs it), the polygon check checks the goal pose at it; `None` arrives along the
+    /// last segment (the stop-and-turn timing's end, which takes none).
+    pub goal_yaw: Option<f64>,
     /// The frame of the points and lengths.
     pub frame: Frame,
     /// Unknown cells are obstacles (else free).
@@ -275,6 +282,68 @@ pub struct PolygonCheck {
     pub ahead: f64,
 }
 
+impl PolygonCheck {
+    /// The check of the convex polygon `vertices` with `padding`, its origin `ahead` of
+    /// the planned point, validated: the errors name the caller's fields, `fields[0]`
+    /// the polygon's (fewer than 3 vertices, non-finite, no area, not convex) and
+    /// `fields[1]` the padding's (negative or not finite).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming one of `fields`.
+    pub fn new(
+        vertices: Vec<[f64; 2]>,
+        padding: f64,
+        ahead: f64,
+        fields: [&str; 2],
+    ) -> Result<Self> {
+        let named = |e: Error| match e {
+            Error::InvalidInput { message, .. } => Error::invalid(fields[0], message),
+            Error::NonFinite { .. } => Error::invalid(fields[0], "the vertices must be finite"),
+            other => other,
+        };
+        let polygon = Footprint::new(vertices).map_err(named)?;
+        ConvexFootprint::new(&polygon, 1.0).map_err(named)?;
+        if !(padding.is_finite() && padding >= 0.0) {
+            return Err(Error::invalid(
+                fields[1],
+                format!("must be a finite length >= 0, got {padding}"),
+            ));
+        }
+        Ok(Self {
+            polygon,
+            padding,
+            ahead,
+        })
+    }
+}
+
+/// The polygon check of a plan as `moma plan` writes it in `path.json` (`robot.check`)
+/// and the Python `plan` returns it (`check`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PolygonCheckReport {
+    /// `"polygon"`.
+    pub kind: &'static str,
+    /// The polygon's vertices about its origin (map units).
+    pub vertices: Vec<[f64; 2]>,
+    /// The clearance it keeps (map units).
+    pub padding: f64,
+    /// [`Plan::colliding`]: the cells of the timed path's poses where it collides.
+    pub colliding: Vec<[usize; 2]>,
+}
+
+/// `moma plan`'s stop-and-turn limits by default (its `--v-max`, `--omega-max`,
+/// `--a-max`, `--alpha-max`; map units per second), which the Python `plan` times a
+/// path with to check it with a polygon.
+pub const PLAN_LIMITS: DiffDriveLimits = DiffDriveLimits {
+    v_max: 0.5,
+    omega_max: 1.0,
+    a_max: 0.5,
+    alpha_max: 2.0,
+};
+
+/// `moma plan`'s sampling period by default (s, its `--dt`).
+pub const PLAN_DT: f64 = 0.1;
+
 /// How the path is timed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Timing {
@@ -287,14 +356,13 @@ pub enum Timing {
         dt: f64,
     },
     /// Curvature-limited: the cell path smoothed under a curvature bound from the start
-    /// pose (the start heading [`PlanRequest::start_yaw`] is then required) to the goal
-    /// pose and timed from rest under the platform limits and tip-over accelerations
-    /// ([`time_cells_curved`]; the mission's). Point and disk footprints only.
+    /// pose to the goal pose (the headings [`PlanRequest::start_yaw`] and
+    /// [`PlanRequest::goal_yaw`] are then required) and timed from rest under the
+    /// platform limits and tip-over accelerations ([`time_cells_curved`]; the
+    /// mission's). Point and disk footprints only.
     Curvature {
         /// Limits, curvature bound and sampling.
         timing: CurvatureTiming,
-        /// Goal heading (rad, world frame).
-        goal_yaw: f64,
     },
 }
 
@@ -364,12 +432,41 @@ pub struct Plan {
     pub colliding: Vec<(usize, usize)>,
 }
 
+impl Plan {
+    /// The plan's outcome as `moma plan` writes it (`status` of `path.json`):
+    /// `"unreachable"`, `"local_minimum"`, `"colliding"` (a pose of the timed path where
+    /// the polygon check collides) or `"found"`.
+    #[must_use]
+    pub fn outcome(&self) -> &'static str {
+        match self.status {
+            PlanStatus::Unreachable => "unreachable",
+            PlanStatus::LocalMinimum => "local_minimum",
+            PlanStatus::Found if !self.colliding.is_empty() => "colliding",
+            PlanStatus::Found => "found",
+        }
+    }
+
+    /// The polygon check of `req` (the request this plan answers) with its verdict;
+    /// `None` without [`PlanRequest::polygon_check`].
+    #[must_use]
+    pub fn check_report(&self, req: &PlanRequest) -> Option<PolygonCheckReport> {
+        req.polygon_check.as_ref().map(|pc| PolygonCheckReport {
+            kind: "polygon",
+            vertices: pc.polygon.vertices.clone(),
+            padding: pc.padding,
+            colliding: self.colliding.iter().map(|c| [c.0, c.1]).collect(),
+        })
+    }
+}
+
 /// Runs the pipeline on `grid` (see the module documentation).
 ///
 /// # Errors
 /// Start or goal off the map, in an obstacle or unknown cell, or inside the C-space
 /// obstacle (each naming the request's field; the start's message says when the
-/// footprint fits nowhere on the map); invalid footprint, offset, search or timing
+/// footprint fits nowhere on the map), or where the polygon check's polygon collides (at
+/// the request's heading, or at the timed path's when it gives none; naming the
+/// field); invalid footprint, offset, search or timing
 /// parameters; an oversized map or footprint C-space. An unreachable goal is not an
 /// error ([`PlanStatus::Unreachable`]).
 pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
@@ -412,19 +509,37 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
             format!("must be finite, and 0 with a polygonal footprint, got {offset}"),
         ));
     }
-    if let Some(Timing::Curvature { goal_yaw, .. }) = req.timing {
-        if matches!(req.footprint, RobotFootprint::Polygon(_)) || req.start_yaw.is_none() {
-            return Err(Error::invalid(
-                "timing",
-                "the curvature-limited timing needs the start heading and a point or disk \
-                 footprint (a polygon's path is timed stop-and-turn, at the headings searched)",
-            ));
-        }
-        if !goal_yaw.is_finite() {
+    for (what, yaw) in [(fields.start, req.start_yaw), (fields.goal, req.goal_yaw)] {
+        if yaw.is_some_and(|y| !y.is_finite()) {
             return Err(Error::NonFinite {
-                field: format!("{} heading", fields.goal),
+                field: format!("{what} heading"),
             });
         }
+    }
+    match req.timing {
+        Some(Timing::Curvature { .. })
+            if matches!(req.footprint, RobotFootprint::Polygon(_))
+                || req.start_yaw.is_none()
+                || req.goal_yaw.is_none() =>
+        {
+            return Err(Error::invalid(
+                "timing",
+                "the curvature-limited timing needs the start heading, the goal heading and \
+                 a point or disk footprint (a polygon's path is timed stop-and-turn, at the \
+                 headings searched)",
+            ));
+        }
+        Some(Timing::StopAndTurn { .. }) if req.goal_yaw.is_some() => {
+            return Err(Error::invalid(
+                "timing",
+                format!(
+                    "the stop-and-turn timing ends along the path's last segment: it takes no \
+                     {} heading",
+                    fields.goal
+                ),
+            ));
+        }
+        _ => {}
     }
     let dilation = radius + offset.abs();
     let distance = distance_transform(&obst, w, h);
@@ -463,7 +578,7 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
             )));
         }
     }
-    let path_check = match &req.polygon_check {
+    let mut path_check = match &req.polygon_check {
         None => None,
         Some(_) if matches!(req.footprint, RobotFootprint::Polygon(_)) => {
             return Err(Error::invalid(
@@ -479,6 +594,17 @@ pub fn plan(grid: &OccupancyGrid, req: &PlanRequest) -> Result<Plan> {
             mf.cells_to_units(1.0),
         )?),
     };
+    // the ends the request gives headings for; the others at the timed path's (`finish`)
+    if let (Some(check), Some(pc)) = (path_check.as_mut(), &req.polygon_check) {
+        for (what, point, yaw) in [
+            (fields.start, req.start, req.start_yaw),
+            (fields.goal, req.goal, req.goal_yaw),
+        ] {
+            if let Some(yaw) = yaw {
+                check_end(&mf, check, pc, &obst, what, point, (yaw, false))?;
+            }
+        }
+    }
     let ends = Ends { start, goal };
     let clock = Instant::now();
     let found = match (&req.footprint, &req.search) {
@@ -758,9 +884,9 @@ fn finish(
             ),
             // a descent stuck short of the goal has no path to the goal pose to time
             Some(Timing::Curvature { .. }) if f.status != PlanStatus::Found => (Vec::new(), None),
-            Some(Timing::Curvature { timing, goal_yaw }) => {
+            Some(Timing::Curvature { timing }) => {
                 let start = [req.start[0], req.start[1], req.start_yaw.unwrap_or(0.0)];
-                let goal = [req.goal[0], req.goal[1], *goal_yaw];
+                let goal = [req.goal[0], req.goal[1], req.goal_yaw.unwrap_or(0.0)];
                 let curve =
                     time_cells_curved(mf.grid, &f.cspace, &f.cells, start, 0.0, goal, timing)?;
                 let points = curve
@@ -790,6 +916,37 @@ fn finish(
         ),
         None => Vec::new(),
     };
+    if let (Some(check), Some(pc), Some(first), Some(last)) = (
+        path_check.as_mut(),
+        &req.polygon_check,
+        trajectory.first(),
+        trajectory.last(),
+    ) {
+        let fields = req.fields;
+        if req.start_yaw.is_none() {
+            check_end(
+                mf,
+                check,
+                pc,
+                &map.occupied,
+                fields.start,
+                req.start,
+                (first.theta, true),
+            )?;
+        }
+        // a descent stuck short of the goal does not arrive there
+        if req.goal_yaw.is_none() && f.status == PlanStatus::Found {
+            check_end(
+                mf,
+                check,
+                pc,
+                &map.occupied,
+                fields.goal,
+                req.goal,
+                (last.theta, true),
+            )?;
+        }
+    }
     Ok(Plan {
         start_cell: ends.start,
         goal_cell: ends.goal,
@@ -812,6 +969,41 @@ fn finish(
         path_check,
         colliding,
     })
+}
+
+/// Refuses the end `what` (the request's start or goal `point`, map units) where the
+/// polygon of `pc` collides at the heading `yaw.0` (`yaw.1`: the heading the timed path
+/// has there, the request giving none) with `occupied` (the plan's obstacle cells).
+fn check_end(
+    mf: &MapFrame<'_>,
+    check: &mut PathCheck,
+    pc: &PolygonCheck,
+    occupied: &[bool],
+    what: &str,
+    point: [f64; 2],
+    yaw: (f64, bool),
+) -> Result<()> {
+    let (yaw, from_path) = yaw;
+    if !check.collides(mf.grid, occupied, [point[0], point[1], yaw]) {
+        return Ok(());
+    }
+    // the polygon's origin, `ahead` of the planned point
+    let (s, c) = yaw.sin_cos();
+    let origin = [point[0] + pc.ahead * c, point[1] + pc.ahead * s];
+    let which = if from_path {
+        ", the heading the timed path has there (none was given)"
+    } else {
+        ""
+    };
+    Err(Error::Planning(format!(
+        "{what}: the footprint polygon with its origin at ({:.3}, {:.3}) {u} and heading \
+         {yaw:.3} rad{which} overlaps an obstacle cell or comes closer to one than the \
+         padding ({} {u})",
+        origin[0],
+        origin[1],
+        short(pc.padding),
+        u = mf.units()
+    )))
 }
 
 /// Keeps only the cells where the direction changes (and repeated cells, i.e. turns).
@@ -850,6 +1042,7 @@ mod tests {
             start: [3.0, 5.0],
             start_yaw: None,
             goal: [27.0, 5.0],
+            goal_yaw: None,
             frame: Frame::Map,
             unknown_is_obstacle: true,
             footprint: RobotFootprint::Disk(0.5),
@@ -914,6 +1107,89 @@ mod tests {
             &untimed.occupied,
             [15.0, 5.0, std::f64::consts::FRAC_PI_2]
         ));
+    }
+
+    /// The start and goal poses are checked with the polygon: at the heading the request
+    /// gives, before the search, or else at the heading the timed path has there; each
+    /// refusal names the request's field. (15, 5) lies two cells below the obstacle: the
+    /// disk fits there, the chassis 5 cells wide across its heading does not at heading 0.
+    #[test]
+    fn the_ends_are_checked_with_the_polygon_naming_the_field() {
+        let g = one_obstacle();
+        let fields = PlanFields {
+            start: "start.pose",
+            goal: "goal.pose",
+            radius: "radius",
+        };
+        let across = || {
+            let mut r = request(Some(rectangle(2.0, 5.0, 0.0)));
+            r.fields = fields;
+            r
+        };
+        // the request's heading: refused before the search
+        let mut req = across();
+        req.start = [15.0, 5.0];
+        req.start_yaw = Some(0.0);
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(
+            e.contains("start.pose: the footprint polygon with its origin at (15.000, 5.000) cells and heading 0.000 rad overlaps"),
+            "{e}"
+        );
+        // turned a quarter turn it fits; the turn in place towards the goal then
+        // collides along the path, which is the path check's verdict, not an error
+        req.start_yaw = Some(std::f64::consts::FRAC_PI_2);
+        let p = plan(&g, &req).unwrap();
+        assert_eq!(p.colliding.first(), Some(&(15, 5)));
+        // no heading given: the one the timed path leaves with (along row 5)
+        req.start_yaw = None;
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(
+            e.contains("start.pose") && e.contains("none was given"),
+            "{e}"
+        );
+        // the goal, arrived at along row 5
+        let mut req = across();
+        req.goal = [15.0, 5.0];
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(
+            e.contains("goal.pose") && e.contains("none was given"),
+            "{e}"
+        );
+        // with a goal heading (untimed: the stop-and-turn timing takes none)
+        req.timing = None;
+        req.goal_yaw = Some(0.0);
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(
+            e.contains("goal.pose") && e.contains("heading 0.000 rad overlaps"),
+            "{e}"
+        );
+        req.goal_yaw = Some(std::f64::consts::FRAC_PI_2);
+        assert_eq!(plan(&g, &req).unwrap().status, PlanStatus::Found);
+        // the padding counts: lengthwise the chassis passes 0.5 cells below the obstacle
+        let mut req = request(Some(rectangle(5.0, 2.0, 0.6)));
+        req.start = [15.0, 5.0];
+        req.start_yaw = Some(0.0);
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(
+            e.contains("start: ") && e.contains("padding (0.6 cells)"),
+            "{e}"
+        );
+        req.start_yaw = Some(f64::NAN);
+        let e = plan(&g, &req).unwrap_err().to_string();
+        assert!(e.contains("start heading"), "{e}");
+        // without the check the ends are the disk's alone
+        let mut req = request(None);
+        req.start = [15.0, 5.0];
+        req.start_yaw = Some(0.0);
+        assert_eq!(plan(&g, &req).unwrap().status, PlanStatus::Found);
+    }
+
+    #[test]
+    fn the_stop_and_turn_timing_takes_no_goal_heading() {
+        let mut req = request(None);
+        req.goal_yaw = Some(0.0);
+        let e = plan(&one_obstacle(), &req).unwrap_err().to_string();
+        assert!(e.contains("timing") && e.contains("goal heading"), "{e}");
     }
 
     #[test]

@@ -16,7 +16,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::contact::{CasterSpec, ContactParams, ContactPlant, ContactState, WheelSpec};
+use crate::contact::{ContactParams, ContactPlant, ContactSpec, ContactState, WheelSpec};
 use crate::error::{Error, Result};
 use crate::mobile::WheeledModel;
 use crate::mobile::wheeled::admissible_velocity_basis;
@@ -143,7 +143,8 @@ impl ReducedMap {
 
 /// The contact plant of `robot` and the map to its reduced coordinates: `model` is the
 /// same robot description on a free-flyer root, the drive wheels are the robot's
-/// tracked `wheel_joints` as disks of radius `drive.r_w`, the casters are `casters`.
+/// tracked `wheel_joints` as disks of radius `drive.r_w`, the casters those of the
+/// `[contact]` table `spec` ([`ContactSpec::plant`]), the law `params`.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] naming the field at fault (`robot.wheel_joints`,
@@ -151,7 +152,7 @@ impl ReducedMap {
 pub fn contact_plant_of(
     robot: WheeledModel,
     model: Model,
-    casters: &[CasterSpec],
+    spec: &ContactSpec,
     params: ContactParams,
 ) -> Result<(ContactPlant, ReducedMap)> {
     let Some(joints) = robot.base.wheel_joints.clone() else {
@@ -162,7 +163,7 @@ pub fn contact_plant_of(
     };
     let radius = robot.base.drive.wheel_radius;
     let wheels = joints.map(|joint| WheelSpec { joint, radius });
-    let plant = ContactPlant::new(model, &wheels, casters, params)?;
+    let plant = spec.plant(model, &wheels, params)?;
     let map = ReducedMap::new(robot, &plant)?;
     Ok((plant, map))
 }

@@ -89,7 +89,7 @@ pub fn prepare_contact(sc: &Scenario, path: &Path) -> Result<ContactRun> {
         }
         None => None,
     };
-    let (plant, mut map) = contact_plant_of(robot, model, &spec.casters, params).map_err(named)?;
+    let (plant, mut map) = contact_plant_of(robot, model, spec, params).map_err(named)?;
     let (q0, v0, driver, record_interval) = if sc.controller.is_some() || sc.reference.is_some() {
         let cl = closed_loop(sc, path, base_dir)?;
         let driver = ContactDriver::Law {

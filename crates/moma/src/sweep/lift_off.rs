@@ -10,10 +10,10 @@
 //! own inertia, `sim::lift_off::DEFAULT_JOINT_GAINS`). Gains unstable at the plant's step
 //! fail the point before it runs, naming `lift_off.joint_gains` and the joint. The search
 //! looks for `event`: the first contact to lift (`first_lift`, the default) or the
-//! tip-over (`tip_over`: every contact off one edge unloaded); `caster_friction = true`
-//! gives the casters the wheels' friction (`ContactPlant::with_caster_friction`);
-//! `static_torque = true` adds the static torque of the posture to the joints' PD law
-//! (`LiftOffProblem::with_static_torque`).
+//! tip-over (`tip_over`: every contact off one edge unloaded); the `contact` table's
+//! `caster_friction = true` gives the casters the wheels' friction
+//! (`ContactPlant::with_caster_friction`); `static_torque = true` adds the static torque
+//! of the posture to the joints' PD law (`LiftOffProblem::with_static_torque`).
 
 use std::path::{Path, PathBuf};
 
@@ -64,7 +64,6 @@ struct Spec {
     max_iterations: Option<usize>,
     joint_gains: Option<[f64; 2]>,
     event: Option<String>,
-    caster_friction: Option<bool>,
     static_torque: Option<bool>,
 }
 
@@ -246,16 +245,10 @@ impl LiftOffStudy {
         };
         let (bracket, settings) = settings(path, &spec)?;
         let slots = parameter_slots(path, &model, params)?;
-        let mut plant = ContactPlant::new(
-            model,
-            &spec.wheels,
-            &spec.contact.casters,
-            spec.contact.params(),
-        )
-        .map_err(|e| plant_error(path, e))?;
-        if spec.caster_friction == Some(true) {
-            plant = plant.with_caster_friction();
-        }
+        let plant = spec
+            .contact
+            .plant(model, &spec.wheels, spec.contact.params())
+            .map_err(|e| plant_error(path, e))?;
         Ok(Self {
             path: path.to_path_buf(),
             plant,
