@@ -532,7 +532,7 @@ impl<'m> Runner<'m> {
                     tr.closest_self_pair = Some(pair);
                 }
             }
-            tr.driving = drives.and_then(|dm| dm.minima());
+            tr.driving = drives.and_then(|dm| dm.scene_minimum());
         }
         self.min_zmp_event();
         self.events.sort_by(|a, b| a.t.total_cmp(&b.t));

@@ -728,6 +728,9 @@ pub struct DistanceMonitor {
     /// Smallest distance between enabled link pairs so far (m) and the links (the held
     /// object as the second one of its pairs).
     pub min_self: Option<(f64, [String; 2])>,
+    /// Whether the distances between links are measured (`false`:
+    /// [`DistanceMonitor::scene_only`], and `min_self` stays `None`).
+    with_self: bool,
 }
 
 impl DistanceMonitor {
@@ -747,6 +750,18 @@ impl DistanceMonitor {
             skipped: 0,
             min_scene: None,
             min_self: None,
+            with_self: true,
+        }
+    }
+
+    /// The monitor of `task` on `robot` that measures the robot against the scene only,
+    /// not its links against each other (the drives': the arm holds its transport
+    /// posture there, whose self distances the load checks, holding the object too).
+    #[must_use]
+    pub fn scene_only(task: &Task, robot: &WheeledModel) -> Self {
+        Self {
+            with_self: false,
+            ..Self::new(task, robot)
         }
     }
 
@@ -776,8 +791,13 @@ impl DistanceMonitor {
     /// [`DistanceMonitor::step`]); `false` while lifting, after a change of what the robot
     /// holds, or before the first sample.
     fn cannot_reach_the_minima(&self, task: &Task, holding: Holding) -> bool {
-        let (Some(min_scene), Some(min_self)) = (&self.min_scene, &self.min_self) else {
+        let Some(min_scene) = &self.min_scene else {
             return false;
+        };
+        let min_self = match &self.min_self {
+            Some((d, _)) => *d,
+            None if self.with_self => return false,
+            None => f64::NEG_INFINITY,
         };
         if holding == Holding::Lifting || holding != self.last.holding || self.anchor.is_empty() {
             return false;
@@ -798,7 +818,7 @@ impl DistanceMonitor {
             })
             .fold(0.0, f64::max);
         self.last.scene_distance - moved > min_scene.0
-            && self.last.self_distance - 2.0 * moved > min_self.0
+            && (!self.with_self || self.last.self_distance - 2.0 * moved > min_self)
     }
 
     /// Forward kinematics at `q` (full configuration) and the placements of the geometry
@@ -814,16 +834,14 @@ impl DistanceMonitor {
         update_geometry_placements(gm, &self.data, gd);
     }
 
-    /// Both minima, once the monitor has measured a state.
+    /// The smallest robot–scene distance and its pair, once the monitor has measured a
+    /// state.
     #[must_use]
-    pub fn minima(&self) -> Option<DistanceMinima> {
-        let ((scene, scene_pair), (self_d, self_pair)) =
-            (self.min_scene.clone()?, self.min_self.clone()?);
-        Some(DistanceMinima {
-            min_scene_distance: scene,
-            closest_scene_pair: scene_pair,
-            min_self_distance: self_d,
-            closest_self_pair: self_pair,
+    pub fn scene_minimum(&self) -> Option<SceneMinimum> {
+        let (d, pair) = self.min_scene.clone()?;
+        Some(SceneMinimum {
+            min_scene_distance: d,
+            closest_scene_pair: pair,
         })
     }
 
@@ -903,7 +921,11 @@ impl DistanceMonitor {
         } else {
             (&task.carried, &mut self.gd_carried, &mut self.sd_after)
         };
-        let d_self = compute_distances(gm, gd, PairSelection::Enabled);
+        let d_self = if self.with_self {
+            compute_distances(gm, gd, PairSelection::Enabled)
+        } else {
+            f64::INFINITY
+        };
         let d_scene = compute_scene_distances(gm, gd, scene, sd);
         let lift_violation = if holding == Holding::Lifting {
             let held = gm.links.len() - 1;
@@ -940,7 +962,8 @@ impl DistanceMonitor {
                 [links[k / no].name.clone(), scene.objects[k % no].id.clone()],
             ));
         }
-        if self.min_self.as_ref().is_none_or(|m| d_self < m.0)
+        if self.with_self
+            && self.min_self.as_ref().is_none_or(|m| d_self < m.0)
             && let Some(i) = gd.closest
         {
             let [a, b] = gm.pairs[i];
@@ -1143,17 +1166,13 @@ pub struct PayloadRecord {
     pub zmp_margin_with: Option<f64>,
 }
 
-/// The smallest distances a [`DistanceMonitor`] measured.
+/// The smallest robot–scene distance a scene-only [`DistanceMonitor`] measured.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct DistanceMinima {
+pub struct SceneMinimum {
     /// Smallest robot–scene distance (m).
     pub min_scene_distance: f64,
     /// Link (or the held object) and scene object at it.
     pub closest_scene_pair: [String; 2],
-    /// Smallest distance between enabled link pairs (m).
-    pub min_self_distance: f64,
-    /// Links at it.
-    pub closest_self_pair: [String; 2],
 }
 
 /// What the pick did.
@@ -1180,10 +1199,10 @@ pub struct TaskResult {
     pub min_self_distance: Option<f64>,
     /// Links at it.
     pub closest_self_pair: Option<[String; 2]>,
-    /// Smallest distances over every control step of the drives, to the placement and
-    /// on from it (the task's scene, the held object with the robot after the grasp;
-    /// `None` without a drive).
-    pub driving: Option<DistanceMinima>,
+    /// Smallest robot–scene distance over every control step of the drives, to the
+    /// placement and on from it (the task's scene, the held object counted after the
+    /// grasp; `None` without a drive).
+    pub driving: Option<SceneMinimum>,
     /// The scene objects the held object may touch ([`Task::support`]).
     pub support: Vec<String>,
     /// The radius of the drive on's footprint, with the held object (m; `None` without

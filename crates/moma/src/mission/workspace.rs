@@ -64,7 +64,8 @@ pub(super) struct Workspace {
     pub(super) ee_jacobian: DMatrix<f64>,
     /// A `[task]`'s distance monitor of the arm motions.
     pub(super) distances: Option<DistanceMonitor>,
-    /// A `[task]`'s distance monitor of the drives (to the placement and on from it).
+    /// A `[task]`'s distance monitor of the drives (to the placement and on from it;
+    /// the scene only).
     pub(super) drive_distances: Option<DistanceMonitor>,
     /// The arm motion's reference: configuration (full), group rates and accelerations.
     pub(super) q_ref: Vec<f64>,
@@ -105,7 +106,7 @@ impl Workspace {
             ndot_v: DVector::zeros(model.nv),
             ee_jacobian: DMatrix::zeros(3, nr),
             distances: task.map(|t| DistanceMonitor::new(t, wm)),
-            drive_distances: task.map(|t| DistanceMonitor::new(t, wm)),
+            drive_distances: task.map(|t| DistanceMonitor::scene_only(t, wm)),
             q_ref: vec![0.0; nq],
             qd_ref: vec![0.0; dim],
             qdd_ref: vec![0.0; dim],
