@@ -45,11 +45,9 @@ fn reference(file: &str) -> Value {
     serde_json::from_str(&text).unwrap()
 }
 
-#[test]
-fn fetch_mesh_distances_match_coal() {
-    let (model, gm, ex) = fetch();
-    let r = reference("fetch_self_public.json");
-    let pairs: Vec<usize> = r["pairs"]
+/// The index in `gm.pairs` of each of the reference's `pairs` (two link names each).
+fn pair_indices(gm: &GeometryModel, r: &Value) -> Vec<usize> {
+    r["pairs"]
         .as_array()
         .unwrap()
         .iter()
@@ -61,7 +59,14 @@ fn fetch_mesh_distances_match_coal() {
                 .position(|x| *x == [a.min(b), a.max(b)])
                 .unwrap()
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn fetch_mesh_distances_match_coal() {
+    let (model, gm, ex) = fetch();
+    let r = reference("fetch_self_public.json");
+    let pairs = pair_indices(&gm, &r);
     let mut data = Data::new(&model);
     let mut gd = GeometryData::new(&gm);
     let (mut worst, mut zeros, mut checked) = (0.0_f64, 0, 0);
@@ -348,19 +353,7 @@ fn verdict(got_min: f64, want_min: f64, counts: &mut [usize; 2], label: &str) {
 fn panda_mesh_distances_match_coal() {
     let (model, gm, ex) = panda();
     let r = reference("panda_self.json");
-    let pairs: Vec<usize> = r["pairs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| {
-            let a = gm.link_index(p[0].as_str().unwrap()).unwrap();
-            let b = gm.link_index(p[1].as_str().unwrap()).unwrap();
-            gm.pairs
-                .iter()
-                .position(|x| *x == [a.min(b), a.max(b)])
-                .unwrap()
-        })
-        .collect();
+    let pairs = pair_indices(&gm, &r);
     let mut data = Data::new(&model);
     let mut gd = GeometryData::new(&gm);
     let (mut worst, mut checked, mut counts) = (0.0_f64, 0, [0usize; 2]);
