@@ -5,14 +5,12 @@
 //! iterations on the pocketed tree: the five cage queries solve with far fewer checked
 //! states than with the two trees alternating.
 
-use moma::motion::{
-    MeshSource, MotionGoal, MotionOptions, MotionProblem, plan_motion, surface_links_for_start,
-};
+use moma::motion::{MotionOptions, MotionProblem, plan_motion};
 use moma::multibody::RootJoint;
 use std::time::Duration;
 
 mod fetch_common;
-use fetch_common::{FetchQueries, fetch_dir, fetch_geometry, fetch_urdf, numbers};
+use fetch_common::{FetchQueries, PreparedQuery, fetch_geometry};
 
 #[test]
 fn balanced_trees_solve_the_cage_with_fewer_checked_states() {
@@ -25,22 +23,18 @@ fn balanced_trees_solve_the_cage_with_fewer_checked_states() {
     let (mut alternating, mut balanced) = (0u64, 0u64);
     for k in 0..5 {
         let name = format!("cage-Front-Cube1-{k}");
-        let query = queries.query(&name);
-        let scene = queries.scene(query);
-        let start = numbers(&query["start"]);
-        let source = MeshSource {
-            urdf: fetch_urdf(),
-            package_dirs: vec![fetch_dir()],
-        };
-        let (geometry, _) =
-            surface_links_for_start(&model, &gm, &scene, &group, &start, 2e-3, &source).unwrap();
+        let PreparedQuery {
+            scene,
+            start,
+            goal,
+            geometry,
+        } = queries.prepare(&model, &gm, &group, &name);
         let problem = MotionProblem {
             model: &model,
             geometry: &geometry,
             scene: &scene,
             group: &group,
         };
-        let goal = MotionGoal::State(numbers(&query["goal_state"]));
         let run = |balance: bool| {
             let mut o = MotionOptions::new(group.dim());
             // Long enough for either run on a loaded machine; the figures compared are

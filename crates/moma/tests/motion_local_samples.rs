@@ -5,14 +5,12 @@
 //! pocket: the same queries solve with far fewer checked states than with uniform samples
 //! when the search's two trees alternate (`MotionOptions::search_balanced` off).
 
-use moma::motion::{
-    MeshSource, MotionGoal, MotionOptions, MotionProblem, plan_motion, surface_links_for_start,
-};
+use moma::motion::{MotionOptions, MotionProblem, plan_motion};
 use moma::multibody::RootJoint;
 use std::time::Duration;
 
 mod fetch_common;
-use fetch_common::{FetchQueries, fetch_dir, fetch_geometry, fetch_urdf, numbers};
+use fetch_common::{FetchQueries, PreparedQuery, fetch_geometry};
 
 #[test]
 fn local_samples_let_the_goal_tree_leave_the_shelf() {
@@ -29,22 +27,18 @@ fn local_samples_let_the_goal_tree_leave_the_shelf() {
         ("bookshelf_small-Front-Can1-1", 0),
         ("bookshelf_tall-Front-Can4-0", 0),
     ] {
-        let query = queries.query(name);
-        let scene = queries.scene(query);
-        let start = numbers(&query["start"]);
-        let source = MeshSource {
-            urdf: fetch_urdf(),
-            package_dirs: vec![fetch_dir()],
-        };
-        let (geometry, _) =
-            surface_links_for_start(&model, &gm, &scene, &group, &start, 2e-3, &source).unwrap();
+        let PreparedQuery {
+            scene,
+            start,
+            goal,
+            geometry,
+        } = queries.prepare(&model, &gm, &group, name);
         let problem = MotionProblem {
             model: &model,
             geometry: &geometry,
             scene: &scene,
             group: &group,
         };
-        let goal = MotionGoal::State(numbers(&query["goal_state"]));
         let run = |share: f64| {
             let mut o = MotionOptions::new(group.dim());
             // Long enough for either run on a loaded machine; the figures compared are

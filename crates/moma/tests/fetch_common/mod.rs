@@ -91,6 +91,44 @@ impl FetchQueries {
     }
 }
 
+/// A query made ready to plan: its scene, start, goal state, and the robot's geometry with
+/// the links that touch at the start measured as their mesh surfaces (2 mm margin).
+pub struct PreparedQuery {
+    pub scene: moma::collision::Scene,
+    pub start: Vec<f64>,
+    pub goal: moma::motion::MotionGoal,
+    pub geometry: GeometryModel,
+}
+
+impl FetchQueries {
+    /// The query named `name` made ready to plan for `group` on `model` with `gm`.
+    pub fn prepare(
+        &self,
+        model: &Model,
+        gm: &GeometryModel,
+        group: &moma::motion::JointGroup,
+        name: &str,
+    ) -> PreparedQuery {
+        let query = self.query(name);
+        let scene = self.scene(query);
+        let start = numbers(&query["start"]);
+        let source = moma::motion::MeshSource {
+            urdf: fetch_urdf(),
+            package_dirs: vec![fetch_dir()],
+        };
+        let (geometry, _) =
+            moma::motion::surface_links_for_start(model, gm, &scene, group, &start, 2e-3, &source)
+                .unwrap();
+        let goal = moma::motion::MotionGoal::State(numbers(&query["goal_state"]));
+        PreparedQuery {
+            scene,
+            start,
+            goal,
+            geometry,
+        }
+    }
+}
+
 /// A JSON list of numbers.
 pub fn numbers(v: &serde_json::Value) -> Vec<f64> {
     v.as_array()
