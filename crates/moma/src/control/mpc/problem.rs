@@ -123,6 +123,19 @@ pub trait OptimalControlProblem {
         lo: &mut DVector<f64>,
         hi: &mut DVector<f64>,
     ) {
+        self.clamp_to_input_bounds(k, x, u, lo, hi);
+    }
+    /// Clamps `u` to [`OptimalControlProblem::input_bounds`] at the state `x` of knot `k`
+    /// (written into `lo` and `hi`): the default [`OptimalControlProblem::admissible_input`],
+    /// and the first step of a problem's own.
+    fn clamp_to_input_bounds(
+        &self,
+        k: usize,
+        x: &DVector<f64>,
+        u: &mut DVector<f64>,
+        lo: &mut DVector<f64>,
+        hi: &mut DVector<f64>,
+    ) {
         self.input_bounds(k, x, lo, hi);
         for i in 0..u.len() {
             u[i] = u[i].clamp(lo[i], hi[i]);

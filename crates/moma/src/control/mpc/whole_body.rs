@@ -334,10 +334,7 @@ impl OptimalControlProblem for MpcProblem {
         lo: &mut DVector<f64>,
         hi: &mut DVector<f64>,
     ) {
-        self.input_bounds(k, x, lo, hi);
-        for i in 0..u.len() {
-            u[i] = u[i].clamp(lo[i], hi[i]);
-        }
+        self.clamp_to_input_bounds(k, x, u, lo, hi);
         let n = self.robot.n_moved();
         let w = &self.robot.wheel_map;
         let Some(w_inv) = w.try_inverse() else {
