@@ -595,6 +595,17 @@ fn edge_run(p: &LiftOffProblem, a: f64, shift: Vector2<f64>) -> EdgeRun {
 }
 
 impl OnCasters {
+    /// The study in the first posture, no payload, speeding up (+x).
+    fn first_posture_speeding_up(&self) -> LiftOffProblem {
+        let joints: Vec<(&str, f64)> = self
+            .arm
+            .iter()
+            .copied()
+            .zip(self.postures[0].1.iter().copied())
+            .collect();
+        problem_on(&self.plant, &joints, self.tool, 0.0, Vector2::new(1.0, 0.0))
+    }
+
     /// The same robot with friction at its casters and stiffer contacts.
     fn with_caster_friction(params: fn(ContactParams) -> Self) -> Self {
         let mut r = params(ContactParams {
@@ -686,21 +697,10 @@ fn held_tip_over_ratio(stiffness: f64, ramp: f64, hold: f64) -> f64 {
         ..on_casters_params()
     });
     robot.plant = robot.plant.with_caster_friction();
-    let joints: Vec<(&str, f64)> = robot
-        .arm
-        .iter()
-        .copied()
-        .zip(robot.postures[0].1.iter().copied())
-        .collect();
-    let p = problem_on(
-        &robot.plant,
-        &joints,
-        robot.tool,
-        0.0,
-        Vector2::new(1.0, 0.0),
-    )
-    .with_event(LiftOffEvent::TipOver)
-    .with_static_torque();
+    let p = robot
+        .first_posture_speeding_up()
+        .with_event(LiftOffEvent::TipOver)
+        .with_static_torque();
     let lim = p.predicted_limit().unwrap().unwrap();
     let settings = LiftOffSettings {
         ramp,
@@ -775,19 +775,7 @@ fn arm_gains_unstable_at_the_step_are_refused_before_the_run_naming_the_joint() 
         (mobile_manipulator(on_casters_params()), "wrist_2_joint"),
         (fetch(on_casters_params()), "head_tilt_joint"),
     ] {
-        let joints: Vec<(&str, f64)> = robot
-            .arm
-            .iter()
-            .copied()
-            .zip(robot.postures[0].1.iter().copied())
-            .collect();
-        let p = problem_on(
-            &robot.plant,
-            &joints,
-            robot.tool,
-            0.0,
-            Vector2::new(1.0, 0.0),
-        );
+        let p = robot.first_posture_speeding_up();
         for e in [
             p.joint_gains(&stiff).unwrap_err(),
             p.lifted_contact(1.0, &stiff).unwrap_err(),
