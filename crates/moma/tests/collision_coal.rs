@@ -7,8 +7,8 @@
 //! table, a box and a post in its base frame) with the same tolerances.
 
 use moma::collision::{
-    GeometryData, GeometryModel, GeometryOptions, PairSelection, SceneData, SceneOptions,
-    compute_collision, compute_distances, compute_scene_distances, read_scene, scene_collision,
+    GeometryData, GeometryModel, PairSelection, SceneData, SceneOptions, compute_collision,
+    compute_distances, compute_scene_distances, read_scene, scene_collision,
     update_geometry_placements,
 };
 use moma::kinematics::forward_kinematics;
@@ -18,7 +18,7 @@ use serde_json::Value;
 use std::path::Path;
 
 mod fetch_common;
-use fetch_common::{data_dir, fetch_geometry};
+use fetch_common::{data_dir, fetch_geometry, panda_geometry};
 
 fn fetch() -> (Model, GeometryModel) {
     fetch_geometry(RootJoint::Fixed)
@@ -26,18 +26,7 @@ fn fetch() -> (Model, GeometryModel) {
 
 /// Panda (example-robot-data's URDF: STL meshes, four boxes per finger) with its SRDF.
 fn panda() -> (Model, GeometryModel) {
-    let urdf = data_dir().join("pinocchio/urdf/panda.urdf");
-    let pkg = data_dir().join("robots/panda");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
-    let gm = GeometryModel::from_urdf(
-        &model,
-        &urdf,
-        &GeometryOptions {
-            srdf: Some(pkg.join("example-robot-data/robots/panda_description/srdf/panda.srdf")),
-            package_dirs: vec![pkg],
-        },
-    )
-    .unwrap();
+    let (model, gm) = panda_geometry();
     assert_eq!(gm.objects.len(), 17);
     (model, gm)
 }

@@ -11,9 +11,9 @@
 //! 3 mm of a mesh contact.
 
 use moma::collision::{
-    ExactGeometry, ExactScene, GeometryData, GeometryModel, GeometryOptions, PairSelection,
-    SceneData, SceneOptions, compute_exact_distances, compute_exact_scene_distances,
-    compute_scene_distances, read_scene, update_geometry_placements,
+    ExactGeometry, ExactScene, GeometryData, GeometryModel, PairSelection, SceneData, SceneOptions,
+    compute_exact_distances, compute_exact_scene_distances, compute_scene_distances, read_scene,
+    update_geometry_placements,
 };
 use moma::kinematics::forward_kinematics;
 use moma::multibody::{Data, Model, RootJoint};
@@ -21,7 +21,7 @@ use nalgebra::{DVector, Rotation3, UnitQuaternion};
 use serde_json::Value;
 
 mod fetch_common;
-use fetch_common::{data_dir, fetch_geometry};
+use fetch_common::{data_dir, fetch_geometry, panda_geometry};
 
 /// Fetch on a fixed base, its geometry with the SRDF, and its exact shapes.
 fn fetch() -> (Model, GeometryModel, ExactGeometry) {
@@ -294,18 +294,7 @@ fn a_link_mesh_inside_a_solid_box_is_at_zero() {
 /// Panda (example-robot-data's URDF: 9 STL meshes, four boxes per finger) with its SRDF,
 /// and its exact shapes.
 fn panda() -> (Model, GeometryModel, ExactGeometry) {
-    let urdf = data_dir().join("pinocchio/urdf/panda.urdf");
-    let pkg = data_dir().join("robots/panda");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
-    let gm = GeometryModel::from_urdf(
-        &model,
-        &urdf,
-        &GeometryOptions {
-            srdf: Some(pkg.join("example-robot-data/robots/panda_description/srdf/panda.srdf")),
-            package_dirs: vec![pkg],
-        },
-    )
-    .unwrap();
+    let (model, gm) = panda_geometry();
     let ex = ExactGeometry::new(&gm).unwrap();
     (model, gm, ex)
 }

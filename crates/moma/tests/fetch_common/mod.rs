@@ -1,6 +1,7 @@
 //! Fetch as the tests load it: its folder (URDF, meshes, SRDF, casters) and its model with
 //! its collision geometry (`package://` meshes resolved in that folder, the SRDF's
-//! disabled pairs), shared by the collision, motion and robot tests.
+//! disabled pairs), shared by the collision, motion and robot tests; and Panda's, for the
+//! collision tests against coal.
 #![allow(dead_code)]
 
 use moma::collision::{GeometryModel, GeometryOptions};
@@ -33,6 +34,24 @@ pub fn fetch_geometry(root: RootJoint) -> (Model, GeometryModel) {
         &GeometryOptions {
             package_dirs: vec![dir.clone()],
             srdf: Some(dir.join("fetch.srdf")),
+        },
+    )
+    .unwrap();
+    (model, gm)
+}
+
+/// Panda (example-robot-data's URDF: STL meshes, four boxes per finger) on a fixed root
+/// and its collision geometry with its SRDF's disabled pairs.
+pub fn panda_geometry() -> (Model, GeometryModel) {
+    let urdf = data_dir().join("pinocchio/urdf/panda.urdf");
+    let pkg = data_dir().join("robots/panda");
+    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).unwrap();
+    let gm = GeometryModel::from_urdf(
+        &model,
+        &urdf,
+        &GeometryOptions {
+            srdf: Some(pkg.join("example-robot-data/robots/panda_description/srdf/panda.srdf")),
+            package_dirs: vec![pkg],
         },
     )
     .unwrap();
