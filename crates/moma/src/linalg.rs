@@ -1,5 +1,5 @@
 //! Small dense linear algebra shared by the layers above: one in-place Cholesky
-//! factorisation and its solve, for the workspaces that must not allocate (the reduced
+//! factorisation and its solves (one vector, or each column of a matrix), for the workspaces that must not allocate (the reduced
 //! dynamics of `mobile`, the damped least-squares step of `ik`, operational-space control),
 //! and one singular value decomposition with its left vectors (manipulability measures and
 //! ellipsoids, pseudo-inverses).
@@ -78,6 +78,42 @@ pub(crate) fn cholesky_solve(l: &DMatrix<f64>, b: &mut DVector<f64>) {
             s -= l[(k, i)] * b[k];
         }
         b[i] = s / l[(i, i)];
+    }
+}
+
+/// Solves `L Lᵀ x = b` in place on each column of `b` with the factor from
+/// [`cholesky_in_place`] (L the lower factor, column-major; operational-space control's
+/// inverses, the MPC's feedback gains). Does not allocate.
+///
+/// # Panics
+/// If `b` does not have as many rows as `l`.
+pub(crate) fn cholesky_solve_columns(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
+    let n = l.nrows();
+    assert_eq!(
+        b.nrows(),
+        n,
+        "cholesky_solve_columns: right-hand side has the wrong rows"
+    );
+    let ls = l.as_slice();
+    for c in 0..b.ncols() {
+        let x = &mut b.as_mut_slice()[c * n..(c + 1) * n];
+        // L y = b: column-oriented forward substitution
+        for i in 0..n {
+            let xi = x[i] / ls[i * n + i];
+            x[i] = xi;
+            for (d, lv) in x[i + 1..].iter_mut().zip(&ls[i * n + i + 1..(i + 1) * n]) {
+                *d -= xi * lv;
+            }
+        }
+        // Lᵀ x = y: dot products with contiguous columns of L
+        for i in (0..n).rev() {
+            let dot: f64 = ls[i * n + i + 1..(i + 1) * n]
+                .iter()
+                .zip(&x[i + 1..])
+                .map(|(a, b)| a * b)
+                .sum();
+            x[i] = (x[i] - dot) / ls[i * n + i];
+        }
     }
 }
 

@@ -30,7 +30,7 @@ use crate::dynamics::{crba, nonlinear_effects};
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::{ReferenceFrame, frame_acceleration_bias, frame_jacobian_from_kinematics};
-use crate::linalg::cholesky_in_place;
+use crate::linalg::{cholesky_in_place, cholesky_solve_columns};
 use crate::mobile::{
     WheeledData, WheeledModel, admissible_velocity_basis, admissible_velocity_basis_dot,
 };
@@ -170,32 +170,6 @@ fn matmul(
                     }
                 }
             }
-        }
-    }
-}
-
-/// Solves `L Lᵀ x = b` in place on each column of `b` (L the lower factor, column-major).
-fn cholesky_solve_columns(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
-    let n = l.nrows();
-    let ls = l.as_slice();
-    for c in 0..b.ncols() {
-        let x = &mut b.as_mut_slice()[c * n..(c + 1) * n];
-        // L y = b: column-oriented forward substitution
-        for i in 0..n {
-            let xi = x[i] / ls[i * n + i];
-            x[i] = xi;
-            for (d, lv) in x[i + 1..].iter_mut().zip(&ls[i * n + i + 1..(i + 1) * n]) {
-                *d -= xi * lv;
-            }
-        }
-        // Lᵀ x = y: dot products with contiguous columns of L
-        for i in (0..n).rev() {
-            let dot: f64 = ls[i * n + i + 1..(i + 1) * n]
-                .iter()
-                .zip(&x[i + 1..])
-                .map(|(a, b)| a * b)
-                .sum();
-            x[i] = (x[i] - dot) / ls[i * n + i];
         }
     }
 }

@@ -17,6 +17,7 @@ use nalgebra::{DMatrix, DVector};
 use super::box_qp::BoxQp;
 use super::problem::{OptimalControlProblem, StageModel};
 use crate::error::{Error, Result};
+use crate::linalg::cholesky_solve_columns;
 
 /// Settings of [`Solver::solve`].
 #[derive(Clone, Debug)]
@@ -114,9 +115,12 @@ pub struct Solver {
     qux: DMatrix<f64>,
     vxx_a: DMatrix<f64>,
     vxx_b: DMatrix<f64>,
-    /// Aᵀ, Bᵀ and Kᵀ of the stage (the products with a transpose as plain products).
-    a_t: DMatrix<f64>,
-    b_t: DMatrix<f64>,
+    /// The non-zero entries of the stage's A and B (`(row, column, value)`): the
+    /// products with them skip the zeros (a whole-body MPC's A is the identity plus a
+    /// few entries, its B a few entries a column).
+    a_nz: Vec<(usize, usize, f64)>,
+    b_nz: Vec<(usize, usize, f64)>,
+    /// Kᵀ of the stage (the product with a transpose as a plain product).
     gains_t: DMatrix<f64>,
     lo: DVector<f64>,
     hi: DVector<f64>,
@@ -124,7 +128,6 @@ pub struct Solver {
     bound_lo: DVector<f64>,
     bound_hi: DVector<f64>,
     qp: BoxQp,
-    col: DVector<f64>,
     tmp_x: DVector<f64>,
     tmp_u: DVector<f64>,
     tmp_ux: DMatrix<f64>,
@@ -153,15 +156,14 @@ impl Solver {
             qux: DMatrix::zeros(nu, nx),
             vxx_a: DMatrix::zeros(nx, nx),
             vxx_b: DMatrix::zeros(nx, nu),
-            a_t: DMatrix::zeros(nx, nx),
-            b_t: DMatrix::zeros(nu, nx),
+            a_nz: Vec::with_capacity(nx * nx),
+            b_nz: Vec::with_capacity(nx * nu),
             gains_t: DMatrix::zeros(nx, nu),
             lo: DVector::zeros(nu),
             hi: DVector::zeros(nu),
             bound_lo: DVector::zeros(nu),
             bound_hi: DVector::zeros(nu),
             qp: BoxQp::new(nu),
-            col: DVector::zeros(nu),
             tmp_x: DVector::zeros(nx),
             tmp_u: DVector::zeros(nu),
             tmp_ux: DMatrix::zeros(nu, nx),
@@ -357,18 +359,17 @@ impl Solver {
             self.qu.copy_from(&s.lu);
             self.qu.gemv_tr(1.0, &s.b, &self.vx, 1.0);
             // Vxx A and Vxx B; Qxx = lxx + Aᵀ Vxx A, Quu = luu + Bᵀ Vxx B,
-            // Qux = lux + Bᵀ Vxx A (the transposes formed once: a product of two plain
-            // matrices is the blocked kernel, one with a transpose a loop of dots).
-            self.vxx.mul_to(&s.a, &mut self.vxx_a);
-            self.vxx.mul_to(&s.b, &mut self.vxx_b);
-            s.a.transpose_to(&mut self.a_t);
-            s.b.transpose_to(&mut self.b_t);
+            // Qux = lux + Bᵀ Vxx A, each product over the non-zero entries of A or B.
+            non_zeros(&s.a, &mut self.a_nz);
+            non_zeros(&s.b, &mut self.b_nz);
+            mul_sparse(&self.vxx, &self.a_nz, &mut self.vxx_a);
+            mul_sparse(&self.vxx, &self.b_nz, &mut self.vxx_b);
             self.qxx.copy_from(&s.lxx);
-            self.qxx.gemm(1.0, &self.a_t, &self.vxx_a, 1.0);
+            add_sparse_tr_mul(&self.a_nz, &self.vxx_a, &mut self.qxx);
             self.quu.copy_from(&s.luu);
-            self.quu.gemm(1.0, &self.b_t, &self.vxx_b, 1.0);
+            add_sparse_tr_mul(&self.b_nz, &self.vxx_b, &mut self.quu);
             self.qux.copy_from(&s.lux);
-            self.qux.gemm(1.0, &self.b_t, &self.vxx_a, 1.0);
+            add_sparse_tr_mul(&self.b_nz, &self.vxx_a, &mut self.qux);
             for i in 0..self.nu {
                 self.quu[(i, i)] += mu;
             }
@@ -388,21 +389,19 @@ impl Solver {
                 return None;
             }
             self.feedforward[k].copy_from(&self.qp.x);
-            // K = −Quu_ff⁻¹ Qux on the free rows, 0 on the clamped ones.
+            // K = −Quu_ff⁻¹ Qux on the free rows, 0 on the clamped ones (the factor is
+            // the identity on the clamped rows and columns, so their zeros stay zero).
             let gains = &mut self.gains[k];
             for j in 0..self.nx {
                 for i in 0..self.nu {
-                    self.col[i] = if self.qp.clamped[i] {
+                    gains[(i, j)] = if self.qp.clamped[i] {
                         0.0
                     } else {
                         -self.qux[(i, j)]
                     };
                 }
-                crate::linalg::cholesky_solve(&self.qp.factor, &mut self.col);
-                for i in 0..self.nu {
-                    gains[(i, j)] = if self.qp.clamped[i] { 0.0 } else { self.col[i] };
-                }
             }
+            cholesky_solve_columns(&self.qp.factor, gains);
             let kff = &self.feedforward[k];
             // Expected decrease terms.
             self.quu.mul_to(kff, &mut self.tmp_u);
@@ -470,5 +469,39 @@ impl Solver {
         }
         cost += problem.cost(self.n, &self.trial.xs[self.n], None)?;
         Ok(cost)
+    }
+}
+
+/// The non-zero entries of `m` as `(row, column, value)`, column by column, into `out`
+/// (no allocation within its capacity).
+fn non_zeros(m: &DMatrix<f64>, out: &mut Vec<(usize, usize, f64)>) {
+    out.clear();
+    for j in 0..m.ncols() {
+        for (i, &v) in m.column(j).iter().enumerate() {
+            if v != 0.0 {
+                out.push((i, j, v));
+            }
+        }
+    }
+}
+
+/// `out = M S` for `S` given by its non-zero entries `s` (`non_zeros`): column `j` of
+/// `out` is `Σ_k S_kj M_:k` over the entries of column `j`.
+fn mul_sparse(m: &DMatrix<f64>, s: &[(usize, usize, f64)], out: &mut DMatrix<f64>) {
+    out.fill(0.0);
+    for &(k, j, v) in s {
+        out.column_mut(j).axpy(v, &m.column(k), 1.0);
+    }
+}
+
+/// `out += Sᵀ X` for `S` given by its non-zero entries `s` (`non_zeros`): row `i` of
+/// `out` gains `S_ki X_k:` for each entry `(k, i)`.
+fn add_sparse_tr_mul(s: &[(usize, usize, f64)], x: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    for c in 0..x.ncols() {
+        let xc = x.column(c);
+        let mut oc = out.column_mut(c);
+        for &(k, i, v) in s {
+            oc[i] += v * xc[k];
+        }
     }
 }
