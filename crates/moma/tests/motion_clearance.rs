@@ -72,3 +72,87 @@ fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
         "{passed} passed, {failed} failed"
     );
 }
+
+/// The closed-form bounds the check tries before GJK (ball covers against the other side's
+/// balls, planes or primitive) never pass a pair GJK finds too close: at a margin of 1 cm
+/// (five times the planner's, so more pairs fall between the bounds and the exact
+/// distance) a state passes exactly when its closest pair is farther than the margin, and
+/// every random segment from a passing state that passes keeps half the margin at each of
+/// 41 states along it (the continuous check's guarantee).
+#[test]
+fn the_bounds_before_gjk_never_pass_a_state_too_close() {
+    let (model, gm) = fetch();
+    let queries = FetchQueries::load();
+    let group = queries.group(&model);
+    let dim = group.dim();
+    let space =
+        moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let (mut passed, mut failed, mut segments) = (0, 0, 0);
+    let margin = 0.01;
+    for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
+        let query = queries.query(name);
+        let scene = queries.scene(query);
+        let start = numbers(&query["start"]);
+        let goal = numbers(&query["goal_state"]);
+        let mut checker =
+            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &vec![1.0; dim])
+                .unwrap();
+        let (mut xa, mut xb) = (vec![0.0; dim], vec![0.0; dim]);
+        group.extract(&start, &mut xa);
+        group.extract(&goal, &mut xb);
+        let mut states: Vec<Vec<f64>> = (0..=100)
+            .map(|k| {
+                let t = f64::from(k) / 100.0;
+                xa.iter().zip(&xb).map(|(a, b)| a + t * (b - a)).collect()
+            })
+            .collect();
+        for _ in 0..1000 {
+            let x: Vec<f64> = (0..dim)
+                .map(|i| rng.random_range(group.lower[i]..=group.upper[i]))
+                .collect();
+            states.push(x);
+        }
+        for x in &states {
+            let valid = checker.is_valid(x);
+            let closest = checker.distance_report(x).unwrap();
+            assert_eq!(
+                valid,
+                closest.distance > margin,
+                "{name}: state {x:?}: is_valid {valid}, closest pair {closest:?}"
+            );
+            if valid {
+                passed += 1;
+            } else {
+                failed += 1;
+                continue;
+            }
+            // A segment from the clear state a random way, up to 0.3 rad per joint.
+            let y: Vec<f64> = x
+                .iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    (v + rng.random_range(-0.3..0.3)).clamp(group.lower[i], group.upper[i])
+                })
+                .collect();
+            let mut scratch = Vec::new();
+            if !checker.segment_valid(&space, x, &y, &mut scratch, &mut 0) {
+                continue;
+            }
+            segments += 1;
+            for k in 0..=40 {
+                let t = f64::from(k) / 40.0;
+                let z: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a + t * (b - a)).collect();
+                let d = checker.distance_report(&z).unwrap().distance;
+                assert!(
+                    d > 0.5 * margin - 1e-9,
+                    "{name}: {z:?} at {d} m on a passed segment"
+                );
+            }
+        }
+    }
+    assert!(
+        passed > 50 && failed > 50 && segments > 10,
+        "{passed} passed, {failed} failed, {segments} segments passed"
+    );
+}

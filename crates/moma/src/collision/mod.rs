@@ -51,10 +51,13 @@
 //!   links disabled; a scene object may allow links to touch it
 //!   ([`SceneObject::touch_links`], MoveIt's allowed-collision entries).
 //! * [`ball_cover`] covers a hull with a few balls (one per slab along its longest axis),
-//!   a cheap lower bound on its distances that the arm planner's check tries before GJK.
+//!   a cheap lower bound on its distances that the arm planner's check tries before GJK;
+//!   [`ball_gap`] bounds a ball's gap to a primitive exactly and to a hull by its 26
+//!   bounding planes, in closed form.
 
 pub mod attached;
 pub mod ball_cover;
+pub mod ball_gap;
 mod bvh;
 pub mod convex;
 pub mod exact;

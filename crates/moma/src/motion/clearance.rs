@@ -27,7 +27,9 @@
 //! around each link against the other link's ball or the scene object's box (all of that
 //! link's pairs with it at once), their bounding balls, their world axis-aligned boxes
 //! (robot objects against each other or against a scene shape), the balls of their hulls'
-//! covers ([`crate::collision::ball_cover`]: every ball clear means the hull is), or the
+//! covers ([`crate::collision::ball_cover`]: every ball clear means the hull is) against
+//! the other object's balls, against its 26 bounding planes, or against the scene shape in
+//! closed form ([`crate::collision::ball_gap`]), or the
 //! distance found at an earlier state of the same segment less the most it can have closed
 //! since; the blocks go
 //! best first (the one that limited the last state, then by the stretch their balls vouch
@@ -48,6 +50,7 @@
 
 use super::group::JointGroup;
 use crate::collision::ball_cover::{MAX_SLABS, hull_ball_cover};
+use crate::collision::ball_gap::{PlacedShape, ShapeBound};
 use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_outside, signed_distance};
 use crate::collision::{Convex, GeometryModel, Scene};
 use crate::kinematics;
@@ -163,6 +166,10 @@ pub struct ClearanceChecker<'a> {
     link_centres: Vec<Vector3<f64>>,
     /// Per scene object: the box holding all its shapes.
     scene_boxes: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Every scene shape placed for closed-form ball gaps, object by object: object `o`'s
+    /// shape `s` is `scene_shapes[scene_first[o] + s]`.
+    scene_shapes: Vec<PlacedShape>,
+    scene_first: Vec<usize>,
     /// Balls whose union holds each robot object (joint frame; a hull's slabs, else its
     /// bounding ball): `cover[cover_of[i].0..][..cover_of[i].1]`, their world centres
     /// valid where `cover_stamp` is `state_stamp`.
@@ -170,6 +177,12 @@ pub struct ClearanceChecker<'a> {
     cover_of: Vec<(usize, usize)>,
     cover_centres: Vec<Vector3<f64>>,
     cover_stamp: Vec<u64>,
+    /// Per robot object: its closed-form bound (object frame), and its world pose at the
+    /// placed state as object-from-world rotation and world translation, valid where
+    /// `pose_stamp` is `state_stamp`.
+    object_bounds: Vec<ShapeBound>,
+    object_poses: Vec<(Matrix3<f64>, Vector3<f64>)>,
+    pose_stamp: Vec<u64>,
     /// Blocks that never move.
     fixed: Vec<Block>,
     /// `rows × dim` coefficients.
@@ -314,6 +327,16 @@ impl<'a> ClearanceChecker<'a> {
                 )
             })
             .collect();
+        let mut scene_first = Vec::with_capacity(scene.objects.len());
+        let mut scene_shapes = Vec::new();
+        for obj in &scene.objects {
+            scene_first.push(scene_shapes.len());
+            scene_shapes.extend(
+                obj.shapes
+                    .iter()
+                    .map(|s| PlacedShape::new(&s.shape, &s.pose)),
+            );
+        }
         let mut coeff = Vec::new();
         let mut entries = Vec::new();
         let (mut moving, mut fixed) = (Vec::new(), Vec::new());
@@ -450,8 +473,17 @@ impl<'a> ClearanceChecker<'a> {
             link_centres: vec![Vector3::zeros(); link_balls.len()],
             link_balls,
             scene_boxes,
+            scene_shapes,
+            scene_first,
             cover_centres: vec![Vector3::zeros(); cover.len()],
             cover_stamp: vec![0; gm.objects.len()],
+            object_bounds: gm
+                .objects
+                .iter()
+                .map(|o| ShapeBound::new(&o.shape))
+                .collect(),
+            object_poses: vec![(Matrix3::identity(), Vector3::zeros()); gm.objects.len()],
+            pose_stamp: vec![0; gm.objects.len()],
             cover,
             cover_of,
             fixed,
@@ -546,7 +578,7 @@ impl<'a> ClearanceChecker<'a> {
         let (ca, ra) = (self.group_centres[a], self.groups[a].radius);
         match b {
             Other::Robot(j) => (ca - self.group_centres[j]).norm() - ra - self.groups[j].radius,
-            Other::Scene(o, s) => self.box_gap(&ca, o, s) - ra,
+            Other::Scene(o, s) => self.shape_gap(&ca, o, s) - ra,
         }
     }
 
@@ -572,7 +604,7 @@ impl<'a> ClearanceChecker<'a> {
             Other::Robot(j) => {
                 (ca - self.object_centre(j)).norm() - ra - self.object_balls[j].radius
             }
-            Other::Scene(o, s) => self.box_gap(&ca, o, s) - ra,
+            Other::Scene(o, s) => self.shape_gap(&ca, o, s) - ra,
         }
     }
 
@@ -590,25 +622,48 @@ impl<'a> ClearanceChecker<'a> {
         first..first + count
     }
 
-    /// Whether the cover balls of robot object `a` all lie farther than `bound` from `b`'s
-    /// (a robot object's cover balls, or a scene shape's box), a proof that the pair is
-    /// farther apart than `bound`, at the placed state.
+    /// Whether the cover balls of robot object `a` all lie farther than `bound` from `b`
+    /// (a robot object's cover balls or closed-form bound, or a scene shape's), a proof
+    /// that the pair is farther apart than `bound`, at the placed state. For two robot
+    /// objects: every ball against every ball, else each side's balls against the other's
+    /// bound ([`ShapeBound`]).
     fn cover_clears(&mut self, a: usize, b: Other, bound: f64) -> bool {
         let mine = self.place_cover(a);
         match b {
             Other::Robot(j) => {
                 let theirs = self.place_cover(j);
-                mine.into_iter().all(|i| {
+                let balls = mine.clone().all(|i| {
                     let (ci, ri) = (self.cover_centres[i], self.cover[i].radius);
                     theirs.clone().all(|k| {
                         (ci - self.cover_centres[k]).norm() - ri - self.cover[k].radius > bound
                     })
-                })
+                });
+                balls || self.balls_clear_bound(mine, j, bound) || {
+                    let theirs = self.place_cover(j);
+                    self.balls_clear_bound(theirs, a, bound)
+                }
             }
-            Other::Scene(o, s) => mine
-                .into_iter()
-                .all(|i| self.box_gap(&self.cover_centres[i], o, s) - self.cover[i].radius > bound),
+            Other::Scene(o, s) => mine.into_iter().all(|i| {
+                self.shape_gap(&self.cover_centres[i], o, s) - self.cover[i].radius > bound
+            }),
         }
+    }
+
+    /// Whether every placed cover ball of `balls` lies farther than `bound` from robot
+    /// object `j`'s closed-form bound, at the placed state.
+    fn balls_clear_bound(&mut self, balls: std::ops::Range<usize>, j: usize, bound: f64) -> bool {
+        if self.pose_stamp[j] != self.state_stamp {
+            let o = &self.gm.objects[j];
+            let pose = self.data.world_from_joint[o.joint.0] * o.placement;
+            self.object_poses[j] = (pose.rotation.transpose(), pose.translation);
+            self.pose_stamp[j] = self.state_stamp;
+        }
+        let (rt, t) = &self.object_poses[j];
+        let shape = &self.object_bounds[j];
+        balls.into_iter().all(|i| {
+            let x = rt * (self.cover_centres[i] - t);
+            shape.point_distance(&x) - self.cover[i].radius > bound
+        })
     }
 
     /// Robot object `a`'s world axis-aligned box at the placed state (computed once per
@@ -639,10 +694,10 @@ impl<'a> ClearanceChecker<'a> {
             .norm()
     }
 
-    /// The distance from `c` to scene shape `(o, s)`'s axis-aligned box.
-    fn box_gap(&self, c: &Vector3<f64>, o: usize, s: usize) -> f64 {
-        let (lo, hi) = &self.scene.objects[o].shapes[s].aabb;
-        (lo - c).sup(&(c - hi)).sup(&Vector3::zeros()).norm()
+    /// The distance from `c` to scene shape `(o, s)` in closed form (a primitive's exact
+    /// distance, a lower bound for a hull: [`ShapeBound`]).
+    fn shape_gap(&self, c: &Vector3<f64>, o: usize, s: usize) -> f64 {
+        self.scene_shapes[self.scene_first[o] + s].point_distance(c)
     }
 
     fn exact(&mut self, k: usize) -> f64 {
