@@ -1156,7 +1156,9 @@ pub struct PlacementChoice {
     /// Base pose `[x, y, θ]` (world).
     pub base: [f64; 3],
     /// Its rank among the candidates (0: the best): the better-ranked ones the base could
-    /// not reach on the map (the footprint does not fit there, or no path leads there).
+    /// not reach on the map (the footprint does not fit there, or no path leads there),
+    /// or, with a `[goal]`, the drive on could not leave holding the object (its footprint
+    /// does not fit there on the drive on's map).
     pub rank: usize,
     /// Candidates ranked.
     pub candidates: usize,
