@@ -862,7 +862,7 @@ fn the_drives_distances_are_monitored_at_every_control_step() {
     assert!(r.reached, "{:?}", r.reason);
     let task = m.task.as_ref().unwrap();
     let driving = r.task.as_ref().unwrap().driving.clone().expect("monitored");
-    let mut dm = DistanceMonitor::scene_only(task, &m.robot);
+    let mut dm = DistanceMonitor::scene_only(task, &m.robot, &m.box_objects);
     let (mut grasped, mut before, mut after) = (false, 0, 0);
     for (q, &phase) in r.samples.q.iter().zip(&r.samples.phase) {
         grasped |= phase == "lift";
@@ -1015,7 +1015,13 @@ fn a_drive_on_with_no_way_round_the_beam_fails_naming_it() {
         why.contains("'map.boxes[0]'") && why.contains("holding 'Can2'"),
         "{why}"
     );
-    assert!(r.task.unwrap().payload.is_some(), "failed after the pick");
+    let tr = r.task.unwrap();
+    assert!(tr.payload.is_some(), "failed after the pick");
+    // the best-ranked placement puts the can held beside the robot over the shelf's
+    // cells, where the drive on could not start: the run stood at one it can leave, and
+    // the drive on failed for want of a way round the beam
+    assert!(tr.placement.unwrap().rank > 0);
+    assert!(why.contains("no collision-free path"), "{why}");
     let ev = r.events.iter().find(|e| e.kind == "heights").unwrap();
     eprintln!("{}", ev.text);
     assert!(
@@ -1026,4 +1032,156 @@ fn a_drive_on_with_no_way_round_the_beam_fails_naming_it() {
         "{}",
         ev.text
     );
+}
+
+/// The pick mission with the arm's transport posture raised to hold the can over Fetch's
+/// head ([`OVERHEAD`]), and `boxes` (`[[map.boxes]]` tables) on the map.
+fn overhead_with_boxes(boxes: &str) -> moma::Result<moma::mission::Mission> {
+    let path = mission_path();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let shipped = "transport_posture = [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.30, 0.0]";
+    let map = "file = \"maps/depot.yaml\"\n";
+    assert!(text.contains(shipped) && text.contains(map));
+    let text = text
+        .replace(shipped, &format!("transport_posture = {OVERHEAD}"))
+        .replace(map, &format!("{map}\n{boxes}\n"));
+    let f = scenario::parse_file(&text, &path)?;
+    scenario::from_file(f, &path, path.parent().unwrap())
+}
+
+/// Torso down, the arm turned to the right, raised and bent back over the robot, the
+/// gripper up: the held can stands over the robot, inside its footprint, above every link.
+const OVERHEAD: &str = "[0.0, -1.57, -1.2, 0.0, -1.0, 0.0, 0.3, 0.0]";
+
+/// The heights of the beams over [`OVERHEAD`]: above the gripper's top (1.696 m), under
+/// the held can's.
+const OVERHEAD_BEAM_Z: &str = "[1.70, 1.85]";
+
+/// Two beams at [`OVERHEAD_BEAM_Z`]: `map.boxes[0]` across the drive on's way from the
+/// shelf to the goal (x 7.4–7.8, y 6.5–9.5), `map.boxes[1]` across the way from the start
+/// to the shelf (y 5.3–5.7, the whole map wide; the drive on, north of it, does not come
+/// near it).
+fn overhead_beams() -> String {
+    format!(
+        "[[map.boxes]]\npose = [7.6, 8.0, 0.0]\nsize = [0.4, 3.0]\nz = {OVERHEAD_BEAM_Z}\n\n\
+         [[map.boxes]]\npose = [10.0, 5.5, 0.0]\nsize = [40.0, 0.4]\nz = {OVERHEAD_BEAM_Z}\n"
+    )
+}
+
+/// The drives' distance monitor measures the map's boxes with the task's scene: under
+/// the beam the robot's distance is the clearance the load's height check found, its
+/// pair the beam's; holding the can there is a touch naming the beam as a map box.
+#[test]
+fn the_drives_distance_monitor_measures_the_map_boxes() {
+    use moma::mission::task::{DistanceMonitor, Holding};
+    let m = overhead_with_boxes(&overhead_beams()).unwrap();
+    let task = m.task.as_ref().unwrap();
+    let bare = m.boxes[1];
+    assert!(!bare.blocked && bare.clearance > 0.0, "{bare:?}");
+    // the base under the middle of map.boxes[1], far from the shelf
+    let mut q = at_posture(&m, &m.transport);
+    q[..3].copy_from_slice(&[3.0, 5.5, 0.0]);
+    let mut dm = DistanceMonitor::scene_only(task, &m.robot, &m.box_objects);
+    let (d, _) = dm.sample(task, &m.robot, &q, Holding::Nothing);
+    eprintln!(
+        "under the beam {d} m; the load's clearance {} m",
+        bare.clearance
+    );
+    assert!((d - bare.clearance).abs() < 1e-4, "{d} {bare:?}");
+    assert_eq!(dm.min_scene.as_ref().unwrap().1[1], "map.boxes[1]");
+    assert!(dm.touch(task).is_none());
+    let (d_held, _) = dm.sample(task, &m.robot, &q, Holding::Carrying);
+    assert!(d_held < 0.0, "{d_held}");
+    let why = dm.touch(task).unwrap();
+    assert!(
+        why.starts_with("held object 'Can2' touches map box 'map.boxes[1]' (-"),
+        "{why}"
+    );
+    // the arm motions' monitor measures the task's scene only
+    let mut arm = DistanceMonitor::new(task, &m.robot);
+    let (d_arm, _) = arm.sample(task, &m.robot, &q, Holding::Carrying);
+    assert!(d_arm > 1.0, "{d_arm}");
+}
+
+/// The drive on's base positions (x, y) of a run: the drive samples after the lift.
+fn drive_on_path(r: &moma::mission::MissionResult) -> Vec<[f64; 2]> {
+    let lift = r.samples.phase.iter().position(|&p| p == "lift").unwrap();
+    (lift..r.samples.t.len())
+        .filter(|&i| matches!(r.samples.phase[i], "drive" | "arrive"))
+        .map(|i| [r.samples.q[i][0], r.samples.q[i][1]])
+        .collect()
+}
+
+/// How far `p` lies outside the drive on's beam (x 7.4–7.8, y 6.5–9.5; 0 inside).
+fn off_the_beam(p: [f64; 2]) -> f64 {
+    let dx = (7.4 - p[0]).max(p[0] - 7.8).max(0.0);
+    let dy = (6.5 - p[1]).max(p[1] - 9.5).max(0.0);
+    dx.hypot(dy)
+}
+
+/// The whole mission with the can held over Fetch's head: the robot drives under a beam
+/// to the shelf, picks the can, and drives on round the beam across its straight way
+/// that only the held can would hit; the drives' distance monitor, measuring the scene
+/// and the beams, sees no touch.
+#[test]
+fn the_drive_on_goes_round_a_beam_that_only_the_held_can_would_hit() {
+    let m = overhead_with_boxes(&overhead_beams()).unwrap();
+    assert!(!m.boxes[0].blocked && !m.boxes[1].blocked, "{:?}", m.boxes);
+    let drive_on = m.drive_on_map.as_ref().unwrap();
+    let blocked: Vec<&str> = drive_on.blocks.iter().map(|b| b.name.as_str()).collect();
+    assert_eq!(blocked, ["map.boxes[0]", "map.boxes[1]"]);
+    let r = run(&m).unwrap();
+    assert!(r.reached, "{:?}", r.reason);
+    let tr = r.task.as_ref().unwrap();
+    assert!(tr.payload.is_some());
+    // the first drive crossed under map.boxes[1] (y 5.3-5.7) bare
+    let first: Vec<f64> = (r.samples.q.iter().zip(&r.samples.phase))
+        .take_while(|(_, p)| **p != "approach")
+        .map(|(q, _)| q[1])
+        .collect();
+    assert!(first.iter().any(|&y| y < 5.3) && first.iter().any(|&y| y > 5.7));
+    // the drive on crossed from the shelf's side of map.boxes[0] to the goal's, round
+    // its end: its base never stood under the beam's outline
+    let path = drive_on_path(&r);
+    assert!(path.iter().any(|p| p[0] < 7.4) && path.iter().any(|p| p[0] > 7.8));
+    let nearest = path
+        .iter()
+        .map(|&p| off_the_beam(p))
+        .fold(f64::INFINITY, f64::min);
+    eprintln!("the drive on's base came {nearest:.3} m from the beam's outline");
+    assert!(nearest > 0.0, "{nearest}");
+    // no touch: the drives' smallest distance to the scene and the beams is positive,
+    // and no larger than the bare robot's under map.boxes[1]
+    let driving = tr.driving.clone().expect("monitored");
+    eprintln!(
+        "drives: {driving:?}; the load's clearance: {:?}",
+        m.boxes[1]
+    );
+    assert!(driving.min_scene_distance > 0.0);
+    assert!(driving.min_scene_distance <= m.boxes[1].clearance + 1e-3);
+    assert!(tr.min_scene_distance.unwrap() > 0.0 && tr.min_self_distance.unwrap() > 0.0);
+    assert!(r.min_clearance().unwrap() > 0.0);
+}
+
+/// The same mission with the drive on's height check left out (its map the mission's,
+/// where the robot passes under the beams bare): the drive on takes the straight way
+/// under map.boxes[0] and the drives' distance monitor stops the run as the held can
+/// touches it.
+#[test]
+fn without_the_drive_ons_height_check_the_held_can_touches_the_beam() {
+    let mut m = overhead_with_boxes(&overhead_beams()).unwrap();
+    let drive_on = m.drive_on_map.as_mut().unwrap();
+    drive_on.grid = m.map.grid.clone();
+    drive_on.blocks.clear();
+    let r = run(&m).unwrap();
+    assert!(!r.reached);
+    let why = r.reason.clone().unwrap();
+    eprintln!("{why}");
+    assert!(
+        why.starts_with("collision: held object 'Can2' touches map box 'map.boxes[0]' ("),
+        "{why}"
+    );
+    assert!(r.task.as_ref().unwrap().payload.is_some());
+    let path = drive_on_path(&r);
+    assert!(off_the_beam(*path.last().unwrap()) < 0.5, "{path:?}");
 }

@@ -1,5 +1,6 @@
 //! A `[task]`'s base goal: the best-ranked placement the base's planner reaches from the
-//! start, chosen before the loop starts.
+//! start and, with a `[goal]`, that the drive on can leave holding the object, chosen
+//! before the loop starts.
 
 use std::time::Instant;
 
@@ -16,7 +17,12 @@ const PLACEMENT_TOLERANCE: [f64; 2] = [0.05, 0.05];
 /// A `[task]`'s base goal: the best-ranked placement
 /// ([`crate::motion::placement::place_base`], the arm at the transport posture) that the
 /// base's planner reaches from the start (the footprint fits there and a path leads
-/// there), with the task's record; or the start pose and the reason there is none.
+/// there) and, with a `[goal]`, that the drive on's planner accepts as its start: the
+/// footprint that holds the object ([`Task::carrying_footprint`]) fits there on the drive
+/// on's map (the placement search checks the robot at the transport posture in 3-D, the
+/// drive on plans with the held object's outline on the ground, which may reach over
+/// furniture the map blocks). With the task's record; or the start pose and the reason
+/// there is none.
 pub(super) fn choose_placement(
     m: &Mission,
     task: &Task,
@@ -51,31 +57,48 @@ pub(super) fn choose_placement(
     }
     let d = m.robot.base.drive.d;
     let s0 = axle_pose(f.start.pose, d);
+    // the drive on's start check: its planner refuses a start where the footprint does
+    // not fit (a path it does not find ends the run after the pick, naming what blocks)
+    let drive_on = m.goal().zip(m.drive_on_map.as_ref());
+    let (mut reached_count, mut cannot_leave) = (0, None);
     for (rank, c) in placement.candidates.iter().enumerate() {
         let g0 = axle_pose(c.base, d);
         let reached = mission_planner(m, &m.map.grid, &m.footprint, s0, g0);
-        if let Ok((_, Some(_), _)) = reached {
-            result.placement = Some(PlacementChoice {
-                base: c.base,
-                rank,
-                candidates: placement.candidates.len(),
-                score: c.score,
-                manipulability: c.manipulability,
-                clearance: c.clearance,
-                tip_over_margin: c.tip_over_margin,
-                counts: placement.counts,
-                time_s,
-            });
-            return Ok((goal_at(c.base), Some(result), None));
+        if !matches!(reached, Ok((_, Some(_), _))) {
+            continue;
         }
+        reached_count += 1;
+        if let Some((goal, map)) = drive_on {
+            let to = axle_pose(goal.pose, d);
+            if let Err(e) = mission_planner(m, &map.grid, &task.carrying_footprint, g0, to) {
+                cannot_leave = Some(e);
+                continue;
+            }
+        }
+        result.placement = Some(PlacementChoice {
+            base: c.base,
+            rank,
+            candidates: placement.candidates.len(),
+            score: c.score,
+            manipulability: c.manipulability,
+            clearance: c.clearance,
+            tip_over_margin: c.tip_over_margin,
+            counts: placement.counts,
+            time_s,
+        });
+        return Ok((goal_at(c.base), Some(result), None));
     }
     let n = placement.candidates.len();
-    Ok((
-        goal_at(f.start.pose),
-        Some(result),
-        Some(format!(
-            "none of the {n} best placements that reach the grasp can be reached by the base: \
-             the footprint does not fit there or no path leads there"
-        )),
-    ))
+    let reason = match cannot_leave {
+        Some(e) => format!(
+            "of the {n} best placements that reach the grasp the base reaches {reached_count}, \
+             and the drive on holding '{}' can leave none: {e}",
+            task.object
+        ),
+        None => format!(
+            "none of the {n} best placements that reach the grasp can be reached by the \
+             base: the footprint does not fit there or no path leads there"
+        ),
+    };
+    Ok((goal_at(f.start.pose), Some(result), Some(reason)))
 }

@@ -234,6 +234,7 @@ impl<'m> Runner<'m> {
             self.m.file.limits.mu,
             noise.is_some(),
             self.m.task.as_ref(),
+            &self.m.box_objects,
         )?;
         let act = Actuators::new(self.wm)?;
         let c = RunSettings::new(

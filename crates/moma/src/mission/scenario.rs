@@ -14,7 +14,7 @@ use super::heights::{
 };
 use super::plant::{MissionContact, start_configuration};
 use super::task::{Task, load_task, object_under_footprint, scene_outlines, task_geometry_options};
-use crate::collision::{GeometryModel, GeometryOptions, Scene};
+use crate::collision::{GeometryModel, GeometryOptions, Scene, SceneObject};
 use crate::contact::PlantKind;
 use crate::control::mpc::WholeBodyMpc;
 use crate::error::{Error, Result};
@@ -62,6 +62,9 @@ pub struct Mission {
     /// The verdict of each of `map.boxes` (in file order); the blocked ones are
     /// occupied cells of [`Mission::map`].
     pub boxes: Vec<BoxVerdict>,
+    /// `map.boxes` as scene objects (named `map.boxes[k]`, in file order): what a
+    /// `[task]`'s drives are monitored against in 3-D, with the task's scene.
+    pub box_objects: Vec<SceneObject>,
     /// `robot.package_dirs`, resolved against the mission file's folder.
     pub package_dirs: Vec<PathBuf>,
     /// The contact plant, built and checked (`simulation.plant = "contact"`).
@@ -242,7 +245,7 @@ pub fn from_file_with(
                 &footprint,
             )?;
             let held = (&robot, transport.as_slice());
-            let drive_on = drive_on_map(&task, (box_objects, &boxes), &map, held, &footprint);
+            let drive_on = drive_on_map(&task, (&box_objects, &boxes), &map, held, &footprint);
             (Some(task), Some(drive_on))
         }
     };
@@ -265,6 +268,7 @@ pub fn from_file_with(
         output_dir,
         footprint,
         boxes,
+        box_objects,
         package_dirs,
         contact,
         plant_robot,
@@ -415,12 +419,12 @@ fn place_scene_on_map(
 /// blocked.
 fn drive_on_map(
     task: &Task,
-    (box_objects, box_verdicts): (Vec<crate::collision::SceneObject>, &[BoxVerdict]),
+    (box_objects, box_verdicts): (&[SceneObject], &[BoxVerdict]),
     map: &LoadedMap,
     (robot, transport): (&WheeledModel, &[f64]),
     footprint: &MissionFootprint,
 ) -> DriveOnMap {
-    let (mut objects, mut bare) = (box_objects, box_verdicts.to_vec());
+    let (mut objects, mut bare) = (box_objects.to_vec(), box_verdicts.to_vec());
     for (o, v) in task.scene.objects.iter().zip(&task.heights) {
         if o.id != task.object {
             objects.push(o.clone());

@@ -698,13 +698,21 @@ impl Task {
 /// robot's enabled link pairs (the collision module's signed distances on the convex
 /// hulls and the swapped links' mesh surfaces), with the pair of each: before the grasp
 /// with the robot's geometry against the whole scene, after it with the geometry carrying
-/// the object ([`Task::carried`]) against the scene without it ([`Holding`]).
+/// the object ([`Task::carried`]) against the scene without it ([`Holding`]). The drives'
+/// monitor ([`DistanceMonitor::scene_only`]) measures against one scene of the task's
+/// objects and the map's boxes.
 ///
 /// During the lift the held object's pairs with its support ([`Task::support`]) are left
 /// out of the scene distance and checked by the lift rule instead ([`LiftStart`]): the
 /// object may touch its support only while it rises off it.
 #[derive(Debug, Clone)]
 pub struct DistanceMonitor {
+    /// What it measures against, per [`Holding`]: the task's scenes ([`Task::scene`],
+    /// [`Task::scene_lifting`], [`Task::scene_after_grasp`]), each followed by the extra
+    /// objects it was built with (the map's boxes, for the drives).
+    scenes: [Scene; 3],
+    /// How many objects of each scene are the task's (the rest are the extra ones).
+    task_objects: [usize; 3],
     data: Data,
     gd: GeometryData,
     gd_carried: GeometryData,
@@ -734,15 +742,37 @@ pub struct DistanceMonitor {
 }
 
 impl DistanceMonitor {
-    /// The monitor of `task` on `robot`.
+    /// The monitor of `task` on `robot` (the arm motions'): the robot against the task's
+    /// scene and its links against each other.
     #[must_use]
     pub fn new(task: &Task, robot: &WheeledModel) -> Self {
+        Self::against(task, robot, &[])
+    }
+
+    /// The monitor of `task` on `robot` against the task's scenes each with `extra`
+    /// objects added.
+    fn against(task: &Task, robot: &WheeledModel, extra: &[SceneObject]) -> Self {
+        let with_extra = |s: &Scene| Scene {
+            objects: s.objects.iter().chain(extra).cloned().collect(),
+        };
+        let scenes = [
+            with_extra(&task.scene),
+            with_extra(&task.scene_lifting),
+            with_extra(&task.scene_after_grasp),
+        ];
+        let task_objects = [
+            task.scene.objects.len(),
+            task.scene_lifting.objects.len(),
+            task.scene_after_grasp.objects.len(),
+        ];
         Self {
             data: Data::new(&robot.model),
             gd: GeometryData::new(&task.geometry),
             gd_carried: GeometryData::new(&task.carried),
-            sd: SceneData::new(&task.geometry, &task.scene),
-            sd_after: SceneData::new(&task.carried, &task.scene_after_grasp),
+            sd: SceneData::new(&task.geometry, &scenes[0]),
+            sd_after: SceneData::new(&task.carried, &scenes[2]),
+            scenes,
+            task_objects,
             q: DVector::zeros(robot.model.nq),
             last: LastSample::default(),
             lift_start: None,
@@ -754,15 +784,23 @@ impl DistanceMonitor {
         }
     }
 
-    /// The monitor of `task` on `robot` that measures the robot against the scene only,
-    /// not its links against each other (the drives': the arm holds its transport
-    /// posture there, whose self distances the load checks, holding the object too).
+    /// The monitor of `task` on `robot` that measures the robot against one scene of the
+    /// task's objects and `boxes` (the map's boxes, `Mission::box_objects`: a table top
+    /// or beam the base passes under), not its links against each other (the drives':
+    /// the arm holds its transport posture there, whose self distances the load checks,
+    /// holding the object too).
     #[must_use]
-    pub fn scene_only(task: &Task, robot: &WheeledModel) -> Self {
+    pub fn scene_only(task: &Task, robot: &WheeledModel, boxes: &[SceneObject]) -> Self {
         Self {
             with_self: false,
-            ..Self::new(task, robot)
+            ..Self::against(task, robot, boxes)
         }
+    }
+
+    /// The scene measured holding `holding`, and how many of its objects are the task's.
+    fn scene(&self, holding: Holding) -> (&Scene, usize) {
+        let k = holding.index();
+        (&self.scenes[k], self.task_objects[k])
     }
 
     /// The monitor at one control step: [`DistanceMonitor::sample`] unless the motion
@@ -847,8 +885,8 @@ impl DistanceMonitor {
 
     /// What the last [`DistanceMonitor::sample`] touched (a distance ≤ 0), as the run's
     /// reason states it: the scene before the links, the held object named as such
-    /// (`held object 'Can2' touches scene object '<id>' (<distance> m)`); `None` when it
-    /// touched nothing.
+    /// (`held object 'Can2' touches scene object '<id>' (<distance> m)`, a map box as
+    /// `... touches map box 'map.boxes[0]' ...`); `None` when it touched nothing.
     /// A lift that breaks the rule of [`LiftStart`] is named as the held object entering
     /// its support (`held object 'Can2' enters its support '<id>' ...`) or staying on it
     /// after rising (`held object 'Can2' is 0.0021 m from its support '<id>' after
@@ -860,7 +898,7 @@ impl DistanceMonitor {
             return Some(v.clone());
         }
         let grasped = l.holding != Holding::Nothing;
-        let scene = l.holding.scene(task);
+        let (scene, task_objects) = self.scene(l.holding);
         let gm = if grasped {
             &task.carried
         } else {
@@ -878,8 +916,13 @@ impl DistanceMonitor {
             && let Some(k) = l.scene_pair
         {
             let no = scene.objects.len();
+            let source = if k % no < task_objects {
+                "scene object"
+            } else {
+                "map box"
+            };
             return Some(format!(
-                "{} touches scene object '{}' ({:.4} m)",
+                "{} touches {source} '{}' ({:.4} m)",
                 link(k / no),
                 scene.objects[k % no].id,
                 l.scene_distance
@@ -915,7 +958,7 @@ impl DistanceMonitor {
     /// The distances of the placements [`DistanceMonitor::place`] computed: as
     /// [`DistanceMonitor::sample`].
     fn measure(&mut self, task: &Task, holding: Holding) -> (f64, f64) {
-        let scene = holding.scene(task);
+        let scene = &self.scenes[holding.index()];
         let (gm, gd, sd) = if holding == Holding::Nothing {
             (&task.geometry, &mut self.gd, &mut self.sd)
         } else {
@@ -1069,13 +1112,13 @@ pub enum Holding {
 }
 
 impl Holding {
-    /// The scene checked while holding this.
-    #[must_use]
-    pub fn scene(self, task: &Task) -> &Scene {
+    /// The index of the scene a [`DistanceMonitor`] checks while holding this: of
+    /// [`Task::scene`], [`Task::scene_lifting`], [`Task::scene_after_grasp`].
+    fn index(self) -> usize {
         match self {
-            Holding::Nothing => &task.scene,
-            Holding::Lifting => &task.scene_lifting,
-            Holding::Carrying => &task.scene_after_grasp,
+            Holding::Nothing => 0,
+            Holding::Lifting => 1,
+            Holding::Carrying => 2,
         }
     }
 }
@@ -1113,7 +1156,9 @@ pub struct PlacementChoice {
     /// Base pose `[x, y, θ]` (world).
     pub base: [f64; 3],
     /// Its rank among the candidates (0: the best): the better-ranked ones the base could
-    /// not reach on the map (the footprint does not fit there, or no path leads there).
+    /// not reach on the map (the footprint does not fit there, or no path leads there),
+    /// or, with a `[goal]`, the drive on could not leave holding the object (its footprint
+    /// does not fit there on the drive on's map).
     pub rank: usize,
     /// Candidates ranked.
     pub candidates: usize,

@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix6xX, Vector2};
 use super::plant::start_configuration;
 use super::scenario::Mission;
 use super::task::{DistanceMonitor, Task};
+use crate::collision::SceneObject;
 use crate::error::Result;
 use crate::mobile::{WheeledData, WheeledModel};
 use crate::multibody::Data;
@@ -64,8 +65,8 @@ pub(super) struct Workspace {
     pub(super) ee_jacobian: DMatrix<f64>,
     /// A `[task]`'s distance monitor of the arm motions.
     pub(super) distances: Option<DistanceMonitor>,
-    /// A `[task]`'s distance monitor of the drives (to the placement and on from it;
-    /// the scene only).
+    /// A `[task]`'s distance monitor of the drives (to the placement and on from it):
+    /// the robot against the task's scene and the map's boxes, not its links.
     pub(super) drive_distances: Option<DistanceMonitor>,
     /// The arm motion's reference: configuration (full), group rates and accelerations.
     pub(super) q_ref: Vec<f64>,
@@ -82,6 +83,7 @@ impl Workspace {
         mu: f64,
         noisy: bool,
         task: Option<&Task>,
+        boxes: &[SceneObject],
     ) -> Result<Self> {
         let model = &wm.model;
         let (nq, nr, nu) = (model.nq, wm.nr(), wm.nu());
@@ -106,7 +108,7 @@ impl Workspace {
             ndot_v: DVector::zeros(model.nv),
             ee_jacobian: DMatrix::zeros(3, nr),
             distances: task.map(|t| DistanceMonitor::new(t, wm)),
-            drive_distances: task.map(|t| DistanceMonitor::scene_only(t, wm)),
+            drive_distances: task.map(|t| DistanceMonitor::scene_only(t, wm, boxes)),
             q_ref: vec![0.0; nq],
             qd_ref: vec![0.0; dim],
             qdd_ref: vec![0.0; dim],
