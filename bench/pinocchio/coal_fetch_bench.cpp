@@ -1,5 +1,6 @@
 // Pinocchio + coal collision micro-benchmark on Fetch: per-query median time (ns) of self
-// distances, self collision checks and robot-scene queries, with the method of
+// distances (convex hulls, and the exact meshes as coal BVH models), self collision checks and
+// robot-scene queries, with the method of
 // pinocchio_bench.cpp (NSTATES seeded states per batch, WARMUP discarded batches, median of
 // NBATCH batches, per-query time = batch time / NSTATES).
 //
@@ -402,6 +403,28 @@ int main(int argc, char **argv) {
   report("fetch", "self_collisions_first_mesh", median_ns_per_call([&](int i) {
            g_sink = g_sink + pinocchio::computeCollisions(model, data, geom_mesh, gdata_mesh, Q[i], true);
          }));
+  {
+    // The exact meshes' distances (coal's BVH models, OBBRSS) on the same 76 pairs: tens of
+    // milliseconds per state, so NBATCH_SLOW (default 5) batches after one warm-up batch.
+    double sum = 0;
+    for (const VectorXd &q : Q) {
+      pinocchio::computeDistances(model, data, geom_mesh, gdata_mesh, q);
+      double dm = 1e9;
+      for (auto &r : gdata_mesh.distanceResults) dm = std::min(dm, r.min_distance);
+      sum += dm;
+    }
+    std::printf("# check mean min enabled mesh distance over the states %.9f\n", sum / NSTATES);
+    const int nb = NBATCH, wu = WARMUP;
+    NBATCH = 5;
+    if (const char *e = std::getenv("NBATCH_SLOW")) NBATCH = std::max(1, std::atoi(e));
+    WARMUP = 1;
+    report("fetch", "self_distances_mesh", median_ns_per_call([&](int i) {
+             pinocchio::computeDistances(model, data, geom_mesh, gdata_mesh, Q[i]);
+             g_sink = g_sink + gdata_mesh.distanceResults[0].min_distance;
+           }));
+    NBATCH = nb;
+    WARMUP = wu;
+  }
 
   if (!scene_path.empty()) {
     const std::vector<Prim> scene = read_scene(scene_path);

@@ -287,5 +287,70 @@ fn voxel_centres(scene: &Scene, r: f64) -> Vec<Vector3<f64>> {
     out
 }
 
-criterion_group!(benches, bench);
+/// The hull support map on each of Fetch's mesh hulls, by size: `climb` is the hull as
+/// built (hulls above `convex::CLIMB_ABOVE` vertices climb along edges from the last
+/// support vertex), `scan` the same vertices without their adjacency (every vertex
+/// scanned). The directions are a random walk on the sphere (steps of 0.3 rad on
+/// average), the hint carried from one call to the next, as GJK's iterations and the
+/// warm starts across states carry it.
+fn bench_support(c: &mut Criterion) {
+    let dir = format!("{}/tests/data/robots/fetch", env!("CARGO_MANIFEST_DIR"));
+    let urdf = format!("{dir}/fetch_description/robots/fetch.urdf");
+    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).expect("model");
+    let opts = GeometryOptions {
+        package_dirs: vec![dir.clone().into()],
+        srdf: Some(format!("{dir}/fetch.srdf").into()),
+    };
+    let gm = GeometryModel::from_urdf(&model, urdf.as_ref(), &opts).expect("geometry");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let mut d = Vector3::x();
+    let dirs: Vec<Vector3<f64>> = (0..1024)
+        .map(|_| {
+            let step = Vector3::new(
+                rng.random_range(-0.3..0.3),
+                rng.random_range(-0.3..0.3),
+                rng.random_range(-0.3..0.3),
+            );
+            d = (d + step).normalize();
+            d
+        })
+        .collect();
+    let mut hulls: Vec<&Convex> = gm
+        .objects
+        .iter()
+        .map(|o| &o.shape)
+        .filter(|s| matches!(s, Convex::Hull { .. }))
+        .collect();
+    let size = |s: &Convex| match s {
+        Convex::Hull { vertices, .. } => vertices.len(),
+        _ => 0,
+    };
+    hulls.sort_by_key(|s| size(s));
+    hulls.dedup_by_key(|s| size(s));
+    let mut group = c.benchmark_group("support");
+    group
+        .warm_up_time(std::time::Duration::from_millis(300))
+        .measurement_time(std::time::Duration::from_secs(1));
+    for hull in hulls {
+        let Convex::Hull { vertices, .. } = hull else {
+            continue;
+        };
+        let scan = Convex::Hull {
+            vertices: vertices.clone(),
+            neighbours: vec![Vec::new(); vertices.len()],
+        };
+        for (name, shape) in [("climb", hull), ("scan", &scan)] {
+            let (mut k, mut hint) = (0, 0);
+            group.bench_function(format!("{:04}_vertices/{name}", vertices.len()), |b| {
+                b.iter(|| {
+                    k = (k + 1) % dirs.len();
+                    black_box(shape.core_support(&dirs[k], &mut hint))
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_support);
 criterion_main!(benches);

@@ -67,7 +67,8 @@ impl Convex {
                 vertices,
                 neighbours,
             } => {
-                let climb = vertices.len() > CLIMB_ABOVE && !neighbours[0].is_empty();
+                let climb = vertices.len() > CLIMB_ABOVE
+                    && neighbours.first().is_some_and(|n| !n.is_empty());
                 let best = if climb {
                     climb_support(vertices, neighbours, d, (*hint).min(vertices.len() - 1))
                 } else {
@@ -200,17 +201,38 @@ impl Support for Triangle {
     }
 }
 
+/// The first vertex that maximises `d · v`, as a sequential scan finds it, by four
+/// independent lanes (vertex `i` in lane `i % 4`, each keeping its first maximiser) that
+/// the processor runs side by side, then the best lane, the lowest index on ties.
 fn scan_support(vertices: &[Vector3<f64>], d: &Vector3<f64>) -> usize {
-    let mut best = 0;
-    let mut best_dot = f64::NEG_INFINITY;
-    for (i, v) in vertices.iter().enumerate() {
-        let s = v.dot(d);
-        if s > best_dot {
-            best_dot = s;
-            best = i;
+    let mut best = [0usize; 4];
+    let mut best_dot = [f64::NEG_INFINITY; 4];
+    let chunks = vertices.chunks_exact(4);
+    let rest = chunks.remainder();
+    for (c, chunk) in chunks.enumerate() {
+        for (l, v) in chunk.iter().enumerate() {
+            let s = v.dot(d);
+            if s > best_dot[l] {
+                best_dot[l] = s;
+                best[l] = 4 * c + l;
+            }
         }
     }
-    best
+    let base = vertices.len() - rest.len();
+    for (l, v) in rest.iter().enumerate() {
+        let s = v.dot(d);
+        if s > best_dot[l] {
+            best_dot[l] = s;
+            best[l] = base + l;
+        }
+    }
+    let mut k = 0;
+    for l in 1..4 {
+        if best_dot[l] > best_dot[k] || (best_dot[l] == best_dot[k] && best[l] < best[k]) {
+            k = l;
+        }
+    }
+    best[k]
 }
 
 /// Hill climb along hull edges: on a convex polytope a vertex no neighbour improves on

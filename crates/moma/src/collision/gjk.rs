@@ -16,7 +16,7 @@
 
 use super::convex::{Convex, Support};
 use crate::spatial::SE3;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// Absolute duality-gap tolerance of GJK and EPA (m).
 pub const GAP_TOLERANCE: f64 = 1e-12;
@@ -218,7 +218,7 @@ pub fn gap_distance<A: Support + ?Sized, B: Support + ?Sized>(
             touching(wa + (wb - wa) * (ma / (ma + mb)))
         }
         Gjk::Overlap { n } => {
-            let (_, _, weights) = closest_on_simplex(&simplex[..n]);
+            let (_, _, weights) = closest_on_simplex(&simplex[..n], 0);
             let p = (0..n).fold(Vector3::zeros(), |p, i| p + simplex[i].a * weights[i]);
             touching(p)
         }
@@ -341,7 +341,8 @@ fn gjk<A: Support + ?Sized, B: Support + ?Sized>(
         }
         simplex[n] = w;
         n += 1;
-        let (m, new_v, new_weights) = closest_on_simplex(&simplex[..n]);
+        // The new point is part of the closest sub-simplex (it improved on v).
+        let (m, new_v, new_weights) = closest_on_simplex(&simplex[..n], 1 << (n - 1));
         if new_v.norm_squared() == 0.0 {
             return Gjk::Overlap { n };
         }
@@ -380,14 +381,15 @@ fn gjk<A: Support + ?Sized, B: Support + ?Sized>(
 /// The point of the simplex closest to the origin: (mask of the supporting points; the
 /// point, exactly zero when the origin is inside the tetrahedron; the weights indexed
 /// like the input).
-/// Every sub-simplex whose projection of the origin has non-negative barycentric weights
-/// is a candidate; the smallest candidate wins. Each candidate is rebuilt from its
-/// weights, so it is a point of the simplex whatever the round-off of the solve.
-fn closest_on_simplex(s: &[SupportPoint]) -> (usize, Vector3<f64>, [f64; 4]) {
+/// Every sub-simplex holding the points of mask `required` whose projection of the origin
+/// has non-negative barycentric weights is a candidate; the smallest candidate wins. Each
+/// candidate is rebuilt from its weights, so it is a point of the simplex whatever the
+/// round-off of the solve.
+fn closest_on_simplex(s: &[SupportPoint], required: usize) -> (usize, Vector3<f64>, [f64; 4]) {
     let n = s.len();
     let mut best = (0usize, Vector3::zeros(), [0.0; 4]);
     let mut best_norm = f64::INFINITY;
-    for mask in 1usize..(1 << n) {
+    for mask in (1usize..(1 << n)).filter(|m| m & required == required) {
         let idx: arrayvec_like::Idx = arrayvec_like::Idx::from_mask(mask, n);
         let Some(mu) = project(s, &idx) else {
             continue;
@@ -468,22 +470,25 @@ fn project(s: &[SupportPoint], idx: &arrayvec_like::Idx) -> Option<[f64; 4]> {
             mu[2] = l2;
         }
         _ => {
-            let e = Matrix3::from_columns(&[
-                s[idx.i[1]].w - p0,
-                s[idx.i[2]].w - p0,
-                s[idx.i[3]].w - p0,
-            ]);
-            let det = e.determinant();
-            let scale = e.column(0).norm() * e.column(1).norm() * e.column(2).norm();
+            let (e1, e2, e3) = (s[idx.i[1]].w - p0, s[idx.i[2]].w - p0, s[idx.i[3]].w - p0);
+            let c23 = e2.cross(&e3);
+            let det = e1.dot(&c23);
+            let scale = e1.norm() * e2.norm() * e3.norm();
             if det.abs() <= 1e-12 * scale {
                 return None;
             }
-            // Solve e λ = −p0 (the origin in the tetrahedron's affine coordinates).
-            let l = e.try_inverse()? * -p0;
-            mu[0] = 1.0 - l.x - l.y - l.z;
-            mu[1] = l.x;
-            mu[2] = l.y;
-            mu[3] = l.z;
+            // Solve [e1 e2 e3] λ = −p0 (the origin in the tetrahedron's affine
+            // coordinates) by Cramer's rule.
+            let r = -p0;
+            let l = [
+                r.dot(&c23) / det,
+                e1.dot(&r.cross(&e3)) / det,
+                e1.dot(&e2.cross(&r)) / det,
+            ];
+            mu[0] = 1.0 - l[0] - l[1] - l[2];
+            mu[1] = l[0];
+            mu[2] = l[1];
+            mu[3] = l[2];
         }
     }
     mu[..=k].iter().all(|m| *m >= 0.0).then_some(mu)
@@ -674,6 +679,7 @@ fn barycentric(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Matrix3;
 
     fn cube(h: f64) -> Convex {
         Convex::Box {
