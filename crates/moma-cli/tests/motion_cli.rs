@@ -431,6 +431,27 @@ fn scene_object_through_the_start_is_named_with_the_link() {
 }
 
 #[test]
+fn a_urdf_scene_is_named_as_such() {
+    // MotionBenchMaker's kitchen and table_bars scenes are URDFs (kitchen.urdf's first
+    // lines); `--scene` reads planning-scene YAML, and said only that line 1 was no mapping.
+    let scene = tmp("kitchen.urdf");
+    std::fs::write(
+        &scene,
+        "<?xml version=\"1.0\" ?>\n<robot name=\"kitchen\">\n  <link name=\"root\"></link>\n</robot>\n",
+    )
+    .unwrap();
+    let o = run_with(&[], &scene.display().to_string());
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(&*scene.display().to_string())
+            && e.contains("is a URDF, not a planning-scene YAML")
+            && e.contains("meshes"),
+        "{e}"
+    );
+}
+
+#[test]
 fn unreadable_files_are_named() {
     let (scene, _, _, _, _) = query_files(QUERY);
     let o = run_with(&[], "/nonexistent/scene.yaml");
