@@ -5,15 +5,16 @@ variations from the problem's variation file, start = MotionBenchMaker's default
 by collision-free damped-least-squares IK of the query's gripper pose), written as one query folder
 (`moma motion-bench`'s SCENE_DIR, bench/motion_check_coal.sh's --dir) whose names end in -sSEED.
 A URDF scene (kitchen, table_bars) becomes one mesh object per link at the URDF's zero joint
-positions (mesh files copied beside the scenes), moved into base_link when the problem places
-the robot at a base_offset (table_bars); its variation file moves those objects by link name.
+positions (mesh files copied beside the scenes), placed at the problem's base_offset from
+base_link (table_bars; see ompl_fetch_mbm.in_base_frame); its variation file moves those
+objects by link name. Plan on those with `moma motion --mesh exact`.
 Runs in the peers' venv (Pinocchio 4.1.0 + coal, PyYAML):
 
     ~/.cache/moma-pinocchio-bench/venv/bin/python bench/mbm_unseen_queries.py --mbm MBM_DIR --seeds 11,12,13,14,15 [--problems P,...] --out DIR
 
 then check every motion moma returns on them with coal:
 
-    bench/motion_check_coal.sh --dir DIR --goal state|pose --time 1|10 [--json OUT]
+    bench/motion_check_coal.sh --dir DIR --goal state|pose --time 1|10 [--mesh exact] [--json OUT]
 """
 import argparse
 import os
