@@ -14,9 +14,12 @@ validity checker):
 * no contact: every path segment and every chord between trajectory samples, at states at most
   `--step` apart per joint (default 1 mrad / 1 mm), collision-free.
 
-    bench/motion_check_coal.sh [--moma BIN] [--dir QUERY_DIR] [--goal state|pose] [--time S] [--seed N]
+    bench/motion_check_coal.sh [--moma BIN] [--dir QUERY_DIR] [--goal state|pose] [--time S] [--seed N] [--mesh convex|exact] [--json OUT]
 
-Prints one line per query and a summary; exit 1 if any solved motion fails a check.
+Prints one line per query and a summary (solved, median / 95th-percentile planning time of the
+solved, coal verdicts); `--json` writes the per-query rows. An exit status of `moma motion` other
+than 0 (solved) or 3 (not solved, with its reason) is a failure: it is printed and counted (a
+panic, or exit 1 on a query whose inputs are valid). Exit 1 if any query failed so.
 """
 import argparse
 import json
@@ -98,6 +101,9 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--step", type=float, default=1e-3)
     ap.add_argument("--problem", default=None)
+    ap.add_argument("--json", default=None, help="per-query rows (default: no file)")
+    ap.add_argument("--mesh", choices=["convex", "exact"], default="convex",
+                    help="moma motion's --mesh: the scenes' meshes as hulls or as triangles")
     args = ap.parse_args()
     with open(os.path.join(args.dir, "queries.json")) as f:
         qf = json.load(f)
@@ -106,44 +112,60 @@ def main():
     urdf = os.path.join(args.fetch, "fetch_description", "robots", "fetch.urdf")
     srdf = os.path.join(args.fetch, "fetch.srdf")
     tmp = tempfile.mkdtemp(prefix="moma_check_")
-    solved = passed = 0
-    total = 0
+    out_path = os.path.join(tmp, "out.json")
+    rows = []
     for q in qf["queries"]:
         if args.problem and q["problem"] != args.problem:
             continue
-        total += 1
         scene = os.path.join(args.dir, q["scene"])
         for key in ("start", "goal_state"):
             with open(os.path.join(tmp, key + ".json"), "w") as f:
                 json.dump({"states": [{"q": q[key]}]}, f)
         cmd = [args.moma, "motion", urdf, "--root", "fixed", "--srdf", srdf, "--package-dir", args.fetch,
                "--scene", scene, "--group", ",".join(qf["group"]), "--start", os.path.join(tmp, "start.json"),
-               "--time-limit", str(args.time), "--seed", str(args.seed), "--output", os.path.join(tmp, "out.json")]
+               "--time-limit", str(args.time), "--seed", str(args.seed), "--mesh", args.mesh, "--output", out_path]
         if args.goal == "state":
             cmd += ["--goal-state", os.path.join(tmp, "goal_state.json")]
         else:
             cmd += ["--goal-pose", f"{qf['ee_frame']}:" + ",".join(map(repr, q["goal_pose"])),
                     "--position-tolerance", str(args.position_tolerance),
                     "--orientation-tolerance", str(args.orientation_tolerance)]
+        if os.path.exists(out_path):
+            os.remove(out_path)  # a run that writes nothing must not be read as the previous query's
         r = subprocess.run(cmd, capture_output=True, text=True)
-        if r.returncode == 1:
-            print(f"{q['name']:40s} error: {r.stderr.strip()}")
+        row = {"name": q["name"], "problem": q["problem"], "exit": r.returncode, "solved": False,
+               "time_s": None, "fails": [], "reason": None}
+        rows.append(row)
+        if r.returncode not in (0, 3) or not os.path.exists(out_path):
+            row["fails"] = [f"exit {r.returncode}"]
+            row["reason"] = r.stderr.strip()
+            print(f"{q['name']:40s} FAILED: exit {r.returncode}: {r.stderr.strip()}", flush=True)
             continue
-        with open(os.path.join(tmp, "out.json")) as f:
+        with open(out_path) as f:
             out = json.load(f)
+        row["time_s"] = out["planning_time_s"]
         if not out["solved"]:
-            print(f"{q['name']:40s} not solved: {out['reason']}")
+            row["reason"] = out["reason"]
+            print(f"{q['name']:40s} not solved: {out['reason']}", flush=True)
             continue
-        solved += 1
+        row["solved"] = True
         checker = Checker(fetch, scene_geometry(fetch, load_scene(scene))[0])
-        fails, n = check(fetch, checker, names, out, q, args.goal, args.position_tolerance,
-                         args.orientation_tolerance, args.step)
-        passed += not fails
+        row["fails"], n = check(fetch, checker, names, out, q, args.goal, args.position_tolerance,
+                                args.orientation_tolerance, args.step)
         print(f"{q['name']:40s} solved in {out['planning_time_s'] * 1e3:7.1f} ms, {n:6d} states checked "
-              f"by coal: {'ok' if not fails else 'FAILED: ' + ', '.join(fails)}", flush=True)
-    print(f"# {solved}/{total} solved; {passed}/{solved} solved motions pass every check "
-          f"(Pinocchio {pin.__version__}, exact meshes by coal, step {args.step})")
-    sys.exit(0 if passed == solved else 1)
+              f"by coal: {'ok' if not row['fails'] else 'FAILED: ' + ', '.join(row['fails'])}", flush=True)
+    solved = [r for r in rows if r["solved"]]
+    failed = [r for r in rows if r["fails"]]
+    ts = np.array([r["time_s"] for r in solved]) * 1e3
+    pct = f"median {np.median(ts):.1f} ms, p95 {np.percentile(ts, 95):.1f} ms" if len(ts) else "no times"
+    print(f"# {len(solved)}/{len(rows)} solved ({pct}); {len(solved) - sum(1 for r in solved if r['fails'])}"
+          f"/{len(solved)} solved motions pass every check; {len(failed)} failures "
+          f"(Pinocchio {pin.__version__}, exact meshes by coal, step {args.step}, goal {args.goal}, "
+          f"time limit {args.time} s, loadavg {os.getloadavg()[0]:.1f})")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"settings": vars(args), "rows": rows}, f, indent=1)
+    sys.exit(1 if failed else 0)
 
 
 if __name__ == "__main__":

@@ -141,13 +141,58 @@ def load_scene(scene_yaml):
         frame = obj.get("header", {}).get("frame_id", "world")
         if frame != "base_link":
             raise ValueError(f"{scene_yaml}: object {obj['id']} in frame {frame}")
-        for prim, pose in zip(obj["primitives"], obj["primitive_poses"]):
+        for mesh, pose in zip(obj.get("meshes") or [], obj.get("mesh_poses") or []):
+            prims.append({"id": obj["id"], "type": "mesh",
+                          "resource": os.path.join(os.path.dirname(os.path.abspath(scene_yaml)), mesh["resource"]),
+                          "position": [float(v) for v in pose["position"]],
+                          "orientation": [float(v) for v in pose["orientation"]]})
+        for prim, pose in zip(obj.get("primitives") or [], obj.get("primitive_poses") or []):
             if prim["type"] not in ("box", "cylinder", "sphere"):
                 raise ValueError(f"{scene_yaml}: primitive {prim['type']}")
             prims.append({"id": obj["id"], "type": prim["type"], "dimensions": [float(d) for d in prim["dimensions"]],
                           "position": [float(v) for v in pose["position"]],
                           "orientation": [float(v) for v in pose["orientation"]]})
     return prims
+
+
+def load_urdf_scene(urdf, mbm_dir):
+    """A URDF scene (kitchen, table_bars) as scene objects: one mesh per link collision, named
+    after its link, posed at the URDF's zero joint positions (world frame; meshes unscaled)."""
+    import xml.etree.ElementTree as ET
+
+    model = pin.buildModelFromUrdf(urdf)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    prims = []
+    for link in ET.parse(urdf).getroot().iter("link"):
+        for col in link.iter("collision"):
+            origin = col.find("origin")
+            xyz = [float(v) for v in (origin.get("xyz", "0 0 0") if origin is not None else "0 0 0").split()]
+            rpy = [float(v) for v in (origin.get("rpy", "0 0 0") if origin is not None else "0 0 0").split()]
+            mesh = col.find("geometry/mesh")
+            if mesh is None or mesh.get("scale", "1 1 1").split() != ["1", "1", "1"]:
+                raise ValueError(f"{urdf}: link {link.get('name')}: only unscaled mesh collisions are read")
+            M = data.oMf[model.getFrameId(link.get("name"))] * pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz))
+            prims.append({"id": link.get("name"), "type": "mesh", "resource": pkg_path(mesh.get("filename"), mbm_dir),
+                          "position": M.translation.tolist(),
+                          "orientation": pin.Quaternion(M.rotation).coeffs().tolist()})
+    return prims
+
+
+def in_base_frame(prims, base_offset):
+    """The scene objects in the robot's base_link frame when the problem gives a `base_offset`
+    (position, orientation [x, y, z, w]): the scene placed at that pose from base_link. (Read the
+    other way round, as the robot's pose in the scene, MotionBenchMaker's table_bars puts Fetch's
+    default state inside the shelves; read this way, its start and goal queries have
+    collision-free IK states.)"""
+    if not any(base_offset.get("position", [0, 0, 0])) and list(base_offset.get("orientation", [0, 0, 0, 1])) == [0, 0, 0, 1]:
+        return prims
+    B = pose_to_se3(base_offset.get("position", [0, 0, 0]), base_offset.get("orientation", [0, 0, 0, 1]))
+    out = []
+    for p in prims:
+        M = B * pose_to_se3(p["position"], p["orientation"])
+        out.append(dict(p, position=M.translation.tolist(), orientation=pin.Quaternion(M.rotation).coeffs().tolist()))
+    return out
 
 
 def vary_scene(prims, variation_yaml, rng):
@@ -186,8 +231,10 @@ def scene_geometry(fetch, prims):
     pin.removeCollisionPairs(fetch.model, geom, fetch.srdf)
     objects = {}
     for k, p in enumerate(prims):
-        d = p["dimensions"]
-        if p["type"] == "box":
+        d = p.get("dimensions")
+        if p["type"] == "mesh":
+            shape = coal.MeshLoader().load(p["resource"])
+        elif p["type"] == "box":
             shape = coal.Box(d[0], d[1], d[2])
         elif p["type"] == "cylinder":
             shape = coal.Cylinder(d[1], d[0])  # shape_msgs: [height, radius]
@@ -254,19 +301,23 @@ def load_problems(mbm_dir):
     return out
 
 
-def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20):
+def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20, urdf_scenes=False, problems=None):
     goals = {"note": "", "samples": samples, "ee_link": ee_link, "group": GROUP, "default_state": DEFAULT_STATE, "queries": []}
     rng = np.random.default_rng(seed)
     for name, path, doc in load_problems(mbm_dir):
+        if problems is not None and name not in problems:
+            continue
         scene = pkg_path(doc["scene"], mbm_dir)
-        if not scene.endswith(".yaml"):
+        if not scene.endswith(".yaml") and not urdf_scenes:
             print(f"# {name}: scene {os.path.basename(scene)} is a URDF scene, skipped", file=sys.stderr)
             continue
         bo = doc.get("base_offset", {})
-        if bo and (any(bo.get("position", [0, 0, 0])) or list(bo.get("orientation", [0, 0, 0, 1])) != [0, 0, 0, 1]):
+        if bo and (any(bo.get("position", [0, 0, 0])) or list(bo.get("orientation", [0, 0, 0, 1])) != [0, 0, 0, 1]) \
+                and not urdf_scenes:
             print(f"# {name}: base_offset not identity, skipped", file=sys.stderr)
             continue
-        nominal = load_scene(scene)
+        nominal = load_scene(scene) if scene.endswith(".yaml") else load_urdf_scene(scene, mbm_dir)
+        nominal = in_base_frame(nominal, bo or {})
         with open(pkg_path(doc["queries"], mbm_dir)) as f:
             qdoc = yaml.safe_load(f)
         variation = pkg_path(doc["variation"], mbm_dir)

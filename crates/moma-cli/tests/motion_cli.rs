@@ -431,6 +431,67 @@ fn scene_object_through_the_start_is_named_with_the_link() {
 }
 
 #[test]
+fn a_concave_scene_mesh_is_its_triangles_with_mesh_exact() {
+    // Two plates 1.4 m apart (one mesh) beside table_pick-Front-Can1-0's scene: their hull
+    // holds the tucked arm, their triangles are 0.441 m from it (coal, the scene file's
+    // header). As hulls the start is refused; as triangles the query is solved.
+    let (_, start, goal, q0, q1) = query_files(QUERY);
+    let scene = format!("{DATA}/scenes/motion_bench_maker/concave_plates/scene.yaml");
+    let o = run_with(&[], &scene);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("scene object 'plates' intersects link"), "{e}");
+    let out = tmp("concave_plates.json").display().to_string();
+    let o = run_with(
+        &[
+            "--start",
+            &start,
+            "--goal-state",
+            &goal,
+            "--mesh",
+            "exact",
+            "--time-limit",
+            "30",
+            "--output",
+            &out,
+        ],
+        &scene,
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let path = v["path"].as_array().unwrap();
+    assert_eq!(numbers(&path[0]), q0);
+    assert_eq!(numbers(path.last().unwrap()), q1);
+    assert!(v["min_distance"].as_f64().unwrap() > 0.0, "{v}");
+}
+
+#[test]
+fn a_urdf_scene_is_named_as_such() {
+    // MotionBenchMaker's kitchen and table_bars scenes are URDFs (kitchen.urdf's first
+    // lines); `--scene` reads planning-scene YAML, and said only that line 1 was no mapping.
+    let scene = tmp("kitchen.urdf");
+    std::fs::write(
+        &scene,
+        "<?xml version=\"1.0\" ?>\n<robot name=\"kitchen\">\n  <link name=\"root\"></link>\n</robot>\n",
+    )
+    .unwrap();
+    let o = run_with(&[], &scene.display().to_string());
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(&*scene.display().to_string())
+            && e.contains("is a URDF, not a planning-scene YAML")
+            && e.contains("meshes"),
+        "{e}"
+    );
+}
+
+#[test]
 fn unreadable_files_are_named() {
     let (scene, _, _, _, _) = query_files(QUERY);
     let o = run_with(&[], "/nonexistent/scene.yaml");

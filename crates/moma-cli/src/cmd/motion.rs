@@ -1,10 +1,11 @@
 //! `moma motion ROBOT.urdf --root fixed [--srdf FILE] [--package-dir DIR]... --scene
 //! SCENE.yaml --group J1,J2,… --start STATES.json (--goal-state STATES.json | --goal-pose
 //! FRAME:x,y,z,qx,qy,qz,qw [--position-tolerance m] [--orientation-tolerance rad])
-//! [--time-limit s] [--seed N] [--output OUT.json]`: a collision-free, timed motion of a
+//! [--time-limit s] [--seed N] [--mesh convex|exact] [--output OUT.json]`: a collision-free, timed motion of a
 //! joint group among a scene's obstacles (`docs/motion.md`). Exit 3 when not solved, with
 //! the reason; the JSON is written either way.
 
+use super::collision::MeshMode;
 use super::common::{goal_not_reached, load_model, parse_list, parse_root, read_states};
 use anyhow::{Context, Result, anyhow, bail};
 use moma::collision::{GeometryModel, GeometryOptions, Scene, SceneOptions, read_scene};
@@ -67,6 +68,11 @@ pub struct Args {
     /// Clearance every state keeps from the scene and between links (m).
     #[arg(long, default_value_t = 0.002)]
     pub margin: f64,
+    /// How the scene's meshes enter the distances, as `moma collision --mesh`: each as its
+    /// convex hull, or each as its triangles (a concave mesh, such as a shelf unit, then has
+    /// no inside).
+    #[arg(long, value_enum, default_value_t = MeshMode::Convex)]
+    pub mesh: MeshMode,
     /// Acceleration limit of every group joint (rad/s², m/s²): one value, or one per joint.
     #[arg(long, default_value = "1.0")]
     pub max_acceleration: String,
@@ -112,21 +118,28 @@ impl Robot {
         })
     }
 
-    /// Reads a scene whose poses are in `world` or (fixed root) the root link.
-    pub fn scene(&self, path: &Path) -> Result<Scene> {
+    /// Reads a scene whose poses are in `world` or (fixed root) the root link; with
+    /// [`MeshMode::Exact`] its meshes are their triangles ([`Scene::with_mesh_triangles`]).
+    pub fn scene(&self, path: &Path, mesh: MeshMode) -> Result<Scene> {
         let mut world_frames = vec!["world".to_string()];
         if self.model.root == RootJoint::Fixed
             && let Some(f) = self.model.frames.iter().find(|f| f.kind == FrameKind::Body)
         {
             world_frames.push(f.name.clone());
         }
-        Ok(read_scene(
+        let scene = read_scene(
             path,
             &SceneOptions {
                 world_frames,
                 package_dirs: self.source.package_dirs.clone(),
             },
-        )?)
+        )?;
+        Ok(match mesh {
+            MeshMode::Convex => scene,
+            MeshMode::Exact => scene
+                .with_mesh_triangles()
+                .with_context(|| format!("{}: --mesh exact", path.display()))?,
+        })
     }
 
     /// Plans one query: swaps concave links in contact at the start for their mesh
@@ -305,7 +318,7 @@ pub fn run(args: Args) -> Result<()> {
         args.srdf.as_deref(),
         &args.package_dirs,
     )?;
-    let scene = robot.scene(&args.scene)?;
+    let scene = robot.scene(&args.scene, args.mesh)?;
     let group = parse_group(&robot.model, &args.group)?;
     let start = first_q(&args.start)?;
     let goal = match (&args.goal_state, &args.goal_pose) {

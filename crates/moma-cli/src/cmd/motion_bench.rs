@@ -1,9 +1,10 @@
 //! `moma motion-bench SCENE_DIR --robot ROBOT.urdf [--srdf FILE] [--package-dir DIR]...
-//! [--goal state|pose] [--runs N] [--time-limit s] [--seed N] [--problem NAME] [--json
+//! [--goal state|pose] [--runs N] [--time-limit s] [--seed N] [--mesh convex|exact] [--problem NAME] [--json
 //! OUT.json]`: runs every query of a query folder (`SCENE_DIR/queries.json`, schema in
 //! `docs/motion.md`) with `moma motion`'s planner and prints the success rate and the
 //! median and 95th-percentile planning time per problem and overall.
 
+use super::collision::MeshMode;
 use super::motion::{Robot, options, parse_goal_pose, parse_group};
 use anyhow::{Context, Result, bail};
 use moma::motion::MotionGoal;
@@ -46,6 +47,9 @@ pub struct Args {
     /// Clearance every state keeps (m).
     #[arg(long, default_value_t = 0.002)]
     pub margin: f64,
+    /// How the scenes' meshes enter the distances (as `moma motion --mesh`).
+    #[arg(long, value_enum, default_value_t = MeshMode::Convex)]
+    pub mesh: MeshMode,
     /// Only the queries of this problem.
     #[arg(long)]
     pub problem: Option<String>,
@@ -133,7 +137,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         let field = format!("{}: queries[{k}] ({})", file.display(), q.name);
         let scene = robot
-            .scene(&args.scene_dir.join(&q.scene))
+            .scene(&args.scene_dir.join(&q.scene), args.mesh)
             .with_context(|| field.clone())?;
         let goal = match args.goal {
             GoalKind::State => MotionGoal::State(q.goal_state.clone()),

@@ -584,6 +584,23 @@ pub fn read_scene(path: &Path, opts: &SceneOptions) -> Result<Scene> {
 /// # Errors
 /// As [`read_scene`].
 pub fn scene_from_str(text: &str, path: &Path, opts: &SceneOptions) -> Result<Scene> {
+    // An XML file (MotionBenchMaker's kitchen and table_bars scenes are URDFs) is no YAML:
+    // say what it is rather than quote the YAML parser's first complaint.
+    if text.trim_start().starts_with('<') {
+        let what = if text.contains("<robot") {
+            "a URDF"
+        } else {
+            "XML"
+        };
+        return Err(Error::parse(
+            path,
+            format!(
+                "is {what}, not a planning-scene YAML: give a URDF scene's links as \
+                 collision_objects with meshes and mesh_poses (the links' poses at the \
+                 scene's joint values)"
+            ),
+        ));
+    }
     let raw: RawScene = serde_saphyr::from_str(text)
         .map_err(|e| Error::parse(path, format!("malformed planning-scene YAML: {e}")))?;
     let mut scene = Scene::default();
