@@ -5,8 +5,8 @@
 //! its goal (which end between the cage's bars and the shelf boards), a state passes
 //! exactly when its closest pair is farther apart than the margin.
 
-use moma::collision::GeometryModel;
-use moma::motion::ClearanceChecker;
+use moma::collision::{GeometryModel, Scene};
+use moma::motion::{ClearanceChecker, JointGroup};
 use moma::multibody::{Model, RootJoint};
 use moma::planning::StateValidity;
 use rand::{Rng, SeedableRng};
@@ -19,6 +19,38 @@ fn fetch() -> (Model, GeometryModel) {
     fetch_geometry(RootJoint::Fixed)
 }
 
+/// A query's scene and start state, and the group states the tests check: `line + 1`
+/// states evenly along the segment from the query's start to its goal, then 1000 drawn
+/// uniformly in the group's box.
+fn query_states(
+    queries: &FetchQueries,
+    group: &JointGroup,
+    name: &str,
+    line: u32,
+    rng: &mut ChaCha8Rng,
+) -> (Scene, Vec<f64>, Vec<Vec<f64>>) {
+    let dim = group.dim();
+    let query = queries.query(name);
+    let start = numbers(&query["start"]);
+    let goal = numbers(&query["goal_state"]);
+    let (mut xa, mut xb) = (vec![0.0; dim], vec![0.0; dim]);
+    group.extract(&start, &mut xa);
+    group.extract(&goal, &mut xb);
+    let mut states: Vec<Vec<f64>> = (0..=line)
+        .map(|k| {
+            let t = f64::from(k) / f64::from(line);
+            xa.iter().zip(&xb).map(|(a, b)| a + t * (b - a)).collect()
+        })
+        .collect();
+    for _ in 0..1000 {
+        let x: Vec<f64> = (0..dim)
+            .map(|i| rng.random_range(group.lower[i]..=group.upper[i]))
+            .collect();
+        states.push(x);
+    }
+    (queries.scene(query), start, states)
+}
+
 #[test]
 fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
     let (model, gm) = fetch();
@@ -29,28 +61,10 @@ fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let (mut passed, mut failed) = (0, 0);
     for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
-        let query = queries.query(name);
-        let scene = queries.scene(query);
-        let start = numbers(&query["start"]);
-        let goal = numbers(&query["goal_state"]);
+        let (scene, start, states) = query_states(&queries, &group, name, 200, &mut rng);
         let mut checker =
             ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &vec![1.0; dim])
                 .unwrap();
-        let (mut xa, mut xb) = (vec![0.0; dim], vec![0.0; dim]);
-        group.extract(&start, &mut xa);
-        group.extract(&goal, &mut xb);
-        let mut states: Vec<Vec<f64>> = (0..=200)
-            .map(|k| {
-                let t = f64::from(k) / 200.0;
-                xa.iter().zip(&xb).map(|(a, b)| a + t * (b - a)).collect()
-            })
-            .collect();
-        for _ in 0..1000 {
-            let x: Vec<f64> = (0..dim)
-                .map(|i| rng.random_range(group.lower[i]..=group.upper[i]))
-                .collect();
-            states.push(x);
-        }
         for x in &states {
             let valid = checker.is_valid(x);
             let closest = checker.distance_report(x).unwrap();
@@ -91,28 +105,10 @@ fn the_bounds_before_gjk_never_pass_a_state_too_close() {
     let (mut passed, mut failed, mut segments) = (0, 0, 0);
     let margin = 0.01;
     for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
-        let query = queries.query(name);
-        let scene = queries.scene(query);
-        let start = numbers(&query["start"]);
-        let goal = numbers(&query["goal_state"]);
+        let (scene, start, states) = query_states(&queries, &group, name, 100, &mut rng);
         let mut checker =
             ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &vec![1.0; dim])
                 .unwrap();
-        let (mut xa, mut xb) = (vec![0.0; dim], vec![0.0; dim]);
-        group.extract(&start, &mut xa);
-        group.extract(&goal, &mut xb);
-        let mut states: Vec<Vec<f64>> = (0..=100)
-            .map(|k| {
-                let t = f64::from(k) / 100.0;
-                xa.iter().zip(&xb).map(|(a, b)| a + t * (b - a)).collect()
-            })
-            .collect();
-        for _ in 0..1000 {
-            let x: Vec<f64> = (0..dim)
-                .map(|i| rng.random_range(group.lower[i]..=group.upper[i]))
-                .collect();
-            states.push(x);
-        }
         for x in &states {
             let valid = checker.is_valid(x);
             let closest = checker.distance_report(x).unwrap();
