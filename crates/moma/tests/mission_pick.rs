@@ -910,16 +910,17 @@ fn arm_states(
         })
 }
 
-/// The pick mission with the arm's transport posture raised to hold the can above
-/// Fetch's head, and `boxes` (`[[map.boxes]]` tables) on the map.
-fn raised_with_boxes(boxes: &str) -> moma::Result<moma::mission::Mission> {
+/// The pick mission with the arm's transport posture `posture` (e.g. [`RAISED`] or
+/// [`OVERHEAD`], holding the can above Fetch's head) and `boxes` (`[[map.boxes]]` tables)
+/// on the map.
+fn with_posture_and_boxes(posture: &str, boxes: &str) -> moma::Result<moma::mission::Mission> {
     let path = mission_path();
     let text = std::fs::read_to_string(&path).unwrap();
     let shipped = "transport_posture = [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.30, 0.0]";
     let map = "file = \"maps/depot.yaml\"\n";
     assert!(text.contains(shipped) && text.contains(map));
     let text = text
-        .replace(shipped, &format!("transport_posture = {RAISED}"))
+        .replace(shipped, &format!("transport_posture = {posture}"))
         .replace(map, &format!("{map}\n{boxes}\n"));
     let f = scenario::parse_file(&text, &path)?;
     scenario::from_file(f, &path, path.parent().unwrap())
@@ -939,7 +940,7 @@ const BEAM_Z: &str = "[1.47, 1.6]";
 
 #[test]
 fn the_drive_on_map_blocks_a_beam_that_only_the_held_can_would_hit() {
-    let m = raised_with_boxes(&beam(3.0)).unwrap();
+    let m = with_posture_and_boxes(RAISED, &beam(3.0)).unwrap();
     // the robot alone passes under the beam: it is not on the mission's map
     let bare = m.boxes[0];
     assert!(!bare.blocked && bare.clearance > 0.0, "{bare:?}");
@@ -1006,7 +1007,7 @@ fn the_drive_on_map_blocks_a_beam_that_only_the_held_can_would_hit() {
 fn a_drive_on_with_no_way_round_the_beam_fails_naming_it() {
     // the beam across the whole map: the robot passes under it to the shelf, but holding
     // the can no way leads to the goal
-    let m = raised_with_boxes(&beam(40.0)).unwrap();
+    let m = with_posture_and_boxes(RAISED, &beam(40.0)).unwrap();
     assert!(!m.boxes[0].blocked);
     let r = run(&m).unwrap();
     assert!(!r.reached);
@@ -1034,21 +1035,6 @@ fn a_drive_on_with_no_way_round_the_beam_fails_naming_it() {
     );
 }
 
-/// The pick mission with the arm's transport posture raised to hold the can over Fetch's
-/// head ([`OVERHEAD`]), and `boxes` (`[[map.boxes]]` tables) on the map.
-fn overhead_with_boxes(boxes: &str) -> moma::Result<moma::mission::Mission> {
-    let path = mission_path();
-    let text = std::fs::read_to_string(&path).unwrap();
-    let shipped = "transport_posture = [0.0, 1.32, 1.40, -0.2, 1.72, 0.0, 1.30, 0.0]";
-    let map = "file = \"maps/depot.yaml\"\n";
-    assert!(text.contains(shipped) && text.contains(map));
-    let text = text
-        .replace(shipped, &format!("transport_posture = {OVERHEAD}"))
-        .replace(map, &format!("{map}\n{boxes}\n"));
-    let f = scenario::parse_file(&text, &path)?;
-    scenario::from_file(f, &path, path.parent().unwrap())
-}
-
 /// Torso down, the arm turned to the right, raised and bent back over the robot, the
 /// gripper up: the held can stands over the robot, inside its footprint, above every link.
 const OVERHEAD: &str = "[0.0, -1.57, -1.2, 0.0, -1.0, 0.0, 0.3, 0.0]";
@@ -1074,7 +1060,7 @@ fn overhead_beams() -> String {
 #[test]
 fn the_drives_distance_monitor_measures_the_map_boxes() {
     use moma::mission::task::{DistanceMonitor, Holding};
-    let m = overhead_with_boxes(&overhead_beams()).unwrap();
+    let m = with_posture_and_boxes(OVERHEAD, &overhead_beams()).unwrap();
     let task = m.task.as_ref().unwrap();
     let bare = m.boxes[1];
     assert!(!bare.blocked && bare.clearance > 0.0, "{bare:?}");
@@ -1125,7 +1111,7 @@ fn off_the_beam(p: [f64; 2]) -> f64 {
 /// and the beams, sees no touch.
 #[test]
 fn the_drive_on_goes_round_a_beam_that_only_the_held_can_would_hit() {
-    let m = overhead_with_boxes(&overhead_beams()).unwrap();
+    let m = with_posture_and_boxes(OVERHEAD, &overhead_beams()).unwrap();
     assert!(!m.boxes[0].blocked && !m.boxes[1].blocked, "{:?}", m.boxes);
     let drive_on = m.drive_on_map.as_ref().unwrap();
     let blocked: Vec<&str> = drive_on.blocks.iter().map(|b| b.name.as_str()).collect();
@@ -1169,7 +1155,7 @@ fn the_drive_on_goes_round_a_beam_that_only_the_held_can_would_hit() {
 /// touches it.
 #[test]
 fn without_the_drive_ons_height_check_the_held_can_touches_the_beam() {
-    let mut m = overhead_with_boxes(&overhead_beams()).unwrap();
+    let mut m = with_posture_and_boxes(OVERHEAD, &overhead_beams()).unwrap();
     let drive_on = m.drive_on_map.as_mut().unwrap();
     drive_on.grid = m.map.grid.clone();
     drive_on.blocks.clear();
