@@ -24,13 +24,14 @@ use moma::collision::{
 };
 use moma::io::pinocchio_layout::PinocchioLayout;
 use moma::kinematics::forward_kinematics;
-use moma::multibody::{Data, RootJoint};
+use moma::multibody::{Data, Model, RootJoint};
 use moma::planning::grid3::Grid3;
 use moma::spatial::SE3;
 use nalgebra::{DVector, Vector3};
 use rand::{Rng, SeedableRng};
 
-fn bench(c: &mut Criterion) {
+/// Fetch on a fixed root with its collision geometry and SRDF, as shipped in the tests' data.
+fn fetch() -> (Model, GeometryModel) {
     let dir = format!("{}/tests/data/robots/fetch", env!("CARGO_MANIFEST_DIR"));
     let urdf = format!("{dir}/fetch_description/robots/fetch.urdf");
     let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).expect("model");
@@ -39,6 +40,11 @@ fn bench(c: &mut Criterion) {
         srdf: Some(format!("{dir}/fetch.srdf").into()),
     };
     let gm = GeometryModel::from_urdf(&model, urdf.as_ref(), &opts).expect("geometry");
+    (model, gm)
+}
+
+fn bench(c: &mut Criterion) {
+    let (model, gm) = fetch();
     let mut data = Data::new(&model);
     let mut gd = GeometryData::new(&gm);
     let layout = PinocchioLayout::new(&model);
@@ -294,14 +300,7 @@ fn voxel_centres(scene: &Scene, r: f64) -> Vec<Vector3<f64>> {
 /// average), the hint carried from one call to the next, as GJK's iterations and the
 /// warm starts across states carry it.
 fn bench_support(c: &mut Criterion) {
-    let dir = format!("{}/tests/data/robots/fetch", env!("CARGO_MANIFEST_DIR"));
-    let urdf = format!("{dir}/fetch_description/robots/fetch.urdf");
-    let model = moma::io::urdf::model_from_urdf_file(&urdf, RootJoint::Fixed).expect("model");
-    let opts = GeometryOptions {
-        package_dirs: vec![dir.clone().into()],
-        srdf: Some(format!("{dir}/fetch.srdf").into()),
-    };
-    let gm = GeometryModel::from_urdf(&model, urdf.as_ref(), &opts).expect("geometry");
+    let (_, gm) = fetch();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let mut d = Vector3::x();
     let dirs: Vec<Vector3<f64>> = (0..1024)
