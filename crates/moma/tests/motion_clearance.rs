@@ -51,6 +51,24 @@ fn query_states(
     (queries.scene(query), start, states)
 }
 
+/// Asserts that the state check passes `x` exactly when its exact report's closest pair is
+/// farther apart than `margin`, and returns the verdict.
+fn passes_exactly_when_clear(
+    checker: &mut ClearanceChecker,
+    name: &str,
+    x: &[f64],
+    margin: f64,
+) -> bool {
+    let valid = checker.is_valid(x);
+    let closest = checker.distance_report(x).unwrap();
+    assert_eq!(
+        valid,
+        closest.distance > margin,
+        "{name}: state {x:?}: is_valid {valid}, closest pair {closest:?}"
+    );
+    valid
+}
+
 #[test]
 fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
     let (model, gm) = fetch();
@@ -66,14 +84,7 @@ fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
             ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &vec![1.0; dim])
                 .unwrap();
         for x in &states {
-            let valid = checker.is_valid(x);
-            let closest = checker.distance_report(x).unwrap();
-            assert_eq!(
-                valid,
-                closest.distance > margin,
-                "{name}: state {x:?}: is_valid {valid}, closest pair {closest:?}"
-            );
-            if valid {
+            if passes_exactly_when_clear(&mut checker, name, x, margin) {
                 passed += 1;
             } else {
                 failed += 1;
@@ -110,14 +121,7 @@ fn the_bounds_before_gjk_never_pass_a_state_too_close() {
             ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &vec![1.0; dim])
                 .unwrap();
         for x in &states {
-            let valid = checker.is_valid(x);
-            let closest = checker.distance_report(x).unwrap();
-            assert_eq!(
-                valid,
-                closest.distance > margin,
-                "{name}: state {x:?}: is_valid {valid}, closest pair {closest:?}"
-            );
-            if valid {
+            if passes_exactly_when_clear(&mut checker, name, x, margin) {
                 passed += 1;
             } else {
                 failed += 1;
