@@ -169,6 +169,12 @@ impl PlacedShape {
         }
     }
 
+    /// Moves the shape to `pose` (world from shape).
+    pub fn set_pose(&mut self, pose: &SE3) {
+        self.rotation_t = pose.rotation.transpose();
+        self.translation = pose.translation;
+    }
+
     /// The distance from world point `p` to the shape ([`ShapeBound::point_distance`]).
     #[must_use]
     pub fn point_distance(&self, p: &Vector3<f64>) -> f64 {

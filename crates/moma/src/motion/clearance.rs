@@ -50,7 +50,7 @@
 
 use super::group::JointGroup;
 use crate::collision::ball_cover::{MAX_SLABS, hull_ball_cover};
-use crate::collision::ball_gap::{PlacedShape, ShapeBound};
+use crate::collision::ball_gap::PlacedShape;
 use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_outside, signed_distance};
 use crate::collision::{Convex, GeometryModel, Scene};
 use crate::kinematics;
@@ -177,11 +177,9 @@ pub struct ClearanceChecker<'a> {
     cover_of: Vec<(usize, usize)>,
     cover_centres: Vec<Vector3<f64>>,
     cover_stamp: Vec<u64>,
-    /// Per robot object: its closed-form bound (object frame), and its world pose at the
-    /// placed state as object-from-world rotation and world translation, valid where
+    /// Per robot object: its closed-form bound placed at the placed state, valid where
     /// `pose_stamp` is `state_stamp`.
-    object_bounds: Vec<ShapeBound>,
-    object_poses: Vec<(Matrix3<f64>, Vector3<f64>)>,
+    object_shapes: Vec<PlacedShape>,
     pose_stamp: Vec<u64>,
     /// Blocks that never move.
     fixed: Vec<Block>,
@@ -477,12 +475,11 @@ impl<'a> ClearanceChecker<'a> {
             scene_first,
             cover_centres: vec![Vector3::zeros(); cover.len()],
             cover_stamp: vec![0; gm.objects.len()],
-            object_bounds: gm
+            object_shapes: gm
                 .objects
                 .iter()
-                .map(|o| ShapeBound::new(&o.shape))
+                .map(|o| PlacedShape::new(&o.shape, &o.placement))
                 .collect(),
-            object_poses: vec![(Matrix3::identity(), Vector3::zeros()); gm.objects.len()],
             pose_stamp: vec![0; gm.objects.len()],
             cover,
             cover_of,
@@ -573,7 +570,7 @@ impl<'a> ClearanceChecker<'a> {
     }
 
     /// The gap between the bounding balls of ball group `a` and `b` (a group, or a scene
-    /// shape's box), at the placed state.
+    /// shape in closed form), at the placed state.
     fn group_gap(&self, a: usize, b: Other) -> f64 {
         let (ca, ra) = (self.group_centres[a], self.groups[a].radius);
         match b {
@@ -595,8 +592,8 @@ impl<'a> ClearanceChecker<'a> {
         }
     }
 
-    /// The gap between the bounding balls of robot object `a` and `b` (a robot object or
-    /// a scene shape's box), at the placed state.
+    /// The gap between the bounding balls of robot object `a` and `b` (a robot object, or
+    /// a scene shape in closed form), at the placed state.
     fn object_gap(&mut self, a: usize, b: Other) -> f64 {
         let ca = self.object_centre(a);
         let ra = self.object_balls[a].radius;
@@ -626,7 +623,7 @@ impl<'a> ClearanceChecker<'a> {
     /// (a robot object's cover balls or closed-form bound, or a scene shape's), a proof
     /// that the pair is farther apart than `bound`, at the placed state. For two robot
     /// objects: every ball against every ball, else each side's balls against the other's
-    /// bound ([`ShapeBound`]).
+    /// bound ([`ShapeBound`](crate::collision::ball_gap::ShapeBound)).
     fn cover_clears(&mut self, a: usize, b: Other, bound: f64) -> bool {
         let mine = self.place_cover(a);
         match b {
@@ -655,15 +652,13 @@ impl<'a> ClearanceChecker<'a> {
         if self.pose_stamp[j] != self.state_stamp {
             let o = &self.gm.objects[j];
             let pose = self.data.world_from_joint[o.joint.0] * o.placement;
-            self.object_poses[j] = (pose.rotation.transpose(), pose.translation);
+            self.object_shapes[j].set_pose(&pose);
             self.pose_stamp[j] = self.state_stamp;
         }
-        let (rt, t) = &self.object_poses[j];
-        let shape = &self.object_bounds[j];
-        balls.into_iter().all(|i| {
-            let x = rt * (self.cover_centres[i] - t);
-            shape.point_distance(&x) - self.cover[i].radius > bound
-        })
+        let shape = &self.object_shapes[j];
+        balls
+            .into_iter()
+            .all(|i| shape.point_distance(&self.cover_centres[i]) - self.cover[i].radius > bound)
     }
 
     /// Robot object `a`'s world axis-aligned box at the placed state (computed once per
@@ -695,7 +690,7 @@ impl<'a> ClearanceChecker<'a> {
     }
 
     /// The distance from `c` to scene shape `(o, s)` in closed form (a primitive's exact
-    /// distance, a lower bound for a hull: [`ShapeBound`]).
+    /// distance, a lower bound for a hull: [`ShapeBound`](crate::collision::ball_gap::ShapeBound)).
     fn shape_gap(&self, c: &Vector3<f64>, o: usize, s: usize) -> f64 {
         self.scene_shapes[self.scene_first[o] + s].point_distance(c)
     }
