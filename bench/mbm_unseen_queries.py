@@ -7,10 +7,14 @@ by collision-free damped-least-squares IK of the query's gripper pose), written 
 A URDF scene (kitchen, table_bars) becomes one mesh object per link at the URDF's zero joint
 positions (mesh files copied beside the scenes), placed at the problem's base_offset from
 base_link (table_bars; see ompl_fetch_mbm.in_base_frame); its variation file moves those
-objects by link name. Plan on those with `moma motion --mesh exact`.
+objects by link name. With `--draw mbm` the scenes are drawn as MotionBenchMaker's code
+draws them (SceneSampler::sample: the base_offset and the World variation applied in the world
+frame, T·M, as MoveIt's World::moveObject does; positions Gaussian; a URDF scene's joints
+uniform within their limits, so the kitchen's doors stand open at random and table_bars's bars
+slide). Plan on those with `moma motion --mesh exact`.
 Runs in the peers' venv (Pinocchio 4.1.0 + coal, PyYAML):
 
-    ~/.cache/moma-pinocchio-bench/venv/bin/python bench/mbm_unseen_queries.py --mbm MBM_DIR --seeds 11,12,13,14,15 [--problems P,...] --out DIR
+    ~/.cache/moma-pinocchio-bench/venv/bin/python bench/mbm_unseen_queries.py --mbm MBM_DIR --seeds 11,12,13,14,15 [--problems P,...] [--draw uniform|mbm] --out DIR
 
 then check every motion moma returns on them with coal:
 
@@ -34,6 +38,10 @@ def main():
     ap.add_argument("--fetch", default=os.path.join(ROOT, "crates/moma/tests/data/robots/fetch"))
     ap.add_argument("--seeds", default="11,12,13,14,15", help="comma-separated numpy seeds, one scene per goal query each")
     ap.add_argument("--problems", default=None, help="comma-separated problem names (default: every problem)")
+    ap.add_argument("--draw", choices=["uniform", "mbm"], default="uniform",
+                    help="uniform: the objects' own variations uniform in [-bound, bound], no World variation, a URDF "
+                         "scene at zero joint positions; mbm: as MotionBenchMaker's code draws (Gaussian positions, "
+                         "the World variation, a URDF scene's joints uniform within their limits)")
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]
@@ -41,7 +49,7 @@ def main():
     merged = None
     for seed in seeds:
         goals = compute_goals(fetch, args.mbm, "gripper_link", seed, 1, urdf_scenes=True,
-                              problems=args.problems.split(",") if args.problems else None)
+                              problems=args.problems.split(",") if args.problems else None, draw=args.draw)
         for q in goals["queries"]:
             q["sample"] = f"{q['sample']}-s{seed}"
         if merged is None:

@@ -155,14 +155,20 @@ def load_scene(scene_yaml):
     return prims
 
 
-def load_urdf_scene(urdf, mbm_dir):
+def load_urdf_scene(urdf, mbm_dir, rng=None):
     """A URDF scene (kitchen, table_bars) as scene objects: one mesh per link collision, named
-    after its link, posed at the URDF's zero joint positions (world frame; meshes unscaled)."""
+    after its link, posed at the URDF's zero joint positions (world frame; meshes unscaled), or,
+    with `rng`, at joint positions drawn uniformly within their limits, as MotionBenchMaker's
+    SceneSampler does for a URDF scene (`setToRandomPositions` before it dumps the scene: the
+    kitchen's doors open, table_bars's bars slide)."""
     import xml.etree.ElementTree as ET
 
     model = pin.buildModelFromUrdf(urdf)
     data = model.createData()
-    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    q = pin.neutral(model)
+    if rng is not None and model.nq > 0:
+        q = rng.uniform(model.lowerPositionLimit, model.upperPositionLimit)
+    pin.framesForwardKinematics(model, data, q)
     prims = []
     for link in ET.parse(urdf).getroot().iter("link"):
         for col in link.iter("collision"):
@@ -195,10 +201,56 @@ def in_base_frame(prims, base_offset):
     return out
 
 
+def mbm_draw(entry, rng):
+    """One draw of a variation-file entry as MotionBenchMaker's code runs it
+    (SceneSampler::Variation::sample): its `type.compare("uniform")` is non-zero for every type
+    but "uniform", so an entry of type "uniform" takes the Gaussian branch, a position with
+    standard deviation `position` per axis; the orientation is uniform in [-bound, bound] per
+    roll, pitch and yaw, composed X·Y·Z (robowflex TF::sampleOrientationUniform)."""
+    dp = rng.normal(0.0, 1.0, 3) * np.array(entry["position"], float)
+    r = rng.uniform(-1, 1, 3) * np.array(entry["orientation"], float)
+    R = pin.utils.rotate("x", r[0]) @ pin.utils.rotate("y", r[1]) @ pin.utils.rotate("z", r[2])
+    return pin.SE3(R, dp)
+
+
+def vary_scene_mbm(prims, variation_yaml, rng, urdf_scene):
+    """The scene varied as MotionBenchMaker's SceneSampler::sample does: the "World" entry moves
+    every object in the world frame (T·M); each object's own entry moves it in its own frame
+    (M·T, robowflex moveObjectLocal), applied here to each of its primitives; a URDF scene's
+    objects get only the World entry (its joints are drawn instead: load_urdf_scene)."""
+    with open(variation_yaml) as f:
+        entries = yaml.safe_load(f) or []
+    out = [dict(p) for p in prims]
+
+    def move(p, T, local):
+        M = pose_to_se3(p["position"], p["orientation"])
+        M = M * T if local else T * M
+        p["position"] = M.translation.tolist()
+        p["orientation"] = pin.Quaternion(M.rotation).coeffs().tolist()  # x, y, z, w
+
+    world = [e for e in entries if "World" in e["names"]]
+    if world:
+        T = mbm_draw(world[0], rng)
+        for p in out:
+            move(p, T, local=False)
+    if urdf_scene:
+        return out
+    for e in entries:
+        if "World" in e["names"]:
+            continue
+        for name in e["names"]:
+            T = mbm_draw(e, rng)
+            for p in out:
+                if p["id"] == name:
+                    move(p, T, local=True)
+    return out
+
+
 def vary_scene(prims, variation_yaml, rng):
     """The objects' own variations of the variation file: each named object moved by a uniform
     draw in [-bound, bound] per position axis and per roll/pitch/yaw angle (world axes, about its
-    own origin). The "World" entries are not applied: the scene stays where the problem puts it."""
+    own origin). The "World" entries are not applied: the scene stays where the problem puts it.
+    (`vary_scene_mbm` draws as MotionBenchMaker's code does.)"""
     with open(variation_yaml) as f:
         entries = yaml.safe_load(f) or []
     out = [dict(p) for p in prims]
@@ -301,7 +353,7 @@ def load_problems(mbm_dir):
     return out
 
 
-def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20, urdf_scenes=False, problems=None):
+def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20, urdf_scenes=False, problems=None, draw="uniform"):
     goals = {"note": "", "samples": samples, "ee_link": ee_link, "group": GROUP, "default_state": DEFAULT_STATE, "queries": []}
     rng = np.random.default_rng(seed)
     for name, path, doc in load_problems(mbm_dir):
@@ -316,7 +368,8 @@ def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20, urdf_scenes=
                 and not urdf_scenes:
             print(f"# {name}: base_offset not identity, skipped", file=sys.stderr)
             continue
-        nominal = load_scene(scene) if scene.endswith(".yaml") else load_urdf_scene(scene, mbm_dir)
+        urdf_scene = not scene.endswith(".yaml")
+        nominal = load_urdf_scene(scene, mbm_dir) if urdf_scene else load_scene(scene)
         nominal = in_base_frame(nominal, bo or {})
         with open(pkg_path(doc["queries"], mbm_dir)) as f:
             qdoc = yaml.safe_load(f)
@@ -326,7 +379,12 @@ def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20, urdf_scenes=
                 for sample in range(samples):
                     found = None
                     for attempt in range(tries):
-                        prims = vary_scene(nominal, variation, rng)
+                        if draw == "mbm":
+                            drawn = in_base_frame(load_urdf_scene(scene, mbm_dir, rng), bo or {}) \
+                                if urdf_scene else nominal
+                            prims = vary_scene_mbm(drawn, variation, rng, urdf_scene)
+                        else:
+                            prims = vary_scene(nominal, variation, rng)
                         geom, objects = scene_geometry(fetch, prims)
                         checker = Checker(fetch, geom)
                         start = {"kind": "default", "state": {n: DEFAULT_STATE[n] for n in GROUP}}
@@ -363,9 +421,16 @@ def compute_goals(fetch, mbm_dir, ee_link, seed, samples, tries=20, urdf_scenes=
                           f"{'goal found (scene draw %d)' % found[4] if found else 'NO goal in %d scene draws' % tries}",
                           file=sys.stderr, flush=True)
     goals["note"] = (
-        "Queries of the MotionBenchMaker Fetch problems with primitive scenes (the URDF scenes kitchen and "
-        "table_bars are not included), `samples` queries per goal query: each scene drawn from the problem's variation "
-        "file (the objects' own variations, uniform in [-bound, bound]; the World variation not applied), its "
+        ("Queries of the MotionBenchMaker Fetch problems (the URDF scenes kitchen and table_bars as one mesh "
+         "object per link), " if urdf_scenes else
+         "Queries of the MotionBenchMaker Fetch problems with primitive scenes (the URDF scenes kitchen and "
+         "table_bars are not included), ") +
+        "`samples` queries per goal query: each scene drawn from the problem's variation "
+        + ("file (the objects' own variations, uniform in [-bound, bound]; the World variation not applied), its "
+           if draw != "mbm" else
+           "file as MotionBenchMaker's code draws (positions Gaussian with the bound as standard deviation, angles "
+           "uniform; the World variation in the world frame, each object's own in its frame; a URDF scene's joints "
+           "uniform within their limits and only the World variation), its ") +
         "objects listed in scene_objects (poses in base_link, quaternions [x, y, z, w]). Goal (and start, for "
         "start_queries) states of the arm_with_torso group: the query's pose of ee_link (object pose x offset) "
         f"solved by damped least squares (Pinocchio {pin.__version__}) from seeded random restarts (numpy "
