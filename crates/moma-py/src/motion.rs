@@ -9,7 +9,7 @@ use moma::collision::Scene;
 use moma::ik::tasks::target_from_slice;
 use moma::motion::{
     GoalPose, JointGroup, MotionGoal, MotionOptions, MotionProblem, plan_motion,
-    surface_links_for_start,
+    surface_links_for_states,
 };
 use moma::multibody::RootJoint;
 use numpy::{PyArray1, PyArray2};
@@ -185,8 +185,11 @@ pub(crate) fn plan_motion_py<'py>(
     let (r, swapped) = py
         .detach(|| -> moma::Result<_> {
             moma::error::ensure_len("start", m.nq, start.len())?;
+            let states: Vec<&[f64]> = std::iter::once(start.as_slice())
+                .chain(goal.state())
+                .collect();
             let (geometry, swapped) =
-                surface_links_for_start(m, gm, scene, &group, &start, options.margin, source)?;
+                surface_links_for_states(m, gm, scene, &group, &states, options.margin, source)?;
             let problem = MotionProblem {
                 model: m,
                 geometry: &geometry,

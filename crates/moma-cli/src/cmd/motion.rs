@@ -12,7 +12,7 @@ use moma::collision::{GeometryModel, GeometryOptions, Scene, SceneOptions, read_
 use moma::ik::tasks::target_from_slice;
 use moma::motion::{
     GoalPose, JointGroup, MeshSource, MotionGoal, MotionOptions, MotionProblem, MotionResult,
-    plan_motion, surface_links_for_start,
+    plan_motion, surface_links_for_states,
 };
 use moma::multibody::{FrameKind, Model, RootJoint};
 use serde::Serialize;
@@ -142,8 +142,8 @@ impl Robot {
         })
     }
 
-    /// Plans one query: swaps concave links in contact at the start for their mesh
-    /// surfaces, then plans. Returns the result and the links swapped.
+    /// Plans one query: swaps concave links in contact at the start (or at a goal state)
+    /// for their mesh surfaces, then plans. Returns the result and the links swapped.
     pub fn plan(
         &self,
         scene: &Scene,
@@ -153,12 +153,13 @@ impl Robot {
         options: &MotionOptions,
     ) -> Result<(MotionResult, Vec<String>)> {
         moma::error::ensure_len("start", self.model.nq, start.len())?;
-        let (geometry, swapped) = surface_links_for_start(
+        let states: Vec<&[f64]> = std::iter::once(start).chain(goal.state()).collect();
+        let (geometry, swapped) = surface_links_for_states(
             &self.model,
             &self.geometry,
             scene,
             group,
-            start,
+            &states,
             options.margin,
             &self.source,
         )?;

@@ -43,7 +43,7 @@ use crate::motion::grasp_query::read_grasp_query;
 use crate::motion::placement::{
     Payload, Placement, PlacementOptions, PlacementProblem, place_base,
 };
-use crate::motion::{GoalPose, JointGroup, MeshSource, surface_links_for_start};
+use crate::motion::{GoalPose, JointGroup, MeshSource, surface_links_for_states};
 use crate::multibody::{Data, FrameIndex, FrameKind, JointType};
 use crate::spatial::{Inertia, SE3};
 use crate::stability::SupportPolygon;
@@ -196,7 +196,7 @@ fn field_err(path: &Path, field: &str, msg: impl std::fmt::Display) -> Error {
 /// Loads `[task]`: the scene on the map, the grasp, the geometry, the group and the
 /// payload robot (module docs). `transport` is the transport posture (one angle per arm
 /// dof): links whose convex hulls touch there are swapped for their mesh surfaces
-/// ([`crate::motion::surface_links_for_start`], as `moma motion` does at its start), so
+/// ([`crate::motion::surface_links_for_states`], as `moma motion` does at its start), so
 /// the posture the arm leaves from and returns to is clear. The robot's geometry carrying
 /// the object is built once, checked at the transport posture, and `footprint` (the
 /// mission's) grown by the object's outline there for the drive on.
@@ -337,12 +337,12 @@ pub fn load_task(
     .map_err(|e| field_err(path, "robot.end_effector", e))?;
     let posture = super::plant::start_configuration(robot, [0.0; 3], transport);
     let hull_geometry = geometry;
-    let (geometry, _) = surface_links_for_start(
+    let (geometry, _) = surface_links_for_states(
         model,
         &hull_geometry,
         &Scene::default(),
         &group,
-        &posture,
+        &[&posture],
         ARM_MARGIN,
         &MeshSource {
             urdf: urdf.to_path_buf(),

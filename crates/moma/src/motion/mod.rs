@@ -28,4 +28,4 @@ pub use plan::{
     MotionGoal, MotionOptions, MotionProblem, MotionResult, MotionTrajectory, NotSolved,
     PhaseChecks, PhaseTimes, plan_motion,
 };
-pub use surface::{MeshSource, surface_links_for_start, with_mesh_surface};
+pub use surface::{MeshSource, PATCH_TRIANGLES, surface_links_for_states, with_mesh_surface};

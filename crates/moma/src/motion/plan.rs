@@ -30,6 +30,17 @@ pub enum MotionGoal {
     Pose(GoalPose),
 }
 
+impl MotionGoal {
+    /// The goal configuration when the goal is a state.
+    #[must_use]
+    pub fn state(&self) -> Option<&[f64]> {
+        match self {
+            MotionGoal::State(q) => Some(q),
+            MotionGoal::Pose(_) => None,
+        }
+    }
+}
+
 /// The options of [`plan_motion`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct MotionOptions {

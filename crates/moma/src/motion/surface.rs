@@ -6,8 +6,9 @@
 //! meeting first, so along a motion checked continuously ([`super::clearance`]) from a
 //! state that is free of contact, positive surface distances mean no contact. The one
 //! thing the surface cannot tell is whether the start itself has one body wholly inside
-//! another; [`surface_links_for_start`] only swaps a link when its hull is in contact at
-//! the start, and the caller states that the start is free (the planner's input).
+//! another; [`surface_links_for_states`] only swaps a link when its hull is in contact at
+//! the start (or at a goal state, reached by a motion checked from the start), and the
+//! caller states that the start is free (the planner's input).
 
 use super::clearance::ClearanceChecker;
 use super::group::JointGroup;
@@ -29,7 +30,8 @@ pub struct MeshSource {
     pub package_dirs: Vec<PathBuf>,
 }
 
-/// The link's mesh objects replaced by their triangles (primitives kept).
+/// The link's mesh objects replaced by their triangles in patches of at most `patch`
+/// neighbouring triangles, each patch the convex hull of its triangles (primitives kept).
 ///
 /// # Errors
 /// [`Error::InvalidInput`] naming the link when it has no geometry; the URDF's and the
@@ -39,6 +41,7 @@ pub fn with_mesh_surface(
     gm: &GeometryModel,
     source: &MeshSource,
     link: &str,
+    patch: usize,
 ) -> Result<GeometryModel> {
     let Some(li) = gm.link_index(link) else {
         return Err(Error::invalid(
@@ -83,7 +86,7 @@ pub fn with_mesh_surface(
         let placement: SE3 = frame.placement * g.origin;
         let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
         let mut leaves = Vec::new();
-        split(&mesh, &mut order, &mut leaves);
+        split(&mesh, &mut order, patch.max(1), &mut leaves);
         for leaf in leaves {
             let mut v: Vec<Vector3<f64>> = leaf
                 .iter()
@@ -179,66 +182,95 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
     Ok(out)
 }
 
-/// While the start state's closest pair is two links within `margin` and one of them has
-/// a mesh hull, swaps that link's hull for its mesh's triangles (of the pair's two links,
-/// the one whose hull volume exceeds its mesh volume the most: the more concave one) and looks
-/// again. Returns the geometry and the links swapped (in order).
+/// For each of `states` in turn (the start first, then a goal state): while the state's
+/// closest pair is two links within `margin`, swaps one of them for its mesh surface and
+/// looks again. A link not yet swapped goes first (of the pair's two, the one whose hull
+/// volume exceeds its mesh volume the most: the more concave one), in patches of
+/// [`PATCH_TRIANGLES`]; when both are swapped (or the other has no mesh), the one with the
+/// larger patches is swapped again with patches half as large, down to single triangles,
+/// since a patch's hull still fills the hollow between its triangles. Returns the geometry
+/// and the links swapped (in order of their first swap).
+///
+/// A goal state's swaps are as sound as the start's: the planner reaches the goal along a
+/// motion checked continuously from the start, so the surfaces would meet before one body
+/// could end up inside the other.
 ///
 /// # Errors
 /// Read errors of the URDF and mesh files; the checker's errors.
-pub fn surface_links_for_start(
+pub fn surface_links_for_states(
     model: &Model,
     gm: &GeometryModel,
     scene: &Scene,
     group: &JointGroup,
-    start: &[f64],
+    states: &[&[f64]],
     margin: f64,
     source: &MeshSource,
 ) -> Result<(GeometryModel, Vec<String>)> {
     let mut current = gm.clone();
-    let mut swapped: Vec<String> = Vec::new();
+    // The swapped links and their patch sizes, in order of their first swap.
+    let mut swapped: Vec<(String, usize)> = Vec::new();
     let weights = vec![1.0; group.dim()];
     let mut x = vec![0.0; group.dim()];
-    group.extract(start, &mut x);
-    for _ in 0..gm.links.len() {
-        let closest = {
-            let mut checker =
-                ClearanceChecker::new(model, &current, scene, group, start, margin, &weights)?;
-            checker.distance_report(&x)
-        };
-        // Only link–link contacts: a scene object inside a link's surface would not be seen.
-        let Some(c) = closest.filter(|c| c.distance <= margin && !c.scene_object) else {
-            break;
-        };
-        let candidates = [c.link.clone(), c.other.clone()];
-        let mut pick: Option<(String, f64)> = None;
-        for name in candidates.iter().filter(|name| !swapped.contains(name)) {
-            let Some(li) = current.link_index(name) else {
-                continue;
+    // Each round swaps a new link or halves a patch size: bounded by this many rounds.
+    let rounds = gm.links.len() * (1 + PATCH_TRIANGLES.ilog2() as usize);
+    for state in states {
+        group.extract(state, &mut x);
+        for _ in 0..rounds {
+            let closest = {
+                let mut checker =
+                    ClearanceChecker::new(model, &current, scene, group, state, margin, &weights)?;
+                checker.distance_report(&x)
             };
-            if let Some(r) = concavity(&current, li, source)?
-                && pick.as_ref().is_none_or(|p| r > p.1)
+            // Only link–link contacts: a scene object inside a link's surface would not be
+            // seen.
+            let Some(c) = closest.filter(|c| c.distance <= margin && !c.scene_object) else {
+                break;
+            };
+            let candidates = [c.link, c.other];
+            let mut pick: Option<(String, f64)> = None;
+            for name in candidates
+                .iter()
+                .filter(|name| swapped.iter().all(|(s, _)| s != *name))
             {
-                pick = Some((name.clone(), r));
+                let Some(li) = current.link_index(name) else {
+                    continue;
+                };
+                if let Some(r) = concavity(&current, li, source)?
+                    && pick.as_ref().is_none_or(|p| r > p.1)
+                {
+                    pick = Some((name.clone(), r));
+                }
+            }
+            if let Some((name, _)) = pick {
+                current = with_mesh_surface(model, &current, source, &name, PATCH_TRIANGLES)?;
+                swapped.push((name, PATCH_TRIANGLES));
+                continue;
+            }
+            // Both swapped: the larger patches are halved, every swap redone from `gm`.
+            let Some(k) = (0..swapped.len())
+                .filter(|&k| candidates.contains(&swapped[k].0) && swapped[k].1 > 1)
+                .max_by_key(|&k| swapped[k].1)
+            else {
+                break;
+            };
+            swapped[k].1 /= 2;
+            current = gm.clone();
+            for (name, patch) in &swapped {
+                current = with_mesh_surface(model, &current, source, name, *patch)?;
             }
         }
-        let Some((name, _)) = pick else {
-            break;
-        };
-        current = with_mesh_surface(model, &current, source, &name)?;
-        swapped.push(name);
     }
-    Ok((current, swapped))
+    Ok((current, swapped.into_iter().map(|(name, _)| name).collect()))
 }
 
-/// Triangles per surface patch.
+/// Triangles per surface patch when a link is first swapped for its surface.
 pub const PATCH_TRIANGLES: usize = 8;
 
 /// Splits the triangles `order` at the median centroid along the longest axis of their
-/// centroids' box until at most [`PATCH_TRIANGLES`] remain: neighbouring triangles end up
-/// in one patch.
-fn split(mesh: &TriangleMesh, order: &mut [usize], leaves: &mut Vec<Vec<usize>>) {
-    if order.len() <= PATCH_TRIANGLES {
+/// centroids' box until at most `patch` remain: neighbouring triangles end up in one
+/// patch.
+fn split(mesh: &TriangleMesh, order: &mut [usize], patch: usize, leaves: &mut Vec<Vec<usize>>) {
+    if order.len() <= patch {
         if !order.is_empty() {
             leaves.push(order.to_vec());
         }
@@ -263,6 +295,6 @@ fn split(mesh: &TriangleMesh, order: &mut [usize], leaves: &mut Vec<Vec<usize>>)
     order.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
     let mid = order.len() / 2;
     let (left, right) = order.split_at_mut(mid);
-    split(mesh, left, leaves);
-    split(mesh, right, leaves);
+    split(mesh, left, patch, leaves);
+    split(mesh, right, patch, leaves);
 }

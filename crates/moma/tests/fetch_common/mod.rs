@@ -135,10 +135,14 @@ impl FetchQueries {
             urdf: fetch_urdf(),
             package_dirs: vec![fetch_dir()],
         };
-        let (geometry, _) =
-            moma::motion::surface_links_for_start(model, gm, &scene, group, &start, 2e-3, &source)
-                .unwrap();
         let goal = moma::motion::MotionGoal::State(numbers(&query["goal_state"]));
+        let states: Vec<&[f64]> = std::iter::once(start.as_slice())
+            .chain(goal.state())
+            .collect();
+        let (geometry, _) = moma::motion::surface_links_for_states(
+            model, gm, &scene, group, &states, 2e-3, &source,
+        )
+        .unwrap();
         PreparedQuery {
             scene,
             start,
