@@ -1,5 +1,5 @@
 //! Arm motion planning among obstacles: `moma.plan_motion`, the library's `plan_motion`
-//! as `moma motion` runs it (concave links in contact at the start swapped for their
+//! as `moma motion` runs it (concave links in contact at the start or goal state swapped for their
 //! mesh surfaces first), returning the command's output fields.
 
 use crate::collision::{PyGeometryModel, PyScene};
