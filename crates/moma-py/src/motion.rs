@@ -13,6 +13,7 @@ use moma::motion::{
 };
 use moma::multibody::RootJoint;
 use numpy::{PyArray1, PyArray2};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::time::Duration;
@@ -72,13 +73,18 @@ fn rows<'py>(py: Python<'py>, r: &[Vec<f64>], cols: usize) -> PyResult<Bound<'py
 /// over the group). `time_limit` (s) bounds IK, search, shortcutting and timing
 /// together; `seed` fixes every random choice (the same seed gives the same path);
 /// `margin` (m) is the clearance every checked state keeps; `max_acceleration` is one
-/// limit for every group joint or one per joint (rad/s², m/s²). Needs a model with a
-/// fixed root. The GIL is released while planning.
+/// limit for every group joint or one per joint (rad/s², m/s²); `mesh` is how the
+/// scene's meshes enter the distances, as `moma motion --mesh`: `"convex"` (each as its
+/// convex hull, the default) or `"exact"` (each as its triangles: a concave mesh, such
+/// as a shelf unit, then has no inside). Needs a model with a fixed root. The GIL is
+/// released while planning.
 ///
 /// Returns a dict with the fields of `moma motion`'s JSON: `solved`, `reason` (None when
 /// solved, else why not: time limit, goal pose unreachable, goal pose only reachable in
 /// collision), `planning_time_s`, `path` (n, nq), `trajectory` (`t` (m,), `q` (m, nq)),
-/// `duration_s`, `min_distance`, `closest_pair`, `checks`, `iterations`, `ik_attempts`,
+/// `duration_s`, `min_distance`, `closest_pair`, `min_distance_states` (the states the
+/// minimum covers: the path's waypoints then the trajectory's samples, a prefix when the
+/// time limit left no room for all), `checks`, `iterations`, `ik_attempts`,
 /// `ik_solutions`, `goal_state` ((nq,) or None), `group`, `seed`, `margin`,
 /// `velocity_limits`, `acceleration_limits`, `mesh_surface_links`. A query not solved
 /// returns `solved=False` with the reason; it does not raise.
@@ -86,12 +92,13 @@ fn rows<'py>(py: Python<'py>, r: &[Vec<f64>], cols: usize) -> PyResult<Bound<'py
 /// Raises MomaError for bad input: an unknown group joint (listing the model's joints),
 /// a start or goal of the wrong length, outside the joint limits or in contact (naming
 /// the link and the scene object or other link), both or neither of `goal_state` and
-/// `goal_pose`, an unknown frame, non-positive tolerances, time limit or accelerations.
+/// `goal_pose`, an unknown frame, non-positive tolerances, time limit or accelerations;
+/// ValueError for a `mesh` other than `"convex"` or `"exact"`.
 #[pyfunction]
 #[pyo3(name = "plan_motion", signature = (
     model, geom, scene, group, start, goal_state = None, goal_pose = None, frame = None,
     position_tolerance = 0.01, orientation_tolerance = 0.01, time_limit = 1.0, seed = 0,
-    margin = 0.002, max_acceleration = None
+    margin = 0.002, max_acceleration = None, mesh = "convex"
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_motion_py<'py>(
@@ -110,7 +117,17 @@ pub(crate) fn plan_motion_py<'py>(
     seed: u64,
     margin: f64,
     max_acceleration: Option<Bound<'py, PyAny>>,
+    mesh: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let exact = match mesh {
+        "convex" => false,
+        "exact" => true,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "plan_motion: mesh: '{other}' is not 'convex' or 'exact'"
+            )));
+        }
+    };
     let m = &model.inner;
     if m.root != RootJoint::Fixed {
         return Err(invalid(
@@ -180,6 +197,13 @@ pub(crate) fn plan_motion_py<'py>(
 
     let empty = Scene::default();
     let scene = scene.as_ref().map_or(&empty, |s| &s.inner);
+    let triangles;
+    let scene = if exact {
+        triangles = scene.with_mesh_triangles().map_err(lib)?;
+        &triangles
+    } else {
+        scene
+    };
     let gm = &geom.inner;
     let source = &geom.source;
     let (r, swapped) = py
@@ -216,6 +240,7 @@ pub(crate) fn plan_motion_py<'py>(
     out.set_item("trajectory", traj)?;
     out.set_item("duration_s", r.trajectory.as_ref().map(|t| t.duration))?;
     out.set_item("min_distance", r.closest.as_ref().map(|c| c.distance))?;
+    out.set_item("min_distance_states", r.closest_states)?;
     out.set_item(
         "closest_pair",
         r.closest

@@ -1,5 +1,6 @@
 """Arm motion planning from Python: a shipped MotionBenchMaker table query solved by
-`moma.plan_motion`, the same path as `moma motion` with the same seed, and bad input."""
+`moma.plan_motion`, the same path as `moma motion` with the same seed, the scene's meshes
+as hulls or as triangles (`mesh`), and bad input."""
 
 import json
 
@@ -133,3 +134,37 @@ def test_bad_input_raises(problem):
     inside[2] = float("nan")
     with pytest.raises(moma.MomaError, match="start"):
         moma.plan_motion(model, geom, scene, group, inside, goal_state=goal)
+
+
+def test_mesh_exact_plans_between_plates_whose_hull_holds_the_arm(problem):
+    # concave_plates: table_pick-Front-Can1-0's scene plus two plates 1.4 m apart (one
+    # mesh); their convex hull holds the tucked arm, their triangles are 0.441 m from it
+    # (coal, the scene file's header). As `moma motion --mesh`.
+    model, geom, _, _, group, q = problem
+    plates = moma.Scene.from_yaml(
+        DATA / "scenes" / "motion_bench_maker" / "concave_plates" / "scene.yaml",
+        world_frames=["world", "base_link"],
+    )
+    with pytest.raises(moma.MomaError, match="scene object 'plates' intersects link"):
+        moma.plan_motion(model, geom, plates, group, q["start"], goal_state=q["goal_state"],
+                         mesh="convex")
+    r = moma.plan_motion(model, geom, plates, group, q["start"], goal_state=q["goal_state"],
+                         time_limit=30.0, seed=SEED, mesh="exact")
+    assert r["solved"] is True, r["reason"]
+    np.testing.assert_array_equal(r["path"][0], q["start"])
+    np.testing.assert_array_equal(r["path"][-1], q["goal_state"])
+    assert r["min_distance"] > 0
+    # Time to spare: the minimum covers every waypoint and every sample.
+    assert r["min_distance_states"] == r["path"].shape[0] + r["trajectory"]["t"].shape[0]
+    # The collision module's exact measure agrees that the samples clear the plates.
+    for k in range(0, len(r["trajectory"]["t"]), 10):
+        d = moma.distances(model, geom, r["trajectory"]["q"][k], scene=plates, mesh="exact")
+        plate = [x for (_, b), x in zip(d["pairs"], d["distance"]) if b == "plates"]
+        assert min(plate) > 0, k
+
+
+def test_mesh_other_than_convex_or_exact_is_a_value_error(problem):
+    model, geom, scene, _, group, q = problem
+    with pytest.raises(ValueError, match="mesh: 'hull' is not 'convex' or 'exact'"):
+        moma.plan_motion(model, geom, scene, group, q["start"], goal_state=q["goal_state"],
+                         mesh="hull")

@@ -295,6 +295,7 @@ struct Output {
     duration_s: Option<f64>,
     min_distance: Option<f64>,
     closest_pair: Option<[String; 2]>,
+    min_distance_states: usize,
     checks: u64,
     iterations: usize,
     ik_attempts: usize,
@@ -363,6 +364,7 @@ pub fn run(args: Args) -> Result<()> {
             .closest
             .as_ref()
             .map(|c| [c.link.clone(), c.other.clone()]),
+        min_distance_states: r.closest_states,
         checks: r.checks,
         iterations: r.iterations,
         ik_attempts: r.ik_attempts,

@@ -11,6 +11,7 @@ use moma::motion::MotionGoal;
 use moma::multibody::RootJoint;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
+use std::time::Instant;
 
 /// Arguments of `moma motion-bench`.
 #[derive(clap::Args)]
@@ -95,6 +96,11 @@ struct Run {
     checks: u64,
     distances: u64,
     min_distance: Option<f64>,
+    /// The states `min_distance` covers (`moma motion`'s `min_distance_states`).
+    min_distance_states: usize,
+    /// Seconds from the call to the plan's return: planning, the report, and the swap of
+    /// links in contact at the start for their mesh surfaces before it.
+    wall_s: f64,
     /// Seconds in setup, IK, search, shortcutting and timing.
     phases_s: [f64; 5],
     /// States checked in setup, IK, search, shortcutting and timing.
@@ -157,7 +163,10 @@ pub fn run(args: Args) -> Result<()> {
         for r in 0..args.runs {
             let seed = args.seed + r;
             let opts = options(group.dim(), args.time_limit, seed, args.margin, "1.0")?;
-            let run = match robot.plan(&scene, &group, &q.start, &goal, &opts) {
+            let began = Instant::now();
+            let planned = robot.plan(&scene, &group, &q.start, &goal, &opts);
+            let wall_s = began.elapsed().as_secs_f64();
+            let run = match planned {
                 Ok((res, _)) => Run {
                     name: q.name.clone(),
                     problem: q.problem.clone(),
@@ -168,6 +177,8 @@ pub fn run(args: Args) -> Result<()> {
                     checks: res.checks,
                     distances: res.distances,
                     min_distance: res.closest.as_ref().map(|c| c.distance),
+                    min_distance_states: res.closest_states,
+                    wall_s,
                     phases_s: [
                         res.phases.setup,
                         res.phases.ik,
@@ -194,6 +205,8 @@ pub fn run(args: Args) -> Result<()> {
                     checks: 0,
                     distances: 0,
                     min_distance: None,
+                    min_distance_states: 0,
+                    wall_s,
                     phases_s: [f64::NAN; 5],
                     phase_checks: [0; 5],
                 },

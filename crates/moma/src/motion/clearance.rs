@@ -59,6 +59,7 @@ use crate::planning::{JointSpace, StateValidity};
 use crate::{Error, Result};
 use nalgebra::{DVector, Matrix3, Vector3};
 use std::collections::VecDeque;
+use std::time::Instant;
 
 /// The most checked states of one segment before it is given up as failed (a segment
 /// grazing an obstacle within the margin needs ever shorter steps).
@@ -208,6 +209,8 @@ pub struct ClearanceChecker<'a> {
     /// The current segment (0: none) and the fraction of it reached.
     epoch: u64,
     t_now: f64,
+    /// States are refused unchecked from this instant on ([`Self::set_deadline`]).
+    deadline: Option<Instant>,
     /// States evaluated since construction.
     pub states_checked: u64,
     /// Exact pair distances computed since construction (the pairs no bound ruled out).
@@ -500,6 +503,7 @@ impl<'a> ClearanceChecker<'a> {
             cache_epoch: vec![0; n_entries],
             epoch: 0,
             t_now: 0.0,
+            deadline: None,
             states_checked: 0,
             distances_computed: 0,
         })
@@ -942,6 +946,9 @@ fn enclosing_ball(balls: &[Ball]) -> Ball {
 
 impl StateValidity for ClearanceChecker<'_> {
     fn is_valid(&mut self, x: &[f64]) -> bool {
+        if self.past_deadline() {
+            return false;
+        }
         self.states_checked += 1;
         self.rate.iter_mut().for_each(|r| *r = 0.0);
         self.epoch += 1;
@@ -1023,6 +1030,9 @@ impl ClearanceChecker<'_> {
         scratch: &mut [f64],
         checks: &mut u64,
     ) -> Option<f64> {
+        if self.past_deadline() {
+            return None;
+        }
         self.t_now = t;
         for (k, x) in scratch.iter_mut().enumerate() {
             *x = a[k] + t * (b[k] - a[k]);
@@ -1031,6 +1041,19 @@ impl ClearanceChecker<'_> {
         self.states_checked += 1;
         self.place(scratch);
         self.allowed_step(need, 0.0)
+    }
+
+    /// From `deadline` on, every state a check would evaluate is refused unchecked (not
+    /// counted in `states_checked`): a state check fails, and so does a segment check at
+    /// its next state. Refusing is always sound, and a caller bounded by a time limit
+    /// then overruns it by at most the one state being evaluated as it passes. `None`:
+    /// no deadline (the default). [`Self::distance_report`] ignores it.
+    pub fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
+    }
+
+    fn past_deadline(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 }
 

@@ -1,7 +1,12 @@
 //! Collision-free motion of a planning group from a start state to a goal state or a goal
 //! pose: goal states by IK ([`super::goal`]), RRT-Connect with the conservative segment
 //! check ([`super::clearance`]), shortcutting, then time-optimal timing with blends that
-//! are checked too. See `docs/motion.md`.
+//! are checked too, and a report of the closest pair. The time limit holds in every
+//! phase: from the deadline on the checker refuses every state unchecked
+//! ([`ClearanceChecker::set_deadline`]), so what only improves a checked path (shortcuts,
+//! dropped waypoints, blends) is skipped and the trajectory stops at those waypoints, and
+//! the report measures states only while time is left; a run returns within the limit
+//! plus the one state in hand as it passes. See `docs/motion.md`.
 
 use super::clearance::{ClearanceChecker, ClosestPair};
 use super::goal::{GoalPose, ik_goals};
@@ -44,7 +49,8 @@ impl MotionGoal {
 /// The options of [`plan_motion`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct MotionOptions {
-    /// The longest planning time (IK, search, shortcutting and timing together).
+    /// The longest planning time (IK, search, shortcutting, timing and the report
+    /// together; module docs).
     pub time_limit: Duration,
     /// The seed of every random choice (IK seeds, samples, shortcuts).
     pub seed: u64,
@@ -206,9 +212,13 @@ pub struct MotionResult {
     pub path: Vec<Vec<f64>>,
     /// The timed trajectory, when solved.
     pub trajectory: Option<MotionTrajectory>,
-    /// The closest pair over the path's waypoints and the trajectory's samples (exact
-    /// distances), when solved.
+    /// The closest pair (exact distances) over the first [`Self::closest_states`] of the
+    /// path's waypoints followed by the trajectory's samples, when solved.
     pub closest: Option<ClosestPair>,
+    /// The states `closest` covers, counted along the path's waypoints and then the
+    /// trajectory's samples: all `path.len() + t.len()` of them when the time limit left
+    /// room, else a prefix (the start always: it is measured before planning).
+    pub closest_states: usize,
     /// States checked for collision while planning.
     pub checks: u64,
     /// Exact pair distances computed while planning (the pairs no bound ruled out).
@@ -283,13 +293,14 @@ fn closest_message(c: &ClosestPair, what: &str) -> String {
     )
 }
 
-/// Checks a full state: length, finite, group in the box, clear of everything.
+/// Checks a full state: length, finite, group in the box, clear of everything; returns
+/// the group's state and its closest pair (`None` when nothing is checked).
 fn check_state(
     problem: &MotionProblem<'_>,
     checker: &mut ClearanceChecker<'_>,
     field: &str,
     q: &[f64],
-) -> Result<(Vec<f64>, f64)> {
+) -> Result<(Vec<f64>, Option<ClosestPair>)> {
     crate::error::ensure_len(field, problem.model.nq, q.len())?;
     crate::error::ensure_finite(field, q)?;
     problem.group.check_in_box(field, q)?;
@@ -304,7 +315,12 @@ fn check_state(
             closest_message(c, &format!("{field} state")),
         ));
     }
-    Ok((x, clearance.map_or(f64::INFINITY, |c| c.distance)))
+    Ok((x, clearance))
+}
+
+/// The distance of a closest pair (infinite for none).
+fn distance_of(c: Option<&ClosestPair>) -> f64 {
+    c.map_or(f64::INFINITY, |c| c.distance)
 }
 
 fn check_options(o: &MotionOptions, dim: usize) -> Result<()> {
@@ -384,9 +400,11 @@ pub fn plan_motion(
         weights,
         options.resolution,
     )?;
-    let (x_start, d_start) = check_state(problem, &mut checker, "start", start)?;
+    let (x_start, start_pair) = check_state(problem, &mut checker, "start", start)?;
     // A start (or goal state) closer than the margin shrinks it to half its clearance.
-    checker.set_margin(options.margin.min(0.5 * d_start));
+    checker.set_margin(options.margin.min(0.5 * distance_of(start_pair.as_ref())));
+    // No state is evaluated past the time limit (the one in hand as it passes aside).
+    checker.set_deadline(Some(deadline));
     let mut result = MotionResult {
         not_solved: None,
         planning_time: Duration::ZERO,
@@ -394,6 +412,7 @@ pub fn plan_motion(
         path: Vec::new(),
         trajectory: None,
         closest: None,
+        closest_states: 0,
         checks: 0,
         distances: 0,
         iterations: 0,
@@ -421,8 +440,8 @@ pub fn plan_motion(
     result.phase_checks.setup = count(&checker);
     let goals: Vec<Vec<f64>> = match goal {
         MotionGoal::State(q) => {
-            let (x, d_goal) = check_state(problem, &mut checker, "goal", q)?;
-            checker.set_margin(checker.margin().min(0.5 * d_goal));
+            let (x, goal_pair) = check_state(problem, &mut checker, "goal", q)?;
+            checker.set_margin(checker.margin().min(0.5 * distance_of(goal_pair.as_ref())));
             if let Some(j) =
                 (0..problem.model.nq).find(|&i| !group.q_index.contains(&i) && q[i] != start[i])
             {
@@ -535,11 +554,52 @@ pub fn plan_motion(
         result.planning_time = began.elapsed();
         return Ok(result);
     };
-    // Shortcutting in rounds of `SHORTCUT_ROUND` attempts, each seeded from the seed and
-    // its number, until the attempts are spent or the time limit passes; then one pass
-    // drops the redundant waypoints.
+    let path = shorten(&space, &mut checker, path, options, deadline)?;
+    result.phases.shortcut = lap();
+    result.phase_checks.shortcut = count(&checker);
+    let timed = time_path(&space, &mut checker, group, &path, options)?;
+    result.phases.timing = lap();
+    result.phase_checks.timing = count(&checker);
+    result.planning_time = began.elapsed();
+    result.checks = checker.states_checked;
+    result.distances = checker.distances_computed;
+    result.margin = checker.margin();
+    let full = |x: &[f64]| -> Vec<f64> {
+        let mut q = start.to_vec();
+        group.embed(x, &mut q);
+        q
+    };
+    result.goal_state = Some(full(&goals[k]));
+    let waypoints = path.to_vecs();
+    result.path = waypoints.iter().map(|x| full(x)).collect();
+    // Report: the start's closest pair (measured in the setup), then the waypoints after
+    // it and the samples, while the time limit allows.
+    let later = waypoints[1..].iter().chain(&timed.q).map(Vec::as_slice);
+    let (closest, measured) = closest_until(&mut checker, start_pair, later, deadline);
+    result.closest_states = 1 + measured;
+    result.closest = closest;
+    result.trajectory = Some(MotionTrajectory {
+        t: timed.t,
+        q: timed.q.iter().map(|x| full(x)).collect(),
+        qd: timed.qd,
+        duration: timed.duration,
+    });
+    Ok(result)
+}
+
+/// Shortens the search's `path` (its segments are checked): shortcut rounds of
+/// [`SHORTCUT_ROUND`] attempts, each seeded from the seed and its number, until the
+/// attempts are spent or `deadline` passes, then one pass dropping the redundant
+/// waypoints if time remains. Both only improve a valid path: a check refused at the
+/// deadline ([`ClearanceChecker::set_deadline`]) keeps the path as it is.
+fn shorten(
+    space: &JointSpace,
+    checker: &mut ClearanceChecker<'_>,
+    mut path: JointPath,
+    options: &MotionOptions,
+    deadline: Instant,
+) -> Result<JointPath> {
     let mut extra = 0u64;
-    let mut path = path;
     let mut round = 0u64;
     let mut left = options.shortcut_attempts;
     let mut shortcuts = ShortcutOptions {
@@ -554,21 +614,34 @@ pub fn plan_motion(
     while left > 0 && Instant::now() < deadline {
         shortcuts.attempts = left.min(SHORTCUT_ROUND);
         shortcuts.seed = options.seed.wrapping_add(round);
-        path = shortcut(&space, &mut checker, &path, &shortcuts, &mut extra)?;
+        path = shortcut(space, checker, &path, &shortcuts, &mut extra)?;
         left -= shortcuts.attempts;
         round += 1;
     }
-    shortcuts.attempts = 0;
-    shortcuts.drop_redundant = true;
-    path = shortcut(&space, &mut checker, &path, &shortcuts, &mut extra)?;
-    result.phases.shortcut = lap();
-    result.phase_checks.shortcut = count(&checker);
-    // The blends are checked state by state; each state vouches for half the spacing.
+    if Instant::now() < deadline {
+        shortcuts.attempts = 0;
+        shortcuts.drop_redundant = true;
+        path = shortcut(space, checker, &path, &shortcuts, &mut extra)?;
+    }
+    Ok(path)
+}
+
+/// Times `path` (time-optimal, blends at its waypoints checked state by state, each
+/// state vouching for half the resolution around it). A blend whose states the checker
+/// refuses, past its deadline too, is halved and then dropped: the trajectory stops at
+/// that waypoint, on the path's own checked segments.
+fn time_path(
+    space: &JointSpace,
+    checker: &mut ClearanceChecker<'_>,
+    group: &JointGroup,
+    path: &JointPath,
+    options: &MotionOptions,
+) -> Result<crate::planning::JointTrajectory> {
     checker.set_tube(0.5 * options.resolution);
     let timed = time_optimal(
-        &space,
-        &mut checker,
-        &path,
+        space,
+        checker,
+        path,
         &JointLimits {
             velocity: group.velocity.clone(),
             acceleration: options.acceleration.clone(),
@@ -578,36 +651,31 @@ pub fn plan_motion(
             sample_period: options.sample_period,
             ..TimingOptions::default()
         },
-    )?;
+    );
     checker.set_tube(0.0);
-    result.phases.timing = lap();
-    result.phase_checks.timing = count(&checker);
-    result.planning_time = began.elapsed();
-    result.checks = checker.states_checked;
-    result.distances = checker.distances_computed;
-    result.margin = checker.margin();
-    let full = |x: &[f64]| -> Vec<f64> {
-        let mut q = start.to_vec();
-        group.embed(x, &mut q);
-        q
-    };
-    result.goal_state = Some(full(&goals[k]));
-    result.path = path.to_vecs().iter().map(|x| full(x)).collect();
-    // Report: the closest pair over the waypoints and the samples.
-    let mut closest: Option<ClosestPair> = None;
-    for x in path.to_vecs().iter().chain(&timed.q) {
+    timed
+}
+
+/// The closest pair over `first` (already measured) and the `states` measured in turn
+/// while `deadline` has not passed; returns it and how many of `states` it covers.
+fn closest_until<'s>(
+    checker: &mut ClearanceChecker<'_>,
+    first: Option<ClosestPair>,
+    states: impl Iterator<Item = &'s [f64]>,
+    deadline: Instant,
+) -> (Option<ClosestPair>, usize) {
+    let mut closest = first;
+    let mut measured = 0;
+    for x in states {
+        if Instant::now() >= deadline {
+            break;
+        }
+        measured += 1;
         if let Some(c) = checker.distance_report(x)
-            && closest.as_ref().is_none_or(|b| c.distance < b.distance)
+            && c.distance < distance_of(closest.as_ref())
         {
             closest = Some(c);
         }
     }
-    result.closest = closest;
-    result.trajectory = Some(MotionTrajectory {
-        t: timed.t,
-        q: timed.q.iter().map(|x| full(x)).collect(),
-        qd: timed.qd,
-        duration: timed.duration,
-    });
-    Ok(result)
+    (closest, measured)
 }
