@@ -146,7 +146,8 @@ fn run_mission(path: &Path) -> BTreeMap<String, Vec<f64>> {
     if let Some(mpc) = s.get_mut("mpc").and_then(|m| m.as_object_mut()) {
         mpc.remove("solve_time_s");
     }
-    // a pick's figures but its wall-clock planning times
+    // a pick's figures but its wall-clock planning times (and how many states the
+    // planner's report reached within its time)
     if let Some(task) = s.get_mut("task").and_then(|t| t.as_object_mut()) {
         if let Some(p) = task.get_mut("placement").and_then(|p| p.as_object_mut()) {
             p.remove("time_s");
@@ -154,6 +155,7 @@ fn run_mission(path: &Path) -> BTreeMap<String, Vec<f64>> {
         if let Some(plans) = task.get_mut("arm_plans").and_then(|a| a.as_array_mut()) {
             for plan in plans.iter_mut().filter_map(|p| p.as_object_mut()) {
                 plan.remove("planning_time_s");
+                plan.remove("min_distance_states");
             }
         }
     }

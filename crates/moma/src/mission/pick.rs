@@ -319,6 +319,7 @@ impl<'m> Runner<'m> {
             checks: 0,
             duration: None,
             min_distance: None,
+            min_distance_states: 0,
         };
         let out = match plan_motion(&problem, &start, &goal, &options) {
             Err(e) => Err(format!("the {name} motion could not be planned: {e}")),
@@ -327,6 +328,7 @@ impl<'m> Runner<'m> {
                 record.checks = r.checks;
                 record.duration = r.trajectory.as_ref().map(|tr| tr.duration);
                 record.min_distance = r.closest.as_ref().map(|c| c.distance);
+                record.min_distance_states = r.closest_states;
                 match (r.not_solved, r.trajectory) {
                     (None, Some(trajectory)) => Ok(ArmMotion { t0: t, trajectory }),
                     (Some(why), _) => Err(format!("the {name} motion was not solved: {why}")),

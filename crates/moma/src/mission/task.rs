@@ -1194,8 +1194,12 @@ pub struct ArmPlanRecord {
     pub checks: u64,
     /// Duration of the timed trajectory (s).
     pub duration: Option<f64>,
-    /// The planner's smallest distance along the plan (m).
+    /// The planner's smallest distance along the plan (m), over the first
+    /// `min_distance_states` of its states (the start, the waypoints, then the trajectory's
+    /// samples: those measured within the planning time, `MotionResult::closest_states`).
     pub min_distance: Option<f64>,
+    /// How many of the plan's states `min_distance` covers.
+    pub min_distance_states: usize,
 }
 
 /// The payload attached at the grasp.
