@@ -1083,10 +1083,14 @@ fn the_drives_distance_monitor_measures_the_map_boxes() {
         why.starts_with("held object 'Can2' touches map box 'map.boxes[1]' (-"),
         "{why}"
     );
-    // the arm motions' monitor measures the task's scene only
+    // the arm motions' monitor measures the boxes within the robot's reach of the pick
+    // too (both beams, 1.2 m and 2.2 m from the grasp): the same touch
+    let ids: Vec<&str> = task.boxes.iter().map(|o| o.id.as_str()).collect();
+    assert_eq!(ids, ["map.boxes[0]", "map.boxes[1]"]);
     let mut arm = DistanceMonitor::new(task, &m.robot);
     let (d_arm, _) = arm.sample(task, &m.robot, &q, Holding::Carrying);
-    assert!(d_arm > 1.0, "{d_arm}");
+    assert!((d_arm - d_held).abs() < 1e-9, "{d_arm} {d_held}");
+    assert_eq!(arm.touch(task), Some(why));
 }
 
 /// The drive on's base positions (x, y) of a run: the drive samples after the lift.

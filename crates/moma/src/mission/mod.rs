@@ -16,7 +16,7 @@
 //! | plant | [`crate::sim::wheeled_system::WheeledSystem`] (reduced coordinates, C q̇ = 0 by construction), fixed-step RK4 with the torques held over each control period; or, with `simulation.plant = "contact"`, the contact plant ([`crate::contact`]) stepped at its own `dt` under the same held torques, measured through the reduced coordinates (`plant`) |
 //! | obstacles | at time t their cells are blocked in D* Lite (`move_start`, `set_blocked`); if the remaining reference crosses a blocked cell, `compute` re-plans and the new path is smoothed and timed from the robot's current pose |
 //! | goal | the base settles on the goal pose, then task-space inverse dynamics on the reduced model brings the end effector along a minimum-jerk line to its target while the platform holds still |
-//! | pick (`[task]`) | the base goal is the best placement ([`crate::motion::placement::place_base`]) the planner reaches and, with a `[goal]`, the drive on can leave holding the object; the torso-arm motions to pre-grasp, grasp, lift and back ([`crate::motion::plan_motion`], the last two carrying the object) tracked in joint space by the same computed torque, the platform held; the payload attached to the law's, plant's and monitors' model; the distances to the scene and between links monitored (with the held object after the grasp); the drives' distances to the scene and the map's boxes monitored; then the drive on to `[goal]`, if any, with the footprint that holds the object |
+//! | pick (`[task]`) | the base goal is the best placement ([`crate::motion::placement::place_base`]) the planner reaches and, with a `[goal]`, the drive on can leave holding the object; the torso-arm motions to pre-grasp, grasp, lift and back ([`crate::motion::plan_motion`], the last two carrying the object) tracked in joint space by the same computed torque, the platform held; the payload attached to the law's, plant's and monitors' model; the placement, the arm motions and their distance monitor with the map's boxes near the pick ([`arm_scene`]); the distances to the scene and between links monitored (with the held object after the grasp); the drives' distances to the scene and the map's boxes monitored; then the drive on to `[goal]`, if any, with the footprint that holds the object |
 //! | law `mpc` (`control.law = "mpc"`) | instead of tracking, arriving and reaching: the whole-body MPC of `[control.mpc]` (the schema of `moma simulate`'s `[controller.mpc]`, [`crate::sim::mpc_table`]) run as [`crate::sim::mpc_law::MpcLaw`] on the timed base reference and the end-effector target at once (`whole_body`), one solve per `control.period`, between solves the planned acceleration held (its torques recomputed at each step); done when the end effector has been within its tolerance and the base rests at the goal pose |
 //! | monitors | ZMP margin, Force-Angle and Moment-Height minima ([`crate::stability::evaluate`] on the full multibody state q, q̇, q̈), wheel slip (the axle's lateral multiplier and the wheels' longitudinal forces against μ N, `stability::loads`), torque and speed saturation, tracking error, clearance, energy |
 //!
@@ -57,6 +57,8 @@
 //!   report.
 //! * `plant` builds and checks the contact plant of `simulation.plant = "contact"` at load
 //!   ([`MissionContact`]) and steps it in the loop, with its monitors and events.
+//! * [`arm_scene`] picks the map's boxes a pick's arm can reach and adds them to the
+//!   task's scene for the placement search, the arm planner and the arm monitor.
 //! * [`task`] loads a `[task]` (the scene placed on the map, blocking the cells under the
 //!   outline of the objects the robot cannot pass under; the grasp; the geometry; the payload robot) and holds its distance monitor
 //!   and result records.
@@ -65,6 +67,7 @@
 //! * [`planned`] offers the same planning calls to `moma simulate` as a platform reference.
 
 mod arm_motion;
+pub mod arm_scene;
 mod arrival;
 pub mod footprint;
 pub mod heights;

@@ -252,9 +252,9 @@ impl<'m> Runner<'m> {
     }
 
     /// Plans the arm motion of `stage` from `q` (the measured state, its group joints
-    /// clamped into the joint box) among the task's scene; the lift and the retreat
-    /// carrying the object, among the scene without it (the lift's support allowed to
-    /// touch it); records the plan.
+    /// clamped into the joint box) among the task's scene and the map's boxes near the
+    /// pick ([`Task::boxes`]); the lift and the retreat carrying the object, among the
+    /// scene without it (the lift's support allowed to touch it); records the plan.
     pub(super) fn plan_arm(
         &mut self,
         task: &Task,
@@ -303,6 +303,8 @@ impl<'m> Runner<'m> {
         options.time_limit = std::time::Duration::from_secs_f64(task.planning_time);
         options.seed = task.seed;
         options.margin = ARM_MARGIN;
+        // the map's boxes near the pick after the task's objects
+        let scene = &super::arm_scene::scene_with(scene, &task.boxes);
         let problem = MotionProblem {
             model: &m.robot.model,
             geometry,

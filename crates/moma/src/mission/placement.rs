@@ -42,6 +42,8 @@ pub(super) fn choose_placement(
         payload: None,
         min_scene_distance: None,
         closest_scene_pair: None,
+        min_box_distance: None,
+        closest_box_pair: None,
         min_self_distance: None,
         closest_self_pair: None,
         driving: None,

@@ -528,6 +528,10 @@ impl<'m> Runner<'m> {
                     tr.min_scene_distance = Some(d);
                     tr.closest_scene_pair = Some(pair);
                 }
+                if let Some((d, pair)) = dm.min_box {
+                    tr.min_box_distance = Some(d);
+                    tr.closest_box_pair = Some(pair);
+                }
                 if let Some((d, pair)) = dm.min_self {
                     tr.min_self_distance = Some(d);
                     tr.closest_self_pair = Some(pair);

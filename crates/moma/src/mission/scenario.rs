@@ -8,6 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::arm_scene::{boxes_near_pick, robot_reach};
 use super::footprint::MissionFootprint;
 use super::heights::{
     BoxVerdict, DriveOnMap, block_by_height, block_by_height_holding, place_boxes,
@@ -236,6 +237,9 @@ pub fn from_file_with(
                 gm,
                 &footprint,
             )?;
+            let reach = robot_reach(&robot.model, &task.carried, ee_frame);
+            let g = task.grasp.target.translation.vector;
+            task.boxes = boxes_near_pick(&box_objects, [g.x, g.y], reach);
             place_scene_on_map(
                 &mut task,
                 &file,

@@ -30,6 +30,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::arm_scene::{polygon_distance, scene_with};
 use crate::collision::footprint::hull_2d;
 use crate::collision::gjk::{EpaWorkspace, WarmStart, signed_distance};
 use crate::collision::{
@@ -145,6 +146,11 @@ pub struct Task {
     /// out of the scene check (MoveIt's support surface of a pick) and checked by the lift
     /// rule instead ([`LiftStart`]).
     pub support: Vec<String>,
+    /// The map's boxes (`[[map.boxes]]`, named `map.boxes[k]`, world frame) the robot can
+    /// reach from a placement ([`super::arm_scene::boxes_near_pick`]): the placement
+    /// search, the arm planner and the arm phases' distance monitor measure them after
+    /// the scene's objects. Set by the mission's load (empty from [`load_task`]).
+    pub boxes: Vec<SceneObject>,
     /// The scene as read, in its own frame (for the report).
     pub scene_pose: [f64; 3],
     /// Per object of `scene` (in its order), the 3-D check of its height range against
@@ -382,6 +388,7 @@ pub fn load_task(
         scene_after_grasp,
         scene_lifting,
         support,
+        boxes: Vec::new(),
         scene_pose: spec.pose,
         heights: Vec::new(),
         object: spec.object.clone(),
@@ -629,29 +636,6 @@ pub fn scene_outlines(scene: &Scene) -> Vec<(String, Vec<Vector2<f64>>)> {
     out
 }
 
-/// Distance from `p` to the convex polygon `poly` (counter-clockwise), 0 inside.
-fn polygon_distance(poly: &[Vector2<f64>], p: &Vector2<f64>) -> f64 {
-    match poly.len() {
-        0 => f64::INFINITY,
-        1 => (p - poly[0]).norm(),
-        n => {
-            let mut inside = n >= 3;
-            let mut best = f64::INFINITY;
-            for k in 0..n {
-                let (a, b) = (poly[k], poly[(k + 1) % n]);
-                let e = b - a;
-                let w = p - a;
-                if e.x * w.y - e.y * w.x < 0.0 {
-                    inside = false;
-                }
-                let s = (w.dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-                best = best.min((w - e * s).norm());
-            }
-            if inside { 0.0 } else { best }
-        }
-    }
-}
-
 /// The first scene object whose outline comes within `radius` of `at` (world), with the
 /// distance: where the footprint would stand in it.
 pub fn object_under_footprint(
@@ -669,7 +653,9 @@ pub fn object_under_footprint(
 impl Task {
     /// Ranks the base poses from which the group reaches the grasp
     /// ([`crate::motion::placement::place_base`]), the arm's other joints at `posture`
-    /// (a full configuration), with the payload.
+    /// (a full configuration), with the payload, clear of the scene and of the map's
+    /// boxes near the pick ([`Task::boxes`]): a grasping posture that touches either is
+    /// refused.
     ///
     /// # Errors
     /// As [`crate::motion::placement::place_base`].
@@ -679,7 +665,7 @@ impl Task {
             &PlacementProblem {
                 model: &robot.model,
                 geometry: &self.hull_geometry,
-                scene: &self.scene,
+                scene: &scene_with(&self.scene, &self.boxes),
                 group: &self.group,
                 posture,
                 support: &support,
@@ -694,33 +680,35 @@ impl Task {
     }
 }
 
-/// The smallest distances of the executed arm motion to the scene and between the
-/// robot's enabled link pairs (the collision module's signed distances on the convex
-/// hulls and the swapped links' mesh surfaces), with the pair of each: before the grasp
-/// with the robot's geometry against the whole scene, after it with the geometry carrying
-/// the object ([`Task::carried`]) against the scene without it ([`Holding`]). The drives'
-/// monitor ([`DistanceMonitor::scene_only`]) measures against one scene of the task's
-/// objects and the map's boxes.
+/// The smallest distances of the executed arm motion to the scene, to the map's boxes
+/// near the pick ([`Task::boxes`]) and between the robot's enabled link pairs (the
+/// collision module's signed distances on the convex hulls and the swapped links' mesh
+/// surfaces), with the pair of each: before the grasp with the robot's geometry against
+/// the whole scene, after it with the geometry carrying the object ([`Task::carried`])
+/// against the scene without it ([`Holding`]). The drives' monitor
+/// ([`DistanceMonitor::scene_only`]) measures against the task's scene and all the map's
+/// boxes.
 ///
 /// During the lift the held object's pairs with its support ([`Task::support`]) are left
 /// out of the scene distance and checked by the lift rule instead ([`LiftStart`]): the
 /// object may touch its support only while it rises off it.
 #[derive(Debug, Clone)]
 pub struct DistanceMonitor {
-    /// What it measures against, per [`Holding`]: the task's scenes ([`Task::scene`],
-    /// [`Task::scene_lifting`], [`Task::scene_after_grasp`]), each followed by the extra
-    /// objects it was built with (the map's boxes, for the drives).
+    /// The task's scenes it measures against, per [`Holding`]: [`Task::scene`],
+    /// [`Task::scene_lifting`], [`Task::scene_after_grasp`].
     scenes: [Scene; 3],
-    /// How many objects of each scene are the task's (the rest are the extra ones).
-    task_objects: [usize; 3],
+    /// The map's boxes it measures against besides, whatever the robot holds.
+    boxes: Scene,
     data: Data,
     gd: GeometryData,
     gd_carried: GeometryData,
     sd: SceneData,
     sd_after: SceneData,
+    sd_boxes: SceneData,
+    sd_boxes_carried: SceneData,
     q: DVector<f64>,
-    /// The last sample: its scene and self distances, what it held, and the closest
-    /// (link, object) and link pair indices.
+    /// The last sample: its scene, box and self distances, what it held, and the closest
+    /// (link, object) and link pair.
     last: LastSample,
     /// Where the held object stood against its support at the lift's first sample.
     lift_start: Option<LiftStart>,
@@ -730,9 +718,12 @@ pub struct DistanceMonitor {
     /// Control steps that [`DistanceMonitor::step`] showed could not come closer than
     /// the minima so far, so it measured no distance there.
     pub skipped: usize,
-    /// Smallest robot–scene distance so far (m) and its link (or the held object) and
-    /// scene object.
+    /// Smallest robot–scene distance so far, the map's boxes included (m), and its link
+    /// (or the held object) and scene object or box.
     pub min_scene: Option<(f64, [String; 2])>,
+    /// Smallest robot–box distance so far (m) and its link (or the held object) and box
+    /// (`map.boxes[k]`); `None` without boxes.
+    pub min_box: Option<(f64, [String; 2])>,
     /// Smallest distance between enabled link pairs so far (m) and the links (the held
     /// object as the second one of its pairs).
     pub min_self: Option<(f64, [String; 2])>,
@@ -743,52 +734,49 @@ pub struct DistanceMonitor {
 
 impl DistanceMonitor {
     /// The monitor of `task` on `robot` (the arm motions'): the robot against the task's
-    /// scene and its links against each other.
+    /// scene and the map's boxes near the pick ([`Task::boxes`]), its links against each
+    /// other.
     #[must_use]
     pub fn new(task: &Task, robot: &WheeledModel) -> Self {
-        Self::against(task, robot, &[])
+        Self::against(task, robot, &task.boxes)
     }
 
-    /// The monitor of `task` on `robot` against the task's scenes each with `extra`
-    /// objects added.
-    fn against(task: &Task, robot: &WheeledModel, extra: &[SceneObject]) -> Self {
-        let with_extra = |s: &Scene| Scene {
-            objects: s.objects.iter().chain(extra).cloned().collect(),
+    /// The monitor of `task` on `robot` against the task's scenes and `boxes`.
+    fn against(task: &Task, robot: &WheeledModel, boxes: &[SceneObject]) -> Self {
+        let boxes = Scene {
+            objects: boxes.to_vec(),
         };
-        let scenes = [
-            with_extra(&task.scene),
-            with_extra(&task.scene_lifting),
-            with_extra(&task.scene_after_grasp),
-        ];
-        let task_objects = [
-            task.scene.objects.len(),
-            task.scene_lifting.objects.len(),
-            task.scene_after_grasp.objects.len(),
-        ];
         Self {
             data: Data::new(&robot.model),
             gd: GeometryData::new(&task.geometry),
             gd_carried: GeometryData::new(&task.carried),
-            sd: SceneData::new(&task.geometry, &scenes[0]),
-            sd_after: SceneData::new(&task.carried, &scenes[2]),
-            scenes,
-            task_objects,
+            sd: SceneData::new(&task.geometry, &task.scene),
+            sd_after: SceneData::new(&task.carried, &task.scene_after_grasp),
+            sd_boxes: SceneData::new(&task.geometry, &boxes),
+            sd_boxes_carried: SceneData::new(&task.carried, &boxes),
+            scenes: [
+                task.scene.clone(),
+                task.scene_lifting.clone(),
+                task.scene_after_grasp.clone(),
+            ],
+            boxes,
             q: DVector::zeros(robot.model.nq),
             last: LastSample::default(),
             lift_start: None,
             anchor: Vec::new(),
             skipped: 0,
             min_scene: None,
+            min_box: None,
             min_self: None,
             with_self: true,
         }
     }
 
-    /// The monitor of `task` on `robot` that measures the robot against one scene of the
-    /// task's objects and `boxes` (the map's boxes, `Mission::box_objects`: a table top
-    /// or beam the base passes under), not its links against each other (the drives':
-    /// the arm holds its transport posture there, whose self distances the load checks,
-    /// holding the object too).
+    /// The monitor of `task` on `robot` that measures the robot against the task's scene
+    /// and `boxes` (all the map's boxes, `Mission::box_objects`: a table top or beam the
+    /// base passes under), not its links against each other (the drives': the arm holds
+    /// its transport posture there, whose self distances the load checks, holding the
+    /// object too).
     #[must_use]
     pub fn scene_only(task: &Task, robot: &WheeledModel, boxes: &[SceneObject]) -> Self {
         Self {
@@ -797,19 +785,13 @@ impl DistanceMonitor {
         }
     }
 
-    /// The scene measured holding `holding`, and how many of its objects are the task's.
-    fn scene(&self, holding: Holding) -> (&Scene, usize) {
-        let k = holding.index();
-        (&self.scenes[k], self.task_objects[k])
-    }
-
     /// The monitor at one control step: [`DistanceMonitor::sample`] unless the motion
     /// since the last sample shows that no distance can have fallen to the minima so far.
     /// Every point of an object moves by at most `|Δc| + ‖ΔR‖_F ρ` (c and ρ its bounding
     /// ball's world centre and radius, R its world rotation; the Frobenius norm bounds the
-    /// rotation's), so with `m` the largest such motion a scene distance is at least the
-    /// last one minus `m` and a distance between two links at least the last one minus
-    /// `2 m`. When both stay above the minima, the step changes neither minimum and
+    /// rotation's), so with `m` the largest such motion a scene or box distance is at
+    /// least the last one minus `m` and a distance between two links at least the last
+    /// one minus `2 m`. When all stay above the minima, the step changes no minimum and
     /// touches nothing (the minima are above zero while the run goes on): the minima are
     /// those of a sample at every step (up to GJK's tolerance, as its warm starts then come
     /// from other states). The lift is sampled at every step (its rule reads
@@ -837,6 +819,11 @@ impl DistanceMonitor {
             None if self.with_self => return false,
             None => f64::NEG_INFINITY,
         };
+        let min_box = match &self.min_box {
+            Some((d, _)) => *d,
+            None if !self.boxes.objects.is_empty() => return false,
+            None => f64::NEG_INFINITY,
+        };
         if holding == Holding::Lifting || holding != self.last.holding || self.anchor.is_empty() {
             return false;
         }
@@ -856,6 +843,7 @@ impl DistanceMonitor {
             })
             .fold(0.0, f64::max);
         self.last.scene_distance - moved > min_scene.0
+            && self.last.box_distance - moved > min_box
             && (!self.with_self || self.last.self_distance - 2.0 * moved > min_self)
     }
 
@@ -884,9 +872,10 @@ impl DistanceMonitor {
     }
 
     /// What the last [`DistanceMonitor::sample`] touched (a distance ≤ 0), as the run's
-    /// reason states it: the scene before the links, the held object named as such
-    /// (`held object 'Can2' touches scene object '<id>' (<distance> m)`, a map box as
-    /// `... touches map box 'map.boxes[0]' ...`); `None` when it touched nothing.
+    /// reason states it: the scene and the boxes before the links, the held object named
+    /// as such (`held object 'Can2' touches scene object '<id>' (<distance> m)`, a map box
+    /// as `link 'upperarm_roll_link' touches map box 'map.boxes[0]' ...`); `None` when it
+    /// touched nothing.
     /// A lift that breaks the rule of [`LiftStart`] is named as the held object entering
     /// its support (`held object 'Can2' enters its support '<id>' ...`) or staying on it
     /// after rising (`held object 'Can2' is 0.0021 m from its support '<id>' after
@@ -898,7 +887,6 @@ impl DistanceMonitor {
             return Some(v.clone());
         }
         let grasped = l.holding != Holding::Nothing;
-        let (scene, task_objects) = self.scene(l.holding);
         let gm = if grasped {
             &task.carried
         } else {
@@ -913,18 +901,16 @@ impl DistanceMonitor {
             }
         };
         if l.scene_distance <= 0.0
-            && let Some(k) = l.scene_pair
+            && let Some((k, object)) = l.scene_pair
         {
-            let no = scene.objects.len();
-            let source = if k % no < task_objects {
-                "scene object"
-            } else {
-                "map box"
+            let source = match object {
+                Measured::Scene(_) => "scene object",
+                Measured::Box(_) => "map box",
             };
             return Some(format!(
                 "{} touches {source} '{}' ({:.4} m)",
-                link(k / no),
-                scene.objects[k % no].id,
+                link(k),
+                object.name(&self.scenes[l.holding.index()], &self.boxes),
                 l.scene_distance
             ));
         }
@@ -942,8 +928,8 @@ impl DistanceMonitor {
         None
     }
 
-    /// The distances at `q` (full configuration) to the scene and between links, holding
-    /// `holding`; updates the minima and returns both (m).
+    /// The distances at `q` (full configuration) to the scene (the boxes included) and
+    /// between links, holding `holding`; updates the minima and returns both (m).
     pub fn sample(
         &mut self,
         task: &Task,
@@ -959,17 +945,40 @@ impl DistanceMonitor {
     /// [`DistanceMonitor::sample`].
     fn measure(&mut self, task: &Task, holding: Holding) -> (f64, f64) {
         let scene = &self.scenes[holding.index()];
-        let (gm, gd, sd) = if holding == Holding::Nothing {
-            (&task.geometry, &mut self.gd, &mut self.sd)
+        let (gm, gd, sd, sd_boxes) = if holding == Holding::Nothing {
+            (
+                &task.geometry,
+                &mut self.gd,
+                &mut self.sd,
+                &mut self.sd_boxes,
+            )
         } else {
-            (&task.carried, &mut self.gd_carried, &mut self.sd_after)
+            (
+                &task.carried,
+                &mut self.gd_carried,
+                &mut self.sd_after,
+                &mut self.sd_boxes_carried,
+            )
         };
         let d_self = if self.with_self {
             compute_distances(gm, gd, PairSelection::Enabled)
         } else {
             f64::INFINITY
         };
-        let d_scene = compute_scene_distances(gm, gd, scene, sd);
+        let d_task = compute_scene_distances(gm, gd, scene, sd);
+        let (no, nb) = (scene.objects.len(), self.boxes.objects.len());
+        let task_pair = sd.closest.map(|k| (k / no, Measured::Scene(k % no)));
+        let (d_box, box_pair) = if nb == 0 {
+            (f64::INFINITY, None)
+        } else {
+            let d = compute_scene_distances(gm, gd, &self.boxes, sd_boxes);
+            (d, sd_boxes.closest.map(|k| (k / nb, Measured::Box(k % nb))))
+        };
+        let (d_scene, scene_pair) = if d_box < d_task {
+            (d_box, box_pair)
+        } else {
+            (d_task, task_pair)
+        };
         let lift_violation = if holding == Holding::Lifting {
             let held = gm.links.len() - 1;
             let (d, support) = support_distance(task, gm, gd, held);
@@ -986,28 +995,35 @@ impl DistanceMonitor {
         } else {
             None
         };
+        let self_pair = gd.closest;
+        self.anchor.clone_from(&gd.placements);
         self.last = LastSample {
             scene_distance: d_scene,
+            box_distance: d_box,
             self_distance: d_self,
             holding,
-            scene_pair: sd.closest,
-            self_pair: gd.closest,
+            scene_pair,
+            self_pair,
             lift_violation,
         };
-        self.anchor.clone_from(&gd.placements);
         let links = &gm.links;
+        let boxes = &self.boxes;
+        let named = |(k, object): (usize, Measured)| {
+            [links[k].name.clone(), object.name(scene, boxes).to_string()]
+        };
         if self.min_scene.as_ref().is_none_or(|m| d_scene < m.0)
-            && let Some(k) = sd.closest
+            && let Some(pair) = scene_pair
         {
-            let no = scene.objects.len();
-            self.min_scene = Some((
-                d_scene,
-                [links[k / no].name.clone(), scene.objects[k % no].id.clone()],
-            ));
+            self.min_scene = Some((d_scene, named(pair)));
+        }
+        if self.min_box.as_ref().is_none_or(|m| d_box < m.0)
+            && let Some(pair) = box_pair
+        {
+            self.min_box = Some((d_box, named(pair)));
         }
         if self.with_self
             && self.min_self.as_ref().is_none_or(|m| d_self < m.0)
-            && let Some(i) = gd.closest
+            && let Some(i) = self_pair
         {
             let [a, b] = gm.pairs[i];
             self.min_self = Some((d_self, [links[a].name.clone(), links[b].name.clone()]));
@@ -1123,14 +1139,36 @@ impl Holding {
     }
 }
 
+/// What a [`DistanceMonitor`] measured a distance to: an object of the task's scene
+/// measured (its index there) or a map box (its index among the monitor's boxes).
+#[derive(Debug, Clone, Copy)]
+enum Measured {
+    Scene(usize),
+    Box(usize),
+}
+
+impl Measured {
+    /// Its id: of an object of `scene` (the task's scene measured) or of `boxes`.
+    fn name<'a>(self, scene: &'a Scene, boxes: &'a Scene) -> &'a str {
+        match self {
+            Measured::Scene(o) => &scene.objects[o].id,
+            Measured::Box(o) => &boxes.objects[o].id,
+        }
+    }
+}
+
 /// The distances of a [`DistanceMonitor`]'s last sample.
 #[derive(Debug, Clone)]
 struct LastSample {
+    /// To the scene and the boxes.
     scene_distance: f64,
+    /// To the boxes (`+∞` without).
+    box_distance: f64,
     self_distance: f64,
     holding: Holding,
-    /// `link * n_objects + object` of the closest link–scene pair.
-    scene_pair: Option<usize>,
+    /// The link (index into the geometry's links) and object of the closest link–scene
+    /// or link–box pair.
+    scene_pair: Option<(usize, Measured)>,
     /// The closest enabled link pair (index into the geometry's pairs).
     self_pair: Option<usize>,
     /// During the lift, how the held object broke the lift rule ([`LiftStart`]).
@@ -1141,6 +1179,7 @@ impl Default for LastSample {
     fn default() -> Self {
         Self {
             scene_distance: f64::INFINITY,
+            box_distance: f64::INFINITY,
             self_distance: f64::INFINITY,
             holding: Holding::Nothing,
             scene_pair: None,
@@ -1237,12 +1276,19 @@ pub struct TaskResult {
     pub arm_plans: Vec<ArmPlanRecord>,
     /// The payload attach.
     pub payload: Option<PayloadRecord>,
-    /// Smallest robot–scene distance over every control step of the executed arm motions
-    /// (m; during the lift without the held object's pairs with its support, which
+    /// Smallest robot–scene distance (the map's boxes near the pick included) over every
+    /// control step of the executed arm motions (m; during the lift without the held object's pairs with its support, which
     /// [`LiftStart`]'s rule checks).
     pub min_scene_distance: Option<f64>,
-    /// Link and scene object at it.
+    /// Link and scene object (or map box) at it.
     pub closest_scene_pair: Option<[String; 2]>,
+    /// Smallest distance to the map's boxes near the pick ([`Task::boxes`]) over every
+    /// control step of the executed arm motions (m; absent without such boxes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_box_distance: Option<f64>,
+    /// Link (or the held object) and box (`map.boxes[k]`) at it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub closest_box_pair: Option<[String; 2]>,
     /// Smallest distance between enabled link pairs over every control step of the
     /// executed arm motions (m).
     pub min_self_distance: Option<f64>,
