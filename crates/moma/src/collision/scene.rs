@@ -118,6 +118,38 @@ impl SceneObject {
     pub fn aabb(&self) -> (Vector3<f64>, Vector3<f64>) {
         (self.nodes[0].lo, self.nodes[0].hi)
     }
+
+    /// The shapes that may lie within `within` of the ball at `centre` of `radius`: into
+    /// `near`, ranges `(first, end)` of [`SceneObject::shapes`] in increasing order
+    /// (adjacent ranges joined), those of the tree's leaves whose boxes, and whose
+    /// ancestors' boxes, are no farther than `within` from the ball. Every shape outside
+    /// the ranges is farther than `within` from anything in the ball. `stack` is scratch.
+    pub fn shapes_near(
+        &self,
+        centre: &Vector3<f64>,
+        radius: f64,
+        within: f64,
+        stack: &mut Vec<usize>,
+        near: &mut Vec<(usize, usize)>,
+    ) {
+        near.clear();
+        stack.clear();
+        stack.push(0);
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n];
+            if ball_box_gap(centre, radius, &node.lo, &node.hi) > within {
+                continue;
+            }
+            match node.leaf {
+                Some((first, count)) => match near.last_mut() {
+                    Some(last) if last.1 == first => last.1 = first + count,
+                    _ => near.push((first, first + count)),
+                },
+                // The first child holds the earlier shapes: popped first.
+                None => stack.extend([node.child + 1, node.child]),
+            }
+        }
+    }
 }
 
 /// World-axis-aligned bounding box (min, max) of `shape` placed at `pose`.

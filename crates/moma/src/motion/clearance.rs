@@ -25,7 +25,9 @@
 //! it, not only at the checked ones, up to the accuracy of the distances (1e-12 m). Pairs
 //! are not computed when a lower bound already covers the stretch found so far: a ball
 //! around each link against the other link's ball or the scene object's box (all of that
-//! link's pairs with it at once), their bounding balls, their world axis-aligned boxes
+//! link's pairs with it at once; against a scene object of several shapes, a mesh's
+//! triangles, the link's ball then descends the object's tree and only the shapes of the
+//! leaves it reaches go on), their bounding balls, their world axis-aligned boxes
 //! (robot objects against each other or against a scene shape), the balls of their hulls'
 //! covers ([`crate::collision::ball_cover`]: every ball clear means the hull is) against
 //! the other object's balls, against its 26 bounding planes, or against the scene shape in
@@ -201,6 +203,12 @@ pub struct ClearanceChecker<'a> {
     order: Vec<(f64, usize)>,
     /// The block that limited the last step (checked first next time).
     last_limiting: usize,
+    /// The blocks of the cluster at hand that its link's ball does not clear, as ranges
+    /// `(first, end)` of `moving` ([`ClearanceChecker::near_blocks`]), and the scratch of
+    /// the scene tree's descent.
+    near: Vec<(usize, usize)>,
+    near_shapes: Vec<(usize, usize)>,
+    tree_stack: Vec<usize>,
     /// Per object pair: the distance last computed on this segment, where (segment
     /// fraction), and the segment it belongs to.
     cache_d: Vec<f64>,
@@ -498,6 +506,9 @@ impl<'a> ClearanceChecker<'a> {
             open: VecDeque::new(),
             order: Vec::new(),
             last_limiting: 0,
+            near: Vec::new(),
+            near_shapes: Vec::new(),
+            tree_stack: Vec::new(),
             cache_d: vec![0.0; n_entries],
             cache_t: vec![0.0; n_entries],
             cache_epoch: vec![0; n_entries],
@@ -693,6 +704,41 @@ impl<'a> ClearanceChecker<'a> {
             .norm()
     }
 
+    /// The blocks of `cluster` its link's ball does not clear by more than `bound`, at the
+    /// placed state, into `self.near`: all of them against a robot link or a scene object
+    /// of one shape; against a scene object of several shapes (a mesh as its triangles, a
+    /// voxel grid) the blocks of the shapes its tree does not clear
+    /// ([`SceneObject::shapes_near`](crate::collision::SceneObject::shapes_near)).
+    fn near_blocks(&mut self, cluster: &Cluster, bound: f64) {
+        self.near.clear();
+        let obj = match cluster.other {
+            Other::Scene(o, _) if self.scene.objects[o].shapes.len() > 1 => &self.scene.objects[o],
+            _ => {
+                self.near
+                    .push((cluster.first, cluster.first + cluster.count));
+                return;
+            }
+        };
+        // The blocks go shape by shape, one per ball group of the link.
+        let per_shape = cluster.count / obj.shapes.len();
+        let (centre, radius) = (
+            self.link_centres[cluster.link],
+            self.link_balls[cluster.link].radius,
+        );
+        obj.shapes_near(
+            &centre,
+            radius,
+            bound,
+            &mut self.tree_stack,
+            &mut self.near_shapes,
+        );
+        self.near.extend(
+            self.near_shapes
+                .iter()
+                .map(|&(s, e)| (cluster.first + s * per_shape, cluster.first + e * per_shape)),
+        );
+    }
+
     /// The distance from `c` to scene shape `(o, s)` in closed form (a primitive's exact
     /// distance, a lower bound for a hull: [`ShapeBound`](crate::collision::ball_gap::ShapeBound)).
     fn shape_gap(&self, c: &Vector3<f64>, o: usize, s: usize) -> f64 {
@@ -762,10 +808,14 @@ impl<'a> ClearanceChecker<'a> {
             if self.cluster_gap(&cluster) > extra {
                 continue;
             }
-            for bi in cluster.first..cluster.first + cluster.count {
-                if bi != last && !self.block_clear(bi, tube) {
-                    self.last_limiting = bi;
-                    return false;
+            self.near_blocks(&cluster, extra);
+            for r in 0..self.near.len() {
+                let (first, end) = self.near[r];
+                for bi in first..end {
+                    if bi != last && !self.block_clear(bi, tube) {
+                        self.last_limiting = bi;
+                        return false;
+                    }
                 }
             }
         }
@@ -816,21 +866,25 @@ impl<'a> ClearanceChecker<'a> {
             if self.cluster_gap(&cluster) > bound {
                 continue;
             }
-            for bi in cluster.first..cluster.first + cluster.count {
-                let block = self.moving[bi];
-                let gap = self.group_gap(block.a, block.b);
-                if gap > bound {
-                    continue;
+            self.near_blocks(&cluster, bound);
+            for r in 0..self.near.len() {
+                let (first, end) = self.near[r];
+                for bi in first..end {
+                    let block = self.moving[bi];
+                    let gap = self.group_gap(block.a, block.b);
+                    if gap > bound {
+                        continue;
+                    }
+                    // The block that limited the last state goes first.
+                    let vouched = if bi == self.last_limiting {
+                        -1.0
+                    } else if gap <= extra {
+                        0.0
+                    } else {
+                        (gap - slack) / rate
+                    };
+                    self.order.push((vouched, bi));
                 }
-                // The block that limited the last state goes first.
-                let vouched = if bi == self.last_limiting {
-                    -1.0
-                } else if gap <= extra {
-                    0.0
-                } else {
-                    (gap - slack) / rate
-                };
-                self.order.push((vouched, bi));
             }
         }
         self.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
