@@ -256,3 +256,76 @@ fn the_state_check_never_passes_a_state_within_the_margin_of_a_concave_mesh_scen
         "{passed} passed, {near_mesh} within the margin of a mesh"
     );
 }
+
+/// The shortcuts that depend on what the check saw before (the plane each pair's last GJK
+/// run ended with, tried before GJK; the clusters a segment's first state leaves live) never
+/// pass a state or a segment too close. One checker checks a random walk of small steps
+/// (so the planes stay tight and are used) and segments between its states, with no exact
+/// report in between; a second checker's exact report judges it: a state passes exactly
+/// when its closest pair is farther than the margin, and every state at 1/40 steps of a
+/// passed segment keeps half the margin.
+#[test]
+fn the_plane_and_live_cluster_shortcuts_never_pass_a_state_too_close() {
+    let (model, gm) = fetch();
+    let queries = FetchQueries::load();
+    let group = queries.group(&model);
+    let dim = group.dim();
+    let space =
+        moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(33);
+    let (mut passed, mut failed, mut segments, mut planes) = (0, 0, 0, 0);
+    let margin = 0.01;
+    for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
+        let (scene, start, states) = query_states(&queries, &group, name, 100, &mut rng);
+        let weights = vec![1.0; dim];
+        let mut check =
+            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
+        let mut judge =
+            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
+        // From every 20th state, a walk of 20 steps of up to 0.05 rad per joint.
+        for origin in states.iter().step_by(20) {
+            let mut x = origin.clone();
+            for _ in 0..20 {
+                let y: Vec<f64> = x
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        (v + rng.random_range(-0.05..0.05)).clamp(group.lower[i], group.upper[i])
+                    })
+                    .collect();
+                let valid = check.is_valid(&y);
+                let closest = judge.distance_report(&y).unwrap();
+                assert_eq!(
+                    valid,
+                    closest.distance > margin,
+                    "{name}: state {y:?}: is_valid {valid}, closest pair {closest:?}"
+                );
+                if valid {
+                    passed += 1;
+                } else {
+                    failed += 1;
+                }
+                let mut scratch = Vec::new();
+                if valid && check.segment_valid(&space, &x, &y, &mut scratch, &mut 0) {
+                    segments += 1;
+                    for k in 0..=40 {
+                        let t = f64::from(k) / 40.0;
+                        let z: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a + t * (b - a)).collect();
+                        let d = judge.distance_report(&z).unwrap().distance;
+                        assert!(
+                            d > 0.5 * margin - 1e-9,
+                            "{name}: {z:?} at {d} m on a passed segment"
+                        );
+                    }
+                }
+                x = y;
+            }
+        }
+        planes += check.planes_cleared;
+    }
+    assert!(
+        passed > 100 && failed > 50 && segments > 100 && planes > 1000,
+        "{passed} passed, {failed} failed, {segments} segments passed, {planes} pairs cleared \
+         by a plane"
+    );
+}

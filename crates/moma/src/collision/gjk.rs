@@ -64,6 +64,15 @@ impl Default for WarmStart {
     }
 }
 
+impl WarmStart {
+    /// The direction the last query ended with (world): a point of A − B, so `−direction`
+    /// points from the first shape towards the second.
+    #[must_use]
+    pub fn direction(&self) -> Vector3<f64> {
+        self.direction
+    }
+}
+
 /// A face of the EPA polytope.
 #[derive(Clone, Copy, Debug)]
 struct Face {

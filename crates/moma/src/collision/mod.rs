@@ -69,6 +69,7 @@ pub mod gradient;
 pub mod mesh;
 pub mod point_cloud;
 pub mod scene;
+pub mod separating_plane;
 pub mod srdf;
 pub mod urdf_geometry;
 

@@ -8,6 +8,7 @@ use super::geometry_data::GeometryData;
 use super::geometry_model::GeometryModel;
 use super::gjk::{EpaWorkspace, PairDistance, WarmStart, overlaps, signed_distance};
 use super::mesh::{TriangleMesh, convex_hull_vertices, read_mesh};
+use super::separating_plane::support_value;
 use super::urdf_geometry::resolve_uri;
 use crate::planning::grid3::Grid3;
 use crate::spatial::SE3;
@@ -457,13 +458,6 @@ pub(super) fn nearest_in_scene(
 /// [`compute_scene_distances`] (m): the reported minimum is within this of the exact one
 /// (ties between the voxels of a flat layer are skipped instead of all visited).
 pub const PRUNE_TOLERANCE: f64 = 1e-12;
-
-/// The support value `max over the placed shape of n·x` (margin included).
-fn support_value(shape: &Convex, pose: &SE3, n: &Vector3<f64>, hint: &mut usize) -> f64 {
-    let local = pose.rotation.tr_mul(n);
-    let p = pose.act_point(&shape.core_support(&local, hint));
-    n.dot(&p) + shape.margin() * n.norm()
-}
 
 /// `min over the box [lo, hi] of n·x`.
 fn box_min_along(n: &Vector3<f64>, lo: &Vector3<f64>, hi: &Vector3<f64>) -> f64 {

@@ -33,11 +33,16 @@
 //! the other object's balls, against its 26 bounding planes, or against the scene shape in
 //! closed form ([`crate::collision::ball_gap`]), or the
 //! distance found at an earlier state of the same segment less the most it can have closed
-//! since; the blocks go
+//! since, or the plane the pair's last GJK run ended with
+//! ([`crate::collision::separating_plane`]: one support point of each shape along that
+//! normal, a true bound wherever the pair has moved since); the blocks go
 //! best first (the one that limited the last state, then by the stretch their balls vouch
 //! for), and GJK stops once a separating plane shows the distance covers it, or once a
 //! point of the Minkowski difference shows the pair within the margin (no penetration
-//! depth is computed for a pair that fails).
+//! depth is computed for a pair that fails). A segment's first checked state tests every
+//! link's ball; its later states only those that state left live: the balls close at
+//! most the row's rate over the whole segment, so a cluster whose balls are farther
+//! apart than that plus the most a later state asks for is clear at every later state.
 //!
 //! **States** ([`StateValidity::is_valid`]) pass when every pair's distance exceeds the
 //! margin plus `tube · ‖c_p ⊘ w‖₂`, the most the pair can close over any state within the
@@ -54,6 +59,7 @@ use super::group::JointGroup;
 use crate::collision::ball_cover::{MAX_SLABS, hull_ball_cover};
 use crate::collision::ball_gap::PlacedShape;
 use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_outside, signed_distance};
+use crate::collision::separating_plane::plane_gap;
 use crate::collision::{Convex, GeometryModel, Scene};
 use crate::kinematics;
 use crate::multibody::{Data, Model};
@@ -223,6 +229,15 @@ pub struct ClearanceChecker<'a> {
     pub states_checked: u64,
     /// Exact pair distances computed since construction (the pairs no bound ruled out).
     pub distances_computed: u64,
+    /// Pairs cleared since construction by the plane their last GJK run ended with.
+    pub planes_cleared: u64,
+    /// The clusters the current segment's later states look at (the first state's
+    /// balls leave the others clear over the whole segment), and whether the next
+    /// checked state is a segment's first (then it fills them).
+    live: Vec<usize>,
+    fill_live: bool,
+    /// Per object pair: the hull vertices that plane's support climbs start from.
+    plane_hints: Vec<(usize, usize)>,
 }
 
 impl<'a> ClearanceChecker<'a> {
@@ -517,6 +532,10 @@ impl<'a> ClearanceChecker<'a> {
             deadline: None,
             states_checked: 0,
             distances_computed: 0,
+            planes_cleared: 0,
+            live: Vec::new(),
+            fill_live: false,
+            plane_hints: vec![(0, 0); n_entries],
         })
     }
 
@@ -745,14 +764,12 @@ impl<'a> ClearanceChecker<'a> {
         self.scene_shapes[self.scene_first[o] + s].point_distance(c)
     }
 
-    fn exact(&mut self, k: usize) -> f64 {
-        self.exact_outside(k, f64::NEG_INFINITY, f64::INFINITY)
-    }
-
     /// The signed distance of entry `k`, or a lower bound on it above `enough`, or an
     /// upper bound on it at most `within` ([`distance_outside`]).
+    /// Above `enough` the pair is first tried against the plane its last GJK run ended
+    /// with ([`plane_gap`]): one support map per shape, and GJK only when that plane
+    /// falls short.
     fn exact_outside(&mut self, k: usize, within: f64, enough: f64) -> f64 {
-        self.distances_computed += 1;
         let (a, b) = self.entries[k];
         let oa = &self.gm.objects[a];
         let pa = self.data.world_from_joint[oa.joint.0] * oa.placement;
@@ -769,6 +786,21 @@ impl<'a> ClearanceChecker<'a> {
                 (&sh.shape, sh.pose)
             }
         };
+        if enough.is_finite() {
+            let gap = plane_gap(
+                &oa.shape,
+                &pa,
+                shape,
+                &pose,
+                &-self.warm[k].direction(),
+                &mut self.plane_hints[k],
+            );
+            if gap > enough.max(0.0) {
+                self.planes_cleared += 1;
+                return gap;
+            }
+        }
+        self.distances_computed += 1;
         if within.is_finite() || enough.is_finite() {
             return distance_outside(
                 &oa.shape,
@@ -854,7 +886,20 @@ impl<'a> ClearanceChecker<'a> {
         // step found so far (and every block after it) is not computed.
         let mut step = need;
         self.order.clear();
-        for ci in 0..self.clusters.len() {
+        // The segment's first state looks at every cluster, the later ones only at those
+        // it left live.
+        let first = self.fill_live;
+        self.fill_live = false;
+        if first {
+            self.live.clear();
+        }
+        let clusters = if first {
+            self.clusters.len()
+        } else {
+            self.live.len()
+        };
+        for i in 0..clusters {
+            let ci = if first { i } else { self.live[i] };
             let cluster = self.clusters[ci];
             let (rate, extra) = (
                 self.rate[cluster.row],
@@ -862,8 +907,15 @@ impl<'a> ClearanceChecker<'a> {
             );
             let slack = extra - 0.5 * self.margin;
             let bound = (slack + step * rate).max(extra);
+            let gap = self.cluster_gap(&cluster);
+            // Anywhere on the segment the balls are at least `gap - rate` apart, and a
+            // later state needs at most `(slack + rate).max(extra)` (its `need` is at most
+            // the whole segment): a cluster farther than that is clear at every later one.
+            if first && gap - rate <= (slack + rate).max(extra) {
+                self.live.push(ci);
+            }
             // The link's ball clears the other link or object: so do all its blocks.
-            if self.cluster_gap(&cluster) > bound {
+            if gap > bound {
                 continue;
             }
             self.near_blocks(&cluster, bound);
@@ -938,7 +990,8 @@ impl<'a> ClearanceChecker<'a> {
     }
 
     /// The closest pair at the group state `x`, over every checked pair (moving or not),
-    /// every distance computed exactly; `None` when nothing is checked.
+    /// its distance computed exactly (a pair's GJK stops once it shows the pair farther
+    /// than the closest found so far); `None` when nothing is checked.
     pub fn distance_report(&mut self, x: &[f64]) -> Option<ClosestPair> {
         self.place(x);
         let mut best: Option<(f64, usize)> = None;
@@ -959,7 +1012,8 @@ impl<'a> ClearanceChecker<'a> {
                 if self.object_gap(a, b) >= cut {
                     continue;
                 }
-                let d = self.exact(k);
+                // Above the closest distance so far a lower bound is enough.
+                let d = self.exact_outside(k, f64::NEG_INFINITY, cut);
                 if d < cut {
                     best = Some((d, k));
                 }
@@ -1032,6 +1086,7 @@ impl StateValidity for ClearanceChecker<'_> {
         }
         scratch.resize(dim, 0.0);
         self.epoch += 1;
+        self.fill_live = true;
         // The end state first (a segment towards an obstacle fails there at once), then
         // the start, then the stretch neither covers, coarse to fine: each checked state
         // vouches for the same fraction on both sides of it.
