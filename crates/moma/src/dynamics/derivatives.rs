@@ -54,7 +54,9 @@
 //! and ∂τ/∂q is written at a = q̈.
 
 use super::motion_pass::{MotionTerms, cross_force, cross_motion, join, split};
-use super::tree_ltdl::{Rhs, dof_parents, ltdl_in_place, ltdl_solve_rows, subtree_ends};
+use super::tree_ltdl::{
+    Rhs, chain_starts, dof_parents, ltdl_in_place, ltdl_solve_rows, subtree_ends,
+};
 use crate::error::{Error, Result};
 use crate::io::pinocchio_layout::PinocchioLayout;
 use crate::kinematics::assert_nv;
@@ -110,6 +112,9 @@ pub struct DerivativeData {
     /// of its subtree (see `tree_ltdl`).
     dof_parent: Vec<usize>,
     subtree_end: Vec<usize>,
+    /// Per coordinate, the first of the run of consecutive coordinates that ends at it in
+    /// its ancestor chain (see `tree_ltdl::chain_starts`).
+    chain_start: Vec<usize>,
     /// The tree-sparse `Lᵀ D L` factor of H, the right-hand sides of the forward-dynamics
     /// derivatives by rows (nv blocks of 3 nv), and one column of scratch.
     fact: DMatrix<f64>,
@@ -147,6 +152,7 @@ impl DerivativeData {
             y2: vec![Vector6::zeros(); nv],
             dof_parent: dof_parents(model),
             subtree_end: subtree_ends(&dof_parents(model)),
+            chain_start: chain_starts(&dof_parents(model)),
             fact: m(),
             rows: DVector::zeros(3 * nv * nv),
             column: DVector::zeros(nv),
@@ -260,7 +266,7 @@ pub fn aba_derivatives(
     dd.fact
         .as_mut_slice()
         .copy_from_slice(dd.drnea_da.as_slice());
-    if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
+    if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent, &dd.chain_start) {
         return Err(singular(dd, k));
     }
     dd.layout
@@ -288,18 +294,13 @@ pub fn aba_derivatives(
         &mut dd.drnea_dv,
         &mut dd.drnea_da,
     );
-    if dd.layout.has_planar_root() {
-        // moma's H differs from the pass's by the planar root's rotation
-        dd.fact
-            .as_mut_slice()
-            .copy_from_slice(dd.drnea_da.as_slice());
-        if let Err(k) = ltdl_in_place(&mut dd.fact, &dd.dof_parent) {
-            return Err(singular(dd, k));
-        }
-    }
-    // H [∂q̈/∂τ, ∂q̈/∂q, ∂q̈/∂v] = [I, −∂τ/∂q, −∂τ/∂v], solved by rows
+    // H [∂q̈/∂τ, ∂q̈/∂q, ∂q̈/∂v] = [I, −∂τ/∂q, −∂τ/∂v], solved by rows. With a planar
+    // root moma's H is `Tᵀ H_P T` (H_P the pass's, already factorised), so the solve is
+    // `X = Tᵀ H_P⁻¹ (T B)` and `H⁻¹ = Tᵀ H_P⁻¹ T`: the base's (x, y) rows of B turned
+    // before, of X and H⁻¹ after, instead of a second factorisation
     let nv = model.nv;
     let m = 3 * nv;
+    let heading = dd.layout.heading(qs);
     let rows = dd.rows.as_mut_slice();
     for r in 0..nv {
         let row = &mut rows[r * m..r * m + nv];
@@ -308,6 +309,11 @@ pub fn aba_derivatives(
     }
     transpose::<true>(dd.drnea_dq.as_slice(), nv, &mut rows[nv..], m, nv);
     transpose::<true>(dd.drnea_dv.as_slice(), nv, &mut rows[2 * nv..], m, nv);
+    if let Some((c, s, iv)) = heading {
+        // T B = Rᵀ(θ) on the two rows; the identity block stays (it gives H_P⁻¹)
+        let (x, y) = rows.split_at_mut((iv + 1) * m);
+        rotate_pairs(&mut x[iv * m + nv..], &mut y[nv..m], c, -s);
+    }
     ltdl_solve_rows(
         &dd.fact,
         &dd.dof_parent,
@@ -331,7 +337,29 @@ pub fn aba_derivatives(
     for r in 0..nv {
         ot[r * nv + r..(r + 1) * nv].copy_from_slice(&rows[r * m + r..r * m + nv]);
     }
+    if let Some((c, s, iv)) = heading {
+        // X = Tᵀ (H_P⁻¹ T B): R(θ) on the two rows of ∂q̈/∂q, ∂q̈/∂v (column-major: entry
+        // (r, col) at col nv + r); H⁻¹ = R H_P⁻¹ Rᵀ on its two rows and two columns
+        for out in [oq, ov, &mut *ot] {
+            for col in out.chunks_exact_mut(nv) {
+                let (x, y) = col.split_at_mut(iv + 1);
+                rotate_pairs(&mut x[iv..], &mut y[..1], c, s);
+            }
+        }
+        let (x, y) = ot.split_at_mut((iv + 1) * nv);
+        rotate_pairs(&mut x[iv * nv..], &mut y[..nv], c, s);
+    }
     Ok(())
+}
+
+/// `(x_i, y_i) ← (c x_i − s y_i, s x_i + c y_i)` for each `i`: the rotation `R(θ)`, with
+/// `(c, s) = (cos θ, sin θ)`, applied to two equally long runs of coordinates.
+fn rotate_pairs(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
+    for (a, b) in x.iter_mut().zip(y.iter_mut()) {
+        let (x0, y0) = (*a, *b);
+        *a = c * x0 - s * y0;
+        *b = s * x0 + c * y0;
+    }
 }
 
 /// `dst[r dst_stride + c] = ±src[c src_stride + r]` for `r, c < n` (negated when `NEG`):

@@ -50,35 +50,65 @@ fn last_dof_above(model: &Model, mut j: usize) -> usize {
     NO_PARENT
 }
 
-/// Factorises `h` (symmetric; only the lower-triangle entries `(k, i)` with `i` an
-/// ancestor-or-self of `k` are read) in place into `Lᵀ D L`: the diagonal becomes `D`,
-/// the entries `(k, i)` below it become `L_ki`. Other entries are left as they were.
+/// Factorises `h` (symmetric; only the entries `(i, k)` with `i` an ancestor-or-self of
+/// `k` are read, i.e. its upper triangle) in place into `Lᵀ D L`: the diagonal becomes
+/// `D`, and the entry `(i, k)` above it becomes `L_ki`, so that row `k` of `L` is
+/// contiguous in the column-major storage (at `k n + i`). Other entries are left as they
+/// were.
+///
+/// `chain_start` is [`chain_starts`] of `parent`: a coordinate's ancestors are taken a run
+/// of consecutive coordinates at a time (a joint's own coordinates, a serial arm), each
+/// run one vectorised multiply–add.
 ///
 /// Returns the index of the first pivot (counting from the leaves) that is not positive
 /// and finite, i.e. when `h` is not positive definite. Does not allocate.
-pub(crate) fn ltdl_in_place(h: &mut DMatrix<f64>, parent: &[usize]) -> Result<(), usize> {
+pub(crate) fn ltdl_in_place(
+    h: &mut DMatrix<f64>,
+    parent: &[usize],
+    chain_start: &[usize],
+) -> Result<(), usize> {
     let n = h.nrows();
-    debug_assert_eq!(parent.len(), n);
+    debug_assert_eq!((parent.len(), chain_start.len()), (n, n));
     let h = h.as_mut_slice();
     for k in (0..n).rev() {
         let d = h[k * n + k];
         if !(d.is_finite() && d > 0.0) {
             return Err(k);
         }
+        let (above, from_k) = h.split_at_mut(k * n);
+        let row_k = &mut from_k[..n];
         let mut i = parent[k];
         while i != NO_PARENT {
-            let a = h[i * n + k] / d;
+            let a = row_k[i] / d;
+            let row_i = &mut above[i * n..(i + 1) * n];
+            // H_ij −= a H_kj for j ancestor-or-self of i; row k's entries up to i are
+            // still H's (they become L's as i reaches them)
             let mut j = i;
             while j != NO_PARENT {
-                // H_ij −= a H_kj, j ancestor-or-self of i (lower triangle, column j)
-                h[j * n + i] -= a * h[j * n + k];
-                j = parent[j];
+                let top = chain_start[j];
+                for (x, y) in row_i[top..=j].iter_mut().zip(&row_k[top..=j]) {
+                    *x -= a * y;
+                }
+                j = parent[top];
             }
-            h[i * n + k] = a;
+            row_k[i] = a;
             i = parent[i];
         }
     }
     Ok(())
+}
+
+/// For each coordinate `j`, the first of the longest run `s, s + 1, …, j` in which each
+/// coordinate is the parent of the next: `j`'s ancestors-or-self are such runs, the next
+/// one ending at `parent[s]`.
+pub(crate) fn chain_starts(parent: &[usize]) -> Vec<usize> {
+    let mut start: Vec<usize> = (0..parent.len()).collect();
+    for j in 1..parent.len() {
+        if parent[j] == j - 1 {
+            start[j] = start[j - 1];
+        }
+    }
+    start
 }
 
 /// Which entries of the right-hand sides of [`ltdl_solve_rows`] can be nonzero.
@@ -170,7 +200,7 @@ fn solve<const FMA: bool, const W: usize>(
         let row_k = &from_k[..m];
         let mut i = parent[k];
         while i != NO_PARENT {
-            let (a, row_i) = (-f[i * n + k], &mut above[i * m..(i + 1) * m]);
+            let (a, row_i) = (-f[k * n + i], &mut above[i * m..(i + 1) * m]);
             match rhs {
                 Rhs::Dense => axpy::<FMA>(row_i, a, row_k),
                 Rhs::Derivatives { end } => {
@@ -244,7 +274,7 @@ fn gather<const FMA: bool, const B: usize>(
     }
     let mut i = parent[k];
     while i != NO_PARENT {
-        let l = -f[i * n + k];
+        let l = -f[k * n + i];
         let src: &[f64; B] = (&above[i * m + c..i * m + c + B])
             .try_into()
             .expect("B columns");
@@ -317,12 +347,12 @@ mod tests {
         // the product has the tree pattern: cousins are zero
         assert_eq!(h[(4, 6)], 0.0);
         let mut f = h.clone();
-        ltdl_in_place(&mut f, &PARENT).unwrap();
+        ltdl_in_place(&mut f, &PARENT, &chain_starts(&PARENT)).unwrap();
         for k in 0..n {
             assert!((f[(k, k)] - d[k]).abs() < 1e-13, "D_{k}");
             for i in 0..k {
                 if is_ancestor_or_self(k, i) {
-                    assert!((f[(k, i)] - l[(k, i)]).abs() < 1e-13, "L_{k}{i}");
+                    assert!((f[(i, k)] - l[(k, i)]).abs() < 1e-13, "L_{k}{i}");
                 }
             }
         }
@@ -337,7 +367,7 @@ mod tests {
         let b = DMatrix::from_fn(n, m, b_entry);
         let want = h.clone().lu().solve(&b).unwrap();
         let mut f = h;
-        ltdl_in_place(&mut f, &PARENT).unwrap();
+        ltdl_in_place(&mut f, &PARENT, &chain_starts(&PARENT)).unwrap();
         let mut rows: Vec<f64> = (0..n)
             .flat_map(|r| (0..m).map(move |c| (r, c)))
             .map(|(r, c)| b[(r, c)])
@@ -393,7 +423,7 @@ mod tests {
             lu.solve(&y).unwrap(),
         );
         let mut f = h;
-        ltdl_in_place(&mut f, &PARENT).unwrap();
+        ltdl_in_place(&mut f, &PARENT, &chain_starts(&PARENT)).unwrap();
         let m = 3 * n;
         let mut rows = vec![0.0; n * m];
         for r in 0..n {
@@ -425,9 +455,19 @@ mod tests {
     }
 
     #[test]
+    fn chains_start_where_a_parent_is_not_the_previous_coordinate() {
+        // 0 - 1 - 2 - {3 - 4, 5 - 6}: 0..=4 is one run (each the parent of the next), 5
+        // starts one (its parent is 2); 6's ancestors-or-self are the runs 5..=6 and 0..=2
+        assert_eq!(chain_starts(&PARENT), vec![0, 0, 0, 0, 0, 5, 5]);
+    }
+
+    #[test]
     fn an_indefinite_matrix_is_reported() {
         let mut h = DMatrix::identity(7, 7);
         h[(5, 5)] = -1.0;
-        assert_eq!(ltdl_in_place(&mut h, &PARENT), Err(5));
+        assert_eq!(
+            ltdl_in_place(&mut h, &PARENT, &chain_starts(&PARENT)),
+            Err(5)
+        );
     }
 }

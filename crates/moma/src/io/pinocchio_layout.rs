@@ -206,8 +206,9 @@ impl PinocchioLayout {
         }
     }
 
-    /// The planar root's `(cos θ, sin θ, idx_v)` at moma configuration `q`.
-    fn heading(&self, q: &[f64]) -> Option<(f64, f64, usize)> {
+    /// The planar root's `(cos θ, sin θ, idx_v)` at moma configuration `q`: on the base's
+    /// `(x, y)` coordinates `T = Rᵀ(θ)`, with `R(θ) = [c −s; s c]`.
+    pub(crate) fn heading(&self, q: &[f64]) -> Option<(f64, f64, usize)> {
         assert_eq!(q.len(), self.moma_nq, "q length");
         self.planar.map(|(iq, iv)| {
             let (s, c) = q[iq + 2].sin_cos();
