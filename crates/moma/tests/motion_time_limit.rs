@@ -9,7 +9,7 @@
 use moma::collision::{GeometryModel, Scene, SceneOptions, read_scene};
 use moma::motion::{
     ClearanceChecker, JointGroup, MeshSource, MotionGoal, MotionOptions, MotionProblem, NotSolved,
-    plan_motion, surface_links_for_start,
+    plan_motion, surface_links_for_states,
 };
 use moma::multibody::{Model, RootJoint};
 use moma::planning::{
@@ -54,7 +54,7 @@ fn plates() -> Plates {
         package_dirs: vec![fetch_dir()],
     };
     let (geometry, _) =
-        surface_links_for_start(&model, &gm, &scene, &group, &start, MARGIN, &source).unwrap();
+        surface_links_for_states(&model, &gm, &scene, &group, &[&start], MARGIN, &source).unwrap();
     Plates {
         model,
         geometry,
