@@ -60,13 +60,39 @@ fn passes_exactly_when_clear(
     margin: f64,
 ) -> bool {
     let valid = checker.is_valid(x);
-    let closest = checker.distance_report(x).unwrap();
+    judged(valid, checker, name, x, margin)
+}
+
+/// `valid` (a check's verdict on `x`), asserted to be whether `judge`'s exact report finds
+/// the closest pair farther apart than the margin.
+fn judged(valid: bool, judge: &mut ClearanceChecker, name: &str, x: &[f64], margin: f64) -> bool {
+    let closest = judge.distance_report(x).unwrap();
     assert_eq!(
         valid,
         closest.distance > margin,
         "{name}: state {x:?}: is_valid {valid}, closest pair {closest:?}"
     );
     valid
+}
+
+/// Asserts that every state at 1/40 steps of the passed segment from `x` to `y` keeps half
+/// the margin by `judge`'s exact report (the continuous check's guarantee).
+fn assert_segment_keeps_half_the_margin(
+    judge: &mut ClearanceChecker,
+    name: &str,
+    x: &[f64],
+    y: &[f64],
+    margin: f64,
+) {
+    for k in 0..=40 {
+        let t = f64::from(k) / 40.0;
+        let z: Vec<f64> = x.iter().zip(y).map(|(a, b)| a + t * (b - a)).collect();
+        let d = judge.distance_report(&z).unwrap().distance;
+        assert!(
+            d > 0.5 * margin - 1e-9,
+            "{name}: {z:?} at {d} m on a passed segment"
+        );
+    }
 }
 
 #[test]
@@ -140,15 +166,7 @@ fn the_bounds_before_gjk_never_pass_a_state_too_close() {
                 continue;
             }
             segments += 1;
-            for k in 0..=40 {
-                let t = f64::from(k) / 40.0;
-                let z: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a + t * (b - a)).collect();
-                let d = checker.distance_report(&z).unwrap().distance;
-                assert!(
-                    d > 0.5 * margin - 1e-9,
-                    "{name}: {z:?} at {d} m on a passed segment"
-                );
-            }
+            assert_segment_keeps_half_the_margin(&mut checker, name, x, &y, margin);
         }
     }
     assert!(
@@ -293,13 +311,7 @@ fn the_plane_and_live_cluster_shortcuts_never_pass_a_state_too_close() {
                         (v + rng.random_range(-0.05..0.05)).clamp(group.lower[i], group.upper[i])
                     })
                     .collect();
-                let valid = check.is_valid(&y);
-                let closest = judge.distance_report(&y).unwrap();
-                assert_eq!(
-                    valid,
-                    closest.distance > margin,
-                    "{name}: state {y:?}: is_valid {valid}, closest pair {closest:?}"
-                );
+                let valid = judged(check.is_valid(&y), &mut judge, name, &y, margin);
                 if valid {
                     passed += 1;
                 } else {
@@ -308,15 +320,7 @@ fn the_plane_and_live_cluster_shortcuts_never_pass_a_state_too_close() {
                 let mut scratch = Vec::new();
                 if valid && check.segment_valid(&space, &x, &y, &mut scratch, &mut 0) {
                     segments += 1;
-                    for k in 0..=40 {
-                        let t = f64::from(k) / 40.0;
-                        let z: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a + t * (b - a)).collect();
-                        let d = judge.distance_report(&z).unwrap().distance;
-                        assert!(
-                            d > 0.5 * margin - 1e-9,
-                            "{name}: {z:?} at {d} m on a passed segment"
-                        );
-                    }
+                    assert_segment_keeps_half_the_margin(&mut judge, name, &x, &y, margin);
                 }
                 x = y;
             }

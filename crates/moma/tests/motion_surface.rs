@@ -6,9 +6,9 @@
 
 mod fetch_common;
 
-use fetch_common::{fetch_dir, fetch_geometry, fetch_urdf};
+use fetch_common::{FetchQueries, fetch_dir, fetch_geometry, fetch_urdf};
 use moma::collision::Scene;
-use moma::motion::{ClearanceChecker, JointGroup, MeshSource, surface_links_for_states};
+use moma::motion::{ClearanceChecker, MeshSource, surface_links_for_states};
 use moma::multibody::RootJoint;
 
 /// MotionBenchMaker's default Fetch state (the tucked arm), full model order.
@@ -42,21 +42,11 @@ const GOAL: [f64; 15] = [
 /// BVH models placed by `pin.updateGeometryPlacements`).
 const COAL_TORSO_SHOULDER: f64 = 0.011_051_225_112_449_013;
 
-const GROUP: [&str; 8] = [
-    "torso_lift_joint",
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "upperarm_roll_joint",
-    "elbow_flex_joint",
-    "forearm_roll_joint",
-    "wrist_flex_joint",
-    "wrist_roll_joint",
-];
-
 #[test]
 fn a_goal_in_the_torsos_hollow_is_clear_once_the_goal_state_swaps_too() {
     let (model, gm) = fetch_geometry(RootJoint::Fixed);
-    let group = JointGroup::new(&model, &GROUP).unwrap();
+    // arm_with_torso: the torso lift and the seven arm joints.
+    let group = FetchQueries::load().group(&model);
     let scene = Scene::default();
     let source = MeshSource {
         urdf: fetch_urdf(),

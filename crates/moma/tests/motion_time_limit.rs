@@ -140,16 +140,13 @@ fn past_the_deadline_shortcutting_and_timing_check_no_state_and_keep_the_path() 
         &mut scratch,
         &mut 0
     ));
+    // The path timed as the planner times it.
+    let time = |checker: &mut ClearanceChecker| {
+        time_optimal(&space, checker, &path, &limits, &TimingOptions::default()).unwrap()
+    };
     let kept = shortcut(&space, &mut checker, &path, &shortcuts, &mut 0).unwrap();
     assert_eq!(kept, path, "the path changed past the deadline");
-    let timed = time_optimal(
-        &space,
-        &mut checker,
-        &path,
-        &limits,
-        &TimingOptions::default(),
-    )
-    .unwrap();
+    let timed = time(&mut checker);
     assert_eq!(timed.blend_deviations.len(), path.len() - 2);
     // A deviation of 0: the trajectory comes to rest at that waypoint.
     assert!(
@@ -168,14 +165,7 @@ fn past_the_deadline_shortcutting_and_timing_check_no_state_and_keep_the_path() 
     assert!(checker.is_valid(&xa));
     let shorter = shortcut(&space, &mut checker, &path, &shortcuts, &mut 0).unwrap();
     assert!(shorter.length(&space) < path.length(&space));
-    let timed = time_optimal(
-        &space,
-        &mut checker,
-        &path,
-        &limits,
-        &TimingOptions::default(),
-    )
-    .unwrap();
+    let timed = time(&mut checker);
     assert!(timed.blend_deviations.iter().any(|d| *d > 0.0));
     assert!(checker.states_checked > before + 1);
 }

@@ -186,9 +186,10 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
 /// closest pair is two links within `margin`, swaps one of them for its mesh surface and
 /// looks again. A link not yet swapped goes first (of the pair's two, the one whose hull
 /// volume exceeds its mesh volume the most: the more concave one), in patches of
-/// [`PATCH_TRIANGLES`]; when both are swapped (or the other has no mesh), the one with the
-/// larger patches is swapped again with patches half as large, down to single triangles,
-/// since a patch's hull still fills the hollow between its triangles. Returns the geometry
+/// [`PATCH_TRIANGLES`]; when both are swapped (or the other has no mesh) and the pair is
+/// still in contact, the one with the larger patches is swapped again with patches half
+/// as large, down to single triangles, since a patch's hull still fills the hollow between
+/// its triangles. Returns the geometry
 /// and the links swapped (in order of their first swap).
 ///
 /// A goal state's swaps are as sound as the start's: the planner reaches the goal along a
@@ -246,7 +247,12 @@ pub fn surface_links_for_states(
                 swapped.push((name, PATCH_TRIANGLES));
                 continue;
             }
-            // Both swapped: the larger patches are halved, every swap redone from `gm`.
+            // Both swapped and still in contact (a pair merely within the margin is left
+            // as it is: the planner's margin shrinks to half the start's clearance): the
+            // larger patches are halved, every swap redone from `gm`.
+            if c.distance > 0.0 {
+                break;
+            }
             let Some(k) = (0..swapped.len())
                 .filter(|&k| candidates.contains(&swapped[k].0) && swapped[k].1 > 1)
                 .max_by_key(|&k| swapped[k].1)
