@@ -192,6 +192,9 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
 /// its triangles. Returns the geometry
 /// and the links swapped (in order of their first swap).
 ///
+/// A state of the wrong length or with a non-finite coordinate is skipped: the planner's
+/// check of it names it.
+///
 /// A goal state's swaps are as sound as the start's: the planner reaches the goal along a
 /// motion checked continuously from the start, so the surfaces would meet before one body
 /// could end up inside the other.
@@ -214,7 +217,12 @@ pub fn surface_links_for_states(
     let mut x = vec![0.0; group.dim()];
     // Each round swaps a new link or halves a patch size: bounded by this many rounds.
     let rounds = gm.links.len() * (1 + PATCH_TRIANGLES.ilog2() as usize);
-    for state in states {
+    // A state of the wrong length or with a non-finite coordinate is left to the planner's
+    // own check of it, which names it (the start or the goal).
+    for state in states
+        .iter()
+        .filter(|q| q.len() == model.nq && q.iter().all(|v| v.is_finite()))
+    {
         group.extract(state, &mut x);
         for _ in 0..rounds {
             let closest = {
