@@ -32,6 +32,18 @@ struct Plates {
     goal: Vec<f64>,
 }
 
+impl Plates {
+    /// The planning problem of the query.
+    fn problem(&self) -> MotionProblem<'_> {
+        MotionProblem {
+            model: &self.model,
+            geometry: &self.geometry,
+            scene: &self.scene,
+            group: &self.group,
+        }
+    }
+}
+
 /// The query table_pick-Front-Can1-0 among its scene plus the two plates, as triangles.
 fn plates() -> Plates {
     let (model, gm) = fetch_geometry(RootJoint::Fixed);
@@ -173,12 +185,7 @@ fn past_the_deadline_shortcutting_and_timing_check_no_state_and_keep_the_path() 
 #[test]
 fn plan_motion_returns_within_its_limit_and_a_phase_begun_past_it_checks_nothing() {
     let p = plates();
-    let problem = MotionProblem {
-        model: &p.model,
-        geometry: &p.geometry,
-        scene: &p.scene,
-        group: &p.group,
-    };
+    let problem = p.problem();
     let goal = MotionGoal::State(p.goal.clone());
     // Solved runs whose search, shortcutting, timing ended past the limit.
     let (mut solved, mut late) = (0, [0; 3]);
@@ -237,12 +244,7 @@ fn plan_motion_returns_within_its_limit_and_a_phase_begun_past_it_checks_nothing
 #[test]
 fn with_time_to_spare_the_minimum_covers_every_waypoint_and_sample() {
     let p = plates();
-    let problem = MotionProblem {
-        model: &p.model,
-        geometry: &p.geometry,
-        scene: &p.scene,
-        group: &p.group,
-    };
+    let problem = p.problem();
     let mut o = MotionOptions::new(p.group.dim());
     o.time_limit = Duration::from_secs(60);
     let r = plan_motion(&problem, &p.start, &MotionGoal::State(p.goal.clone()), &o).unwrap();
