@@ -15,8 +15,12 @@ use rand_chacha::ChaCha8Rng;
 mod fetch_common;
 use fetch_common::{FetchQueries, fetch_geometry, numbers};
 
-fn fetch() -> (Model, GeometryModel) {
-    fetch_geometry(RootJoint::Fixed)
+/// Fetch on a fixed root with its geometry, the shipped query folder, and its group.
+fn fetch() -> (Model, GeometryModel, FetchQueries, JointGroup) {
+    let (model, gm) = fetch_geometry(RootJoint::Fixed);
+    let queries = FetchQueries::load();
+    let group = queries.group(&model);
+    (model, gm, queries, group)
 }
 
 /// A query's scene and start state, and the group states the tests check: `line + 1`
@@ -97,9 +101,7 @@ fn assert_segment_keeps_half_the_margin(
 
 #[test]
 fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
-    let (model, gm) = fetch();
-    let queries = FetchQueries::load();
-    let group = queries.group(&model);
+    let (model, gm, queries, group) = fetch();
     let dim = group.dim();
     let margin = 2e-3;
     let mut rng = ChaCha8Rng::seed_from_u64(7);
@@ -132,9 +134,7 @@ fn the_state_check_passes_exactly_the_states_clear_of_the_margin() {
 /// 41 states along it (the continuous check's guarantee).
 #[test]
 fn the_bounds_before_gjk_never_pass_a_state_too_close() {
-    let (model, gm) = fetch();
-    let queries = FetchQueries::load();
-    let group = queries.group(&model);
+    let (model, gm, queries, group) = fetch();
     let dim = group.dim();
     let space =
         moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
@@ -191,9 +191,7 @@ fn the_state_check_never_passes_a_state_within_the_margin_of_a_concave_mesh_scen
     };
     use moma::kinematics::forward_kinematics;
     use moma::multibody::Data;
-    let (model, gm) = fetch();
-    let queries = FetchQueries::load();
-    let group = queries.group(&model);
+    let (model, gm, queries, group) = fetch();
     let dim = group.dim();
     let start = numbers(&queries.query("cage-Front-Cube1-0")["start"]);
     let fetch_dir = fetch_common::fetch_dir();
@@ -284,9 +282,7 @@ fn the_state_check_never_passes_a_state_within_the_margin_of_a_concave_mesh_scen
 /// passed segment keeps half the margin.
 #[test]
 fn the_plane_and_live_cluster_shortcuts_never_pass_a_state_too_close() {
-    let (model, gm) = fetch();
-    let queries = FetchQueries::load();
-    let group = queries.group(&model);
+    let (model, gm, queries, group) = fetch();
     let dim = group.dim();
     let space =
         moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
