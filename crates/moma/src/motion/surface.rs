@@ -189,8 +189,8 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
 /// [`PATCH_TRIANGLES`]; when both are swapped (or the other has no mesh) and the pair is
 /// still in contact, the one with the larger patches is swapped again with patches half
 /// as large, down to single triangles, since a patch's hull still fills the hollow between
-/// its triangles. Returns the geometry
-/// and the links swapped (in order of their first swap).
+/// its triangles. Returns the geometry and the links swapped (in order of their first
+/// swap).
 ///
 /// A state of the wrong length or with a non-finite coordinate is skipped: the planner's
 /// check of it names it.
@@ -217,8 +217,6 @@ pub fn surface_links_for_states(
     let mut x = vec![0.0; group.dim()];
     // Each round swaps a new link or halves a patch size: bounded by this many rounds.
     let rounds = gm.links.len() * (1 + PATCH_TRIANGLES.ilog2() as usize);
-    // A state of the wrong length or with a non-finite coordinate is left to the planner's
-    // own check of it, which names it (the start or the goal).
     for state in states
         .iter()
         .filter(|q| q.len() == model.nq && q.iter().all(|v| v.is_finite()))
