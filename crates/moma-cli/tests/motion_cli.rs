@@ -9,7 +9,7 @@ use moma::collision::{
     compute_distances, compute_scene_distances, read_scene, update_geometry_placements,
 };
 use moma::kinematics;
-use moma::motion::{MeshSource, PATCH_TRIANGLES, with_mesh_surface};
+use moma::motion::{MeshSource, PATCH_TRIANGLES, Patching, with_mesh_surface};
 use moma::multibody::{Data, RootJoint};
 use nalgebra::DVector;
 use serde_json::Value;
@@ -172,7 +172,7 @@ impl DenseCheck {
                     package_dirs: vec![pkg.clone()],
                 },
                 link,
-                PATCH_TRIANGLES,
+                &Patching::uniform(PATCH_TRIANGLES),
             )
             .unwrap();
         }

@@ -8,7 +8,10 @@ mod fetch_common;
 
 use fetch_common::{FetchQueries, fetch_dir, fetch_geometry, fetch_urdf};
 use moma::collision::Scene;
-use moma::motion::{ClearanceChecker, MeshSource, surface_links_for_states};
+use moma::motion::{
+    ClearanceChecker, MeshSource, PATCH_TRIANGLES, Patching, surface_links_for_states,
+    with_mesh_surface,
+};
 use moma::multibody::RootJoint;
 
 /// MotionBenchMaker's default Fetch state (the tucked arm), full model order.
@@ -80,9 +83,36 @@ fn a_goal_in_the_torsos_hollow_is_clear_once_the_goal_state_swaps_too() {
         &source,
     )
     .unwrap();
+    // Splitting the torso's patches where they meet the shoulder clears the goal: the
+    // shoulder keeps its hull.
+    assert_eq!(swapped, ["torso_lift_link"]);
+    // Only the patches in contact are split: far fewer objects than the torso's surface
+    // cut into single triangles everywhere (the cost of every checked state grows with
+    // them).
+    let objects = |geometry: &moma::collision::GeometryModel| {
+        geometry.links[geometry.link_index("torso_lift_link").unwrap()].count
+    };
+    let uniform = |triangles| {
+        let g = with_mesh_surface(
+            &model,
+            &gm,
+            &source,
+            "torso_lift_link",
+            &Patching::uniform(triangles),
+        )
+        .unwrap();
+        objects(&g)
+    };
+    let (coarse, single) = (uniform(PATCH_TRIANGLES), uniform(1));
+    println!(
+        "torso objects: {} split where in contact, {coarse} in patches of {PATCH_TRIANGLES}, {single} single triangles",
+        objects(&both)
+    );
+    assert!(objects(&both) > coarse, "no patch was split");
     assert!(
-        swapped.contains(&"torso_lift_link".to_string()),
-        "{swapped:?}"
+        objects(&both) < coarse + (single - coarse) / 4,
+        "{} objects",
+        objects(&both)
     );
     let after = closest_at_goal(&both);
     assert!(after.distance > margin, "{after:?}");

@@ -28,4 +28,6 @@ pub use plan::{
     MotionGoal, MotionOptions, MotionProblem, MotionResult, MotionTrajectory, NotSolved,
     PhaseChecks, PhaseTimes, plan_motion,
 };
-pub use surface::{MeshSource, PATCH_TRIANGLES, surface_links_for_states, with_mesh_surface};
+pub use surface::{
+    MeshSource, PATCH_TRIANGLES, Patching, surface_links_for_states, with_mesh_surface,
+};

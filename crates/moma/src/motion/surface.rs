@@ -12,13 +12,16 @@
 
 use super::clearance::ClearanceChecker;
 use super::group::JointGroup;
+use crate::collision::gjk::{WarmStart, overlaps};
 use crate::collision::mesh::TriangleMesh;
 use crate::collision::urdf_geometry::{GeometrySpec, read_link_mesh, read_urdf_geometry};
 use crate::collision::{Convex, GeometryModel, GeometryObject, LinkGeometry, Scene};
-use crate::multibody::{FrameKind, Model};
+use crate::kinematics::forward_kinematics;
+use crate::multibody::{Data, FrameKind, Model};
 use crate::spatial::SE3;
 use crate::{Error, Result};
-use nalgebra::Vector3;
+use nalgebra::{DVector, Vector3};
+use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 /// Where the URDF's meshes are: the file and the package folders.
@@ -30,8 +33,83 @@ pub struct MeshSource {
     pub package_dirs: Vec<PathBuf>,
 }
 
-/// The link's mesh objects replaced by their triangles in patches of at most `patch`
-/// neighbouring triangles, each patch the convex hull of its triangles (primitives kept).
+/// How a link's mesh surface is cut into patches: the median splits of
+/// [`with_mesh_surface`] down to at most `triangles` triangles, and further where a patch
+/// was found in contact ([`surface_links_for_states`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Patching {
+    /// Triangles per patch at most.
+    pub triangles: usize,
+    /// Patches split once more, each named by its mesh element's index among the link's
+    /// collision elements and its triangles' indices (ascending).
+    split: BTreeSet<(usize, Vec<usize>)>,
+}
+
+impl Patching {
+    /// Patches of at most `triangles` triangles, nowhere finer.
+    pub fn uniform(triangles: usize) -> Self {
+        Self {
+            triangles,
+            split: BTreeSet::new(),
+        }
+    }
+
+    /// The patches of element `element`'s mesh: its triangles split at the median centroid
+    /// along the longest axis of their centroids' box while more than `triangles` remain
+    /// or the set is one to split once more (neighbouring triangles end up in one patch).
+    fn patches(&self, mesh: &TriangleMesh, element: usize) -> Vec<Vec<usize>> {
+        let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
+        let mut leaves = Vec::new();
+        self.split_into(mesh, element, &mut order, &mut leaves);
+        leaves
+    }
+
+    fn split_into(
+        &self,
+        mesh: &TriangleMesh,
+        element: usize,
+        order: &mut [usize],
+        leaves: &mut Vec<Vec<usize>>,
+    ) {
+        if order.is_empty() {
+            return;
+        }
+        let split_again = || {
+            let mut key = order.to_vec();
+            key.sort_unstable();
+            self.split.contains(&(element, key))
+        };
+        if order.len() == 1 || (order.len() <= self.triangles.max(1) && !split_again()) {
+            leaves.push(order.to_vec());
+            return;
+        }
+        let centroid = |t: usize| -> Vector3<f64> {
+            mesh.triangles[t]
+                .iter()
+                .fold(Vector3::zeros(), |s, &i| s + mesh.vertices[i as usize])
+                / 3.0
+        };
+        let (mut lo, mut hi) = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
+        for &t in order.iter() {
+            let c = centroid(t);
+            lo = lo.inf(&c);
+            hi = hi.sup(&c);
+        }
+        let axis = (hi - lo).imax();
+        order.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+        let mid = order.len() / 2;
+        let (left, right) = order.split_at_mut(mid);
+        self.split_into(mesh, element, left, leaves);
+        self.split_into(mesh, element, right, leaves);
+    }
+}
+
+/// The link's mesh objects replaced by their triangles in patches of neighbouring
+/// triangles as `patching` cuts them, each patch the convex hull of its triangles
+/// (primitives kept).
 ///
 /// # Errors
 /// [`Error::InvalidInput`] naming the link when it has no geometry; the URDF's and the
@@ -41,7 +119,7 @@ pub fn with_mesh_surface(
     gm: &GeometryModel,
     source: &MeshSource,
     link: &str,
-    patch: usize,
+    patching: &Patching,
 ) -> Result<GeometryModel> {
     let Some(li) = gm.link_index(link) else {
         return Err(Error::invalid(
@@ -49,21 +127,12 @@ pub fn with_mesh_surface(
             "has no collision geometry",
         ));
     };
-    let text = std::fs::read_to_string(&source.urdf).map_err(|e| Error::Io {
-        path: source.urdf.clone(),
-        source: e,
-    })?;
-    let elements = read_urdf_geometry(&text, &source.urdf.display().to_string())?;
     let frame = model
         .frames
         .iter()
         .find(|f| f.kind == FrameKind::Body && f.name == link)
         .ok_or_else(|| Error::invalid(format!("link '{link}'"), "is not a body of the model"))?;
-    let mine: Vec<_> = elements
-        .collisions
-        .iter()
-        .filter(|g| g.link == link)
-        .collect();
+    let mine = link_elements(link, source)?;
     let old = &gm.links[li];
     if mine.len() != old.count {
         return Err(Error::invalid(
@@ -76,18 +145,14 @@ pub fn with_mesh_surface(
         ));
     }
     let mut replaced: Vec<GeometryObject> = Vec::new();
-    for (k, g) in mine.iter().enumerate() {
+    for (k, (origin, mesh)) in mine.iter().enumerate() {
         let original = &gm.objects[old.first + k];
-        let GeometrySpec::Mesh { uri, scale } = &g.spec else {
+        let Some(mesh) = mesh else {
             replaced.push(original.clone());
             continue;
         };
-        let mesh = read_link_mesh(&source.urdf, link, uri, *scale, &source.package_dirs)?;
-        let placement: SE3 = frame.placement * g.origin;
-        let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
-        let mut leaves = Vec::new();
-        split(&mesh, &mut order, patch.max(1), &mut leaves);
-        for leaf in leaves {
+        let placement: SE3 = frame.placement * *origin;
+        for leaf in patching.patches(mesh, k) {
             let mut v: Vec<Vector3<f64>> = leaf
                 .iter()
                 .flat_map(|&t| mesh.triangles[t].map(|i| mesh.vertices[i as usize]))
@@ -153,15 +218,19 @@ fn concavity(gm: &GeometryModel, li: usize, source: &MeshSource) -> Result<Optio
         }
     }
     let mut mesh = 0.0;
-    let meshes = link_meshes(&link.name, source)?;
-    for m in &meshes {
-        mesh += signed(&m.vertices, &mut m.triangles.iter().copied());
+    let mut meshes = 0;
+    for (_, m) in link_elements(&link.name, source)? {
+        if let Some(m) = m {
+            mesh += signed(&m.vertices, &mut m.triangles.iter().copied());
+            meshes += 1;
+        }
     }
-    Ok((!meshes.is_empty() && hull > 0.0).then(|| hull / mesh.max(1e-12)))
+    Ok((meshes > 0 && hull > 0.0).then(|| hull / mesh.max(1e-12)))
 }
 
-/// The meshes of a link's collision elements, in the elements' frames.
-fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
+/// A link's collision elements in the URDF's order: each one's origin in the link's frame
+/// and, for a mesh, the mesh (in the element's frame).
+fn link_elements(link: &str, source: &MeshSource) -> Result<Vec<(SE3, Option<TriangleMesh>)>> {
     let text = std::fs::read_to_string(&source.urdf).map_err(|e| Error::Io {
         path: source.urdf.clone(),
         source: e,
@@ -169,28 +238,89 @@ fn link_meshes(link: &str, source: &MeshSource) -> Result<Vec<TriangleMesh>> {
     let elements = read_urdf_geometry(&text, &source.urdf.display().to_string())?;
     let mut out = Vec::new();
     for g in elements.collisions.iter().filter(|g| g.link == link) {
-        if let GeometrySpec::Mesh { uri, scale } = &g.spec {
-            out.push(read_link_mesh(
+        let mesh = match &g.spec {
+            GeometrySpec::Mesh { uri, scale } => Some(read_link_mesh(
                 &source.urdf,
                 link,
                 uri,
                 *scale,
                 &source.package_dirs,
-            )?);
-        }
+            )?),
+            _ => None,
+        };
+        out.push((g.origin, mesh));
     }
     Ok(out)
 }
 
+/// Marks to be split once more every patch of more than one triangle of `link`'s surface
+/// (its `elements` cut as `patching`, the geometry `gm` built so) that overlaps one of
+/// `other`'s objects at the placements of `data`; returns how many it marked.
+fn split_patches_in_contact(
+    data: &Data,
+    gm: &GeometryModel,
+    link: &str,
+    other: &str,
+    elements: &[(SE3, Option<TriangleMesh>)],
+    patching: &mut Patching,
+) -> usize {
+    let (Some(li), Some(oi)) = (gm.link_index(link), gm.link_index(other)) else {
+        return 0;
+    };
+    let world = |o: &GeometryObject| data.world_from_joint[o.joint.0].compose(&o.placement);
+    let theirs = &gm.links[oi];
+    let others: Vec<(&GeometryObject, SE3, Vector3<f64>)> = gm.objects
+        [theirs.first..theirs.first + theirs.count]
+        .iter()
+        .map(|o| {
+            let w = world(o);
+            let centre = w.act_point(&o.bounding_centre);
+            (o, w, centre)
+        })
+        .collect();
+    let mine = &gm.links[li];
+    let mut next = mine.first;
+    let mut marked = Vec::new();
+    for (k, (_, mesh)) in elements.iter().enumerate() {
+        let Some(mesh) = mesh else {
+            next += 1;
+            continue;
+        };
+        for leaf in patching.patches(mesh, k) {
+            let Some(o) = gm.objects[..mine.first + mine.count].get(next) else {
+                return 0; // not the geometry `patching` built: nothing to tell
+            };
+            next += 1;
+            if leaf.len() < 2 {
+                continue;
+            }
+            let w = world(o);
+            let centre = w.act_point(&o.bounding_centre);
+            let touches = others.iter().any(|(p, pw, pc)| {
+                (centre - pc).norm() <= o.bounding_radius + p.bounding_radius + 1e-9
+                    && overlaps(&o.shape, &w, &p.shape, pw, &mut WarmStart::default())
+            });
+            if touches {
+                let mut key = leaf;
+                key.sort_unstable();
+                marked.push((k, key));
+            }
+        }
+    }
+    let count = marked.len();
+    patching.split.extend(marked);
+    count
+}
+
 /// For each of `states` in turn (the start first, then a goal state): while the state's
 /// closest pair is two links within `margin`, swaps one of them for its mesh surface and
-/// looks again. A link not yet swapped goes first (of the pair's two, the one whose hull
-/// volume exceeds its mesh volume the most: the more concave one), in patches of
-/// [`PATCH_TRIANGLES`]; when both are swapped (or the other has no mesh) and the pair is
-/// still in contact, the one with the larger patches is swapped again with patches half
-/// as large, down to single triangles, since a patch's hull still fills the hollow between
-/// its triangles. Returns the geometry and the links swapped (in order of their first
-/// swap).
+/// looks again. While a swapped link is in contact with the other (a patch's hull still
+/// fills the hollow between its triangles), each of its patches that overlaps the other
+/// link is split in two, down to single triangles, the rest of its surface staying as it
+/// was; otherwise a link not yet swapped is swapped (of the pair's two, the one whose
+/// hull volume exceeds its mesh volume the most: the more concave one), in patches of
+/// [`PATCH_TRIANGLES`]. Returns the geometry and the links swapped (in order of their
+/// first swap).
 ///
 /// A state of the wrong length or with a non-finite coordinate is skipped: the planner's
 /// check of it names it.
@@ -211,17 +341,20 @@ pub fn surface_links_for_states(
     source: &MeshSource,
 ) -> Result<(GeometryModel, Vec<String>)> {
     let mut current = gm.clone();
-    // The swapped links and their patch sizes, in order of their first swap.
-    let mut swapped: Vec<(String, usize)> = Vec::new();
+    // The swapped links and how their surfaces are cut, in order of their first swap.
+    let mut swapped: Vec<(String, Patching)> = Vec::new();
     let weights = vec![1.0; group.dim()];
     let mut x = vec![0.0; group.dim()];
-    // Each round swaps a new link or halves a patch size: bounded by this many rounds.
+    let mut data = Data::new(model);
+    // Each round splits the patches in contact (at most log2 of the patch size times for
+    // one pair) or swaps a new link: bounded by this many rounds.
     let rounds = gm.links.len() * (1 + PATCH_TRIANGLES.ilog2() as usize);
     for state in states
         .iter()
         .filter(|q| q.len() == model.nq && q.iter().all(|v| v.is_finite()))
     {
         group.extract(state, &mut x);
+        forward_kinematics(model, &mut data, &DVector::from_column_slice(state));
         for _ in 0..rounds {
             let closest = {
                 let mut checker =
@@ -234,6 +367,35 @@ pub fn surface_links_for_states(
                 break;
             };
             let candidates = [c.link, c.other];
+            // In contact with a surface: the patches in contact are split first, every
+            // swap redone from `gm` (a pair merely within the margin is left as it is:
+            // the planner's margin shrinks to half the start's clearance).
+            if c.distance <= 0.0 {
+                let mut marked = 0;
+                for (link, other) in [
+                    (&candidates[0], &candidates[1]),
+                    (&candidates[1], &candidates[0]),
+                ] {
+                    if let Some(k) = swapped.iter().position(|(s, _)| s == link) {
+                        let elements = link_elements(link, source)?;
+                        marked += split_patches_in_contact(
+                            &data,
+                            &current,
+                            link,
+                            other,
+                            &elements,
+                            &mut swapped[k].1,
+                        );
+                    }
+                }
+                if marked > 0 {
+                    current = gm.clone();
+                    for (name, patching) in &swapped {
+                        current = with_mesh_surface(model, &current, source, name, patching)?;
+                    }
+                    continue;
+                }
+            }
             let mut pick: Option<(String, f64)> = None;
             for name in candidates
                 .iter()
@@ -248,28 +410,12 @@ pub fn surface_links_for_states(
                     pick = Some((name.clone(), r));
                 }
             }
-            if let Some((name, _)) = pick {
-                current = with_mesh_surface(model, &current, source, &name, PATCH_TRIANGLES)?;
-                swapped.push((name, PATCH_TRIANGLES));
-                continue;
-            }
-            // Both swapped and still in contact (a pair merely within the margin is left
-            // as it is: the planner's margin shrinks to half the start's clearance): the
-            // larger patches are halved, every swap redone from `gm`.
-            if c.distance > 0.0 {
-                break;
-            }
-            let Some(k) = (0..swapped.len())
-                .filter(|&k| candidates.contains(&swapped[k].0) && swapped[k].1 > 1)
-                .max_by_key(|&k| swapped[k].1)
-            else {
+            let Some((name, _)) = pick else {
                 break;
             };
-            swapped[k].1 /= 2;
-            current = gm.clone();
-            for (name, patch) in &swapped {
-                current = with_mesh_surface(model, &current, source, name, *patch)?;
-            }
+            let patching = Patching::uniform(PATCH_TRIANGLES);
+            current = with_mesh_surface(model, &current, source, &name, &patching)?;
+            swapped.push((name, patching));
         }
     }
     Ok((current, swapped.into_iter().map(|(name, _)| name).collect()))
@@ -277,36 +423,3 @@ pub fn surface_links_for_states(
 
 /// Triangles per surface patch when a link is first swapped for its surface.
 pub const PATCH_TRIANGLES: usize = 8;
-
-/// Splits the triangles `order` at the median centroid along the longest axis of their
-/// centroids' box until at most `patch` remain: neighbouring triangles end up in one
-/// patch.
-fn split(mesh: &TriangleMesh, order: &mut [usize], patch: usize, leaves: &mut Vec<Vec<usize>>) {
-    if order.len() <= patch {
-        if !order.is_empty() {
-            leaves.push(order.to_vec());
-        }
-        return;
-    }
-    let centroid = |t: usize| -> Vector3<f64> {
-        mesh.triangles[t]
-            .iter()
-            .fold(Vector3::zeros(), |s, &i| s + mesh.vertices[i as usize])
-            / 3.0
-    };
-    let (mut lo, mut hi) = (
-        Vector3::repeat(f64::INFINITY),
-        Vector3::repeat(f64::NEG_INFINITY),
-    );
-    for &t in order.iter() {
-        let c = centroid(t);
-        lo = lo.inf(&c);
-        hi = hi.sup(&c);
-    }
-    let axis = (hi - lo).imax();
-    order.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
-    let mid = order.len() / 2;
-    let (left, right) = order.split_at_mut(mid);
-    split(mesh, left, patch, leaves);
-    split(mesh, right, patch, leaves);
-}
