@@ -402,12 +402,12 @@ impl OptimalControlProblem for MpcProblem {
             planes.push(Vector3::new(r[0], r[1], hi[i]));
             planes.push(Vector3::new(-r[0], -r[1], -lo[i]));
         }
-        let first_rows = if k == 0 {
+        let rows_here = if k == 0 {
             WHEEL_TORQUE_ROWS + self.first_zmp_rows
         } else {
             0
         };
-        for r in 0..first_rows {
+        for r in 0..rows_here {
             let row = self.first_rows.row(r);
             let mut rest = self.first_offsets[r];
             for j in 2..u.len() {
@@ -422,8 +422,8 @@ impl OptimalControlProblem for MpcProblem {
             planes.push(Vector3::new(e[0], e[1], (limit - rate[i]) / dt));
             planes.push(Vector3::new(-e[0], -e[1], (limit + rate[i]) / dt));
         }
-        let speed = 4 + first_rows;
-        let torque = 4 + first_rows.min(WHEEL_TORQUE_ROWS);
+        let speed = 4 + rows_here;
+        let torque = 4 + rows_here.min(WHEEL_TORQUE_ROWS);
         let z0 = w * Vector2::new(u[0], u[1]);
         let z = nearest_in_polygon(planes, z0)
             .or_else(|| nearest_in_polygon(&planes[..speed], z0))
@@ -519,7 +519,7 @@ impl WholeBodyMpc {
         lo[0] = -settings.max_linear_acceleration;
         lo[1] = -settings.max_angular_acceleration;
         let hi = -&lo;
-        let first_rows = WHEEL_TORQUE_ROWS + robot.stability.support.len() + 1;
+        let row_capacity = WHEEL_TORQUE_ROWS + robot.stability.support.len() + 1;
         let posture =
             DVector::from_iterator(robot.n_moved(), robot.dofs.iter().map(|&d| q_start[d]));
         let problem = MpcProblem {
@@ -531,10 +531,10 @@ impl WholeBodyMpc {
             hold: q_start.clone(),
             lo,
             hi,
-            first_rows: DMatrix::zeros(first_rows, nu),
-            first_offsets: DVector::zeros(first_rows),
+            first_rows: DMatrix::zeros(row_capacity, nu),
+            first_offsets: DVector::zeros(row_capacity),
             first_zmp_rows: 0,
-            planes: Vec::with_capacity(8 + first_rows),
+            planes: Vec::with_capacity(8 + row_capacity),
             min_zmp: vec![f64::INFINITY; n + 1],
             min_clearance: vec![f64::INFINITY; n + 1],
             kept_min_zmp: vec![f64::INFINITY; n + 1],
