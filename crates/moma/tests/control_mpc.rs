@@ -590,3 +590,153 @@ fn fetch_admissible_inputs_keep_the_next_knots_speed_limits_and_are_the_nearest(
         "the wheel-rate limit moved {moved} of 300 inputs"
     );
 }
+
+/// At knot 0 the first input's platform part is moved onto the inputs that keep the ZMP
+/// margin at the measured state at least its set value (Fetch with five times its wheel
+/// torque and the arm raised forward, so that the base's accelerations can tip it): from
+/// random states and inputs, the margin of the accelerations the returned input's torques
+/// give on the plant (`stability::evaluate` of the forward dynamics, not the MPC's rows)
+/// is at least the set value wherever a 31 × 31 grid of the platform's accelerations,
+/// with the same arm input, holds a point that keeps it within the wheels' torque and
+/// rate limits; and the wheels' torques stay within their limits.
+#[test]
+fn the_first_input_keeps_the_zmp_margin_at_the_measured_state() {
+    use moma::mobile::wheeled::{WheeledData, reduced_forward_dynamics_crba};
+    use moma::stability::{ExternalLoads, StabilityData, evaluate};
+    let set_value = 0.03;
+    let mut s = MpcSettings::default();
+    s.constraints.zmp_margin = Some(set_value);
+    s.max_linear_acceleration = 8.0;
+    let (a_lin, a_ang, a_joint) = (
+        s.max_linear_acceleration,
+        s.max_angular_acceleration,
+        s.max_joint_acceleration,
+    );
+    let (mut mpc, mut q0) = mpc_common::fetch_mpc(None, s);
+    let robot = &mut mpc.problem.robot;
+    robot.torque_limit[0] *= 5.0;
+    robot.torque_limit[1] *= 5.0;
+    let model = &robot.wheeled.model;
+    for (name, v) in [
+        ("torso_lift_joint", 0.38),
+        ("shoulder_lift_joint", -1.0),
+        ("elbow_flex_joint", 0.0),
+        ("wrist_flex_joint", 0.0),
+    ] {
+        let j = model.joint_id(name).unwrap();
+        q0[model.idx_q[j.0]] = v;
+    }
+    let robot = robot.clone();
+    let (nx, nu, n) = (robot.nx(), robot.nu(), robot.n_moved());
+    let wm = &robot.wheeled;
+    let (w, wl, dt) = (robot.wheel_map, robot.wheel_rate_limit, 0.05);
+    let mut wd = WheeledData::new(wm);
+    let mut sd = StabilityData::new(&robot.stability);
+    let mut tau = vec![0.0; wm.nu()];
+    // The ZMP margin and the wheels' torques and next rates of the input `u` at (q, v),
+    // through the torques that realise it and the plant's forward dynamics of them.
+    let mut outcome = |mpc: &mut moma::control::mpc::WholeBodyMpc,
+                       q: &DVector<f64>,
+                       v: &DVector<f64>,
+                       u: &DVector<f64>| {
+        mpc.solution.us[0].copy_from(u);
+        mpc.first_input_torques_at(q.as_slice(), v.as_slice(), &mut tau, false)
+            .unwrap();
+        reduced_forward_dynamics_crba(wm, &mut wd, q, v, &tau).unwrap();
+        let margin = evaluate(
+            &wm.model,
+            &mut wd.data,
+            &robot.stability,
+            &mut sd,
+            q,
+            &wd.qdot,
+            &wd.reduced.qddot,
+            &ExternalLoads::NONE,
+        )
+        .zmp_margin
+        .unwrap_or(f64::NEG_INFINITY);
+        let torque =
+            (tau[0].abs() / robot.torque_limit[0]).max(tau[1].abs() / robot.torque_limit[1]);
+        let rates = w * nalgebra::Vector2::new(v[0] + dt * u[0], v[1] + dt * u[1]);
+        (margin, torque, rates.amax() / wl)
+    };
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let (mut lo, mut hi) = (DVector::zeros(nu), DVector::zeros(nu));
+    let mut x = DVector::zeros(nx);
+    let (mut held, mut tipping, mut infeasible) = (0, 0, 0);
+    for trial in 0..40 {
+        let mut q = q0.clone();
+        q[0] = rnd();
+        q[1] = rnd();
+        q[2] = 3.0 * rnd();
+        for &d in &robot.dofs {
+            q[d] += 0.3 * rnd();
+        }
+        let mut v = DVector::zeros(wm.nr());
+        let platform =
+            w.try_inverse().unwrap() * nalgebra::Vector2::new(0.8 * wl * rnd(), 0.8 * wl * rnd());
+        v[0] = platform[0];
+        v[1] = platform[1];
+        for i in 0..n {
+            v[robot.reduced[i]] = 0.3 * robot.speed_limit[i] * rnd();
+        }
+        mpc.solve(q.as_slice(), v.as_slice()).unwrap();
+        robot.state_from_plant(q.as_slice(), v.as_slice(), &mut x);
+        let mut u = DVector::zeros(nu);
+        u[0] = a_lin * rnd();
+        u[1] = a_ang * rnd();
+        for i in 2..nu {
+            u[i] = a_joint * rnd();
+        }
+        let mut asked = u.clone();
+        mpc.problem
+            .clamp_to_input_bounds(0, &x, &mut asked, &mut lo, &mut hi);
+        mpc.problem
+            .admissible_input(0, &x, &mut u, &mut lo, &mut hi);
+        assert_eq!(
+            u.rows(2, n),
+            asked.rows(2, n),
+            "{trial}: the arm's input is kept"
+        );
+        let (asked_margin, _, _) = outcome(&mut mpc, &q, &v, &asked);
+        let (margin, torque, _) = outcome(&mut mpc, &q, &v, &u);
+        // Whether the grid holds an admissible input that keeps the set value.
+        let mut feasible = false;
+        let mut trial_u = u.clone();
+        for a in 0..=30 {
+            for b in 0..=30 {
+                trial_u[0] = a_lin * (a as f64 / 15.0 - 1.0);
+                trial_u[1] = a_ang * (b as f64 / 15.0 - 1.0);
+                let (m, t, r) = outcome(&mut mpc, &q, &v, &trial_u);
+                feasible |= m >= set_value && t <= 1.0 && r <= 1.0;
+            }
+        }
+        if !feasible {
+            infeasible += 1;
+            continue;
+        }
+        if asked_margin < set_value {
+            tipping += 1;
+        }
+        held += 1;
+        assert!(
+            margin >= set_value - 1e-9,
+            "{trial}: margin {margin} (asked for {asked_margin}), input {u}"
+        );
+        assert!(
+            torque <= 1.0 + 1e-9,
+            "{trial}: wheel torque {torque} of the limit"
+        );
+    }
+    println!("held {held} (asked to tip: {tipping}), no grid point: {infeasible}");
+    assert!(
+        tipping >= 10 && held >= 20,
+        "held {held}, tipping {tipping}"
+    );
+}

@@ -120,30 +120,103 @@ fn hard_stop(zmp: Option<f64>) -> MpcRun {
     .unwrap()
 }
 
+/// The smallest ZMP margin of the plant over the whole run, not only at the solves: each
+/// period replayed from its sample's state under the torques held over it (the loop's
+/// zero-order hold), RK4 at 1 ms, the margin of the plant's acceleration at every step
+/// (`stability::evaluate`, as the samples'); lift-off counts as `−∞`.
+fn min_margin_between_solves(run: &MpcRun, wheeled: &moma::mobile::WheeledModel) -> f64 {
+    use moma::mobile::wheeled::{WheeledData, reduced_forward_dynamics_crba};
+    use moma::sim::reduced_system::ReducedSystem;
+    use moma::stability::{ExternalLoads, StabilityData, evaluate};
+    let robot = mpc_common::fetch_robot(None);
+    let mut plant = WheeledSystem::new(wheeled.clone());
+    let mut wd = WheeledData::new(wheeled);
+    let mut sd = StabilityData::new(&robot.stability);
+    let (nq, nv) = (plant.nq(), plant.nv());
+    let mut margin = |q: &[f64], v: &[f64], tau: &[f64]| {
+        let (q, v) = (DVector::from_column_slice(q), DVector::from_column_slice(v));
+        reduced_forward_dynamics_crba(wheeled, &mut wd, &q, &v, tau).unwrap();
+        evaluate(
+            &wheeled.model,
+            &mut wd.data,
+            &robot.stability,
+            &mut sd,
+            &q,
+            &wd.qdot,
+            &wd.reduced.qddot,
+            &ExternalLoads::NONE,
+        )
+        .zmp_margin
+        .unwrap_or(f64::NEG_INFINITY)
+    };
+    let (steps, h) = (50, 0.001);
+    let mut lowest = f64::INFINITY;
+    for s in &run.samples {
+        let (mut q, mut v) = (s.q.clone(), s.v.clone());
+        for _ in 0..steps {
+            lowest = lowest.min(margin(&q, &v, &s.torque));
+            // Classic RK4 on (q, v): slopes at y, y + h/2 k1, y + h/2 k2, y + h k3.
+            let mut slopes: Vec<(Vec<f64>, Vec<f64>)> = Vec::with_capacity(4);
+            for c in [0.0, 0.5 * h, 0.5 * h, h] {
+                let (qs, vs): (Vec<f64>, Vec<f64>) = match slopes.last() {
+                    Some((kq, kv)) => (
+                        q.iter().zip(kq).map(|(a, b)| a + c * b).collect(),
+                        v.iter().zip(kv).map(|(a, b)| a + c * b).collect(),
+                    ),
+                    None => (q.clone(), v.clone()),
+                };
+                let (mut kq, mut kv) = (vec![0.0; nq], vec![0.0; nv]);
+                plant
+                    .dynamics(&qs, &vs, &s.torque, &mut kq, &mut kv)
+                    .unwrap();
+                slopes.push((kq, kv));
+            }
+            for (w, (kq, kv)) in [1.0, 2.0, 2.0, 1.0].iter().zip(&slopes) {
+                for i in 0..nq {
+                    q[i] += w * h / 6.0 * kq[i];
+                }
+                for i in 0..nv {
+                    v[i] += w * h / 6.0 * kv[i];
+                }
+            }
+        }
+    }
+    lowest
+}
+
 #[test]
 fn tip_over_constraint_keeps_the_zmp_margin_that_the_unconstrained_mpc_loses() {
     let free = hard_stop(None);
     let kept = hard_stop(Some(0.03));
     println!("free {:#?}\nkept {:#?}", free.summary, kept.summary);
+    let wheeled = mpc_common::fetch_robot(None).wheeled;
+    let (free_between, kept_between) = (
+        min_margin_between_solves(&free, &wheeled),
+        min_margin_between_solves(&kept, &wheeled),
+    );
+    println!("between solves: free {free_between} m, kept {kept_between} m");
+    // Without the constraint the ZMP leaves the support.
     assert!(
         free.summary.min_zmp_margin < 0.0,
         "{}",
         free.summary.min_zmp_margin
     );
-    // Measured: −0.15 m without the constraint, +0.022 m with it (set value 0.03 m): the
-    // constraint keeps the ZMP inside the support but not quite at the set value in
-    // closed loop (see docs/mpc.md); these bounds record that and fail if it gets worse.
+    // With it, at every solve the first input keeps the set value exactly at the
+    // measured state ("Limits the solver enforces", docs/mpc.md); the applied torques
+    // realise it on the plant to the rounding of the forward dynamics of the plant's
+    // state (the held joints' small velocities, which the MPC's model zeroes).
+    // Measured: 0.0299998 m.
     assert!(
-        kept.summary.min_zmp_margin > free.summary.min_zmp_margin + 0.1,
-        "{} vs {}",
-        kept.summary.min_zmp_margin,
-        free.summary.min_zmp_margin
-    );
-    assert!(
-        kept.summary.min_zmp_margin > 0.0,
+        kept.summary.min_zmp_margin > 0.03 - 1e-6,
         "{}",
         kept.summary.min_zmp_margin
     );
+    // Between solves the torques are held over the 50 ms period while the state moves,
+    // so the acceleration, hence the ZMP, drifts from the one the solve held. Measured:
+    // 0.02846 m at worst, 1.5 mm below the set value, at the end of the period from
+    // t = 0.70 s (the base speeding up from 0.27 to 0.50 m/s at the held torques, the
+    // margin falling steadily through the period); 2.5 mm allowed.
+    assert!(kept_between > 0.03 - 0.0025, "{kept_between}");
 }
 
 /// `scenarios/mpc_reach_on_the_move.toml`, read by `moma::sim_config` and run by the

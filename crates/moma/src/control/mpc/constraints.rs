@@ -35,11 +35,12 @@
 //! | clearance | one row per nearest pair (self pairs, scene; the [`ConstraintSettings::clearance_pairs`] nearest, ascending): distance ≥ `clearance` | that pair's distance derivative |
 //! | map clearance | base footprint's clearance on the map's distance field ≥ `map_clearance` | the bilinear field's gradient in `(x, y, θ)` |
 //!
-//! The joint-speed and wheel-speed limits, and the wheels' torque limits of the first
-//! input, are also enforced exactly by the solver, on every input it applies (the
-//! whole-body problem's `input_bounds` and `admissible_input`, `docs/mpc.md`, "Limits the
-//! solver enforces"); their rows here then stay inactive unless the limit cannot be met
-//! in one stage.
+//! The joint-speed and wheel-speed limits, and the wheels' torque limits and the ZMP
+//! margin of the first input, are also enforced exactly by the solver, on every input it
+//! applies (the whole-body problem's `input_bounds` and `admissible_input`,
+//! `docs/mpc.md`, "Limits the solver enforces"); their rows here then stay inactive
+//! unless the limit cannot be met in one stage (for the ZMP at knot 0: by the platform's
+//! inputs, the arm's given).
 
 use nalgebra::DVector;
 

@@ -116,7 +116,7 @@ pub trait OptimalControlProblem {
     /// that box cut by further constraints the rollout enforces exactly projects onto
     /// it, the result staying within the box.
     fn admissible_input(
-        &self,
+        &mut self,
         k: usize,
         x: &DVector<f64>,
         u: &mut DVector<f64>,

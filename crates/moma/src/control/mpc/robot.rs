@@ -15,7 +15,7 @@
 //! (head, gripper fingers, wheel angles) are held where the caller's configuration puts
 //! them: zero velocity and zero acceleration over the horizon.
 
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3xX, Matrix6xX, Vector3, Vector6};
 
 use crate::collision::{
     ClosestPair, GeometryData, GeometryModel, PairSelection, Scene, SceneData, compute_distances,
@@ -32,7 +32,7 @@ use crate::mobile::wheeled::{
 };
 use crate::multibody::FrameIndex;
 use crate::spatial::{Inertia, Motion, SE3};
-use crate::stability::{ExternalLoads, StabilityData, StabilityModel, evaluate};
+use crate::stability::{ExternalLoads, StabilityData, StabilityModel, SupportPolygon, evaluate};
 
 /// The robot's collision model and its scene.
 #[derive(Clone, Debug)]
@@ -262,6 +262,13 @@ pub struct KnotValues {
     /// Its gradient in u (exact: the momentum rate is affine in q̈, see
     /// [`evaluate_knot`]).
     pub zmp_du: DVector<f64>,
+    /// The gravito-inertial wrench `[f; M]` of the whole robot, its moment `M` about the
+    /// ground point below the world origin `(0, 0, z_ground)`: the ZMP is
+    /// `(−M_y / f_z, M_x / f_z)` where `f_z < 0`. Set with the derivatives.
+    pub ground_wrench: Vector6<f64>,
+    /// Its derivative in u (6 × nu), exact: the wrench is affine in u at a fixed state
+    /// (the momentum rate is affine in q̈). Set with the derivatives.
+    pub ground_wrench_du: DMatrix<f64>,
     /// The signed distances of the nearest pairs (self pairs and scene link–object
     /// pairs), ascending, one per clearance row (the workspace's `pair_rows` of them):
     /// `distances[0]` is the smallest distance. A slot no queried pair fills holds the
@@ -321,6 +328,18 @@ pub struct KnotWorkspace {
 }
 
 impl KnotWorkspace {
+    /// The support polygon (world) of the last knot evaluated, placed at its base pose.
+    #[must_use]
+    pub fn support(&self) -> &SupportPolygon {
+        &self.sd.support
+    }
+
+    /// The robot's total mass (kg), from the last knot evaluated.
+    #[must_use]
+    pub fn mass(&self) -> f64 {
+        self.sd.wrench.mass
+    }
+
     /// Buffers for `robot`, keeping the distances of the `pair_rows` nearest pairs
     /// (at least one).
     #[must_use]
@@ -372,6 +391,8 @@ impl KnotWorkspace {
                 zmp_margin: None,
                 zmp_dx: DVector::zeros(nx),
                 zmp_du: DVector::zeros(nu),
+                ground_wrench: Vector6::zeros(),
+                ground_wrench_du: DMatrix::zeros(6, nu),
                 distances: vec![f64::INFINITY; pair_rows],
                 distances_dx: vec![DVector::zeros(nx); pair_rows],
                 map_clearance: f64::INFINITY,
@@ -711,82 +732,97 @@ pub fn evaluate_knot(
             }
         }
     }
-    // ZMP gradient on the critical edge. In x: the point-mass ZMP
-    // p = c_xy − h c̈_xy / (g + c̈_z), h = c_z − z_ground, with c̈ = J_c q̈ (the J̇_c q̇ term
-    // and ∂c̈/∂q left out). In u: exact (below).
+    // The ground wrench and its exact derivative in u: the momentum rate ḣ (world
+    // origin) is affine in q̈, with ∂ḣ/∂q̈_d = I_sub(d) J_d (the world inertia of the
+    // subtree dof d moves times its joint Jacobian column), and q̈ = N_C v̇_r + Ṅ_C v_r.
+    // The gravito-inertial force is f = m g − ḣ_lin and its moment about
+    // p0 = (0, 0, z_ground) is M = m c × g − ḣ_ang + p0 × ḣ_lin.
     vals.zmp_dx.fill(0.0);
     vals.zmp_du.fill(0.0);
-    if derivatives && let (Some(_), Some(e)) = (vals.zmp_margin, critical) {
-        com_jacobian(
-            model,
-            data,
-            &mut ws.sub_mass,
-            &mut ws.sub_moment,
-            &mut ws.jcom,
+    if !derivatives {
+        return;
+    }
+    let p0 = Vector3::new(0.0, 0.0, ws.sd.support.ground_z());
+    let w = &ws.sd.wrench;
+    let (f, m) = (w.force, w.moment_about(&p0));
+    vals.ground_wrench = Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z);
+    let nj = model.njoints;
+    for j in 0..nj {
+        ws.sub_inertia[j] = if j == 0 {
+            Inertia::zero()
+        } else {
+            model.inertias[j].transformed(&data.world_from_joint[j])
+        };
+    }
+    for j in (1..nj).rev() {
+        let sub = ws.sub_inertia[j];
+        ws.sub_inertia[model.parents[j].0] += sub;
+    }
+    let nc = robot.n_moved();
+    vals.ground_wrench_du.fill(0.0);
+    for d in 0..model.nv {
+        let col = data.joint_jacobians.column(d);
+        let jd = Motion::new(
+            Vector3::new(col[0], col[1], col[2]),
+            Vector3::new(col[3], col[4], col[5]),
         );
-        let com = ws.sd.wrench.com;
-        let g = -robot.stability.gravity.z;
-        let cdd = &ws.jcom * &ws.qddot;
-        let h = com.z - ws.sd.support.ground_z();
-        let den = g + cdd.z;
-        let edge = ws.sd.support.edge(e);
-        let n = edge.inward;
-        let zmp = report_zmp(&com, &cdd, h, den);
-        // ∂s/∂p = n (xy); base translation moves the edge: −n; yaw turns it about the base.
-        let b = Vector3::new(ws.sd.base_pose[0], ws.sd.base_pose[1], 0.0);
-        let rel = zmp - b;
-        let dyaw = Vector3::z().cross(&n).dot(&rel);
-        for d in 0..model.nv {
-            let Some(col) = x_column(robot, d) else {
-                continue;
-            };
-            let jc = ws.jcom.column(d);
-            let dpx = jc[0] - cdd.x / den * jc[2];
-            let dpy = jc[1] - cdd.y / den * jc[2];
-            vals.zmp_dx[col] += n.x * dpx + n.y * dpy;
-        }
-        vals.zmp_dx[0] -= n.x;
-        vals.zmp_dx[1] -= n.y;
-        vals.zmp_dx[2] += dyaw;
-        // In u, exactly: the momentum rate ḣ (world origin) is affine in q̈, with
-        // ∂ḣ/∂q̈_d = I_sub(d) J_d (the world inertia of the subtree dof d moves times its
-        // joint Jacobian column), and q̈ = N_C v̇_r + Ṅ_C v_r. The gravito-inertial
-        // force is f = m g − ḣ_lin and its moment about p0 = (0, 0, z_ground) is
-        // M = m c × g − ḣ_ang + p0 × ḣ_lin; the ZMP is (−M_y / f_z, M_x / f_z).
-        let nj = model.njoints;
-        for j in 0..nj {
-            ws.sub_inertia[j] = if j == 0 {
-                Inertia::zero()
-            } else {
-                model.inertias[j].transformed(&data.world_from_joint[j])
-            };
-        }
-        for j in (1..nj).rev() {
-            let sub = ws.sub_inertia[j];
-            ws.sub_inertia[model.parents[j].0] += sub;
-        }
-        let p0 = Vector3::new(0.0, 0.0, ws.sd.support.ground_z());
-        let w = &ws.sd.wrench;
-        let (f, m) = (w.force, w.moment_about(&p0));
-        let nc = robot.n_moved();
-        vals.zmp_du.fill(0.0);
-        for d in 0..model.nv {
-            let col = data.joint_jacobians.column(d);
-            let jd = Motion::new(
-                Vector3::new(col[0], col[1], col[2]),
-                Vector3::new(col[3], col[4], col[5]),
-            );
-            let dh = ws.sub_inertia[model.joint_of_dof[d].0].mul_motion(&jd);
-            let df = -dh.linear;
-            let dm = -dh.angular + p0.cross(&dh.linear);
-            let dpx = (-dm.y * f.z + m.y * df.z) / (f.z * f.z);
-            let dpy = (dm.x * f.z - m.x * df.z) / (f.z * f.z);
-            let ds = n.x * dpx + n.y * dpy;
-            for c in 0..2 + nc {
-                let rc = if c < 2 { c } else { robot.reduced[c - 2] };
-                vals.zmp_du[c] += ds * ws.wd.basis[(d, rc)];
+        let dh = ws.sub_inertia[model.joint_of_dof[d].0].mul_motion(&jd);
+        let df = -dh.linear;
+        let dm = -dh.angular + p0.cross(&dh.linear);
+        let dw = [df.x, df.y, df.z, dm.x, dm.y, dm.z];
+        for c in 0..2 + nc {
+            let rc = if c < 2 { c } else { robot.reduced[c - 2] };
+            let b = ws.wd.basis[(d, rc)];
+            if b != 0.0 {
+                for (r, &v) in dw.iter().enumerate() {
+                    vals.ground_wrench_du[(r, c)] += v * b;
+                }
             }
         }
+    }
+    // ZMP gradient on the critical edge. In x: the point-mass ZMP
+    // p = c_xy − h c̈_xy / (g + c̈_z), h = c_z − z_ground, with c̈ = J_c q̈ (the J̇_c q̇ term
+    // and ∂c̈/∂q left out). In u: exact, the ZMP (−M_y / f_z, M_x / f_z) of the wrench's
+    // derivative.
+    let (Some(_), Some(e)) = (vals.zmp_margin, critical) else {
+        return;
+    };
+    com_jacobian(
+        model,
+        data,
+        &mut ws.sub_mass,
+        &mut ws.sub_moment,
+        &mut ws.jcom,
+    );
+    let com = ws.sd.wrench.com;
+    let g = -robot.stability.gravity.z;
+    let cdd = &ws.jcom * &ws.qddot;
+    let h = com.z - ws.sd.support.ground_z();
+    let den = g + cdd.z;
+    let edge = ws.sd.support.edge(e);
+    let n = edge.inward;
+    let zmp = report_zmp(&com, &cdd, h, den);
+    // ∂s/∂p = n (xy); base translation moves the edge: −n; yaw turns it about the base.
+    let b = Vector3::new(ws.sd.base_pose[0], ws.sd.base_pose[1], 0.0);
+    let rel = zmp - b;
+    let dyaw = Vector3::z().cross(&n).dot(&rel);
+    for d in 0..model.nv {
+        let Some(col) = x_column(robot, d) else {
+            continue;
+        };
+        let jc = ws.jcom.column(d);
+        let dpx = jc[0] - cdd.x / den * jc[2];
+        let dpy = jc[1] - cdd.y / den * jc[2];
+        vals.zmp_dx[col] += n.x * dpx + n.y * dpy;
+    }
+    vals.zmp_dx[0] -= n.x;
+    vals.zmp_dx[1] -= n.y;
+    vals.zmp_dx[2] += dyaw;
+    for c in 0..2 + nc {
+        let dw = vals.ground_wrench_du.column(c);
+        let dpx = (-dw[4] * f.z + m.y * dw[2]) / (f.z * f.z);
+        let dpy = (dw[3] * f.z - m.x * dw[2]) / (f.z * f.z);
+        vals.zmp_du[c] = n.x * dpx + n.y * dpy;
     }
 }
 

@@ -87,11 +87,17 @@ pub struct MpcProblem {
     ws: KnotWorkspace,
     lo: DVector<f64>,
     hi: DVector<f64>,
-    /// The wheels' torques at the solve's measured state, affine in the first input:
-    /// `τ_w = first_wheel_torque_du u_0 + first_wheel_torque_offset` (2 × nu; exact,
-    /// the state being fixed), set at the start of each solve.
-    first_wheel_torque_du: DMatrix<f64>,
-    first_wheel_torque_offset: [f64; 2],
+    /// The constraints on the first input that hold exactly at the solve's measured
+    /// state, each affine in it there: row `r` is `first_rows[r] · u_0 + first_offsets[r]
+    /// ≤ 0`; set at the start of each solve ([`MpcProblem::linearize_first_input`]).
+    /// The first [`WHEEL_TORQUE_ROWS`] bound the wheels' torques; the next
+    /// `first_zmp_rows` keep the ZMP margin.
+    first_rows: DMatrix<f64>,
+    first_offsets: DVector<f64>,
+    first_zmp_rows: usize,
+    /// The half-planes of [`OptimalControlProblem::admissible_input`] (scratch, with
+    /// room for every row).
+    planes: Vec<Vector3<f64>>,
     /// Per knot, the ZMP margin and clearance of the last evaluation.
     min_zmp: Vec<f64>,
     min_clearance: Vec<f64>,
@@ -127,23 +133,65 @@ impl MpcProblem {
         }
     }
 
-    /// The wheels' torques at the measured state `x0` as an affine function of the first
-    /// input (`first_wheel_torque_du`, `first_wheel_torque_offset`), from one evaluation
-    /// of knot 0 with derivatives at the first input `u0`: the torques are
-    /// `(N_Cᵀ S)⁻¹ (M_r u + c_r + G_r)`, affine in `u` at a fixed state.
-    fn linearize_first_wheel_torques(&mut self, x0: &DVector<f64>, u0: &DVector<f64>) {
+    /// The exact constraints on the first input at the measured state `x0`
+    /// (`first_rows`, `first_offsets`), from one evaluation of knot 0 with derivatives
+    /// at the first input `u0`: at a fixed state the wheels' torques
+    /// `(N_Cᵀ S)⁻¹ (M_r u + c_r + G_r)` and the gravito-inertial wrench `[f; M]` (about
+    /// the ground point below the origin) are affine in `u`. The rows:
+    ///
+    /// - `±τ_i − torque_fraction · τ_max,i ≤ 0` for each wheel `i`;
+    /// - with a ZMP set value `m`, for each edge of the support (inward normal `n`, a
+    ///   point `a` on it) the ZMP `p = (−M_y / f_z, M_x / f_z)` at least `m` inside,
+    ///   `n·p ≥ n·a + m`, which for `f_z < 0` is `n_y M_x − n_x M_y − (n·a + m) f_z ≤ 0`;
+    ///   and `f_z ≤ −10⁻⁶ m_robot |g|` (the robot presses on the ground, so the ZMP
+    ///   exists). Together: the ZMP margin at the measured state is at least `m`.
+    fn linearize_first_input(&mut self, x0: &DVector<f64>, u0: &DVector<f64>) {
         self.ws.distance_cutoff = f64::NEG_INFINITY;
         evaluate_knot(&self.robot, &mut self.ws, &self.hold, x0, Some(u0), true);
         let vals = &self.ws.values;
-        for i in 0..2 {
-            let mut offset = vals.torque[i];
-            for j in 0..u0.len() {
-                let d = vals.torque_du[(i, j)];
-                self.first_wheel_torque_du[(i, j)] = d;
+        let nu = u0.len();
+        // row r: coefficients over u and the value at u0, then offset = value − row · u0.
+        let mut set = |r: usize, row: &dyn Fn(usize) -> f64, value: f64| {
+            let mut offset = value;
+            for j in 0..nu {
+                let d = row(j);
+                self.first_rows[(r, j)] = d;
                 offset -= d * u0[j];
             }
-            self.first_wheel_torque_offset[i] = offset;
+            self.first_offsets[r] = offset;
+        };
+        for i in 0..2 {
+            let lim = self.settings.constraints.torque_fraction * self.robot.torque_limit[i];
+            for (side, sign) in [1.0, -1.0].into_iter().enumerate() {
+                set(
+                    2 * i + side,
+                    &|j| sign * vals.torque_du[(i, j)],
+                    sign * vals.torque[i] - lim,
+                );
+            }
         }
+        self.first_zmp_rows = 0;
+        let Some(margin) = self.settings.constraints.zmp_margin else {
+            return;
+        };
+        let (w, dw) = (&vals.ground_wrench, &vals.ground_wrench_du);
+        let support = self.ws.support();
+        // Coefficients c of c · [f; M].
+        let mut coeffs = |r: usize, c: [f64; 6]| {
+            let value = (0..6).map(|i| c[i] * w[i]).sum();
+            set(r, &|j| (0..6).map(|i| c[i] * dw[(i, j)]).sum(), value);
+        };
+        for e in 0..support.len() {
+            let edge = support.edge(e);
+            let n = edge.inward;
+            let d = n.x * edge.from.x + n.y * edge.from.y + margin;
+            coeffs(WHEEL_TORQUE_ROWS + e, [0.0, 0.0, -d, n.y, -n.x, 0.0]);
+        }
+        let weight = 1e-6 * self.robot.stability.gravity.norm() * self.ws.mass();
+        let lift_off = WHEEL_TORQUE_ROWS + support.len();
+        coeffs(lift_off, [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+        self.first_offsets[lift_off] += weight;
+        self.first_zmp_rows = support.len() + 1;
     }
 
     /// Evaluates knot `k` and its costs and constraint terms.
@@ -316,18 +364,20 @@ impl OptimalControlProblem for MpcProblem {
         }
     }
     /// The box of [`MpcProblem::input_bounds`], the wheel-rate limit at the next knot
-    /// and, at knot 0, the wheels' torque limits. `φ̇⁺ = W ([v, ω] + dt [v̇, ω̇])` is affine
-    /// in the platform's accelerations, so `|φ̇⁺_L|, |φ̇⁺_R| ≤ φ̇_max` is a box on the
-    /// wheels' accelerations `z = W [v̇, ω̇]`; the acceleration bounds on `(v̇, ω̇)` are a
-    /// parallelogram there; and at knot 0, whose state is the measured one, the wheels'
-    /// torques are affine in the input (exactly: `first_wheel_torque_du`), so
-    /// `|τ_w| ≤ torque_fraction · τ_max` are two more pairs of half-planes for the
-    /// other inputs given. The platform input is moved to the nearest point (in `z`) of
-    /// their intersection, a convex polygon; where it is empty, the nearest point of the
-    /// acceleration bounds and the torque limits, then of the acceleration bounds alone
-    /// (a wheel beyond what one stage can bring back: the nearest the limit it gets).
+    /// and, at knot 0, the exact constraints of the measured state (the wheels' torque
+    /// limits and the ZMP margin, [`MpcProblem::linearize_first_input`]).
+    /// `φ̇⁺ = W ([v, ω] + dt [v̇, ω̇])` is affine in the platform's accelerations, so
+    /// `|φ̇⁺_L|, |φ̇⁺_R| ≤ φ̇_max` is a box on the wheels' accelerations `z = W [v̇, ω̇]`;
+    /// the acceleration bounds on `(v̇, ω̇)` are a parallelogram there; and each row of
+    /// knot 0, affine in the input, is one more half-plane in `z` for the arm's inputs
+    /// given. The platform input is moved to the nearest point (in `z`) of their
+    /// intersection, a convex polygon; where it is empty, the nearest point of the
+    /// polygon without the wheel rates, then without the ZMP margin too, then of the
+    /// acceleration bounds alone (a wheel beyond what one stage can bring back: the
+    /// nearest the limit it gets; an arm input that tips the robot whatever the base
+    /// does: the wheels' torques kept).
     fn admissible_input(
-        &self,
+        &mut self,
         k: usize,
         x: &DVector<f64>,
         u: &mut DVector<f64>,
@@ -344,38 +394,40 @@ impl OptimalControlProblem for MpcProblem {
         let limit = self.robot.wheel_rate_limit;
         let rate = w * Vector2::new(x[3 + n], x[4 + n]);
         // Half-planes a·z ≤ b as (a, b): the acceleration bounds (rows of W⁻¹), the
-        // wheel torques (knot 0), the wheel rates.
-        let mut planes = [Vector3::zeros(); 12];
+        // rows of knot 0 (wheel torques, ZMP), the wheel rates.
+        let planes = &mut self.planes;
+        planes.clear();
         for i in 0..2 {
             let r = w_inv.row(i);
-            planes[2 * i] = Vector3::new(r[0], r[1], hi[i]);
-            planes[2 * i + 1] = Vector3::new(-r[0], -r[1], -lo[i]);
+            planes.push(Vector3::new(r[0], r[1], hi[i]));
+            planes.push(Vector3::new(-r[0], -r[1], -lo[i]));
         }
-        let mut torque_planes = 0;
-        if k == 0 {
-            let t = &self.first_wheel_torque_du;
-            for i in 0..2 {
-                let lim = self.settings.constraints.torque_fraction * self.robot.torque_limit[i];
-                let mut rest = self.first_wheel_torque_offset[i];
-                for j in 2..u.len() {
-                    rest += t[(i, j)] * u[j];
-                }
-                let a = Vector2::new(t[(i, 0)], t[(i, 1)]).transpose() * w_inv;
-                planes[4 + 2 * i] = Vector3::new(a[0], a[1], lim - rest);
-                planes[4 + 2 * i + 1] = Vector3::new(-a[0], -a[1], lim + rest);
+        let rows_here = if k == 0 {
+            WHEEL_TORQUE_ROWS + self.first_zmp_rows
+        } else {
+            0
+        };
+        for r in 0..rows_here {
+            let row = self.first_rows.row(r);
+            let mut rest = self.first_offsets[r];
+            for j in 2..u.len() {
+                rest += row[j] * u[j];
             }
-            torque_planes = 4;
+            let a = Vector2::new(row[0], row[1]).transpose() * w_inv;
+            planes.push(Vector3::new(a[0], a[1], -rest));
         }
-        let speed = 4 + torque_planes;
         for i in 0..2 {
             let mut e = Vector2::zeros();
             e[i] = 1.0;
-            planes[speed + 2 * i] = Vector3::new(e[0], e[1], (limit - rate[i]) / dt);
-            planes[speed + 2 * i + 1] = Vector3::new(-e[0], -e[1], (limit + rate[i]) / dt);
+            planes.push(Vector3::new(e[0], e[1], (limit - rate[i]) / dt));
+            planes.push(Vector3::new(-e[0], -e[1], (limit + rate[i]) / dt));
         }
+        let speed = 4 + rows_here;
+        let torque = 4 + rows_here.min(WHEEL_TORQUE_ROWS);
         let z0 = w * Vector2::new(u[0], u[1]);
-        let z = nearest_in_polygon(&planes[..speed + 4], z0)
+        let z = nearest_in_polygon(planes, z0)
             .or_else(|| nearest_in_polygon(&planes[..speed], z0))
+            .or_else(|| nearest_in_polygon(&planes[..torque], z0))
             .or_else(|| nearest_in_polygon(&planes[..4], z0))
             .unwrap_or(z0);
         let p = w_inv * z;
@@ -391,6 +443,10 @@ impl OptimalControlProblem for MpcProblem {
         self.kept_min_clearance.copy_from_slice(&self.min_clearance);
     }
 }
+
+/// Rows of [`MpcProblem::linearize_first_input`] that bound the wheels' torques: `±τ_i`
+/// for each of the two wheels.
+const WHEEL_TORQUE_ROWS: usize = 4;
 
 /// The whole-body MPC: problem, solver workspace and the last solution.
 #[derive(Clone, Debug)]
@@ -463,6 +519,7 @@ impl WholeBodyMpc {
         lo[0] = -settings.max_linear_acceleration;
         lo[1] = -settings.max_angular_acceleration;
         let hi = -&lo;
+        let row_capacity = WHEEL_TORQUE_ROWS + robot.stability.support.len() + 1;
         let posture =
             DVector::from_iterator(robot.n_moved(), robot.dofs.iter().map(|&d| q_start[d]));
         let problem = MpcProblem {
@@ -474,8 +531,10 @@ impl WholeBodyMpc {
             hold: q_start.clone(),
             lo,
             hi,
-            first_wheel_torque_du: DMatrix::zeros(2, nu),
-            first_wheel_torque_offset: [0.0; 2],
+            first_rows: DMatrix::zeros(row_capacity, nu),
+            first_offsets: DVector::zeros(row_capacity),
+            first_zmp_rows: 0,
+            planes: Vec::with_capacity(8 + row_capacity),
             min_zmp: vec![f64::INFINITY; n + 1],
             min_clearance: vec![f64::INFINITY; n + 1],
             kept_min_zmp: vec![f64::INFINITY; n + 1],
@@ -524,7 +583,7 @@ impl WholeBodyMpc {
             shift_solution(&mut self.solution.us, &mut self.problem.constraints.lambda);
         }
         self.problem
-            .linearize_first_wheel_torques(&self.x0, &self.solution.us[0]);
+            .linearize_first_input(&self.x0, &self.solution.us[0]);
         let opts = self.problem.settings.solver.clone();
         let stats: SolveStats =
             self.solver
