@@ -43,6 +43,9 @@
 //! link's ball; its later states only those that state left live: the balls close at
 //! most the row's rate over the whole segment, so a cluster whose balls are farther
 //! apart than that plus the most a later state asks for is clear at every later state.
+//! Where every cluster's link-ball bound is wanted (a segment's first state, a state on
+//! its own) one pass computes them all ([`super::link_ball_gaps`]); a cluster of two
+//! links of one ball group each has one block, whose ball gap is the cluster's.
 //!
 //! **States** ([`StateValidity::is_valid`]) pass when every pair's distance exceeds the
 //! margin plus `tube · ‖c_p ⊘ w‖₂`, the most the pair can close over any state within the
