@@ -329,3 +329,74 @@ fn the_plane_and_live_cluster_shortcuts_never_pass_a_state_too_close() {
          by a plane"
     );
 }
+
+/// The cluster pass (every link ball against every other link's ball and every scene
+/// object's box at once) and the block bound it shares with its cluster (two links of one
+/// ball each) never pass a state too close, nor fail one that is clear: with the gripper
+/// and the right finger swapped for their mesh surfaces (links of many patches, in ball
+/// groups, beside links of one hull), random walks in the cage and bookshelf scenes at a
+/// 1 cm margin pass a state exactly when the exact report finds its closest pair farther
+/// than the margin, and every passed segment keeps half the margin along it.
+#[test]
+fn the_cluster_pass_never_passes_a_state_too_close_with_links_of_many_patches() {
+    let (model, gm, queries, group) = fetch();
+    let source = moma::motion::MeshSource {
+        urdf: fetch_common::fetch_urdf(),
+        package_dirs: vec![fetch_common::fetch_dir()],
+    };
+    let mut patched = gm;
+    for link in ["gripper_link", "r_gripper_finger_link"] {
+        patched = moma::motion::with_mesh_surface(
+            &model,
+            &patched,
+            &source,
+            link,
+            moma::motion::PATCH_TRIANGLES,
+        )
+        .unwrap();
+    }
+    let gm = patched;
+    let dim = group.dim();
+    let space =
+        moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let (mut passed, mut failed, mut segments) = (0, 0, 0);
+    let margin = 0.01;
+    for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
+        let (scene, start, states) = query_states(&queries, &group, name, 100, &mut rng);
+        let weights = vec![1.0; dim];
+        let mut check =
+            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
+        let mut judge =
+            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
+        // From every 40th state, a walk of 15 steps of up to 0.05 rad per joint.
+        for origin in states.iter().step_by(40) {
+            let mut x = origin.clone();
+            for _ in 0..15 {
+                let y: Vec<f64> = x
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        (v + rng.random_range(-0.05..0.05)).clamp(group.lower[i], group.upper[i])
+                    })
+                    .collect();
+                let valid = judged(check.is_valid(&y), &mut judge, name, &y, margin);
+                if valid {
+                    passed += 1;
+                } else {
+                    failed += 1;
+                }
+                let mut scratch = Vec::new();
+                if valid && check.segment_valid(&space, &x, &y, &mut scratch, &mut 0) {
+                    segments += 1;
+                    assert_segment_keeps_half_the_margin(&mut judge, name, &x, &y, margin);
+                }
+                x = y;
+            }
+        }
+    }
+    assert!(
+        passed > 50 && failed > 50 && segments > 50,
+        "{passed} passed, {failed} failed, {segments} segments passed"
+    );
+}

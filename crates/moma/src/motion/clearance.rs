@@ -43,6 +43,9 @@
 //! link's ball; its later states only those that state left live: the balls close at
 //! most the row's rate over the whole segment, so a cluster whose balls are farther
 //! apart than that plus the most a later state asks for is clear at every later state.
+//! Where every cluster's link-ball bound is wanted (a segment's first state, a state on
+//! its own) one pass computes them all ([`super::link_ball_gaps`]); a cluster of two
+//! links of one ball group each has one block, whose ball gap is the cluster's.
 //!
 //! **States** ([`StateValidity::is_valid`]) pass when every pair's distance exceeds the
 //! margin plus `tube · ‖c_p ⊘ w‖₂`, the most the pair can close over any state within the
@@ -56,6 +59,7 @@
 //! hold the meshes: a positive hull distance is a positive mesh distance.
 
 use super::group::JointGroup;
+use super::link_ball_gaps::LinkBallGaps;
 use crate::collision::ball_cover::{MAX_SLABS, hull_ball_cover};
 use crate::collision::ball_gap::PlacedShape;
 use crate::collision::gjk::{EpaWorkspace, WarmStart, distance_outside, signed_distance};
@@ -116,6 +120,9 @@ struct Cluster {
     /// Its blocks: `moving[first..first + count]`.
     first: usize,
     count: usize,
+    /// Whether its one block's balls are the two links' balls (two links of one ball
+    /// group each): the block's ball gap is the cluster's.
+    shared_balls: bool,
 }
 
 /// The closest pair found by [`ClearanceChecker::distance_report`].
@@ -173,8 +180,8 @@ pub struct ClearanceChecker<'a> {
     /// the placed state.
     link_balls: Vec<Ball>,
     link_centres: Vec<Vector3<f64>>,
-    /// Per scene object: the box holding all its shapes.
-    scene_boxes: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Every cluster's link-ball bound, computed for all clusters in one pass.
+    link_gaps: LinkBallGaps,
     /// Every scene shape placed for closed-form ball gaps, object by object: object `o`'s
     /// shape `s` is `scene_shapes[scene_first[o] + s]`.
     scene_shapes: Vec<PlacedShape>,
@@ -423,6 +430,7 @@ impl<'a> ClearanceChecker<'a> {
                     row,
                     first,
                     count: n_moving - first,
+                    shared_balls: link_groups[la].len() == 1 && link_groups[lb].len() == 1,
                 });
             }
         }
@@ -451,6 +459,7 @@ impl<'a> ClearanceChecker<'a> {
                             row,
                             first,
                             count: n_moving - first,
+                            shared_balls: false,
                         });
                     }
                 }
@@ -468,6 +477,27 @@ impl<'a> ClearanceChecker<'a> {
             })
             .collect();
         let n_entries = entries.len();
+        // The link–link clusters come first (built above in that order), as the pass
+        // over them wants.
+        let pairs: Vec<(usize, usize)> = clusters
+            .iter()
+            .map_while(|c| match c.other {
+                Other::Robot(l) => Some((c.link, l)),
+                Other::Scene(..) => None,
+            })
+            .collect();
+        let boxes: Vec<(usize, Vector3<f64>, Vector3<f64>)> = clusters[pairs.len()..]
+            .iter()
+            .map(|c| match c.other {
+                Other::Scene(o, _) => (c.link, scene_boxes[o].0, scene_boxes[o].1),
+                Other::Robot(_) => unreachable!("link–link clusters precede the scene's"),
+            })
+            .collect();
+        let link_gaps = LinkBallGaps::new(
+            link_balls.iter().map(|b| b.radius).collect(),
+            &pairs,
+            &boxes,
+        );
         Ok(ClearanceChecker {
             model,
             gm,
@@ -495,8 +525,8 @@ impl<'a> ClearanceChecker<'a> {
             moving,
             clusters,
             link_centres: vec![Vector3::zeros(); link_balls.len()],
+            link_gaps,
             link_balls,
-            scene_boxes,
             scene_shapes,
             scene_first,
             cover_centres: vec![Vector3::zeros(); cover.len()],
@@ -587,8 +617,14 @@ impl<'a> ClearanceChecker<'a> {
         for (c, g) in self.group_centres.iter_mut().zip(&self.groups) {
             *c = self.data.world_from_joint[g.joint].act_point(&g.centre);
         }
-        for (c, b) in self.link_centres.iter_mut().zip(&self.link_balls) {
+        for (l, (c, b)) in self
+            .link_centres
+            .iter_mut()
+            .zip(&self.link_balls)
+            .enumerate()
+        {
             *c = self.data.world_from_joint[b.joint].act_point(&b.centre);
+            self.link_gaps.set_centre(l, c);
         }
         self.state_stamp += 1;
     }
@@ -610,19 +646,6 @@ impl<'a> ClearanceChecker<'a> {
         match b {
             Other::Robot(j) => (ca - self.group_centres[j]).norm() - ra - self.groups[j].radius,
             Other::Scene(o, s) => self.shape_gap(&ca, o, s) - ra,
-        }
-    }
-
-    /// The gap between cluster `c`'s bounds: its link's ball and the other link's ball or
-    /// the scene object's box, at the placed state.
-    fn cluster_gap(&self, c: &Cluster) -> f64 {
-        let (ca, ra) = (self.link_centres[c.link], self.link_balls[c.link].radius);
-        match c.other {
-            Other::Robot(l) => (ca - self.link_centres[l]).norm() - ra - self.link_balls[l].radius,
-            Other::Scene(o, _) => {
-                let (lo, hi) = &self.scene_boxes[o];
-                (lo - ca).sup(&(ca - hi)).sup(&Vector3::zeros()).norm() - ra
-            }
         }
     }
 
@@ -831,20 +854,21 @@ impl<'a> ClearanceChecker<'a> {
     /// first bound that decides it.
     fn state_clear(&mut self, tube: f64) -> bool {
         let last = self.last_limiting;
-        if last < self.moving.len() && !self.block_clear(last, tube) {
+        if last < self.moving.len() && !self.block_clear(last, tube, false) {
             return false;
         }
+        self.link_gaps.fill_all();
         for ci in 0..self.clusters.len() {
             let cluster = self.clusters[ci];
             let extra = self.margin + tube * self.tube_norm[cluster.row];
-            if self.cluster_gap(&cluster) > extra {
+            if self.link_gaps.gap[ci] > extra {
                 continue;
             }
             self.near_blocks(&cluster, extra);
             for r in 0..self.near.len() {
                 let (first, end) = self.near[r];
                 for bi in first..end {
-                    if bi != last && !self.block_clear(bi, tube) {
+                    if bi != last && !self.block_clear(bi, tube, cluster.shared_balls) {
                         self.last_limiting = bi;
                         return false;
                     }
@@ -855,11 +879,12 @@ impl<'a> ClearanceChecker<'a> {
     }
 
     /// Whether every object pair of moving block `bi` is farther apart than the margin
-    /// plus the tube's share, at the placed state.
-    fn block_clear(&mut self, bi: usize, tube: f64) -> bool {
+    /// plus the tube's share, at the placed state; `balls_near`: its balls are known to
+    /// be within that (they are its cluster's, which did not clear it).
+    fn block_clear(&mut self, bi: usize, tube: f64, balls_near: bool) -> bool {
         let block = self.moving[bi];
         let extra = self.margin + tube * self.tube_norm[block.row];
-        if self.group_gap(block.a, block.b) > extra {
+        if !balls_near && self.group_gap(block.a, block.b) > extra {
             return true;
         }
         for k in block.first..block.first + block.count {
@@ -892,6 +917,7 @@ impl<'a> ClearanceChecker<'a> {
         self.fill_live = false;
         if first {
             self.live.clear();
+            self.link_gaps.fill_all();
         }
         let clusters = if first {
             self.clusters.len()
@@ -907,7 +933,11 @@ impl<'a> ClearanceChecker<'a> {
             );
             let slack = extra - 0.5 * self.margin;
             let bound = (slack + step * rate).max(extra);
-            let gap = self.cluster_gap(&cluster);
+            let gap = if first {
+                self.link_gaps.gap[ci]
+            } else {
+                self.link_gaps.fill_one(ci)
+            };
             // Anywhere on the segment the balls are at least `gap - rate` apart, and a
             // later state needs at most `(slack + rate).max(extra)` (its `need` is at most
             // the whole segment): a cluster farther than that is clear at every later one.
@@ -923,7 +953,11 @@ impl<'a> ClearanceChecker<'a> {
                 let (first, end) = self.near[r];
                 for bi in first..end {
                     let block = self.moving[bi];
-                    let gap = self.group_gap(block.a, block.b);
+                    let gap = if cluster.shared_balls {
+                        gap
+                    } else {
+                        self.group_gap(block.a, block.b)
+                    };
                     if gap > bound {
                         continue;
                     }

@@ -17,6 +17,7 @@ pub mod clearance;
 pub mod goal;
 pub mod grasp_query;
 pub mod group;
+mod link_ball_gaps;
 pub mod placement;
 pub mod plan;
 pub mod surface;

@@ -109,7 +109,41 @@ enum Piece {
         ey: Vec<f64>,
         r: f64,
         angle: f64,
+        /// Per coordinate, `x'` and `x''·(−r)` as harmonics `A cos(θ − ψ)`
+        /// ([`Harmonic::new`]), so [`Piece::bounds`] takes no arctangent per call.
+        harmonics: Vec<(Harmonic, Harmonic)>,
     },
+}
+
+/// `c cos θ + s sin θ` as `amplitude · cos(θ − phase)`.
+#[derive(Clone, Copy, Debug)]
+struct Harmonic {
+    amplitude: f64,
+    phase: f64,
+}
+
+impl Harmonic {
+    fn new(c: f64, s: f64) -> Self {
+        Harmonic {
+            amplitude: c.hypot(s),
+            phase: s.atan2(c),
+        }
+    }
+
+    /// `max |c cos θ + s sin θ|` over `θ ∈ [a, b]`.
+    fn max_abs(&self, a: f64, b: f64) -> f64 {
+        if self.amplitude == 0.0 {
+            return 0.0;
+        }
+        // |cos| is 1 at multiples of π.
+        let (fa, fb) = (a - self.phase, b - self.phase);
+        let k = (fa / std::f64::consts::PI).ceil();
+        if k * std::f64::consts::PI <= fb {
+            self.amplitude
+        } else {
+            self.amplitude * fa.cos().abs().max(fb.cos().abs())
+        }
+    }
 }
 
 impl Piece {
@@ -152,32 +186,15 @@ impl Piece {
                     q[i] = 0.0;
                 }
             }
-            Piece::Arc { ex, ey, r, .. } => {
+            Piece::Arc { harmonics, r, .. } => {
                 let (ta, tb) = (a / r, b / r);
-                for i in 0..p.len() {
+                for (i, (first, second)) in harmonics.iter().enumerate() {
                     // x' = ey cos θ − ex sin θ, x'' = −(ex cos θ + ey sin θ) / r.
-                    p[i] = max_abs_harmonic(ey[i], -ex[i], ta, tb);
-                    q[i] = max_abs_harmonic(ex[i], ey[i], ta, tb) / r;
+                    p[i] = first.max_abs(ta, tb);
+                    q[i] = second.max_abs(ta, tb) / r;
                 }
             }
         }
-    }
-}
-
-/// `max |c cos θ + s sin θ|` over `θ ∈ [a, b]`.
-fn max_abs_harmonic(c: f64, s: f64, a: f64, b: f64) -> f64 {
-    let amplitude = c.hypot(s);
-    if amplitude == 0.0 {
-        return 0.0;
-    }
-    // c cos θ + s sin θ = A cos(θ − ψ); |cos| is 1 at multiples of π.
-    let psi = s.atan2(c);
-    let (fa, fb) = (a - psi, b - psi);
-    let k = (fa / std::f64::consts::PI).ceil();
-    if k * std::f64::consts::PI <= fb {
-        amplitude
-    } else {
-        amplitude * fa.cos().abs().max(fb.cos().abs())
     }
 }
 
@@ -540,7 +557,13 @@ fn blend(
         .map(|i| (corner[i] - d * y1[i] - center[i]) / r)
         .collect();
     let actual = d * (1.0 - half.cos()) / half.sin();
+    let harmonics = ex
+        .iter()
+        .zip(y1)
+        .map(|(&x, &y)| (Harmonic::new(y, -x), Harmonic::new(x, y)))
+        .collect();
     let arc = Piece::Arc {
+        harmonics,
         center,
         ex,
         ey: y1.to_vec(),
