@@ -351,7 +351,7 @@ fn the_cluster_pass_never_passes_a_state_too_close_with_links_of_many_patches() 
             &patched,
             &source,
             link,
-            moma::motion::PATCH_TRIANGLES,
+            &moma::motion::Patching::uniform(moma::motion::PATCH_TRIANGLES),
         )
         .unwrap();
     }
