@@ -40,11 +40,11 @@
 //!
 //! Forward dynamics follows from the implicit function theorem: with q̈ = ABA(q, v, τ),
 //! `∂q̈/∂x = −H⁻¹ ∂τ/∂x` evaluated at a = q̈, and `∂q̈/∂τ = H⁻¹`. H is factorised as
-//! `Lᵀ D L` with the tree's sparsity (Featherstone's LTDL, `Σ depth²` operations), and
-//! the three right-hand sides `[−∂τ/∂q, −∂τ/∂v, I]` are solved together, row by row: each
-//! step of the two triangular solves works on contiguous 3 nv rows, and only along the
-//! tree's ancestor chains (`2 Σ depth` row updates in all; on the way down a row gathers
-//! all its ancestors' rows in registers before it is stored).
+//! `Lᵀ D L` with the tree's sparsity (Featherstone's LTDL, `Σ depth²` operations); H⁻¹ is
+//! solved from it row by row, its upper triangle only, along the tree's ancestor chains
+//! (`2 Σ depth` row updates), and `−H⁻¹ ∂τ/∂q`, `−H⁻¹ ∂τ/∂v` are dense products
+//! (`dense_product`, Pinocchio's route: about twice the multiply–adds of solving those two
+//! right-hand sides through the tree too, but register-blocked, so each load feeds many).
 //!
 //! q̈ itself comes from the same passes, with no separate ABA: of everything they
 //! compute, only the accelerations, `u`, the forces, τ and ∂τ/∂q depend on `a`, and
@@ -53,6 +53,7 @@
 //! the accelerations, `δa_λ × J` to `u` and the subtree sums of `I_k δa_k` to the forces,
 //! and ∂τ/∂q is written at a = q̈.
 
+use super::dense_product::neg_mul;
 use super::motion_pass::{MotionTerms, cross_force, cross_motion, join, split};
 use super::tree_ltdl::{
     Rhs, chain_starts, dof_parents, ltdl_in_place, ltdl_solve_rows, subtree_ends,
@@ -115,8 +116,8 @@ pub struct DerivativeData {
     /// Per coordinate, the first of the run of consecutive coordinates that ends at it in
     /// its ancestor chain (see `tree_ltdl::chain_starts`).
     chain_start: Vec<usize>,
-    /// The tree-sparse `Lᵀ D L` factor of H, the right-hand sides of the forward-dynamics
-    /// derivatives by rows (nv blocks of 3 nv), and one column of scratch.
+    /// The tree-sparse `Lᵀ D L` factor of H, H⁻¹ by rows while it is solved (nv blocks of
+    /// nv), and one column of scratch.
     fact: DMatrix<f64>,
     rows: DVector<f64>,
     column: DVector<f64>,
@@ -154,7 +155,7 @@ impl DerivativeData {
             subtree_end: subtree_ends(&dof_parents(model)),
             chain_start: chain_starts(&dof_parents(model)),
             fact: m(),
-            rows: DVector::zeros(3 * nv * nv),
+            rows: DVector::zeros(nv * nv),
             column: DVector::zeros(nv),
         }
     }
@@ -294,61 +295,46 @@ pub fn aba_derivatives(
         &mut dd.drnea_dv,
         &mut dd.drnea_da,
     );
-    // H [∂q̈/∂τ, ∂q̈/∂q, ∂q̈/∂v] = [I, −∂τ/∂q, −∂τ/∂v], solved by rows. With a planar
-    // root moma's H is `Tᵀ H_P T` (H_P the pass's, already factorised), so the solve is
-    // `X = Tᵀ H_P⁻¹ (T B)` and `H⁻¹ = Tᵀ H_P⁻¹ T`: the base's (x, y) rows of B turned
-    // before, of X and H⁻¹ after, instead of a second factorisation
+    // H⁻¹ by rows (its upper triangle solved, row r columns r..), then ∂q̈/∂q = −H⁻¹ ∂τ/∂q
+    // and ∂q̈/∂v = −H⁻¹ ∂τ/∂v as dense products. With a planar root moma's H is
+    // `Tᵀ H_P T` (H_P the pass's, already factorised), so `H⁻¹ = Tᵀ H_P⁻¹ T`: the base's
+    // (x, y) rows and columns of H_P⁻¹ turned, instead of a second factorisation
     let nv = model.nv;
-    let m = 3 * nv;
-    let heading = dd.layout.heading(qs);
     let rows = dd.rows.as_mut_slice();
     for r in 0..nv {
-        let row = &mut rows[r * m..r * m + nv];
+        let row = &mut rows[r * nv..(r + 1) * nv];
         row.fill(0.0);
         row[r] = 1.0;
-    }
-    transpose::<true>(dd.drnea_dq.as_slice(), nv, &mut rows[nv..], m, nv);
-    transpose::<true>(dd.drnea_dv.as_slice(), nv, &mut rows[2 * nv..], m, nv);
-    if let Some((c, s, iv)) = heading {
-        // T B = Rᵀ(θ) on the two rows; the identity block stays (it gives H_P⁻¹)
-        let (x, y) = rows.split_at_mut((iv + 1) * m);
-        rotate_pairs(&mut x[iv * m + nv..], &mut y[nv..m], c, -s);
     }
     ltdl_solve_rows(
         &dd.fact,
         &dd.dof_parent,
         rows,
-        m,
-        Rhs::Derivatives {
+        nv,
+        Rhs::Inverse {
             end: &dd.subtree_end,
         },
     );
-    let (oq, ov, ot) = (
-        dd.daba_dq.as_mut_slice(),
-        dd.daba_dv.as_mut_slice(),
-        dd.daba_dtau.as_mut_slice(),
-    );
-    transpose::<false>(&rows[nv..], m, oq, nv, nv);
-    transpose::<false>(&rows[2 * nv..], m, ov, nv, nv);
-    // H⁻¹ from its upper triangle (row r, columns r..), exactly symmetric: the whole
-    // block transposed gives the upper triangle, then each row r's columns r.. are the
-    // lower triangle's column r
-    transpose::<false>(rows, m, ot, nv, nv);
+    // exactly symmetric: the rows transposed give the upper triangle, then each row r's
+    // columns r.. are the lower triangle's column r
+    let ot = dd.daba_dtau.as_mut_slice();
+    transpose(rows, nv, ot, nv, nv);
     for r in 0..nv {
-        ot[r * nv + r..(r + 1) * nv].copy_from_slice(&rows[r * m + r..r * m + nv]);
+        ot[r * nv + r..(r + 1) * nv].copy_from_slice(&rows[r * nv + r..(r + 1) * nv]);
     }
-    if let Some((c, s, iv)) = heading {
-        // X = Tᵀ (H_P⁻¹ T B): R(θ) on the two rows of ∂q̈/∂q, ∂q̈/∂v (column-major: entry
-        // (r, col) at col nv + r); H⁻¹ = R H_P⁻¹ Rᵀ on its two rows and two columns
-        for out in [oq, ov, &mut *ot] {
-            for col in out.chunks_exact_mut(nv) {
-                let (x, y) = col.split_at_mut(iv + 1);
-                rotate_pairs(&mut x[iv..], &mut y[..1], c, s);
-            }
+    if let Some((c, s, iv)) = dd.layout.heading(qs) {
+        // R H_P⁻¹ Rᵀ on its two rows (column-major: entry (r, col) at col nv + r) and
+        // two columns
+        for col in ot.chunks_exact_mut(nv) {
+            let (x, y) = col.split_at_mut(iv + 1);
+            rotate_pairs(&mut x[iv..], &mut y[..1], c, s);
         }
         let (x, y) = ot.split_at_mut((iv + 1) * nv);
         rotate_pairs(&mut x[iv * nv..], &mut y[..nv], c, s);
     }
+    let ot = dd.daba_dtau.as_slice();
+    neg_mul(ot, dd.drnea_dq.as_slice(), dd.daba_dq.as_mut_slice(), nv);
+    neg_mul(ot, dd.drnea_dv.as_slice(), dd.daba_dv.as_mut_slice(), nv);
     Ok(())
 }
 
@@ -362,19 +348,12 @@ fn rotate_pairs(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
     }
 }
 
-/// `dst[r dst_stride + c] = ±src[c src_stride + r]` for `r, c < n` (negated when `NEG`):
+/// `dst[r dst_stride + c] = src[c src_stride + r]` for `r, c < n`:
 /// the transpose of an `n × n` block between a column-major matrix and rows, or back.
 /// Done by tiles of 8 × 8, each read as 8 contiguous runs and written as 8, instead of
 /// one strided access per entry.
-fn transpose<const NEG: bool>(
-    src: &[f64],
-    src_stride: usize,
-    dst: &mut [f64],
-    dst_stride: usize,
-    n: usize,
-) {
+fn transpose(src: &[f64], src_stride: usize, dst: &mut [f64], dst_stride: usize, n: usize) {
     const T: usize = 8;
-    let sign = |x: f64| if NEG { -x } else { x };
     let tiled = n / T * T;
     for c0 in (0..tiled).step_by(T) {
         for r0 in (0..tiled).step_by(T) {
@@ -386,7 +365,7 @@ fn transpose<const NEG: bool>(
             for i in 0..T {
                 let at = (r0 + i) * dst_stride + c0;
                 for (d, t) in dst[at..at + T].iter_mut().zip(&tile) {
-                    *d = sign(t[i]);
+                    *d = t[i];
                 }
             }
         }
@@ -396,7 +375,7 @@ fn transpose<const NEG: bool>(
     for c in 0..n {
         let r_from = if c < tiled { tiled } else { 0 };
         for r in r_from..n {
-            dst[r * dst_stride + c] = sign(src[c * src_stride + r]);
+            dst[r * dst_stride + c] = src[c * src_stride + r];
         }
     }
 }

@@ -64,6 +64,7 @@ pub(crate) use aba::{aba_forward_pass, accelerate_one_dof, condense_one_dof};
 mod centroidal;
 mod coriolis;
 mod crba;
+mod dense_product;
 mod derivatives;
 mod frame_derivatives;
 mod motion_pass;

@@ -116,12 +116,9 @@ pub(crate) fn chain_starts(parent: &[usize]) -> Vec<usize> {
 pub(crate) enum Rhs<'a> {
     /// Any: every row of `B` is solved over its full width `m`.
     Dense,
-    /// The forward-dynamics derivatives: `m = 3 n`, row `k` of `B` is `[e_kᵀ, x_kᵀ, y_kᵀ]`
-    /// where `x_k`, `y_k` are zero past `end[k]` (one past the last coordinate of `k`'s
-    /// subtree; a row of ∂τ/∂q or ∂τ/∂v is nonzero only on `k`'s ancestors and subtree).
-    /// On return the first block of row `k` holds `H⁻¹` on the columns `k..n` only (its
-    /// upper triangle; the rest is left unspecified), the other two `H⁻¹ X` and `H⁻¹ Y`.
-    Derivatives {
+    /// `H⁻¹` alone: `m = n`, row `k` of `B` is `e_kᵀ`. On return row `k` holds `H⁻¹` on
+    /// the columns `k..n` only (its upper triangle; the rest is left unspecified).
+    Inverse {
         /// Per coordinate, one past the last coordinate of its subtree.
         end: &'a [usize],
     },
@@ -132,8 +129,8 @@ pub(crate) enum Rhs<'a> {
 /// of `B`, so every step works on contiguous columns), and is overwritten by `Y` in the
 /// same layout. On the way up the tree each row is added to its ancestors' rows; on the
 /// way down each row gathers its ancestors' rows a block of columns at a time, summed in
-/// registers and stored once. With [`Rhs::Derivatives`] the steps skip the columns known
-/// to be zero on the way up and, for `H⁻¹`, the lower triangle on the way down. Does not
+/// registers and stored once. With [`Rhs::Inverse`] the steps skip the columns known to be
+/// zero on the way up and the lower triangle on the way down. Does not
 /// allocate.
 ///
 /// The multiply–adds are compiled three times and chosen at run time: AVX-512F or
@@ -190,8 +187,9 @@ fn solve<const FMA: bool, const W: usize>(
 ) {
     let n = fact.nrows();
     debug_assert_eq!(rows.len(), n * m);
-    if let Rhs::Derivatives { end } = rhs {
-        debug_assert_eq!((m, end.len()), (3 * n, n));
+    match rhs {
+        Rhs::Dense => {}
+        Rhs::Inverse { end } => debug_assert_eq!((m, end.len()), (n, n)),
     }
     let f = fact.as_slice();
     // Lᵀ Z = B: from the leaves, each finished row updates its ancestors' rows
@@ -203,12 +201,8 @@ fn solve<const FMA: bool, const W: usize>(
             let (a, row_i) = (-f[k * n + i], &mut above[i * m..(i + 1) * m]);
             match rhs {
                 Rhs::Dense => axpy::<FMA>(row_i, a, row_k),
-                Rhs::Derivatives { end } => {
-                    // e_k's part lives on k's subtree, x_k's and y_k's before end[k]
-                    let e = end[k];
-                    axpy::<FMA>(&mut row_i[k..n + e], a, &row_k[k..n + e]);
-                    axpy::<FMA>(&mut row_i[2 * n..2 * n + e], a, &row_k[2 * n..2 * n + e]);
-                }
+                // e_k's part lives on k's subtree
+                Rhs::Inverse { end } => axpy::<FMA>(&mut row_i[k..end[k]], a, &row_k[k..end[k]]),
             }
             i = parent[i];
         }
@@ -220,7 +214,7 @@ fn solve<const FMA: bool, const W: usize>(
         // H⁻¹'s upper triangle only: columns k.. of the first block, read from rows i < k
         let lo = match rhs {
             Rhs::Dense => 0,
-            Rhs::Derivatives { .. } => k,
+            Rhs::Inverse { .. } => k,
         };
         let (above, from_k) = rows.split_at_mut(k * m);
         let row_k = &mut from_k[..m];
@@ -393,62 +387,25 @@ mod tests {
     }
 
     #[test]
-    fn derivative_rows_skip_only_zeros() {
+    fn inverse_rows_skip_only_zeros() {
         let (l, d) = factors();
         let n = d.len();
         let h = l.transpose() * DMatrix::from_diagonal(&d.into()) * &l;
         let end = subtree_ends(&PARENT);
         assert_eq!(end, vec![7, 7, 7, 5, 5, 7, 7]);
-        // rows nonzero on the ancestors and the subtree only, as ∂τ/∂q's
-        let related = |r: usize, c: usize| is_ancestor_or_self(r, c) || is_ancestor_or_self(c, r);
-        let x = DMatrix::from_fn(n, n, |r, c| {
-            if related(r, c) {
-                (1.0 + (r * n + c) as f64).sqrt()
-            } else {
-                0.0
-            }
-        });
-        let y = DMatrix::from_fn(n, n, |r, c| {
-            if related(r, c) {
-                ((r + 2 * c) as f64).sin()
-            } else {
-                0.0
-            }
-        });
-        assert_eq!(x[(3, 5)], 0.0);
-        let lu = h.clone().lu();
-        let (hinv, hx, hy) = (
-            lu.try_inverse().unwrap(),
-            lu.solve(&x).unwrap(),
-            lu.solve(&y).unwrap(),
-        );
+        let hinv = h.clone().lu().try_inverse().unwrap();
         let mut f = h;
         ltdl_in_place(&mut f, &PARENT, &chain_starts(&PARENT)).unwrap();
-        let m = 3 * n;
-        let mut rows = vec![0.0; n * m];
+        let mut rows = vec![0.0; n * n];
         for r in 0..n {
-            rows[r * m + r] = 1.0;
-            for c in 0..n {
-                rows[r * m + n + c] = x[(r, c)];
-                rows[r * m + 2 * n + c] = y[(r, c)];
-            }
+            rows[r * n + r] = 1.0;
         }
-        ltdl_solve_rows(&f, &PARENT, &mut rows, m, Rhs::Derivatives { end: &end });
+        ltdl_solve_rows(&f, &PARENT, &mut rows, n, Rhs::Inverse { end: &end });
         for r in 0..n {
-            for c in 0..n {
-                if c >= r {
-                    assert!(
-                        (rows[r * m + c] - hinv[(r, c)]).abs() < 1e-12,
-                        "H⁻¹ {r} {c}"
-                    );
-                }
+            for c in r..n {
                 assert!(
-                    (rows[r * m + n + c] - hx[(r, c)]).abs() < 1e-12,
-                    "H⁻¹X {r} {c}"
-                );
-                assert!(
-                    (rows[r * m + 2 * n + c] - hy[(r, c)]).abs() < 1e-12,
-                    "H⁻¹Y {r} {c}"
+                    (rows[r * n + c] - hinv[(r, c)]).abs() < 1e-12,
+                    "H⁻¹ {r} {c}"
                 );
             }
         }
