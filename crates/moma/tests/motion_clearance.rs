@@ -283,46 +283,9 @@ fn the_state_check_never_passes_a_state_within_the_margin_of_a_concave_mesh_scen
 #[test]
 fn the_plane_and_live_cluster_shortcuts_never_pass_a_state_too_close() {
     let (model, gm, queries, group) = fetch();
-    let dim = group.dim();
-    let space =
-        moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(33);
-    let (mut passed, mut failed, mut segments, mut planes) = (0, 0, 0, 0);
-    let margin = 0.01;
-    for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
-        let (scene, start, states) = query_states(&queries, &group, name, 100, &mut rng);
-        let weights = vec![1.0; dim];
-        let mut check =
-            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
-        let mut judge =
-            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
-        // From every 20th state, a walk of 20 steps of up to 0.05 rad per joint.
-        for origin in states.iter().step_by(20) {
-            let mut x = origin.clone();
-            for _ in 0..20 {
-                let y: Vec<f64> = x
-                    .iter()
-                    .enumerate()
-                    .map(|(i, v)| {
-                        (v + rng.random_range(-0.05..0.05)).clamp(group.lower[i], group.upper[i])
-                    })
-                    .collect();
-                let valid = judged(check.is_valid(&y), &mut judge, name, &y, margin);
-                if valid {
-                    passed += 1;
-                } else {
-                    failed += 1;
-                }
-                let mut scratch = Vec::new();
-                if valid && check.segment_valid(&space, &x, &y, &mut scratch, &mut 0) {
-                    segments += 1;
-                    assert_segment_keeps_half_the_margin(&mut judge, name, &x, &y, margin);
-                }
-                x = y;
-            }
-        }
-        planes += check.planes_cleared;
-    }
+    // From every 20th state, a walk of 20 steps.
+    let [passed, failed, segments, planes] =
+        judged_walks(&model, &gm, &queries, &group, 33, 20, 20);
     assert!(
         passed > 100 && failed > 50 && segments > 100 && planes > 1000,
         "{passed} passed, {failed} failed, {segments} segments passed, {planes} pairs cleared \
@@ -355,24 +318,46 @@ fn the_cluster_pass_never_passes_a_state_too_close_with_links_of_many_patches() 
         )
         .unwrap();
     }
-    let gm = patched;
+    // From every 40th state, a walk of 15 steps.
+    let [passed, failed, segments, _] =
+        judged_walks(&model, &patched, &queries, &group, 41, 40, 15);
+    assert!(
+        passed > 50 && failed > 50 && segments > 50,
+        "{passed} passed, {failed} failed, {segments} segments passed"
+    );
+}
+
+/// Random walks in the cage and a bookshelf query at a 1 cm margin (from every `stride`-th
+/// of `query_states`' states, `steps` steps of up to 0.05 rad per joint, drawn from
+/// `seed`): each state the check passes or fails is judged by a second checker's exact
+/// report ([`judged`]) and each segment it passes is held to half the margin
+/// ([`assert_segment_keeps_half_the_margin`]). Returns the states passed and failed, the
+/// segments passed and the robot pairs the check cleared by a plane.
+fn judged_walks(
+    model: &Model,
+    gm: &GeometryModel,
+    queries: &FetchQueries,
+    group: &JointGroup,
+    seed: u64,
+    stride: usize,
+    steps: usize,
+) -> [u64; 4] {
     let dim = group.dim();
     let space =
         moma::planning::JointSpace::new(group.lower.clone(), group.upper.clone(), 0.05).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(41);
-    let (mut passed, mut failed, mut segments) = (0, 0, 0);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut passed, mut failed, mut segments, mut planes) = (0, 0, 0, 0);
     let margin = 0.01;
     for name in ["cage-Front-Cube1-0", "bookshelf_small-Front-Can1-1"] {
-        let (scene, start, states) = query_states(&queries, &group, name, 100, &mut rng);
+        let (scene, start, states) = query_states(queries, group, name, 100, &mut rng);
         let weights = vec![1.0; dim];
         let mut check =
-            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
+            ClearanceChecker::new(model, gm, &scene, group, &start, margin, &weights).unwrap();
         let mut judge =
-            ClearanceChecker::new(&model, &gm, &scene, &group, &start, margin, &weights).unwrap();
-        // From every 40th state, a walk of 15 steps of up to 0.05 rad per joint.
-        for origin in states.iter().step_by(40) {
+            ClearanceChecker::new(model, gm, &scene, group, &start, margin, &weights).unwrap();
+        for origin in states.iter().step_by(stride) {
             let mut x = origin.clone();
-            for _ in 0..15 {
+            for _ in 0..steps {
                 let y: Vec<f64> = x
                     .iter()
                     .enumerate()
@@ -394,9 +379,7 @@ fn the_cluster_pass_never_passes_a_state_too_close_with_links_of_many_patches() 
                 x = y;
             }
         }
+        planes += check.planes_cleared;
     }
-    assert!(
-        passed > 50 && failed > 50 && segments > 50,
-        "{passed} passed, {failed} failed, {segments} segments passed"
-    );
+    [passed, failed, segments, planes]
 }
