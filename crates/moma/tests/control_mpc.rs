@@ -612,21 +612,8 @@ fn the_first_input_keeps_the_zmp_margin_at_the_measured_state() {
         s.max_angular_acceleration,
         s.max_joint_acceleration,
     );
-    let (mut mpc, mut q0) = mpc_common::fetch_mpc(None, s);
-    let robot = &mut mpc.problem.robot;
-    robot.torque_limit[0] *= 5.0;
-    robot.torque_limit[1] *= 5.0;
-    let model = &robot.wheeled.model;
-    for (name, v) in [
-        ("torso_lift_joint", 0.38),
-        ("shoulder_lift_joint", -1.0),
-        ("elbow_flex_joint", 0.0),
-        ("wrist_flex_joint", 0.0),
-    ] {
-        let j = model.joint_id(name).unwrap();
-        q0[model.idx_q[j.0]] = v;
-    }
-    let robot = robot.clone();
+    let (mut mpc, q0) = mpc_common::fetch_hard_stop(s);
+    let robot = mpc.problem.robot.clone();
     let (nx, nu, n) = (robot.nx(), robot.nu(), robot.n_moved());
     let wm = &robot.wheeled;
     let (w, wl, dt) = (robot.wheel_map, robot.wheel_rate_limit, 0.05);

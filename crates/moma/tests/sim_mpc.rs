@@ -82,20 +82,8 @@ fn hard_stop(zmp: Option<f64>) -> MpcRun {
     s.constraints.zmp_margin = zmp;
     s.max_linear_acceleration = 8.0;
     s.weights.base_position = 400.0;
-    let (mut mpc, mut q0) = mpc_common::fetch_mpc(None, s);
-    let robot = &mut mpc.problem.robot;
-    robot.torque_limit[0] *= 5.0;
-    robot.torque_limit[1] *= 5.0;
-    let model = &robot.wheeled.model;
-    for (name, v) in [
-        ("torso_lift_joint", 0.38),
-        ("shoulder_lift_joint", -1.0),
-        ("elbow_flex_joint", 0.0),
-        ("wrist_flex_joint", 0.0),
-    ] {
-        let j = model.joint_id(name).unwrap();
-        q0[model.idx_q[j.0]] = v;
-    }
+    let (mut mpc, q0) = mpc_common::fetch_hard_stop(s);
+    let robot = &mpc.problem.robot;
     mpc.problem.posture =
         nalgebra::DVector::from_iterator(robot.n_moved(), robot.dofs.iter().map(|&d| q0[d]));
     let mut plant = WheeledSystem::new(mpc.problem.robot.wheeled.clone());

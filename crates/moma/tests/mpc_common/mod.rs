@@ -125,3 +125,24 @@ pub fn fetch_mpc(scene: Option<Scene>, settings: MpcSettings) -> (WholeBodyMpc, 
     let q0 = fetch_start(&robot);
     (WholeBodyMpc::new(robot, settings, &q0).unwrap(), q0)
 }
+
+/// The MPC on Fetch set up for a hard stop: five times Fetch's wheel torque (so that
+/// braking can tip it) and the arm raised forward (torso up 0.38 m, shoulder lifted by
+/// −1 rad, elbow and wrist straight) in the returned configuration.
+pub fn fetch_hard_stop(settings: MpcSettings) -> (WholeBodyMpc, DVector<f64>) {
+    let (mut mpc, mut q0) = fetch_mpc(None, settings);
+    let robot = &mut mpc.problem.robot;
+    robot.torque_limit[0] *= 5.0;
+    robot.torque_limit[1] *= 5.0;
+    let model = &robot.wheeled.model;
+    for (name, v) in [
+        ("torso_lift_joint", 0.38),
+        ("shoulder_lift_joint", -1.0),
+        ("elbow_flex_joint", 0.0),
+        ("wrist_flex_joint", 0.0),
+    ] {
+        let j = model.joint_id(name).unwrap();
+        q0[model.idx_q[j.0]] = v;
+    }
+    (mpc, q0)
+}
