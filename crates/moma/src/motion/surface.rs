@@ -21,7 +21,7 @@ use crate::multibody::{Data, FrameKind, Model};
 use crate::spatial::SE3;
 use crate::{Error, Result};
 use nalgebra::{DVector, Vector3};
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 /// Where the URDF's meshes are: the file and the package folders.
@@ -75,6 +75,9 @@ impl Patching {
             return;
         }
         let split_again = || {
+            if self.split.is_empty() {
+                return false;
+            }
             let mut key = order.to_vec();
             key.sort_unstable();
             self.split.contains(&(element, key))
@@ -121,6 +124,21 @@ pub fn with_mesh_surface(
     link: &str,
     patching: &Patching,
 ) -> Result<GeometryModel> {
+    surface_from_elements(model, gm, link, &link_elements(link, source)?, patching)
+}
+
+/// A link's collision elements (its origin in the link's frame and, for a mesh, the mesh
+/// in the element's frame), as [`link_elements`] reads them.
+type Elements = Vec<(SE3, Option<TriangleMesh>)>;
+
+/// [`with_mesh_surface`] with the link's collision elements already read (`mine`).
+fn surface_from_elements(
+    model: &Model,
+    gm: &GeometryModel,
+    link: &str,
+    mine: &[(SE3, Option<TriangleMesh>)],
+    patching: &Patching,
+) -> Result<GeometryModel> {
     let Some(li) = gm.link_index(link) else {
         return Err(Error::invalid(
             format!("link '{link}'"),
@@ -132,7 +150,6 @@ pub fn with_mesh_surface(
         .iter()
         .find(|f| f.kind == FrameKind::Body && f.name == link)
         .ok_or_else(|| Error::invalid(format!("link '{link}'"), "is not a body of the model"))?;
-    let mine = link_elements(link, source)?;
     let old = &gm.links[li];
     if mine.len() != old.count {
         return Err(Error::invalid(
@@ -200,7 +217,11 @@ pub fn with_mesh_surface(
 
 /// The volume a link's mesh hulls hold over the volume its meshes hold: 1 for convex
 /// meshes, larger the more concave they are (`None` for a link without meshes).
-fn concavity(gm: &GeometryModel, li: usize, source: &MeshSource) -> Result<Option<f64>> {
+fn concavity(
+    gm: &GeometryModel,
+    li: usize,
+    elements: &[(SE3, Option<TriangleMesh>)],
+) -> Option<f64> {
     let link = &gm.links[li];
     let signed = |v: &[Vector3<f64>], faces: &mut dyn Iterator<Item = [u32; 3]>| -> f64 {
         faces
@@ -219,18 +240,16 @@ fn concavity(gm: &GeometryModel, li: usize, source: &MeshSource) -> Result<Optio
     }
     let mut mesh = 0.0;
     let mut meshes = 0;
-    for (_, m) in link_elements(&link.name, source)? {
-        if let Some(m) = m {
-            mesh += signed(&m.vertices, &mut m.triangles.iter().copied());
-            meshes += 1;
-        }
+    for m in elements.iter().filter_map(|(_, m)| m.as_ref()) {
+        mesh += signed(&m.vertices, &mut m.triangles.iter().copied());
+        meshes += 1;
     }
-    Ok((meshes > 0 && hull > 0.0).then(|| hull / mesh.max(1e-12)))
+    (meshes > 0 && hull > 0.0).then(|| hull / mesh.max(1e-12))
 }
 
 /// A link's collision elements in the URDF's order: each one's origin in the link's frame
 /// and, for a mesh, the mesh (in the element's frame).
-fn link_elements(link: &str, source: &MeshSource) -> Result<Vec<(SE3, Option<TriangleMesh>)>> {
+fn link_elements(link: &str, source: &MeshSource) -> Result<Elements> {
     let text = std::fs::read_to_string(&source.urdf).map_err(|e| Error::Io {
         path: source.urdf.clone(),
         source: e,
@@ -343,6 +362,8 @@ pub fn surface_links_for_states(
     let mut current = gm.clone();
     // The swapped links and how their surfaces are cut, in order of their first swap.
     let mut swapped: Vec<(String, Patching)> = Vec::new();
+    // Each link's collision elements, read from the files once.
+    let mut read: BTreeMap<String, Elements> = BTreeMap::new();
     let weights = vec![1.0; group.dim()];
     let mut x = vec![0.0; group.dim()];
     let mut data = Data::new(model);
@@ -377,13 +398,12 @@ pub fn surface_links_for_states(
                     (&candidates[1], &candidates[0]),
                 ] {
                     if let Some(k) = swapped.iter().position(|(s, _)| s == link) {
-                        let elements = link_elements(link, source)?;
                         marked += split_patches_in_contact(
                             &data,
                             &current,
                             link,
                             other,
-                            &elements,
+                            elements_of(&mut read, link, source)?,
                             &mut swapped[k].1,
                         );
                     }
@@ -391,7 +411,8 @@ pub fn surface_links_for_states(
                 if marked > 0 {
                     current = gm.clone();
                     for (name, patching) in &swapped {
-                        current = with_mesh_surface(model, &current, source, name, patching)?;
+                        let elements = elements_of(&mut read, name, source)?;
+                        current = surface_from_elements(model, &current, name, elements, patching)?;
                     }
                     continue;
                 }
@@ -404,7 +425,7 @@ pub fn surface_links_for_states(
                 let Some(li) = current.link_index(name) else {
                     continue;
                 };
-                if let Some(r) = concavity(&current, li, source)?
+                if let Some(r) = concavity(&current, li, elements_of(&mut read, name, source)?)
                     && pick.as_ref().is_none_or(|p| r > p.1)
                 {
                     pick = Some((name.clone(), r));
@@ -414,11 +435,25 @@ pub fn surface_links_for_states(
                 break;
             };
             let patching = Patching::uniform(PATCH_TRIANGLES);
-            current = with_mesh_surface(model, &current, source, &name, &patching)?;
+            let elements = elements_of(&mut read, &name, source)?;
+            current = surface_from_elements(model, &current, &name, elements, &patching)?;
             swapped.push((name, patching));
         }
     }
     Ok((current, swapped.into_iter().map(|(name, _)| name).collect()))
+}
+
+/// The collision elements of `link` kept in `read`, read from the files the first time.
+fn elements_of<'a>(
+    read: &'a mut BTreeMap<String, Elements>,
+    link: &str,
+    source: &MeshSource,
+) -> Result<&'a Elements> {
+    if !read.contains_key(link) {
+        let elements = link_elements(link, source)?;
+        read.insert(link.to_string(), elements);
+    }
+    Ok(&read[link])
 }
 
 /// Triangles per surface patch when a link is first swapped for its surface.
