@@ -129,6 +129,7 @@ impl DerivativeData {
     pub fn new(model: &Model) -> Self {
         let (n, nv) = (model.njoints, model.nv);
         let m = || DMatrix::zeros(nv, nv);
+        let dof_parent = dof_parents(model);
         Self {
             drnea_dq: m(),
             drnea_dv: m(),
@@ -151,9 +152,9 @@ impl DerivativeData {
             dforce: vec![Vector6::zeros(); n],
             y1: vec![Vector6::zeros(); nv],
             y2: vec![Vector6::zeros(); nv],
-            dof_parent: dof_parents(model),
-            subtree_end: subtree_ends(&dof_parents(model)),
-            chain_start: chain_starts(&dof_parents(model)),
+            subtree_end: subtree_ends(&dof_parent),
+            chain_start: chain_starts(&dof_parent),
+            dof_parent,
             fact: m(),
             rows: DVector::zeros(nv * nv),
             column: DVector::zeros(nv),
@@ -318,7 +319,7 @@ pub fn aba_derivatives(
     // exactly symmetric: the rows transposed give the upper triangle, then each row r's
     // columns r.. are the lower triangle's column r
     let ot = dd.daba_dtau.as_mut_slice();
-    transpose(rows, nv, ot, nv, nv);
+    transpose(rows, ot, nv);
     for r in 0..nv {
         ot[r * nv + r..(r + 1) * nv].copy_from_slice(&rows[r * nv + r..(r + 1) * nv]);
     }
@@ -348,22 +349,21 @@ fn rotate_pairs(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
     }
 }
 
-/// `dst[r dst_stride + c] = src[c src_stride + r]` for `r, c < n`:
-/// the transpose of an `n × n` block between a column-major matrix and rows, or back.
-/// Done by tiles of 8 × 8, each read as 8 contiguous runs and written as 8, instead of
-/// one strided access per entry.
-fn transpose(src: &[f64], src_stride: usize, dst: &mut [f64], dst_stride: usize, n: usize) {
+/// `dst[r n + c] = src[c n + r]` for `r, c < n`: the transpose of an `n × n` matrix
+/// (column-major into rows, or back). Done by tiles of 8 × 8, each read as 8 contiguous
+/// runs and written as 8, instead of one strided access per entry.
+fn transpose(src: &[f64], dst: &mut [f64], n: usize) {
     const T: usize = 8;
     let tiled = n / T * T;
     for c0 in (0..tiled).step_by(T) {
         for r0 in (0..tiled).step_by(T) {
             let mut tile = [[0.0; T]; T];
             for (j, t) in tile.iter_mut().enumerate() {
-                let at = (c0 + j) * src_stride + r0;
+                let at = (c0 + j) * n + r0;
                 t.copy_from_slice(&src[at..at + T]);
             }
             for i in 0..T {
-                let at = (r0 + i) * dst_stride + c0;
+                let at = (r0 + i) * n + c0;
                 for (d, t) in dst[at..at + T].iter_mut().zip(&tile) {
                     *d = t[i];
                 }
@@ -375,7 +375,7 @@ fn transpose(src: &[f64], src_stride: usize, dst: &mut [f64], dst_stride: usize,
     for c in 0..n {
         let r_from = if c < tiled { tiled } else { 0 };
         for r in r_from..n {
-            dst[r * dst_stride + c] = src[c * src_stride + r];
+            dst[r * n + c] = src[c * n + r];
         }
     }
 }
