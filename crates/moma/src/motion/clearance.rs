@@ -866,8 +866,8 @@ impl<'a> ClearanceChecker<'a> {
             }
             self.near_blocks(&cluster, extra);
             for r in 0..self.near.len() {
-                let (first, end) = self.near[r];
-                for bi in first..end {
+                let (from, to) = self.near[r];
+                for bi in from..to {
                     if bi != last && !self.block_clear(bi, tube, cluster.shared_balls) {
                         self.last_limiting = bi;
                         return false;
@@ -950,8 +950,8 @@ impl<'a> ClearanceChecker<'a> {
             }
             self.near_blocks(&cluster, bound);
             for r in 0..self.near.len() {
-                let (first, end) = self.near[r];
-                for bi in first..end {
+                let (from, to) = self.near[r];
+                for bi in from..to {
                     let block = self.moving[bi];
                     let gap = if cluster.shared_balls {
                         gap
