@@ -517,13 +517,7 @@ fn fetch_admissible_inputs_keep_the_next_knots_speed_limits_and_are_the_nearest(
     p.robot.state_from_plant(q0.as_slice(), &vr, &mut x);
     let (mut lo, mut hi) = (DVector::zeros(nu), DVector::zeros(nu));
     let mut next = DVector::zeros(nx);
-    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-    let mut rnd = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut rnd = uniform_pm1(0x2545_f491_4f6c_dd1d_u64);
     let mut moved = 0;
     for trial in 0..300 {
         let rates = nalgebra::Vector2::new(wl * rnd(), wl * rnd());
@@ -647,13 +641,7 @@ fn the_first_input_keeps_the_zmp_margin_at_the_measured_state() {
         let rates = w * nalgebra::Vector2::new(v[0] + dt * u[0], v[1] + dt * u[1]);
         (margin, torque, rates.amax() / wl)
     };
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut rnd = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut rnd = uniform_pm1(0x9e37_79b9_7f4a_7c15_u64);
     let (mut lo, mut hi) = (DVector::zeros(nu), DVector::zeros(nu));
     let mut x = DVector::zeros(nx);
     let (mut held, mut tipping, mut infeasible) = (0, 0, 0);
@@ -726,4 +714,14 @@ fn the_first_input_keeps_the_zmp_margin_at_the_measured_state() {
         tipping >= 10 && held >= 20,
         "held {held}, tipping {tipping}"
     );
+}
+
+/// Numbers uniform in [−1, 1) from `seed` (xorshift64), for the tests' random states.
+fn uniform_pm1(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
 }
